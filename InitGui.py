@@ -1,0 +1,25 @@
+# APLAN workbench registration (runs when the FreeCAD GUI starts). FreeCAD executes this file without
+# __file__, so paths come from the freecad_aplan package.
+import FreeCADGui
+
+
+class AplanWorkbench(FreeCADGui.Workbench):
+    """APLAN: designer intent, assembly plans and operator intentions for human-robot collaboration."""
+
+    MenuText = "APLAN"
+    ToolTip = "Assembly plans and operator intentions for human-robot collaborative assembly"
+
+    def __init__(self):
+        import freecad_aplan
+
+        self.__class__.Icon = freecad_aplan.icon_path("aplan.svg")
+
+    def Initialize(self):
+        # Commands are imported here, not at FreeCAD start-up (they arrive with the workbench issue).
+        pass
+
+    def GetClassName(self):
+        return "Gui::PythonWorkbench"
+
+
+FreeCADGui.addWorkbench(AplanWorkbench())

@@ -1,0 +1,139 @@
+"""The ``aplan`` command line: ``aplan stats``, ``aplan intentions``, ``aplan synth``.
+
+Exit status: 0 on success, 1 when the input is bad (the message says what, where and how to fix it),
+2 on a usage error. Nothing is written when a command fails.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Sequence
+
+from .errors import PlannerError
+from .examples import EXAMPLES, resolve_product
+from .intentions import DEFAULT_INTENTION_LIMIT, intention_graph, most_connected_part
+from .plan import make_plan
+from .product import product_to_dict, write_atomic
+from .stats import STAT_KEYS, plan_statistics
+from .synth import SYNTHETIC
+
+__all__ = ["main"]
+
+_PRODUCT_HELP = f"a product file (.json) or the name of an embedded example ({', '.join(EXAMPLES)})"
+
+
+def _add_technical(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--technical", action=argparse.BooleanOptionalAction, default=None,
+                        help="switch every technical constraint on (--technical) or off (--no-technical); "
+                             "by default each constraint is as the product file marks it ('active')")
+
+
+def _stats(args: argparse.Namespace) -> int:
+    product = resolve_product(args.product)
+    plan = make_plan(product, args.technical)
+    base = most_connected_part(plan.product) if args.base_part == "auto" else args.base_part
+    stats = plan_statistics(plan, base)
+    if args.json:
+        print(json.dumps(stats.as_dict()))
+        return 0
+    title = plan.product.name or str(args.product)
+    print(f"{title} ({plan.product.source})")
+    values = stats.as_dict()
+    for key in STAT_KEYS:
+        value = values[key]
+        shown = f"{value:.2f}" if isinstance(value, float) else f"{value:,}"
+        print(f"  {key:<14}{shown:>22}")
+    if base:
+        print(f"  (sequences whose first operation joins the base part {base!r})")
+    print(f"  factored view: {stats.states:,} assembly states x {stats.sequences:,} sequences "
+          f"instead of {stats.intentions:,} intentions")
+    for k in plan.tags.unmatched:
+        print(f"  warning: operations[{k}] tags an operation that is not in the AND/OR graph", file=sys.stderr)
+    return 0
+
+
+def _intentions(args: argparse.Namespace) -> int:
+    plan = make_plan(resolve_product(args.product), args.technical)
+    graph = intention_graph(plan.states, limit=args.limit)
+    chosen = graph.full_sequences() if args.full else range(graph.n_intentions)
+    operations = graph.operation
+    for i in chosen:
+        path = graph.path(int(i))
+        if args.json:
+            steps = []
+            j = int(i)
+            while graph.successor[j] >= 0:
+                steps.append(plan.andor.describe(int(operations[j])))
+                j = int(graph.successor[j])
+            print(json.dumps({"intention": int(i), "states": [plan.states.describe(s) for s in path],
+                              "operations": steps}))
+        else:
+            print(f"{int(i)}: " + " -> ".join(plan.states.describe(s) for s in path))
+    return 0
+
+
+def _synth(args: argparse.Namespace) -> int:
+    product = SYNTHETIC[args.kind](args.parts)
+    text = json.dumps(product_to_dict(product), indent=1) + "\n"
+    if args.output:
+        write_atomic(args.output, text)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+def _positive(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="aplan", description="APLAN: assembly plans and operator intentions "
+                                     "for human-robot collaborative assembly (Cramer et al., RA-L 2021).")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    stats = commands.add_parser("stats", help="count subassemblies, operations, states, intentions, ...",
+                                description="Print the figures of a product's plan: " + ", ".join(STAT_KEYS) + ".")
+    stats.add_argument("product", metavar="PRODUCT", help=_PRODUCT_HELP)
+    stats.add_argument("--json", action="store_true", help="print one JSON object with exactly those keys")
+    _add_technical(stats)
+    stats.add_argument("--base-part", nargs="?", const="auto", metavar="PART",
+                       help="count only the sequences whose first operation joins PART "
+                            "(without PART: the most connected part)")
+    stats.set_defaults(run=_stats)
+
+    intentions = commands.add_parser("intentions", help="enumerate operator intentions (paths of assembly states)")
+    intentions.add_argument("product", metavar="PRODUCT", help=_PRODUCT_HELP)
+    intentions.add_argument("--limit", type=_positive, default=DEFAULT_INTENTION_LIMIT,
+                            help=f"refuse to enumerate more intentions than this (default {DEFAULT_INTENTION_LIMIT:,})")
+    intentions.add_argument("--full", action="store_true", help="only the full assembly sequences")
+    intentions.add_argument("--json", action="store_true", help="one JSON object per line")
+    _add_technical(intentions)
+    intentions.set_defaults(run=_intentions)
+
+    synth = commands.add_parser("synth", help="write a synthetic product of Table I",
+                                description="chain: weakly connected (each part touches the next); "
+                                            "complete: strongly connected (every part touches every other).")
+    synth.add_argument("kind", choices=sorted(SYNTHETIC))
+    synth.add_argument("parts", type=_positive, metavar="N", help="number of parts")
+    synth.add_argument("-o", "--output", metavar="FILE", help="write here (default: standard output)")
+    synth.set_defaults(run=_synth)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.run(args)
+    except PlannerError as exc:
+        print(f"aplan: error: {exc}", file=sys.stderr)
+        return 1
+    except BrokenPipeError:  # e.g. `aplan intentions pen | head`
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

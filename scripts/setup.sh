@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Set up APLAN in ./.venv (idempotent). With --freecad, also install Debian's FreeCAD 0.20 (headless
+# freecadcmd, the GUI and Xvfb) and the Python packages FreeCAD's own interpreter needs, when they are
+# missing and apt can be used (as root, or through passwordless sudo).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if [ ! -x .venv/bin/python ]; then
+    python3 -m venv .venv
+fi
+.venv/bin/python -m pip install --quiet --disable-pip-version-check -e '.[test]'
+
+if [ "${1:-}" = "--freecad" ] && ! command -v freecadcmd >/dev/null 2>&1; then
+    if [ "$(id -u)" = 0 ]; then as_root=(); elif sudo -n true 2>/dev/null; then as_root=(sudo -n); else as_root=(); fi
+    if command -v apt-get >/dev/null 2>&1 && { [ "$(id -u)" = 0 ] || [ ${#as_root[@]} -gt 0 ]; }; then
+        echo "setup: installing FreeCAD from Debian (about a minute)" >&2
+        "${as_root[@]}" apt-get update -qq
+        DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends \
+            freecad-python3 freecad xvfb xauth python3-numpy python3-networkx python3-lxml >/dev/null
+    else
+        echo "setup: FreeCAD is not installed and apt-get cannot be used here: FreeCAD tests will be skipped" >&2
+    fi
+fi

@@ -1,0 +1,35 @@
+"""The addon inside real FreeCAD: installed as a Mod folder, its packages import and the planner runs."""
+from __future__ import annotations
+
+import json
+import subprocess
+
+from conftest import REPO, require_freecadcmd
+
+PROBE = """
+import json
+import FreeCAD
+import freecad_aplan, planner   # no sys.path changes: FreeCAD puts the Mod folder on it
+from planner import make_plan, plan_statistics, resolve_product
+stats = plan_statistics(make_plan(resolve_product("pen"))).as_dict()
+print("APLAN-RESULT " + json.dumps({"version": FreeCAD.Version()[:2], "planner": planner.__file__,
+                                     "stats": stats}))
+"""
+
+
+def test_planner_runs_in_freecad_from_the_mod_folder(tmp_path):
+    freecadcmd = require_freecadcmd()
+    home = tmp_path / "home"
+    for mod in (home / ".local" / "share" / "FreeCAD" / "Mod", home / ".FreeCAD" / "Mod"):
+        mod.mkdir(parents=True)
+        (mod / "APLAN").symlink_to(REPO, target_is_directory=True)
+    script = tmp_path / "probe.py"
+    script.write_text(PROBE)
+    result = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=120,
+                            env={"HOME": str(home), "PATH": "/usr/bin:/bin", "LANG": "C.UTF-8"})
+    lines = [line for line in result.stdout.splitlines() if line.startswith("APLAN-RESULT ")]
+    assert lines, f"no result from FreeCAD:\n{result.stdout[-2000:]}\n{result.stderr[-2000:]}"
+    data = json.loads(lines[-1].split(" ", 1)[1])
+    assert data["version"] == ["0", "20"]
+    assert "/Mod/APLAN/" in data["planner"]
+    assert data["stats"]["intentions"] == 69 and data["stats"]["subassemblies"] == 18
