@@ -8,19 +8,43 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 from typing import Sequence
 
+from .bundle import PRODUCT_FILE, analyze_product, apply_report
 from .errors import PlannerError
 from .examples import EXAMPLES, resolve_product
+from .geometry import Tolerances
 from .intentions import DEFAULT_INTENTION_LIMIT, intention_graph, most_connected_part
 from .plan import make_plan
-from .product import product_to_dict, write_atomic
+from .plugins import registry
+from .product import load_product, product_to_dict, save_product, write_atomic
 from .stats import STAT_KEYS, plan_statistics
 from .synth import SYNTHETIC
 
-__all__ = ["main"]
+__all__ = ["main", "build_parser", "add_tolerance_options", "tolerances_from"]
 
-_PRODUCT_HELP = f"a product file (.json) or the name of an embedded example ({', '.join(EXAMPLES)})"
+_PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or STEP file (read through "
+                 f"FreeCAD), or an embedded example ({', '.join(EXAMPLES)})")
+
+
+def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
+    """The geometry engines' tolerances as options (shared by analyze and export-freecad)."""
+    d = Tolerances()
+    group = parser.add_argument_group("geometry tolerances (model units)")
+    group.add_argument("--contact", type=float, default=d.contact, metavar="T",
+                       help=f"surfaces closer than this touch (default {d.contact:g})")
+    group.add_argument("--interference", type=float, default=d.interference, metavar="V",
+                       help=f"report overlaps above this volume (default {d.interference:g})")
+    group.add_argument("--depth", type=float, default=d.depth, metavar="T",
+                       help=f"overlaps shallower than this along the motion do not block (default {d.depth:g})")
+    group.add_argument("--resolution", type=int, default=d.resolution, metavar="N",
+                       help=f"mesh engine: pixels across the product for the projection test (default {d.resolution})")
+
+
+def tolerances_from(args: argparse.Namespace) -> Tolerances:
+    return Tolerances(contact=args.contact, interference=args.interference, depth=args.depth,
+                      resolution=args.resolution)
 
 
 def _add_technical(parser: argparse.ArgumentParser) -> None:
@@ -73,6 +97,26 @@ def _intentions(args: argparse.Namespace) -> int:
     return 0
 
 
+def _analyze(args: argparse.Namespace) -> int:
+    target = Path(args.product)
+    path = target / PRODUCT_FILE if target.is_dir() else target
+    product = load_product(path)
+    report = analyze_product(product, args.engine, tolerances_from(args))
+    save_product(apply_report(product, report), args.output or path)
+    if args.json:
+        print(json.dumps(report.as_dict()))
+        return 0
+    print(f"{path}: {len(report.parts)} parts, {len(report.contacts)} contacts, "
+          f"{len(report.interferences)} interferences ({report.engine} engine, {report.seconds:.2f} s)")
+    for a, b, volume in report.interferences:
+        print(f"  interference {a} / {b}: {volume:.4g} cubic units")
+    for axis, pairs in report.obstructions.items():
+        print(f"  obstructions {axis}: {len(pairs)} pairs")
+    for warning in report.warnings:
+        print(f"  warning: {warning}", file=sys.stderr)
+    return 0
+
+
 def _synth(args: argparse.Namespace) -> int:
     product = SYNTHETIC[args.kind](args.parts)
     text = json.dumps(product_to_dict(product), indent=1) + "\n"
@@ -114,6 +158,17 @@ def build_parser() -> argparse.ArgumentParser:
     _add_technical(intentions)
     intentions.set_defaults(run=_intentions)
 
+    analyze = commands.add_parser(
+        "analyze", help="compute contacts and obstruction diagrams from a bundle's geometry",
+        description="Fill in the connection diagram and the +X/+Y/+Z obstruction diagrams of a product bundle "
+                    "from its part meshes (mesh engine) or B-reps (occt engine, through FreeCAD).")
+    analyze.add_argument("product", metavar="BUNDLE", help="a bundle folder (or its product .json)")
+    analyze.add_argument("-o", "--output", metavar="FILE", help="write the product here (default: in place)")
+    analyze.add_argument("--engine", default="mesh", help="mesh (default) or occt")
+    analyze.add_argument("--json", action="store_true", help="print the analysis as JSON")
+    add_tolerance_options(analyze)
+    analyze.set_defaults(run=_analyze)
+
     synth = commands.add_parser("synth", help="write a synthetic product of Table I",
                                 description="chain: weakly connected (each part touches the next); "
                                             "complete: strongly connected (every part touches every other).")
@@ -121,6 +176,8 @@ def build_parser() -> argparse.ArgumentParser:
     synth.add_argument("parts", type=_positive, metavar="N", help="number of parts")
     synth.add_argument("-o", "--output", metavar="FILE", help="write here (default: standard output)")
     synth.set_defaults(run=_synth)
+    for add in registry().commands:
+        add(commands)
     return parser
 
 

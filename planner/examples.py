@@ -26,13 +26,29 @@ def example_path(name: str) -> Path:
 
 
 def resolve_product(argument: str | os.PathLike) -> Product:
-    """Load PRODUCT: a product file, or the name of an embedded example (``pen``)."""
+    """Load PRODUCT: a product file, a bundle folder, a CAD file a plugin reads (``.FCStd``, STEP: through
+    FreeCAD), or the name of an embedded example (``pen``).
+
+    A bundle whose geometry has not been analysed yet is analysed in memory with the mesh engine.
+    """
+    from .bundle import PRODUCT_FILE, analyze_product, apply_report, is_analysed
+    from .plugins import registry
+
     path = Path(argument)
+    if path.is_dir():
+        if not (path / PRODUCT_FILE).is_file():
+            raise UnknownProductError(f"{argument}: is a folder without {PRODUCT_FILE}, so not a product bundle")
+        product = load_product(path / PRODUCT_FILE)
+        return product if is_analysed(product) else apply_report(product, analyze_product(product))
     if path.is_file():
+        loader = registry().loaders.get(path.suffix.lower())
+        if loader is not None:
+            return loader(path)
+        if path.suffix.lower() in (".fcstd", ".step", ".stp"):
+            raise UnknownProductError(f"{argument}: reading {path.suffix} files needs APLAN's FreeCAD side "
+                                      "(install the project with `pip install -e .` and FreeCAD)")
         return load_product(path)
     if str(argument) in EXAMPLES:
         return load_product(example_path(str(argument)))
-    if path.is_dir():
-        raise UnknownProductError(f"{argument}: is a folder, not a product file (*.json)")
     raise UnknownProductError(
         f"{argument}: no such file, and no embedded example of that name (embedded: {', '.join(EXAMPLES)})")

@@ -64,11 +64,13 @@ _UNIT_TOLERANCE = 1e-6
 
 @dataclass(frozen=True)
 class Part:
-    """A component of the product. ``volume`` is in cubic ``units``, ``mass`` in kg."""
+    """A component of the product. ``mesh`` and ``brep`` are paths relative to the product file (a closed
+    triangle mesh, and the exact OCCT shape); ``volume`` is in cubic ``units``, ``mass`` in kg."""
 
     id: str
     label: str = ""
     mesh: str | None = None
+    brep: str | None = None
     volume: float | None = None
     mass: float | None = None
     material: str | None = None
@@ -157,6 +159,7 @@ class Product:
     defaults: TagDefaults = TagDefaults()
     name: str = ""
     units: str = "mm"
+    geometry: Mapping[str, Any] = field(default_factory=dict, compare=False)
     extensions: Mapping[str, Any] = field(default_factory=dict, compare=False)
     source: str = field(default="<memory>", compare=False)
 
@@ -404,7 +407,8 @@ def product_from_dict(data: Any, source: str = "<memory>") -> Product:
     """
     r = _Reader(source)
     top = r.obj(data, "", ("format", "version", "parts", "contacts"),
-                ("name", "units", "obstructions", "technical_constraints", "tools", "operations", "defaults"))
+                ("name", "units", "obstructions", "technical_constraints", "tools", "operations", "defaults",
+                 "geometry"))
     if top["format"] != FORMAT:
         raise r.fail("format", f"expected {FORMAT!r}, got {_kind(top['format'])}; this is not an APLAN product file")
     version = top["version"]
@@ -417,11 +421,12 @@ def product_from_dict(data: Any, source: str = "<memory>") -> Product:
     parts = []
     for i, item in enumerate(r.array(top["parts"], "parts")):
         loc = f"parts[{i}]"
-        r.obj(item, loc, ("id",), ("label", "mesh", "volume", "mass", "material"))
+        r.obj(item, loc, ("id",), ("label", "mesh", "brep", "volume", "mass", "material"))
         parts.append(Part(
             id=r.string(item["id"], f"{loc}.id"),
             label=r.string(item.get("label", ""), f"{loc}.label"),
             mesh=r.string(item.get("mesh"), f"{loc}.mesh", optional=True),
+            brep=r.string(item.get("brep"), f"{loc}.brep", optional=True),
             volume=r.number(item.get("volume"), f"{loc}.volume", optional=True),
             mass=r.number(item.get("mass"), f"{loc}.mass", optional=True),
             material=r.string(item.get("material"), f"{loc}.material", optional=True),
@@ -478,12 +483,13 @@ def product_from_dict(data: Any, source: str = "<memory>") -> Product:
         robot=r.boolean(raw_defaults.get("robot", True), "defaults.robot"),
         tool=r.string(raw_defaults.get("tool"), "defaults.tool", optional=True),
     )
+    geometry = r.obj(top.get("geometry", {}), "geometry", (), ("source", "tessellation", "analysis", "warnings"))
     extensions = {k: v for k, v in top.items() if k.startswith("x-")}
     return Product(
         parts=tuple(parts), contacts=contacts, obstructions=tuple(obstructions),
         technical_constraints=tuple(constraints), tools=tuple(tools), operations=tuple(operations),
         defaults=defaults, name=r.string(top.get("name", ""), "name"), units=r.string(top.get("units", "mm"), "units"),
-        extensions=extensions, source=source,
+        geometry=geometry, extensions=extensions, source=source,
     )
 
 
@@ -498,7 +504,7 @@ def product_to_dict(product: Product) -> dict:
         out: dict[str, Any] = {"id": p.id}
         if p.label:
             out["label"] = p.label
-        for key in ("mesh", "volume", "mass", "material"):
+        for key in ("mesh", "brep", "volume", "mass", "material"):
             if getattr(p, key) is not None:
                 out[key] = getattr(p, key)
         return out
@@ -528,6 +534,8 @@ def product_to_dict(product: Product) -> dict:
     if product.defaults != TagDefaults():
         d = product.defaults
         doc["defaults"] = {"unfavorable": d.unfavorable, "robot": d.robot, **({"tool": d.tool} if d.tool else {})}
+    if product.geometry:
+        doc["geometry"] = dict(product.geometry)
     doc.update(product.extensions)
     return doc
 

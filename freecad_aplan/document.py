@@ -1,0 +1,195 @@
+"""Read the parts of a FreeCAD document (or a STEP file) as solids in global coordinates.
+
+Which objects are parts:
+
+- ``Part::Feature`` and everything derived from it that holds solids: plain features, ``Part::FeaturePython``
+  (A2plus assemblies such as the pen and the truck), ``PartDesign::Body``, STEP imports;
+- ``App::Link`` objects (also to other documents), with the link's placement;
+- objects inside ``App::Part`` containers, with the containers' placements.
+
+Objects that are inputs of another feature (boolean operands, the features inside a body, the profile of
+an extrusion) are skipped, as are hidden objects that an ``App::Link`` shows elsewhere. Objects with faces
+but no solid are reported and skipped. Shapes are always copies: the document's placements and geometry
+are never changed.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import FreeCAD
+import Part
+
+__all__ = ["Component", "ReadResult", "open_model", "read_components", "DocumentError"]
+
+
+class DocumentError(Exception):
+    """A model cannot be read: missing or unreadable file, unsupported type, no solids."""
+
+
+@dataclass
+class Component:
+    """One part of the product: its solids (a copy, in global coordinates) and where they came from."""
+
+    id: str
+    label: str
+    shape: "Part.Shape"
+    objects: list[str] = field(default_factory=list)
+    material: str | None = None
+
+
+@dataclass
+class ReadResult:
+    components: list[Component]
+    warnings: list[str]
+    document: "FreeCAD.Document"
+
+
+def open_model(path: str) -> "FreeCAD.Document":
+    """Open an ``.FCStd`` document or import a STEP file into a new, hidden document."""
+    if not os.path.isfile(path):
+        raise DocumentError(f"{path}: no such file")
+    extension = os.path.splitext(path)[1].lower()
+    if extension == ".fcstd":
+        try:
+            return FreeCAD.openDocument(path, True)
+        except Exception as exc:  # FreeCAD raises plain exceptions for corrupt archives
+            raise DocumentError(f"{path}: FreeCAD cannot open it ({exc}); is it a FreeCAD document?") from None
+    if extension in (".step", ".stp"):
+        import Import
+
+        # Import.insert with link groups can crash FreeCADCmd (checked on FreeCAD 0.20.2).
+        FreeCAD.ParamGet("User parameter:BaseApp/Preferences/Mod/Import").SetBool("UseLinkGroup", False)
+        name = "aplan_" + "".join(c if c.isalnum() else "_" for c in os.path.splitext(os.path.basename(path))[0])
+        document = FreeCAD.newDocument(name, hidden=True)
+        try:
+            Import.insert(path, document.Name)
+        except Exception as exc:
+            FreeCAD.closeDocument(document.Name)
+            raise DocumentError(f"{path}: the STEP file cannot be read ({exc})") from None
+        document.recompute()
+        return document
+    raise DocumentError(f"{path}: unsupported file type {extension!r}; use a FreeCAD document (.FCStd) or STEP (.step, .stp)")
+
+
+def _is_consumer(obj) -> bool:
+    """True for objects that build their shape from other objects' shapes (booleans, bodies, extrusions)."""
+    return obj.isDerivedFrom("Part::Feature") and not obj.isDerivedFrom("App::Link")
+
+
+def _parent_placement(obj) -> "FreeCAD.Placement":
+    """The placement of the containers (App::Part, links) above ``obj``."""
+    try:
+        return obj.getGlobalPlacement().multiply(obj.Placement.inverse())
+    except Exception:
+        return FreeCAD.Placement()
+
+
+def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
+    """A copy of the object's solids in global coordinates, or (None, reason)."""
+    if obj.isDerivedFrom("App::Link"):
+        shape = Part.getShape(obj, "", needSubElement=False, transform=True)
+    else:
+        shape = obj.Shape
+    if shape is None or shape.isNull():
+        return None, None
+    solids = [s.copy() for s in shape.Solids]
+    if not solids:
+        if shape.Faces:
+            return None, f"has {len(shape.Faces)} faces but no solid (an open or unsewn shell)"
+        return None, None
+    compound = solids[0] if len(solids) == 1 else Part.makeCompound(solids)
+    compound = compound.copy()
+    parent = _parent_placement(obj)
+    if not parent.isIdentity():
+        compound.Placement = parent.multiply(compound.Placement)
+    return compound, None
+
+
+def _material(obj) -> str | None:
+    value = getattr(obj, "Material", None)
+    if isinstance(value, str) and value:
+        return value
+    if isinstance(value, dict):
+        return value.get("Name") or value.get("CardName")
+    return None
+
+
+def read_components(document, groups: dict[str, list[str]] | None = None,
+                    exclude: list[str] | None = None, split_solids: bool = False) -> ReadResult:
+    """The components of ``document``: one per part object, or one per group of ``groups``.
+
+    ``groups`` maps a component name to the labels (or names) of the objects it fuses; ``exclude`` lists
+    labels (or names) to leave out (fasteners to be treated later, say). With ``split_solids``, an object
+    holding several solids (a STEP file exported as one product) gives one part per solid. Raises
+    :class:`DocumentError` when a group or exclusion names no object, or when nothing with a solid is left.
+    """
+    groups = groups or {}
+    exclude = set(exclude or ())
+    warnings: list[str] = []
+    objects = list(document.Objects)
+    linked_hidden = {o.LinkedObject.Name for o in objects
+                     if o.isDerivedFrom("App::Link") and o.LinkedObject is not None
+                     and o.LinkedObject.Document == document and not o.LinkedObject.Visibility}
+    known = {o.Label for o in objects} | {o.Name for o in objects}
+    for name in sorted(exclude - known):
+        raise DocumentError(f"{document.FileName or document.Name}: exclude names no object {name!r}")
+    group_of: dict[str, str] = {}
+    for group, members in groups.items():
+        for member in members:
+            if member not in known:
+                raise DocumentError(f"{document.FileName or document.Name}: group {group!r} names no object {member!r}")
+            group_of[member] = group
+
+    singles: list[Component] = []
+    grouped: dict[str, list[tuple[object, "Part.Shape"]]] = {g: [] for g in groups}
+    for obj in objects:
+        if not (obj.isDerivedFrom("Part::Feature") or obj.isDerivedFrom("App::Link")):
+            continue
+        if obj.Label in exclude or obj.Name in exclude:
+            continue
+        if any(_is_consumer(user) for user in obj.InList) or obj.Name in linked_hidden:
+            continue
+        shape, problem = _solids_of(obj)
+        if problem:
+            warnings.append(f"{obj.Label}: {problem}; skipped (make it a solid in FreeCAD to include it)")
+        if shape is None:
+            continue
+        if shape.Volume <= 0:
+            warnings.append(f"{obj.Label}: its solid has no volume ({shape.Volume:g}); skipped")
+            continue
+        group = group_of.get(obj.Label) or group_of.get(obj.Name)
+        if group is not None:
+            grouped[group].append((obj, shape))
+        elif len(shape.Solids) > 1 and split_solids:
+            for k, solid in enumerate(shape.Solids, start=1):
+                singles.append(Component(f"{obj.Label}_{k:03d}", f"{obj.Label} {k}", solid.copy(), [obj.Name],
+                                         _material(obj)))
+        else:
+            if len(shape.Solids) > 1:
+                warnings.append(f"{obj.Label}: {len(shape.Solids)} solids are read as one part "
+                                "(use split_solids / --split-solids for one part per solid)")
+            singles.append(Component(obj.Label, obj.Label, shape, [obj.Name], _material(obj)))
+
+    components = list(singles)
+    for group, members in grouped.items():
+        if not members:
+            raise DocumentError(f"{document.FileName or document.Name}: group {group!r} holds no solid")
+        solids = [s for _, shape in members for s in shape.Solids]
+        components.append(Component(group, group, Part.makeCompound(solids), [o.Name for o, _ in members]))
+    if not components:
+        raise DocumentError(f"{document.FileName or document.Name}: the document has no solids to plan with")
+    _unique_ids(components, warnings)
+    return ReadResult(components, warnings, document)
+
+
+def _unique_ids(components: list[Component], warnings: list[str]) -> None:
+    seen: dict[str, int] = {}
+    for component in components:
+        base = component.id
+        if base in seen:
+            seen[base] += 1
+            component.id = f"{base}_{seen[base]}"
+            warnings.append(f"{base}: label used by several parts; this one is called {component.id!r}")
+        else:
+            seen[base] = 1

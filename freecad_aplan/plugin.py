@@ -1,0 +1,140 @@
+"""The FreeCAD side's additions to the ``aplan`` command line (entry point ``aplan.plugins``).
+
+- ``aplan export-freecad MODEL -o BUNDLE``: FreeCADCmd writes the meshes and B-reps of a ``.FCStd`` or STEP
+  model, then a geometry engine fills in contacts and obstruction diagrams; the bundle appears only when
+  everything succeeded.
+- ``aplan stats MODEL.FCStd`` (and every command taking PRODUCT): the same export into a temporary folder.
+- ``aplan analyze --engine occt``: the exact engine, run in FreeCADCmd on the bundle's B-reps.
+
+Nothing here imports FreeCAD: FreeCAD runs as a separate program (:mod:`freecad_aplan.runner`).
+"""
+from __future__ import annotations
+
+import argparse
+import shutil
+import tempfile
+from pathlib import Path
+
+from planner.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
+from planner.geometry import GeometryReport, Tolerances
+from planner.product import Product, save_product
+
+from .runner import FreeCADError, run_batch
+
+__all__ = ["register", "export_bundle"]
+
+MODEL_SUFFIXES = (".fcstd", ".step", ".stp")
+
+
+def export_bundle(model: str | Path, bundle: str | Path, engine: str = "mesh", tolerances: Tolerances = Tolerances(),
+                  groups: dict[str, list[str]] | None = None, exclude: list[str] | None = None,
+                  split_solids: bool = False, linear_deflection: float | None = None,
+                  angular_deflection: float | None = None, freecadcmd: str | None = None,
+                  overwrite: bool = False) -> Product:
+    """Export ``model`` into the bundle folder ``bundle`` and analyse it with ``engine`` (or ``"none"``).
+
+    The bundle is built in a temporary folder beside it and renamed into place at the end, so a failure
+    leaves no partial bundle (and an existing one untouched). Returns the bundle's product.
+    """
+    model, bundle = Path(model).resolve(), Path(bundle).resolve()
+    if not model.is_file():
+        raise FreeCADError(f"{model}: no such file")
+    if model.suffix.lower() not in MODEL_SUFFIXES:
+        raise FreeCADError(f"{model}: unsupported model type {model.suffix!r}; use .FCStd, .step or .stp")
+    if bundle.exists() and not overwrite:
+        raise FreeCADError(f"{bundle} already exists; choose another folder or overwrite it (--force)")
+    bundle.parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".{bundle.name}.", suffix=".partial", dir=bundle.parent))
+    try:
+        arguments = {"model": str(model), "folder": str(work), "groups": groups or {}, "exclude": exclude or [],
+                     "split_solids": split_solids}
+        if linear_deflection is not None:
+            arguments["linear_deflection"] = linear_deflection
+        if angular_deflection is not None:
+            arguments["angular_deflection"] = angular_deflection
+        run_batch("export", arguments, freecadcmd)
+        product = load_bundle(work)
+        if engine != "none":
+            product = apply_report(product, analyze_product(product, engine, tolerances))
+            save_product(product, work / PRODUCT_FILE)
+        if bundle.exists():
+            old = bundle.with_name(f".{bundle.name}.old")
+            bundle.rename(old)
+            work.rename(bundle)
+            shutil.rmtree(old)
+        else:
+            work.rename(bundle)
+    except BaseException:
+        shutil.rmtree(work, ignore_errors=True)
+        raise
+    return load_bundle(bundle)
+
+
+def _load_model(path: Path) -> Product:
+    """PRODUCT given as a CAD model: export it to a temporary bundle and analyse its meshes."""
+    with tempfile.TemporaryDirectory(prefix="aplan-") as folder:
+        return export_bundle(path, Path(folder) / "bundle")
+
+
+def _occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
+    if product.source == "<memory>":
+        raise FreeCADError("the occt engine reads a bundle's B-rep files: give it a bundle folder")
+    data = run_batch("analyze-occt", {"folder": str(Path(product.source).parent), "contact": tolerances.contact,
+                                      "interference": tolerances.interference, "depth": tolerances.depth})
+    return GeometryReport(
+        engine="occt", parts=tuple(product.part_ids), contacts=tuple(tuple(c) for c in data["contacts"]),
+        interferences=tuple((i["parts"][0], i["parts"][1], float(i["volume"])) for i in data["interferences"]),
+        obstructions={axis: tuple(tuple(p) for p in pairs) for axis, pairs in data["obstructions"].items()},
+        tolerances=data.get("tolerances", {}), warnings=tuple(data.get("warnings", ())),
+        seconds=float(data.get("seconds", 0.0)))
+
+
+def _parse_group(text: str) -> tuple[str, list[str]]:
+    name, sep, members = text.partition("=")
+    if not sep or not name or not members:
+        raise argparse.ArgumentTypeError(f"expected NAME=LABEL,LABEL,..., got {text!r}")
+    return name, [m for m in members.split(",") if m]
+
+
+def _export_command(subparsers) -> None:
+    from planner.cli import add_tolerance_options, tolerances_from
+
+    parser = subparsers.add_parser(
+        "export-freecad", help="export a FreeCAD document or STEP file as a product bundle (runs FreeCADCmd)",
+        description="Write BUNDLE/product.json, BUNDLE/meshes/*.stl and BUNDLE/breps/*.brep from MODEL, then "
+                    "compute contacts and obstruction diagrams. Nothing is written when it fails.")
+    parser.add_argument("model", metavar="MODEL", help="a .FCStd document or a .step/.stp file")
+    parser.add_argument("-o", "--output", required=True, metavar="BUNDLE", help="the bundle folder to create")
+    parser.add_argument("--engine", choices=("mesh", "occt", "none"), default="mesh",
+                        help="geometry engine for contacts and obstructions (default mesh; none: export only)")
+    parser.add_argument("--group", action="append", type=_parse_group, default=[], metavar="NAME=A,B,...",
+                        help="make one component NAME of the objects (labels) A, B, ... (repeatable)")
+    parser.add_argument("--exclude", action="append", default=[], metavar="LABEL",
+                        help="leave this object out, e.g. a fastener (repeatable)")
+    parser.add_argument("--split-solids", action="store_true",
+                        help="one part per solid of objects holding several solids (STEP files of one product)")
+    parser.add_argument("--linear-deflection", type=float, metavar="D",
+                        help="tessellation: largest distance between mesh and surface, model units (default 0.05)")
+    parser.add_argument("--angular-deflection", type=float, metavar="A",
+                        help="tessellation: largest angle between facet normals, radians (default 0.25)")
+    parser.add_argument("--freecadcmd", metavar="PATH", help="the FreeCADCmd executable (default: from PATH)")
+    parser.add_argument("--force", action="store_true", help="replace BUNDLE if it exists")
+    add_tolerance_options(parser)
+
+    def run(args: argparse.Namespace) -> int:
+        product = export_bundle(args.model, args.output, args.engine, tolerances_from(args), dict(args.group),
+                                args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
+                                args.freecadcmd, args.force)
+        print(f"{args.output}: {len(product.parts)} parts, {len(product.contacts)} contacts")
+        for warning in product.geometry.get("warnings", []) + product.geometry.get("analysis", {}).get("warnings", []):
+            print(f"  warning: {warning}")
+        return 0
+
+    parser.set_defaults(run=run)
+
+
+def register(registry) -> None:
+    registry.commands.append(_export_command)
+    for suffix in MODEL_SUFFIXES:
+        registry.loaders[suffix] = _load_model
+    registry.engines["occt"] = _occt_engine

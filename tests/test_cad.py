@@ -1,0 +1,185 @@
+"""From real CAD files to plans, through real FreeCAD: export, mesh analysis, statistics, bad input."""
+from __future__ import annotations
+
+import hashlib
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from conftest import PEN_MODELS, REPO, SHARED, require_freecadcmd, require_shared
+from planner import load_product, make_plan, plan_statistics
+from planner.bundle import bundle_product_path
+
+LIAISONS = {frozenset(p) for p in [("ink_001", "cartridge_001"), ("cartridge_001", "head_001"),
+                                   ("head_001", "body_001"), ("body_001", "cap_001"), ("body_001", "button_001")]}
+VARIANTS = [(v, ext) for v in ("simplified", "complex") for ext in ("FCStd", "stp")]
+
+
+def ground_truth(axis: str) -> set[tuple[str, str]]:
+    path = require_shared(PEN_MODELS / "simplified" / "GroundTruth" / f"GeomConstraints_POS_{axis[1]}.json")
+    return {(link["source"], link["target"]) for link in json.loads(path.read_text())["links"]}
+
+
+def aplan(*args: str, check: bool = True) -> subprocess.CompletedProcess:
+    done = subprocess.run([sys.executable, "-m", "planner", *args], capture_output=True, text=True, timeout=600)
+    if check and done.returncode != 0:
+        raise AssertionError(f"aplan {' '.join(args)} failed ({done.returncode}):\n{done.stdout}\n{done.stderr}")
+    return done
+
+
+@pytest.fixture(scope="module")
+def pen_bundles(tmp_path_factory):
+    require_freecadcmd()
+    out = {}
+    for variant, ext in VARIANTS:
+        model = require_shared(PEN_MODELS / variant / f"asm_bourjault_ballpoint.{ext}")
+        bundle = tmp_path_factory.mktemp("bundles") / f"{variant}_{ext}"
+        aplan("export-freecad", str(model), "-o", str(bundle))
+        out[variant, ext] = bundle
+    return out
+
+
+@pytest.mark.freecad
+@pytest.mark.parametrize("variant, ext", VARIANTS)
+def test_pen_models_give_the_ground_truth(pen_bundles, variant, ext):
+    product = load_product(bundle_product_path(pen_bundles[variant, ext]))
+    assert sorted(product.part_ids) == sorted(["ink_001", "cartridge_001", "head_001", "body_001", "cap_001",
+                                               "button_001"])
+    assert {frozenset(c) for c in product.contacts} == LIAISONS
+    assert [o.direction.name for o in product.obstructions] == ["+X", "+Y", "+Z"]
+    for obstruction in product.obstructions:
+        assert set(obstruction.blocks) == ground_truth(obstruction.direction.name), obstruction.direction.name
+    analysis = product.geometry["analysis"]
+    assert analysis["engine"] == "mesh" and analysis["interferences"] == []
+    assert product.geometry["tessellation"]["linear_deflection"] > 0
+    for part in product.parts:
+        assert (pen_bundles[variant, ext] / part.mesh).is_file() and (pen_bundles[variant, ext] / part.brep).is_file()
+
+
+@pytest.mark.freecad
+def test_bundle_and_model_to_stats(pen_bundles):
+    expected = {"subassemblies": 18, "states": 18, "intentions": 69, "sequences": 24}
+    for target in (str(pen_bundles["simplified", "FCStd"]), str(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd")):
+        stats = json.loads(aplan("stats", target, "--json").stdout)
+        assert {k: stats[k] for k in expected} == expected
+
+
+@pytest.mark.freecad
+def test_export_never_touches_the_model(tmp_path):
+    require_freecadcmd()
+    model = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
+    before = hashlib.sha256(model.read_bytes()).hexdigest()
+    aplan("export-freecad", str(model), "-o", str(tmp_path / "b"), "--engine", "none")
+    assert hashlib.sha256(model.read_bytes()).hexdigest() == before
+    product = load_product(tmp_path / "b" / "product.json")
+    assert product.contacts == () and "analysis" not in product.geometry
+    # An unanalysed bundle is analysed in memory when planned.
+    assert json.loads(aplan("stats", str(tmp_path / "b"), "--json").stdout)["intentions"] == 69
+
+
+PLACEMENTS = """
+import json, os, sys, tempfile
+sys.path.insert(0, {repo!r})
+import FreeCAD
+from freecad_aplan.document import open_model, read_components
+from freecad_aplan.export import export_components
+doc = open_model({model!r})
+def snapshot():
+    return {{o.Name: [list(o.Placement.Base), list(o.Placement.Rotation.Q), round(o.Shape.Volume, 6),
+                      list(o.Shape.Placement.Base)] for o in doc.Objects if hasattr(o, "Shape")}}
+before = snapshot()
+result = read_components(doc, groups={{"refill": ["ink_001", "cartridge_001"]}}, exclude=["button_001"])
+for c in result.components:
+    c.shape.translate(FreeCAD.Vector(1000, 0, 0))  # moving the copies must not move the document's parts
+export_components(result.components, tempfile.mkdtemp(), {model!r}, result.warnings)
+print("APLAN-RESULT " + json.dumps({{"same": snapshot() == before, "ids": sorted(c.id for c in result.components)}}))
+"""
+
+
+@pytest.mark.freecad
+def test_placements_unchanged_and_groups(tmp_path):
+    freecadcmd = require_freecadcmd()
+    script = tmp_path / "probe.py"
+    script.write_text(PLACEMENTS.format(repo=str(REPO), model=str(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd")))
+    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300)
+    line = next(l for l in done.stdout.splitlines() if l.startswith("APLAN-RESULT "))
+    data = json.loads(line.split(" ", 1)[1])
+    assert data["same"] is True
+    assert data["ids"] == ["body_001", "cap_001", "head_001", "refill"]
+
+
+@pytest.mark.freecad
+def test_group_and_exclude_from_the_command_line(tmp_path):
+    require_freecadcmd()
+    model = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
+    aplan("export-freecad", str(model), "-o", str(tmp_path / "b"), "--group", "refill=ink_001,cartridge_001",
+          "--exclude", "button_001")
+    product = load_product(tmp_path / "b" / "product.json")
+    assert sorted(product.part_ids) == ["body_001", "cap_001", "head_001", "refill"]
+    assert {frozenset(c) for c in product.contacts} == {frozenset(p) for p in [("refill", "head_001"),
+                                                                               ("head_001", "body_001"),
+                                                                               ("body_001", "cap_001")]}
+
+
+@pytest.mark.freecad
+@pytest.mark.parametrize("model, parts, contacts, interferences, skipped", [
+    ("toy_truck/asm_cement_mixer_truck.FCStd", 61, 113, 0, []),
+    ("diaphragm_pump/asm_diaphragm_pump.FCStd", 51, 68, 12, ["16_001", "21_001"]),
+])
+def test_truck_and_pump(tmp_path, model, parts, contacts, interferences, skipped):
+    """Parts from SOURCE.txt (61 and 51 solids; the pump's two shells are skipped by name); the pump's 68
+    contacts are the touching pairs SOURCE.txt reports; the truck's contacts and both interference counts
+    are this engine's own figures, printed for the record."""
+    require_freecadcmd()
+    path = require_shared(SHARED / "models" / model)
+    out = aplan("export-freecad", str(path), "-o", str(tmp_path / "b")).stdout
+    print(out)
+    product = load_product(tmp_path / "b" / "product.json")
+    found = product.geometry["analysis"]["interferences"]
+    print(f"{model}: {len(product.parts)} parts, {len(product.contacts)} contacts, {len(found)} interferences")
+    assert (len(product.parts), len(product.contacts), len(found)) == (parts, contacts, interferences)
+    for name in skipped:
+        assert any(w.startswith(f"{name}: has") and "no solid" in w for w in product.geometry["warnings"])
+    for item in found:
+        assert item["volume"] > 1.0
+
+
+@pytest.mark.freecad
+def test_bad_models_leave_nothing(tmp_path):
+    require_freecadcmd()
+    missing = aplan("export-freecad", str(tmp_path / "nope.FCStd"), "-o", str(tmp_path / "b"), check=False)
+    assert missing.returncode == 1 and "no such file" in missing.stderr
+    corrupt = tmp_path / "corrupt.FCStd"
+    corrupt.write_bytes(b"this is not a zip archive")
+    bad = aplan("export-freecad", str(corrupt), "-o", str(tmp_path / "b"), check=False)
+    assert bad.returncode == 1 and "corrupt.FCStd" in bad.stderr
+    (tmp_path / "b").mkdir()
+    exists = aplan("export-freecad", str(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"), "-o",
+                   str(tmp_path / "b"), check=False)
+    assert exists.returncode == 1 and "already exists" in exists.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b", "corrupt.FCStd"]  # no partial bundles
+
+
+NO_SOLIDS = """
+import FreeCAD, Part
+doc = FreeCAD.newDocument("flat")
+face = doc.addObject("Part::Feature", "Sheet")
+face.Shape = Part.makePlane(10, 10)
+doc.saveAs({path!r})
+print("APLAN-RESULT {{}}")
+"""
+
+
+@pytest.mark.freecad
+def test_document_without_solids(tmp_path):
+    freecadcmd = require_freecadcmd()
+    script = tmp_path / "make.py"
+    script.write_text(NO_SOLIDS.format(path=str(tmp_path / "flat.FCStd")))
+    subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=120)
+    done = aplan("export-freecad", str(tmp_path / "flat.FCStd"), "-o", str(tmp_path / "b"), check=False)
+    assert done.returncode == 1
+    assert "the document has no solids to plan with" in done.stderr
+    assert not (tmp_path / "b").exists()
