@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -21,6 +22,13 @@ VARIANTS = [(v, ext) for v in ("simplified", "complex") for ext in ("FCStd", "st
 def ground_truth(axis: str) -> set[tuple[str, str]]:
     path = require_shared(PEN_MODELS / "simplified" / "GroundTruth" / f"GeomConstraints_POS_{axis[1]}.json")
     return {(link["source"], link["target"]) for link in json.loads(path.read_text())["links"]}
+
+
+def freecad_result(done: subprocess.CompletedProcess) -> dict:
+    """The JSON a FreeCADCmd script printed after ``APLAN-RESULT`` (FreeCAD's progress output surrounds it)."""
+    found = re.search(r"APLAN-RESULT (.*)", done.stdout)
+    assert found, f"no result from FreeCAD:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
+    return json.loads(found.group(1))
 
 
 def aplan(*args: str, check: bool = True) -> subprocess.CompletedProcess:
@@ -105,8 +113,7 @@ def test_placements_unchanged_and_groups(tmp_path):
     script = tmp_path / "probe.py"
     script.write_text(PLACEMENTS.format(repo=str(REPO), model=str(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd")))
     done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300)
-    line = next(l for l in done.stdout.splitlines() if l.startswith("APLAN-RESULT "))
-    data = json.loads(line.split(" ", 1)[1])
+    data = freecad_result(done)
     assert data["same"] is True
     assert data["ids"] == ["body_001", "cap_001", "head_001", "refill"]
 
@@ -183,3 +190,49 @@ def test_document_without_solids(tmp_path):
     assert done.returncode == 1
     assert "the document has no solids to plan with" in done.stderr
     assert not (tmp_path / "b").exists()
+
+
+DOCUMENT_TYPES = """
+import json, os, sys, tempfile
+sys.path.insert(0, {repo!r})
+import FreeCAD, Part
+folder = tempfile.mkdtemp()
+# A library document with one box, linked from the assembly.
+lib = FreeCAD.newDocument("lib")
+libbox = lib.addObject("Part::Box", "LibBox"); libbox.Length = libbox.Width = libbox.Height = 2
+lib.recompute(); lib.saveAs(os.path.join(folder, "lib.FCStd"))
+doc = FreeCAD.newDocument("asm"); doc.saveAs(os.path.join(folder, "asm.FCStd"))
+body = doc.addObject("PartDesign::Body", "Body")
+feature = doc.addObject("PartDesign::AdditiveBox", "Box")
+body.addObject(feature); feature.Length = feature.Width = feature.Height = 10
+a = doc.addObject("Part::Box", "CutBase"); a.Length = a.Width = a.Height = 10; a.Placement.Base = FreeCAD.Vector(20, 0, 0)
+b = doc.addObject("Part::Box", "CutTool"); b.Length = b.Width = b.Height = 5; b.Placement.Base = FreeCAD.Vector(20, 0, 0)
+cut = doc.addObject("Part::Cut", "Cut"); cut.Base = a; cut.Tool = b
+container = doc.addObject("App::Part", "Sub"); container.Placement.Base = FreeCAD.Vector(0, 50, 0)
+inner = doc.addObject("Part::Cylinder", "Pin"); inner.Radius = 1; inner.Height = 4; container.addObject(inner)
+link = doc.addObject("App::Link", "LinkedBox"); link.LinkedObject = libbox; link.Placement.Base = FreeCAD.Vector(0, 0, 30)
+sketchy = doc.addObject("Part::Feature", "Face"); sketchy.Shape = Part.makePlane(3, 3)
+doc.recompute()
+from freecad_aplan.document import read_components
+result = read_components(doc)
+out = {{c.id: [round(c.shape.Volume, 3), [round(v, 3) for v in (c.shape.BoundBox.XMin, c.shape.BoundBox.YMin, c.shape.BoundBox.ZMin)]] for c in result.components}}
+print("APLAN-RESULT " + json.dumps({{"components": out, "warnings": result.warnings}}))
+"""
+
+
+@pytest.mark.freecad
+def test_document_object_types(tmp_path):
+    """PartDesign bodies, booleans, App::Part containers and links to other documents, built in FreeCAD."""
+    freecadcmd = require_freecadcmd()
+    script = tmp_path / "document_types_probe.py"  # not types.py: it would shadow the standard module
+    script.write_text(DOCUMENT_TYPES.format(repo=str(REPO)))
+    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300)
+    data = freecad_result(done)
+    assert data["components"] == {
+        "Body": [1000.0, [0.0, 0.0, 0.0]],      # the body, not its feature
+        "Cut": [875.0, [20.0, 0.0, 0.0]],       # the boolean, not its operands
+        "Pin": [12.566, [-1.0, 49.0, 0.0]],     # inside an App::Part placed at y = 50
+        "LinkedBox": [8.0, [0.0, 0.0, 30.0]],   # a link to another document, with the link's placement
+    }
+    assert data["warnings"] == ["Face: has 1 faces but no solid (an open or unsewn shell); skipped "
+                                "(make it a solid in FreeCAD to include it)"]
