@@ -47,7 +47,7 @@ def tolerances_from(args: argparse.Namespace) -> Tolerances:
                       resolution=args.resolution)
 
 
-def _add_technical(parser: argparse.ArgumentParser) -> None:
+def _add_technical(parser) -> None:
     parser.add_argument("--technical", action=argparse.BooleanOptionalAction, default=None,
                         help="switch every technical constraint on (--technical) or off (--no-technical); "
                              "by default each constraint is as the product file marks it ('active')")
@@ -117,6 +117,66 @@ def _analyze(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_decision_options(parser: argparse.ArgumentParser) -> None:
+    from .decision import Rewards
+
+    d = Rewards()
+    group = parser.add_argument_group("decision model (when MODEL is a product)")
+    _add_technical(group)
+    group.add_argument("--discount", type=float, default=0.9, help="discount factor (default 0.9)")
+    group.add_argument("--reward-unfavorable", type=float, default=d.unfavorable, metavar="R",
+                       help=f"robot does the next step, unfavorable to humans (default {d.unfavorable:g})")
+    group.add_argument("--reward-favorable", type=float, default=d.favorable, metavar="R",
+                       help=f"robot does the next step, fine for humans (default {d.favorable:g})")
+    group.add_argument("--reward-wrong", type=float, default=d.wrong, metavar="R",
+                       help=f"robot does another operation: its eagerness (default {d.wrong:g})")
+    group.add_argument("--reward-wait", type=float, default=d.wait, metavar="R", help=f"wait (default {d.wait:g})")
+
+
+def _model_from(args: argparse.Namespace):
+    from .decision import Rewards
+    from .models import load_model
+
+    rewards = Rewards(args.reward_unfavorable, args.reward_favorable, args.reward_wrong, args.reward_wait)
+    return load_model(args.model, args.technical, rewards, args.discount)
+
+
+def _pomdp(args: argparse.Namespace) -> int:
+    from .models import save_model
+
+    model = _model_from(args)
+    save_model(model, args.output)
+    print(f"{args.output}: {model.n_states} states, {model.n_actions} actions, {model.n_observations} observations")
+    return 0
+
+
+def _solve(args: argparse.Namespace) -> int:
+    from .policy import write_policy
+    from .solvers import PointBasedSolver
+
+    model = _model_from(args)
+    if args.engine == "sarsop":
+        from .solvers.sarsop import solve_with_sarsop
+
+        result = solve_with_sarsop(model, args.time_limit, args.precision)
+    else:
+        def progress(seconds: float, lower: float, upper: float) -> None:
+            if not args.json and not args.quiet:
+                print(f"\r  {seconds:7.1f} s  lower {lower:.6f}  upper {upper:.6f}  gap {upper - lower:.6f}",
+                      end="", file=sys.stderr, flush=True)
+
+        result = PointBasedSolver(time_limit=args.time_limit, precision=args.precision).solve(model, progress)
+        if not args.json and not args.quiet:
+            print(file=sys.stderr)
+    write_policy(result.policy, args.output, model.name)
+    if args.json:
+        print(json.dumps(result.as_dict()))
+    else:
+        print(f"{args.output}: lower bound {result.lower_bound:.6f}, upper bound {result.upper_bound:.6f} "
+              f"(gap {result.gap:.6f}), {result.policy.alphas.shape[0]} alpha vectors, {result.seconds:.1f} s")
+    return 0
+
+
 def _synth(args: argparse.Namespace) -> int:
     product = SYNTHETIC[args.kind](args.parts)
     text = json.dumps(product_to_dict(product), indent=1) + "\n"
@@ -176,6 +236,28 @@ def build_parser() -> argparse.ArgumentParser:
     synth.add_argument("parts", type=_positive, metavar="N", help="number of parts")
     synth.add_argument("-o", "--output", metavar="FILE", help="write here (default: standard output)")
     synth.set_defaults(run=_synth)
+    pomdp = commands.add_parser("pomdp", help="write the operator-intent POMDP (Alg. 3) as POMDPX or .pomdp",
+                                description="Build the POMDP over operator intentions and write it: POMDPX "
+                                            "(APPL's pomdpsol reads it) or Cassandra's .pomdp, by the file name.")
+    pomdp.add_argument("model", metavar="PRODUCT", help=_PRODUCT_HELP)
+    pomdp.add_argument("-o", "--output", required=True, metavar="MODEL", help="MODEL.pomdpx or MODEL.pomdp")
+    _add_decision_options(pomdp)
+    pomdp.set_defaults(run=_pomdp)
+
+    solve = commands.add_parser("solve", help="solve a POMDP offline into a policy (certified bounds)",
+                                description="Anytime point-based solver with lower and upper bounds; stops at "
+                                            "the time limit or when upper - lower <= precision at the initial belief.")
+    solve.add_argument("model", metavar="MODEL", help="a .pomdpx or .pomdp file, or a PRODUCT")
+    solve.add_argument("-o", "--output", required=True, metavar="POLICY", help="the policy file (SARSOP's .policy XML)")
+    solve.add_argument("--time-limit", type=float, default=60.0, metavar="S", help="seconds (default 60)")
+    solve.add_argument("--precision", type=float, default=1e-3, metavar="E", help="target gap (default 0.001)")
+    solve.add_argument("--engine", choices=("builtin", "sarsop"), default="builtin",
+                       help="builtin (default) or sarsop (APPL's pomdpsol, when it is on PATH)")
+    solve.add_argument("--json", action="store_true", help="print lower_bound, upper_bound, alpha_vectors, seconds")
+    solve.add_argument("--quiet", action="store_true", help="no progress line")
+    _add_decision_options(solve)
+    solve.set_defaults(run=_solve)
+
     for add in registry().commands:
         add(commands)
     return parser
