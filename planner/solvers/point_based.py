@@ -177,6 +177,7 @@ class PointBasedSolver:
         corner = Q.max(axis=0)
         points = _Rows(m.S)
         fingerprint = np.random.default_rng(self.seed).random(m.S)
+        point_at: dict[float, int] = {}
         point_excess: list[float] = []  # v_i - corner . b_i: how far below the corner interpolation
         excess_array = np.zeros(0)
 
@@ -234,8 +235,14 @@ class PointBasedSolver:
             nonlocal excess_array
             value = float(q_upper(b, evaluation).max())
             if value < upper(b[None])[0] - 1e-12:
-                points.append(b)
-                point_excess.append(value - float(b @ corner))
+                key = float(b @ fingerprint)
+                row = point_at.get(key)
+                if row is not None and np.array_equal(points.rows[row], b):
+                    point_excess[row] = value - float(b @ corner)  # the same belief again: lower its value
+                else:
+                    point_at[key] = points.n
+                    points.append(b)
+                    point_excess.append(value - float(b @ corner))
                 excess_array = np.asarray(point_excess)
 
         visited = _Rows(m.S)
