@@ -1,0 +1,79 @@
+"""Decision-model benchmarks: the solver on the pen (ours and the authors' files), and belief updates at scale.
+
+Run: ``.venv/bin/python bench/bench_decision.py [--time-limit 60]`` (about 4 x the time limit).
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+
+from planner import chain_product, make_plan, resolve_product  # noqa: E402
+from planner.belief import DiscreteUpdater  # noqa: E402
+from planner.decision import intention_pomdp  # noqa: E402
+from planner.pomdpx import read_pomdpx  # noqa: E402
+from planner.solvers import PointBasedSolver  # noqa: E402
+
+REFERENCE = ROOT.parent / "shared" / "models" / "bourjault_pen" / "reference_pomdp"
+MARKS = (1, 5, 10, 30, 60)
+
+
+def solver_rows(time_limit: float) -> None:
+    pen = resolve_product("pen")
+    cases = [("ours, no technical constraint", intention_pomdp(make_plan(pen, False))),
+             ("authors' file, no technical constraint", read_pomdpx(REFERENCE / "pen_no_technical.pomdpx.gz")),
+             ("ours, technical constraint", intention_pomdp(make_plan(pen, True))),
+             ("authors' file, technical constraint", read_pomdpx(REFERENCE / "pen_technical.pomdpx.gz"))]
+    marks = [t for t in MARKS if t <= time_limit]
+    print("| model | " + " | ".join(f"lower/upper at {t} s" for t in marks) + " | gap <= 0.05 at | gap <= 0.01 at |")
+    print("|---|" + "---|" * (len(marks) + 2))
+    for name, model in cases:
+        result = PointBasedSolver(time_limit=time_limit, precision=1e-4).solve(model)
+        cells = []
+        for t in marks:
+            lower, upper = [(lo, up) for s, lo, up in result.history if s <= t][-1]
+            cells.append(f"{lower:.5f} / {upper:.5f}")
+        reach = [next((f"{s:.1f} s" for s, lo, up in result.history if up - lo <= g), "-") for g in (0.05, 0.01)]
+        print(f"| {name} | " + " | ".join(cells) + f" | {reach[0]} | {reach[1]} |", flush=True)
+
+
+def belief_rows() -> None:
+    plan = make_plan(chain_product(9))
+    start = time.perf_counter()
+    model = intention_pomdp(plan, limit=200_000)
+    built = time.perf_counter() - start
+    updater = DiscreteUpdater(model)
+    rng = np.random.default_rng(0)
+    belief = updater.initialize()
+    times = []
+    for _ in range(200):
+        action = int(rng.integers(model.n_actions))
+        predicted = updater.predict(belief, action)
+        likely = (np.stack([updater.observation_likelihood(action, z) for z in range(model.n_observations)])
+                  @ predicted)
+        observation = int(rng.choice(model.n_observations, p=likely / likely.sum()))
+        t0 = time.perf_counter()
+        belief = updater.update(belief, action, observation)
+        times.append(time.perf_counter() - t0)
+    print(f"\nbelief update, chain of 9 parts: {model.n_states:,} intentions, {model.n_actions} actions, "
+          f"{model.n_observations} observations (model built in {built:.2f} s): median "
+          f"{statistics.median(times) * 1e3:.3f} ms, max {max(times) * 1e3:.3f} ms over 200 updates")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--time-limit", type=float, default=60.0)
+    args = parser.parse_args()
+    solver_rows(args.time_limit)
+    belief_rows()
+
+
+if __name__ == "__main__":
+    main()
