@@ -177,6 +177,86 @@ def _solve(args: argparse.Namespace) -> int:
     return 0
 
 
+def _policy_for(args: argparse.Namespace, model):
+    from .policy import read_policy
+    from .solvers import PointBasedSolver
+
+    if args.policy:
+        return read_policy(args.policy, model)
+    result = PointBasedSolver(time_limit=args.time_limit, precision=1e-3).solve(model)
+    print(f"(no --policy: solved for {result.seconds:.1f} s, lower bound {result.lower_bound:.5f}, "
+          f"upper bound {result.upper_bound:.5f})", file=sys.stderr)
+    return result.policy
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from .simulate import plot_beliefs, simulate_episode
+
+    model = _model_from(args)
+    graph = model.metadata.get("intention_graph")
+    if graph is None:
+        raise PlannerError("simulate needs a PRODUCT (the intention graph names the sequences), not a model file")
+    policy = _policy_for(args, model)
+    starts = [int(s) for s in graph.full_sequences()]
+    rng = np.random.default_rng(args.seed)
+    if args.all:
+        chosen = starts
+    elif args.random:
+        chosen = [int(s) for s in rng.choice(starts, size=args.random)]
+    else:
+        chosen = args.sequence or [starts[0]]
+        unknown = [s for s in chosen if s not in starts]
+        if unknown:
+            raise PlannerError(f"--sequence {unknown[0]} is not a full assembly sequence; the sequences are the "
+                               f"intentions {starts[0]}..{starts[-1]} (see aplan intentions PRODUCT --full)")
+    episodes = [simulate_episode(model, policy, start, rng, args.max_steps, graph.successor, 0) for start in chosen]
+    plan_states = graph.states
+    for start, episode in zip(chosen, episodes):
+        if args.json:
+            print(json.dumps({"sequence": start, "operations": [plan_states.andor.describe(int(o))
+                                                                for o in _sequence_ops(graph, start)],
+                              "confident_after_operations": episode.first_confident(0.9),
+                              "discounted_return": round(episode.discounted_return, 6)}))
+            continue
+        print(f"sequence {start}: " + " ; ".join(plan_states.andor.describe(int(o)) for o in _sequence_ops(graph, start)))
+        print(f"  {'step':>4}  {'robot action':<44} {'observation':<28} {'p(true)':>7}  operator ops")
+        for k, step in enumerate(episode.steps, start=1):
+            print(f"  {k:>4}  {model.actions[step.action]:<44} {model.observations[step.observation]:<28} "
+                  f"{step.p_true:7.3f}  {step.operator_operations}")
+        print(f"  belief on the true intention first above 0.9 after {episode.first_confident(0.9)} operator "
+              f"operation(s); discounted return {episode.discounted_return:.3f}")
+    if args.plot:
+        written = plot_beliefs(episodes, args.plot, [f"sequence {s}" for s in chosen])
+        if not args.json:
+            print("wrote " + ", ".join(written))
+    return 0
+
+
+def _sequence_ops(graph, start: int) -> list[int]:
+    ops, i = [], start
+    operations = graph.operation
+    while graph.successor[i] >= 0:
+        ops.append(operations[i])
+        i = int(graph.successor[i])
+    return ops
+
+
+def _evaluate(args: argparse.Namespace) -> int:
+    from .simulate import evaluate_policy
+
+    model = _model_from(args)
+    policy = _policy_for(args, model)
+    final = 0 if model.metadata.get("intention_graph") is not None else None
+    mean, half, _ = evaluate_policy(model, policy, args.episodes, args.seed, args.max_steps, final)
+    if args.json:
+        print(json.dumps({"mean_return": mean, "ci95": half, "episodes": args.episodes}))
+    else:
+        print(f"mean discounted return {mean:.4f} +- {half:.4f} (95 % confidence, {args.episodes} episodes)")
+    return 0
+
+
 def _synth(args: argparse.Namespace) -> int:
     product = SYNTHETIC[args.kind](args.parts)
     text = json.dumps(product_to_dict(product), indent=1) + "\n"
@@ -257,6 +337,37 @@ def build_parser() -> argparse.ArgumentParser:
     solve.add_argument("--quiet", action="store_true", help="no progress line")
     _add_decision_options(solve)
     solve.set_defaults(run=_solve)
+
+    simulate = commands.add_parser("simulate", help="play an operator through assembly sequences against a policy",
+                                   description="Per step: the robot's action, the observation, and the belief on "
+                                               "the true intention; optionally the Fig. 7 belief heat map.")
+    simulate.add_argument("model", metavar="PRODUCT", help=_PRODUCT_HELP)
+    simulate.add_argument("--policy", metavar="POLICY", help="a .policy file (default: solve for --time-limit s)")
+    which = simulate.add_mutually_exclusive_group()
+    which.add_argument("--sequence", type=int, nargs="+", metavar="K",
+                       help="full sequences by intention number (aplan intentions PRODUCT --full)")
+    which.add_argument("--all", action="store_true", help="every full sequence")
+    which.add_argument("--random", type=_positive, metavar="N", help="N sequences drawn at random")
+    simulate.add_argument("--plot", metavar="STEM", help="write STEM.png and STEM.svg (belief heat maps)")
+    simulate.add_argument("--json", action="store_true",
+                          help="one JSON line per episode: sequence, confident_after_operations, discounted_return")
+    for sub in (simulate,):
+        sub.add_argument("--seed", type=int, default=0)
+        sub.add_argument("--max-steps", type=_positive, default=100)
+        sub.add_argument("--time-limit", type=float, default=20.0, help="solver seconds when no --policy")
+        _add_decision_options(sub)
+    simulate.set_defaults(run=_simulate)
+
+    evaluate = commands.add_parser("evaluate", help="mean discounted return of a policy over simulated episodes")
+    evaluate.add_argument("model", metavar="MODEL", help="a PRODUCT, or a .pomdpx/.pomdp file")
+    evaluate.add_argument("--policy", metavar="POLICY", help="a .policy file (default: solve for --time-limit s)")
+    evaluate.add_argument("--episodes", type=_positive, default=1000)
+    evaluate.add_argument("--json", action="store_true", help="print mean_return, ci95 and episodes")
+    evaluate.add_argument("--seed", type=int, default=0)
+    evaluate.add_argument("--max-steps", type=_positive, default=100)
+    evaluate.add_argument("--time-limit", type=float, default=20.0, help="solver seconds when no --policy")
+    _add_decision_options(evaluate)
+    evaluate.set_defaults(run=_evaluate)
 
     for add in registry().commands:
         add(commands)
