@@ -211,7 +211,8 @@ def _simulate(args: argparse.Namespace) -> int:
         if unknown:
             raise PlannerError(f"--sequence {unknown[0]} is not a full assembly sequence; the sequences are the "
                                f"intentions {starts[0]}..{starts[-1]} (see aplan intentions PRODUCT --full)")
-    episodes = [simulate_episode(model, policy, start, rng, args.max_steps, graph.successor, 0) for start in chosen]
+    episodes = [simulate_episode(model, policy, start, rng, args.max_steps, graph.successor, 0, args.operator)
+                for start in chosen]
     plan_states = graph.states
     for start, episode in zip(chosen, episodes):
         if args.json:
@@ -349,6 +350,10 @@ def build_parser() -> argparse.ArgumentParser:
     which.add_argument("--all", action="store_true", help="every full sequence")
     which.add_argument("--random", type=_positive, metavar="N", help="N sequences drawn at random")
     simulate.add_argument("--plot", metavar="STEM", help="write STEM.png and STEM.svg (belief heat maps)")
+    simulate.add_argument("--operator", choices=("model", "turns"), default="model",
+                          help="model (default): the operator acts with the model's probability (1/2 per step); "
+                               "turns: it acts whenever the model lets it, taking turns with the robot as in the "
+                               "paper's experiment")
     simulate.add_argument("--json", action="store_true",
                           help="one JSON line per episode: sequence, confident_after_operations, discounted_return")
     for sub in (simulate,):

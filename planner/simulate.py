@@ -42,14 +42,22 @@ class Episode:
         return next((s.operator_operations for s in self.steps if s.p_true > threshold), None)
 
 
+OPERATORS = ("turns", "model")
+
+
 def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: np.random.Generator,
                      max_steps: int = 100, successor: np.ndarray | None = None,
-                     final: int | None = None) -> Episode:
+                     final: int | None = None, operator: str = "model") -> Episode:
     """One episode from the true intention ``start`` until ``final`` (the finished product) or ``max_steps``.
 
+    ``operator``: ``"model"`` draws the operator's timing from the model (it acts with probability 1/2 per
+    step); ``"turns"`` makes it act whenever the model lets it (human and robot take turns, as in the
+    paper's experiment; needs ``successor``). Observations are always drawn from the model.
     ``successor`` (the intention graph's successor array) lets the episode count operator operations: a
     move of the true intention that the robot's own action does not explain.
     """
+    if operator not in OPERATORS:
+        raise ValueError(f"operator must be one of {OPERATORS}, got {operator!r}")
     updater = DiscreteUpdater(model)
     belief = updater.initialize()
     episode = Episode(start, beliefs=[belief])
@@ -63,7 +71,10 @@ def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: n
         action = policy.action(belief)
         reward = float(model.reward[action, state])
         row = transition[action].getrow(state)
-        nxt = int(rng.choice(row.indices, p=row.data / row.data.sum()))
+        if operator == "turns" and successor is not None:
+            nxt = int(max(row.indices, key=lambda t: _moves(successor, state, int(t))))
+        else:
+            nxt = int(rng.choice(row.indices, p=row.data / row.data.sum()))
         if successor is not None and nxt != state:
             robot_did_step = action != wait and _moves_intention(model, action, state)
             operations += _moves(successor, state, nxt) - (1 if robot_did_step else 0)
@@ -85,8 +96,11 @@ def _moves_intention(model: POMDP, action: int, state: int) -> bool:
 
 
 def _moves(successor: np.ndarray, a: int, b: int) -> int:
+    """Steps from intention a to b along the successors (-1 when b does not follow a)."""
     steps = 0
-    while a != b and a >= 0:
+    while a != b:
+        if a < 0:
+            return -1
         a = successor[a]
         steps += 1
     return steps

@@ -33,6 +33,18 @@ def test_episodes_reach_the_finished_product(solved):
         assert moves == sorted(moves)
 
 
+def test_operator_taking_turns_acts_every_step(solved):
+    model, result = solved
+    graph = model.metadata["intention_graph"]
+    wait = model.actions.index("wait")
+    episode = simulate_episode(model, result.policy, int(graph.full_sequences()[0]), np.random.default_rng(0),
+                               successor=graph.successor, final=0, operator="turns")
+    for before, step in zip([None] + episode.steps, episode.steps):
+        if step.action == wait:  # waiting, the operator always does its next operation
+            previous = before.operator_operations if before else 0
+            assert step.operator_operations == previous + 1
+
+
 def test_evaluation_brackets_the_bounds(solved):
     model, result = solved
     mean, half, returns = evaluate_policy(model, result.policy, 2000, seed=1, final=0)
