@@ -268,6 +268,14 @@ def _synth(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_episode_options(parser: argparse.ArgumentParser) -> None:
+    """Options shared by simulate and evaluate."""
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--max-steps", type=_positive, default=100)
+    parser.add_argument("--time-limit", type=float, default=20.0, help="solver seconds when no --policy")
+    _add_decision_options(parser)
+
+
 def _positive(text: str) -> int:
     value = int(text)
     if value < 1:
@@ -356,11 +364,7 @@ def build_parser() -> argparse.ArgumentParser:
                                "paper's experiment")
     simulate.add_argument("--json", action="store_true",
                           help="one JSON line per episode: sequence, confident_after_operations, discounted_return")
-    for sub in (simulate,):
-        sub.add_argument("--seed", type=int, default=0)
-        sub.add_argument("--max-steps", type=_positive, default=100)
-        sub.add_argument("--time-limit", type=float, default=20.0, help="solver seconds when no --policy")
-        _add_decision_options(sub)
+    _add_episode_options(simulate)
     simulate.set_defaults(run=_simulate)
 
     evaluate = commands.add_parser("evaluate", help="mean discounted return of a policy over simulated episodes")
@@ -368,10 +372,7 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--policy", metavar="POLICY", help="a .policy file (default: solve for --time-limit s)")
     evaluate.add_argument("--episodes", type=_positive, default=1000)
     evaluate.add_argument("--json", action="store_true", help="print mean_return, ci95 and episodes")
-    evaluate.add_argument("--seed", type=int, default=0)
-    evaluate.add_argument("--max-steps", type=_positive, default=100)
-    evaluate.add_argument("--time-limit", type=float, default=20.0, help="solver seconds when no --policy")
-    _add_decision_options(evaluate)
+    _add_episode_options(evaluate)
     evaluate.set_defaults(run=_evaluate)
 
     for add in registry().commands:
