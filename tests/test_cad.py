@@ -236,3 +236,19 @@ def test_document_object_types(tmp_path):
     }
     assert data["warnings"] == ["Face: has 1 faces but no solid (an open or unsewn shell); skipped "
                                 "(make it a solid in FreeCAD to include it)"]
+
+
+@pytest.mark.freecad
+def test_occt_engine_through_the_command_line(pen_bundles, tmp_path):
+    """aplan analyze --engine occt: the exact engine, run in FreeCADCmd on the bundle's B-reps."""
+    import shutil
+
+    bundle = tmp_path / "b"
+    shutil.copytree(pen_bundles["simplified", "FCStd"], bundle)
+    done = aplan("analyze", str(bundle), "--engine", "occt")
+    assert "(occt engine" in done.stdout
+    product = load_product(bundle / "product.json")
+    assert product.geometry["analysis"]["engine"] == "occt"
+    assert {frozenset(c) for c in product.contacts} == LIAISONS
+    for obstruction in product.obstructions:
+        assert set(obstruction.blocks) == ground_truth(obstruction.direction.name), obstruction.direction.name
