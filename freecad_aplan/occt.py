@@ -3,29 +3,43 @@
 Runs inside FreeCAD (``Part``). It computes what :mod:`planner.geometry` computes from meshes, with the same
 definitions (see that module), on the exact shapes:
 
-- *contact*: the two parts' surfaces are closer than ``contact`` (``distToShape``), or they overlap (one is
-  inside the other, a press fit, a small modelling interference);
+- *contact*: the two parts' surfaces are closer than ``contact`` (``distToShape``), or they overlap (one
+  inside the other, a press fit, a small modelling interference such as the pen's button, 0.06 mm^3);
 - *interference*: the common volume of the two parts (``common``) exceeds ``interference`` cubic units;
 - *obstruction* along ``d``: part ``x``, moved along ``+d`` without limit, would collide with part ``y``.
 
 Method
 ------
-The obstruction test is continuous and exact: ``x`` swept along ``+d`` to beyond the scene is the union of
-the prisms (extrusions along ``d``) of its faces that face backwards (outward normal . d < 0); every point
-of the sweep lies ahead of such a face on a line parallel to ``d``. OCCT builds a valid prism only from a
-face that projects one-to-one along ``d``, so faces whose normal turns across ``d`` (a cylinder seen side
-on, a sphere) are first split along their silhouettes, exactly, by planes: through the axis of cylinders and
-cones, through the centre of spheres, through the axis or perpendicular to it for tori and surfaces of
-revolution. A face that still folds (a B-spline face, a torus in a general position) is replaced by the
-prisms of its tessellation triangles, and the report says so in its warnings. ``x`` is *blocked* by ``y``
-when ``volume(sweep(x) & y) - volume(x & y)`` exceeds the volume tolerance ``depth ** 3``: what ``x`` and
-``y`` already share does not count, and surfaces that touch or slide along each other (a peg in its hole,
-moving along its axis) have a common volume of zero.
+Obstruction is tested continuously, on exact sweeps: ``x`` swept along ``+d`` to beyond the scene is the
+union of the prisms (extrusions along ``d``) of its faces that face backwards (outward normal . d < 0), since
+every point of the sweep lies ahead of such a face on a line parallel to ``d``. ``x`` is *blocked* by ``y``
+when one prism ``P`` takes more than ``depth ** 3`` of ``y`` outside ``x``: ``volume(P & y) - volume(P & x & y)``.
+What the parts already share does not count, and surfaces that touch or slide along each other (a peg in
+its hole, moving along its axis) have a common volume of zero.
+
+OCCT needs some help to get there:
+
+- A prism is valid only for a face that projects one-to-one along ``d``. Faces whose normal turns across
+  ``d`` (a cylinder seen side on, a sphere) are split along their silhouettes, exactly: by planes through
+  the axis of cylinders and cones, through the centre of spheres, across or through the axis of tori and
+  surfaces of revolution, and by cylinders around the axis where a profile's normal is along it. A piece
+  that still folds (B-splines, a torus in a general position), or whose prism OCCT cannot build, is swept as
+  the polyhedral prism of its tessellation (within ``contact / 2``), and the warnings say so.
+- Planar sides of prisms that OCCT makes as extrusion surfaces are rebuilt as planes, and faces whose
+  normal or axis is within 1e-6 rad of ``d`` (models assembled by constraints are 1e-8 rad off) are swept
+  along that normal or axis: booleans do not match an extrusion surface with a coplanar plane or a coaxial
+  cylinder, and return wrong volumes, or never finish.
+- Booleans run on copies (OCCT raises its arguments' tolerances in place) and fail quietly now and then
+  (an empty common for a door moving onto its screws). The prisms are tested one by one rather than fused;
+  a positive volume is evidence, while an empty one must be confirmed by the prism built both ways (along
+  the face's axis and along ``d``) with two fuzzy values, and by rays from the face through ``y`` (point
+  classification, no boolean). A pair OCCT cannot decide counts as blocked, with a warning.
 
 Broad phase: contact pairs whose bounding boxes are farther apart than ``contact`` are never measured; for
-the obstruction along ``d``, ``y`` must overlap ``x``'s box in the two directions across ``d`` (by more than
-``contact``: narrower contacts only graze) and reach more than ``depth`` beyond the start of ``x`` along
-``d``. Sweeps are built once per part and axis, only when a candidate needs them.
+the obstruction along ``d``, ``y`` must overlap ``x``'s box in the two directions across ``d`` by more than
+``contact`` (narrower contacts only graze) and reach more than ``depth`` beyond the start of ``x`` along
+``d``; a prism is only tested against ``y`` when their boxes overlap. Prisms are built once per part and
+axis, only when a candidate needs them.
 """
 from __future__ import annotations
 
@@ -46,8 +60,6 @@ _DIRECTIONS = {"+X": (1.0, 0.0, 0.0), "+Y": (0.0, 1.0, 0.0), "+Z": (0.0, 0.0, 1.
 _SAMPLES = 13  # samples per parameter direction when checking where a face's normal turns
 _FLAT = 1e-7  # |normal . d| below this: the face is parallel to d there
 _FOLD = 1e-3  # a face whose normal turns past the silhouette by less than this (radians) is not split
-
-
 
 
 class BrepError(DocumentError):
@@ -78,8 +90,10 @@ def _nested(inner, outer) -> bool:
     return False
 
 
-def _contacts(ids, shapes, boxes, contact: float, fuzzies, warnings: list[str]):
-    """Contact pairs (i < j), and {(i, j) and (j, i): (volume, common solid)} for pairs that overlap."""
+def _contacts(ids, shapes, boxes, points, contact: float, fuzzies, warnings: list[str]):
+    """Contact pairs (i < j), and {(i, j) and (j, i): (volume, common solid)} for pairs that overlap.
+
+    ``points(j)``: points inside part j (to catch booleans that fail quietly)."""
     pairs, overlap = [], {}
     n = len(shapes)
     for i in range(n):
@@ -96,7 +110,8 @@ def _contacts(ids, shapes, boxes, contact: float, fuzzies, warnings: list[str]):
                     continue
             pairs.append((i, j))
             if distance <= contact * 1e-3:
-                common = _common(shapes[i], shapes[j], fuzzies)
+                common = _common(shapes[i], shapes[j], fuzzies,
+                                 lambda i=i, j=j: _holds_any(shapes[i], boxes[i], points(j), fuzzies[-1]))
                 if common is None:
                     warnings.append(f"OCCT cannot compute the overlap of {ids[i]!r} and {ids[j]!r}; "
                                     "counted as contact without overlap")
@@ -351,8 +366,49 @@ def _mesh_prism(face, d, length: float, deflection: float):
     return solid
 
 
+class _Prism:
+    """One prism of a sweep: its solid and box, and on demand other constructions of it (cross-checks)."""
+
+    def __init__(self, piece, d, length: float, flatness: float, deflection: float, solid, exact: bool):
+        self.piece, self.d, self.length = piece, d, length
+        self.flatness, self.deflection = flatness, deflection
+        self.solid, self.exact_built = solid, exact
+        self.box = _box(solid)
+        self._points = None
+
+    @property
+    def points(self) -> list:
+        """Sample points of the face (rays start there)."""
+        if self._points is None:
+            u0, u1, v0, v1 = self.piece.ParameterRange
+            grid = [(u0 + (u1 - u0) * (a + 0.5) / 5, v0 + (v1 - v0) * (b + 0.5) / 5)
+                    for a in range(5) for b in range(5)]
+            self._points = [self.piece.valueAt(u, v) for u, v in grid if self.piece.isPartOfDomain(u, v)]
+        return self._points
+
+    def exact(self):
+        """The prism, then (when it was swept along the face's own axis) the prism swept along ``d``
+        exactly: two constructions whose booleans fail in different cases."""
+        yield self.solid
+        if self.exact_built and _direction(self.piece, self.d) is not self.d:
+            try:
+                yield _prism(self.piece, self.d * self.length, self.flatness)
+            except Exception:  # OCCT construction errors are plain exceptions
+                pass
+
+    def meshed(self):
+        """The polyhedral prism of the face's tessellation (within ``deflection``), or None."""
+        if not self.exact_built:
+            return self.solid
+        try:
+            return _mesh_prism(self.piece, self.d, self.length, self.deflection)
+        except Exception:  # OCCT cannot mesh or sew it
+            return None
+
+
 def _piece_prisms(piece, d, length: float, flatness: float, deflection: float) -> tuple[list, int]:
-    """Prisms sweeping ``piece`` along ``d``, and 1 when the piece had to be swept as triangles.
+    """The prism (a :class:`_Prism`) sweeping ``piece`` along ``d`` in a list, and 1 when the piece had to
+    be swept as triangles.
 
     A piece that still folds (no known silhouette: B-splines, tori in general positions) or whose prism
     OCCT cannot build sensibly (edges with large tolerances in imported models) is swept as the polyhedral
@@ -367,19 +423,19 @@ def _piece_prisms(piece, d, length: float, flatness: float, deflection: float) -
         if high <= _FOLD:
             prism = _prism(piece, _direction(piece, d) * length, flatness)
             if prism.isValid() or 0 < prism.Volume <= length * piece.Area * (1 + 1e-6):
-                return [prism], 0
+                return [_Prism(piece, d, length, flatness, deflection, prism, True)], 0
     except Exception:  # OCCT construction errors ("Courbes non jointives", ...) are plain exceptions
         pass
     try:
         prism = _mesh_prism(piece, d, length, deflection)
     except Exception:  # OCCT cannot mesh or sew it
         prism = None
-    return ([] if prism is None else [prism]), 1
+    return ([] if prism is None else [_Prism(piece, d, length, flatness, deflection, prism, False)]), 1
 
 
 def _prisms(shape, d, length: float, deflection: float, flatness: float) -> tuple[list, int]:
-    """Prisms whose union is ``shape`` swept along ``d`` by ``length``, and the number of small pieces
-    swept as triangles."""
+    """Prisms (:class:`_Prism`) whose union is ``shape`` swept along ``d`` by ``length``, and the number
+    of pieces swept as triangles."""
     size = shape.BoundBox.DiagonalLength + 1.0
     prisms, trouble = [], 0
     for face in shape.copy().Faces:
@@ -394,10 +450,67 @@ def _prisms(shape, d, length: float, deflection: float, flatness: float) -> tupl
     return prisms, trouble
 
 
-def _common(a, b, fuzzies: tuple[float, ...]):
-    """``a & b`` computed on copies (booleans raise their arguments' tolerances), checked against
-    ``0 <= volume <= min(volumes)``; None when no fuzzy value gives a plausible answer."""
+def _inner_points(shape, depth: float, limit: int = 40) -> list:
+    """Points strictly inside ``shape``: its solids' centres of mass and points ``depth`` below the
+    middle of its faces (those that fall inside), at most ``limit``."""
+    candidates = [solid.CenterOfMass for solid in shape.Solids]
+    for face in shape.Faces:
+        u0, u1, v0, v1 = face.ParameterRange
+        u, v = (u0 + u1) / 2, (v0 + v1) / 2
+        try:
+            if face.isPartOfDomain(u, v):
+                candidates.append(face.valueAt(u, v) - face.normalAt(u, v) * depth)
+        except Exception:  # a singular point
+            continue
+    points = []
+    for point in candidates:
+        if shape.isInside(point, 1e-7, False):
+            points.append(point)
+            if len(points) >= limit:
+                break
+    return points
+
+
+def _holds_any(solid, box, points, tolerance: float) -> bool:
+    """True when one of ``points`` lies inside ``solid`` (whose box is ``box``), deeper than ``tolerance``."""
+    lo, hi = box
+    for point in points:
+        if all(lo[k] < point[k] < hi[k] for k in range(3)) and solid.isInside(point, tolerance, False):
+            return True
+    return False
+
+
+def _ray_hits(prism, other, other_box, axis: int, tolerance: float, steps: int = 4) -> bool:
+    """True when a ray along the sweep from a sample point of the prism's face (away from its edges)
+    passes through the inside of ``other``, deeper than ``tolerance`` (``steps`` points per ray, spread over
+    ``other``'s box): then the prism and ``other`` overlap, whatever a boolean says."""
+    lo, hi = other_box
+    across = [k for k in range(3) if k != axis]
+    for start in prism.points:
+        if not all(lo[k] < start[k] < hi[k] for k in across):
+            continue
+        begin = max(lo[axis], start[axis])
+        if begin >= hi[axis]:
+            continue
+        for step in range(steps):
+            position = begin + (hi[axis] - begin) * (step + 0.5) / steps
+            point = FreeCAD.Vector(start)
+            point[axis] = position
+            if other.isInside(point, tolerance, False):
+                return True
+    return False
+
+
+def _common(a, b, fuzzies: tuple[float, ...], overlaps=None):
+    """``a & b`` computed on copies (booleans raise their arguments' tolerances), for the first fuzzy value
+    that gives a plausible answer: ``0 <= volume <= min(volumes)``, and not empty when ``overlaps()``
+    (an independent test, by point classification) finds that they overlap. None when none does.
+
+    OCCT's booleans fail quietly now and then: an empty common for a screw head against a door, or for a
+    screw inside a prism (their cylinders 1e-8 rad apart).
+    """
     bound = min(a.Volume, b.Volume)
+    known = None
     for fuzzy in fuzzies:
         try:
             first, second = a.copy(), b.copy()
@@ -405,21 +518,28 @@ def _common(a, b, fuzzies: tuple[float, ...]):
             volume = common.Volume
         except Exception:  # OCCT failures surface as plain exceptions (also a null result's volume)
             continue
-        if -1e-9 * max(1.0, bound) <= volume <= bound * (1 + 1e-6) + 1e-9:
-            return common
+        if not -1e-9 * max(1.0, bound) <= volume <= bound * (1 + 1e-6) + 1e-9:
+            continue
+        if volume <= 0 and overlaps is not None:
+            if known is None:
+                known = overlaps()
+            if known:
+                continue
+        return common
     return None
 
 
-def _common_volume(a, b, fuzzies: tuple[float, ...]) -> float | None:
+def _common_volume(a, b, fuzzies: tuple[float, ...], overlaps=None) -> float | None:
     """Volume of ``a & b`` (see :func:`_common`), or None."""
-    common = _common(a, b, fuzzies)
+    common = _common(a, b, fuzzies, overlaps)
     return None if common is None else max(common.Volume, 0.0)
 
 
 # ------------------------------------------------------------------------------------------ obstructions
 
 
-def _obstructions(ids, shapes, boxes, overlap, contact: float, depth: float, fuzzies, warnings: list[str]):
+def _obstructions(ids, shapes, boxes, overlap, contact: float, depth: float, fuzzies,
+                  warnings: list[str]):
     """Per axis, the pairs (i, j): part i moving along the axis collides with part j."""
     scene_hi = [max(b[1][k] for b in boxes) for k in range(3)]
     volume_tolerance = depth ** 3
@@ -439,9 +559,9 @@ def _obstructions(ids, shapes, boxes, overlap, contact: float, depth: float, fuz
             if meshed:
                 warnings.append(f"part {ids[i]!r}: {meshed} face piece(s) swept along {name} as triangles within "
                                 f"{contact / 2:g} (no exact silhouette, or OCCT could not build their prism)")
-            prisms = [(prism, _box(prism)) for prism in prisms]
             for j in candidates:
-                verdict = _blocks(prisms, shapes[j], boxes[j], overlap.get((i, j)), axis, volume_tolerance, fuzzies)
+                verdict = _blocks(prisms, shapes[j], boxes[j], overlap.get((i, j)), axis, volume_tolerance,
+                                  fuzzies)
                 if verdict is None:
                     warnings.append(f"{name}: OCCT cannot tell whether {ids[i]!r} moving along {name} hits "
                                     f"{ids[j]!r}; assumed it does")
@@ -452,31 +572,55 @@ def _obstructions(ids, shapes, boxes, overlap, contact: float, depth: float, fuz
 
 
 def _blocks(prisms, other, other_box, shared, axis: int, volume_tolerance: float, fuzzies) -> bool | None:
-    """True when one of the prisms (with its box) takes more than ``volume_tolerance`` of ``other``
-    outside ``shared`` (the (volume, solid) the moving part already shares with it); None when a boolean
-    failed and no prism decided.
-
-    The prisms are tested one by one, not fused: OCCT's union of a part's prisms, and the common of that
-    union with a part that touches it along many faces, failed quietly (an empty result) on the truck.
-    """
+    """True when one of the prisms takes more than ``volume_tolerance`` of ``other`` outside ``shared``
+    (the (volume, solid) the moving part already shares with it); None when no prism decided because
+    booleans failed."""
     lo, hi = other_box
     unsure = False
-    for prism, (plo, phi) in prisms:
+    for prism in prisms:
+        plo, phi = prism.box
         if phi[axis] <= lo[axis] or any(min(phi[k], hi[k]) - max(plo[k], lo[k]) <= 0 for k in range(3) if k != axis):
             continue
-        volume = _common_volume(prism, other, fuzzies)
-        if volume is None:
-            unsure = True
-            continue
-        if shared and volume > volume_tolerance:
-            inside = _common_volume(prism, shared[1], fuzzies)
-            if inside is None:
-                unsure = True
-                continue
-            volume -= inside
-        if volume > volume_tolerance:
+        verdict = _prism_blocks(prism, other, other_box, shared, axis, volume_tolerance, fuzzies)
+        if verdict:
             return True
+        unsure = unsure or verdict is None
     return None if unsure else False
+
+
+def _gained(solid, other, shared, fuzzy: float) -> float | None:
+    """Volume of ``solid & other`` outside ``shared`` (or None when a boolean fails)."""
+    volume = _common_volume(solid, other, (fuzzy,))
+    if volume is not None and shared and volume > 0:
+        inside = _common_volume(solid, shared[1], (fuzzy,))
+        volume = None if inside is None else volume - inside
+    return volume
+
+
+def _prism_blocks(prism, other, other_box, shared, axis: int, volume_tolerance: float, fuzzies) -> bool | None:
+    """Whether ``prism`` takes more than ``volume_tolerance`` of ``other`` outside ``shared``.
+
+    OCCT's booleans fail quietly now and then: an empty common for a door moving onto its screws, or for a
+    screw inside a prism, their cylinders 1e-8 rad apart. So a volume is positive evidence, and an empty
+    result needs agreement: the prism built two ways (along the face's axis and along ``d``) times two
+    fuzzy values, then rays from the face through ``other`` (point classification, no boolean). Only when
+    every exact boolean fails does the tessellated prism decide.
+    """
+    empty = False
+    for solid in prism.exact():
+        for fuzzy in fuzzies[:2]:
+            gained = _gained(solid, other, shared, fuzzy)
+            if gained is None:
+                continue
+            if gained > volume_tolerance:
+                return True
+            empty = True
+    rays = not shared and _ray_hits(prism, other, other_box, axis, fuzzies[-1])
+    if empty or rays:
+        return rays
+    meshed = prism.meshed()
+    gained = None if meshed is None else _gained(meshed, other, shared, fuzzies[0])
+    return None if gained is None else gained > volume_tolerance
 
 
 # ---------------------------------------------------------------------------------------------- public
@@ -491,10 +635,22 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = 0.1, 
     interference pairs follow the order of ``parts``; obstruction pair ``(x, y)`` along ``+d`` means ``x``
     moving along ``+d`` collides with ``y``.
 
-    Raises :class:`BrepError` naming the part when a shape holds no solid or no volume.
-    Cost: one ``distToShape`` per pair whose boxes are within ``contact``, one ``common`` per pair that
-    touches; per axis, one sweep (prisms of the backward faces and their fusion) per part with candidates and
-    one ``common`` per candidate pair. Roughly 0.05-1 s per boolean on ordinary parts.
+    Tolerances: ``contact`` (model units) for contacts, and the grazing width of the obstruction broad
+    phase; ``interference`` (cubic units) for reporting overlaps; ``depth`` (model units) for obstruction:
+    ``y`` must reach more than ``depth`` beyond the start of ``x``, and ``x``'s sweep must take more than
+    ``depth ** 3`` of ``y`` outside what they already share. Raises :class:`BrepError` naming the part when
+    a shape holds no solid or no volume, ``ValueError`` for a negative tolerance.
+
+    >>> import Part
+    >>> report = analyze_shapes([("a", Part.makeBox(1, 1, 1)), ("b", Part.makeBox(1, 1, 1, FreeCAD.Vector(1, 0, 0)))])
+    >>> report["contacts"], report["obstructions"]["+X"]
+    ([['a', 'b']], [['a', 'b']])
+
+    Cost: one ``distToShape`` per pair whose boxes are within ``contact`` and one ``common`` per pair that
+    touches; per axis, the prisms of each part's backward faces (one ``generalFuse`` per face split at its
+    silhouette) and, per candidate pair, one to four ``common`` per prism whose box meets the other part
+    (an empty result is cross-checked) plus up to 100 point classifications. Booleans take 0.01-1 s each;
+    the pen takes about 2 s, a 61-part toy truck about 90 s.
     """
     start = time.perf_counter()
     for name, value in (("contact", contact), ("interference", interference), ("depth", depth)):
@@ -512,8 +668,15 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = 0.1, 
         shapes.append(shape.copy())  # booleans may raise the tolerances of their arguments
     boxes = [_box(s) for s in shapes]
     warnings: list[str] = []
-    fuzzies = (contact * 1e-4, 0.0, contact * 1e-3, contact * 1e-2)
-    contacts, overlap = _contacts(ids, shapes, boxes, contact, fuzzies, warnings)
+    fuzzies = (0.0, contact * 1e-4, contact * 1e-3)
+    cache: dict[int, list] = {}
+
+    def points(j: int) -> list:
+        if j not in cache:
+            cache[j] = _inner_points(shapes[j], min(contact, 0.01 * shapes[j].BoundBox.DiagonalLength))
+        return cache[j]
+
+    contacts, overlap = _contacts(ids, shapes, boxes, points, contact, fuzzies, warnings)
     interferences = [(i, j, overlap[i, j][0]) for i, j in contacts if overlap.get((i, j), (0.0,))[0] > interference]
     for i, j, volume in interferences:
         warnings.append(f"parts {ids[i]!r} and {ids[j]!r} interpenetrate by {volume:.4g} cubic units "

@@ -1,6 +1,6 @@
 """The exact OCCT engine (freecad_aplan.occt) in real FreeCAD: closed-form shapes and the four pen models.
 
-One FreeCADCmd process runs everything (about 30 s): small solids with known answers, then the pen exported
+One FreeCADCmd process runs everything (about 15 s): small solids with known answers, then the pen exported
 from the simplified and complex models, as FreeCAD documents and as STEP files, against the ground truth.
 """
 from __future__ import annotations
