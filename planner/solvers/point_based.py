@@ -1,14 +1,23 @@
-"""An anytime point-based POMDP solver with certified bounds (heuristic search value iteration).
+"""An anytime point-based POMDP solver with certified bounds: heuristic search for the upper bound, value
+iteration over reachable beliefs for the lower bound.
 
 The value ``V*(b0)`` is bracketed by a lower bound (a set of alpha vectors: the value of a policy that can
 be executed) and an upper bound (belief points with values, interpolated by the sawtooth rule, and the fast
-informed bound). Trials descend from ``b0`` following the action that is best for the upper bound and the
-observation with the largest weighted excess gap, and back up both bounds on the way up (Smith & Simmons,
-HSVI2, 2005). It stops at the time limit, at the iteration limit, or when ``upper - lower <= precision`` at
-``b0``: the gap is a certificate, ``V*(b0)`` lies between the bounds.
+informed bound). Two processes share the time, balanced by work:
 
-Every step evaluates all actions and observations at once (numpy); a backup costs
-O(A (nnz(T) + S Z) + (K + N) S M) for K alpha vectors, N upper-bound points and M = A x Z successors.
+- *Trials* (Smith & Simmons, HSVI2, 2005) descend from ``b0`` following the action that is best for the
+  upper bound and the observation with the largest weighted excess gap, and back up both bounds on the way
+  up; every other trial follows the lower bound's policy instead.
+- *Sweeps* (:mod:`planner.solvers.belief_set`) grow a set of beliefs reachable under the lower bound's
+  policy, heaviest first, and back up all of them at once, which tightens the lower bound far faster than
+  one belief per trial step (on the pen: within 0.001 of the optimum in about half a second).
+
+It stops at the time limit, at the iteration limit, or when ``upper - lower <= precision`` at ``b0``: the
+gap is a certificate, ``V*(b0)`` lies between the bounds.
+
+A trial step evaluates all actions and observations at once (numpy) and costs
+O(A (nnz(T) + S Z) + (K + N) S M) for K alpha vectors, N upper-bound points and M = A x Z successors; a
+sweep costs O(A S (S + Z K)) per belief.
 """
 from __future__ import annotations
 
@@ -17,11 +26,11 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from ..policy import AlphaVectorPolicy
 from ..pomdp import POMDP
+from .belief_set import BeliefSet, policy_successors, sweep
+from .tables import Rows, Tables, blind_lower_bound, fast_informed_bound
 
 __all__ = ["PointBasedSolver", "SolveResult"]
 
@@ -35,7 +44,7 @@ class SolveResult:
     upper_bound: float
     seconds: float
     iterations: int
-    history: list = field(default_factory=list)  # (seconds, lower, upper) after each trial
+    history: list = field(default_factory=list)  # (seconds, lower, upper) after each trial or sweep
 
     @property
     def gap(self) -> float:
@@ -47,111 +56,18 @@ class SolveResult:
                 "iterations": self.iterations}
 
 
-class _Rows:
-    """A growing (n, width) float array (amortised appends), with its support pattern as floats."""
-
-    def __init__(self, width: int):
-        self._data = np.zeros((64, width))
-        self._support = np.zeros((64, width), dtype=np.float32)
-        self.n = 0
-
-    def append(self, row: np.ndarray) -> None:
-        if self.n == self._data.shape[0]:
-            self._data = np.concatenate([self._data, np.zeros_like(self._data)])
-            self._support = np.concatenate([self._support, np.zeros_like(self._support)])
-        self._data[self.n] = row
-        self._support[self.n] = row > 0
-        self.n += 1
-
-    def keep(self, mask: np.ndarray) -> None:
-        kept = int(mask.sum())
-        self._data[:kept] = self._data[:self.n][mask]
-        self._support[:kept] = self._support[:self.n][mask]
-        self.n = kept
-
-    @property
-    def rows(self) -> np.ndarray:
-        return self._data[:self.n]
-
-    @property
-    def support(self) -> np.ndarray:
-        return self._support[:self.n]
-
-
-DENSE_LIMIT = 20_000_000  # A * S * S entries up to which transitions are kept dense (faster for small models)
-
-
-class _Model:
-    """The tables a solver needs, in the shapes it needs them."""
-
-    def __init__(self, model: POMDP):
-        self.S, self.A, self.Z = model.n_states, model.n_actions, model.n_observations
-        self.T = [t.tocsr() for t in model.transition]               # rows: from
-        self.dense = self.A * self.S * self.S <= DENSE_LIMIT
-        if self.dense:
-            self.TD = np.stack([t.toarray() for t in model.transition])  # (A, S, S)
-        else:
-            self.stacked_t = sp.vstack([t.T for t in model.transition]).tocsr()   # (A*S, S): rows "to"
-            self.block = sp.block_diag(self.T, format="csr")                   # (A*S, A*S)
-        self.OZ = np.stack([o.toarray().T for o in model.observation])  # (A, Z, S): O(z | s', a)
-        self.R = np.asarray(model.reward, dtype=float)                 # (A, S)
-        self.gamma = model.discount
-
-    def predict(self, b: np.ndarray) -> np.ndarray:
-        """(A, S): the next-state distribution after each action."""
-        if self.dense:
-            return np.tensordot(b, self.TD, axes=(0, 1))
-        return (self.stacked_t @ b).reshape(self.A, self.S)
-
-    def expect(self, W: np.ndarray) -> np.ndarray:
-        """(A, S): for each action a, sum_s' T(s'|s,a) W[a, s']."""
-        if self.dense:
-            return np.einsum("ast,at->as", self.TD, W)
-        return (self.block @ W.reshape(-1)).reshape(self.A, self.S)
-
-    def successors(self, b: np.ndarray):
-        """Non-zero (action, observation) pairs after ``b``: their indices, probabilities and beliefs."""
-        predicted = self.predict(b)                                      # (A, S)
-        joint = self.OZ * predicted[:, None, :]                          # (A, Z, S)
-        pz = joint.sum(axis=2)
-        a_idx, z_idx = np.nonzero(pz > 1e-15)
-        probs = pz[a_idx, z_idx]
-        return a_idx, z_idx, probs, joint[a_idx, z_idx] / probs[:, None]
-
-
-def _blind_lower_bound(m: _Model) -> np.ndarray:
-    """For each action, the value of repeating it forever: (I - gamma T_a) alpha = R_a."""
-    identity = sp.identity(m.S, format="csc")
-    return np.array([spla.spsolve((identity - m.gamma * m.T[a]).tocsc(), m.R[a]) for a in range(m.A)])
-
-
-def _fast_informed_bound(m: _Model, tolerance: float = 1e-3, max_sweeps: int = 100_000) -> np.ndarray:
-    """Q (A, S): Q(s,a) = R(s,a) + gamma sum_z max_a' sum_s' T(s'|s,a) O(z|s',a) Q(s',a') (Hauskrecht 2000).
-
-    Iterated from the trivial upper bound R_max / (1 - gamma): the operator is monotone, so every iterate
-    is an upper bound too, and the iteration can stop early.
-    """
-    Q = np.full((m.A, m.S), np.abs(m.R).max() / (1 - m.gamma))
-    for _ in range(max_sweeps):
-        new = np.empty_like(Q)
-        for a in range(m.A):
-            inner = np.stack([m.T[a] @ (m.OZ[a][z][:, None] * Q.T) for z in range(m.Z)])  # (Z, S, A')
-            new[a] = m.R[a] + m.gamma * inner.max(axis=2).sum(axis=0)
-        done = np.abs(new - Q).max() < tolerance
-        Q = new
-        if done:
-            break
-    return Q
-
-
 @dataclass(frozen=True)
 class PointBasedSolver:
-    """HSVI-style point-based solver (module docstring). Same configuration and seed, same result.
+    """Point-based solver with certified bounds (module docstring). Same configuration, same result: the
+    two processes are balanced by counted work, not by the clock, so only the time limit depends on speed.
 
     ``time_limit`` (s), ``precision`` (target gap at b0), ``max_iterations`` (trials), ``max_depth``,
     ``gap_fraction``: each trial aims at this fraction of the current gap at b0 (at least ``precision``);
-    every ``lower_trial_every``-th trial follows the lower bound's policy; alpha vectors that are best at
-    no visited belief are pruned every ``prune_every`` trials.
+    every ``lower_trial_every``-th trial follows the lower bound's policy. Sweeps: ``theta`` is the first
+    reach-weight threshold for growing the belief set, divided by ``theta_factor`` whenever no belief above
+    it is left to grow; ``sweeps_per_round`` sweeps follow each growth, over ``chunk`` beliefs at a time;
+    ``trial_weight`` is the work of one trial backup in belief-set backups (it evaluates every action and
+    observation against both bounds); the sweeps get as much work as the trials.
     """
 
     time_limit: float = 60.0
@@ -159,27 +75,34 @@ class PointBasedSolver:
     max_iterations: int | None = None
     max_depth: int = 300
     gap_fraction: float = 0.5
-    prune_every: int = 25
     lower_trial_every: int = 2
+    theta: float = 1e-3
+    theta_factor: float = 3.0
+    sweeps_per_round: int = 3
+    chunk: int = 4096
+    trial_weight: float = 25.0
+    min_share: float = 0.1
+    rate_horizon: float = 20_000.0
+    belief_memory: int = 50_000_000
     seed: int = 0
 
     def solve(self, model: POMDP, progress: Callable[[float, float, float], None] | None = None) -> SolveResult:
         start = time.perf_counter()
-        m = _Model(model)
+        m = Tables(model)
         gamma = m.gamma
         b0 = np.asarray(model.initial, dtype=float)
-        alphas = _Rows(m.S)
-        actions: list[int] = []
-        for a, alpha in enumerate(_blind_lower_bound(m)):
-            alphas.append(alpha)
-            actions.append(a)
-        Q = _fast_informed_bound(m)
+        alphas = Rows(m.S)
+        alphas.extend(blind_lower_bound(m))
+        actions: list[int] = list(range(m.A))
+        Q = fast_informed_bound(m)
         corner = Q.max(axis=0)
-        points = _Rows(m.S)
+        points = Rows(m.S)
         fingerprint = np.random.default_rng(self.seed).random(m.S)
         point_at: dict[float, int] = {}
         point_excess: list[float] = []  # v_i - corner . b_i: how far below the corner interpolation
         excess_array = np.zeros(0)
+        beliefs = BeliefSet(m.S)
+        beliefs.add(b0[None], np.ones(1))
 
         def lower(B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             values = B @ alphas.rows.T
@@ -221,7 +144,11 @@ class PointBasedSolver:
             np.add.at(q, a_idx, gamma * probs * up)
             return q
 
-        def backup(b: np.ndarray, evaluation) -> None:
+        def backup(b: np.ndarray, evaluation, known: tuple[float, int, float]) -> tuple[float, int, float]:
+            """Back up both bounds at ``b``; ``known``: its (lower, best vector, upper) bounds when the trial
+            went down (still valid bounds: they can only have tightened since). Returns the new ones."""
+            nonlocal excess_array
+            low, best_vector, high = known
             a_idx, z_idx, probs, nxt, lo, best, up = evaluation
             chosen = alphas.rows[best]                                   # (M, S): best vector per successor
             weighted = m.OZ[a_idx, z_idx] * chosen                       # (M, S')
@@ -229,12 +156,13 @@ class PointBasedSolver:
             np.add.at(per_action, a_idx, weighted)
             vectors = m.R + gamma * m.expect(per_action)
             a = int(np.argmax(vectors @ b))
-            if vectors[a] @ b > lower(b[None])[0][0] + 1e-12:
+            if vectors[a] @ b > low + 1e-12:
+                low, best_vector = float(vectors[a] @ b), alphas.n
                 alphas.append(vectors[a])
                 actions.append(a)
-            nonlocal excess_array
             value = float(q_upper(b, evaluation).max())
-            if value < upper(b[None])[0] - 1e-12:
+            if value < high - 1e-12:
+                high = value
                 key = float(b @ fingerprint)
                 row = point_at.get(key)
                 if row is not None and np.array_equal(points.rows[row], b):
@@ -244,38 +172,22 @@ class PointBasedSolver:
                     points.append(b)
                     point_excess.append(value - float(b @ corner))
                 excess_array = np.asarray(point_excess)
+            return low, best_vector, high
 
-        visited = _Rows(m.S)
-
-        def prune() -> None:
-            """Keep the alpha vectors that are best at some visited belief (and the blind ones)."""
-            V = visited.rows
-            best = np.unique((V @ alphas.rows.T).argmax(axis=1))
-            mask = np.zeros(alphas.n, dtype=bool)
-            mask[best] = True
-            mask[:m.A] = True
-            alphas.keep(mask)
-            kept = [actions[i] for i in np.flatnonzero(mask)]
-            actions[:] = kept
-
-        history = []
-        iterations = 0
-        lb, ub = float(lower(b0[None])[0][0]), float(upper(b0[None])[0])
-        history.append((time.perf_counter() - start, lb, ub))
-        while (ub - lb > self.precision and time.perf_counter() - start < self.time_limit
-               and (self.max_iterations is None or iterations < self.max_iterations)):
-            iterations += 1
-            # Trials aim at a fraction of the current gap, so early trials stay shallow (HSVI's epsilon).
-            epsilon = max(self.precision, self.gap_fraction * (ub - lb))
-            path = []  # (belief, evaluation, index of the successor the trial went on to)
-            b, depth = b0, 0
+        def trial(iteration: int, epsilon: float) -> int:
+            """One trial from b0; returns the number of backups."""
+            path = []  # (belief, evaluation, index of the successor the trial went on to, its known bounds)
+            b, depth, weight = b0, 0, 1.0
+            low, best_vector = (float(v[0]) for v in lower(b0[None]))
+            known = (low, int(best_vector), float(upper(b0[None])[0]))
+            reached, weights = [], []
             while depth < self.max_depth:
                 evaluation = evaluate(b)
                 a_idx, z_idx, probs, nxt, lo, best, up = evaluation
-                path.append([b, evaluation, None])
-                if float(upper(b[None])[0]) - float(lower(b[None])[0][0]) <= epsilon * gamma ** (-depth):
+                path.append([b, evaluation, None, known])
+                if known[2] - known[0] <= epsilon * gamma ** (-depth):
                     break
-                if iterations % self.lower_trial_every == 0:
+                if iteration % self.lower_trial_every == 0:
                     # Now and then, follow the current policy (the lower bound's best action) instead, so the
                     # beliefs that policy visits get backed up too (SARSOP samples near it for the same reason).
                     q_low = m.R @ b
@@ -291,19 +203,80 @@ class PointBasedSolver:
                     break
                 k = int(mine[int(np.argmax(excess))])
                 path[-1][2] = k
-                b, depth = nxt[k], depth + 1
-            for b, evaluation, k in reversed(path):
+                b, depth, weight = nxt[k], depth + 1, weight * gamma * probs[k]
+                known = (float(lo[k]), int(best[k]), float(up[k]))
+                reached.append(b)
+                weights.append(weight)
+            child = None
+            for b, evaluation, k, known in reversed(path):
                 if k is not None:
                     # Only the successor the trial went through has new bounds; the others' bounds can only
                     # have tightened since, so their stored values remain valid bounds.
-                    child = evaluation[3][k][None]
-                    low, idx = lower(child)
-                    evaluation[4][k], evaluation[5][k], evaluation[6][k] = low[0], idx[0], upper(child)[0]
-                backup(b, evaluation)
-                visited.append(b)
-            if iterations % self.prune_every == 0:
-                prune()
+                    evaluation[4][k], evaluation[5][k], evaluation[6][k] = child
+                child = backup(b, evaluation, known)
+            if reached:
+                beliefs.add(np.asarray(reached), np.asarray(weights))  # the sweeps back them up from now on
+            return len(path)
+
+        def prune() -> None:
+            """Keep the alpha vectors that are best at some belief of the set (and the blind ones)."""
+            best = np.unique(lower(beliefs.rows)[1])
+            mask = np.zeros(alphas.n, dtype=bool)
+            mask[best] = True
+            mask[:m.A] = True
+            alphas.keep(mask)
+            actions[:] = [actions[i] for i in np.flatnonzero(mask)]
+
+        def sweeps():
+            """The lower bound's process (module docstring), as a generator yielding its work in beliefs."""
+            theta = self.theta
+            while True:
+                todo = np.zeros(0, dtype=np.int64)
+                if beliefs.n * m.S < self.belief_memory:
+                    todo = beliefs.take_frontier(theta)
+                    while not todo.size and theta > 0 and beliefs.unexpanded:
+                        theta /= self.theta_factor
+                        todo = beliefs.take_frontier(theta)
+                if todo.size:
+                    greedy = np.asarray(actions)[lower(beliefs.rows[todo])[1]]
+                    beliefs.add(*policy_successors(m, beliefs.rows[todo], greedy, beliefs.weights[todo]))
+                    yield int(todo.size)
+                for _ in range(self.sweeps_per_round):
+                    for first in range(0, beliefs.n, self.chunk):
+                        chunk = beliefs.rows[first:first + self.chunk]
+                        vectors, chosen, _ = sweep(m, chunk, alphas.rows, Q)
+                        alphas.extend(vectors)
+                        actions.extend(int(a) for a in chosen)
+                        yield len(chunk)
+                    prune()
+
+        history = []
+        iterations = 0
+        lower_process = sweeps()
+        # Work (in belief-set backups) goes to the process that has recently closed the gap at b0 the
+        # fastest per unit of work, each keeping at least min_share of it: [decayed gap closed, decayed work].
+        recent = {"sweeps": [0.0, 0.0], "trials": [0.0, 0.0]}
+        done = {"sweeps": 0.0, "trials": 0.0}
+        lb, ub = float(lower(b0[None])[0][0]), float(upper(b0[None])[0])
+        history.append((time.perf_counter() - start, lb, ub))
+        while (ub - lb > self.precision and time.perf_counter() - start < self.time_limit
+               and (self.max_iterations is None or iterations < self.max_iterations)):
+            rates = {k: (g / w if w > 0 else np.inf) for k, (g, w) in recent.items()}
+            total = rates["sweeps"] + rates["trials"]
+            share = 0.5 if not np.isfinite(total) or total <= 0 else rates["sweeps"] / total
+            share = min(max(share, self.min_share), 1 - self.min_share)
+            if done["sweeps"] * (1 - share) <= done["trials"] * share:
+                process, work = "sweeps", float(next(lower_process))
+            else:
+                iterations += 1
+                # Trials aim at a fraction of the current gap, so early trials stay shallow (HSVI's epsilon).
+                epsilon = max(self.precision, self.gap_fraction * (ub - lb))
+                process, work = "trials", self.trial_weight * trial(iterations, epsilon)
+            gap = ub - lb
             lb, ub = float(lower(b0[None])[0][0]), float(upper(b0[None])[0])
+            decay = 0.5 ** (work / self.rate_horizon)
+            recent[process] = [recent[process][0] * decay + (gap - (ub - lb)), recent[process][1] * decay + work]
+            done[process] += work
             elapsed = time.perf_counter() - start
             history.append((elapsed, lb, ub))
             if progress is not None:

@@ -1,0 +1,123 @@
+"""What the point-based solvers share: a model's tables in the shapes they need, growing row arrays, and
+the two initial bounds (blind policies below, the fast informed bound above)."""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..pomdp import POMDP
+
+__all__ = ["Rows", "Tables", "blind_lower_bound", "fast_informed_bound"]
+
+DENSE_LIMIT = 20_000_000  # A * S * S entries up to which transitions are kept dense (faster for small models)
+
+
+class Rows:
+    """A growing (n, width) float array (amortised appends), with its support pattern as floats."""
+
+    def __init__(self, width: int):
+        self._data = np.zeros((64, width))
+        self._support = np.zeros((64, width), dtype=np.float32)
+        self.n = 0
+
+    def extend(self, rows: np.ndarray) -> None:
+        """Append the rows of ``rows`` (k, width)."""
+        need = self.n + len(rows)
+        if need > self._data.shape[0]:
+            size = max(need, 2 * self._data.shape[0])
+            self._data = np.concatenate([self._data, np.zeros((size - self._data.shape[0], self._data.shape[1]))])
+            self._support = np.concatenate([self._support, np.zeros((size - self._support.shape[0],
+                                                                     self._support.shape[1]), dtype=np.float32)])
+        self._data[self.n:need] = rows
+        self._support[self.n:need] = rows > 0
+        self.n = need
+
+    def append(self, row: np.ndarray) -> None:
+        self.extend(row[None])
+
+    def keep(self, mask: np.ndarray) -> None:
+        kept = int(mask.sum())
+        self._data[:kept] = self._data[:self.n][mask]
+        self._support[:kept] = self._support[:self.n][mask]
+        self.n = kept
+
+    @property
+    def rows(self) -> np.ndarray:
+        return self._data[:self.n]
+
+    @property
+    def support(self) -> np.ndarray:
+        return self._support[:self.n]
+
+
+class Tables:
+    """A model's tables, in the shapes a solver needs: ``T`` (A sparse (S, S), rows "from"), dense ``TD``
+    (A, S, S) when small enough, ``OZ`` (A, Z, S) = O(z | s', a), ``R`` (A, S), ``gamma``."""
+
+    def __init__(self, model: POMDP):
+        self.S, self.A, self.Z = model.n_states, model.n_actions, model.n_observations
+        self.T = [t.tocsr() for t in model.transition]
+        self.dense = self.A * self.S * self.S <= DENSE_LIMIT
+        if self.dense:
+            self.TD = np.stack([t.toarray() for t in model.transition])
+        else:
+            self.stacked_t = sp.vstack([t.T for t in model.transition]).tocsr()   # (A*S, S): rows "to"
+            self.block = sp.block_diag(self.T, format="csr")                   # (A*S, A*S)
+        self.OZ = np.stack([o.toarray().T for o in model.observation])
+        self.R = np.asarray(model.reward, dtype=float)
+        self.gamma = model.discount
+
+    def predict(self, b: np.ndarray) -> np.ndarray:
+        """(A, S): the next-state distribution after each action."""
+        if self.dense:
+            return np.tensordot(b, self.TD, axes=(0, 1))
+        return (self.stacked_t @ b).reshape(self.A, self.S)
+
+    def step(self, B: np.ndarray, a: int) -> np.ndarray:
+        """(n, S): the next-state distributions of the beliefs ``B`` (n, S) after action ``a``."""
+        return B @ self.TD[a] if self.dense else np.asarray((self.T[a].T @ B.T).T)
+
+    def expect(self, W: np.ndarray) -> np.ndarray:
+        """(A, S): for each action a, sum_s' T(s'|s,a) W[a, s']."""
+        if self.dense:
+            return np.einsum("ast,at->as", self.TD, W)
+        return (self.block @ W.reshape(-1)).reshape(self.A, self.S)
+
+    def expect_one(self, a: int, W: np.ndarray) -> np.ndarray:
+        """(n, S): for each row w of ``W`` (n, S), sum_s' T(s'|s,a) w[s']."""
+        return W @ self.TD[a].T if self.dense else np.asarray((self.T[a] @ W.T).T)
+
+    def successors(self, b: np.ndarray):
+        """Non-zero (action, observation) pairs after ``b``: their indices, probabilities and beliefs."""
+        predicted = self.predict(b)                                      # (A, S)
+        joint = self.OZ * predicted[:, None, :]                          # (A, Z, S)
+        pz = joint.sum(axis=2)
+        a_idx, z_idx = np.nonzero(pz > 1e-15)
+        probs = pz[a_idx, z_idx]
+        return a_idx, z_idx, probs, joint[a_idx, z_idx] / probs[:, None]
+
+
+def blind_lower_bound(m: Tables) -> np.ndarray:
+    """(A, S): for each action, the value of repeating it forever: (I - gamma T_a) alpha = R_a."""
+    identity = sp.identity(m.S, format="csc")
+    return np.array([spla.spsolve((identity - m.gamma * m.T[a]).tocsc(), m.R[a]) for a in range(m.A)])
+
+
+def fast_informed_bound(m: Tables, tolerance: float = 1e-3, max_sweeps: int = 100_000) -> np.ndarray:
+    """Q (A, S): Q(s,a) = R(s,a) + gamma sum_z max_a' sum_s' T(s'|s,a) O(z|s',a) Q(s',a') (Hauskrecht 2000).
+
+    Iterated from the trivial upper bound R_max / (1 - gamma): the operator is monotone, so every iterate
+    is an upper bound too, and the iteration can stop early.
+    """
+    Q = np.full((m.A, m.S), np.abs(m.R).max() / (1 - m.gamma))
+    for _ in range(max_sweeps):
+        new = np.empty_like(Q)
+        for a in range(m.A):
+            inner = np.stack([m.T[a] @ (m.OZ[a][z][:, None] * Q.T) for z in range(m.Z)])  # (Z, S, A')
+            new[a] = m.R[a] + m.gamma * inner.max(axis=2).sum(axis=0)
+        done = np.abs(new - Q).max() < tolerance
+        Q = new
+        if done:
+            break
+    return Q
