@@ -121,17 +121,64 @@ def wait_cancel():
     dialog = FreeCADGui.getMainWindow().findChild(QtGui.QDialog, "AplanPlanDialog")
     table = dialog.findChild(QtGui.QTableWidget, "AplanStatisticsTable")
     result["shown"] = {{table.item(r, 0).text(): table.item(r, 1).text() for r in range(table.rowCount())}}
-    dialog.move(FreeCADGui.getMainWindow().geometry().center() - dialog.rect().center() + QtCore.QPoint(250, 0))
-    dialog.resize(520, 420)
+    dialog.setGeometry(690, 120, 580, 420)  # beside the pen, for the screenshot
     QtCore.QTimer.singleShot(800, guarded(screenshots))
 
 
 def screenshots():
     doc = FreeCAD.ActiveDocument
+    FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
+    FreeCADGui.ActiveDocument.ActiveView.fitAll()
+    QtGui.QApplication.processEvents()
     FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(ARTIFACTS, "gui_3d_view.png"), 800, 600, "White")
     screen = QtGui.QApplication.primaryScreen().grabWindow(0)
     screen.save(os.path.join(ARTIFACTS, "gui_main_window.png"))
     result["after"] = snapshot(doc)
+    # Designer intent in the task panel: the pen's technical constraint and a tag (body + button needs a
+    # screwdriver and is left to the human), then the plan again.
+    FreeCADGui.getMainWindow().findChild(QtGui.QDialog, "AplanPlanDialog").close()
+    FreeCADGui.runCommand("Aplan_Intent")
+    window = FreeCADGui.getMainWindow()
+    constraints = window.findChild(QtGui.QTableWidget, "AplanConstraintsTable")
+    tags = window.findChild(QtGui.QTableWidget, "AplanTagsTable")
+    constraints.insertRow(0)
+    constraints.setItem(0, 0, QtGui.QTableWidgetItem("ink_001, cartridge_001"))
+    constraints.setItem(0, 1, QtGui.QTableWidgetItem("head_001"))
+    active = QtGui.QTableWidgetItem()
+    active.setCheckState(QtCore.Qt.Checked)
+    constraints.setItem(0, 2, active)
+    row = [r for r in range(tags.rowCount()) if tags.item(r, 0).text() == "{{body_001}} + {{button_001}}"][0]
+    tags.item(row, 2).setCheckState(QtCore.Qt.Unchecked)
+    tags.item(row, 3).setText("screwdriver")
+    result["tag_rows"] = tags.rowCount()
+    from freecad_aplan.gui import commands
+    panel = commands._STATE.get("panel")
+    panel.accept()
+    from freecad_aplan.intent import find_analysis, read_intent
+    intent = read_intent(find_analysis(doc))
+    result["stored"] = [intent.technical_constraints, intent.operations, intent.tools]
+    FreeCADGui.runCommand("Aplan_Plan")
+    result["tagged_plan"] = commands.last_plan()["statistics"]
+    doc.undo()
+    result["undone"] = read_intent(find_analysis(doc)).operations
+    # An analysis from a newer APLAN: refused with a message, nothing changes.
+    analysis = find_analysis(doc)
+    analysis.FormatVersion = 2
+    names = list(analysis.Excluded)
+    FreeCADGui.runCommand("Aplan_Plan")
+    result["newer"] = status()
+    FreeCADGui.Selection.addSelection(doc.Name, "b_cap_001_")
+    FreeCADGui.runCommand("Aplan_ExcludeParts")
+    result["newer_unchanged"] = list(analysis.Excluded) == names
+    # A document without solids.
+    import Part
+    flat = FreeCAD.newDocument("flat")
+    flat.addObject("Part::Feature", "Sheet").Shape = Part.makePlane(10, 10)
+    flat.recompute()
+    FreeCADGui.runCommand("Aplan_CreateAnalysis")
+    FreeCADGui.runCommand("Aplan_Detect")
+    result["no_solids"] = status()
+    result["no_solids_jobs"] = len(__import__("freecad_aplan.gui.jobs", fromlist=["x"]).running_jobs())
     finish(0)
 
 
@@ -191,5 +238,16 @@ def test_workbench_in_the_real_freecad_window(tmp_path):
     assert data["shown"]["intentions"] == "69"
     assert all(path.endswith(".png") for path in data["plan"]["images"].values())
     assert data["after"] == data["before"]
+    # Intent edited in the task panel: stored as product-format entries, used by the next plan, undoable.
+    constraints, operations, tools = data["stored"]
+    assert constraints == [{"parts": ["ink_001", "cartridge_001"], "requires": "head_001", "active": True}]
+    assert operations == [{"inputs": [["body_001"], ["button_001"]], "unfavorable": False, "robot": False,
+                           "tool": "screwdriver"}] and tools == ["screwdriver"]
+    assert data["tag_rows"] == 21
+    tagged = data["tagged_plan"]
+    assert (tagged["intentions"], tagged["states"], tagged["actions"]) == (39, 14, 18 - 1)
+    assert data["undone"] == []
+    assert "written by a newer APLAN" in data["newer"] and data["newer_unchanged"] is True
+    assert "the document has no solids to plan with" in data["no_solids"] and data["no_solids_jobs"] == 0
     for name in ("gui_main_window.png", "gui_3d_view.png"):
         assert (ARTIFACTS / name).stat().st_size > 10_000

@@ -208,7 +208,8 @@ class Diagrams(_Command):
         analysis = workflow.require_analysis(_document())
         workflow.analysis_product(analysis)  # a clear message when nothing was detected yet
         FreeCADGui.Control.closeDialog()
-        FreeCADGui.Control.showDialog(DiagramsPanel(analysis))
+        _STATE["panel"] = DiagramsPanel(analysis)
+        FreeCADGui.Control.showDialog(_STATE["panel"])
 
 
 class Intent(_Command):
@@ -223,7 +224,8 @@ class Intent(_Command):
         analysis = workflow.require_analysis(_document())
         plan = make_plan(workflow.analysis_product(analysis), technical=False)
         FreeCADGui.Control.closeDialog()
-        FreeCADGui.Control.showDialog(IntentPanel(analysis, plan))
+        _STATE["panel"] = IntentPanel(analysis, plan)
+        FreeCADGui.Control.showDialog(_STATE["panel"])
 
 
 class Plan(_Command):
