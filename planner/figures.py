@@ -104,6 +104,7 @@ def draw_plan(plan: Plan, folder: str | Path, limit: int = DEFAULT_DRAW_LIMIT) -
 
     Returns name -> path, or name -> the reason it was not drawn (a graph above ``limit`` nodes).
     """
+    Path(folder).mkdir(parents=True, exist_ok=True)
     out = {}
     for name, draw in (("andor", draw_andor), ("states", draw_states), ("intentions", draw_intentions)):
         try:

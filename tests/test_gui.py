@@ -161,8 +161,33 @@ def screenshots():
     result["tagged_plan"] = commands.last_plan()["statistics"]
     doc.undo()
     result["undone"] = read_intent(find_analysis(doc)).operations
-    # An analysis from a newer APLAN: refused with a message, nothing changes.
+    # Components: group the selected ink and cartridge, then ungroup; exclude the cap, then include it.
     analysis = find_analysis(doc)
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(doc.Name, "b_ink_001_")
+    FreeCADGui.Selection.addSelection(doc.Name, "b_cartridge_001_")
+    FreeCADGui.runCommand("Aplan_GroupComponent")
+    result["grouped"] = read_intent(analysis).groups
+    FreeCADGui.runCommand("Aplan_GroupComponent")
+    result["ungrouped"] = read_intent(analysis).groups
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(doc.Name, "b_cap_001_")
+    FreeCADGui.runCommand("Aplan_ExcludeParts")
+    result["excluded"] = read_intent(analysis).excluded
+    FreeCADGui.runCommand("Aplan_ExcludeParts")
+    result["included"] = read_intent(analysis).excluded
+    FreeCADGui.Selection.clearSelection()
+    # Diagrams panel: remove the first relation (a contact), OK; then undo.
+    FreeCADGui.runCommand("Aplan_Diagrams")
+    table = FreeCADGui.getMainWindow().findChild(QtGui.QTableWidget, "AplanDiagramsTable")
+    table.selectRow(0)
+    commands._STATE["panel"].remove_selected()
+    commands._STATE["panel"].accept()
+    result["contacts_after_remove"] = len(read_intent(analysis).diagrams["contacts"])
+    doc.undo()
+    result["contacts_after_undo"] = len(read_intent(analysis).diagrams["contacts"])
+    FreeCADGui.Selection.clearSelection()
+    # An analysis from a newer APLAN: refused with a message, nothing changes.
     analysis.FormatVersion = 2
     names = list(analysis.Excluded)
     FreeCADGui.runCommand("Aplan_Plan")
@@ -247,6 +272,9 @@ def test_workbench_in_the_real_freecad_window(tmp_path):
     tagged = data["tagged_plan"]
     assert (tagged["intentions"], tagged["states"], tagged["actions"]) == (39, 14, 18 - 1)
     assert data["undone"] == []
+    assert data["grouped"] == {"ink_001+cartridge_001": ["b_ink_001_", "b_cartridge_001_"]}
+    assert data["ungrouped"] == {} and data["excluded"] == ["b_cap_001_"] and data["included"] == []
+    assert (data["contacts_after_remove"], data["contacts_after_undo"]) == (4, 5)
     assert "written by a newer APLAN" in data["newer"] and data["newer_unchanged"] is True
     assert "the document has no solids to plan with" in data["no_solids"] and data["no_solids_jobs"] == 0
     for name in ("gui_main_window.png", "gui_3d_view.png"):
