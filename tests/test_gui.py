@@ -154,7 +154,7 @@ def screenshots():
     from freecad_aplan.gui import commands
     panel = commands._STATE.get("panel")
     panel.accept()
-    from freecad_aplan.intent import find_analysis, read_intent
+    from freecad_aplan.intent import find_analysis, read_intent, update_intent
     intent = read_intent(find_analysis(doc))
     result["stored"] = [intent.technical_constraints, intent.operations, intent.tools]
     FreeCADGui.runCommand("Aplan_Plan")
@@ -187,6 +187,19 @@ def screenshots():
     doc.undo()
     result["contacts_after_undo"] = len(read_intent(analysis).diagrams["contacts"])
     FreeCADGui.Selection.clearSelection()
+    # Save, close and reopen in the GUI: the analysis, its intent and its view provider come back.
+    from dataclasses import asdict
+    update_intent(analysis, "tag", tools=["screwdriver"], operations=[{{"inputs": [["body_001"], ["button_001"]],
+                                                                      "robot": False, "tool": "screwdriver"}}])
+    saved = asdict(read_intent(analysis))
+    path = os.path.join(os.path.dirname(COPY), "reopened.FCStd")
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    doc = FreeCAD.openDocument(path)
+    analysis = find_analysis(doc)
+    result["reopened_same"] = asdict(read_intent(analysis)) == saved
+    result["reopened_view"] = type(FreeCADGui.getDocument(doc.Name).getObject(analysis.Name).Proxy).__name__
+    result["reopened_placements"] = snapshot(doc) == result["before"]
     # An analysis from a newer APLAN: refused with a message, nothing changes.
     analysis.FormatVersion = 2
     names = list(analysis.Excluded)
@@ -275,6 +288,8 @@ def test_workbench_in_the_real_freecad_window(tmp_path):
     assert data["grouped"] == {"ink_001+cartridge_001": ["b_ink_001_", "b_cartridge_001_"]}
     assert data["ungrouped"] == {} and data["excluded"] == ["b_cap_001_"] and data["included"] == []
     assert (data["contacts_after_remove"], data["contacts_after_undo"]) == (4, 5)
+    assert data["reopened_same"] is True and data["reopened_view"] == "AnalysisViewProvider"
+    assert data["reopened_placements"] is True
     assert "written by a newer APLAN" in data["newer"] and data["newer_unchanged"] is True
     assert "the document has no solids to plan with" in data["no_solids"] and data["no_solids_jobs"] == 0
     for name in ("gui_main_window.png", "gui_3d_view.png"):
