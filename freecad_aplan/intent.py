@@ -201,7 +201,7 @@ def read_intent(analysis) -> Intent:
 
 
 def _write(analysis, intent: Intent) -> None:
-    for name, group in intent.groups.items():
+    for name in intent.groups:
         if "=" in name or "," in name or not name.strip():
             raise IntentError(f"component name {name!r}: use a non-empty name without '=' or ','")
     if intent.engine not in ENGINES:

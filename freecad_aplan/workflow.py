@@ -26,7 +26,7 @@ from planner.errors import PlannerError
 from . import ADDON_DIR
 
 __all__ = ["require_analysis", "export_for_detection", "worker_command", "analyze_bundle", "store_detection",
-           "analysis_product", "plan_report", "export_analysis_bundle", "export_decision_model",
+           "analysis_product", "analysis_diagrams", "plan_report", "export_analysis_bundle", "export_decision_model",
            "solve_product", "simulate_sequence", "BATCH_SCRIPT"]
 
 BATCH_SCRIPT = os.path.join(ADDON_DIR, "freecad_aplan", "batch.py")
@@ -55,40 +55,35 @@ def export_for_detection(document, folder: str) -> dict:
     return product
 
 
-def _python_with(modules: tuple[str, ...]) -> str | None:
-    """A Python interpreter for planner jobs that can import ``modules``, or None.
-
-    Order: ``$APLAN_PYTHON``; the addon's own ``.venv`` (made by ``scripts/setup.sh``); FreeCAD's Python when
-    it has them (then FreeCADCmd runs the job).
-    """
+def _mesh_python() -> str | None:
+    """The Python that runs the mesh engine: ``$APLAN_PYTHON``, else the addon's own ``.venv`` (made by
+    ``scripts/setup.sh``), else None (then FreeCADCmd, when FreeCAD's Python has trimesh and manifold3d)."""
     explicit = os.environ.get("APLAN_PYTHON")
     if explicit:
         return explicit
     venv = os.path.join(ADDON_DIR, ".venv", "bin", "python")
-    if os.path.isfile(venv) and os.access(venv, os.X_OK):
-        return venv
-    import importlib.util
-
-    return None if any(importlib.util.find_spec(m) is None for m in modules) else ""
+    return venv if os.path.isfile(venv) and os.access(venv, os.X_OK) else None
 
 
 def worker_command(action: str, engine: str | None = None) -> list[str]:
     """The program and arguments of a background job running ``batch.py`` (``action``: analyze, solve).
 
-    The occt engine runs in FreeCADCmd; the mesh engine needs trimesh and manifold3d, so it runs in the first
-    Python of :func:`_python_with` that has them. Raises :class:`~freecad_aplan.runner.FreeCADError` with
-    what to install when there is none.
+    The occt engine and the solver run in FreeCADCmd; the mesh engine needs trimesh and manifold3d, so it
+    runs in :func:`_mesh_python`, else in FreeCADCmd when FreeCAD's Python has them. Raises
+    :class:`~freecad_aplan.runner.FreeCADError` saying what to install when none can.
     """
+    import importlib.util
+
     from .runner import FreeCADError, find_freecadcmd
 
     if action == "analyze" and engine == "mesh":
-        python = _python_with(("trimesh", "manifold3d"))
-        if python is None:
+        python = _mesh_python()
+        if python is not None:
+            return [python, BATCH_SCRIPT]
+        if any(importlib.util.find_spec(m) is None for m in ("trimesh", "manifold3d")):
             raise FreeCADError("the mesh engine needs the Python packages trimesh and manifold3d, which FreeCAD's "
                                "Python does not have: install them for FreeCAD (pip), set APLAN_PYTHON to a Python "
                                "that has them, or choose the occt engine (analysis property Engine)")
-        if python:
-            return [python, BATCH_SCRIPT]
     return [find_freecadcmd(), BATCH_SCRIPT]
 
 
@@ -174,9 +169,10 @@ def plan_report(product, folder: str | None = None, technical: bool | None = Non
 def export_analysis_bundle(document, analysis, bundle: str) -> None:
     """Write the bundle folder ``bundle`` (meshes, B-reps, product.json with the stored diagrams and intent);
     it appears only when everything succeeded, replacing an existing one."""
+    from dataclasses import replace
+
     from planner.bundle import PRODUCT_FILE, load_bundle
     from planner.product import save_product
-    from dataclasses import replace
 
     product = analysis_product(analysis)
     bundle = os.path.abspath(bundle)

@@ -61,6 +61,14 @@ out["solve_job"], line = job("solve", {{"product": os.path.join(TMP, "product.js
 out["solve"] = json.loads(line.split(" ", 1)[1])
 out["simulate"] = workflow.simulate_sequence(product, os.path.join(TMP, "pen.policy"), os.path.join(TMP, "belief"))
 _, out["bad_job"] = job("analyze", {{"folder": os.path.join(TMP, "missing"), "engine": "occt"}}, "occt")
+# Without a Python for the mesh engine: FreeCADCmd when FreeCAD's Python has trimesh, else a clear error.
+import importlib.util
+workflow._mesh_python = lambda: None
+out["freecad_has_mesh"] = all(importlib.util.find_spec(m) for m in ("trimesh", "manifold3d"))
+try:
+    out["no_mesh"] = workflow.worker_command("analyze", "mesh")
+except Exception as exc:
+    out["no_mesh"] = str(exc)
 print("APLAN-RESULT " + json.dumps(out))
 """
 
@@ -93,3 +101,7 @@ def test_workbench_workflow_without_gui(tmp_path):
     assert simulate["steps"] and all(p.endswith((".png", ".svg")) for p in simulate["plots"])
     assert (tmp_path / "belief.png").stat().st_size > 1000
     assert data["bad_job"].startswith("APLAN-ERROR ") and "Traceback" not in data["bad_job"]
+    if data["freecad_has_mesh"]:
+        assert data["no_mesh"][0].endswith("freecadcmd")
+    else:
+        assert "the mesh engine needs the Python packages trimesh and manifold3d" in data["no_mesh"]
