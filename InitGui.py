@@ -15,7 +15,17 @@ class AplanWorkbench(FreeCADGui.Workbench):
         self.__class__.Icon = freecad_aplan.icon_path("aplan.svg")
 
     def Initialize(self):
-        # Commands are imported here, not at FreeCAD start-up (they arrive with the workbench issue).
+        # Commands are imported here, when the workbench is first activated, not at FreeCAD start-up.
+        from freecad_aplan.gui import commands
+
+        names = commands.register()
+        self.appendToolbar("APLAN", names)
+        self.appendMenu("APLAN", names)
+
+    def Activated(self):
+        pass
+
+    def Deactivated(self):
         pass
 
     def GetClassName(self):

@@ -7,7 +7,10 @@ Runs inside FreeCAD (the GUI, or FreeCADCmd through ``freecad_aplan.batch``). A 
 - ``meshes/<id>.stl``: binary STL of each part in global coordinates (model units);
 - ``breps/<id>.brep``: the exact OCCT shape of each part, for the OCCT engine.
 
-The document is never modified: shapes are copies, and documents this module opened are closed again.
+When the document holds an APLAN analysis (:mod:`freecad_aplan.intent`), its designer intent applies:
+its groups and exclusions choose the components, and its technical constraints, tools and operation tags
+go into ``product.json``. The document is never modified: shapes are copies, and documents this module
+opened are closed again.
 """
 from __future__ import annotations
 
@@ -20,7 +23,8 @@ import MeshPart
 
 from .document import open_model, read_components
 
-__all__ = ["export_components", "export_model", "DEFAULT_LINEAR_DEFLECTION", "DEFAULT_ANGULAR_DEFLECTION"]
+__all__ = ["export_components", "export_document", "export_model", "DEFAULT_LINEAR_DEFLECTION",
+           "DEFAULT_ANGULAR_DEFLECTION"]
 
 DEFAULT_LINEAR_DEFLECTION = 0.05  # model units (mm): the largest distance between mesh and surface
 DEFAULT_ANGULAR_DEFLECTION = 0.25  # radians between neighbouring facet normals on curved faces
@@ -38,8 +42,11 @@ def _file_name(part_id: str, used: set[str]) -> str:
 
 def export_components(components, folder: str, source: str, warnings: list[str],
                       linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
-                      angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION) -> dict:
-    """Write meshes, B-reps and ``product.json`` for ``components`` into ``folder`` (which must exist)."""
+                      angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION, extra: dict | None = None) -> dict:
+    """Write meshes, B-reps and ``product.json`` for ``components`` into ``folder`` (which must exist).
+
+    ``extra``: more top-level keys of the product file (the designer intent's constraints and tags).
+    """
     os.makedirs(os.path.join(folder, "meshes"), exist_ok=True)
     os.makedirs(os.path.join(folder, "breps"), exist_ok=True)
     used: set[str] = set()
@@ -72,6 +79,7 @@ def export_components(components, folder: str, source: str, warnings: list[str],
                      "tessellation": {"linear_deflection": linear_deflection,
                                       "angular_deflection": angular_deflection},
                      "warnings": warnings},
+        **(extra or {}),
     }
     with open(os.path.join(folder, "product.json"), "w", encoding="utf-8") as handle:
         json.dump(product, handle, indent=1)
@@ -79,16 +87,55 @@ def export_components(components, folder: str, source: str, warnings: list[str],
     return product
 
 
+def export_document(document, folder: str, source: str, groups=None, exclude=None, split_solids: bool = False,
+                    linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
+                    angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION) -> tuple[dict, "Intent | None"]:
+    """Export an open ``document`` with its stored designer intent into ``folder``.
+
+    ``groups``, ``exclude`` and ``split_solids`` add to what the document's APLAN analysis says. Returns the
+    product (as written) and the intent (None without an analysis). Raises
+    :class:`~freecad_aplan.intent.IntentError` when the intent names components the document does not have.
+    """
+    from planner.errors import ProductFormatError
+    from planner.product import product_from_dict
+
+    from .intent import find_analysis, product_intent, read_intent
+
+    analysis = find_analysis(document)
+    intent = read_intent(analysis) if analysis is not None else None
+    if intent is not None:
+        groups = {**intent.groups, **(groups or {})}
+        exclude = list(intent.excluded) + [e for e in exclude or () if e not in intent.excluded]
+        split_solids = split_solids or intent.split_solids
+    result = read_components(document, groups, exclude, split_solids)
+    extra = product_intent(intent) if intent is not None else {}
+    ids = {c.id for c in result.components}
+    if extra:
+        try:  # check the intent against the components before writing anything
+            product_from_dict({"format": "aplan-product", "version": 1, "contacts": [],
+                               "parts": [{"id": i} for i in sorted(ids)], **extra}, "product")
+        except ProductFormatError as exc:
+            from .intent import IntentError
+
+            raise IntentError(f"{source}: the APLAN analysis {analysis.Label!r} does not fit the components "
+                              f"{sorted(ids)}: {exc.location}: {exc.problem}; fix the constraint or tag in "
+                              "the APLAN workbench") from None
+    extra["x-freecad-objects"] = {c.id: list(c.objects) for c in result.components}
+    product = export_components(result.components, folder, source, result.warnings, linear_deflection,
+                                angular_deflection, extra)
+    return product, intent
+
+
 def export_model(model: str, folder: str, groups=None, exclude=None, split_solids: bool = False,
                  linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
-                 angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION) -> dict:
-    """Open ``model`` (.FCStd or STEP), read its components and export them into ``folder``."""
+                 angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION) -> tuple[dict, "Intent | None"]:
+    """Open ``model`` (.FCStd or STEP) and export it with its stored intent into ``folder`` (see
+    :func:`export_document`); returns the product and the intent."""
     already_open = {d.FileName for d in FreeCAD.listDocuments().values()}
     document = open_model(model)
     try:
-        result = read_components(document, groups, exclude, split_solids)
-        return export_components(result.components, folder, model, result.warnings,
-                                 linear_deflection, angular_deflection)
+        return export_document(document, folder, model, groups, exclude, split_solids, linear_deflection,
+                               angular_deflection)
     finally:
         if document.FileName not in already_open or not document.FileName:
             FreeCAD.closeDocument(document.Name)

@@ -21,17 +21,22 @@ from planner.product import Product, save_product
 
 from .runner import FreeCADError, run_batch
 
-__all__ = ["register", "export_bundle"]
+__all__ = ["register", "export_bundle", "occt_report"]
 
 MODEL_SUFFIXES = (".fcstd", ".step", ".stp")
 
 
-def export_bundle(model: str | Path, bundle: str | Path, engine: str = "mesh", tolerances: Tolerances = Tolerances(),
+def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = None,
+                  tolerances: Tolerances | dict | None = None,
                   groups: dict[str, list[str]] | None = None, exclude: list[str] | None = None,
                   split_solids: bool = False, linear_deflection: float | None = None,
                   angular_deflection: float | None = None, freecadcmd: str | None = None,
                   overwrite: bool = False) -> Product:
     """Export ``model`` into the bundle folder ``bundle`` and analyse it with ``engine`` (or ``"none"``).
+
+    The document's APLAN analysis (designer intent) chooses the components and adds its constraints and tags;
+    ``engine=None`` and ``tolerances=None`` take the analysis' engine and tolerances (else mesh and the
+    defaults); ``tolerances`` as a dict sets only the fields it names.
 
     The bundle is built in a temporary folder beside it and renamed into place at the end, so a failure
     leaves no partial bundle (and an existing one untouched). Returns the bundle's product.
@@ -52,8 +57,12 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str = "mesh", t
             arguments["linear_deflection"] = linear_deflection
         if angular_deflection is not None:
             arguments["angular_deflection"] = angular_deflection
-        run_batch("export", arguments, freecadcmd)
+        stored = run_batch("export", arguments, freecadcmd).get("intent") or {}
         product = load_bundle(work)
+        engine = engine or stored.get("engine", "mesh")
+        if not isinstance(tolerances, Tolerances):
+            chosen = {k: stored[k] for k in ("contact", "interference", "depth") if k in stored}
+            tolerances = Tolerances(**{**chosen, **(tolerances or {})})
         if engine != "none":
             product = apply_report(product, analyze_product(product, engine, tolerances))
             save_product(product, work / PRODUCT_FILE)
@@ -81,6 +90,11 @@ def _occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
         raise FreeCADError("the occt engine reads a bundle's B-rep files: give it a bundle folder")
     data = run_batch("analyze-occt", {"folder": str(Path(product.source).parent), "contact": tolerances.contact,
                                       "interference": tolerances.interference, "depth": tolerances.depth})
+    return occt_report(product, data)
+
+
+def occt_report(product: Product, data: dict) -> GeometryReport:
+    """The :class:`GeometryReport` of the OCCT engine's JSON answer (:func:`freecad_aplan.occt.analyze_bundle_breps`)."""
     return GeometryReport(
         engine="occt", parts=tuple(product.part_ids), contacts=tuple(tuple(c) for c in data["contacts"]),
         interferences=tuple((i["parts"][0], i["parts"][1], float(i["volume"])) for i in data["interferences"]),
@@ -97,16 +111,19 @@ def _parse_group(text: str) -> tuple[str, list[str]]:
 
 
 def _export_command(subparsers) -> None:
-    from planner.cli import add_tolerance_options, tolerances_from
+    from planner.cli import add_tolerance_options
 
     parser = subparsers.add_parser(
         "export-freecad", help="export a FreeCAD document or STEP file as a product bundle (runs FreeCADCmd)",
         description="Write BUNDLE/product.json, BUNDLE/meshes/*.stl and BUNDLE/breps/*.brep from MODEL, then "
-                    "compute contacts and obstruction diagrams. Nothing is written when it fails.")
+                    "compute contacts and obstruction diagrams. The document's APLAN analysis (designer intent) "
+                    "chooses the components, adds its constraints and tags, and gives the engine and the "
+                    "tolerances not set here. Nothing is written when it fails.")
     parser.add_argument("model", metavar="MODEL", help="a .FCStd document or a .step/.stp file")
     parser.add_argument("-o", "--output", required=True, metavar="BUNDLE", help="the bundle folder to create")
-    parser.add_argument("--engine", choices=("mesh", "occt", "none"), default="mesh",
-                        help="geometry engine for contacts and obstructions (default mesh; none: export only)")
+    parser.add_argument("--engine", choices=("mesh", "occt", "none"),
+                        help="geometry engine for contacts and obstructions (default: the document's APLAN "
+                             "analysis, else mesh; none: export only)")
     parser.add_argument("--group", action="append", type=_parse_group, default=[], metavar="NAME=A,B,...",
                         help="make one component NAME of the objects (labels) A, B, ... (repeatable)")
     parser.add_argument("--exclude", action="append", default=[], metavar="LABEL",
@@ -120,9 +137,13 @@ def _export_command(subparsers) -> None:
     parser.add_argument("--freecadcmd", metavar="PATH", help="the FreeCADCmd executable (default: from PATH)")
     parser.add_argument("--force", action="store_true", help="replace BUNDLE if it exists")
     add_tolerance_options(parser)
+    # Tolerances not given on the command line come from the document's APLAN analysis.
+    parser.set_defaults(contact=None, interference=None, depth=None)
 
     def run(args: argparse.Namespace) -> int:
-        product = export_bundle(args.model, args.output, args.engine, tolerances_from(args), dict(args.group),
+        given = {k: getattr(args, k) for k in ("contact", "interference", "depth") if getattr(args, k) is not None}
+        product = export_bundle(args.model, args.output, args.engine, {**given, "resolution": args.resolution},
+                                dict(args.group),
                                 args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
                                 args.freecadcmd, args.force)
         print(f"{args.output}: {len(product.parts)} parts, {len(product.contacts)} contacts")

@@ -1,0 +1,358 @@
+"""The APLAN workbench's commands: small classes over the functions of :mod:`freecad_aplan.workflow`.
+
+Each command has an icon (``resources/icons/<command>.svg``), a tooltip and an ``IsActive`` that never
+raises. Errors the user can fix (no document, nothing selected, no solids, an analysis from a newer APLAN,
+a cancelled job) are written to the report view and the status bar as one clear line; nothing in the
+document changes except what the command is for.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+import traceback
+
+import FreeCAD
+import FreeCADGui
+from PySide import QtGui
+
+from planner.errors import PlannerError
+
+from .. import icon_path, workflow
+from ..document import DocumentError
+from ..intent import create_analysis, find_analysis, is_analysis, read_intent, update_intent
+
+__all__ = ["COMMANDS", "register", "last_plan"]
+
+_STATE: dict = {"policy": None, "plan_dialog": None, "job_folder": None}
+PARAMETERS = "User parameter:BaseApp/Preferences/Mod/APLAN"
+
+
+def _message(text: str, error: bool = True) -> None:
+    """One line in the report view (and the status bar)."""
+    (FreeCAD.Console.PrintError if error else FreeCAD.Console.PrintMessage)(f"APLAN: {text}\n")
+    try:
+        FreeCADGui.getMainWindow().statusBar().showMessage(f"APLAN: {text.splitlines()[0]}", 15000)
+    except AttributeError:
+        pass
+
+
+def _guarded(action):
+    """Run a command body; expected errors become a message, unexpected ones a message plus a log entry."""
+    try:
+        action()
+    except (PlannerError, DocumentError) as exc:
+        _message(str(exc))
+    except Exception as exc:  # a bug: say so in one line, keep the details in the log
+        _message(f"internal error ({type(exc).__name__}: {exc}); please report it")
+        FreeCAD.Console.PrintLog(traceback.format_exc())
+
+
+def _document():
+    document = FreeCAD.ActiveDocument
+    if document is None:
+        raise DocumentError("no document is open: open an assembly first")
+    return document
+
+
+def _selected_objects() -> list:
+    objects = [o for o in FreeCADGui.Selection.getSelection() if not is_analysis(o)]
+    if not objects:
+        raise DocumentError("nothing is selected: select parts in the 3D view or the tree first")
+    return objects
+
+
+def last_plan() -> dict | None:
+    """What the last plan command showed (statistics and images), for tests."""
+    return _STATE.get("plan")
+
+
+class _Command:
+    """Base: resources from the class attributes; active when there is a document (and an analysis)."""
+
+    name = ""
+    menu = ""
+    tooltip = ""
+    needs_analysis = True
+
+    def GetResources(self):
+        return {"Pixmap": icon_path(f"{self.name}.svg"), "MenuText": self.menu, "ToolTip": self.tooltip}
+
+    def IsActive(self):
+        try:
+            document = FreeCAD.ActiveDocument
+            if document is None:
+                return False
+            return (find_analysis(document) is not None) if self.needs_analysis else True
+        except Exception:  # IsActive must never raise (FreeCAD calls it all the time)
+            return False
+
+    def Activated(self):
+        _guarded(self.run)
+
+    def run(self):
+        raise NotImplementedError
+
+
+class CreateAnalysis(_Command):
+    name, menu = "Aplan_CreateAnalysis", "Create analysis"
+    tooltip = "Add an APLAN analysis to the document: it holds the designer intent (components, constraints, tags)"
+    needs_analysis = False
+
+    def IsActive(self):
+        try:
+            document = FreeCAD.ActiveDocument
+            return document is not None and find_analysis(document) is None
+        except Exception:
+            return False
+
+    def run(self):
+        analysis = create_analysis(_document())
+        _message(f"created {analysis.Label!r}; next: Detect contacts and obstructions", error=False)
+
+
+class GroupComponent(_Command):
+    name, menu = "Aplan_GroupComponent", "Group as one component"
+    tooltip = ("Make the selected objects one component (a part of the product); "
+               "with the objects of one group selected, ungroup them")
+
+    def run(self):
+        analysis = workflow.require_analysis(_document())
+        names = [o.Name for o in _selected_objects()]
+        groups = dict(read_intent(analysis).groups)
+        owner = [g for g, members in groups.items() if set(names) <= set(members)]
+        if owner:
+            del groups[owner[0]]
+            update_intent(analysis, f"ungroup {owner[0]}", groups=groups)
+            _message(f"component {owner[0]!r} ungrouped", error=False)
+            return
+        if len(names) < 2:
+            raise DocumentError("select two or more objects to group them into one component")
+        labels = [FreeCAD.ActiveDocument.getObject(n).Label for n in names]
+        name = "+".join(labels)
+        groups = {g: [m for m in members if m not in names] for g, members in groups.items()}
+        groups = {g: m for g, m in groups.items() if m}
+        groups[name] = names
+        update_intent(analysis, f"group {name}", groups=groups)
+        _message(f"component {name!r} groups {', '.join(labels)}", error=False)
+
+
+class ExcludeParts(_Command):
+    name, menu = "Aplan_ExcludeParts", "Exclude / include parts"
+    tooltip = "Leave the selected objects out of the product (e.g. fasteners); again to include them"
+
+    def run(self):
+        analysis = workflow.require_analysis(_document())
+        names = [o.Name for o in _selected_objects()]
+        excluded = list(read_intent(analysis).excluded)
+        if all(n in excluded for n in names):
+            excluded = [n for n in excluded if n not in names]
+            update_intent(analysis, "include parts", excluded=excluded)
+            _message(f"included again: {', '.join(names)}", error=False)
+        else:
+            excluded += [n for n in names if n not in excluded]
+            update_intent(analysis, "exclude parts", excluded=excluded)
+            _message(f"excluded: {', '.join(names)}", error=False)
+
+
+class Detect(_Command):
+    name, menu = "Aplan_Detect", "Detect contacts and obstructions"
+    tooltip = ("Compute the connection and obstruction diagrams of the components in the background "
+               "(engine and tolerances: the analysis' properties); the parts are not moved")
+
+    def run(self):
+        from .jobs import BackgroundJob
+
+        document = _document()
+        analysis = workflow.require_analysis(document)
+        intent = read_intent(analysis)
+        command = workflow.worker_command("analyze", intent.engine)
+        folder = tempfile.mkdtemp(prefix="aplan-detect-")
+        try:
+            product = workflow.export_for_detection(document, folder)
+        except BaseException:
+            shutil.rmtree(folder, ignore_errors=True)
+            raise
+        for warning in product["geometry"]["warnings"]:
+            _message(f"warning: {warning}", error=False)
+
+        def done(result):
+            try:
+                _guarded(lambda: self._store(analysis, folder, result))
+            finally:
+                shutil.rmtree(folder, ignore_errors=True)
+
+        def failed(message):
+            shutil.rmtree(folder, ignore_errors=True)
+            _message(message)
+
+        job = {"action": "analyze", "folder": folder, "engine": intent.engine, "contact": intent.contact,
+               "interference": intent.interference, "depth": intent.depth}
+        BackgroundJob(f"Detecting contacts and obstructions of {len(product['parts'])} parts ({intent.engine} engine)",
+                      command, job, done, failed, FreeCADGui.getMainWindow()).start()
+
+    @staticmethod
+    def _store(analysis, folder, result):
+        workflow.store_detection(analysis, folder)
+        _message(f"{result['parts']} parts, {result['contacts']} contacts, {result['interferences']} "
+                 f"interferences ({result['seconds']:.1f} s); see Diagrams", error=False)
+
+
+class Diagrams(_Command):
+    name, menu = "Aplan_Diagrams", "Connection and obstruction diagrams"
+    tooltip = "Inspect and edit the detected relations; selecting one highlights its two parts"
+
+    def run(self):
+        from .panels import DiagramsPanel
+
+        analysis = workflow.require_analysis(_document())
+        workflow.analysis_product(analysis)  # a clear message when nothing was detected yet
+        FreeCADGui.Control.closeDialog()
+        _STATE["panel"] = DiagramsPanel(analysis)
+        FreeCADGui.Control.showDialog(_STATE["panel"])
+
+
+class Intent(_Command):
+    name, menu = "Aplan_Intent", "Technical constraints and operation tags"
+    tooltip = "Edit technical constraints; tag operations as unfavorable to humans, robot-capable, and their tool"
+
+    def run(self):
+        from planner import make_plan
+
+        from .panels import IntentPanel
+
+        analysis = workflow.require_analysis(_document())
+        plan = make_plan(workflow.analysis_product(analysis), technical=False)
+        FreeCADGui.Control.closeDialog()
+        _STATE["panel"] = IntentPanel(analysis, plan)
+        FreeCADGui.Control.showDialog(_STATE["panel"])
+
+
+class Plan(_Command):
+    name, menu = "Aplan_Plan", "Generate plan and statistics"
+    tooltip = "Build the AND/OR, state and intention graphs; show the statistics (as aplan stats) and pictures"
+
+    def run(self):
+        from .panels import PlanDialog
+
+        analysis = workflow.require_analysis(_document())
+        product = workflow.analysis_product(analysis)
+        folder = tempfile.mkdtemp(prefix="aplan-plan-")
+        _, statistics, images = workflow.plan_report(product, folder)
+        figures = statistics.as_dict()
+        _STATE["plan"] = {"statistics": figures, "images": images}
+        _message(", ".join(f"{k} {v:,}" if isinstance(v, int) else f"{k} {v}" for k, v in figures.items()),
+                 error=False)
+        dialog = PlanDialog(product.name, figures, images, FreeCADGui.getMainWindow())
+        _STATE["plan_dialog"] = dialog
+        dialog.show()
+
+
+def _save_path(title: str, filters: str, suffix: str) -> str | None:
+    path, _ = QtGui.QFileDialog.getSaveFileName(FreeCADGui.getMainWindow(), title, "", filters)
+    if not path:
+        return None
+    return path if os.path.splitext(path)[1] else path + suffix
+
+
+class ExportBundle(_Command):
+    name, menu = "Aplan_ExportBundle", "Export product bundle"
+    tooltip = "Write a bundle folder (product.json with diagrams and intent, meshes, B-reps) for aplan"
+
+    def run(self):
+        document = _document()
+        analysis = workflow.require_analysis(document)
+        workflow.analysis_product(analysis)
+        path = _save_path("Export APLAN bundle (a new folder)", "Bundle folder (*)", "")
+        if path:
+            workflow.export_analysis_bundle(document, analysis, path)
+            _message(f"wrote the bundle {path}", error=False)
+
+
+class ExportModel(_Command):
+    name, menu = "Aplan_ExportModel", "Export decision model (POMDPX / .pomdp)"
+    tooltip = "Write the operator-intent POMDP (Alg. 3) as POMDPX or Cassandra .pomdp"
+
+    def run(self):
+        analysis = workflow.require_analysis(_document())
+        product = workflow.analysis_product(analysis)
+        path = _save_path("Export decision model", "POMDPX (*.pomdpx);;POMDP (*.pomdp)", ".pomdpx")
+        if path:
+            sizes = workflow.export_decision_model(product, path)
+            _message(f"wrote {path}: {sizes['states']} states, {sizes['actions']} actions, "
+                     f"{sizes['observations']} observations", error=False)
+
+
+class Solve(_Command):
+    name, menu = "Aplan_Solve", "Solve and save policy"
+    tooltip = ("Solve the decision model in the background (point-based solver; time limit: parameter "
+               "Mod/APLAN/SolveTimeLimit, default 10 s) and save the policy")
+
+    def run(self):
+        from planner.product import save_product
+
+        from .jobs import BackgroundJob
+
+        analysis = workflow.require_analysis(_document())
+        product = workflow.analysis_product(analysis)
+        path = _save_path("Save policy", "SARSOP policy (*.policy)", ".policy")
+        if not path:
+            return
+        seconds = FreeCAD.ParamGet(PARAMETERS).GetFloat("SolveTimeLimit", 10.0) or 10.0
+        folder = tempfile.mkdtemp(prefix="aplan-solve-")
+        save_product(product, os.path.join(folder, "product.json"))
+
+        def done(result):
+            shutil.rmtree(folder, ignore_errors=True)
+            _STATE["policy"] = path
+            _message(f"wrote {path}: lower bound {result['lower_bound']:.5f}, upper bound "
+                     f"{result['upper_bound']:.5f}, {result['alpha_vectors']} alpha vectors", error=False)
+
+        def failed(message):
+            shutil.rmtree(folder, ignore_errors=True)
+            _message(message)
+
+        job = {"action": "solve", "product": os.path.join(folder, "product.json"), "output": path,
+               "time_limit": seconds}
+        BackgroundJob(f"Solving the decision model ({seconds:g} s)", workflow.worker_command("solve"), job, done,
+                      failed, FreeCADGui.getMainWindow()).start()
+
+
+class Simulate(_Command):
+    name, menu = "Aplan_Simulate", "Simulate an operator sequence"
+    tooltip = "Play the operator through a full assembly sequence against the policy; show the belief plot"
+
+    def run(self):
+        from .panels import ImageDialog
+
+        analysis = workflow.require_analysis(_document())
+        product = workflow.analysis_product(analysis)
+        policy = _STATE["policy"]
+        if not policy or not os.path.isfile(policy):
+            policy, _ = QtGui.QFileDialog.getOpenFileName(FreeCADGui.getMainWindow(), "Policy to simulate", "",
+                                                          "SARSOP policy (*.policy)")
+            if not policy:
+                return
+        sequence, ok = QtGui.QInputDialog.getInt(FreeCADGui.getMainWindow(), "Simulate",
+                                                 "Full sequence (intention number; -1: the first)", -1, -1)
+        if not ok:
+            return
+        stem = os.path.join(tempfile.mkdtemp(prefix="aplan-simulate-"), "belief")
+        result = workflow.simulate_sequence(product, policy, stem, None if sequence < 0 else sequence)
+        caption = (f"Sequence {result['sequence']}: belief on the true intention first above 0.9 after "
+                   f"{result['confident_after']} operator operation(s). Steps: "
+                   + "; ".join(f"{a} / {o} / {p}" for a, o, p in result["steps"]))
+        dialog = ImageDialog("APLAN belief", caption, result["plots"][0], FreeCADGui.getMainWindow())
+        _STATE["simulate_dialog"] = dialog
+        dialog.show()
+
+
+COMMANDS = [CreateAnalysis, GroupComponent, ExcludeParts, Detect, Diagrams, Intent, Plan, ExportBundle,
+            ExportModel, Solve, Simulate]
+
+
+def register() -> list[str]:
+    """Register every command with FreeCAD; returns their names (toolbar order)."""
+    for command in COMMANDS:
+        FreeCADGui.addCommand(command.name, command())
+    return [c.name for c in COMMANDS]

@@ -1,0 +1,110 @@
+"""Background jobs of the workbench: ``batch.py`` in a separate process, with a progress dialog and Cancel.
+
+The process runs through ``QProcess``, so FreeCAD's event loop keeps running (the GUI never freezes) and
+Cancel simply kills the process: its work happens in a temporary folder, so nothing reaches the document.
+The answer is the ``APLAN-RESULT``/``APLAN-ERROR`` line of :mod:`freecad_aplan.batch`; ``APLAN-PROGRESS``
+lines update the dialog.
+"""
+from __future__ import annotations
+
+import json
+import time
+
+from PySide import QtCore, QtGui
+
+__all__ = ["BackgroundJob", "running_jobs"]
+
+_RUNNING: list["BackgroundJob"] = []
+
+
+def running_jobs() -> list["BackgroundJob"]:
+    """The jobs still running (tests wait on this)."""
+    return list(_RUNNING)
+
+
+class BackgroundJob(QtCore.QObject):
+    """Run ``command`` (program and script) on ``job`` (the batch action's JSON) in the background.
+
+    ``on_done(result)`` is called with the job's JSON result, ``on_failed(message)`` with a readable message
+    (also when cancelled: ``cancelled`` is then True). Both run in the GUI thread.
+    """
+
+    def __init__(self, title: str, command: list[str], job: dict, on_done, on_failed, parent=None):
+        super().__init__(parent)
+        self.title, self.on_done, self.on_failed = title, on_done, on_failed
+        self.cancelled = False
+        self.output = ""
+        self.started = time.monotonic()
+        self.progress_text = ""
+        self.process = QtCore.QProcess(self)
+        environment = QtCore.QProcessEnvironment.systemEnvironment()
+        environment.insert("APLAN_BATCH", json.dumps(job))
+        self.process.setProcessEnvironment(environment)
+        self.process.setProcessChannelMode(QtCore.QProcess.MergedChannels)
+        self.process.readyReadStandardOutput.connect(self._read)
+        self.process.finished.connect(self._finished)
+        self.process.errorOccurred.connect(self._error)
+        self.dialog = QtGui.QProgressDialog(title, "Cancel", 0, 0, parent)
+        self.dialog.setObjectName("AplanJobProgress")
+        self.dialog.setWindowTitle("APLAN")
+        self.dialog.setWindowModality(QtCore.Qt.WindowModal)
+        self.dialog.setMinimumDuration(0)
+        self.dialog.canceled.connect(self.cancel)
+        self.timer = QtCore.QTimer(self)
+        self.timer.timeout.connect(self._tick)
+        self.program, self.arguments = command[0], command[1:]
+
+    def start(self) -> "BackgroundJob":
+        _RUNNING.append(self)
+        self.process.start(self.program, self.arguments)
+        self.timer.start(500)
+        self.dialog.show()
+        return self
+
+    def cancel(self) -> None:
+        """Stop the job; nothing it computed is kept."""
+        if self not in _RUNNING:
+            return
+        self.cancelled = True
+        self.process.kill()
+
+    def _tick(self) -> None:
+        seconds = time.monotonic() - self.started
+        self.dialog.setLabelText(f"{self.title}\n{seconds:.0f} s{self.progress_text}")
+
+    def _read(self) -> None:
+        chunk = bytes(self.process.readAllStandardOutput()).decode("utf-8", "replace")
+        self.output += chunk
+        for line in chunk.splitlines():
+            if line.startswith("APLAN-PROGRESS "):
+                fields = line.split()[1:]
+                if len(fields) == 3:
+                    self.progress_text = f"  (bounds {fields[1]} .. {fields[2]})"
+
+    def _close(self) -> None:
+        self.timer.stop()
+        if self in _RUNNING:
+            _RUNNING.remove(self)
+        self.dialog.canceled.disconnect(self.cancel)
+        self.dialog.close()
+
+    def _error(self, error) -> None:
+        if error == QtCore.QProcess.FailedToStart:
+            self._close()
+            self.on_failed(f"{self.title}: cannot start {self.program} ({self.process.errorString()})")
+
+    def _finished(self, *args) -> None:
+        self._read()
+        self._close()
+        if self.cancelled:
+            self.on_failed(f"{self.title}: cancelled; nothing was changed")
+            return
+        for line in self.output.splitlines():
+            if line.startswith("APLAN-ERROR "):
+                self.on_failed(line[len("APLAN-ERROR "):])
+                return
+            if line.startswith("APLAN-RESULT "):
+                self.on_done(json.loads(line[len("APLAN-RESULT "):]))
+                return
+        tail = "\n".join(self.output.strip().splitlines()[-10:])
+        self.on_failed(f"{self.title}: the job gave no result (exit code {self.process.exitCode()}); its last output:\n{tail}")

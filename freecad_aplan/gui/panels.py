@@ -1,0 +1,262 @@
+"""Task panels and dialogs of the workbench: the diagrams table, the intent tables, the plan report.
+
+Each panel edits a copy of the analysis' intent and writes it back on OK as one undoable transaction
+(:func:`freecad_aplan.intent.update_intent`); Cancel changes nothing.
+"""
+from __future__ import annotations
+
+import json
+
+import FreeCAD
+import FreeCADGui
+from PySide import QtCore, QtGui
+
+from ..intent import read_intent, update_intent
+
+__all__ = ["DiagramsPanel", "IntentPanel", "PlanDialog", "ImageDialog", "relation_rows"]
+
+
+def relation_rows(diagrams: dict) -> list[tuple[str, str, str]]:
+    """The rows of the diagrams table: ("contact", a, b) and ("blocks +X", x, y) (x moving along +X hits y)."""
+    rows = [("contact", a, b) for a, b in diagrams.get("contacts", [])]
+    for obstruction in diagrams.get("obstructions", []):
+        direction = obstruction["direction"]
+        name = direction if isinstance(direction, str) else json.dumps(direction)
+        rows += [(f"blocks {name}", x, y) for x, y in obstruction["blocks"]]
+    return rows
+
+
+def _table(headers: list[str], name: str) -> QtGui.QTableWidget:
+    table = QtGui.QTableWidget(0, len(headers))
+    table.setObjectName(name)
+    table.setHorizontalHeaderLabels(headers)
+    table.horizontalHeader().setStretchLastSection(True)
+    table.verticalHeader().setVisible(False)
+    return table
+
+
+def _item(text: str, editable: bool = False) -> QtGui.QTableWidgetItem:
+    item = QtGui.QTableWidgetItem(text)
+    if not editable:
+        item.setFlags(item.flags() & ~QtCore.Qt.ItemIsEditable)
+    return item
+
+
+def _check(value: bool) -> QtGui.QTableWidgetItem:
+    item = QtGui.QTableWidgetItem()
+    item.setFlags((item.flags() | QtCore.Qt.ItemIsUserCheckable) & ~QtCore.Qt.ItemIsEditable)
+    item.setCheckState(QtCore.Qt.Checked if value else QtCore.Qt.Unchecked)
+    return item
+
+
+def _checked(item) -> bool:
+    return item.checkState() == QtCore.Qt.Checked
+
+
+class DiagramsPanel:
+    """The connection and obstruction diagrams as a table; selecting a row selects the two parts in the 3D
+    view; "Remove" deletes relations (written on OK)."""
+
+    def __init__(self, analysis):
+        self.analysis = analysis
+        self.diagrams = read_intent(analysis).diagrams
+        self.form = QtGui.QWidget()
+        self.form.setObjectName("AplanDiagramsPanel")
+        self.form.setWindowTitle("APLAN: connection and obstruction diagrams")
+        layout = QtGui.QVBoxLayout(self.form)
+        summary = self.diagrams.get("analysis", {})
+        layout.addWidget(QtGui.QLabel(
+            f"{len(self.diagrams.get('parts', []))} parts, {len(self.diagrams.get('contacts', []))} contacts "
+            f"({summary.get('engine', '?')} engine). A row 'blocks +X: a, b' means a, moved along +X, hits b."))
+        self.table = _table(["relation", "part", "part"], "AplanDiagramsTable")
+        self.table.setSelectionBehavior(QtGui.QAbstractItemView.SelectRows)
+        for row, (relation, a, b) in enumerate(relation_rows(self.diagrams)):
+            self.table.insertRow(row)
+            for column, text in enumerate((relation, a, b)):
+                self.table.setItem(row, column, _item(text))
+        self.table.itemSelectionChanged.connect(self.highlight)
+        layout.addWidget(self.table)
+        remove = QtGui.QPushButton("Remove selected relations")
+        remove.clicked.connect(self.remove_selected)
+        layout.addWidget(remove)
+        self.removed: set[tuple[str, str, str]] = set()
+
+    def highlight(self) -> None:
+        """Select, in the 3D view, the objects of the parts of the selected rows."""
+        objects = self.diagrams.get("objects", {})
+        document = self.analysis.Document
+        FreeCADGui.Selection.clearSelection()
+        for index in self.table.selectionModel().selectedRows():
+            for column in (1, 2):
+                part = self.table.item(index.row(), column).text()
+                for name in objects.get(part, []):
+                    if document.getObject(name) is not None:
+                        FreeCADGui.Selection.addSelection(document.Name, name)
+
+    def remove_selected(self) -> None:
+        for index in sorted((i.row() for i in self.table.selectionModel().selectedRows()), reverse=True):
+            self.removed.add(tuple(self.table.item(index, c).text() for c in range(3)))
+            self.table.removeRow(index)
+
+    def accept(self) -> bool:
+        if self.removed:
+            diagrams = dict(self.diagrams)
+            diagrams["contacts"] = [c for c in diagrams["contacts"] if ("contact", *c) not in self.removed]
+            diagrams["obstructions"] = [
+                {**o, "blocks": [b for b in o["blocks"] if (f"blocks {o['direction']}", *b) not in self.removed]}
+                for o in diagrams["obstructions"]]
+            update_intent(self.analysis, "edit diagrams", diagrams=diagrams)
+        FreeCADGui.Control.closeDialog()
+        return True
+
+    def reject(self) -> bool:
+        FreeCADGui.Control.closeDialog()
+        return True
+
+
+class IntentPanel:
+    """Technical constraints and operation tags, as two tables.
+
+    Constraints: parts (comma-separated), the part they require, active. Operation tags: every operation of
+    the plan without technical constraints, with its resolved tags; rows the designer changes are stored as
+    tags, the others keep following the defaults.
+    """
+
+    def __init__(self, analysis, plan):
+        self.analysis, self.plan = analysis, plan
+        intent = read_intent(analysis)
+        self.intent = intent
+        self.form = QtGui.QWidget()
+        self.form.setObjectName("AplanIntentPanel")
+        self.form.setWindowTitle("APLAN: technical constraints and operation tags")
+        layout = QtGui.QVBoxLayout(self.form)
+        layout.addWidget(QtGui.QLabel("Technical constraints: these parts only together with 'requires'"))
+        self.constraints = _table(["parts (comma-separated)", "requires", "active"], "AplanConstraintsTable")
+        for c in intent.technical_constraints:
+            self._add_constraint(", ".join(c.get("parts", [])), c.get("requires", ""), c.get("active", True))
+        layout.addWidget(self.constraints)
+        buttons = QtGui.QHBoxLayout()
+        add, remove = QtGui.QPushButton("Add constraint"), QtGui.QPushButton("Remove constraint")
+        add.clicked.connect(lambda: self._add_constraint("", "", True))
+        remove.clicked.connect(lambda: self.constraints.removeRow(self.constraints.currentRow()))
+        buttons.addWidget(add)
+        buttons.addWidget(remove)
+        layout.addLayout(buttons)
+        layout.addWidget(QtGui.QLabel("Operation tags (unfavorable to humans, robot-capable, tool)"))
+        self.tags = _table(["operation", "unfavorable", "robot", "tool"], "AplanTagsTable")
+        andor, tags = plan.andor, plan.tags
+        self.defaults = []
+        for j in range(len(andor.operations)):
+            self.tags.insertRow(j)
+            self.tags.setItem(j, 0, _item(andor.describe(j)))
+            self.tags.setItem(j, 1, _check(bool(tags.unfavorable[j])))
+            self.tags.setItem(j, 2, _check(bool(tags.robot[j])))
+            self.tags.setItem(j, 3, _item(tags.tool[j] or "", editable=True))
+            self.defaults.append((bool(tags.unfavorable[j]), bool(tags.robot[j]), tags.tool[j] or ""))
+        layout.addWidget(self.tags)
+
+    def _add_constraint(self, parts: str, requires: str, active: bool) -> None:
+        row = self.constraints.rowCount()
+        self.constraints.insertRow(row)
+        self.constraints.setItem(row, 0, _item(parts, editable=True))
+        self.constraints.setItem(row, 1, _item(requires, editable=True))
+        self.constraints.setItem(row, 2, _check(active))
+
+    def values(self) -> dict:
+        """The intent fields the tables hold (technical_constraints, operations, tools)."""
+        constraints = []
+        for row in range(self.constraints.rowCount()):
+            parts = [p.strip() for p in self.constraints.item(row, 0).text().split(",") if p.strip()]
+            requires = self.constraints.item(row, 1).text().strip()
+            if parts or requires:
+                constraints.append({"parts": parts, "requires": requires,
+                                    "active": _checked(self.constraints.item(row, 2))})
+        andor = self.plan.andor
+        shown = {frozenset(andor.inputs(j)) for j in range(len(andor.operations))}
+        operations = [t for t in self.intent.operations  # tags of operations not shown here stay as they are
+                      if frozenset(frozenset(s) for s in t.get("inputs", [])) not in shown]
+        for j, default in enumerate(self.defaults):
+            now = (_checked(self.tags.item(j, 1)), _checked(self.tags.item(j, 2)), self.tags.item(j, 3).text().strip())
+            stored = next((t for t in self.intent.operations
+                           if frozenset(frozenset(s) for s in t.get("inputs", [])) == frozenset(andor.inputs(j))), None)
+            if now != default or stored is not None:
+                tag = {"inputs": [sorted(s) for s in andor.inputs(j)], "unfavorable": now[0], "robot": now[1]}
+                if now[2]:
+                    tag["tool"] = now[2]
+                operations.append(tag)
+        tools = sorted({t["tool"] for t in operations if t.get("tool")} | set(self.intent.tools))
+        return {"technical_constraints": constraints, "operations": operations, "tools": tools}
+
+    def accept(self) -> bool:
+        from ..intent import IntentError
+        from ..workflow import analysis_product
+
+        try:
+            update_intent(self.analysis, "edit constraints and tags", **self.values())
+        except IntentError as exc:
+            FreeCAD.Console.PrintError(f"APLAN: {exc}\n")
+            return False
+        try:
+            analysis_product(self.analysis)
+        except IntentError as exc:  # names a part that is not a component: take the change back, keep the panel
+            self.analysis.Document.undo()
+            FreeCAD.Console.PrintError(f"APLAN: {exc}\n")
+            return False
+        FreeCADGui.Control.closeDialog()
+        return True
+
+    def reject(self) -> bool:
+        FreeCADGui.Control.closeDialog()
+        return True
+
+
+def _image_tab(path_or_reason: str) -> QtGui.QWidget:
+    scroll = QtGui.QScrollArea()
+    label = QtGui.QLabel()
+    if path_or_reason.endswith(".png"):
+        label.setPixmap(QtGui.QPixmap(path_or_reason))
+    else:
+        label.setText(path_or_reason)
+        label.setWordWrap(True)
+    scroll.setWidget(label)
+    return scroll
+
+
+class PlanDialog(QtGui.QDialog):
+    """The statistics of the plan (the figures of ``aplan stats``) and pictures of its three graphs."""
+
+    def __init__(self, title: str, statistics: dict, images: dict, parent=None):
+        super().__init__(parent)
+        self.setObjectName("AplanPlanDialog")
+        self.setWindowTitle(f"APLAN plan: {title}")
+        self.resize(900, 650)
+        layout = QtGui.QVBoxLayout(self)
+        tabs = QtGui.QTabWidget()
+        table = _table(["figure", "value"], "AplanStatisticsTable")
+        for row, (key, value) in enumerate(statistics.items()):
+            table.insertRow(row)
+            table.setItem(row, 0, _item(key))
+            table.setItem(row, 1, _item(f"{value:,}" if isinstance(value, int) else str(value)))
+        tabs.addTab(table, "Statistics")
+        for key, name in (("andor", "AND/OR graph"), ("states", "State graph"), ("intentions", "Intention graph")):
+            if key in images:
+                tabs.addTab(_image_tab(images[key]), name)
+        layout.addWidget(tabs)
+        close = QtGui.QPushButton("Close")
+        close.clicked.connect(self.close)
+        layout.addWidget(close)
+
+
+class ImageDialog(QtGui.QDialog):
+    """A picture (the belief plot) with a caption."""
+
+    def __init__(self, title: str, caption: str, path: str, parent=None):
+        super().__init__(parent)
+        self.setObjectName("AplanImageDialog")
+        self.setWindowTitle(title)
+        layout = QtGui.QVBoxLayout(self)
+        text = QtGui.QLabel(caption)
+        text.setWordWrap(True)
+        layout.addWidget(text)
+        layout.addWidget(_image_tab(path))
+        self.resize(700, 600)

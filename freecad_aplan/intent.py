@@ -1,0 +1,254 @@
+"""The designer's intent, stored in the FreeCAD document as an "APLAN analysis" object.
+
+An *analysis* is an ``App::DocumentObjectGroupPython`` whose properties hold what the designer decided on
+top of the geometry (everything is saved in the ``.FCStd`` and restored on reopen):
+
+- components: ``Groups`` (``NAME=Object1,Object2``: several objects form one component) and ``Excluded``
+  (objects left out, e.g. fasteners), by internal object name, so renaming a label does not break them;
+  ``SplitSolids`` (one part per solid of an object holding several);
+- ``TechnicalConstraints``, ``Tools`` and ``OperationTags``: one product-format JSON object per entry
+  (``docs/product-format.md``: ``{"parts": [...], "requires": r, "active": b}``,
+  ``{"inputs": [[...], [...]], "unfavorable": b, "robot": b, "tool": t}``), over component ids;
+- ``Engine`` and the tolerances of the geometry engines (``ContactTolerance``, ``InterferenceVolume``,
+  ``DepthTolerance``);
+- ``Diagrams``: the connection and obstruction diagrams the last detection found (product-format JSON);
+- ``FormatVersion``: an analysis written by a newer APLAN is refused (:class:`IntentError`), never guessed.
+
+The functions here are shared by batch mode (:mod:`freecad_aplan.export`) and the GUI commands. Every
+change is one undoable transaction; the user's parts are never touched.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field, fields, replace
+
+import FreeCAD
+
+from .document import DocumentError
+
+__all__ = ["FORMAT_VERSION", "ENGINES", "Intent", "IntentError", "AnalysisProxy", "create_analysis",
+           "find_analysis", "read_intent", "update_intent", "product_intent", "is_analysis"]
+
+FORMAT_VERSION = 1
+ENGINES = ("mesh", "occt")
+_TYPE = "AplanAnalysis"
+
+
+class IntentError(DocumentError):
+    """The designer intent of a document cannot be read or changed (the message says where and how to fix)."""
+
+
+@dataclass(frozen=True)
+class Intent:
+    """The designer intent held by one analysis (plain data; see the module docstring for the meaning)."""
+
+    groups: dict[str, list[str]] = field(default_factory=dict)
+    excluded: list[str] = field(default_factory=list)
+    split_solids: bool = False
+    technical_constraints: list[dict] = field(default_factory=list)
+    tools: list[str] = field(default_factory=list)
+    operations: list[dict] = field(default_factory=list)
+    engine: str = "mesh"
+    contact: float = 0.1
+    interference: float = 1.0
+    depth: float = 0.1
+    diagrams: dict = field(default_factory=dict)
+
+
+# property name, FreeCAD type, property group, tooltip; in the order of Intent's fields
+_PROPERTIES = (
+    ("Groups", "App::PropertyStringList", "Components", "NAME=Object1,Object2: these objects form one component"),
+    ("Excluded", "App::PropertyStringList", "Components", "objects left out of the product (internal names)"),
+    ("SplitSolids", "App::PropertyBool", "Components", "one part per solid of an object holding several solids"),
+    ("TechnicalConstraints", "App::PropertyStringList", "Designer intent",
+     'one JSON object per constraint: {"parts": [...], "requires": "part", "active": true}'),
+    ("Tools", "App::PropertyStringList", "Designer intent", "tools the operator picks up (ids)"),
+    ("OperationTags", "App::PropertyStringList", "Designer intent",
+     'one JSON object per operation: {"inputs": [[...], [...]], "unfavorable": b, "robot": b, "tool": t}'),
+    ("Engine", "App::PropertyEnumeration", "Detection", "geometry engine for contacts and obstructions"),
+    ("ContactTolerance", "App::PropertyFloat", "Detection", "surfaces closer than this touch (mm)"),
+    ("InterferenceVolume", "App::PropertyFloat", "Detection", "overlaps above this volume are reported (mm^3)"),
+    ("DepthTolerance", "App::PropertyFloat", "Detection", "overlaps shallower than this do not block (mm)"),
+    ("Diagrams", "App::PropertyString", "Detection", "connection and obstruction diagrams found by the last detection"),
+)
+
+
+class AnalysisProxy:
+    """Python proxy of an APLAN analysis: adds the properties; stores nothing itself."""
+
+    def __init__(self, obj):
+        obj.Proxy = self
+        self.Type = _TYPE
+        obj.addProperty("App::PropertyInteger", "FormatVersion", "Base", "format version of this analysis")
+        obj.FormatVersion = FORMAT_VERSION
+        obj.setEditorMode("FormatVersion", 1)  # read-only in the property editor
+        for name, kind, group, tip in _PROPERTIES:
+            obj.addProperty(kind, name, group, tip)
+        obj.Engine = list(ENGINES)
+        defaults = Intent()
+        obj.ContactTolerance, obj.InterferenceVolume, obj.DepthTolerance = (
+            defaults.contact, defaults.interference, defaults.depth)
+        obj.setEditorMode("Diagrams", 2)  # hidden: edited through the task panel
+
+    def execute(self, obj):
+        pass
+
+    def onDocumentRestored(self, obj):
+        self.Type = _TYPE
+
+    def __getstate__(self):  # FreeCAD 0.20 serialises the proxy through these
+        return {"Type": _TYPE}
+
+    def __setstate__(self, state):
+        self.Type = _TYPE
+
+    dumps, loads = __getstate__, __setstate__  # FreeCAD 0.21 and later
+
+
+def is_analysis(obj) -> bool:
+    """True for an APLAN analysis (also when this addon's proxy class could not be loaded)."""
+    proxy = getattr(obj, "Proxy", None)
+    return getattr(proxy, "Type", None) == _TYPE or (
+        obj.TypeId == "App::DocumentObjectGroupPython" and "FormatVersion" in obj.PropertiesList
+        and "OperationTags" in obj.PropertiesList)
+
+
+def find_analysis(document):
+    """The document's APLAN analysis, or None (a document holds at most one)."""
+    return next((o for o in document.Objects if is_analysis(o)), None)
+
+
+def _in_transaction(document, description: str, change):
+    document.openTransaction(description)
+    try:
+        result = change()
+    except BaseException:
+        document.abortTransaction()
+        raise
+    document.commitTransaction()
+    return result
+
+
+def create_analysis(document, label: str = "APLAN analysis"):
+    """Add an empty APLAN analysis to ``document`` (one undoable step) and return it.
+
+    Raises :class:`IntentError` when the document already has one.
+    """
+    existing = find_analysis(document)
+    if existing is not None:
+        raise IntentError(f"{_where(document)}: already holds the APLAN analysis {existing.Label!r}; "
+                          "edit that one (a document holds one analysis)")
+
+    def add():
+        obj = document.addObject("App::DocumentObjectGroupPython", "AplanAnalysis")
+        AnalysisProxy(obj)
+        obj.Label = label
+        if FreeCAD.GuiUp:
+            from .viewproviders import AnalysisViewProvider
+
+            AnalysisViewProvider(obj.ViewObject)
+        return obj
+
+    return _in_transaction(document, "Create APLAN analysis", add)
+
+
+def _where(document) -> str:
+    return document.FileName or document.Label
+
+
+def _check_version(analysis) -> None:
+    version = getattr(analysis, "FormatVersion", None)
+    if not isinstance(version, int):
+        raise IntentError(f"{_where(analysis.Document)}: {analysis.Label!r} has no FormatVersion; it is not an "
+                          "APLAN analysis")
+    if version > FORMAT_VERSION:
+        raise IntentError(f"{_where(analysis.Document)}: the APLAN analysis {analysis.Label!r} has format version "
+                          f"{version}, written by a newer APLAN (this one reads version {FORMAT_VERSION}); "
+                          "update the APLAN workbench to use it")
+
+
+def _json_entries(analysis, prop: str) -> list[dict]:
+    entries = []
+    for k, text in enumerate(getattr(analysis, prop)):
+        try:
+            value = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise IntentError(f"{analysis.Label}.{prop}[{k}]: not valid JSON ({exc.msg}): {text!r}") from None
+        if not isinstance(value, dict):
+            raise IntentError(f"{analysis.Label}.{prop}[{k}]: expected a JSON object, got {text!r}")
+        entries.append(value)
+    return entries
+
+
+def read_intent(analysis) -> Intent:
+    """The designer intent held by ``analysis``; raises :class:`IntentError` for a newer format or bad entries."""
+    _check_version(analysis)
+    groups: dict[str, list[str]] = {}
+    for k, text in enumerate(analysis.Groups):
+        name, sep, members = text.partition("=")
+        if not sep or not name.strip() or not members.strip():
+            raise IntentError(f"{analysis.Label}.Groups[{k}]: expected NAME=Object1,Object2, got {text!r}")
+        groups[name.strip()] = [m.strip() for m in members.split(",") if m.strip()]
+    try:
+        diagrams = json.loads(analysis.Diagrams) if analysis.Diagrams else {}
+    except json.JSONDecodeError as exc:
+        raise IntentError(f"{analysis.Label}.Diagrams: not valid JSON ({exc.msg}); run the detection again") from None
+    return Intent(groups=groups, excluded=list(analysis.Excluded), split_solids=bool(analysis.SplitSolids),
+                  technical_constraints=_json_entries(analysis, "TechnicalConstraints"), tools=list(analysis.Tools),
+                  operations=_json_entries(analysis, "OperationTags"), engine=str(analysis.Engine),
+                  contact=float(analysis.ContactTolerance), interference=float(analysis.InterferenceVolume),
+                  depth=float(analysis.DepthTolerance), diagrams=diagrams)
+
+
+def _write(analysis, intent: Intent) -> None:
+    for name in intent.groups:
+        if "=" in name or "," in name or not name.strip():
+            raise IntentError(f"component name {name!r}: use a non-empty name without '=' or ','")
+    if intent.engine not in ENGINES:
+        raise IntentError(f"unknown engine {intent.engine!r}; use one of {', '.join(ENGINES)}")
+    for name in ("contact", "interference", "depth"):
+        if not getattr(intent, name) >= 0:
+            raise IntentError(f"tolerance {name} must be >= 0, got {getattr(intent, name)!r}")
+    values = {
+        "Groups": [f"{n}={','.join(m)}" for n, m in intent.groups.items()],
+        "Excluded": list(intent.excluded),
+        "SplitSolids": bool(intent.split_solids),
+        "TechnicalConstraints": [json.dumps(c, sort_keys=True) for c in intent.technical_constraints],
+        "Tools": list(intent.tools),
+        "OperationTags": [json.dumps(t, sort_keys=True) for t in intent.operations],
+        "Engine": intent.engine,
+        "ContactTolerance": float(intent.contact),
+        "InterferenceVolume": float(intent.interference),
+        "DepthTolerance": float(intent.depth),
+        "Diagrams": json.dumps(intent.diagrams, sort_keys=True) if intent.diagrams else "",
+    }
+    for name, value in values.items():
+        if getattr(analysis, name) != value:  # unchanged properties stay untouched (no needless undo steps)
+            setattr(analysis, name, value)
+
+
+def update_intent(analysis, description: str, **changes) -> Intent:
+    """Replace fields of the analysis' intent (names of :class:`Intent`) in one undoable transaction.
+
+    Example: ``update_intent(a, "Exclude screw", excluded=["Screw"])``. Nothing changes when the analysis is
+    from a newer format or a value is invalid (:class:`IntentError`). Returns the new intent.
+    """
+    known = {f.name for f in fields(Intent)}
+    unknown = sorted(set(changes) - known)
+    if unknown:
+        raise TypeError(f"update_intent: unknown fields {unknown}; known: {sorted(known)}")
+    intent = replace(read_intent(analysis), **changes)
+    _in_transaction(analysis.Document, f"APLAN: {description}", lambda: _write(analysis, intent))
+    return intent
+
+
+def product_intent(intent: Intent) -> dict:
+    """The product-file keys (``technical_constraints``, ``tools``, ``operations``) the intent adds."""
+    out: dict = {}
+    if intent.technical_constraints:
+        out["technical_constraints"] = [dict(c) for c in intent.technical_constraints]
+    if intent.tools:
+        out["tools"] = [{"id": t} for t in intent.tools]
+    if intent.operations:
+        out["operations"] = [dict(t) for t in intent.operations]
+    return out

@@ -1,0 +1,254 @@
+"""What the workbench's commands do, as plain functions (no Qt): the GUI, batch jobs and tests share them.
+
+From an open document with an APLAN analysis (:mod:`freecad_aplan.intent`):
+
+1. :func:`export_for_detection` writes the document's components into a bundle folder, and a background
+   job (:func:`worker_command`: ``batch.py analyze``, i.e. :func:`analyze_bundle`) runs a geometry engine on
+   it; :func:`store_detection` keeps the connection and obstruction diagrams in the analysis;
+2. :func:`analysis_product` is the product the planner sees: those diagrams plus the designer intent;
+3. :func:`plan_report` gives the statistics (the figures of ``aplan stats``) and the graph pictures;
+4. :func:`export_analysis_bundle`, :func:`export_decision_model`, :func:`solve_product` (a background job)
+   and :func:`simulate_sequence` write the bundle, the POMDPX/``.pomdp`` model, the policy and the belief plot.
+
+Functions that need FreeCAD import it themselves, so the background jobs also run in a plain Python.
+Every write is atomic; the user's parts are never touched.
+"""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+from planner.errors import PlannerError
+
+from . import ADDON_DIR
+
+__all__ = ["require_analysis", "export_for_detection", "worker_command", "analyze_bundle", "store_detection",
+           "analysis_product", "analysis_diagrams", "plan_report", "export_analysis_bundle", "export_decision_model",
+           "solve_product", "simulate_sequence", "BATCH_SCRIPT"]
+
+BATCH_SCRIPT = os.path.join(ADDON_DIR, "freecad_aplan", "batch.py")
+
+
+def require_analysis(document):
+    """The document's APLAN analysis; :class:`~freecad_aplan.intent.IntentError` when there is none (or it is
+    from a newer format)."""
+    from .intent import IntentError, find_analysis, read_intent
+
+    if document is None:
+        raise IntentError("no document is open: open an assembly first")
+    analysis = find_analysis(document)
+    if analysis is None:
+        raise IntentError(f"{document.Label}: no APLAN analysis; create one first (APLAN > Create analysis)")
+    read_intent(analysis)  # refuses a newer format before anything else happens
+    return analysis
+
+
+def export_for_detection(document, folder: str) -> dict:
+    """Export the document's components (with its intent) into the bundle folder ``folder``; returns the
+    product as written (with ``x-freecad-objects``: component id -> its objects' names)."""
+    from .export import export_document
+
+    product, _ = export_document(document, folder, document.FileName or document.Label)
+    return product
+
+
+def _mesh_python() -> str | None:
+    """The Python that runs the mesh engine: ``$APLAN_PYTHON``, else the addon's own ``.venv`` (made by
+    ``scripts/setup.sh``), else None (then FreeCADCmd, when FreeCAD's Python has trimesh and manifold3d)."""
+    explicit = os.environ.get("APLAN_PYTHON")
+    if explicit:
+        return explicit
+    venv = os.path.join(ADDON_DIR, ".venv", "bin", "python")
+    return venv if os.path.isfile(venv) and os.access(venv, os.X_OK) else None
+
+
+def worker_command(action: str, engine: str | None = None) -> list[str]:
+    """The program and arguments of a background job running ``batch.py`` (``action``: analyze, solve).
+
+    The occt engine and the solver run in FreeCADCmd; the mesh engine needs trimesh and manifold3d, so it
+    runs in :func:`_mesh_python`, else in FreeCADCmd when FreeCAD's Python has them. Raises
+    :class:`~freecad_aplan.runner.FreeCADError` saying what to install when none can.
+    """
+    import importlib.util
+
+    from .runner import FreeCADError, find_freecadcmd
+
+    if action == "analyze" and engine == "mesh":
+        python = _mesh_python()
+        if python is not None:
+            return [python, BATCH_SCRIPT]
+        if any(importlib.util.find_spec(m) is None for m in ("trimesh", "manifold3d")):
+            raise FreeCADError("the mesh engine needs the Python packages trimesh and manifold3d, which FreeCAD's "
+                               "Python does not have: install them for FreeCAD (pip), set APLAN_PYTHON to a Python "
+                               "that has them, or choose the occt engine (analysis property Engine)")
+    return [find_freecadcmd(), BATCH_SCRIPT]
+
+
+def analyze_bundle(folder: str, engine: str = "mesh", contact: float = 0.1, interference: float = 1.0,
+                   depth: float = 0.1) -> dict:
+    """Run a geometry engine on the bundle ``folder`` and write the result into its ``product.json``.
+
+    Returns the counts (parts, contacts, interferences, seconds). Runs in a background job.
+    """
+    from planner.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
+    from planner.geometry import Tolerances
+    from planner.product import save_product
+
+    product = load_bundle(folder)
+    tolerances = Tolerances(contact=contact, interference=interference, depth=depth)
+    if engine == "occt":
+        from .occt import analyze_bundle_breps
+        from .plugin import occt_report
+
+        report = occt_report(product, analyze_bundle_breps(folder, contact=contact, interference=interference,
+                                                           depth=depth))
+    else:
+        report = analyze_product(product, engine, tolerances)
+    save_product(apply_report(product, report), Path(folder) / PRODUCT_FILE)
+    return {"parts": len(report.parts), "contacts": len(report.contacts),
+            "interferences": len(report.interferences), "seconds": round(report.seconds, 3)}
+
+
+def store_detection(analysis, folder: str):
+    """Keep the diagrams of the analysed bundle ``folder`` in the analysis (one undoable step)."""
+    from planner.bundle import load_bundle
+    from planner.product import product_to_dict
+
+    from .intent import update_intent
+
+    raw = json.loads((Path(folder) / "product.json").read_text(encoding="utf-8"))
+    data = product_to_dict(load_bundle(folder))
+    diagrams = {"parts": [p["id"] for p in data["parts"]], "objects": raw.get("x-freecad-objects", {}),
+                "contacts": data["contacts"], "obstructions": data["obstructions"],
+                "analysis": data.get("geometry", {}).get("analysis", {})}
+    return update_intent(analysis, "detect contacts and obstructions", diagrams=diagrams)
+
+
+def analysis_product(analysis, name: str = ""):
+    """The product the planner sees: the stored diagrams plus the designer intent (a ``planner.Product``).
+
+    Raises :class:`~freecad_aplan.intent.IntentError` when nothing was detected yet or the intent does not fit.
+    """
+    from planner.errors import ProductFormatError
+    from planner.product import product_from_dict
+
+    from .intent import IntentError, product_intent, read_intent
+
+    intent = read_intent(analysis)
+    diagrams = intent.diagrams
+    if not diagrams.get("parts"):
+        raise IntentError(f"{analysis.Label}: no contacts and obstructions yet; run APLAN > Detect contacts "
+                          "and obstructions first")
+    data = {"format": "aplan-product", "version": 1, "name": name or analysis.Document.Label,
+            "parts": [{"id": p} for p in diagrams["parts"]], "contacts": diagrams["contacts"],
+            "obstructions": diagrams["obstructions"], **product_intent(intent)}
+    try:
+        return product_from_dict(data, analysis.Label)
+    except ProductFormatError as exc:
+        raise IntentError(f"{analysis.Label}: {exc.location}: {exc.problem}; fix it in the APLAN task panels, "
+                          "or run the detection again if the components changed") from None
+
+
+def plan_report(product, folder: str | None = None, technical: bool | None = None):
+    """The plan of ``product``, its statistics (``aplan stats``'s figures) and, with ``folder``, the pictures
+    of its AND/OR, state and intention graphs (:func:`planner.figures.draw_plan`)."""
+    from planner import make_plan, plan_statistics
+
+    plan = make_plan(product, technical)
+    images = {}
+    if folder is not None:
+        from planner.figures import draw_plan
+
+        images = draw_plan(plan, folder)
+    return plan, plan_statistics(plan), images
+
+
+def export_analysis_bundle(document, analysis, bundle: str) -> None:
+    """Write the bundle folder ``bundle`` (meshes, B-reps, product.json with the stored diagrams and intent);
+    it appears only when everything succeeded, replacing an existing one."""
+    from dataclasses import replace
+
+    from planner.bundle import PRODUCT_FILE, load_bundle
+    from planner.product import save_product
+
+    product = analysis_product(analysis)
+    bundle = os.path.abspath(bundle)
+    work = tempfile.mkdtemp(prefix=f".{os.path.basename(bundle)}.", suffix=".partial", dir=os.path.dirname(bundle))
+    try:
+        export_for_detection(document, work)
+        exported = load_bundle(work)
+        if sorted(exported.part_ids) != sorted(product.part_ids):
+            raise PlannerError(f"the components {sorted(exported.part_ids)} differ from those of the last detection "
+                               f"{sorted(product.part_ids)}; run the detection again")
+        save_product(replace(exported, contacts=product.contacts, obstructions=product.obstructions,
+                             geometry={**exported.geometry, "analysis": analysis_diagrams(analysis)}),
+                     os.path.join(work, PRODUCT_FILE))
+        if os.path.exists(bundle):
+            shutil.rmtree(bundle)
+        os.rename(work, bundle)
+    except BaseException:
+        shutil.rmtree(work, ignore_errors=True)
+        raise
+
+
+def analysis_diagrams(analysis) -> dict:
+    """The engine summary of the last detection (engine, tolerances, interferences, warnings)."""
+    from .intent import read_intent
+
+    return read_intent(analysis).diagrams.get("analysis", {})
+
+
+def export_decision_model(product, path: str, technical: bool | None = None) -> dict:
+    """Write the POMDP of ``product`` (Alg. 3) as POMDPX or ``.pomdp`` (by the file name); returns its sizes."""
+    from planner import make_plan
+    from planner.decision import intention_pomdp
+    from planner.models import save_model
+
+    model = intention_pomdp(make_plan(product, technical))
+    save_model(model, path)
+    return {"states": len(model.states), "actions": len(model.actions), "observations": len(model.observations)}
+
+
+def solve_product(product: str, output: str, time_limit: float = 10.0, precision: float = 1e-3,
+                  technical: bool | None = None, progress=None) -> dict:
+    """Solve the POMDP of the product file ``product`` and write the policy to ``output`` (a background job)."""
+    from planner import load_product, make_plan
+    from planner.decision import intention_pomdp
+    from planner.policy import write_policy
+    from planner.solvers import PointBasedSolver
+
+    model = intention_pomdp(make_plan(load_product(product), technical))
+    result = PointBasedSolver(time_limit=time_limit, precision=precision).solve(model, progress)
+    write_policy(result.policy, output, model.name)
+    return {"lower_bound": result.lower_bound, "upper_bound": result.upper_bound,
+            "alpha_vectors": int(result.policy.alphas.shape[0]), "seconds": round(result.seconds, 2)}
+
+
+def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None = None, seed: int = 0,
+                      technical: bool | None = None) -> dict:
+    """Play the operator through full sequence ``sequence`` (default: the first) against the policy and
+    write the belief plot ``stem.png``/``stem.svg``; returns the steps and the plot paths."""
+    import numpy as np
+
+    from planner import make_plan
+    from planner.decision import intention_pomdp
+    from planner.policy import read_policy
+    from planner.simulate import plot_beliefs, simulate_episode
+
+    model = intention_pomdp(make_plan(product, technical))
+    graph = model.metadata["intention_graph"]
+    starts = [int(s) for s in graph.full_sequences()]
+    start = starts[0] if sequence is None else sequence
+    if start not in starts:
+        raise PlannerError(f"{start} is not a full assembly sequence; the sequences are the intentions "
+                           f"{starts[0]}..{starts[-1]}")
+    policy = read_policy(policy_path, model)
+    episode = simulate_episode(model, policy, start, np.random.default_rng(seed), 100, graph.successor, 0, "turns")
+    written = plot_beliefs([episode], stem, [f"sequence {start}"])
+    return {"sequence": start, "steps": [(model.actions[s.action], str(model.observations[s.observation]),
+                                          round(s.p_true, 3)) for s in episode.steps],
+            "confident_after": episode.first_confident(0.9), "plots": written}
+
