@@ -198,6 +198,13 @@ class Detect(_Command):
                  f"interferences ({result['seconds']:.1f} s); see Diagrams", error=False)
 
 
+def _show_panel(panel) -> None:
+    """Show ``panel`` in the task view, replacing any open one (kept in _STATE so Qt does not drop it)."""
+    FreeCADGui.Control.closeDialog()
+    _STATE["panel"] = panel
+    FreeCADGui.Control.showDialog(panel)
+
+
 class Diagrams(_Command):
     name, menu = "Aplan_Diagrams", "Connection and obstruction diagrams"
     tooltip = "Inspect and edit the detected relations; selecting one highlights its two parts"
@@ -207,9 +214,7 @@ class Diagrams(_Command):
 
         analysis = workflow.require_analysis(_document())
         workflow.analysis_product(analysis)  # a clear message when nothing was detected yet
-        FreeCADGui.Control.closeDialog()
-        _STATE["panel"] = DiagramsPanel(analysis)
-        FreeCADGui.Control.showDialog(_STATE["panel"])
+        _show_panel(DiagramsPanel(analysis))
 
 
 class Intent(_Command):
@@ -223,9 +228,7 @@ class Intent(_Command):
 
         analysis = workflow.require_analysis(_document())
         plan = make_plan(workflow.analysis_product(analysis), technical=False)
-        FreeCADGui.Control.closeDialog()
-        _STATE["panel"] = IntentPanel(analysis, plan)
-        FreeCADGui.Control.showDialog(_STATE["panel"])
+        _show_panel(IntentPanel(analysis, plan))
 
 
 class Plan(_Command):
