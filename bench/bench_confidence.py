@@ -58,7 +58,7 @@ def main() -> None:
         known = [c for c in counts if c is not None]
         median = statistics.median(known) if known else None
         medians.append(median)
-        print(f"| {start} | {' ; '.join(steps)} | {median if median is not None else '-'} | "
+        print(f"| {start} | {' ; '.join(steps)} | {format(median, 'g') if median is not None else '-'} | "
               f"{min(known) if known else '-'} | {max(known) if known else '-'} | "
               f"{(len(counts) - len(known)) / len(counts):.0%} |", flush=True)
     found = [m for m in medians if m is not None]
