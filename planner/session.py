@@ -48,7 +48,7 @@ from .tags import BLANK, Observation
 __all__ = [
     "SessionError", "Instruction", "RobotReport", "ObservationSource", "Robot", "ConsoleRobot", "ScriptedRobot",
     "ScriptedOperator", "KeyboardSource", "EventLog", "SessionResult", "run_session", "instruction_for",
-    "status_line", "Replay", "replay", "LOG_VERSION",
+    "status_line", "read_line", "Replay", "replay", "LOG_VERSION",
 ]
 
 LOG_VERSION = 1
@@ -113,6 +113,16 @@ class Robot(Protocol):
         ...
 
 
+def read_line(prompt: str) -> str:
+    """Like :func:`input`, but the prompt goes to standard error (standard output stays for results)."""
+    sys.stderr.write(prompt)
+    sys.stderr.flush()
+    line = sys.stdin.readline()
+    if not line:
+        raise EOFError
+    return line.rstrip("\n")
+
+
 def instruction_for(plan: Plan, model: POMDP, action: int, step: int) -> Instruction:
     """The instruction of ``action`` in ``model`` (an intention POMDP of ``plan``)."""
     name = model.actions[action]
@@ -128,7 +138,7 @@ class ConsoleRobot:
     (or types ``f`` and a reason, then Enter, when it could not be done). Waiting needs no confirmation
     unless ``confirm_wait``. End of input counts as a failure (nobody confirmed)."""
 
-    def __init__(self, read: Callable[[str], str] = input, write=None, confirm_wait: bool = False):
+    def __init__(self, read: Callable[[str], str] = read_line, write=None, confirm_wait: bool = False):
         self._read = read
         self._write = write or (lambda text: print(text, file=sys.stderr, flush=True))
         self.confirm_wait = confirm_wait
@@ -219,7 +229,7 @@ class KeyboardSource:
     (``ink cartridge hammer``), an empty line for nothing, ``q`` to stop. A line naming something that is
     not a part or tool, or two tools, is refused and asked again."""
 
-    def __init__(self, product: Product, read: Callable[[str], str] = input, write=None):
+    def __init__(self, product: Product, read: Callable[[str], str] = read_line, write=None):
         self.parts = set(product.part_ids)
         self.tools = {t.id for t in product.tools}
         self._read = read
@@ -250,11 +260,13 @@ class KeyboardSource:
 
 class EventLog:
     """Session events as JSON lines. Each event is one line written with one ``write``, then flushed and
-    fsynced. ``path`` None keeps the events in memory only (``events`` always holds them)."""
+    fsynced. ``path`` None keeps the events in memory only (``events`` always holds them); ``on_event`` sees
+    every event as it is written."""
 
-    def __init__(self, path: str | os.PathLike | None = None):
+    def __init__(self, path: str | os.PathLike | None = None, on_event: Callable[[dict], None] | None = None):
         self.path = Path(path) if path is not None else None
         self.events: list[dict] = []
+        self.on_event = on_event
         self._handle = None
         if self.path is not None:
             try:
@@ -272,6 +284,8 @@ class EventLog:
             self._handle.write(json.dumps(record) + "\n")
             self._handle.flush()
             os.fsync(self._handle.fileno())
+        if self.on_event is not None:
+            self.on_event(record)
         return record
 
     def close(self) -> None:

@@ -224,3 +224,107 @@ def test_log_is_never_overwritten_and_replay_checks(setup, tmp_path):
     path.write_text('not json\n{"event": "start"}\n')
     with pytest.raises(SessionError, match="line 1: not JSON"):
         replay(path)
+
+
+# ---------------------------------------------------------------------------------------------- command line
+
+
+def _aplan(*args, stdin=""):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "planner", *map(str, args)], input=stdin, capture_output=True,
+                          text=True)
+
+
+@pytest.fixture(scope="module")
+def policy_file(setup, tmp_path_factory):
+    from planner.policy import write_policy
+
+    path = tmp_path_factory.mktemp("policy") / "pen.policy"
+    write_policy(setup[2], path)
+    return path
+
+
+def test_cli_session_on_a_recorded_video_and_replay(setup, policy_file, tmp_path):
+    """Record the frames of a session (operator and robot in the same cell), then run `aplan session
+    --video` on the recording with a robot that confirms at once: the same beliefs, assembled."""
+    import cv2
+
+    plan, model, policy, graph = setup
+    markers = marker_map(plan.product)
+    start = int(graph.full_sequences()[3])
+    operator = ScriptedOperator.following(plan, graph, start)
+    cell = TrayCell(tray_layout(markers, (960, 540), 48), operator, Camera(blur=1.0, noise=4, seed=3))
+    recorded = []
+
+    def frames():
+        for frame in cell:
+            recorded.append(frame)
+            yield frame
+
+    result = run_session(plan, model, policy, VisionSource(frames(), markers, quiet_frames=20),
+                         ScriptedRobot(on_perform=cell.robot))
+    assert result.assembled
+    video = tmp_path / "session.avi"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 30, (960, 540))
+    for frame in recorded + recorded[-1:] * 30:
+        writer.write(frame)
+    writer.release()
+    log = tmp_path / "cli.jsonl"
+    done = _aplan("session", "pen", "--policy", policy_file, "--video", video, "--robot", "auto", "--log", log,
+                  "--quiet-frames", 20)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("assembled: the product is assembled after")
+    assert "step 1 | belief" in done.stderr
+    replayed = replay(log)
+    assert replayed.observations == result.observations and replayed.actions == result.actions
+    shown = _aplan("replay", log, "--plot", tmp_path / "fig7")
+    assert shown.returncode == 0 and f"beliefs reproduced at all {len(result.actions)} steps" in shown.stdout
+    assert (tmp_path / "fig7.png").stat().st_size > 0
+
+
+def test_cli_session_keyboard_and_console_robot(setup, policy_file, tmp_path):
+    """The operator's picks typed in and a person confirming the robot's instructions with Enter."""
+    plan, model, policy, graph = setup
+    operator = ScriptedOperator.following(plan, graph, int(graph.full_sequences()[0]))
+    robot = ScriptedRobot(on_perform=operator.robot_acting)
+    expected = run_session(plan, model, policy, operator, robot)
+    lines = []
+    for action, z in zip(expected.actions, expected.observations):
+        if model.actions[action] != "wait":
+            lines.append("")  # the person standing in for the robot presses Enter
+        observation = plan.observations[z]
+        lines.append(" ".join(observation.parts + ((observation.tool,) if observation.tool else ())))
+    log = tmp_path / "k.jsonl"
+    done = _aplan("session", "pen", "--policy", policy_file, "--keyboard", "--log", log, stdin="\n".join(lines) + "\n")
+    assert done.returncode == 0, done.stderr
+    assert "ROBOT, step" in done.stderr and "press Enter when done" in done.stderr
+    assert replay(log).observations == expected.observations
+
+
+def test_cli_session_errors(policy_file, tmp_path):
+    missing = _aplan("session", "pen", "--policy", policy_file, "--images", tmp_path / "nowhere",
+                     "--log", tmp_path / "x.jsonl")
+    assert missing.returncode == 1 and "no such folder of images" in missing.stderr
+    assert not (tmp_path / "x.jsonl").exists()  # nothing ran, nothing logged
+    usage = _aplan("session", "pen", "--policy", policy_file)
+    assert usage.returncode == 2 and "one of the arguments --camera --video --images --keyboard is required" in usage.stderr
+    (tmp_path / "x.jsonl").write_text("")
+    exists = _aplan("session", "pen", "--policy", policy_file, "--keyboard", "--log", tmp_path / "x.jsonl")
+    assert exists.returncode == 1 and "the log exists already" in exists.stderr
+    failed = _aplan("session", "pen", "--policy", policy_file, "--keyboard", "--log", tmp_path / "f.jsonl",
+                    stdin="body ink hammer\n")
+    assert failed.returncode == 1 and failed.stdout.startswith("unexplained observation: step 1")
+    events = [json.loads(line)["event"] for line in (tmp_path / "f.jsonl").read_text().splitlines()]
+    assert events[0] == "start" and events[-1] == "end"
+    broken = _aplan("replay", tmp_path / "x.jsonl")
+    assert broken.returncode == 1 and "not a session log" in broken.stderr
+
+
+def test_cli_markers(tmp_path):
+    done = _aplan("markers", "pen", "-o", tmp_path / "sheet.pdf")
+    assert done.returncode == 0 and "7 markers (DICT_4X4_50, 40 mm)" in done.stdout
+    bad = _aplan("markers", "pen", "-o", tmp_path / "sheet.jpg")
+    assert bad.returncode == 1 and ".pdf or .png" in bad.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sheet.pdf"]
