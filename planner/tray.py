@@ -107,9 +107,9 @@ def render_tray(layout: TrayLayout, in_tray: Iterable[str], blur: float = 0.0, n
         frame = cv2.GaussianBlur(frame, (0, 0), blur)
     if noise > 0:
         cv2.setRNGSeed(seed)
-        grain = np.empty(frame.shape, np.int16)
+        grain = np.empty(frame.shape[:2], np.int16)  # luminance noise: what survives the grey conversion
         cv2.randn(grain, 0, noise)
-        frame = np.clip(frame.astype(np.int16) + grain, 0, 255).astype(np.uint8)
+        frame = np.clip(frame.astype(np.int16) + grain[:, :, None], 0, 255).astype(np.uint8)
     return frame
 
 

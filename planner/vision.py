@@ -23,7 +23,7 @@ Pipeline, one job per piece:
 - Frame sources: :func:`camera_frames`, :func:`video_frames`, :func:`image_frames`; each raises
   :class:`VisionError` with the cause when it cannot be opened or read.
 
-Cost: detection dominates (about 20 ms per 1920x1080 frame on one core, see ``bench/bench_vision.py``);
+Cost: detection dominates (about 15 ms per 1920x1080 frame on one core, see ``bench/bench_vision.py``);
 tracking and building are O(markers) per frame.
 """
 from __future__ import annotations
@@ -33,7 +33,7 @@ import threading
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Iterator
+from typing import Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -98,13 +98,14 @@ def marker_map(product: Product, require_all: bool = True) -> MarkerMap:
 class MarkerDetector:
     """ArUco marker detection in one frame (grey or BGR ``(H, W[, 3]) uint8``).
 
-    ``threshold_windows``: the adaptive-threshold window sizes tried (OpenCV's default tries 3, 13 and 23;
-    two windows keep 1080p frames above 30 per second on one core and still find markers 30 to 300 pixels
-    wide under blur, noise and perspective). ``downscale``: detect on the frame shrunk by this factor (1:
-    full size).
+    ``threshold_windows``: the adaptive-threshold window sizes (pixels, odd, evenly spaced) tried on each
+    frame. OpenCV's default tries 3, 13 and 23; every window costs a thresholding and a contour pass, and the
+    single window 23 finds markers 40 pixels wide and more under blur, noise and perspective at more than
+    twice OpenCV's default frame rate (``bench/bench_vision.py``); ``(13, 23)`` reaches down to about 32
+    pixels. ``downscale``: detect on the frame shrunk by this factor (1: full size).
     """
 
-    def __init__(self, dictionary: str = DEFAULT_MARKER_DICTIONARY, threshold_windows: tuple[int, int] = (13, 33),
+    def __init__(self, dictionary: str = DEFAULT_MARKER_DICTIONARY, threshold_windows: Sequence[int] = (23,),
                  downscale: float = 1.0):
         import cv2
 
@@ -113,13 +114,16 @@ class MarkerDetector:
                               f"{DEFAULT_MARKER_DICTIONARY}")
         if downscale < 1:
             raise VisionError(f"downscale must be at least 1, got {downscale}")
+        windows = sorted(int(w) for w in threshold_windows)
+        steps = {b - a for a, b in zip(windows, windows[1:])}
+        if not windows or windows[0] < 3 or any(w % 2 == 0 for w in windows) or len(steps) > 1 or 0 in steps:
+            raise VisionError(f"threshold windows must be distinct odd sizes >= 3, evenly spaced; got {threshold_windows}")
         self.dictionary = dictionary
         self.downscale = downscale
         parameters = cv2.aruco.DetectorParameters()
-        low, high = threshold_windows
-        parameters.adaptiveThreshWinSizeMin = low
-        parameters.adaptiveThreshWinSizeMax = high
-        parameters.adaptiveThreshWinSizeStep = max(high - low, 1)
+        parameters.adaptiveThreshWinSizeMin = windows[0]
+        parameters.adaptiveThreshWinSizeMax = windows[-1]
+        parameters.adaptiveThreshWinSizeStep = steps.pop() if steps else 10
         self._detector = cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary)),
                                                  parameters)
         self._cv2 = cv2
@@ -354,15 +358,28 @@ def in_background(items: Iterator, maxsize: int = 0) -> Iterator:
     stop = threading.Event()
     done = object()
 
+    def put(message) -> bool:
+        while not stop.is_set():
+            try:
+                channel.put(message, timeout=0.05)
+                return True
+            except queue.Full:
+                continue
+        return False
+
     def pump() -> None:
         try:
             for item in items:
-                if stop.is_set():
-                    break
-                channel.put(("item", item))
+                if not put(("item", item)):
+                    return
         except BaseException as exc:  # handed to the consumer, which re-raises it
-            channel.put(("error", exc))
-        channel.put(("done", done))
+            put(("error", exc))
+            return
+        finally:
+            close = getattr(items, "close", None)
+            if close is not None:
+                close()  # releases the camera
+        put(("done", done))
 
     thread = threading.Thread(target=pump, name="aplan-vision", daemon=True)
     thread.start()

@@ -62,9 +62,18 @@ def test_detector_sees_exactly_the_uncovered_markers(markers, camera):
         assert detector.detect(frame) == expected
 
 
+@pytest.mark.parametrize("pixels", [40, 200])
+def test_marker_sizes_the_default_detector_covers(markers, pixels):
+    layout = tray_layout(markers, (1920, 1080), pixels)
+    frame = render_tray(layout, {"ink"}, blur=1.2, noise=6, perspective=0.04, seed=pixels, camera_seed=pixels)
+    assert MarkerDetector().detect(frame) == {1, 2, 3, 4, 5, 6}
+
+
 def test_unknown_dictionary():
     with pytest.raises(VisionError, match="unknown marker dictionary 'DICT_9X9_1'"):
         MarkerDetector("DICT_9X9_1")
+    with pytest.raises(VisionError, match="evenly spaced"):
+        MarkerDetector(threshold_windows=(3, 13, 33))
 
 
 def test_tracker_ignores_flickers_shorter_than_the_debounce():
@@ -238,3 +247,26 @@ def test_marker_sheet_is_detectable(pen, markers, tmp_path):
     with pytest.raises(Exception, match=r"\.pdf or \.png"):
         write_marker_sheet(pen, tmp_path / "sheet.svg")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sheet.pdf", "sheet.png"]
+
+
+def test_background_reading_keeps_order_and_reraises():
+    from planner.vision import in_background
+
+    def items():
+        yield from range(5)
+        raise VisionError("camera 0 stopped")
+
+    stream = in_background(items())
+    assert [next(stream) for _ in range(5)] == list(range(5))
+    with pytest.raises(VisionError, match="camera 0 stopped"):
+        next(stream)
+    endless = in_background(iter(int, 1), maxsize=4)  # an endless source, stopped by closing
+    assert next(endless) == 0
+    endless.close()
+    import threading
+    import time
+
+    deadline = time.monotonic() + 2
+    while any(t.name == "aplan-vision" for t in threading.enumerate()) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert not any(t.name == "aplan-vision" for t in threading.enumerate())
