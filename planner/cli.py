@@ -296,7 +296,7 @@ def _session(args: argparse.Namespace) -> int:
         close_without_tool = any(o.parts and o.tool is None for o in plan.observations)
         source = VisionSource((), markers, detector, args.debounce, args.quiet_frames, close_without_tool,
                               on_warning=lambda message: log.write("warning", step=_current_step(log), message=message),
-                              detections=stream)
+                              detections=stream, robot_uses_tray_tools=not args.robot_own_tools)
     robot = ConsoleRobot() if args.robot == "console" else ScriptedRobot()
 
     def status(line: str) -> None:
@@ -307,7 +307,8 @@ def _session(args: argparse.Namespace) -> int:
                 "rewards": vars(rewards), "robot": args.robot,
                 "source": (f"camera {args.camera}" if args.camera is not None else f"video {args.video}"
                            if args.video else f"images {args.images}" if args.images else "keyboard"),
-                "debounce": args.debounce, "quiet_frames": args.quiet_frames}
+                "debounce": args.debounce, "quiet_frames": args.quiet_frames,
+                "robot_own_tools": args.robot_own_tools}
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)  # logged and shown as warning events instead
@@ -517,6 +518,9 @@ def build_parser() -> argparse.ArgumentParser:
     session.add_argument("--quiet-frames", type=_positive, default=45, metavar="F",
                          help="frames without any marker change that make a blank observation (default 45: "
                               "1.5 s at 30 fps)")
+    session.add_argument("--robot-own-tools", action="store_true",
+                         help="the robot has tools of its own: every tool taken from the tray is the operator's "
+                              "(default: the robot takes its tool from the tray too, as in the paper)")
     session.add_argument("--max-steps", type=_positive, default=500)
     session.add_argument("--time-limit", type=float, default=20.0, help="solver seconds when no --policy")
     _add_decision_options(session)

@@ -235,12 +235,15 @@ class VisionSource:
     ``frames`` yields ``(H, W[, 3]) uint8`` images. :meth:`observe` reads frames until the operator closes an
     operation (its observation), or ``quiet_frames`` frames pass without a marker change (BLANK), or the
     frames end (None, or BLANK first when frames were read in this call).
-    ``on_warning`` receives each warning (an unknown marker id, once per id); default: :func:`warnings.warn`.
+    ``robot_uses_tray_tools``: the robot takes its tool from the tray too (the paper's setup), so one tool
+    event per robot operation is the robot's; False when the robot has tools of its own.
+    ``on_warning`` receives each warning (an unknown marker id, once per id; a robot pick that never showed);
+    default: :func:`warnings.warn`. ``detections`` replaces ``frames`` by the marker ids of each frame.
     """
 
     def __init__(self, frames: Iterable[np.ndarray], markers: MarkerMap, detector: MarkerDetector | None = None,
                  debounce: int = 3, quiet_frames: int = 45, close_without_tool: bool = False,
-                 on_warning=None, detections: Iterable[set[int]] | None = None):
+                 on_warning=None, detections: Iterable[set[int]] | None = None, robot_uses_tray_tools: bool = True):
         if quiet_frames <= debounce:
             raise VisionError(f"quiet_frames ({quiet_frames}) must exceed debounce ({debounce})")
         self.markers = markers
@@ -248,6 +251,7 @@ class VisionSource:
         self.tracker = MarkerTracker(markers.items, debounce)
         self.builder = ObservationBuilder(markers, close_without_tool)
         self.quiet_frames = quiet_frames
+        self.robot_uses_tray_tools = robot_uses_tray_tools
         self.frames_read = 0
         self.unknown: set[int] = set()
         self._warn = on_warning or (lambda message: warnings.warn(message, RuntimeWarning, stacklevel=3))
@@ -255,9 +259,19 @@ class VisionSource:
         self._queued: list[Observation] = []
 
     def robot_acting(self, instruction) -> None:
-        """The robot is about to perform ``instruction``: its parts and tool are not the operator's."""
+        """The robot is about to perform ``instruction``: its parts and tool are not the operator's.
+
+        What the robot's previous step should have shown and did not is dropped, with a warning, so a missed
+        robot event cannot swallow the operator's later ones."""
+        builder = self.builder
+        left = sorted(builder.robot_parts) + builder.robot_tools
+        if left:
+            self._warn(f"the robot's previous operation never showed {', '.join(left)} leaving the tray "
+                       "(taken earlier, or not seen); no longer expected")
+            builder.robot_parts.clear()
+            builder.robot_tools.clear()
         if instruction.operation is not None:
-            self.builder.expect_robot(instruction.picks, instruction.tool)
+            builder.expect_robot(instruction.picks, instruction.tool if self.robot_uses_tray_tools else None)
 
     def observe(self) -> Observation | None:
         if self._queued:

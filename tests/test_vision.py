@@ -164,6 +164,24 @@ def test_robot_picks_are_not_the_operators(plan, graph, markers):
     assert [first] + rest == truth and len(truth) == 4  # the robot's operation is not among the operator's
 
 
+def test_robot_expectations_last_one_step(markers):
+    said = []
+    # frames: the robot takes the ink (marker 0); the cartridge (1) and the hammer (6) never show for it
+    source = VisionSource([], markers, on_warning=said.append, quiet_frames=5,
+                          detections=[{0}] * 8 + [{0, 1}] * 3 + [{0, 1, 6}] * 3 + [{0, 1}] * 8)
+    join = Instruction(1, 0, "a", 7, (("ink",), ("cartridge",)), "hammer")
+    source.robot_acting(join)
+    source.builder.robot_parts.add("cartridge")  # as if the robot had been sent for it too
+    assert source.observe() == BLANK  # the ink is the robot's
+    source.robot_acting(Instruction(2, 1, "wait"))
+    assert "never showed cartridge, hammer leaving the tray" in said[0]
+    assert source.observe() == Observation(("cartridge",), "hammer")  # the operator's, no longer swallowed
+    own = VisionSource([], markers, quiet_frames=5, robot_uses_tray_tools=False,
+                       detections=[{0}] * 4 + [{0, 6}] * 4)
+    own.robot_acting(join)
+    assert own.observe() == Observation((), "hammer")  # a robot with its own hammer: the tray's is the operator's
+
+
 def test_unknown_marker_ids_warn_once(markers):
     source = VisionSource([], markers, detections=[{42}, {42, 0}, {42, 0}, {42, 0}] + [set(), {0}] * 30,
                           quiet_frames=10)
