@@ -275,6 +275,9 @@ def _session(args: argparse.Namespace) -> int:
     stream = None
     if not args.keyboard:  # open the frames first: a camera or file that cannot be read stops before any log
         markers = marker_map(plan.product)
+        if plan.product.markers is None:
+            print("aplan: note: the product has no 'markers': parts then tools are markers 0, 1, ... in file order "
+                  "(see aplan markers)", file=sys.stderr)
         detector = MarkerDetector(markers.dictionary)
         if args.camera is not None:
             stream = in_background(detections(camera_frames(args.camera), detector))

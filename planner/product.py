@@ -552,7 +552,8 @@ def product_from_dict(data: Any, source: str = "<memory>") -> Product:
     return Product(
         parts=tuple(parts), contacts=contacts, obstructions=tuple(obstructions),
         technical_constraints=tuple(constraints), tools=tuple(tools), operations=tuple(operations),
-        defaults=defaults, markers=markers, name=r.string(top.get("name", ""), "name"), units=r.string(top.get("units", "mm"), "units"),
+        defaults=defaults, markers=markers, name=r.string(top.get("name", ""), "name"),
+        units=r.string(top.get("units", "mm"), "units"),
         geometry=geometry, extensions=extensions, source=source,
     )
 

@@ -281,9 +281,12 @@ class EventLog:
         record = {"event": event, "time": round(time.time(), 3), **fields}
         self.events.append(record)
         if self._handle is not None:
-            self._handle.write(json.dumps(record) + "\n")
-            self._handle.flush()
-            os.fsync(self._handle.fileno())
+            try:
+                self._handle.write(json.dumps(record) + "\n")
+                self._handle.flush()
+                os.fsync(self._handle.fileno())
+            except OSError as exc:
+                raise SessionError(f"{self.path}: cannot write the log: {exc}") from None
         if self.on_event is not None:
             self.on_event(record)
         return record
@@ -369,7 +372,7 @@ def run_session(plan: Plan, model: POMDP, policy, source: ObservationSource, rob
                 result.operations += 1
             observation = source.observe()
             if observation is None:
-                return stop("source ended", f"the observations ended after step {step - 1}, with "
+                return stop("source ended", f"the observations ended at step {step}, with "
                             f"{result.operations} of {needed} operations done")
             z = index.get(observation)
             log.write("observation", step=step, observation=str(observation), index=z)
@@ -445,7 +448,8 @@ def _read_log(path: Path) -> list[dict]:
     if not events or events[0]["event"] != "start":
         raise SessionError(f"{path}: not a session log (it must start with a 'start' event)")
     if events[0].get("version") != LOG_VERSION:
-        raise SessionError(f"{path}: log version {events[0].get('version')!r}; this planner reads version {LOG_VERSION}")
+        raise SessionError(f"{path}: log version {events[0].get('version')!r}; this planner reads version "
+                           f"{LOG_VERSION}")
     return events
 
 

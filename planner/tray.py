@@ -100,7 +100,8 @@ def render_tray(layout: TrayLayout, in_tray: Iterable[str], blur: float = 0.0, n
         cv2.ellipse(frame, occluder.center, occluder.axes, occluder.angle, 0, 360, (120, 150, 200), -1)
     if perspective > 0:
         corners = np.float32([[0, 0], [width, 0], [width, height], [0, height]])
-        shift = np.random.default_rng(camera_seed).uniform(-perspective, perspective, (4, 2)) * np.float32([width, height])
+        shift = np.random.default_rng(camera_seed).uniform(-perspective, perspective, (4, 2))
+        shift *= np.float32([width, height])
         homography = cv2.getPerspectiveTransform(corners, (corners + shift).astype(np.float32))
         frame = cv2.warpPerspective(frame, homography, (width, height), borderValue=(70, 90, 110))
     if blur > 0:

@@ -117,7 +117,8 @@ class MarkerDetector:
         windows = sorted(int(w) for w in threshold_windows)
         steps = {b - a for a, b in zip(windows, windows[1:])}
         if not windows or windows[0] < 3 or any(w % 2 == 0 for w in windows) or len(steps) > 1 or 0 in steps:
-            raise VisionError(f"threshold windows must be distinct odd sizes >= 3, evenly spaced; got {threshold_windows}")
+            raise VisionError("threshold windows must be distinct odd sizes >= 3, evenly spaced; "
+                              f"got {threshold_windows}")
         self.dictionary = dictionary
         self.downscale = downscale
         parameters = cv2.aruco.DetectorParameters()
@@ -274,6 +275,7 @@ class VisionSource:
             builder.expect_robot(instruction.picks, instruction.tool if self.robot_uses_tray_tools else None)
 
     def observe(self) -> Observation | None:
+        """The operator's next operation, BLANK after a quiet period, None when the frames have ended."""
         if self._queued:
             return self._queued.pop(0)
         quiet = 0

@@ -91,5 +91,6 @@ class TrayCell:
                 occluders = tuple(Occluder((x, y), (px // 3, px // 3)) for x, y in self.layout.slots.values())
             self.frames += 1
             self.queue.append(render_tray(self.layout, self.in_tray, self.camera.blur, self.camera.noise,
-                                          self.camera.perspective, occluders, seed=self.camera.seed * 100_003 + self.frames,
+                                          self.camera.perspective, occluders,
+                                          seed=self.camera.seed * 100_003 + self.frames,
                                           camera_seed=self.camera.seed))

@@ -153,7 +153,7 @@ def test_impossible_observation_resets_the_belief_and_goes_on(setup):
     log = EventLog()
     with pytest.warns(RuntimeWarning, match="has probability 0"):
         result = run_session(plan, model, policy, source, ScriptedRobot(), log)
-    assert result.reason == "source ended" and "after step 2" in result.message
+    assert result.reason == "source ended" and "ended at step 3" in result.message
     warnings = [e for e in log.events if e["event"] == "warning"]
     assert len(warnings) == 1 and "[hammer]" in warnings[0]["message"]
     assert [e["reset"] for e in log.events if e["event"] == "belief"][0] is not None
@@ -309,7 +309,8 @@ def test_cli_session_errors(policy_file, tmp_path):
     assert missing.returncode == 1 and "no such folder of images" in missing.stderr
     assert not (tmp_path / "x.jsonl").exists()  # nothing ran, nothing logged
     usage = _aplan("session", "pen", "--policy", policy_file)
-    assert usage.returncode == 2 and "one of the arguments --camera --video --images --keyboard is required" in usage.stderr
+    assert usage.returncode == 2
+    assert "one of the arguments --camera --video --images --keyboard is required" in usage.stderr
     (tmp_path / "x.jsonl").write_text("")
     exists = _aplan("session", "pen", "--policy", policy_file, "--keyboard", "--log", tmp_path / "x.jsonl")
     assert exists.returncode == 1 and "the log exists already" in exists.stderr
