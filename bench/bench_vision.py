@@ -1,6 +1,6 @@
 """Vision benchmark: ArUco marker detection on 1920x1080 frames of the parts tray, on one core.
 
-Run: ``.venv/bin/python bench/bench_vision.py [--frames 300]`` (about 30 s).
+Run: ``.venv/bin/python bench/bench_vision.py [--frames 300]`` (about 1 minute).
 
 Frames are rendered by planner.tray (the pen's tray, markers 96 px wide, and a 48-item tray, markers 64 px)
 before timing, with the camera degradations of the tests; each frame's truth (the uncovered markers) is known,

@@ -33,13 +33,16 @@ import threading
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Iterable, Iterator, Sequence
+from typing import TYPE_CHECKING, Iterable, Iterator, Sequence
 
 import numpy as np
 
 from .errors import PlannerError
 from .product import DEFAULT_MARKER_DICTIONARY, MARKER_DICTIONARIES, Markers, Product
 from .tags import BLANK, Observation
+
+if TYPE_CHECKING:
+    from .session import Instruction
 
 __all__ = [
     "VisionError", "MarkerMap", "marker_map", "default_markers", "MarkerDetector", "MarkerTracker",
@@ -259,7 +262,7 @@ class VisionSource:
         self._detections = iter(detections) if detections is not None else (self.detector.detect(f) for f in frames)
         self._queued: list[Observation] = []
 
-    def robot_acting(self, instruction) -> None:
+    def robot_acting(self, instruction: Instruction) -> None:
         """The robot is about to perform ``instruction``: its parts and tool are not the operator's.
 
         What the robot's previous step should have shown and did not is dropped, with a warning, so a missed
