@@ -172,6 +172,24 @@ def test_source_error_stops_cleanly(setup):
     assert result.reason == "error" and "0002.png" in result.message
 
 
+def test_interrupt_and_step_limit_stop_cleanly(setup):
+    plan, model, policy, graph = setup
+
+    class Interrupted(_Listed):
+        def observe(self):
+            if not self.observations:
+                raise KeyboardInterrupt
+            return super().observe()
+
+    log = EventLog()
+    result = run_session(plan, model, policy, Interrupted([BLANK]), ScriptedRobot(), log)
+    assert result.reason == "interrupted" and result.message == "interrupted at step 2"
+    assert log.events[-1]["event"] == "end" and len(result.beliefs) == 2
+    operator = ScriptedOperator.following(plan, graph, int(graph.full_sequences()[0]), acts=lambda step: False)
+    result = run_session(plan, model, policy, operator, ScriptedRobot(), max_steps=3)
+    assert result.reason == "step limit" and result.steps == 3 and len(result.beliefs) == 4
+
+
 def test_console_robot_and_keyboard(setup):
     plan, model, policy, _ = setup
     shown = []
@@ -282,6 +300,8 @@ def test_cli_session_on_a_recorded_video_and_replay(setup, policy_file, tmp_path
     shown = _aplan("replay", log, "--plot", tmp_path / "fig7")
     assert shown.returncode == 0 and f"beliefs reproduced at all {len(result.actions)} steps" in shown.stdout
     assert (tmp_path / "fig7.png").stat().st_size > 0
+    steps = [json.loads(line) for line in _aplan("replay", log, "--json").stdout.splitlines()]
+    assert [s["observation"] for s in steps] == [model.observations[z] for z in result.observations]
 
 
 def test_cli_session_keyboard_and_console_robot(setup, policy_file, tmp_path):
@@ -308,6 +328,9 @@ def test_cli_session_errors(policy_file, tmp_path):
                      "--log", tmp_path / "x.jsonl")
     assert missing.returncode == 1 and "no such folder of images" in missing.stderr
     assert not (tmp_path / "x.jsonl").exists()  # nothing ran, nothing logged
+    camera = _aplan("session", "pen", "--policy", policy_file, "--camera", 97, "--log", tmp_path / "x.jsonl")
+    assert camera.returncode == 1 and "camera 97 cannot be opened" in camera.stderr
+    assert not (tmp_path / "x.jsonl").exists()
     usage = _aplan("session", "pen", "--policy", policy_file)
     assert usage.returncode == 2
     assert "one of the arguments --camera --video --images --keyboard is required" in usage.stderr
