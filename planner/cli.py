@@ -271,8 +271,11 @@ def _session(args: argparse.Namespace) -> int:
     plan = make_plan(resolve_product(args.product), args.technical)
     rewards = Rewards(args.reward_unfavorable, args.reward_favorable, args.reward_wrong, args.reward_wait)
     model = intention_pomdp(plan, rewards, args.discount)
+    if args.demo is not None and args.robot is not None:
+        raise PlannerError("--demo simulates the robot too; leave out --robot")
     policy = _policy_for(args, model)
     stream = None
+    robot = ConsoleRobot() if args.robot in (None, "console") else ScriptedRobot()
     if not args.keyboard:  # open the frames first: a camera or file that cannot be read stops before any log
         markers = marker_map(plan.product)
         if plan.product.markers is None:
@@ -281,6 +284,10 @@ def _session(args: argparse.Namespace) -> int:
         detector = MarkerDetector(markers.dictionary)
         if args.camera is not None:
             stream = in_background(detections(camera_frames(args.camera), detector))
+        elif args.demo is not None:
+            cell = _demo_cell(plan, model, markers, args.demo)
+            stream = detections(cell, detector)
+            robot = ScriptedRobot(on_perform=cell.robot)
         else:
             frames = video_frames(args.video) if args.video is not None else image_frames(args.images)
             stream = detections(frames, detector)
@@ -300,7 +307,6 @@ def _session(args: argparse.Namespace) -> int:
         source = VisionSource((), markers, detector, args.debounce, args.quiet_frames, close_without_tool,
                               on_warning=lambda message: log.write("warning", step=_current_step(log), message=message),
                               detections=stream, robot_uses_tray_tools=not args.robot_own_tools)
-    robot = ConsoleRobot() if args.robot == "console" else ScriptedRobot()
 
     def status(line: str) -> None:
         print(("\r\033[K" if interactive else "") + line, end="" if interactive else "\n", file=sys.stderr,
@@ -309,7 +315,8 @@ def _session(args: argparse.Namespace) -> int:
     settings = {"policy": args.policy, "technical": args.technical, "discount": args.discount,
                 "rewards": vars(rewards), "robot": args.robot,
                 "source": (f"camera {args.camera}" if args.camera is not None else f"video {args.video}"
-                           if args.video else f"images {args.images}" if args.images else "keyboard"),
+                           if args.video else f"images {args.images}" if args.images else
+                           f"demo {args.demo}" if args.demo is not None else "keyboard"),
                 "debounce": args.debounce, "quiet_frames": args.quiet_frames,
                 "robot_own_tools": args.robot_own_tools}
     try:
@@ -325,6 +332,21 @@ def _session(args: argparse.Namespace) -> int:
     print(f"{result.reason}: {result.message}")
     print(f"log: {log_path}")
     return 0 if result.assembled else 1
+
+
+def _demo_cell(plan, model, markers, sequence: int):
+    """A simulated cell: an operator following full sequence ``sequence`` on a rendered 1080p tray."""
+    from .session import ScriptedOperator
+    from .tray import CameraModel, SimulatedCell, tray_layout
+
+    graph = model.metadata["intention_graph"]
+    starts = [int(s) for s in graph.full_sequences()]
+    if sequence not in starts:
+        raise PlannerError(f"--demo {sequence} is not a full assembly sequence; the sequences are the intentions "
+                           f"{starts[0]}..{starts[-1]} (see aplan intentions PRODUCT --full)")
+    operator = ScriptedOperator.following(plan, graph, sequence)
+    camera = CameraModel(blur=1.2, noise=6, perspective=0.04, hands=True, seed=sequence)
+    return SimulatedCell(tray_layout(markers), operator, camera)
 
 
 def _current_step(log) -> int:
@@ -511,7 +533,10 @@ def build_parser() -> argparse.ArgumentParser:
     source.add_argument("--video", metavar="FILE", help="a video file of the tray")
     source.add_argument("--images", metavar="DIR", help="a folder of images of the tray, in file-name order")
     source.add_argument("--keyboard", action="store_true", help="type the operator's picks (no camera)")
-    session.add_argument("--robot", choices=("console", "auto"), default="console",
+    source.add_argument("--demo", type=int, metavar="K",
+                        help="a simulated cell: an operator following full sequence K (aplan intentions PRODUCT "
+                             "--full) and a robot, on a rendered tray seen through the vision pipeline")
+    session.add_argument("--robot", choices=("console", "auto"),
                          help="console (default): print each instruction for the person standing in for the "
                               "robot and wait for Enter; auto: confirm every instruction at once (dry runs)")
     session.add_argument("--log", metavar="FILE", help="the JSON-lines log (default: session-DATE-TIME.jsonl; "

@@ -2,14 +2,16 @@
 
 A *tray layout* places one slot per part and tool on a grid; each slot holds the item's ArUco marker, and
 the item, while it lies in the tray, covers it (the paper's Fig. 6). :func:`render_tray` draws what an
-overhead camera sees, with optional blur, sensor noise, a perspective tilt and occluders (hands); tests
-and benchmarks render their frames with it, so the vision pipeline is checked on images whose truth is known.
+overhead camera sees, with optional blur, sensor noise, a perspective tilt and occluders (hands);
+:class:`SimulatedCell` films a scripted operator and a scripted robot working from the tray. Tests, demos
+and benchmarks render their frames with them, so the vision pipeline runs on images whose truth is known.
 """
 from __future__ import annotations
 
 import math
 import os
 import tempfile
+from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
@@ -18,9 +20,11 @@ import numpy as np
 
 from .errors import PlannerError
 from .product import Product
+from .session import Instruction, ScriptedOperator
 from .vision import MarkerMap, marker_map
 
-__all__ = ["marker_image", "TrayLayout", "tray_layout", "render_tray", "Occluder", "write_marker_sheet"]
+__all__ = ["marker_image", "TrayLayout", "tray_layout", "render_tray", "Occluder", "CameraModel", "SimulatedCell",
+           "write_marker_sheet"]
 
 
 def marker_image(dictionary: str, marker: int, pixels: int) -> np.ndarray:
@@ -112,6 +116,97 @@ def render_tray(layout: TrayLayout, in_tray: Iterable[str], blur: float = 0.0, n
         cv2.randn(grain, 0, noise)
         frame = np.clip(frame.astype(np.int16) + grain[:, :, None], 0, 255).astype(np.uint8)
     return frame
+
+
+@dataclass(frozen=True)
+class CameraModel:
+    """Image degradations of one camera: Gaussian blur sigma, noise std (grey levels), perspective tilt
+    (fraction of the frame), and whether hands pass over the tray."""
+
+    blur: float = 0.0
+    noise: float = 0.0
+    perspective: float = 0.0
+    hands: bool = False
+    seed: int = 0
+
+
+class SimulatedCell:
+    """A cell filmed from above, as an iterator of frames, for tests and demos without a camera.
+
+    When its queue of frames runs dry it is the operator's turn: the operator performs its next operation
+    (takes the operation's single parts, grasps the tool, puts it back) or idles for ``idle`` frames.
+    ``robot(instruction)`` (a :class:`~planner.session.ScriptedRobot` hook) renders the robot taking its
+    parts and using the tool, and strikes the operation from the operator's list. Each change is held for
+    ``hold`` frames; ``operator_observations`` is the truth, in order.
+    """
+
+    def __init__(self, layout: TrayLayout, operator: ScriptedOperator, camera: CameraModel = CameraModel(),
+                 hold: int = 8, idle: int = 24):
+        self.layout = layout
+        self.operator = operator
+        self.camera = camera
+        self.hold = hold
+        self.idle = idle
+        self.in_tray = set(layout.slots)
+        self.queue: deque = deque()
+        self.frames = 0
+        self.operator_observations = []  # the truth, in order
+
+    def __iter__(self):
+        return self
+
+    def __next__(self):
+        if not self.queue:
+            self._operator_turn()
+        return self.queue.popleft()
+
+    def robot(self, instruction: Instruction) -> None:
+        self.operator.robot_acting(instruction)
+        for part in instruction.picks:
+            self._take(part)
+        if instruction.tool is not None:
+            self._use_tool(instruction.tool)
+
+    def _operator_turn(self) -> None:
+        operation = self.operator.next_operation()
+        if operation is None:
+            self._show(self.idle)
+            return
+        observation = self.operator.observation_of(operation)
+        self.operator_observations.append(observation)
+        for part in observation.parts:
+            self._take(part)
+        if observation.tool is not None:
+            self._use_tool(observation.tool)
+
+    def _take(self, item: str) -> None:
+        self.in_tray.discard(item)
+        self._show(self.hold, reach=item)
+
+    def _use_tool(self, tool: str) -> None:
+        self.in_tray.discard(tool)
+        self._show(self.hold, reach=tool)
+        self.in_tray.add(tool)
+        self._show(self.hold, reach=tool)
+
+    def _show(self, count: int, reach: str | None = None) -> None:
+        for k in range(count):
+            occluders = ()
+            if self.camera.hands and reach is not None and k < 2:
+                # a hand over the slot just reached into, and an arm across the tray, for two frames
+                x, y = self.layout.slots[reach]
+                px = self.layout.marker_px
+                occluders = (Occluder((x + px // 2, y + px // 2), (px // 2, px // 3), 30.0),
+                             Occluder((self.layout.size[0] // 2, self.layout.size[1] // 2), (px * 3, px // 4), 10.0))
+            elif self.camera.hands and k == count // 2 + 1:
+                # a corner of every slot covered, for one frame (a marker flickers)
+                px = self.layout.marker_px
+                occluders = tuple(Occluder((x, y), (px // 3, px // 3)) for x, y in self.layout.slots.values())
+            self.frames += 1
+            self.queue.append(render_tray(self.layout, self.in_tray, self.camera.blur, self.camera.noise,
+                                          self.camera.perspective, occluders,
+                                          seed=self.camera.seed * 100_003 + self.frames,
+                                          camera_seed=self.camera.seed))
 
 
 def write_marker_sheet(product: Product, path: str | Path, marker_mm: float = 40.0) -> int:

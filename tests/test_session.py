@@ -7,13 +7,12 @@ import json
 import numpy as np
 import pytest
 
-from cell import Camera, TrayCell
 from planner import BLANK, Observation, make_plan
 from planner.decision import intention_pomdp
 from planner.session import (ConsoleRobot, EventLog, KeyboardSource, ObservationSource, Robot, ScriptedOperator,
                              ScriptedRobot, SessionError, replay, run_session)
 from planner.solvers import PointBasedSolver
-from planner.tray import tray_layout
+from planner.tray import CameraModel, SimulatedCell, tray_layout
 from planner.vision import VisionError, VisionSource, marker_map
 
 
@@ -51,7 +50,7 @@ def _vision_session(setup, start, camera, tmp_path=None):
     plan, model, policy, graph = setup
     markers = marker_map(plan.product)
     operator = ScriptedOperator.following(plan, graph, start)
-    cell = TrayCell(tray_layout(markers, (960, 540), 48), operator, camera)
+    cell = SimulatedCell(tray_layout(markers, (960, 540), 48), operator, camera)
     robot = ScriptedRobot(on_perform=cell.robot)
     log = EventLog(tmp_path / "session.jsonl" if tmp_path else None)
     result = run_session(plan, model, policy, VisionSource(cell, markers, quiet_frames=20), robot, log)
@@ -64,7 +63,7 @@ def test_end_to_end_on_rendered_frames(setup, tmp_path):
     the product assembled and the belief on the true intention above 0.9; the vision changes nothing."""
     plan, model, policy, graph = setup
     start = int(graph.full_sequences()[10])
-    result, log, operator, robot = _vision_session(setup, start, Camera(blur=1.2, noise=6, perspective=0.04,
+    result, log, operator, robot = _vision_session(setup, start, CameraModel(blur=1.2, noise=6, perspective=0.04,
                                                                        hands=True, seed=7), tmp_path)
     assert result.assembled, result.message
     assert result.operations == 5 and operator.remaining == [] and operator.off_script == []
@@ -273,7 +272,7 @@ def test_cli_session_on_a_recorded_video_and_replay(setup, policy_file, tmp_path
     markers = marker_map(plan.product)
     start = int(graph.full_sequences()[3])
     operator = ScriptedOperator.following(plan, graph, start)
-    cell = TrayCell(tray_layout(markers, (960, 540), 48), operator, Camera(blur=1.0, noise=4, seed=3))
+    cell = SimulatedCell(tray_layout(markers, (960, 540), 48), operator, CameraModel(blur=1.0, noise=4, seed=3))
     recorded = []
 
     def frames():
@@ -344,6 +343,17 @@ def test_cli_session_errors(policy_file, tmp_path):
     assert events[0] == "start" and events[-1] == "end"
     broken = _aplan("replay", tmp_path / "x.jsonl")
     assert broken.returncode == 1 and "not a session log" in broken.stderr
+
+
+def test_cli_demo(policy_file, tmp_path):
+    """A simulated cell at 1080p through the whole pipeline, in one command."""
+    done = _aplan("session", "pen", "--policy", policy_file, "--demo", 57, "--log", tmp_path / "d.jsonl")
+    assert done.returncode == 0 and done.stdout.startswith("assembled"), done.stderr
+    assert replay(tmp_path / "d.jsonl").mismatches == []
+    bad = _aplan("session", "pen", "--policy", policy_file, "--demo", 3, "--log", tmp_path / "e.jsonl")
+    assert bad.returncode == 1 and "--demo 3 is not a full assembly sequence" in bad.stderr
+    both = _aplan("session", "pen", "--policy", policy_file, "--demo", 57, "--robot", "auto")
+    assert both.returncode == 1 and "leave out --robot" in both.stderr
 
 
 def test_cli_markers(tmp_path):

@@ -8,10 +8,9 @@ import cv2
 import numpy as np
 import pytest
 
-from cell import Camera, TrayCell
 from planner import BLANK, Observation, intention_graph, make_plan, product_from_dict, product_to_dict
 from planner.session import Instruction, ScriptedOperator
-from planner.tray import render_tray, tray_layout, write_marker_sheet
+from planner.tray import CameraModel, SimulatedCell, render_tray, tray_layout, write_marker_sheet
 from planner.vision import (MarkerDetector, MarkerTracker, ObservationBuilder, VisionError, VisionSource,
                             default_markers, image_frames, marker_map, video_frames)
 
@@ -51,8 +50,8 @@ def test_default_markers_and_missing_ones(pen):
         marker_map(product_from_dict(doc))
 
 
-@pytest.mark.parametrize("camera", [Camera(), Camera(blur=1.5), Camera(noise=10), Camera(perspective=0.06, seed=2)],
-                         ids=["clean", "blur", "noise", "perspective"])
+@pytest.mark.parametrize("camera", [CameraModel(), CameraModel(blur=1.5), CameraModel(noise=10),
+                                    CameraModel(perspective=0.06, seed=2)], ids=["clean", "blur", "noise", "perspective"])
 def test_detector_sees_exactly_the_uncovered_markers(markers, camera):
     layout = tray_layout(markers, *SMALL)
     detector = MarkerDetector()
@@ -111,15 +110,15 @@ def test_builder_closes_toolless_operations_at_quiet_periods(markers):
 
 def _recover(plan, graph, markers, sequence, camera, size=SMALL, debounce=3):
     operator = ScriptedOperator.following(plan, graph, sequence)
-    cell = TrayCell(tray_layout(markers, *size), operator, camera)
+    cell = SimulatedCell(tray_layout(markers, *size), operator, camera)
     source = VisionSource(cell, markers, debounce=debounce, quiet_frames=20)
     seen = [source.observe() for _ in range(len(plan.product.parts) - 1)]
     return seen, cell, source
 
 
-CAMERAS = {"clean": Camera(), "blur": Camera(blur=1.6, seed=1), "noise": Camera(noise=12, seed=2),
-           "perspective": Camera(perspective=0.06, seed=3), "occlusion": Camera(hands=True, seed=4),
-           "all": Camera(blur=1.3, noise=8, perspective=0.05, hands=True, seed=5)}
+CAMERAS = {"clean": CameraModel(), "blur": CameraModel(blur=1.6, seed=1), "noise": CameraModel(noise=12, seed=2),
+           "perspective": CameraModel(perspective=0.06, seed=3), "occlusion": CameraModel(hands=True, seed=4),
+           "all": CameraModel(blur=1.3, noise=8, perspective=0.05, hands=True, seed=5)}
 
 
 @pytest.mark.parametrize("name", list(CAMERAS))
@@ -151,7 +150,7 @@ def test_without_debounce_flickers_become_operations(plan, graph, markers):
 def test_robot_picks_are_not_the_operators(plan, graph, markers):
     sequence = int(graph.full_sequences()[0])
     operator = ScriptedOperator.following(plan, graph, sequence)
-    cell = TrayCell(tray_layout(markers, *SMALL), operator)
+    cell = SimulatedCell(tray_layout(markers, *SMALL), operator)
     source = VisionSource(cell, markers, quiet_frames=20)
     first = source.observe()
     robot_op = operator.remaining[0]
@@ -199,7 +198,7 @@ def test_end_of_frames(markers):
 
 def test_video_file_source(plan, graph, markers, tmp_path):
     operator = ScriptedOperator.following(plan, graph, int(graph.full_sequences()[3]))
-    cell = TrayCell(tray_layout(markers, *SMALL), operator)
+    cell = SimulatedCell(tray_layout(markers, *SMALL), operator)
     frames = [next(cell) for _ in range(110)]
     path = tmp_path / "tray.avi"
     writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), 30, SMALL[0])
