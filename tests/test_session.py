@@ -332,7 +332,7 @@ def test_cli_session_errors(policy_file, tmp_path):
     assert not (tmp_path / "x.jsonl").exists()
     usage = _aplan("session", "pen", "--policy", policy_file)
     assert usage.returncode == 2
-    assert "one of the arguments --camera --video --images --keyboard is required" in usage.stderr
+    assert "one of the arguments --camera --video --images --keyboard --demo is required" in usage.stderr
     (tmp_path / "x.jsonl").write_text("")
     exists = _aplan("session", "pen", "--policy", policy_file, "--keyboard", "--log", tmp_path / "x.jsonl")
     assert exists.returncode == 1 and "the log exists already" in exists.stderr
