@@ -31,6 +31,7 @@ import json
 import os
 import sys
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable, Protocol, Sequence, runtime_checkable
@@ -475,19 +476,25 @@ def replay(path: str | os.PathLike, tolerance: float = 1e-6) -> Replay:
     beliefs, actions, observations, mismatches = [belief], [], [], []
     pending: dict[int, int] = {}
     end = None
-    for event in events[1:]:
+    for number, event in enumerate(events[1:], start=2):
         kind = event["event"]
-        if kind == "action":
-            pending[event["step"]] = event["action"]
-        elif kind == "observation" and event.get("index") is not None:
-            step = event["step"]
-            belief = updater.update(belief, pending[step], event["index"])
-            actions.append(pending[step])
-            observations.append(event["index"])
-            beliefs.append(belief)
-        elif kind == "belief":
-            if any(abs(belief[i] - p) > tolerance for i, p in event["top"]):
-                mismatches.append(event["step"])
-        elif kind == "end":
-            end = event
+        try:
+            if kind == "action":
+                pending[event["step"]] = int(event["action"])
+            elif kind == "observation" and event.get("index") is not None:
+                step = event["step"]
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", RuntimeWarning)  # a reset, logged by the session already
+                    belief = updater.update(belief, pending[step], int(event["index"]))
+                actions.append(pending[step])
+                observations.append(int(event["index"]))
+                beliefs.append(belief)
+            elif kind == "belief":
+                if any(abs(belief[int(i)] - float(p)) > tolerance for i, p in event["top"]):
+                    mismatches.append(event["step"])
+            elif kind == "end":
+                end = event
+        except (KeyError, TypeError, ValueError, IndexError) as exc:
+            raise SessionError(f"{path}: event {number} ({kind!r}): malformed or out of order ({exc!r}); "
+                               "the log is damaged") from None
     return Replay(product, model, actions, observations, beliefs, end, mismatches, events)

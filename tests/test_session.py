@@ -235,6 +235,9 @@ def test_log_is_never_overwritten_and_replay_checks(setup, tmp_path):
     belief["top"][0][1] = round(belief["top"][0][1] / 2, 6)
     path.write_text("".join(json.dumps(e) + "\n" for e in events))
     assert replay(path).mismatches == [belief["step"]]
+    path.write_text("".join(json.dumps(e) + "\n" for e in events if e["event"] != "action"))
+    with pytest.raises(SessionError, match=r"event \d+ \('observation'\): malformed or out of order"):
+        replay(path)
     path.write_text('{"event": "robot"}\n')
     with pytest.raises(SessionError, match="not a session log"):
         replay(path)
