@@ -266,6 +266,18 @@ def test_marker_sheet_is_detectable(pen, markers, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sheet.pdf", "sheet.png"]
 
 
+def test_marker_sheet_pages(tmp_path):
+    import re
+
+    from planner import Part, Product
+
+    parts = tuple(Part(f"p{k}") for k in range(30))
+    product = Product(parts, tuple((f"p{k}", f"p{k + 1}") for k in range(29)))
+    assert write_marker_sheet(product, tmp_path / "big.pdf") == 30
+    pages = re.findall(rb"/Type\s*/Page\b(?!s)", (tmp_path / "big.pdf").read_bytes())
+    assert len(pages) == 3  # 12 markers of 40 mm per A4 page (3 columns, 4 rows)
+
+
 def test_background_reading_keeps_order_and_reraises():
     from planner.vision import in_background
 
