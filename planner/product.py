@@ -41,6 +41,9 @@ __all__ = [
     "Tool",
     "OperationTag",
     "TagDefaults",
+    "Markers",
+    "MARKER_DICTIONARIES",
+    "DEFAULT_MARKER_DICTIONARY",
     "Product",
     "product_from_dict",
     "product_to_dict",
@@ -59,6 +62,13 @@ AXIS_DIRECTIONS: dict[str, tuple[float, float, float]] = {
     "+Z": (0.0, 0.0, 1.0), "-Z": (0.0, 0.0, -1.0),
 }
 UNFAVORABLE_DEFAULTS = ("single-part-rule", "none", "all")
+#: OpenCV's predefined ArUco/AprilTag dictionaries and how many marker ids each holds.
+MARKER_DICTIONARIES: dict[str, int] = {
+    **{f"DICT_{n}X{n}_{size}": size for n in (4, 5, 6, 7) for size in (50, 100, 250, 1000)},
+    "DICT_ARUCO_ORIGINAL": 1024, "DICT_APRILTAG_16h5": 30, "DICT_APRILTAG_25h9": 35,
+    "DICT_APRILTAG_36h10": 2320, "DICT_APRILTAG_36h11": 587, "DICT_ARUCO_MIP_36h12": 250,
+}
+DEFAULT_MARKER_DICTIONARY = "DICT_4X4_50"
 _UNIT_TOLERANCE = 1e-6
 
 
@@ -143,6 +153,23 @@ class TagDefaults:
 
 
 @dataclass(frozen=True)
+class Markers:
+    """The fiducial markers of the parts tray: ``ids`` pairs each part or tool with the id of the marker it
+    covers in ``dictionary`` (one of :data:`MARKER_DICTIONARIES`). A marker id names one item only."""
+
+    ids: tuple[tuple[str, int], ...]
+    dictionary: str = DEFAULT_MARKER_DICTIONARY
+
+    def by_id(self) -> dict[int, str]:
+        """Marker id -> part or tool id."""
+        return {marker: name for name, marker in self.ids}
+
+    def of(self, name: str) -> int | None:
+        """The marker id of part or tool ``name`` (None when it has none)."""
+        return next((marker for item, marker in self.ids if item == name), None)
+
+
+@dataclass(frozen=True)
 class Product:
     """A product: parts, connection diagram, obstruction diagrams, technical constraints and designer tags.
 
@@ -157,6 +184,7 @@ class Product:
     tools: tuple[Tool, ...] = ()
     operations: tuple[OperationTag, ...] = ()
     defaults: TagDefaults = TagDefaults()
+    markers: Markers | None = None
     name: str = ""
     units: str = "mm"
     geometry: Mapping[str, Any] = field(default_factory=dict, compare=False)
@@ -289,6 +317,33 @@ def _check_product(product: Product) -> None:
         raise _fail(product, "defaults.unfavorable",
                     f"unknown rule {product.defaults.unfavorable!r}; use one of {', '.join(UNFAVORABLE_DEFAULTS)}")
     known_tool(product.defaults.tool, "defaults.tool")
+    if product.markers is not None:
+        _check_markers(product, set(seen) | set(tool_ids))
+
+
+def _check_markers(product: Product, items: set[str]) -> None:
+    markers = product.markers
+    size = MARKER_DICTIONARIES.get(markers.dictionary)
+    if size is None:
+        raise _fail(product, "markers.dictionary", f"unknown marker dictionary {markers.dictionary!r}"
+                    f"{_suggest(markers.dictionary, MARKER_DICTIONARIES)}; use one of OpenCV's, e.g. "
+                    f"{DEFAULT_MARKER_DICTIONARY}")
+    owner: dict[int, str] = {}
+    named: set[str] = set()
+    for name, marker in markers.ids:
+        location = f"markers.ids.{name}"
+        if name not in items:
+            raise _fail(product, location, f"{name!r} is neither a part nor a tool id{_suggest(name, items)}")
+        if name in named:
+            raise _fail(product, location, f"{name!r} has two markers; give it one")
+        named.add(name)
+        if isinstance(marker, bool) or not isinstance(marker, int) or not 0 <= marker < size:
+            raise _fail(product, location, f"marker id must be an integer from 0 to {size - 1} "
+                        f"({markers.dictionary} holds {size} markers), got {marker!r}")
+        if marker in owner:
+            raise _fail(product, location, f"marker {marker} is used twice: by {owner[marker]!r} and by {name!r}; "
+                        "give every part and tool its own marker")
+        owner[marker] = name
 
 
 def _suggest(name: Any, choices: Iterable[str]) -> str:
@@ -408,7 +463,7 @@ def product_from_dict(data: Any, source: str = "<memory>") -> Product:
     r = _Reader(source)
     top = r.obj(data, "", ("format", "version", "parts", "contacts"),
                 ("name", "units", "obstructions", "technical_constraints", "tools", "operations", "defaults",
-                 "geometry"))
+                 "markers", "geometry"))
     if top["format"] != FORMAT:
         raise r.fail("format", f"expected {FORMAT!r}, got {_kind(top['format'])}; this is not an APLAN product file")
     version = top["version"]
@@ -483,12 +538,22 @@ def product_from_dict(data: Any, source: str = "<memory>") -> Product:
         robot=r.boolean(raw_defaults.get("robot", True), "defaults.robot"),
         tool=r.string(raw_defaults.get("tool"), "defaults.tool", optional=True),
     )
+    markers = None
+    if "markers" in top:
+        raw = r.obj(top["markers"], "markers", ("ids",), ("dictionary",))
+        ids = r.obj(raw["ids"], "markers.ids", (), tuple(raw["ids"]) if isinstance(raw["ids"], dict) else ())
+        for name, marker in ids.items():
+            if isinstance(marker, bool) or not isinstance(marker, int):
+                raise r.fail(f"markers.ids.{name}", f"expected an integer marker id, got {_kind(marker)}")
+        markers = Markers(tuple(ids.items()),
+                          r.string(raw.get("dictionary", DEFAULT_MARKER_DICTIONARY), "markers.dictionary"))
     geometry = r.obj(top.get("geometry", {}), "geometry", (), ("source", "tessellation", "analysis", "warnings"))
     extensions = {k: v for k, v in top.items() if k.startswith("x-")}
     return Product(
         parts=tuple(parts), contacts=contacts, obstructions=tuple(obstructions),
         technical_constraints=tuple(constraints), tools=tuple(tools), operations=tuple(operations),
-        defaults=defaults, name=r.string(top.get("name", ""), "name"), units=r.string(top.get("units", "mm"), "units"),
+        defaults=defaults, markers=markers, name=r.string(top.get("name", ""), "name"),
+        units=r.string(top.get("units", "mm"), "units"),
         geometry=geometry, extensions=extensions, source=source,
     )
 
@@ -534,6 +599,8 @@ def product_to_dict(product: Product) -> dict:
     if product.defaults != TagDefaults():
         d = product.defaults
         doc["defaults"] = {"unfavorable": d.unfavorable, "robot": d.robot, **({"tool": d.tool} if d.tool else {})}
+    if product.markers is not None:
+        doc["markers"] = {"dictionary": product.markers.dictionary, "ids": dict(product.markers.ids)}
     if product.geometry:
         doc["geometry"] = dict(product.geometry)
     doc.update(product.extensions)

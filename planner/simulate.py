@@ -120,9 +120,12 @@ def evaluate_policy(model: POMDP, policy: AlphaVectorPolicy, episodes: int, seed
     return mean, half, returns
 
 
-def plot_beliefs(episodes: list[Episode], path_stem: str, titles: list[str] | None = None) -> list[str]:
-    """Fig. 7-style heat maps (belief over intentions per time step, darker = more probable) with the true
-    intention drawn as a line; writes ``path_stem.png`` and ``path_stem.svg`` and returns their paths."""
+def plot_beliefs(episodes: list[Episode], path_stem: str, titles: list[str] | None = None,
+                 line_label: str = "true intention") -> list[str]:
+    """Fig. 7-style heat maps (belief over intentions per time step, darker = more probable) with each
+    episode's ``start`` and steps' ``state`` drawn as a line (the true intention; a replayed session, which
+    does not know it, draws the most probable one and says so in ``line_label``); writes ``path_stem.png``
+    and ``path_stem.svg`` and returns their paths."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -133,7 +136,8 @@ def plot_beliefs(episodes: list[Episode], path_stem: str, titles: list[str] | No
         grid = np.stack(episode.beliefs, axis=1)
         ax.imshow(grid, aspect="auto", cmap="Greys", vmin=0, vmax=1, interpolation="nearest", origin="lower")
         truth = [episode.start] + [s.state for s in episode.steps]
-        ax.plot(range(len(truth)), truth, color=f"C{k % 10}", linewidth=1.5)
+        ax.plot(range(len(truth)), truth, color=f"C{k % 10}", linewidth=1.5, label=line_label)
+        ax.legend(loc="upper right", fontsize=7)
         ax.set_xlabel("time step")
         ax.set_ylabel("intention")
         ax.set_title(titles[k] if titles else f"episode {k + 1}", fontsize=9)

@@ -98,6 +98,11 @@ BAD = [
     (["defaults", "unfavorable"], "most", "defaults.unfavorable", "unknown rule 'most'"),
     (["units"], "furlong", "units", "unknown unit 'furlong'"),
     (["contact"], [], "contact", "unknown key (did you mean 'contacts'?)"),
+    (["markers", "ids", "cap"], 3, "markers.ids.cap", "marker 3 is used twice: by 'body' and by 'cap'"),
+    (["markers", "ids", "cap"], 50, "markers.ids.cap", "marker id must be an integer from 0 to 49"),
+    (["markers", "ids", "cap"], "4", "markers.ids.cap", "expected an integer marker id, got the string '4'"),
+    (["markers", "ids", "hamer"], 9, "markers.ids.hamer", "neither a part nor a tool id (did you mean 'hammer'?)"),
+    (["markers", "dictionary"], "DICT_4X4_5", "markers.dictionary", "unknown marker dictionary 'DICT_4X4_5'"),
 ]
 
 
