@@ -17,6 +17,8 @@ from .pomdp import POMDP
 
 __all__ = ["DiscreteUpdater", "UnexplainedObservation"]
 
+DENSE_LIMIT = 50_000_000  # observation-table numbers kept dense (400 MB)
+
 
 @dataclass(frozen=True)
 class UnexplainedObservation:
@@ -34,13 +36,21 @@ class UnexplainedObservation:
 class DiscreteUpdater:
     """Exact belief updates for a :class:`~planner.pomdp.POMDP` (tables transposed once, sparse).
 
-    Cost per update: O(nnz(T_a) + S).
+    Cost per update: O(nnz(T_a) + S); memory: one dense (Z, S) array per distinct observation table (sparse
+    columns beyond ``DENSE_LIMIT`` numbers).
     """
 
     def __init__(self, model: POMDP):
         self.model = model
         self._transposed = [t.T.tocsr() for t in model.transition]
-        self._emit = [o.tocsc() for o in model.observation]
+        # O(z | s', a) as dense rows per observation, once per distinct table (actions often share one), when
+        # they fit in DENSE_LIMIT numbers; else sparse columns.
+        distinct = {id(o): o for o in model.observation}
+        if len(distinct) * model.n_states * model.n_observations <= DENSE_LIMIT:
+            dense = {key: np.ascontiguousarray(o.toarray().T) for key, o in distinct.items()}
+            self._emit = [dense[id(o)] for o in model.observation]
+        else:
+            self._emit = [o.tocsc() for o in model.observation]
         self._reach = None
         self.events: list[UnexplainedObservation] = []
 
@@ -52,7 +62,8 @@ class DiscreteUpdater:
         return self._transposed[action] @ belief
 
     def observation_likelihood(self, action: int, observation: int) -> np.ndarray:
-        return self._emit[action][:, observation].toarray().ravel()
+        table = self._emit[action]
+        return table[observation] if isinstance(table, np.ndarray) else table[:, observation].toarray().ravel()
 
     def update(self, belief: np.ndarray, action: int, observation: int) -> np.ndarray:
         """The posterior belief; on an unexplained observation, a reset (see the module docstring)."""

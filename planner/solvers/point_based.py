@@ -66,8 +66,11 @@ class PointBasedSolver:
     every ``lower_trial_every``-th trial follows the lower bound's policy. Sweeps: ``theta`` is the first
     reach-weight threshold for growing the belief set, divided by ``theta_factor`` whenever no belief above
     it is left to grow; ``sweeps_per_round`` sweeps follow each growth, over ``chunk`` beliefs at a time;
-    ``trial_weight`` is the work of one trial backup in belief-set backups (it evaluates every action and
-    observation against both bounds); the sweeps get as much work as the trials.
+    the set stops growing at ``belief_memory`` stored numbers (400 MB). Sharing: ``trial_weight`` is the
+    work of one trial backup counted in belief-set backups (it evaluates every action and observation
+    against both bounds: about 25 times the work on the pen); work goes to the process that has recently
+    closed the gap at b0 the fastest per unit of work (half-life ``rate_horizon`` units), each keeping at
+    least ``min_share`` of it.
     """
 
     time_limit: float = 60.0
