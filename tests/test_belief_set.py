@@ -48,7 +48,7 @@ def test_sweeps_reach_the_closed_form_on_the_reachable_beliefs(doors):
     alphas = blind_lower_bound(m)
     q = fast_informed_bound(m)
     for _ in range(200):
-        vectors, _, improved = sweep(m, beliefs, alphas, q)
+        vectors, _, improved, _ = sweep(m, beliefs, alphas, q)
         if not improved.any():
             break
         alphas = np.vstack([alphas, vectors])
@@ -76,3 +76,27 @@ def test_pen_lower_bound_reaches_the_optimum_bracket(pen, technical):
     # never below the best known lower bound.
     assert low - 5e-4 <= result.lower_bound <= high
     assert result.upper_bound >= low
+
+
+def test_sparse_tables_compute_what_dense_ones_do(pen, monkeypatch):
+    # Large or sparse models keep transitions sparse (tables.DENSE_LIMIT); every product must agree.
+    import planner.solvers.tables as tables
+
+    model = intention_pomdp(make_plan(pen, True))
+    dense = Tables(model)
+    monkeypatch.setattr(tables, "DENSE_LIMIT", 0)
+    sparse = Tables(model)
+    assert dense.dense and not sparse.dense
+    rng = np.random.default_rng(1)
+    b = rng.random(model.n_states)
+    B = rng.random((5, model.n_states))
+    W = rng.random((model.n_actions, model.n_states))
+    assert np.allclose(dense.predict(b), sparse.predict(b))
+    assert np.allclose(dense.expect(W), sparse.expect(W))
+    for a in (0, model.n_actions - 1):
+        assert np.allclose(dense.step(B, a), sparse.step(B, a))
+        assert np.allclose(dense.expect_one(a, B), sparse.expect_one(a, B))
+    # And the solver on the sparse path still brackets the optimum.
+    result = PointBasedSolver(max_iterations=400, time_limit=120, precision=1e-4).solve(model)
+    low, high = OPTIMUM[True]
+    assert low - 5e-4 <= result.lower_bound <= high and result.upper_bound >= low

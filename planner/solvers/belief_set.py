@@ -99,9 +99,9 @@ def sweep(m: Tables, beliefs: np.ndarray, alphas: np.ndarray, q_upper: np.ndarra
     """Back up every belief of ``beliefs`` (N, S) against the vectors ``alphas`` (K, S).
 
     ``q_upper`` (A, S): an upper bound on Q (e.g. the fast informed bound), to skip actions that cannot
-    improve. Returns ``(vectors, actions, improved)``: the distinct backed-up vectors (n, S) of the beliefs
-    whose value improved by more than ``tolerance``, their actions (n,), and the boolean mask (N,) of those
-    beliefs.
+    improve. Returns ``(vectors, actions, improved, candidates)``: the distinct backed-up vectors (n, S) of
+    the beliefs whose value improved by more than ``tolerance``, their actions (n,), the boolean mask (N,)
+    of those beliefs, and how many (belief, action) pairs were backed up.
     """
     N, K = len(beliefs), len(alphas)
     current = (beliefs @ alphas.T).max(axis=1)
@@ -109,13 +109,16 @@ def sweep(m: Tables, beliefs: np.ndarray, alphas: np.ndarray, q_upper: np.ndarra
     best_q = np.full(N, -np.inf)
     best_a = np.zeros(N, dtype=np.int64)
     best_choice = np.zeros((N, m.Z), dtype=np.int64)
+    projections: dict[int, np.ndarray] = {}
     for a in range(m.A):
         rows = np.flatnonzero(candidates[:, a])
         if not rows.size:
             continue
-        # (b T_a) . (O_z,a * alpha_k) for every observation z and vector k at once.
-        projected = (m.OZ[a][:, :, None] * alphas.T[None]).transpose(1, 0, 2).reshape(m.S, m.Z * K)
-        values = (m.step(beliefs[rows], a) @ projected).reshape(len(rows), m.Z, K)
+        # (b T_a) . (O_z,a * alpha_k) for every observation z and vector k at once; built once per table.
+        table = int(m.observation_table[a])
+        if table not in projections:
+            projections[table] = (m.OZ[a][:, :, None] * alphas.T[None]).transpose(1, 0, 2).reshape(m.S, m.Z * K)
+        values = (m.step(beliefs[rows], a) @ projections[table]).reshape(len(rows), m.Z, K)
         q = beliefs[rows] @ m.R[a] + m.gamma * values.max(axis=2).sum(axis=1)
         better = q > best_q[rows]
         rows, q = rows[better], q[better]
@@ -129,4 +132,4 @@ def sweep(m: Tables, beliefs: np.ndarray, alphas: np.ndarray, q_upper: np.ndarra
         mine = np.flatnonzero(keys[:, 0] == a)
         inner = (m.OZ[a][None] * alphas[keys[mine, 1:]]).sum(axis=1)      # (n, S'): sum_z O_z * alpha_k(z)
         vectors[mine] = m.R[a] + m.gamma * m.expect_one(int(a), inner)
-    return vectors, keys[:, 0], improved
+    return vectors, keys[:, 0], improved, int(candidates.sum())

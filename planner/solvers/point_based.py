@@ -66,9 +66,8 @@ class PointBasedSolver:
     every ``lower_trial_every``-th trial follows the lower bound's policy. Sweeps: ``theta`` is the first
     reach-weight threshold for growing the belief set, divided by ``theta_factor`` whenever no belief above
     it is left to grow; ``sweeps_per_round`` sweeps follow each growth, over ``chunk`` beliefs at a time;
-    the set stops growing at ``belief_memory`` stored numbers (400 MB). Sharing: ``trial_weight`` is the
-    work of one trial backup counted in belief-set backups (it evaluates every action and observation
-    against both bounds: about 25 times the work on the pen); work goes to the process that has recently
+    the set stops growing at ``belief_memory`` stored numbers (400 MB). Sharing: work is counted in
+    estimated multiply-adds (the costs in the module docstring); it goes to the process that has recently
     closed the gap at b0 the fastest per unit of work (half-life ``rate_horizon`` units), each keeping at
     least ``min_share`` of it.
     """
@@ -83,9 +82,8 @@ class PointBasedSolver:
     theta_factor: float = 3.0
     sweeps_per_round: int = 3
     chunk: int = 4096
-    trial_weight: float = 25.0
-    min_share: float = 0.1
-    rate_horizon: float = 20_000.0
+    min_share: float = 0.2
+    rate_horizon: float = 1e9
     belief_memory: int = 50_000_000
     seed: int = 0
 
@@ -97,7 +95,8 @@ class PointBasedSolver:
         alphas = Rows(m.S)
         alphas.extend(blind_lower_bound(m))
         actions: list[int] = list(range(m.A))
-        Q = fast_informed_bound(m)
+        # Any iterate of the fast informed bound is an upper bound: it gets at most a quarter of the time.
+        Q = fast_informed_bound(m, deadline=start + self.time_limit / 4)
         corner = Q.max(axis=0)
         points = Rows(m.S)
         fingerprint = np.random.default_rng(self.seed).random(m.S)
@@ -177,8 +176,8 @@ class PointBasedSolver:
                 excess_array = np.asarray(point_excess)
             return low, best_vector, high
 
-        def trial(iteration: int, epsilon: float) -> int:
-            """One trial from b0; returns the number of backups."""
+        def trial(iteration: int, epsilon: float) -> float:
+            """One trial from b0; returns its work (estimated multiply-adds)."""
             path = []  # (belief, evaluation, index of the successor the trial went on to, its known bounds)
             b, depth, weight = b0, 0, 1.0
             low, best_vector = (float(v[0]) for v in lower(b0[None]))
@@ -219,7 +218,10 @@ class PointBasedSolver:
                 child = backup(b, evaluation, known)
             if reached:
                 beliefs.add(np.asarray(reached), np.asarray(weights))  # the sweeps back them up from now on
-            return len(path)
+            # Per step: every action and observation, then each distinct successor against both bounds
+            # (counted to 6 digits, so that a model written with rounded numbers costs the same).
+            distinct = sum(len(np.unique(np.round(evaluation[3] @ fingerprint, 6))) for _, evaluation, _, _ in path)
+            return float(len(path) * m.A * m.Z * m.S + distinct * m.S * (alphas.n + points.n))
 
         def prune() -> None:
             """Keep the alpha vectors that are best at some belief of the set (and the blind ones)."""
@@ -231,7 +233,8 @@ class PointBasedSolver:
             actions[:] = [actions[i] for i in np.flatnonzero(mask)]
 
         def sweeps():
-            """The lower bound's process (module docstring), as a generator yielding its work in beliefs."""
+            """The lower bound's process (module docstring), as a generator yielding its work (estimated
+            multiply-adds)."""
             theta = self.theta
             while True:
                 todo = np.zeros(0, dtype=np.int64)
@@ -243,14 +246,15 @@ class PointBasedSolver:
                 if todo.size:
                     greedy = np.asarray(actions)[lower(beliefs.rows[todo])[1]]
                     beliefs.add(*policy_successors(m, beliefs.rows[todo], greedy, beliefs.weights[todo]))
-                    yield int(todo.size)
+                    yield float(todo.size * m.Z * m.S)
                 for _ in range(self.sweeps_per_round):
                     for first in range(0, beliefs.n, self.chunk):
                         chunk = beliefs.rows[first:first + self.chunk]
-                        vectors, chosen, _ = sweep(m, chunk, alphas.rows, Q)
+                        backups = alphas.n * len(chunk) * m.S  # the current values, and per candidate:
+                        vectors, chosen, _, candidates = sweep(m, chunk, alphas.rows, Q)
                         alphas.extend(vectors)
                         actions.extend(int(a) for a in chosen)
-                        yield len(chunk)
+                        yield float(backups + candidates * m.S * m.Z * alphas.n)
                     prune()
 
         history = []
@@ -274,7 +278,7 @@ class PointBasedSolver:
                 iterations += 1
                 # Trials aim at a fraction of the current gap, so early trials stay shallow (HSVI's epsilon).
                 epsilon = max(self.precision, self.gap_fraction * (ub - lb))
-                process, work = "trials", self.trial_weight * trial(iterations, epsilon)
+                process, work = "trials", trial(iterations, epsilon)
             gap = ub - lb
             lb, ub = float(lower(b0[None])[0][0]), float(upper(b0[None])[0])
             decay = 0.5 ** (work / self.rate_horizon)

@@ -2,6 +2,8 @@
 the two initial bounds (blind policies below, the fast informed bound above)."""
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
@@ -10,7 +12,7 @@ from ..pomdp import POMDP
 
 __all__ = ["Rows", "Tables", "blind_lower_bound", "fast_informed_bound"]
 
-DENSE_LIMIT = 20_000_000  # A * S * S entries up to which transitions are kept dense (faster for small models)
+DENSE_LIMIT = 20_000_000  # A * S * S entries up to which transitions may be kept dense
 
 
 class Rows:
@@ -53,25 +55,33 @@ class Rows:
 
 class Tables:
     """A model's tables, in the shapes a solver needs: ``T`` (A sparse (S, S), rows "from"), dense ``TD``
-    (A, S, S) when small enough, ``OZ`` (A, Z, S) = O(z | s', a), ``R`` (A, S), ``gamma``."""
+    (A, S, S) when small enough, ``OZ`` (A, Z, S) = O(z | s', a), ``observation_table`` (A,): the first
+    action with the same observation table object, ``R`` (A, S), ``gamma``."""
 
     def __init__(self, model: POMDP):
         self.S, self.A, self.Z = model.n_states, model.n_actions, model.n_observations
         self.T = [t.tocsr() for t in model.transition]
-        self.dense = self.A * self.S * self.S <= DENSE_LIMIT
+        entries = self.A * self.S * self.S
+        nonzero = sum(t.nnz for t in self.T)
+        # Dense products win for small or dense tables; sparse ones (the intentions' few successors) beyond.
+        self.dense = entries <= DENSE_LIMIT and (entries <= 250_000 or nonzero >= 0.05 * entries)
         if self.dense:
             self.TD = np.stack([t.toarray() for t in model.transition])
+            self._by_origin = np.ascontiguousarray(self.TD.transpose(1, 0, 2)).reshape(self.S, self.A * self.S)
         else:
             self.stacked_t = sp.vstack([t.T for t in model.transition]).tocsr()   # (A*S, S): rows "to"
             self.block = sp.block_diag(self.T, format="csr")                   # (A*S, A*S)
         self.OZ = np.stack([o.toarray().T for o in model.observation])
+        # Actions whose observation tables are the same object share one index (the intention POMDP's do).
+        first: dict[int, int] = {}
+        self.observation_table = np.array([first.setdefault(id(o), a) for a, o in enumerate(model.observation)])
         self.R = np.asarray(model.reward, dtype=float)
         self.gamma = model.discount
 
     def predict(self, b: np.ndarray) -> np.ndarray:
         """(A, S): the next-state distribution after each action."""
         if self.dense:
-            return np.tensordot(b, self.TD, axes=(0, 1))
+            return (b @ self._by_origin).reshape(self.A, self.S)
         return (self.stacked_t @ b).reshape(self.A, self.S)
 
     def step(self, B: np.ndarray, a: int) -> np.ndarray:
@@ -81,7 +91,7 @@ class Tables:
     def expect(self, W: np.ndarray) -> np.ndarray:
         """(A, S): for each action a, sum_s' T(s'|s,a) W[a, s']."""
         if self.dense:
-            return np.einsum("ast,at->as", self.TD, W)
+            return np.matmul(self.TD, W[:, :, None])[:, :, 0]
         return (self.block @ W.reshape(-1)).reshape(self.A, self.S)
 
     def expect_one(self, a: int, W: np.ndarray) -> np.ndarray:
@@ -104,20 +114,29 @@ def blind_lower_bound(m: Tables) -> np.ndarray:
     return np.array([spla.spsolve((identity - m.gamma * m.T[a]).tocsc(), m.R[a]) for a in range(m.A)])
 
 
-def fast_informed_bound(m: Tables, tolerance: float = 1e-3, max_sweeps: int = 100_000) -> np.ndarray:
+def fast_informed_bound(m: Tables, tolerance: float = 1e-3, max_sweeps: int = 100_000,
+                        deadline: float | None = None, chunk: int = 4_000_000) -> np.ndarray:
     """Q (A, S): Q(s,a) = R(s,a) + gamma sum_z max_a' sum_s' T(s'|s,a) O(z|s',a) Q(s',a') (Hauskrecht 2000).
 
     Iterated from the trivial upper bound R_max / (1 - gamma): the operator is monotone, so every iterate
-    is an upper bound too, and the iteration can stop early.
+    is an upper bound too, and the iteration can stop early: when a sweep changes no entry by more than
+    ``tolerance``, after ``max_sweeps`` sweeps, or at ``deadline`` (a ``time.perf_counter()`` value).
+    Cost per sweep: O(A nnz(T) Z A) in products of T_a with (S, Z x A) blocks of at most ``chunk`` numbers.
     """
     Q = np.full((m.A, m.S), np.abs(m.R).max() / (1 - m.gamma))
+    step = max(1, chunk // max(1, m.S * m.A))  # observations per block
     for _ in range(max_sweeps):
         new = np.empty_like(Q)
         for a in range(m.A):
-            inner = np.stack([m.T[a] @ (m.OZ[a][z][:, None] * Q.T) for z in range(m.Z)])  # (Z, S, A')
-            new[a] = m.R[a] + m.gamma * inner.max(axis=2).sum(axis=0)
+            total = np.zeros(m.S)
+            for first in range(0, m.Z, step):
+                emit = m.OZ[a][first:first + step]                             # (z, S')
+                block = (emit.T[:, :, None] * Q.T[:, None, :]).reshape(m.S, -1)  # (S', z * A')
+                reached = m.T[a] @ block                                        # (S, z * A')
+                total += reached.reshape(m.S, len(emit), m.A).max(axis=2).sum(axis=1)
+            new[a] = m.R[a] + m.gamma * total
         done = np.abs(new - Q).max() < tolerance
         Q = new
-        if done:
+        if done or (deadline is not None and time.perf_counter() > deadline):
             break
     return Q
