@@ -88,6 +88,7 @@ def test_workbench_workflow_without_gui(tmp_path):
     # The plan from the stored diagrams equals the plan of the bundle it writes, read by the planner.
     bundle = load_product(tmp_path / "bundle" / "product.json")
     assert {frozenset(c) for c in bundle.contacts} == LIAISONS
+    assert bundle.geometry["analysis"]["diagrams"] == "stored in the document"
     assert data["stats"] == plan_statistics(make_plan(bundle)).as_dict()
     assert data["stats"]["intentions"] == 69
     assert sorted(data["images"]) == ["andor", "intentions", "states"]
@@ -191,6 +192,10 @@ def test_edited_diagrams_reach_batch_export(tmp_path):
             if b == REMOVED[1:]] == []
     assert stored.geometry["analysis"]["diagrams"] == "stored in the document, edited"
     assert stored.geometry["analysis"]["edits"] == [{"removed": list(REMOVED)}]
+    # An engine named on the command line does not silently replace the designer's diagrams.
+    done = aplan("export-freecad", model, "-o", str(tmp_path / "named"), "--engine", "occt")
+    assert "(diagrams: stored in the document, edited)" in done.stdout
+    assert "warning: --engine and the tolerances were not applied" in done.stdout and "--redetect" in done.stdout
     aplan("export-freecad", model, "-o", str(tmp_path / "again"), "--redetect")
     again = load_product(tmp_path / "again" / "product.json")
     assert again.geometry["analysis"]["diagrams"] == "engine"
