@@ -1,7 +1,9 @@
 """FreeCADCmd entry point: ``APLAN_BATCH='{"action": ...}' freecadcmd freecad_aplan/batch.py``.
 
-Actions: ``export`` (a model to a bundle folder with its stored designer intent,
-:func:`freecad_aplan.export.export_model`; the answer names the intent's engine and tolerances) and
+Actions: ``export`` (a model to a bundle folder with its stored designer intent and, unless
+``"redetect": true``, its stored diagrams, :func:`freecad_aplan.export.export_model`; the answer names the
+intent's engine and tolerances, and ``diagrams``: where the product's diagrams came from, or null when a
+geometry engine must still detect them) and
 ``analyze-occt`` (the exact engine on a bundle's B-reps, :mod:`freecad_aplan.occt`). The answer is one line
 ``APLAN-RESULT <json>`` or ``APLAN-ERROR <message>`` on standard output (FreeCADCmd's exit code is not
 reliable). Used by :mod:`freecad_aplan.runner`.
@@ -27,7 +29,8 @@ def _run(job: dict) -> dict:
         product, intent = export_model(**job)
         stored = None if intent is None else {"engine": intent.engine, "contact": intent.contact,
                                               "interference": intent.interference, "depth": intent.depth}
-        return {"parts": len(product["parts"]), "warnings": product["geometry"]["warnings"], "intent": stored}
+        return {"parts": len(product["parts"]), "warnings": product["geometry"]["warnings"], "intent": stored,
+                "diagrams": product["geometry"].get("analysis", {}).get("diagrams")}
     if action == "analyze-occt":
         from freecad_aplan.occt import analyze_bundle_breps
 

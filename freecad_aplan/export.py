@@ -9,7 +9,9 @@ Runs inside FreeCAD (the GUI, or FreeCADCmd through ``freecad_aplan.batch``). A 
 
 When the document holds an APLAN analysis (:mod:`freecad_aplan.intent`), its designer intent applies:
 its groups and exclusions choose the components, and its technical constraints, tools and operation tags
-go into ``product.json``. The document is never modified: shapes are copies, and documents this module
+go into ``product.json``. So do its stored connection and obstruction diagrams (as the designer edited
+them), when they cover exactly the exported components; ``geometry.analysis.diagrams`` then says
+``"stored in the document"`` (``", edited"`` after edits), and a geometry engine need not run. The document is never modified: shapes are copies, and documents this module
 opened are closed again.
 """
 from __future__ import annotations
@@ -42,10 +44,12 @@ def _file_name(part_id: str, used: set[str]) -> str:
 
 def export_components(components, folder: str, source: str, warnings: list[str],
                       linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
-                      angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION, extra: dict | None = None) -> dict:
+                      angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION, extra: dict | None = None,
+                      analysis: dict | None = None) -> dict:
     """Write meshes, B-reps and ``product.json`` for ``components`` into ``folder`` (which must exist).
 
-    ``extra``: more top-level keys of the product file (the designer intent's constraints and tags).
+    ``extra``: more top-level keys of the product file (the designer intent's constraints and tags, stored
+    diagrams); ``analysis``: the ``geometry.analysis`` record of where those diagrams came from.
     """
     os.makedirs(os.path.join(folder, "meshes"), exist_ok=True)
     os.makedirs(os.path.join(folder, "breps"), exist_ok=True)
@@ -78,7 +82,7 @@ def export_components(components, folder: str, source: str, warnings: list[str],
         "geometry": {"source": os.path.basename(source),
                      "tessellation": {"linear_deflection": linear_deflection,
                                       "angular_deflection": angular_deflection},
-                     "warnings": warnings},
+                     "warnings": warnings, **({"analysis": analysis} if analysis else {})},
         **(extra or {}),
     }
     with open(os.path.join(folder, "product.json"), "w", encoding="utf-8") as handle:
@@ -87,18 +91,53 @@ def export_components(components, folder: str, source: str, warnings: list[str],
     return product
 
 
+def _stored_diagrams(intent, components, extra: dict) -> tuple[dict | None, str | None]:
+    """The analysis' stored diagrams when they fit the exported ``components`` (with the intent's ``extra``
+    keys), else None and the reason (None too when nothing is stored)."""
+    from planner.errors import ProductFormatError
+    from planner.product import product_from_dict
+
+    diagrams = intent.diagrams if intent is not None else {}
+    if not diagrams.get("parts"):
+        return None, None
+    ids, stored = sorted(c.id for c in components), sorted(diagrams["parts"])
+    if ids != stored:
+        missing, new = sorted(set(stored) - set(ids)), sorted(set(ids) - set(stored))
+        differences = ([f"without {', '.join(missing)}"] if missing else []) + \
+            ([f"with {', '.join(new)}"] if new else [])
+        return None, f"they cover the components {stored}, this export has {ids} ({'; '.join(differences)})"
+    objects = diagrams.get("objects") or {}
+    for component in components:
+        before = objects.get(component.id)
+        if before is not None and sorted(before) != sorted(component.objects):
+            return None, (f"component {component.id!r} was made of {sorted(before)} when they were detected, "
+                          f"and is made of {sorted(component.objects)} now")
+    try:
+        product_from_dict({"format": "aplan-product", "version": 1, "parts": [{"id": i} for i in ids],
+                           "contacts": diagrams.get("contacts", []),
+                           "obstructions": diagrams.get("obstructions", []), **extra}, "diagrams")
+    except ProductFormatError as exc:
+        return None, f"they are not valid: {exc.location}: {exc.problem}"
+    return diagrams, None
+
+
 def export_document(document, folder: str, source: str, groups=None, exclude=None, split_solids: bool = False,
                     linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
-                    angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION) -> tuple[dict, "Intent | None"]:
+                    angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION,
+                    redetect: bool = False) -> tuple[dict, "Intent | None"]:
     """Export an open ``document`` with its stored designer intent into ``folder``.
 
-    ``groups``, ``exclude`` and ``split_solids`` add to what the document's APLAN analysis says. Returns the
-    product (as written) and the intent (None without an analysis). Raises
+    ``groups``, ``exclude`` and ``split_solids`` add to what the document's APLAN analysis says. The
+    analysis' stored diagrams go into ``product.json`` when they cover exactly the exported components
+    (same ids, made of the same objects) and ``redetect`` is False; when they do not fit, a warning in
+    ``geometry.warnings`` says why, and the product has no contacts yet (a geometry engine fills them in).
+    Returns the product (as written) and the intent (None without an analysis). Raises
     :class:`~freecad_aplan.intent.IntentError` when the intent names components the document does not have.
     """
     from planner.errors import ProductFormatError
     from planner.product import product_from_dict
 
+    from .diagrams import stored_analysis
     from .intent import find_analysis, product_intent, read_intent
 
     analysis = find_analysis(document)
@@ -120,22 +159,33 @@ def export_document(document, folder: str, source: str, groups=None, exclude=Non
             raise IntentError(f"{source}: the APLAN analysis {analysis.Label!r} does not fit the components "
                               f"{sorted(ids)}: {exc.location}: {exc.problem}; fix the constraint or tag in "
                               "the APLAN workbench") from None
+    recorded = None
+    if not redetect:
+        diagrams, reason = _stored_diagrams(intent, result.components, extra)
+        if diagrams is not None:
+            extra["contacts"], extra["obstructions"] = diagrams.get("contacts", []), diagrams.get("obstructions", [])
+            recorded = stored_analysis(diagrams)
+        elif reason is not None:
+            result.warnings.append(f"the diagrams stored in {analysis.Label!r} were not used: {reason}; contacts "
+                                   "and obstructions are detected again (run APLAN > Detect contacts and "
+                                   "obstructions to store new ones)")
     extra["x-freecad-objects"] = {c.id: list(c.objects) for c in result.components}
     product = export_components(result.components, folder, source, result.warnings, linear_deflection,
-                                angular_deflection, extra)
+                                angular_deflection, extra, recorded)
     return product, intent
 
 
 def export_model(model: str, folder: str, groups=None, exclude=None, split_solids: bool = False,
                  linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
-                 angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION) -> tuple[dict, "Intent | None"]:
+                 angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION,
+                 redetect: bool = False) -> tuple[dict, "Intent | None"]:
     """Open ``model`` (.FCStd or STEP) and export it with its stored intent into ``folder`` (see
     :func:`export_document`); returns the product and the intent."""
     already_open = {d.FileName for d in FreeCAD.listDocuments().values()}
     document = open_model(model)
     try:
         return export_document(document, folder, model, groups, exclude, split_solids, linear_deflection,
-                               angular_deflection)
+                               angular_deflection, redetect)
     finally:
         if document.FileName not in already_open or not document.FileName:
             FreeCAD.closeDocument(document.Name)

@@ -1,8 +1,9 @@
 """The FreeCAD side's additions to the ``aplan`` command line (entry point ``aplan.plugins``).
 
 - ``aplan export-freecad MODEL -o BUNDLE``: FreeCADCmd writes the meshes and B-reps of a ``.FCStd`` or STEP
-  model, then a geometry engine fills in contacts and obstruction diagrams; the bundle appears only when
-  everything succeeded.
+  model; the diagrams stored in the document's APLAN analysis (as the designer edited them) are used when
+  they cover exactly the exported components, else (or with ``--redetect``) a geometry engine fills in
+  contacts and obstruction diagrams; the bundle appears only when everything succeeded.
 - ``aplan stats MODEL.FCStd`` (and every command taking PRODUCT): the same export into a temporary folder.
 - ``aplan analyze --engine occt``: the exact engine, run in FreeCADCmd on the bundle's B-reps.
 
@@ -31,10 +32,14 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
                   groups: dict[str, list[str]] | None = None, exclude: list[str] | None = None,
                   split_solids: bool = False, linear_deflection: float | None = None,
                   angular_deflection: float | None = None, freecadcmd: str | None = None,
-                  overwrite: bool = False) -> Product:
+                  overwrite: bool = False, redetect: bool = False) -> Product:
     """Export ``model`` into the bundle folder ``bundle`` and analyse it with ``engine`` (or ``"none"``).
 
-    The document's APLAN analysis (designer intent) chooses the components and adds its constraints and tags;
+    The document's APLAN analysis (designer intent) chooses the components and adds its constraints and tags.
+    Its stored connection and obstruction diagrams (as the designer edited them) are used as they are when
+    they cover exactly the exported components, unless ``redetect``; ``geometry.analysis.diagrams`` of the
+    product then says ``"stored in the document"`` (``", edited"`` after edits). Otherwise ``engine``
+    detects them (``"engine"``; ``geometry.warnings`` says why stored diagrams were not used):
     ``engine=None`` and ``tolerances=None`` take the analysis' engine and tolerances (else mesh and the
     defaults); ``tolerances`` as a dict sets only the fields it names.
 
@@ -52,18 +57,19 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
     work = Path(tempfile.mkdtemp(prefix=f".{bundle.name}.", suffix=".partial", dir=bundle.parent))
     try:
         arguments = {"model": str(model), "folder": str(work), "groups": groups or {}, "exclude": exclude or [],
-                     "split_solids": split_solids}
+                     "split_solids": split_solids, "redetect": redetect}
         if linear_deflection is not None:
             arguments["linear_deflection"] = linear_deflection
         if angular_deflection is not None:
             arguments["angular_deflection"] = angular_deflection
-        stored = run_batch("export", arguments, freecadcmd).get("intent") or {}
+        answer = run_batch("export", arguments, freecadcmd)
+        stored = answer.get("intent") or {}
         product = load_bundle(work)
         engine = engine or stored.get("engine", "mesh")
         if not isinstance(tolerances, Tolerances):
             chosen = {k: stored[k] for k in ("contact", "interference", "depth") if k in stored}
             tolerances = Tolerances(**{**chosen, **(tolerances or {})})
-        if engine != "none":
+        if engine != "none" and not answer.get("diagrams"):  # no stored diagrams in product.json: detect
             product = apply_report(product, analyze_product(product, engine, tolerances))
             save_product(product, work / PRODUCT_FILE)
         if bundle.exists():
@@ -118,12 +124,18 @@ def _export_command(subparsers) -> None:
         description="Write BUNDLE/product.json, BUNDLE/meshes/*.stl and BUNDLE/breps/*.brep from MODEL, then "
                     "compute contacts and obstruction diagrams. The document's APLAN analysis (designer intent) "
                     "chooses the components, adds its constraints and tags, and gives the engine and the "
-                    "tolerances not set here. Nothing is written when it fails.")
+                    "tolerances not set here; its stored diagrams (as edited in the workbench) are used when "
+                    "they cover exactly the exported components (else detected again, with a warning saying "
+                    "why). Nothing is written when it fails.")
     parser.add_argument("model", metavar="MODEL", help="a .FCStd document or a .step/.stp file")
     parser.add_argument("-o", "--output", required=True, metavar="BUNDLE", help="the bundle folder to create")
     parser.add_argument("--engine", choices=("mesh", "occt", "none"),
                         help="geometry engine for contacts and obstructions (default: the document's APLAN "
-                             "analysis, else mesh; none: export only)")
+                             "analysis, else mesh; none: export only); used when the document has no stored "
+                             "diagrams that fit, or with --redetect")
+    parser.add_argument("--redetect", action="store_true",
+                        help="detect contacts and obstructions again even when the document's APLAN analysis "
+                             "stores diagrams (possibly edited by the designer) that fit the components")
     parser.add_argument("--group", action="append", type=_parse_group, default=[], metavar="NAME=A,B,...",
                         help="make one component NAME of the objects (labels) A, B, ... (repeatable)")
     parser.add_argument("--exclude", action="append", default=[], metavar="LABEL",
@@ -145,8 +157,12 @@ def _export_command(subparsers) -> None:
         product = export_bundle(args.model, args.output, args.engine, {**given, "resolution": args.resolution},
                                 dict(args.group),
                                 args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
-                                args.freecadcmd, args.force)
-        print(f"{args.output}: {len(product.parts)} parts, {len(product.contacts)} contacts")
+                                args.freecadcmd, args.force, args.redetect)
+        source = product.geometry.get("analysis", {}).get("diagrams", "none detected")
+        print(f"{args.output}: {len(product.parts)} parts, {len(product.contacts)} contacts (diagrams: {source})")
+        if source.startswith("stored") and (args.engine or given):
+            print("  warning: --engine and the tolerances were not applied: the diagrams stored in the document "
+                  "were used; add --redetect to detect them again")
         for warning in product.geometry.get("warnings", []) + product.geometry.get("analysis", {}).get("warnings", []):
             print(f"  warning: {warning}")
         return 0

@@ -26,7 +26,7 @@ from planner.errors import PlannerError
 from . import ADDON_DIR
 
 __all__ = ["require_analysis", "export_for_detection", "worker_command", "analyze_bundle", "store_detection",
-           "analysis_product", "analysis_diagrams", "plan_report", "export_analysis_bundle", "export_decision_model",
+           "edit_analysis_diagrams", "analysis_product", "analysis_diagrams", "plan_report", "export_analysis_bundle", "export_decision_model",
            "solve_product", "simulate_sequence", "BATCH_SCRIPT"]
 
 BATCH_SCRIPT = os.path.join(ADDON_DIR, "freecad_aplan", "batch.py")
@@ -47,11 +47,12 @@ def require_analysis(document):
 
 
 def export_for_detection(document, folder: str) -> dict:
-    """Export the document's components (with its intent) into the bundle folder ``folder``; returns the
-    product as written (with ``x-freecad-objects``: component id -> its objects' names)."""
+    """Export the document's components (with its intent, without stored diagrams) into the bundle folder
+    ``folder``; returns the product as written (with ``x-freecad-objects``: component id -> its objects'
+    names)."""
     from .export import export_document
 
-    product, _ = export_document(document, folder, document.FileName or document.Label)
+    product, _ = export_document(document, folder, document.FileName or document.Label, redetect=True)
     return product
 
 
@@ -127,6 +128,33 @@ def store_detection(analysis, folder: str):
     return update_intent(analysis, "detect contacts and obstructions", diagrams=diagrams)
 
 
+def edit_analysis_diagrams(analysis, remove=(), add=()) -> dict:
+    """Remove and add relations of the analysis' stored diagrams in one undoable transaction.
+
+    Relations are ``(kind, a, b)`` triples (:mod:`freecad_aplan.diagrams`: ``("contact", a, b)``,
+    ``("blocks +X", x, y)`` for x blocked by y along +X). The diagrams panel calls this on OK. Raises
+    :class:`~freecad_aplan.diagrams.RelationError` (unknown component, a component related to itself, a
+    duplicate, a relation that is not there) or :class:`~freecad_aplan.intent.IntentError` (nothing detected
+    yet, a newer format) before anything changes. Returns the new diagrams.
+    """
+    from .diagrams import describe_relation, edited_diagrams
+    from .intent import IntentError, read_intent, update_intent
+
+    remove, add = [tuple(r) for r in remove], [tuple(r) for r in add]
+    diagrams = read_intent(analysis).diagrams
+    if not diagrams.get("parts"):
+        raise IntentError(f"{analysis.Label}: no contacts and obstructions yet; run APLAN > Detect contacts "
+                          "and obstructions first")
+    new = edited_diagrams(diagrams, remove, add)
+    if len(remove) + len(add) == 1:
+        description = ("remove " if remove else "add ") + describe_relation((remove or add)[0])
+    else:
+        description = f"edit diagrams ({len(remove)} removed, {len(add)} added)"
+    if remove or add:
+        update_intent(analysis, description, diagrams=new)
+    return new
+
+
 def analysis_product(analysis, name: str = ""):
     """The product the planner sees: the stored diagrams plus the designer intent (a ``planner.Product``).
 
@@ -195,10 +223,12 @@ def export_analysis_bundle(document, analysis, bundle: str) -> None:
 
 
 def analysis_diagrams(analysis) -> dict:
-    """The engine summary of the last detection (engine, tolerances, interferences, warnings)."""
+    """The ``geometry.analysis`` of a product from the stored diagrams: the engine summary of the last
+    detection (engine, tolerances, interferences, warnings), where the diagrams came from and their edits."""
+    from .diagrams import stored_analysis
     from .intent import read_intent
 
-    return read_intent(analysis).diagrams.get("analysis", {})
+    return stored_analysis(read_intent(analysis).diagrams)
 
 
 def export_decision_model(product, path: str, technical: bool | None = None) -> dict:

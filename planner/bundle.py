@@ -76,14 +76,15 @@ def analyze_product(product: Product, engine: str = "mesh", tolerances: Toleranc
 
 def apply_report(product: Product, report: GeometryReport) -> Product:
     """A copy of ``product`` with the report's contacts and +X/+Y/+Z obstruction diagrams, and the analysis
-    recorded under ``geometry.analysis``. Technical constraints and designer tags are kept."""
+    recorded under ``geometry.analysis`` (``diagrams: "engine"``: found by a geometry engine). Technical
+    constraints and designer tags are kept."""
     if set(report.parts) != set(product.part_ids):
         raise GeometryError(f"{product.source}: the analysed parts {sorted(report.parts)} are not the product's "
                             f"parts {sorted(product.part_ids)}")
     obstructions = tuple(Obstruction(Direction(axis, AXIS_DIRECTIONS[axis]), tuple(report.obstructions[axis]))
                          for axis in AXES)
     summary = report.as_dict()
-    analysis = {"engine": report.engine, "tolerances": summary["tolerances"],
+    analysis = {"diagrams": "engine", "engine": report.engine, "tolerances": summary["tolerances"],
                 "interferences": summary["interferences"], "warnings": summary["warnings"],
                 "seconds": summary["seconds"]}
     geometry = {**product.geometry, "analysis": analysis}

@@ -121,16 +121,34 @@ def wait_cancel():
     dialog = FreeCADGui.getMainWindow().findChild(QtGui.QDialog, "AplanPlanDialog")
     table = dialog.findChild(QtGui.QTableWidget, "AplanStatisticsTable")
     result["shown"] = {{table.item(r, 0).text(): table.item(r, 1).text() for r in range(table.rowCount())}}
-    dialog.setGeometry(690, 120, 580, 420)  # beside the pen, for the screenshot
+    view = FreeCADGui.ActiveDocument.ActiveView
+    view.viewIsometric()
+    FreeCADGui.SendMsgToActiveView("ViewFit")  # the whole pen
+    view.saveImage(os.path.join(ARTIFACTS, "gui_3d_view.png"), 800, 600, "White")
+    # For the window's screenshot: the dialog on the right, the fitted pen centred in the 3D view left of it.
+    dialog.setGeometry(800, 100, 470, 640)
+    QtGui.QApplication.processEvents()
+    frame_left_of(dialog.frameGeometry().x())
     QtCore.QTimer.singleShot(800, guarded(screenshots))
+
+
+def frame_left_of(right):
+    # Pan (and zoom by 1.25) the fitted camera: the pen's centre in the middle of the 3D view's part left of
+    # the screen column `right`.
+    from pivy import coin
+    view = FreeCADGui.ActiveDocument.ActiveView
+    widget = FreeCADGui.getMainWindow().findChild(QtGui.QMdiArea).currentSubWindow().widget()
+    left = widget.mapToGlobal(QtCore.QPoint(0, 0)).x()
+    width, height = view.getSize()
+    camera = view.getCameraNode()
+    camera.height.setValue(camera.height.getValue() * 0.8)
+    shift = (left + width / 2 - (left + right) / 2) * camera.height.getValue() / height  # pixels to model units
+    sideways = camera.orientation.getValue().multVec(coin.SbVec3f(1, 0, 0))
+    camera.position.setValue(camera.position.getValue() + sideways * shift)
 
 
 def screenshots():
     doc = FreeCAD.ActiveDocument
-    FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
-    FreeCADGui.ActiveDocument.ActiveView.fitAll()
-    QtGui.QApplication.processEvents()
-    FreeCADGui.ActiveDocument.ActiveView.saveImage(os.path.join(ARTIFACTS, "gui_3d_view.png"), 800, 600, "White")
     screen = QtGui.QApplication.primaryScreen().grabWindow(0)
     screen.save(os.path.join(ARTIFACTS, "gui_main_window.png"))
     result["after"] = snapshot(doc)
@@ -186,6 +204,37 @@ def screenshots():
     result["contacts_after_remove"] = len(read_intent(analysis).diagrams["contacts"])
     doc.undo()
     result["contacts_after_undo"] = len(read_intent(analysis).diagrams["contacts"])
+    # Diagrams panel: add a relation with the panel's own fields and button. Bad ones first: a message in
+    # the panel, no new row; then a new contact, OK (one undoable step); then undo.
+    FreeCADGui.runCommand("Aplan_Diagrams")
+    form = FreeCADGui.getMainWindow().findChild(QtGui.QWidget, "AplanDiagramsPanel")
+    table = form.findChild(QtGui.QTableWidget, "AplanDiagramsTable")
+    kind, first, second = (form.findChild(QtGui.QComboBox, name)
+                           for name in ("AplanRelationKind", "AplanRelationFirst", "AplanRelationSecond"))
+    add = form.findChild(QtGui.QPushButton, "AplanAddRelation")
+    message = form.findChild(QtGui.QLabel, "AplanDiagramsMessage")
+
+    def fill_and_add(relation):
+        kind.setCurrentIndex(kind.findText(relation[0]))
+        first.setEditText(relation[1])
+        second.setEditText(relation[2])
+        add.click()
+        return message.text()
+
+    rows, steps = table.rowCount(), len(doc.UndoNames)
+    result["add_messages"] = [fill_and_add(r) for r in (("blocks -Y", "cap_001", "ink_001"),
+                                                        ("contact", "ink_01", "body_001"),
+                                                        ("contact", "body_001", "body_001"))]
+    result["rows_after_bad"] = table.rowCount() - rows
+    result["add_message"] = fill_and_add(("contact", "ink_001", "body_001"))
+    result["added_row"] = [table.item(table.rowCount() - 1, c).text() for c in range(3)]
+    result["stored_before_ok"] = len(read_intent(analysis).diagrams["contacts"])
+    commands._STATE["panel"].accept()
+    stored = read_intent(analysis).diagrams
+    result["after_add"] = [stored["contacts"], stored.get("edits"), doc.UndoNames[0], len(doc.UndoNames) - steps]
+    doc.undo()
+    undone = read_intent(analysis).diagrams
+    result["after_add_undo"] = [len(undone["contacts"]), "edits" in undone]
     FreeCADGui.Selection.clearSelection()
     # Save, close and reopen in the GUI: the analysis, its intent and its view provider come back.
     from dataclasses import asdict
@@ -288,6 +337,21 @@ def test_workbench_in_the_real_freecad_window(tmp_path):
     assert data["grouped"] == {"ink_001+cartridge_001": ["b_ink_001_", "b_cartridge_001_"]}
     assert data["ungrouped"] == {} and data["excluded"] == ["b_cap_001_"] and data["included"] == []
     assert (data["contacts_after_remove"], data["contacts_after_undo"]) == (4, 5)
+    # Adding a relation in the panel: refused with a message (duplicate, unknown, self), else one undoable step.
+    duplicate, unknown, itself = data["add_messages"]
+    assert duplicate == ("cannot add cap_001 blocked by ink_001 along -Y: the diagrams already hold it "
+                         "(as ink_001 blocked by cap_001 along +Y)")
+    assert "'ink_01' is not a component (did you mean 'ink_001'?)" in unknown
+    assert "a component cannot be related to itself" in itself
+    assert data["rows_after_bad"] == 0
+    assert data["add_message"] == "added contact ink_001 - body_001 (stored on OK)"
+    assert data["added_row"] == ["contact", "ink_001", "body_001"] and data["stored_before_ok"] == 5
+    contacts, edits, undo_name, steps = data["after_add"]
+    assert {frozenset(c) for c in contacts} == {frozenset(c) for c in diagrams["contacts"]} | {
+        frozenset(("ink_001", "body_001"))}
+    assert edits == [{"added": ["contact", "ink_001", "body_001"]}]
+    assert (undo_name, steps) == ("APLAN: add contact ink_001 - body_001", 1)
+    assert data["after_add_undo"] == [5, False]
     assert data["reopened_same"] is True and data["reopened_view"] == "AnalysisViewProvider"
     assert data["reopened_placements"] is True
     assert "written by a newer APLAN" in data["newer"] and data["newer_unchanged"] is True

@@ -5,25 +5,14 @@ Each panel edits a copy of the analysis' intent and writes it back on OK as one 
 """
 from __future__ import annotations
 
-import json
-
 import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
-from ..intent import read_intent, update_intent
+from ..diagrams import RELATION_KINDS, RelationError, describe_relation, edited_diagrams, relation_rows
+from ..intent import IntentError, read_intent, update_intent
 
 __all__ = ["DiagramsPanel", "IntentPanel", "PlanDialog", "ImageDialog", "relation_rows"]
-
-
-def relation_rows(diagrams: dict) -> list[tuple[str, str, str]]:
-    """The rows of the diagrams table: ("contact", a, b) and ("blocks +X", x, y) (x moving along +X hits y)."""
-    rows = [("contact", a, b) for a, b in diagrams.get("contacts", [])]
-    for obstruction in diagrams.get("obstructions", []):
-        direction = obstruction["direction"]
-        name = direction if isinstance(direction, str) else json.dumps(direction)
-        rows += [(f"blocks {name}", x, y) for x, y in obstruction["blocks"]]
-    return rows
 
 
 def _table(headers: list[str], name: str) -> QtGui.QTableWidget:
@@ -55,31 +44,72 @@ def _checked(item) -> bool:
 
 class DiagramsPanel:
     """The connection and obstruction diagrams as a table; selecting a row selects the two parts in the 3D
-    view; "Remove" deletes relations (written on OK)."""
+    view. "Remove" deletes the selected relations, "Add" adds a contact or an obstruction (checked at once:
+    unknown component, a component related to itself, a duplicate); OK writes all of it as one undoable
+    transaction (:func:`freecad_aplan.workflow.edit_analysis_diagrams`), Cancel changes nothing."""
 
     def __init__(self, analysis):
         self.analysis = analysis
         self.diagrams = read_intent(analysis).diagrams
+        self.removed: list[tuple[str, str, str]] = []
+        self.added: list[tuple[str, str, str]] = []
         self.form = QtGui.QWidget()
         self.form.setObjectName("AplanDiagramsPanel")
         self.form.setWindowTitle("APLAN: connection and obstruction diagrams")
         layout = QtGui.QVBoxLayout(self.form)
         summary = self.diagrams.get("analysis", {})
-        layout.addWidget(QtGui.QLabel(
+        edited = f", {len(self.diagrams['edits'])} edits" if self.diagrams.get("edits") else ""
+        intro = QtGui.QLabel(
             f"{len(self.diagrams.get('parts', []))} parts, {len(self.diagrams.get('contacts', []))} contacts "
-            f"({summary.get('engine', '?')} engine). A row 'blocks +X: a, b' means a, moved along +X, hits b."))
+            f"({summary.get('engine', '?')} engine{edited}). A row 'blocks +X: a, b' means a, moved along +X, "
+            "hits b (and b, moved along -X, hits a).")
+        intro.setWordWrap(True)
+        layout.addWidget(intro)
         self.table = _table(["relation", "part", "part"], "AplanDiagramsTable")
         self.table.setSelectionBehavior(QtGui.QAbstractItemView.SelectRows)
-        for row, (relation, a, b) in enumerate(relation_rows(self.diagrams)):
-            self.table.insertRow(row)
-            for column, text in enumerate((relation, a, b)):
-                self.table.setItem(row, column, _item(text))
+        for relation in relation_rows(self.diagrams):
+            self._append_row(relation)
         self.table.itemSelectionChanged.connect(self.highlight)
         layout.addWidget(self.table)
         remove = QtGui.QPushButton("Remove selected relations")
+        remove.setObjectName("AplanRemoveRelations")
         remove.clicked.connect(self.remove_selected)
         layout.addWidget(remove)
-        self.removed: set[tuple[str, str, str]] = set()
+        adding = QtGui.QHBoxLayout()
+        parts = list(self.diagrams.get("parts", []))
+        self.kind = self._combo("AplanRelationKind", RELATION_KINDS, editable=False)
+        self.first = self._combo("AplanRelationFirst", parts, editable=True)
+        self.second = self._combo("AplanRelationSecond", parts, editable=True)
+        add = QtGui.QPushButton("Add")
+        add.setObjectName("AplanAddRelation")
+        add.clicked.connect(lambda: self.add_relation())
+        for widget in (self.kind, self.first, self.second, add):
+            adding.addWidget(widget)
+        layout.addWidget(QtGui.QLabel("Add a relation: contact a, b, or 'blocks +X' a, b (a blocked by b "
+                                      "along +X)"))
+        layout.addLayout(adding)
+        self.message = QtGui.QLabel("")
+        self.message.setObjectName("AplanDiagramsMessage")
+        self.message.setWordWrap(True)
+        layout.addWidget(self.message)
+
+    @staticmethod
+    def _combo(name: str, items, editable: bool) -> QtGui.QComboBox:
+        combo = QtGui.QComboBox()
+        combo.setObjectName(name)
+        combo.setEditable(editable)
+        combo.addItems(list(items))
+        return combo
+
+    def _append_row(self, relation) -> None:
+        row = self.table.rowCount()
+        self.table.insertRow(row)
+        for column, text in enumerate(relation):
+            self.table.setItem(row, column, _item(text))
+
+    def _say(self, text: str, error: bool) -> None:
+        self.message.setText(text)
+        (FreeCAD.Console.PrintError if error else FreeCAD.Console.PrintMessage)(f"APLAN: {text}\n")
 
     def highlight(self) -> None:
         """Select, in the 3D view, the objects of the parts of the selected rows."""
@@ -95,17 +125,37 @@ class DiagramsPanel:
 
     def remove_selected(self) -> None:
         for index in sorted((i.row() for i in self.table.selectionModel().selectedRows()), reverse=True):
-            self.removed.add(tuple(self.table.item(index, c).text() for c in range(3)))
+            relation = tuple(self.table.item(index, c).text() for c in range(3))
+            if relation in self.added:  # added in this panel: simply not added any more
+                self.added.remove(relation)
+            else:
+                self.removed.append(relation)
             self.table.removeRow(index)
 
+    def add_relation(self, kind: str | None = None, first: str | None = None, second: str | None = None) -> bool:
+        """Add the relation of the three fields (or of the arguments) to the table, if valid; else say why in
+        the panel and the report view and change nothing. Written to the document on OK."""
+        relation = (kind if kind is not None else self.kind.currentText(),
+                    (first if first is not None else self.first.currentText()).strip(),
+                    (second if second is not None else self.second.currentText()).strip())
+        try:
+            edited_diagrams(self.diagrams, self.removed, self.added + [relation])
+        except RelationError as exc:
+            self._say(str(exc), error=True)
+            return False
+        self.added.append(relation)
+        self._append_row(relation)
+        self._say(f"added {describe_relation(relation)} (stored on OK)", error=False)
+        return True
+
     def accept(self) -> bool:
-        if self.removed:
-            diagrams = dict(self.diagrams)
-            diagrams["contacts"] = [c for c in diagrams["contacts"] if ("contact", *c) not in self.removed]
-            diagrams["obstructions"] = [
-                {**o, "blocks": [b for b in o["blocks"] if (f"blocks {o['direction']}", *b) not in self.removed]}
-                for o in diagrams["obstructions"]]
-            update_intent(self.analysis, "edit diagrams", diagrams=diagrams)
+        from ..workflow import edit_analysis_diagrams
+
+        try:
+            edit_analysis_diagrams(self.analysis, self.removed, self.added)
+        except (RelationError, IntentError) as exc:
+            self._say(str(exc), error=True)
+            return False
         FreeCADGui.Control.closeDialog()
         return True
 
@@ -188,7 +238,6 @@ class IntentPanel:
         return {"technical_constraints": constraints, "operations": operations, "tools": tools}
 
     def accept(self) -> bool:
-        from ..intent import IntentError
         from ..workflow import analysis_product
 
         try:
