@@ -143,7 +143,7 @@ class PointBasedSolver:
         def q_upper(b: np.ndarray, evaluation) -> np.ndarray:
             a_idx, _, probs, _, _, _, up = evaluation
             q = m.R @ b
-            np.add.at(q, a_idx, gamma * probs * up)
+            q += np.bincount(a_idx, gamma * probs * up, minlength=m.A)
             return q
 
         def backup(b: np.ndarray, evaluation, known: tuple[float, int, float]) -> tuple[float, int, float]:
@@ -155,7 +155,9 @@ class PointBasedSolver:
             chosen = alphas.rows[best]                                   # (M, S): best vector per successor
             weighted = m.OZ[a_idx, z_idx] * chosen                       # (M, S')
             per_action = np.zeros((m.A, m.S))
-            np.add.at(per_action, a_idx, weighted)
+            # a_idx is sorted (successors come action by action): sum each action's block at once.
+            present, starts = np.unique(a_idx, return_index=True)
+            per_action[present] = np.add.reduceat(weighted, starts, axis=0)
             vectors = m.R + gamma * m.expect(per_action)
             a = int(np.argmax(vectors @ b))
             if vectors[a] @ b > low + 1e-12:
@@ -193,7 +195,7 @@ class PointBasedSolver:
                     # Now and then, follow the current policy (the lower bound's best action) instead, so the
                     # beliefs that policy visits get backed up too (SARSOP samples near it for the same reason).
                     q_low = m.R @ b
-                    np.add.at(q_low, a_idx, gamma * probs * lo)
+                    q_low += np.bincount(a_idx, gamma * probs * lo, minlength=m.A)
                     a = int(np.argmax(q_low))
                 else:
                     a = int(np.argmax(q_upper(b, evaluation)))
