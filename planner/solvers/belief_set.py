@@ -18,15 +18,19 @@ detections, so beliefs branch into few heavy successors and a long tail of light
 observations); the weights order that tail, and a sweep evaluates thousands of beliefs in a few matrix
 products where a trial-based solver backs up one belief at a time.
 
-Cost of a sweep over N beliefs with K vectors: O(N A' S (S + Z K)), A' the actions not skipped.
+Cost of a sweep over N beliefs with K vectors: O(N A' (nnz(T) + s Z K)), A' the actions not skipped and s
+the number of states a predicted belief covers (all S for small models, multiplied densely).
 """
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from .tables import Tables
 
 __all__ = ["BeliefSet", "policy_successors", "sweep"]
+
+SPARSE_STATES = 256  # above this many states, predicted beliefs are multiplied as sparse rows
 
 
 class BeliefSet:
@@ -118,7 +122,10 @@ def sweep(m: Tables, beliefs: np.ndarray, alphas: np.ndarray, q_upper: np.ndarra
         table = int(m.observation_table[a])
         if table not in projections:
             projections[table] = (m.OZ[a][:, :, None] * alphas.T[None]).transpose(1, 0, 2).reshape(m.S, m.Z * K)
-        values = (m.step(beliefs[rows], a) @ projections[table]).reshape(len(rows), m.Z, K)
+        stepped = m.step(beliefs[rows], a)
+        if m.S > SPARSE_STATES:  # beliefs have small supports: multiply only their non-zero entries
+            stepped = sp.csr_matrix(stepped)
+        values = np.asarray(stepped @ projections[table]).reshape(len(rows), m.Z, K)
         q = beliefs[rows] @ m.R[a] + m.gamma * values.max(axis=2).sum(axis=1)
         better = q > best_q[rows]
         rows, q = rows[better], q[better]
