@@ -100,3 +100,20 @@ def test_sparse_tables_compute_what_dense_ones_do(pen, monkeypatch):
     result = PointBasedSolver(max_iterations=400, time_limit=120, precision=1e-4).solve(model)
     low, high = OPTIMUM[True]
     assert low - 5e-4 <= result.lower_bound <= high and result.upper_bound >= low
+
+
+def test_sweep_with_sparse_rows_equals_dense(pen, monkeypatch):
+    # Models above SPARSE_STATES states multiply predicted beliefs as sparse rows; same vectors either way.
+    import planner.solvers.belief_set as belief_set
+
+    model = intention_pomdp(make_plan(pen, False))
+    m = Tables(model)
+    result = PointBasedSolver(max_iterations=20, time_limit=60).solve(model)
+    rng = np.random.default_rng(2)
+    beliefs = np.vstack([model.initial, rng.dirichlet(np.ones(model.n_states) * 0.05, size=30)])
+    q = fast_informed_bound(m)
+    dense = sweep(m, beliefs, result.policy.alphas, q)
+    monkeypatch.setattr(belief_set, "SPARSE_STATES", 0)
+    sparse = sweep(m, beliefs, result.policy.alphas, q)
+    assert np.array_equal(dense[2], sparse[2]) and np.array_equal(dense[1], sparse[1])
+    assert np.allclose(dense[0], sparse[0])
