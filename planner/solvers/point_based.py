@@ -128,6 +128,35 @@ class PointBasedSolver:
                     bound = np.minimum(bound, base + best_gain)
             return bound
 
+        def prune_points(chunk: int = 64) -> None:
+            """Drop the upper-bound points that the others (and the informed bound) already bound as tightly
+            at their own belief (HSVI2's pruning). Dropping points never invalidates the bound."""
+            nonlocal excess_array
+            keep = np.ones(points.n, dtype=bool)
+            rows, support = points.rows, points.support
+            for first in range(0, points.n, chunk):
+                query = np.arange(first, min(first + chunk, points.n))
+                B = rows[query]
+                base = B @ corner
+                bound = np.minimum((B @ Q.T).max(axis=1), base)
+                inside = (support @ (B <= 0).T.astype(np.float32) == 0) & keep[:, None]
+                inside[query, np.arange(len(query))] = False                   # not the point itself
+                i_idx, b_idx = np.nonzero(inside)
+                if i_idx.size:
+                    cols = np.flatnonzero((B > 0).any(axis=0))
+                    Bc = B[:, cols]
+                    inverse = np.divide(1.0, Bc, out=np.zeros_like(Bc), where=Bc > 0)
+                    ratio = 1.0 / (rows[i_idx][:, cols] * inverse[b_idx]).max(axis=1)
+                    gain = np.zeros(len(B))
+                    np.minimum.at(gain, b_idx, excess_array[i_idx] * ratio)
+                    bound = np.minimum(bound, base + gain)
+                keep[query] &= bound > base + excess_array[query] + 1e-12
+            points.keep(keep)
+            point_excess[:] = [point_excess[i] for i in np.flatnonzero(keep)]
+            excess_array = np.asarray(point_excess)
+            point_at.clear()
+            point_at.update({float(b @ fingerprint): i for i, b in enumerate(points.rows)})
+
         def evaluate(b: np.ndarray) -> list:
             """Successors of b with their bounds: [a_idx, z_idx, probs, beliefs, lower, best alpha, upper]."""
             a_idx, z_idx, probs, nxt = m.successors(b)
@@ -266,6 +295,7 @@ class PointBasedSolver:
         # fastest per unit of work, each keeping at least min_share of it: [decayed gap closed, decayed work].
         recent = {"sweeps": [0.0, 0.0], "trials": [0.0, 0.0]}
         done = {"sweeps": 0.0, "trials": 0.0}
+        pruned_at = 0  # upper-bound points after the last pruning
         lb, ub = float(lower(b0[None])[0][0]), float(upper(b0[None])[0])
         history.append((time.perf_counter() - start, lb, ub))
         while (ub - lb > self.precision and time.perf_counter() - start < self.time_limit
@@ -281,6 +311,9 @@ class PointBasedSolver:
                 # Trials aim at a fraction of the current gap, so early trials stay shallow (HSVI's epsilon).
                 epsilon = max(self.precision, self.gap_fraction * (ub - lb))
                 process, work = "trials", trial(iterations, epsilon)
+                if points.n >= max(512, 2 * pruned_at):
+                    prune_points()
+                    pruned_at = points.n
             gap = ub - lb
             lb, ub = float(lower(b0[None])[0][0]), float(upper(b0[None])[0])
             decay = 0.5 ** (work / self.rate_horizon)
