@@ -111,11 +111,15 @@ class PointBasedSolver:
             best = values.argmax(axis=1)
             return values[np.arange(len(B)), best], best
 
-        def upper(B: np.ndarray) -> np.ndarray:
+        def upper(B: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
+            """The upper bound at the beliefs ``B``; ``allowed`` (points, len(B)): which points may serve
+            which belief (default: all)."""
             base = B @ corner
             bound = np.minimum((B @ Q.T).max(axis=1), base)
             if points.n:
                 inside = points.support @ (B <= 0).T.astype(np.float32) == 0  # supp(point) within supp(b)
+                if allowed is not None:
+                    inside &= allowed
                 i_idx, b_idx = np.nonzero(inside)
                 if i_idx.size:
                     # Sawtooth: the largest lambda with b - lambda b_i >= 0 is 1 / max_s b_i(s) / b(s).
@@ -133,24 +137,12 @@ class PointBasedSolver:
             at their own belief (HSVI2's pruning). Dropping points never invalidates the bound."""
             nonlocal excess_array
             keep = np.ones(points.n, dtype=bool)
-            rows, support = points.rows, points.support
             for first in range(0, points.n, chunk):
                 query = np.arange(first, min(first + chunk, points.n))
-                B = rows[query]
-                base = B @ corner
-                bound = np.minimum((B @ Q.T).max(axis=1), base)
-                inside = (support @ (B <= 0).T.astype(np.float32) == 0) & keep[:, None]
-                inside[query, np.arange(len(query))] = False                   # not the point itself
-                i_idx, b_idx = np.nonzero(inside)
-                if i_idx.size:
-                    cols = np.flatnonzero((B > 0).any(axis=0))
-                    Bc = B[:, cols]
-                    inverse = np.divide(1.0, Bc, out=np.zeros_like(Bc), where=Bc > 0)
-                    ratio = 1.0 / (rows[i_idx][:, cols] * inverse[b_idx]).max(axis=1)
-                    gain = np.zeros(len(B))
-                    np.minimum.at(gain, b_idx, excess_array[i_idx] * ratio)
-                    bound = np.minimum(bound, base + gain)
-                keep[query] &= bound > base + excess_array[query] + 1e-12
+                B = points.rows[query]
+                others = np.repeat(keep[:, None], len(query), axis=1)
+                others[query, np.arange(len(query))] = False                   # not the point itself
+                keep[query] &= upper(B, others) > B @ corner + excess_array[query] + 1e-12
             points.keep(keep)
             point_excess[:] = [point_excess[i] for i in np.flatnonzero(keep)]
             excess_array = np.asarray(point_excess)
