@@ -27,8 +27,8 @@ import numpy as np  # noqa: E402
 
 from planner import make_plan, resolve_product  # noqa: E402
 from planner.decision import intention_pomdp  # noqa: E402
-from planner.simulate import simulate_episode  # noqa: E402
-from planner.solvers import PointBasedSolver  # noqa: E402
+from planner.decision.simulate import simulate_episode  # noqa: E402
+from planner.decision.solvers import PointBasedSolver  # noqa: E402
 
 
 def main() -> None:

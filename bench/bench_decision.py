@@ -21,10 +21,10 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from planner import chain_product, make_plan, resolve_product  # noqa: E402
-from planner.belief import DiscreteUpdater  # noqa: E402
 from planner.decision import intention_pomdp  # noqa: E402
-from planner.pomdpx import read_pomdpx  # noqa: E402
-from planner.solvers import PointBasedSolver  # noqa: E402
+from planner.decision.belief import DiscreteUpdater  # noqa: E402
+from planner.decision.io.pomdpx import read_pomdpx  # noqa: E402
+from planner.decision.solvers import PointBasedSolver  # noqa: E402
 
 REFERENCE = ROOT.parent / "shared" / "models" / "bourjault_pen" / "reference_pomdp"
 MARKS = (1, 5, 10, 30, 60, 120, 300, 600)

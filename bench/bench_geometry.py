@@ -16,8 +16,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from freecad_aplan.plugin import export_bundle  # noqa: E402
-from planner.bundle import analyze_product, load_bundle, load_part_meshes  # noqa: E402
 from planner.geometry import Tolerances, analyze_meshes  # noqa: E402
+from planner.geometry.bundle import analyze_product, load_bundle, load_part_meshes  # noqa: E402
 
 MODELS = ROOT.parent / "shared" / "models"
 CASES = [

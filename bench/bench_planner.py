@@ -16,8 +16,18 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from planner import (and_or_graph, assembly_state_graph, chain_product, complete_product,  # noqa: E402
-                     count_intentions, count_sequences, example_path, intention_graph, load_product, make_plan)
+from planner import (  # noqa: E402
+    and_or_graph,
+    assembly_state_graph,
+    chain_product,
+    complete_product,
+    count_intentions,
+    count_sequences,
+    example_path,
+    intention_graph,
+    load_product,
+    make_plan,
+)
 
 
 def pen_latency(repeats: int = 2000) -> dict:

@@ -2,7 +2,7 @@
 
 Run: ``.venv/bin/python bench/bench_vision.py [--frames 300]`` (about 1 minute).
 
-Frames are rendered by planner.tray (the pen's tray, markers 96 px wide, and a 48-item tray, markers 64 px)
+Frames are rendered by planner.runtime.tray (the pen's tray, markers 96 px wide, and a 48-item tray, markers 64 px)
 before timing, with the camera degradations of the tests; each frame's truth (the uncovered markers) is known,
 so the benchmark also counts frames whose detection is not exactly right. ``cv2.setNumThreads(1)`` keeps
 OpenCV on one core. Rows: detection alone with APLAN's detector (one adaptive-threshold window, 23 px), with
@@ -23,8 +23,8 @@ import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
 from planner import Part, Product, Tool, resolve_product  # noqa: E402
-from planner.tray import render_tray, tray_layout  # noqa: E402
-from planner.vision import MarkerDetector, VisionSource, marker_map  # noqa: E402
+from planner.runtime.tray import render_tray, tray_layout  # noqa: E402
+from planner.runtime.vision import MarkerDetector, VisionSource, marker_map  # noqa: E402
 
 
 def frames_for(markers, marker_px: int, count: int, seed: int = 0):

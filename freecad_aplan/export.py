@@ -23,6 +23,8 @@ import re
 import FreeCAD
 import MeshPart
 
+from planner.defaults import PRODUCT_FILE
+
 from .document import open_model, read_components
 
 __all__ = ["export_components", "export_document", "export_model", "DEFAULT_LINEAR_DEFLECTION",
@@ -85,7 +87,7 @@ def export_components(components, folder: str, source: str, warnings: list[str],
                      "warnings": warnings, **({"analysis": analysis} if analysis else {})},
         **(extra or {}),
     }
-    with open(os.path.join(folder, "product.json"), "w", encoding="utf-8") as handle:
+    with open(os.path.join(folder, PRODUCT_FILE), "w", encoding="utf-8") as handle:
         json.dump(product, handle, indent=1)
         handle.write("\n")
     return product

@@ -24,6 +24,8 @@ from dataclasses import dataclass, field, fields, replace
 
 import FreeCAD
 
+from planner.defaults import BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME
+
 from .document import DocumentError
 
 __all__ = ["FORMAT_VERSION", "ENGINES", "Intent", "IntentError", "AnalysisProxy", "create_analysis",
@@ -49,9 +51,9 @@ class Intent:
     tools: list[str] = field(default_factory=list)
     operations: list[dict] = field(default_factory=list)
     engine: str = "mesh"
-    contact: float = 0.1
-    interference: float = 1.0
-    depth: float = 0.1
+    contact: float = CONTACT_TOLERANCE
+    interference: float = INTERFERENCE_VOLUME
+    depth: float = BLOCKING_DEPTH
     diagrams: dict = field(default_factory=dict)
 
 

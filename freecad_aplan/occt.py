@@ -51,6 +51,13 @@ import time
 import FreeCAD
 import Part
 
+from planner.defaults import (
+    BLOCKING_DEPTH,
+    CONTACT_TOLERANCE,
+    INTERFERENCE_VOLUME,
+    PRODUCT_FILE,
+)
+
 from .document import DocumentError
 
 __all__ = ["analyze_shapes", "analyze_bundle_breps", "BrepError", "AXES"]
@@ -626,8 +633,8 @@ def _prism_blocks(prism, other, other_box, shared, axis: int, volume_tolerance: 
 # ---------------------------------------------------------------------------------------------- public
 
 
-def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = 0.1, interference: float = 1.0,
-                   depth: float = 0.1) -> dict:
+def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTACT_TOLERANCE,
+                   interference: float = INTERFERENCE_VOLUME, depth: float = BLOCKING_DEPTH) -> dict:
     """Contacts, interferences and the +X, +Y, +Z obstruction diagrams of exact part shapes.
 
     ``parts``: (id, shape) pairs, shapes holding solids in global coordinates (they are not modified).
@@ -700,7 +707,7 @@ def analyze_bundle_breps(folder: str, **tolerances) -> dict:
     Raises :class:`BrepError` naming the part and the file when a B-rep is missing or unreadable.
     Cost: reading the files, then that of :func:`analyze_shapes`.
     """
-    path = os.path.join(folder, "product.json")
+    path = os.path.join(folder, PRODUCT_FILE)
     try:
         with open(path, encoding="utf-8") as handle:
             product = json.load(handle)

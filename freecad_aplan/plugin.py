@@ -16,8 +16,13 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from planner.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
 from planner.geometry import GeometryReport, Tolerances
+from planner.geometry.bundle import (
+    PRODUCT_FILE,
+    analyze_product,
+    apply_report,
+    load_bundle,
+)
 from planner.product import Product, save_product
 
 from .runner import FreeCADError, run_batch

@@ -21,6 +21,14 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from planner.defaults import (
+    BLOCKING_DEPTH,
+    CONFIDENCE,
+    CONTACT_TOLERANCE,
+    INTERFERENCE_VOLUME,
+    SOLVE_PRECISION,
+    WORKBENCH_SOLVE_TIME_LIMIT,
+)
 from planner.errors import PlannerError
 
 from . import ADDON_DIR
@@ -88,14 +96,19 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
     return [find_freecadcmd(), BATCH_SCRIPT]
 
 
-def analyze_bundle(folder: str, engine: str = "mesh", contact: float = 0.1, interference: float = 1.0,
-                   depth: float = 0.1) -> dict:
+def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_TOLERANCE,
+                   interference: float = INTERFERENCE_VOLUME, depth: float = BLOCKING_DEPTH) -> dict:
     """Run a geometry engine on the bundle ``folder`` and write the result into its ``product.json``.
 
     Returns the counts (parts, contacts, interferences, seconds). Runs in a background job.
     """
-    from planner.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
     from planner.geometry import Tolerances
+    from planner.geometry.bundle import (
+        PRODUCT_FILE,
+        analyze_product,
+        apply_report,
+        load_bundle,
+    )
     from planner.product import save_product
 
     product = load_bundle(folder)
@@ -115,12 +128,12 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = 0.1, inte
 
 def store_detection(analysis, folder: str):
     """Keep the diagrams of the analysed bundle ``folder`` in the analysis (one undoable step)."""
-    from planner.bundle import load_bundle
+    from planner.geometry.bundle import load_bundle
     from planner.product import product_to_dict
 
     from .intent import update_intent
 
-    raw = json.loads((Path(folder) / "product.json").read_text(encoding="utf-8"))
+    raw = json.loads((Path(folder) / PRODUCT_FILE).read_text(encoding="utf-8"))
     data = product_to_dict(load_bundle(folder))
     diagrams = {"parts": [p["id"] for p in data["parts"]], "objects": raw.get("x-freecad-objects", {}),
                 "contacts": data["contacts"], "obstructions": data["obstructions"],
@@ -182,13 +195,13 @@ def analysis_product(analysis, name: str = ""):
 
 def plan_report(product, folder: str | None = None, technical: bool | None = None):
     """The plan of ``product``, its statistics (``aplan stats``'s figures) and, with ``folder``, the pictures
-    of its AND/OR, state and intention graphs (:func:`planner.figures.draw_plan`)."""
+    of its AND/OR, state and intention graphs (:func:`planner.assembly.figures.draw_plan`)."""
     from planner import make_plan, plan_statistics
 
     plan = make_plan(product, technical)
     images = {}
     if folder is not None:
-        from planner.figures import draw_plan
+        from planner.assembly.figures import draw_plan
 
         images = draw_plan(plan, folder)
     return plan, plan_statistics(plan), images
@@ -199,7 +212,7 @@ def export_analysis_bundle(document, analysis, bundle: str) -> None:
     it appears only when everything succeeded, replacing an existing one."""
     from dataclasses import replace
 
-    from planner.bundle import PRODUCT_FILE, load_bundle
+    from planner.geometry.bundle import PRODUCT_FILE, load_bundle
     from planner.product import save_product
 
     product = analysis_product(analysis)
@@ -234,21 +247,22 @@ def analysis_diagrams(analysis) -> dict:
 def export_decision_model(product, path: str, technical: bool | None = None) -> dict:
     """Write the POMDP of ``product`` (Alg. 3) as POMDPX or ``.pomdp`` (by the file name); returns its sizes."""
     from planner import make_plan
+    from planner.api import save_model
     from planner.decision import intention_pomdp
-    from planner.models import save_model
 
     model = intention_pomdp(make_plan(product, technical))
     save_model(model, path)
     return {"states": len(model.states), "actions": len(model.actions), "observations": len(model.observations)}
 
 
-def solve_product(product: str, output: str, time_limit: float = 10.0, precision: float = 1e-3,
+def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE_TIME_LIMIT,
+                  precision: float = SOLVE_PRECISION,
                   technical: bool | None = None, progress=None) -> dict:
     """Solve the POMDP of the product file ``product`` and write the policy to ``output`` (a background job)."""
     from planner import load_product, make_plan
     from planner.decision import intention_pomdp
-    from planner.policy import write_policy
-    from planner.solvers import PointBasedSolver
+    from planner.decision.policy import write_policy
+    from planner.decision.solvers import PointBasedSolver
 
     model = intention_pomdp(make_plan(load_product(product), technical))
     result = PointBasedSolver(time_limit=time_limit, precision=precision).solve(model, progress)
@@ -265,8 +279,8 @@ def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None
 
     from planner import make_plan
     from planner.decision import intention_pomdp
-    from planner.policy import read_policy
-    from planner.simulate import plot_beliefs, simulate_episode
+    from planner.decision.policy import read_policy
+    from planner.decision.simulate import plot_beliefs, simulate_episode
 
     model = intention_pomdp(make_plan(product, technical))
     graph = model.metadata["intention_graph"]
@@ -280,5 +294,5 @@ def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None
     written = plot_beliefs([episode], stem, [f"sequence {start}"])
     return {"sequence": start, "steps": [(model.actions[s.action], str(model.observations[s.observation]),
                                           round(s.p_true, 3)) for s in episode.steps],
-            "confident_after": episode.first_confident(0.9), "plots": written}
+            "confident_after": episode.first_confident(CONFIDENCE), "plots": written}
 

@@ -7,19 +7,57 @@ The planner never imports FreeCAD; the FreeCAD side (``freecad_aplan``) writes p
 >>> plan_statistics(plan).intentions
 69
 """
-from .andor import AndOrGraph, Operation, and_or_graph
-from .errors import (DisconnectedProductError, LimitExceededError, NotDisassemblableError, PlannerError,
-                     ProductFormatError, UnknownProductError)
-from .examples import EXAMPLES, example_path, resolve_product
-from .intentions import (IntentionGraph, count_intentions, count_sequences, intention_graph, most_connected_part,
-                         paths_to_final)
-from .plan import Plan, make_plan
-from .product import (Direction, Obstruction, OperationTag, Part, Product, TagDefaults, TechnicalConstraint, Tool,
-                      load_product, loads_product, product_from_dict, product_to_dict, save_product)
-from .states import AssemblyStateGraph, assembly_state_graph
-from .stats import STAT_KEYS, PlanStatistics, plan_statistics
-from .synth import chain_product, complete_product
-from .tags import BLANK, Observation, OperationTags, observation_table, operation_tags
+from .api import resolve_product
+from .assembly import (
+                       BLANK,
+                       STAT_KEYS,
+                       AndOrGraph,
+                       AssemblyStateGraph,
+                       IntentionGraph,
+                       Observation,
+                       Operation,
+                       OperationTags,
+                       Plan,
+                       PlanStatistics,
+                       and_or_graph,
+                       assembly_state_graph,
+                       count_intentions,
+                       count_sequences,
+                       intention_graph,
+                       make_plan,
+                       most_connected_part,
+                       observation_table,
+                       operation_tags,
+                       paths_to_final,
+                       plan_statistics,
+)
+from .errors import (
+                       DisconnectedProductError,
+                       LimitExceededError,
+                       NotDisassemblableError,
+                       PlannerError,
+                       ProductFormatError,
+                       UnknownProductError,
+)
+from .product import (
+                       EXAMPLES,
+                       Direction,
+                       Obstruction,
+                       OperationTag,
+                       Part,
+                       Product,
+                       TagDefaults,
+                       TechnicalConstraint,
+                       Tool,
+                       chain_product,
+                       complete_product,
+                       example_path,
+                       load_product,
+                       loads_product,
+                       product_from_dict,
+                       product_to_dict,
+                       save_product,
+)
 
 __version__ = "0.1.0"
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.pomdp import POMDP
+from planner.decision.pomdp import POMDP
 
 
 def _refine(T, O, R, b0, fixed):

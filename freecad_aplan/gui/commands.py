@@ -16,11 +16,18 @@ import FreeCAD
 import FreeCADGui
 from PySide import QtGui
 
+from planner.defaults import CONFIDENCE, PRODUCT_FILE, WORKBENCH_SOLVE_TIME_LIMIT
 from planner.errors import PlannerError
 
 from .. import icon_path, workflow
 from ..document import DocumentError
-from ..intent import create_analysis, find_analysis, is_analysis, read_intent, update_intent
+from ..intent import (
+    create_analysis,
+    find_analysis,
+    is_analysis,
+    read_intent,
+    update_intent,
+)
 
 __all__ = ["COMMANDS", "register", "last_plan"]
 
@@ -289,7 +296,7 @@ class ExportModel(_Command):
 class Solve(_Command):
     name, menu = "Aplan_Solve", "Solve and save policy"
     tooltip = ("Solve the decision model in the background (point-based solver; time limit: parameter "
-               "Mod/APLAN/SolveTimeLimit, default 10 s) and save the policy")
+               f"Mod/APLAN/SolveTimeLimit, default {WORKBENCH_SOLVE_TIME_LIMIT:g} s) and save the policy")
 
     def run(self):
         from planner.product import save_product
@@ -301,9 +308,9 @@ class Solve(_Command):
         path = _save_path("Save policy", "SARSOP policy (*.policy)", ".policy")
         if not path:
             return
-        seconds = FreeCAD.ParamGet(PARAMETERS).GetFloat("SolveTimeLimit", 10.0) or 10.0
+        seconds = FreeCAD.ParamGet(PARAMETERS).GetFloat("SolveTimeLimit", WORKBENCH_SOLVE_TIME_LIMIT) or WORKBENCH_SOLVE_TIME_LIMIT
         folder = tempfile.mkdtemp(prefix="aplan-solve-")
-        save_product(product, os.path.join(folder, "product.json"))
+        save_product(product, os.path.join(folder, PRODUCT_FILE))
 
         def done(result):
             shutil.rmtree(folder, ignore_errors=True)
@@ -315,7 +322,7 @@ class Solve(_Command):
             shutil.rmtree(folder, ignore_errors=True)
             _message(message)
 
-        job = {"action": "solve", "product": os.path.join(folder, "product.json"), "output": path,
+        job = {"action": "solve", "product": os.path.join(folder, PRODUCT_FILE), "output": path,
                "time_limit": seconds}
         BackgroundJob(f"Solving the decision model ({seconds:g} s)", workflow.worker_command("solve"), job, done,
                       failed, FreeCADGui.getMainWindow()).start()
@@ -342,7 +349,7 @@ class Simulate(_Command):
             return
         stem = os.path.join(tempfile.mkdtemp(prefix="aplan-simulate-"), "belief")
         result = workflow.simulate_sequence(product, policy, stem, None if sequence < 0 else sequence)
-        caption = (f"Sequence {result['sequence']}: belief on the true intention first above 0.9 after "
+        caption = (f"Sequence {result['sequence']}: belief on the true intention first above {CONFIDENCE:g} after "
                    f"{result['confident_after']} operator operation(s). Steps: "
                    + "; ".join(f"{a} / {o} / {p}" for a, o, p in result["steps"]))
         dialog = ImageDialog("APLAN belief", caption, result["plots"][0], FreeCADGui.getMainWindow())

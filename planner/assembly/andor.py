@@ -1,0 +1,247 @@
+"""AND/OR graph of a product by the reverse cut-set algorithm (Homem de Mello & Sanderson; Lambert & Gupta).
+
+Definitions
+-----------
+A *subassembly* is a set of parts. It is *feasible* when
+
+1. it is connected in the connection diagram (topological constraint);
+2. it is technically feasible: no active constraint ``(R1, R2)`` with ``R1 <= S`` and ``R2 not in S``
+   (single parts are always feasible);
+3. it is a single part, or it can be split into two feasible subassemblies ``A`` and ``B = S - A`` that are
+   *separable*: along some listed direction ``d`` or its reverse, one side moves away without any of its
+   parts being blocked by a part of the other side (geometric constraint). An empty obstruction list
+   means the geometry is not constrained.
+
+The AND/OR graph ``H = (V, A)`` holds the feasible subassemblies reachable from the complete product by
+feasible splits; each *operation* (AND hyperarc) is one unordered split ``S -> {A, B}``, listed once.
+
+The reverse cut-set algorithm builds this bottom-up: all connected part sets are generated smallest first,
+and a set is kept when one of its cuts into two connected halves joins two kept, separable subassemblies.
+A final top-down pass keeps what the complete product can be disassembled into.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Iterable
+
+from ..errors import DisconnectedProductError, NotDisassemblableError
+from ..product.model import Product
+from .bitsets import bit_indices, components, connected_subsets, lowest_bit, mask_of
+
+__all__ = ["Operation", "AndOrGraph", "and_or_graph", "liaison_adjacency"]
+
+
+@dataclass(frozen=True)
+class Operation:
+    """An AND hyperarc: subassembly ``parent`` (index) is assembled from ``children`` (two indices).
+
+    ``children[0]`` is the child holding the parent's lowest-indexed part.
+    """
+
+    parent: int
+    children: tuple[int, int]
+
+
+@dataclass(frozen=True)
+class AndOrGraph:
+    """The AND/OR graph: ``subassemblies`` are part bitmasks (bit ``i`` = ``parts[i]``).
+
+    Index 0 is the complete product; subassemblies are ordered by decreasing size, then by bitmask, so
+    the single parts come last. ``operations`` are ordered by parent index.
+    """
+
+    parts: tuple[str, ...]
+    subassemblies: tuple[int, ...]
+    operations: tuple[Operation, ...]
+    index: dict[int, int] = field(repr=False, compare=False)
+
+    def parts_of(self, subassembly: int) -> frozenset[str]:
+        """The part ids of subassembly number ``subassembly``."""
+        return frozenset(self.parts[i] for i in bit_indices(self.subassemblies[subassembly]))
+
+    def inputs(self, operation: int) -> tuple[frozenset[str], frozenset[str]]:
+        """The two part sets that operation number ``operation`` joins."""
+        first, second = self.operations[operation].children
+        return self.parts_of(first), self.parts_of(second)
+
+    def names(self, subassembly: int) -> str:
+        """``{a, b, c}``: the parts of a subassembly in product order."""
+        return "{" + ", ".join(self.parts[i] for i in bit_indices(self.subassemblies[subassembly])) + "}"
+
+    def describe(self, operation: int) -> str:
+        """``{a, b} + {c}`` for an operation."""
+        return " + ".join(self.names(child) for child in self.operations[operation].children)
+
+    def to_networkx(self):
+        """A ``networkx.DiGraph`` with subassembly nodes ``("S", i)`` and operation nodes ``("O", j)``.
+
+        Edges go parent -> operation -> children (the disassembly direction of Fig. 1).
+        """
+        import networkx as nx
+
+        graph = nx.DiGraph()
+        for i in range(len(self.subassemblies)):
+            graph.add_node(("S", i), parts=sorted(self.parts_of(i)))
+        for j, op in enumerate(self.operations):
+            graph.add_node(("O", j))
+            graph.add_edge(("S", op.parent), ("O", j))
+            for child in op.children:
+                graph.add_edge(("O", j), ("S", child))
+        return graph
+
+
+def liaison_adjacency(product: Product) -> list[int]:
+    """``adjacency[i]``: bitmask of the parts in contact with part ``i``."""
+    index = {p: i for i, p in enumerate(product.part_ids)}
+    adjacency = [0] * len(index)
+    for a, b in product.contacts:
+        adjacency[index[a]] |= 1 << index[b]
+        adjacency[index[b]] |= 1 << index[a]
+    return adjacency
+
+
+def and_or_graph(product: Product, technical: bool | None = None) -> AndOrGraph:
+    """Build the AND/OR graph of ``product`` by the reverse cut-set algorithm.
+
+    Parameters
+    ----------
+    product : the product (parts, contacts, obstruction diagrams, technical constraints).
+    technical : ``True`` applies every technical constraint, ``False`` none, ``None`` those marked active.
+
+    Returns
+    -------
+    AndOrGraph
+
+    Raises
+    ------
+    DisconnectedProductError : the connection diagram is not connected (the groups are named).
+    NotDisassemblableError : the complete product has no feasible split (the reasons are given).
+
+    Notes
+    -----
+    Cost: O(sum over connected part sets S of the connected subsets of S holding its lowest part), that is
+    O(3^n) for a complete connection diagram of n parts and O(n^3) for a chain.
+    """
+    product = product.with_technical(technical)
+    parts = product.part_ids
+    n = len(parts)
+    index = {p: i for i, p in enumerate(parts)}
+    adjacency = liaison_adjacency(product)
+    full = (1 << n) - 1
+    groups = components(adjacency, full)
+    if len(groups) > 1:
+        raise DisconnectedProductError([[parts[i] for i in bit_indices(g)] for g in groups])
+
+    constraints = [(mask_of(index[p] for p in c.parts), 1 << index[c.requires])
+                   for c in product.technical_constraints if c.active]
+    separable = _separability_test(product, index)
+
+    def technically_feasible(mask: int) -> bool:
+        return all(mask & r1 != r1 or mask & r2 for r1, r2 in constraints)
+
+    # Bottom-up: every connected set, smallest first; keep it when a cut joins two kept, separable halves.
+    connected = sorted((s for r in range(n) for s in connected_subsets(adjacency, full & ~((1 << r) - 1), r)),
+                       key=int.bit_count)
+    splits: dict[int, list[tuple[int, int]]] = {1 << i: [] for i in range(n)}
+    for subset in connected:
+        if subset & (subset - 1) == 0 or not technically_feasible(subset):
+            continue
+        root = lowest_bit(subset).bit_length() - 1
+        found = []
+        for first in connected_subsets(adjacency, subset, root):
+            second = subset ^ first
+            if second and first in splits and second in splits and separable(first, second):
+                found.append((first, second))
+        if found:
+            splits[subset] = found
+
+    if full not in splits:
+        raise _stuck(full, parts, adjacency, splits, technically_feasible, separable)
+
+    # Top-down: keep what the complete product can be disassembled into.
+    reachable = {full}
+    stack = [full]
+    while stack:
+        for pair in splits[stack.pop()]:
+            for child in pair:
+                if child not in reachable:
+                    reachable.add(child)
+                    stack.append(child)
+    subassemblies = tuple(sorted(reachable, key=lambda m: (-m.bit_count(), m)))
+    position = {m: i for i, m in enumerate(subassemblies)}
+    operations = tuple(Operation(position[s], (position[a], position[b]))
+                       for s in subassemblies for a, b in sorted(splits[s]))
+    return AndOrGraph(parts, subassemblies, operations, position)
+
+
+def _separability_test(product: Product, index: dict[str, int]):
+    """``separable(a, b)``: along some direction or its reverse, one side leaves the other unblocked."""
+    n = len(index)
+    blockers = []  # per direction: blockers[d][x] = mask of the parts that x, moving along d, would hit
+    for obstruction in product.obstructions:
+        row = [0] * n
+        for x, y in obstruction.blocks:
+            row[index[x]] |= 1 << index[y]
+        blockers.append(row)
+    if not blockers:
+        return lambda a, b: True
+    cache: dict[int, tuple[int, ...]] = {}
+
+    def hit(mask: int) -> tuple[int, ...]:
+        # Per direction, the parts that some part of ``mask`` would hit moving along it.
+        found = cache.get(mask)
+        if found is None:
+            members = bit_indices(mask)
+            found = tuple(_union(row[i] for i in members) for row in blockers)
+            cache[mask] = found
+        return found
+
+    def separable(a: int, b: int) -> bool:
+        # a moves along d unless it hits b; b moves along d (a along -d) unless it hits a.
+        return any(ha & b == 0 or hb & a == 0 for ha, hb in zip(hit(a), hit(b)))
+
+    return separable
+
+
+def _union(masks: Iterable[int]) -> int:
+    out = 0
+    for m in masks:
+        out |= m
+    return out
+
+
+def _stuck(full, parts, adjacency, splits, technically_feasible, separable) -> NotDisassemblableError:
+    """Explain why the complete product has no feasible split, down to the smallest stuck subassembly."""
+    names = lambda m: "{" + ", ".join(parts[i] for i in bit_indices(m)) + "}"  # noqa: E731
+    feasible_alone = lambda m: m & (m - 1) == 0 or technically_feasible(m)  # noqa: E731
+    chain = [full]
+    while True:
+        subset = chain[-1]
+        blocked, infeasible, unassemblable = [], [], []
+        for first in connected_subsets(adjacency, subset, lowest_bit(subset).bit_length() - 1):
+            second = subset ^ first
+            if not second or len(components(adjacency, second)) != 1:
+                continue
+            if not (feasible_alone(first) and feasible_alone(second)):
+                infeasible.append((first, second))
+            elif first not in splits or second not in splits:
+                unassemblable.append(next(m for m in (first, second) if m not in splits))
+            elif not separable(first, second):
+                blocked.append((first, second))
+        if blocked or infeasible or not unassemblable:
+            break
+        chain.append(min(unassemblable, key=lambda m: (m.bit_count(), m)))
+    reasons = []
+    if blocked:
+        a, b = min(blocked, key=lambda p: min(p[0].bit_count(), p[1].bit_count()))
+        reasons.append(f"{len(blocked)} cut(s) blocked in every direction, e.g. {names(a)} from {names(b)}")
+    if infeasible:
+        a, b = infeasible[0]
+        reasons.append(f"{len(infeasible)} cut(s) with a technically infeasible side, e.g. {names(a)} | {names(b)}")
+    if unassemblable:
+        m = min(unassemblable, key=int.bit_count)
+        reasons.append(f"{len(unassemblable)} cut(s) with a side that cannot be assembled itself, e.g. {names(m)}")
+    detail = "; ".join(reasons) or "no cut into two connected halves"
+    if len(chain) > 1:
+        detail += "; it is needed by " + " <- ".join(names(m) for m in reversed(chain[:-1]))
+    return NotDisassemblableError([parts[i] for i in bit_indices(chain[-1])], detail)

@@ -1,0 +1,204 @@
+"""Operator intentions: counts by dynamic programming and the intention graph (Alg. 2).
+
+Definitions
+-----------
+An *operator intention* is a path in the assembly state graph from some state (the current one) to the
+final state: the assembly states the operator has in mind from now on. The path of length 0 (the finished
+product) is an intention too. A *full assembly sequence* is an intention that starts at the initial state.
+
+Alg. 2 builds the *intention graph* backwards from the final state: each intention ``I`` starting at
+state ``Y`` and each state edge ``(X, Y)`` give the intention ``I' = (X, I)`` and the edge ``(I', I)``,
+mapped to the operation of ``(X, Y)`` (``m_I``). Every intention but the final one has exactly one
+successor, so the intention graph is a tree rooted at the final intention.
+
+Counting
+--------
+With ``P(final) = 1`` and ``P(s) = sum over edges (s, t) of P(t)``, ``P(s)`` is the number of paths from
+``s`` to the final state; there are ``sum_s P(s)`` intentions and ``P(initial)`` full sequences. The sums run
+level by level in floating point while they stay below 2**52, where they are exact, and in Python
+integers above, so the counts are exact for any size.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..defaults import INTENTION_LIMIT
+from ..errors import LimitExceededError, PlannerError
+from ..product.model import Product
+from .states import AssemblyStateGraph
+
+__all__ = [
+    "IntentionGraph",
+    "paths_to_final",
+    "count_intentions",
+    "count_sequences",
+    "most_connected_part",
+    "intention_graph",
+    "DEFAULT_INTENTION_LIMIT",
+]
+
+DEFAULT_INTENTION_LIMIT = INTENTION_LIMIT
+_EXACT_FLOAT = 2.0 ** 52
+
+
+def _sum_by(index: np.ndarray, values: np.ndarray, size: int) -> np.ndarray:
+    """``out[k] = sum of values[index == k]``, exact: int64 when small enough, Python ints otherwise."""
+    if values.dtype != object:
+        out = np.bincount(index, weights=values, minlength=size)
+        if out.sum() < _EXACT_FLOAT:
+            return out.astype(np.int64)
+        values = values.astype(object)
+    out = np.zeros(size, dtype=object)
+    if index.size:
+        order = np.argsort(index, kind="stable")
+        index, values = index[order], values[order]
+        starts = np.flatnonzero(np.r_[True, index[1:] != index[:-1]])
+        out[index[starts]] = np.add.reduceat(values, starts)
+    return out
+
+
+def paths_to_final(states: AssemblyStateGraph) -> list[np.ndarray]:
+    """Per level (``k`` blocks at position ``k - 1``), the number of paths from each state to the final state.
+
+    Each array is int64, or of Python ints where the counts exceed 2**52. Cost: O(E).
+    """
+    counts = [np.ones(1, dtype=np.int64)]
+    start = states.level_start
+    target = states.edge_target
+    for k in range(1, len(start) - 1):
+        lo, hi = np.searchsorted(target, [start[k - 1], start[k]])
+        size = int(start[k + 1] - start[k])
+        if size == 0:
+            break
+        counts.append(_sum_by(states.edge_source[lo:hi] - start[k], counts[-1][target[lo:hi] - start[k - 1]], size))
+    return counts
+
+
+def count_intentions(states: AssemblyStateGraph, paths: list[np.ndarray] | None = None) -> int:
+    """The number of operator intentions (vertices of the intention graph), without enumerating them.
+
+    ``paths``: the result of :func:`paths_to_final`, if already computed.
+    """
+    return sum(int(level.sum()) for level in (paths if paths is not None else paths_to_final(states)))
+
+
+def count_sequences(states: AssemblyStateGraph, base_part: str | None = None,
+                    paths: list[np.ndarray] | None = None) -> int:
+    """The number of full assembly sequences (paths from the initial to the final state).
+
+    With ``base_part``, only the sequences whose first operation joins the base part are counted
+    (assembly starts from the base part, paper Sec. V). ``paths``: :func:`paths_to_final`, if computed.
+    """
+    counts = paths if paths is not None else paths_to_final(states)
+    if base_part is None:
+        return int(counts[-1][-1])
+    andor = states.andor
+    if base_part not in andor.parts:
+        raise PlannerError(f"base part {base_part!r} is not a part of the product; parts: {', '.join(andor.parts)}")
+    if len(counts) == 1:
+        return 1  # a single part: the empty sequence starts from it
+    bit = 1 << andor.parts.index(base_part)
+    first = states.edge_source == states.initial
+    before_last, offset = counts[-2], states.level_start[len(counts) - 2]
+    total = 0
+    for target, operation in zip(states.edge_target[first], states.edge_operation[first]):
+        if andor.subassemblies[andor.operations[operation].parent] & bit:
+            total += int(before_last[target - offset])
+    return total
+
+
+def most_connected_part(product: Product) -> str:
+    """The part with the most contacts (the base part of paper Sec. V); ties go to the first listed."""
+    degree = {p: 0 for p in product.part_ids}
+    for a, b in product.contacts:
+        degree[a] += 1
+        degree[b] += 1
+    return max(product.part_ids, key=lambda p: degree[p])
+
+
+@dataclass(frozen=True)
+class IntentionGraph:
+    """The intention graph as a tree over intention indices (0 is the final intention).
+
+    ``first_state[i]``: the state intention ``i`` starts at (the current assembly state);
+    ``successor[i]``: the intention after ``i``'s next step (-1 for the final intention);
+    ``step_edge[i]``: the state edge of that step (-1 for the final intention), so the edge
+    ``(i, successor[i])`` maps to operation ``states.edge_operation[step_edge[i]]`` (``m_I``).
+    Intentions are numbered by their length, then by the order Alg. 2 finds them.
+    """
+
+    states: AssemblyStateGraph
+    first_state: np.ndarray
+    successor: np.ndarray
+    step_edge: np.ndarray
+
+    @property
+    def n_intentions(self) -> int:
+        return int(self.first_state.shape[0])
+
+    @property
+    def operation(self) -> np.ndarray:
+        """``m_I``: the operation of each intention's next step (-1 for the final intention)."""
+        out = np.full(self.n_intentions, -1, dtype=np.int64)
+        has = self.step_edge >= 0
+        out[has] = self.states.edge_operation[self.step_edge[has]]
+        return out
+
+    def path(self, intention: int) -> list[int]:
+        """The states of an intention, from its current state to the final state."""
+        out = []
+        while intention >= 0:
+            out.append(int(self.first_state[intention]))
+            intention = int(self.successor[intention])
+        return out
+
+    def full_sequences(self) -> np.ndarray:
+        """The intentions that start at the initial state (the full assembly sequences)."""
+        return np.flatnonzero(self.first_state == self.states.initial)
+
+    def to_networkx(self):
+        """A ``networkx.DiGraph`` over intention indices, edges ``(i, successor[i])`` with ``operation``."""
+        import networkx as nx
+
+        graph = nx.DiGraph()
+        graph.add_nodes_from(range(self.n_intentions))
+        ops = self.operation
+        graph.add_edges_from((i, int(self.successor[i]), {"operation": int(ops[i])})
+                             for i in range(self.n_intentions) if self.successor[i] >= 0)
+        return graph
+
+
+def intention_graph(states: AssemblyStateGraph, limit: int = DEFAULT_INTENTION_LIMIT) -> IntentionGraph:
+    """Enumerate the intention graph (Alg. 2) with the map from its edges to operations.
+
+    Raises :class:`~planner.errors.LimitExceededError`, stating the count, when there are more than
+    ``limit`` intentions; the count itself never needs enumeration (:func:`count_intentions`).
+    Cost: O(I) time and memory for I intentions.
+    """
+    total = count_intentions(states)
+    if total > limit:
+        raise LimitExceededError(
+            "intention graph", total, limit,
+            "Raise the limit (aplan: --limit) or use the counts, which need no enumeration.")
+    in_start, in_count = states.incoming()
+    first = [np.array([states.final], dtype=np.int64)]
+    successor = [np.array([-1], dtype=np.int64)]
+    step = [np.array([-1], dtype=np.int64)]
+    frontier = np.array([0], dtype=np.int64)
+    produced = 1
+    while frontier.size:
+        at = first[-1]
+        count = in_count[at]
+        size = int(count.sum())
+        if size == 0:
+            break
+        ends = np.cumsum(count)
+        edge = np.repeat(in_start[at] - ends + count, count) + np.arange(size)
+        successor.append(np.repeat(frontier, count))
+        step.append(edge)
+        first.append(states.edge_source[edge].astype(np.int64))
+        frontier = produced + np.arange(size)
+        produced += size
+    return IntentionGraph(states, np.concatenate(first), np.concatenate(successor), np.concatenate(step))

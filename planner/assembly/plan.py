@@ -1,0 +1,43 @@
+"""A plan: the AND/OR graph, assembly state graph, tags and observations of one product, built once."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..product.model import Product
+from .andor import AndOrGraph, and_or_graph
+from .states import AssemblyStateGraph, assembly_state_graph
+from .tags import Observation, OperationTags, observation_table, operation_tags
+
+__all__ = ["Plan", "make_plan"]
+
+
+@dataclass(frozen=True)
+class Plan:
+    """Everything the planner derives from a product before the decision model.
+
+    ``product`` has its technical constraints switched as requested; ``operation_observation[j]`` is the
+    index in ``observations`` of operation ``j``'s observation (``observations[0]`` is the blank one).
+    """
+
+    product: Product
+    andor: AndOrGraph
+    states: AssemblyStateGraph
+    tags: OperationTags
+    observations: list[Observation]
+    operation_observation: np.ndarray
+
+
+def make_plan(product: Product, technical: bool | None = None) -> Plan:
+    """Build the AND/OR graph (reverse cut-set), the assembly state graph (Alg. 1) and the tags of ``product``.
+
+    ``technical``: ``True``/``False`` switches every technical constraint on/off, ``None`` keeps the file's.
+    The intention graph is built on request (:func:`planner.intention_graph`), since it can be huge.
+    """
+    product = product.with_technical(technical)
+    andor = and_or_graph(product)
+    states = assembly_state_graph(andor)
+    tags = operation_tags(andor, product)
+    observations, operation_observation = observation_table(andor, tags)
+    return Plan(product, andor, states, tags, observations, operation_observation)

@@ -1,0 +1,97 @@
+"""The Bayes filter over states (intentions): the *updater* half of the policy / updater seam.
+
+``update(b, a, z)``: ``b'(s') ~ O(z | s', a) * sum_s T(s' | s, a) b(s)``. An observation that no state
+explains (probability 0) never produces NaN: the update reports an :class:`UnexplainedObservation` and
+resets the belief to the states that are reachable from the previous belief's support and can emit ``z``
+(uniform), else to every state that can emit ``z``, else to the uniform belief.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from .pomdp import POMDP
+
+__all__ = ["DiscreteUpdater", "UnexplainedObservation"]
+
+DENSE_LIMIT = 50_000_000  # observation-table numbers kept dense (400 MB)
+
+
+@dataclass(frozen=True)
+class UnexplainedObservation:
+    """The event of an observation with probability 0 under the current belief, and what was done."""
+
+    action: int
+    observation: int
+    reset_to: str  # "reachable", "emitting" or "uniform"
+
+    def __str__(self) -> str:
+        return (f"observation {self.observation} after action {self.action} has probability 0 under the belief; "
+                f"belief reset to the {self.reset_to} states")
+
+
+class DiscreteUpdater:
+    """Exact belief updates for a :class:`~planner.pomdp.POMDP` (tables transposed once, sparse).
+
+    Cost per update: O(nnz(T_a) + S); memory: one dense (Z, S) array per distinct observation table (sparse
+    columns beyond ``DENSE_LIMIT`` numbers).
+    """
+
+    def __init__(self, model: POMDP):
+        self.model = model
+        self._transposed = [t.T.tocsr() for t in model.transition]
+        # O(z | s', a) as dense rows per observation, once per distinct table (actions often share one), when
+        # they fit in DENSE_LIMIT numbers; else sparse columns.
+        distinct = {id(o): o for o in model.observation}
+        if len(distinct) * model.n_states * model.n_observations <= DENSE_LIMIT:
+            dense = {key: np.ascontiguousarray(o.toarray().T) for key, o in distinct.items()}
+            self._emit = [dense[id(o)] for o in model.observation]
+        else:
+            self._emit = [o.tocsc() for o in model.observation]
+        self._reach = None
+        self.events: list[UnexplainedObservation] = []
+
+    def initialize(self) -> np.ndarray:
+        return self.model.initial.copy()
+
+    def predict(self, belief: np.ndarray, action: int) -> np.ndarray:
+        """The distribution of the next state after ``action`` (before the observation)."""
+        return self._transposed[action] @ belief
+
+    def observation_likelihood(self, action: int, observation: int) -> np.ndarray:
+        table = self._emit[action]
+        return table[observation] if isinstance(table, np.ndarray) else table[:, observation].toarray().ravel()
+
+    def update(self, belief: np.ndarray, action: int, observation: int) -> np.ndarray:
+        """The posterior belief; on an unexplained observation, a reset (see the module docstring)."""
+        likelihood = self.observation_likelihood(action, observation)
+        posterior = likelihood * self.predict(belief, action)
+        total = posterior.sum()
+        if total > 0:
+            return posterior / total
+        return self._reset(belief, action, observation, likelihood)
+
+    def _reset(self, belief, action, observation, likelihood) -> np.ndarray:
+        emitting = likelihood > 0
+        reachable = self._reachable(belief > 0)
+        for name, mask in (("reachable", emitting & reachable), ("emitting", emitting),
+                           ("uniform", np.ones_like(emitting))):
+            if mask.any():
+                event = UnexplainedObservation(action, observation, name)
+                self.events.append(event)
+                warnings.warn(str(event), RuntimeWarning, stacklevel=3)
+                return mask / mask.sum()
+        raise AssertionError("unreachable")
+
+    def _reachable(self, support: np.ndarray) -> np.ndarray:
+        if self._reach is None:
+            self._reach = (sum(abs(t) for t in self.model.transition) > 0).astype(np.int8).T.tocsr()
+        seen = support.copy()
+        frontier = support
+        while frontier.any():
+            nxt = (self._reach @ frontier.astype(np.int8)) > 0
+            frontier = nxt & ~seen
+            seen |= nxt
+        return seen

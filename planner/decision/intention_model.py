@@ -1,0 +1,116 @@
+"""The operator-intent POMDP of Cramer et al. 2021 (Alg. 3), built from a plan.
+
+Definitions (these match the authors' code, checked against the POMDPX files it writes):
+
+- States: the operator intentions (vertices of the intention graph, :mod:`planner.intentions`).
+- Actions: the robot-capable operations, in AND/OR graph order, then ``wait``.
+- Transitions: after ``wait`` the operator may perform the next step of intention ``i``: uniform over
+  ``{i}`` and its successor. After the operation that is ``i``'s next step, the robot has performed it:
+  the intention moves to that successor ``i'``, and then uniform over ``{i'}`` and the successor of ``i'``
+  (the operator may act too). Any other action leaves ``i`` unchanged. The finished product is absorbing.
+- Observations: what the operator is seen picking (:mod:`planner.tags`). In intention ``i``, uniform over the
+  distinct observations of the operations that could have led to ``i`` (the steps of ``i``'s predecessors),
+  with the blank observation (a missed detection) at a quarter of that weight; blank with certainty when
+  nothing leads to ``i`` (the full sequences, where assembly starts). It does not depend on the action.
+- Rewards: ``wait`` 0; ``i``'s next step +10 when it is unfavorable to humans, else -2; any other operation
+  -50 (all four configurable: the paper's "eagerness").
+- Initial belief: uniform over the full sequences.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..assembly.intentions import (
+    DEFAULT_INTENTION_LIMIT,
+    IntentionGraph,
+    intention_graph,
+)
+from ..assembly.plan import Plan
+from ..defaults import DISCOUNT
+from .pomdp import POMDP
+
+__all__ = ["Rewards", "WAIT", "intention_pomdp"]
+
+WAIT = "wait"
+
+
+@dataclass(frozen=True)
+class Rewards:
+    """Rewards of Alg. 3: for the intention's next step (unfavorable / favorable to humans), for any other
+    operation (the robot's eagerness: the more negative, the longer it waits to be sure), and for waiting."""
+
+    unfavorable: float = 10.0
+    favorable: float = -2.0
+    wrong: float = -50.0
+    wait: float = 0.0
+
+
+def intention_pomdp(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
+                    graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT) -> POMDP:
+    """The POMDP of Alg. 3 over the intentions of ``plan`` (definitions in the module docstring).
+
+    Cost: O(I x A) for the reward table and O(I) for the sparse tables, I intentions, A actions.
+    """
+    graph = graph if graph is not None else intention_graph(plan.states, limit)
+    andor = plan.andor
+    n = graph.n_intentions
+    successor = graph.successor
+    step = graph.operation  # operation index of each intention's next step (-1 at the finished product)
+    robot_ops = np.flatnonzero(plan.tags.robot)
+    action_of_op = np.full(len(andor.operations), -1)
+    action_of_op[robot_ops] = np.arange(len(robot_ops))
+    n_actions = len(robot_ops) + 1
+    wait = n_actions - 1
+    states = np.arange(n)
+    has_next = successor >= 0
+    after = np.where(has_next, successor, states)  # the intention after one more step (itself at the end)
+
+    def uniform_step(origin: np.ndarray, rows: np.ndarray) -> sp.csr_matrix:
+        # From each row: uniform over {origin} and origin's successor (origin alone at the end).
+        moves = after[origin] != origin
+        cols = np.concatenate([origin, after[origin][moves]])
+        rr = np.concatenate([rows, rows[moves]])
+        vals = np.concatenate([np.where(moves, 0.5, 1.0), np.full(moves.sum(), 0.5)])
+        return sp.csr_matrix((vals, (rr, cols)), shape=(n, n))
+
+    waiting = uniform_step(states, states)
+    transition = []
+    for k, op in enumerate(robot_ops):
+        doing = has_next & (step == op)  # the robot performs the intention's next step
+        stay = ~doing
+        performed = uniform_step(after[states[doing]], states[doing])
+        kept = sp.csr_matrix((np.ones(stay.sum()), (states[stay], states[stay])), shape=(n, n))
+        transition.append((performed + kept).tocsr())
+    transition.append(waiting)
+
+    # Observations: those of the steps that lead into each intention (its predecessors' next steps).
+    observed = plan.operation_observation
+    preds = np.flatnonzero(has_next)
+    pairs = np.unique(np.stack([successor[preds], observed[step[preds]]], axis=1), axis=0)
+    pairs = pairs[pairs[:, 1] != 0]  # an operation that looks like waiting adds nothing beyond the blank
+    count = np.bincount(pairs[:, 0], minlength=n).astype(float)
+    weight = 1.0 / (count + 0.25)
+    rows = np.concatenate([pairs[:, 0], states])
+    cols = np.concatenate([pairs[:, 1], np.zeros(n, dtype=np.int64)])
+    vals = np.concatenate([weight[pairs[:, 0]], 0.25 * weight])
+    table = sp.csr_matrix((vals, (rows, cols)), shape=(n, len(plan.observations)))
+    observation = tuple(table for _ in range(n_actions))
+
+    reward = np.full((n_actions, n), rewards.wrong, dtype=float)
+    reward[wait] = rewards.wait
+    nexts = np.flatnonzero(has_next & (action_of_op[np.maximum(step, 0)] >= 0))
+    reward[action_of_op[step[nexts]], nexts] = np.where(plan.tags.unfavorable[step[nexts]], rewards.unfavorable,
+                                                        rewards.favorable)
+    initial = np.zeros(n)
+    starts = graph.full_sequences()
+    initial[starts] = 1.0 / len(starts)
+
+    names = [f"i{i}" for i in range(n)]
+    actions = [f"a{k}:" + andor.describe(int(op)).replace(" ", "") for k, op in enumerate(robot_ops)] + [WAIT]
+    observations = [str(o) for o in plan.observations]
+    return POMDP(tuple(names), tuple(actions), tuple(observations), tuple(transition), observation, reward, initial,
+                 discount, name=plan.product.name or "aplan",
+                 metadata={"operations": robot_ops.tolist(), "intention_graph": graph})

@@ -1,0 +1,110 @@
+"""Policies from alpha vectors, and SARSOP's ``.policy`` XML (write and read, so SARSOP's policies work too).
+
+A policy maps a belief to an action: ``action(b) = actions[argmax_k alphas[k] . b]``; ``value(b)`` is the
+maximum. File layout (APPL): ``<Policy><AlphaVector vectorLength numObsValue numVectors>`` holding
+``<Vector action obsValue>`` (dense) or ``<SparseVector action obsValue>`` with ``<Entry>state value</Entry>``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from lxml import etree
+
+from ..errors import PlannerError
+from ..product.model import write_atomic
+from .io.pomdpx import safe_parser
+from .pomdp import POMDP
+
+__all__ = ["AlphaVectorPolicy", "PolicyError", "read_policy", "write_policy", "policy_text"]
+
+
+class PolicyError(PlannerError):
+    """A policy file is malformed or does not fit the model."""
+
+
+@dataclass(frozen=True)
+class AlphaVectorPolicy:
+    """``alphas`` (K, S) float, ``actions`` (K,) int: the action of each vector."""
+
+    alphas: np.ndarray
+    actions: np.ndarray
+
+    def values(self, belief: np.ndarray) -> np.ndarray:
+        return self.alphas @ belief
+
+    def action(self, belief: np.ndarray) -> int:
+        """The action of the best alpha vector at ``belief``."""
+        return int(self.actions[int(np.argmax(self.values(belief)))])
+
+    def value(self, belief: np.ndarray) -> float:
+        """The policy's (lower-bound) value at ``belief``."""
+        return float(self.values(belief).max())
+
+    def check(self, model: POMDP, source: str = "policy") -> None:
+        """Raise :class:`PolicyError` unless the vectors have the model's length and valid actions."""
+        if self.alphas.ndim != 2 or self.alphas.shape[1] != model.n_states:
+            raise PolicyError(f"{source}: vectors of length {self.alphas.shape[-1]}, but the model has "
+                              f"{model.n_states} states")
+        if self.actions.size and (self.actions.min() < 0 or self.actions.max() >= model.n_actions):
+            raise PolicyError(f"{source}: action {int(self.actions.max())} out of range; the model has "
+                              f"{model.n_actions} actions")
+
+
+def policy_text(policy: AlphaVectorPolicy, model_name: str = "aplan") -> str:
+    root = etree.Element("Policy", version="0.1", type="value", model=model_name)
+    vectors = etree.SubElement(root, "AlphaVector", vectorLength=str(policy.alphas.shape[1]), numObsValue="1",
+                               numVectors=str(policy.alphas.shape[0]))
+    for alpha, action in zip(policy.alphas, policy.actions):
+        etree.SubElement(vectors, "Vector", action=str(int(action)), obsValue="0").text = \
+            " ".join(f"{v:.12g}" for v in alpha)
+    return etree.tostring(root, pretty_print=True, xml_declaration=True, encoding="ISO-8859-1").decode("latin-1")
+
+
+def write_policy(policy: AlphaVectorPolicy, path: str | Path, model_name: str = "aplan") -> None:
+    """Write a SARSOP-style ``.policy`` file (atomically)."""
+    write_atomic(path, policy_text(policy, model_name))
+
+
+def read_policy(path: str | Path, model: POMDP | None = None) -> AlphaVectorPolicy:
+    """Read a SARSOP ``.policy`` file; with ``model``, check that it fits."""
+    source = str(path)
+    try:
+        root = etree.fromstring(Path(path).read_bytes(), safe_parser())
+    except OSError as exc:
+        raise PolicyError(f"{source}: cannot read the file: {exc}") from None
+    except etree.XMLSyntaxError as exc:
+        raise PolicyError(f"{source}: line {exc.lineno}: malformed XML: {exc.msg}") from None
+    block = root.find("AlphaVector")
+    if root.tag != "Policy" or block is None:
+        raise PolicyError(f"{source}: not a policy file (expected <Policy><AlphaVector>)")
+    try:
+        length = int(block.get("vectorLength"))
+    except (TypeError, ValueError):
+        raise PolicyError(f"{source}: line {block.sourceline}: <AlphaVector> needs an integer vectorLength") from None
+    alphas, actions = [], []
+    for element in block:
+        try:
+            action = int(element.get("action"))
+            if element.tag == "Vector":
+                values = np.array([float(x) for x in (element.text or "").split()])
+            elif element.tag == "SparseVector":
+                values = np.zeros(length)
+                for entry in element.findall("Entry"):
+                    index, value = (entry.text or "").split()
+                    values[int(index)] = float(value)
+            else:
+                continue
+        except (TypeError, ValueError, IndexError):
+            raise PolicyError(f"{source}: line {element.sourceline}: malformed <{element.tag}>") from None
+        if values.size != length:
+            raise PolicyError(f"{source}: line {element.sourceline}: {values.size} values, vectorLength is {length}")
+        alphas.append(values)
+        actions.append(action)
+    if not alphas:
+        raise PolicyError(f"{source}: the policy holds no vectors")
+    policy = AlphaVectorPolicy(np.array(alphas), np.array(actions, dtype=np.int64))
+    if model is not None:
+        policy.check(model, source)
+    return policy

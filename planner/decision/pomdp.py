@@ -1,0 +1,96 @@
+"""A discrete POMDP in sparse tables: the *model* half of the model / solver / policy / updater seam.
+
+Any solver (:mod:`planner.solvers`) runs on any ``POMDP``, whether built from a product
+(:func:`planner.decision.intention_pomdp`) or read from a POMDPX or Cassandra ``.pomdp`` file.
+
+Tables, for ``S`` states, ``A`` actions and ``Z`` observations:
+
+- ``transition[a]``: (S, S) CSR, ``T(s' | s, a)``; each row sums to 1;
+- ``observation[a]``: (S, Z) CSR, ``O(z | s', a)``, the probability of observing ``z`` after action ``a``
+  led to state ``s'``; each row sums to 1;
+- ``reward``: (A, S) dense, ``R(s, a)``;
+- ``initial``: (S,) dense, the initial belief; ``discount`` in [0, 1).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..defaults import DISCOUNT
+from ..errors import PlannerError
+
+__all__ = ["POMDP", "ModelError", "PROBABILITY_TOLERANCE"]
+
+PROBABILITY_TOLERANCE = 1e-6
+
+
+class ModelError(PlannerError):
+    """A POMDP's tables are inconsistent (sizes, probabilities that do not sum to 1, unknown names)."""
+
+
+@dataclass(frozen=True)
+class POMDP:
+    """A discrete POMDP with named states, actions and observations and sparse tables (module docstring)."""
+
+    states: tuple[str, ...]
+    actions: tuple[str, ...]
+    observations: tuple[str, ...]
+    transition: tuple[sp.csr_matrix, ...]
+    observation: tuple[sp.csr_matrix, ...]
+    reward: np.ndarray
+    initial: np.ndarray
+    discount: float = DISCOUNT
+    name: str = "aplan"
+    metadata: dict = field(default_factory=dict, compare=False)
+
+    def __post_init__(self) -> None:
+        self.check()
+
+    @property
+    def n_states(self) -> int:
+        return len(self.states)
+
+    @property
+    def n_actions(self) -> int:
+        return len(self.actions)
+
+    @property
+    def n_observations(self) -> int:
+        return len(self.observations)
+
+    def check(self, tolerance: float = PROBABILITY_TOLERANCE) -> None:
+        """Raise :class:`ModelError` naming the first row whose probabilities do not sum to 1, or a size
+        that does not match."""
+        S, A, Z = self.n_states, self.n_actions, self.n_observations
+        if len(self.transition) != A or len(self.observation) != A:
+            raise ModelError(f"{A} actions but {len(self.transition)} transition and {len(self.observation)} "
+                             "observation tables")
+        if self.reward.shape != (A, S):
+            raise ModelError(f"reward table has shape {self.reward.shape}, expected ({A}, {S})")
+        if self.initial.shape != (S,):
+            raise ModelError(f"initial belief has {self.initial.shape[0]} entries, expected {S}")
+        if not 0 <= self.discount < 1:
+            raise ModelError(f"discount must be in [0, 1), got {self.discount}")
+        for kind, tables, width, names in (("transition", self.transition, S, self.states),
+                                           ("observation", self.observation, Z, self.observations)):
+            for a, table in enumerate(tables):
+                if table.shape != (S, width):
+                    raise ModelError(f"{kind} table of action {self.actions[a]!r} has shape {table.shape}, "
+                                     f"expected ({S}, {width})")
+                if table.nnz and table.data.min() < -tolerance:
+                    raise ModelError(f"{kind} table of action {self.actions[a]!r} has negative probabilities")
+                sums = np.asarray(table.sum(axis=1)).ravel()
+                bad = np.flatnonzero(np.abs(sums - 1) > tolerance)
+                if bad.size:
+                    s = int(bad[0])
+                    row = "from state" if kind == "transition" else "in state"
+                    raise ModelError(f"{kind} probabilities of action {self.actions[a]!r} {row} {self.states[s]!r} "
+                                     f"sum to {sums[s]:.9g}, not 1 ({bad.size} such rows)")
+        if abs(self.initial.sum() - 1) > tolerance or self.initial.min() < -tolerance:
+            raise ModelError(f"initial belief sums to {self.initial.sum():.9g}, not 1")
+
+    def dense(self) -> tuple[np.ndarray, np.ndarray]:
+        """Dense (A, S, S) transition and (A, S, Z) observation arrays (for small models and tests)."""
+        return (np.stack([t.toarray() for t in self.transition]), np.stack([o.toarray() for o in self.observation]))

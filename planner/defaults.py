@@ -1,0 +1,38 @@
+"""Every default a user can meet, and the constants of the file formats, in one place.
+
+The CLI's options, the workbench's settings, the Python API's keyword defaults and the batch jobs all read
+them from here, so a default is changed once. Tolerances are in model units (millimetres for FreeCAD).
+"""
+from __future__ import annotations
+
+__all__ = [
+    "PRODUCT_FORMAT", "PRODUCT_VERSION", "PRODUCT_FILE",
+    "CONTACT_TOLERANCE", "INTERFERENCE_VOLUME", "BLOCKING_DEPTH", "RASTER_RESOLUTION",
+    "INTENTION_LIMIT", "DISCOUNT",
+    "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
+    "CONFIDENCE",
+]
+
+# The product file (docs/product-format.md): its "format" and "version" keys, and its name in a bundle.
+PRODUCT_FORMAT = "aplan-product"
+PRODUCT_VERSION = 1
+PRODUCT_FILE = "product.json"
+
+# Geometry engines (planner.geometry.Tolerances; the occt engine in FreeCAD uses the same).
+CONTACT_TOLERANCE = 0.1      # surfaces closer than this touch
+INTERFERENCE_VOLUME = 1.0    # overlaps above this volume are reported as interferences
+BLOCKING_DEPTH = 0.1         # overlaps shallower than this along the motion do not block
+RASTER_RESOLUTION = 2048     # mesh engine: pixels across the product for the projection test
+
+# Assembly plans: intention graphs larger than this are refused before they are built.
+INTENTION_LIMIT = 1_000_000
+
+# Decision model (Alg. 3) and solving.
+DISCOUNT = 0.9
+SOLVE_TIME_LIMIT = 60.0            # aplan solve
+POLICY_TIME_LIMIT = 20.0           # simulate, evaluate and session when no --policy is given
+WORKBENCH_SOLVE_TIME_LIMIT = 10.0  # the workbench's Solve command (its parameter SolveTimeLimit overrides it)
+SOLVE_PRECISION = 1e-3             # target gap between the bounds at the initial belief
+
+# The belief on the true intention above which the robot counts as confident (paper's Fig. 7 discussion).
+CONFIDENCE = 0.9

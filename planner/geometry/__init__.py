@@ -1,0 +1,22 @@
+"""Geometry: the connection diagram and the obstruction diagrams along +/-X, Y, Z from part meshes (the mesh
+engine), and product bundles (a product file with one mesh per part) that carry them."""
+from .bundle import (
+           ENGINES,
+           PRODUCT_FILE,
+           analyze_product,
+           apply_report,
+           bundle_product_path,
+           is_analysed,
+           load_part_meshes,
+)
+from .mesh_engine import (
+           AXES,
+           GeometryError,
+           GeometryReport,
+           PartMesh,
+           Tolerances,
+           analyze_meshes,
+)
+
+__all__ = ["ENGINES", "PRODUCT_FILE", "analyze_product", "apply_report", "bundle_product_path", "is_analysed",
+           "load_part_meshes", "AXES", "GeometryError", "GeometryReport", "PartMesh", "Tolerances", "analyze_meshes"]

@@ -1,0 +1,109 @@
+"""Product bundles: a folder holding ``product.json`` and the part meshes (and B-reps) it names.
+
+``aplan export-freecad`` writes bundles from FreeCAD documents; the geometry engines read the meshes (or
+B-reps) of a bundle and fill in the connection and obstruction diagrams (:func:`analyze_product`).
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..defaults import PRODUCT_FILE
+from ..product.model import (
+    AXIS_DIRECTIONS,
+    Direction,
+    Obstruction,
+    Product,
+    load_product,
+)
+from .mesh_engine import (
+    AXES,
+    GeometryError,
+    GeometryReport,
+    PartMesh,
+    Tolerances,
+    analyze_meshes,
+)
+
+__all__ = ["PRODUCT_FILE", "bundle_product_path", "is_analysed", "load_part_meshes", "analyze_product",
+           "apply_report", "ENGINES"]
+
+
+
+def bundle_product_path(folder: str | Path) -> Path:
+    """The product file of a bundle folder."""
+    return Path(folder) / PRODUCT_FILE
+
+
+def is_analysed(product: Product) -> bool:
+    """True when a geometry engine has filled in the product's contacts and obstructions."""
+    return "analysis" in product.geometry
+
+
+def _base(product: Product) -> Path:
+    return Path(product.source).parent if product.source != "<memory>" else Path(".")
+
+
+def load_part_meshes(product: Product) -> list[PartMesh]:
+    """Read the mesh of every part (paths relative to the product file); errors name the part and file."""
+    import trimesh
+
+    meshes = []
+    for part in product.parts:
+        if not part.mesh:
+            raise GeometryError(f"{product.source}: part {part.id!r} has no mesh; export the product with meshes "
+                                "(aplan export-freecad) or add a 'mesh' path to the part")
+        path = _base(product) / part.mesh
+        if not path.is_file():
+            raise GeometryError(f"{product.source}: part {part.id!r}: mesh file {path} does not exist")
+        try:
+            mesh = trimesh.load(path, force="mesh")
+        except Exception as exc:  # trimesh raises many types for corrupt files
+            raise GeometryError(f"{product.source}: part {part.id!r}: cannot read mesh {path}: {exc}") from None
+        if len(mesh.faces) == 0:
+            raise GeometryError(f"{product.source}: part {part.id!r}: mesh {path} has no triangles")
+        meshes.append(PartMesh(part.id, np.asarray(mesh.vertices, dtype=np.float64),
+                               np.asarray(mesh.faces, dtype=np.int64)))
+    return meshes
+
+
+def _mesh_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
+    return analyze_meshes(load_part_meshes(product), tolerances)
+
+
+ENGINES: dict[str, Callable[[Product, Tolerances], GeometryReport]] = {"mesh": _mesh_engine}
+
+
+def analyze_product(product: Product, engine: str = "mesh", tolerances: Tolerances = Tolerances()) -> GeometryReport:
+    """Run a geometry engine on the product's meshes (``mesh``) or B-reps (``occt``, from the FreeCAD side)."""
+    from ..plugins import registry
+
+    engines = {**ENGINES, **registry().engines}
+    if engine not in engines:
+        raise GeometryError(f"unknown geometry engine {engine!r}; available: {', '.join(sorted(engines))}")
+    return engines[engine](product, tolerances)
+
+
+def apply_report(product: Product, report: GeometryReport) -> Product:
+    """A copy of ``product`` with the report's contacts and +X/+Y/+Z obstruction diagrams, and the analysis
+    recorded under ``geometry.analysis`` (``diagrams: "engine"``: found by a geometry engine). Technical
+    constraints and designer tags are kept."""
+    if set(report.parts) != set(product.part_ids):
+        raise GeometryError(f"{product.source}: the analysed parts {sorted(report.parts)} are not the product's "
+                            f"parts {sorted(product.part_ids)}")
+    obstructions = tuple(Obstruction(Direction(axis, AXIS_DIRECTIONS[axis]), tuple(report.obstructions[axis]))
+                         for axis in AXES)
+    summary = report.as_dict()
+    analysis = {"diagrams": "engine", "engine": report.engine, "tolerances": summary["tolerances"],
+                "interferences": summary["interferences"], "warnings": summary["warnings"],
+                "seconds": summary["seconds"]}
+    geometry = {**product.geometry, "analysis": analysis}
+    return replace(product, contacts=tuple(report.contacts), obstructions=obstructions, geometry=geometry)
+
+
+def load_bundle(folder: str | Path) -> Product:
+    """The product of a bundle folder."""
+    return load_product(bundle_product_path(folder))

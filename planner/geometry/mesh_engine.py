@@ -1,0 +1,316 @@
+"""Connection and obstruction diagrams from part meshes (the FreeCAD-free geometry engine).
+
+Definitions
+-----------
+- Two parts are in *contact* when their surfaces are closer than ``Tolerances.contact``, or when they
+  overlap (a press fit, or a small modelling interference such as the pen's button, which overlaps the
+  body by about 0.06 mm^3). Overlaps of more than ``Tolerances.interference`` in volume and more than
+  ``Tolerances.contact`` in mean thickness (twice the volume over the surface area) are reported as
+  *interferences*; thinner ones are slivers between surfaces tessellated differently.
+- Part ``x`` is *blocked* by part ``y`` along ``d`` when ``x``, moved along ``d`` without limit, would
+  collide with ``y``: some point of ``y`` lies ahead (along ``d``) of some point of ``x`` on a common line
+  parallel to ``d``. The relation along ``-d`` is the one along ``d`` reversed.
+
+Method
+------
+Contacts and interferences use manifold3d (exact mesh booleans and gap queries). The obstruction test is a
+continuous projection test: each part is rasterised along each axis into the first and last depth it
+occupies on every line parallel to the axis (a z-buffer holding the minimum and the maximum), on a grid of
+``scene size / Tolerances.resolution``. ``x`` is blocked by ``y`` along ``+a`` when on some line through both
+``max depth(y) > min depth(x) + depth tolerance``. Lines are infinite, so no obstacle is stepped over,
+whatever its thickness along the motion. Lines within ``Tolerances.grazing`` pixels of a part's outline are
+ignored, so surfaces that only slide along each other (a peg in its hole, with slivers from tessellating the
+two cylinders differently) do not block; an overlap narrower than that is not seen.
+
+Broad phase: pairs whose bounding boxes are farther apart than the contact tolerance, or whose projections
+do not overlap, are never tested.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..defaults import (
+    BLOCKING_DEPTH,
+    CONTACT_TOLERANCE,
+    INTERFERENCE_VOLUME,
+    RASTER_RESOLUTION,
+)
+from ..errors import PlannerError
+
+__all__ = ["Tolerances", "GeometryReport", "PartMesh", "GeometryError", "analyze_meshes", "AXES"]
+
+AXES = ("+X", "+Y", "+Z")
+
+
+class GeometryError(PlannerError):
+    """A mesh cannot be analysed (not closed, no volume, unreadable)."""
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Tolerances of the geometry analysis, in model units (lengths) and cubic units (volumes).
+
+    ``contact``: surfaces closer than this touch. ``interference``: overlap volumes above this are reported.
+    ``depth``: along the motion, overlaps shallower than this do not block (modelling interferences).
+    ``resolution``: pixels across the largest dimension of the product for the projection test.
+    ``grazing``: pixels next to a part's outline that are ignored (at least 1).
+    """
+
+    contact: float = CONTACT_TOLERANCE
+    interference: float = INTERFERENCE_VOLUME
+    depth: float = BLOCKING_DEPTH
+    resolution: int = RASTER_RESOLUTION
+    grazing: int = 1
+
+    def __post_init__(self) -> None:
+        for name in ("contact", "interference", "depth"):
+            if not getattr(self, name) >= 0:
+                raise GeometryError(f"tolerance {name} must be >= 0, got {getattr(self, name)!r}")
+        if self.resolution < 16:
+            raise GeometryError(f"resolution must be at least 16 pixels, got {self.resolution}")
+        if self.grazing < 1:
+            raise GeometryError(f"grazing must be at least 1 pixel, got {self.grazing}")
+
+
+@dataclass(frozen=True)
+class PartMesh:
+    """A closed triangle mesh of one part: ``vertices`` (v, 3) float64, ``faces`` (f, 3) int64."""
+
+    id: str
+    vertices: np.ndarray
+    faces: np.ndarray
+
+    @property
+    def triangles(self) -> np.ndarray:
+        """(f, 3, 3) float64."""
+        return self.vertices[self.faces]
+
+
+@dataclass(frozen=True)
+class GeometryReport:
+    """What an engine found: contacts, interferences (a, b, volume) and obstructions per positive axis."""
+
+    engine: str
+    parts: tuple[str, ...]
+    contacts: tuple[tuple[str, str], ...]
+    interferences: tuple[tuple[str, str, float], ...]
+    obstructions: dict[str, tuple[tuple[str, str], ...]]
+    tolerances: dict = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
+    seconds: float = 0.0
+
+    def as_dict(self) -> dict:
+        return {"engine": self.engine, "parts": len(self.parts), "contacts": [list(c) for c in self.contacts],
+                "interferences": [{"parts": [a, b], "volume": round(v, 6)} for a, b, v in self.interferences],
+                "obstructions": {d: [list(p) for p in pairs] for d, pairs in self.obstructions.items()},
+                "tolerances": self.tolerances, "warnings": list(self.warnings), "seconds": round(self.seconds, 3)}
+
+
+# ------------------------------------------------------------------------------------------- contacts
+
+
+def _manifold(part: PartMesh):
+    import manifold3d
+
+    mesh = manifold3d.Mesh(vert_properties=np.ascontiguousarray(part.vertices, dtype=np.float32),
+                           tri_verts=np.ascontiguousarray(part.faces, dtype=np.uint32))
+    solid = manifold3d.Manifold(mesh)
+    if solid.status() != manifold3d.Error.NoError:
+        raise GeometryError(f"part {part.id!r}: its mesh is not a closed, consistently oriented surface "
+                            f"({solid.status().name}); re-export it or repair the solid in the CAD model")
+    if solid.volume() <= 0:
+        raise GeometryError(f"part {part.id!r}: its mesh encloses no volume ({solid.volume():g}); "
+                            "check the part in the CAD model")
+    return solid
+
+
+def _bbox_gaps(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(n, n) largest per-axis gap between the bounding boxes (<= 0 when they overlap)."""
+    gap = np.maximum(lo[:, None, :] - hi[None, :, :], lo[None, :, :] - hi[:, None, :])
+    return gap.max(axis=2)
+
+
+def _contacts(parts, solids, lo, hi, tol: Tolerances, warnings: list[str]):
+    contacts, interferences = [], []
+    gaps = _bbox_gaps(lo, hi)
+    n = len(parts)
+    for i in range(n):
+        for j in range(i + 1, n):
+            if gaps[i, j] > tol.contact:
+                continue
+            gap = solids[i].min_gap(solids[j], tol.contact * 2 + 1e-9)
+            if gap > tol.contact:
+                continue
+            contacts.append((parts[i].id, parts[j].id))
+            if gap == 0:
+                common = solids[i] ^ solids[j]
+                volume = common.volume()
+                # Mean thickness of the overlap: slivers between surfaces tessellated differently are thin.
+                thickness = 2 * volume / common.surface_area() if volume > 0 else 0.0
+                if volume > tol.interference and thickness > tol.contact:
+                    interferences.append((parts[i].id, parts[j].id, float(volume)))
+    return contacts, interferences
+
+
+# ---------------------------------------------------------------------------------------- obstruction
+
+_PLANE = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # the two in-plane axes (u, v) of a projection along each axis
+
+
+@dataclass
+class _DepthMap:
+    """A part seen along one axis: window origin (i0, j0) on the global grid, and per pixel the first and
+    last depth it occupies (``+inf``/``-inf`` where it is absent)."""
+
+    i0: int
+    j0: int
+    zmin: np.ndarray
+    zmax: np.ndarray
+    inner: np.ndarray  # covered and not within `grazing` pixels of the outline
+
+
+def _rasterise(triangles: np.ndarray, axis: int, origin: np.ndarray, pixel: float, grazing: int) -> _DepthMap:
+    u, v = _PLANE[axis]
+    uv = (triangles[:, :, [u, v]] - origin) / pixel  # (m, 3, 2) in pixels
+    depth = triangles[:, :, axis]
+    i0 = int(np.floor(uv[..., 0].min())) - 1
+    j0 = int(np.floor(uv[..., 1].min())) - 1
+    width = int(np.ceil(uv[..., 0].max())) - i0 + 2
+    height = int(np.ceil(uv[..., 1].max())) - j0 + 2
+    zmin = np.full(width * height, np.inf)
+    zmax = np.full(width * height, -np.inf)
+
+    a, b, c = uv[:, 0], uv[:, 1], uv[:, 2]
+    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    keep = np.abs(area) > 1e-12  # faces parallel to the axis cover no line
+    uv, depth, area = uv[keep], depth[keep], area[keep]
+    a, b, c = uv[:, 0], uv[:, 1], uv[:, 2]
+    da, db, dc = depth[:, 0], depth[:, 1], depth[:, 2]
+    # Depth is affine over a triangle: gradient from the two edge vectors.
+    gx = ((db - da) * (c[:, 1] - a[:, 1]) - (dc - da) * (b[:, 1] - a[:, 1])) / area
+    gy = ((dc - da) * (b[:, 0] - a[:, 0]) - (db - da) * (c[:, 0] - a[:, 0])) / area
+
+    # Rows whose pixel centres (j + 0.5) the triangle spans.
+    vmin, vmax = uv[..., 1].min(axis=1), uv[..., 1].max(axis=1)
+    jlo = np.ceil(vmin - 0.5).astype(np.int64)
+    rows = np.maximum(np.floor(vmax - 0.5).astype(np.int64) - jlo + 1, 0)
+    tri = np.repeat(np.arange(len(rows)), rows)
+    y = (jlo[tri] + _ranks(rows) + 0.5)
+    # Span of the triangle on each row: intersect the row with the three edges.
+    left = np.full(y.shape, np.inf)
+    right = np.full(y.shape, -np.inf)
+    for p, q in ((a, b), (b, c), (c, a)):
+        py, qy, px, qx = p[tri, 1], q[tri, 1], p[tri, 0], q[tri, 0]
+        lo, hi = np.minimum(py, qy), np.maximum(py, qy)
+        hit = (y >= lo) & (y <= hi) & (hi > lo)
+        x = np.where(hit, px + (y - py) * (qx - px) / np.where(hi > lo, qy - py, 1.0), 0.0)
+        left = np.where(hit, np.minimum(left, x), left)
+        right = np.where(hit, np.maximum(right, x), right)
+    ilo = np.ceil(left - 0.5).astype(np.int64)
+    cols = np.maximum(np.floor(right - 0.5).astype(np.int64) - ilo + 1, 0)
+    sample = np.repeat(np.arange(len(cols)), cols)
+    i = ilo[sample] + _ranks(cols)
+    j = (y[sample] - 0.5).astype(np.int64)
+    t = tri[sample]
+    z = da[t] + (i + 0.5 - a[t, 0]) * gx[t] + (j + 0.5 - a[t, 1]) * gy[t]
+    index = (j - j0) * width + (i - i0)
+    np.minimum.at(zmin, index, z)
+    np.maximum.at(zmax, index, z)
+    zmin, zmax = zmin.reshape(height, width), zmax.reshape(height, width)
+    inner = _erode(zmax >= zmin, grazing)
+    return _DepthMap(i0, j0, zmin, zmax, inner)
+
+
+def _ranks(counts: np.ndarray) -> np.ndarray:
+    """0, 1, ..., c - 1 for each count c, concatenated."""
+    total = int(counts.sum())
+    starts = np.repeat(np.cumsum(counts) - counts, counts)
+    return np.arange(total) - starts
+
+
+def _erode(mask: np.ndarray, radius: int) -> np.ndarray:
+    """Binary erosion by ``radius`` pixels (8-neighbourhood); the border counts as outside."""
+    out = mask.copy()
+    for _ in range(radius):
+        padded = np.pad(out, 1, constant_values=False)
+        out = padded[1:-1, 1:-1].copy()
+        for di in (-1, 0, 1):
+            for dj in (-1, 0, 1):
+                out &= padded[1 + di:padded.shape[0] - 1 + di, 1 + dj:padded.shape[1] - 1 + dj]
+    return out
+
+
+def _window(first: _DepthMap, second: _DepthMap):
+    """The common window of two depth maps as slices into each, or None."""
+    j0 = max(first.j0, second.j0)
+    i0 = max(first.i0, second.i0)
+    j1 = min(first.j0 + first.zmin.shape[0], second.j0 + second.zmin.shape[0])
+    i1 = min(first.i0 + first.zmin.shape[1], second.i0 + second.zmin.shape[1])
+    if j1 <= j0 or i1 <= i0:
+        return None
+    def cut(m: _DepthMap):
+        return (slice(j0 - m.j0, j1 - m.j0), slice(i0 - m.i0, i1 - m.i0))
+    return cut(first), cut(second)
+
+
+def _obstructions(parts, lo, hi, tol: Tolerances):
+    extent = float((hi.max(axis=0) - lo.min(axis=0)).max())
+    pixel = extent / tol.resolution if extent > 0 else 1.0
+    origin3 = lo.min(axis=0)
+    result: dict[str, list[tuple[str, str]]] = {}
+    for axis, name in enumerate(AXES):
+        u, v = _PLANE[axis]
+        origin = origin3[[u, v]]
+        maps = [_rasterise(p.triangles, axis, origin, pixel, tol.grazing) for p in parts]
+        pairs = []
+        for i in range(len(parts)):
+            for j in range(i + 1, len(parts)):
+                # Broad phase: the projections' boxes must overlap by more than the grazing band.
+                margin = 2 * tol.grazing * pixel
+                if (min(hi[i, u], hi[j, u]) - max(lo[i, u], lo[j, u]) <= margin or
+                        min(hi[i, v], hi[j, v]) - max(lo[i, v], lo[j, v]) <= margin):
+                    continue
+                cut = _window(maps[i], maps[j])
+                if cut is None:
+                    continue
+                a, b = maps[i], maps[j]
+                both = a.inner[cut[0]] & b.inner[cut[1]]
+                if not both.any():
+                    continue
+                amin, amax = a.zmin[cut[0]][both], a.zmax[cut[0]][both]
+                bmin, bmax = b.zmin[cut[1]][both], b.zmax[cut[1]][both]
+                if np.any(bmax > amin + tol.depth):
+                    pairs.append((parts[i].id, parts[j].id))  # i moving along +axis hits j
+                if np.any(amax > bmin + tol.depth):
+                    pairs.append((parts[j].id, parts[i].id))
+        result[name] = pairs
+    return result, pixel
+
+
+def analyze_meshes(parts: list[PartMesh], tolerances: Tolerances = Tolerances()) -> GeometryReport:
+    """Contacts, interferences and the +X, +Y, +Z obstruction diagrams of closed part meshes.
+
+    Raises :class:`GeometryError` naming the part when a mesh is not closed or encloses no volume.
+    Cost: contacts O(pairs near each other x mesh size); obstructions O(pixels covered + triangles) per
+    part and axis, plus O(pixels in common) per pair whose projections overlap.
+    """
+    start = time.perf_counter()
+    warnings: list[str] = []
+    if not parts:
+        raise GeometryError("no parts to analyse")
+    solids = [_manifold(p) for p in parts]
+    lo = np.array([p.vertices.min(axis=0) for p in parts])
+    hi = np.array([p.vertices.max(axis=0) for p in parts])
+    contacts, interferences = _contacts(parts, solids, lo, hi, tolerances, warnings)
+    obstructions, pixel = _obstructions(parts, lo, hi, tolerances)
+    for a, b, volume in interferences:
+        warnings.append(f"parts {a!r} and {b!r} interpenetrate by {volume:.4g} cubic units "
+                        f"(more than the interference tolerance {tolerances.interference:g})")
+    used = {"contact": tolerances.contact, "interference": tolerances.interference, "depth": tolerances.depth,
+            "resolution": tolerances.resolution, "grazing": tolerances.grazing, "pixel": pixel}
+    return GeometryReport("mesh", tuple(p.id for p in parts), tuple(contacts), tuple(interferences),
+                          {k: tuple(v) for k, v in obstructions.items()}, used, tuple(warnings),
+                          time.perf_counter() - start)

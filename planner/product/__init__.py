@@ -1,0 +1,37 @@
+"""The product: parts, the connection and obstruction diagrams, technical constraints and the designer's tags
+(the paper's Sec. III-A), their JSON file format, synthetic products (Table I) and the embedded example.
+
+Everything else in the planner starts from a :class:`Product`.
+"""
+from .examples import EXAMPLES, example_path, resources_dir
+from .model import (
+                    AXIS_DIRECTIONS,
+                    DEFAULT_MARKER_DICTIONARY,
+                    FORMAT,
+                    MARKER_DICTIONARIES,
+                    UNITS,
+                    VERSION,
+                    Direction,
+                    Markers,
+                    Obstruction,
+                    OperationTag,
+                    Part,
+                    Product,
+                    TagDefaults,
+                    TechnicalConstraint,
+                    Tool,
+                    load_product,
+                    loads_product,
+                    product_from_dict,
+                    product_to_dict,
+                    save_product,
+                    write_atomic,
+)
+from .synthetic import SYNTHETIC, chain_product, complete_product
+
+__all__ = ["EXAMPLES", "example_path", "resources_dir",
+           "AXIS_DIRECTIONS", "DEFAULT_MARKER_DICTIONARY", "FORMAT", "MARKER_DICTIONARIES", "UNITS", "VERSION",
+           "Direction", "Markers", "Obstruction", "OperationTag", "Part", "Product", "TagDefaults",
+           "TechnicalConstraint", "Tool", "load_product", "loads_product", "product_from_dict", "product_to_dict",
+           "save_product", "write_atomic",
+           "SYNTHETIC", "chain_product", "complete_product"]

@@ -1,0 +1,272 @@
+"""The parts tray: marker images, the printable marker sheet, and synthetic camera views of the tray.
+
+A *tray layout* places one slot per part and tool on a grid; each slot holds the item's ArUco marker, and
+the item, while it lies in the tray, covers it (the paper's Fig. 6). :func:`render_tray` draws what an
+overhead camera sees, with optional blur, sensor noise, a perspective tilt and occluders (hands);
+:class:`SimulatedCell` films a scripted operator and a scripted robot working from the tray. Tests, demos
+and benchmarks render their frames with them, so the vision pipeline runs on images whose truth is known.
+"""
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+from collections import deque
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Iterable, Sequence
+
+import numpy as np
+
+from ..errors import PlannerError
+from ..product.model import Product
+from .session import Instruction, ScriptedOperator
+from .vision import MarkerMap, marker_map
+
+__all__ = ["marker_image", "TrayLayout", "tray_layout", "render_tray", "Occluder", "CameraModel", "SimulatedCell",
+           "write_marker_sheet"]
+
+
+def marker_image(dictionary: str, marker: int, pixels: int) -> np.ndarray:
+    """The ``(pixels, pixels) uint8`` image of marker ``marker`` (black border included, no white margin)."""
+    import cv2
+
+    return cv2.aruco.generateImageMarker(cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary)),
+                                         marker, pixels)
+
+
+@dataclass(frozen=True)
+class TrayLayout:
+    """Slot of each item: the top-left corner ``(x, y)`` of its marker, in pixels of a ``size`` frame."""
+
+    markers: MarkerMap
+    size: tuple[int, int]  # (width, height)
+    marker_px: int
+    slots: dict[str, tuple[int, int]]
+
+
+def tray_layout(markers: MarkerMap, size: tuple[int, int] = (1920, 1080), marker_px: int = 96,
+                columns: int | None = None) -> TrayLayout:
+    """A grid of slots centred in the frame, ``2.2 * marker_px`` apart, items in marker-id order."""
+    names = [markers.items[k] for k in sorted(markers.items)]
+    columns = columns or math.ceil(math.sqrt(len(names) * size[0] / size[1]))
+    rows = math.ceil(len(names) / columns)
+    pitch = int(2.2 * marker_px)
+    x0 = (size[0] - columns * pitch) // 2 + (pitch - marker_px) // 2
+    y0 = (size[1] - rows * pitch) // 2 + (pitch - marker_px) // 2
+    if x0 < 0 or y0 < 0:
+        raise PlannerError(f"{len(names)} markers of {marker_px} px do not fit a {size[0]}x{size[1]} frame")
+    slots = {name: (x0 + (k % columns) * pitch, y0 + (k // columns) * pitch) for k, name in enumerate(names)}
+    return TrayLayout(markers, size, marker_px, slots)
+
+
+@dataclass(frozen=True)
+class Occluder:
+    """An ellipse (a hand or an arm) drawn over the tray: centre, half-axes in pixels, angle in degrees."""
+
+    center: tuple[int, int]
+    axes: tuple[int, int]
+    angle: float = 0.0
+
+
+def render_tray(layout: TrayLayout, in_tray: Iterable[str], blur: float = 0.0, noise: float = 0.0,
+                perspective: float = 0.0, occluders: Sequence[Occluder] = (), seed: int = 0,
+                camera_seed: int = 0) -> np.ndarray:
+    """The ``(H, W, 3) uint8`` BGR view of the tray with the items ``in_tray`` covering their markers.
+
+    ``blur``: Gaussian sigma in pixels; ``noise``: standard deviation of additive Gaussian noise (grey
+    levels, drawn from ``seed``); ``perspective``: each frame corner moves by up to this fraction of the frame
+    size (a tilted camera, drawn from ``camera_seed``: the same for every frame of one camera); ``occluders``
+    are drawn over everything else.
+    """
+    import cv2
+
+    width, height = layout.size
+    frame = np.empty((height, width, 3), np.uint8)
+    frame[:] = (70, 90, 110)  # bench top
+    px = layout.marker_px
+    margin = px // 3
+    xs = [x for x, _ in layout.slots.values()]
+    ys = [y for _, y in layout.slots.values()]
+    cv2.rectangle(frame, (min(xs) - 2 * margin, min(ys) - 2 * margin), (max(xs) + px + 2 * margin,
+                  max(ys) + px + 2 * margin), (150, 160, 165), -1)  # the tray
+    present = set(in_tray)
+    for k, (name, (x, y)) in enumerate(layout.slots.items()):
+        cv2.rectangle(frame, (x - margin // 2, y - margin // 2), (x + px + margin // 2, y + px + margin // 2),
+                      (255, 255, 255), -1)
+        image = marker_image(layout.markers.dictionary, layout.markers.id_of(name), px)
+        frame[y:y + px, x:x + px] = image[:, :, None]
+        if name in present:  # the item covers its marker
+            colour = tuple(int(c) for c in np.random.default_rng(k).integers(40, 220, 3))
+            cv2.rectangle(frame, (x - margin, y - margin), (x + px + margin, y + px + margin), colour, -1)
+            cv2.putText(frame, name, (x - margin + 4, y + px // 2), cv2.FONT_HERSHEY_SIMPLEX, px / 200, (0, 0, 0), 2)
+    for occluder in occluders:
+        cv2.ellipse(frame, occluder.center, occluder.axes, occluder.angle, 0, 360, (120, 150, 200), -1)
+    if perspective > 0:
+        corners = np.float32([[0, 0], [width, 0], [width, height], [0, height]])
+        shift = np.random.default_rng(camera_seed).uniform(-perspective, perspective, (4, 2))
+        shift *= np.float32([width, height])
+        homography = cv2.getPerspectiveTransform(corners, (corners + shift).astype(np.float32))
+        frame = cv2.warpPerspective(frame, homography, (width, height), borderValue=(70, 90, 110))
+    if blur > 0:
+        frame = cv2.GaussianBlur(frame, (0, 0), blur)
+    if noise > 0:
+        cv2.setRNGSeed(seed)
+        grain = np.empty(frame.shape[:2], np.int16)  # luminance noise: what survives the grey conversion
+        cv2.randn(grain, 0, noise)
+        frame = np.clip(frame.astype(np.int16) + grain[:, :, None], 0, 255).astype(np.uint8)
+    return frame
+
+
+@dataclass(frozen=True)
+class CameraModel:
+    """Image degradations of one camera: Gaussian blur sigma, noise std (grey levels), perspective tilt
+    (fraction of the frame), and whether hands pass over the tray."""
+
+    blur: float = 0.0
+    noise: float = 0.0
+    perspective: float = 0.0
+    hands: bool = False
+    seed: int = 0
+
+
+class SimulatedCell:
+    """A cell filmed from above, as an iterator of frames, for tests and demos without a camera.
+
+    When its queue of frames runs dry it is the operator's turn: the operator performs its next operation
+    (takes the operation's single parts, grasps the tool, puts it back) or idles for ``idle`` frames.
+    ``robot(instruction)`` (a :class:`~planner.session.ScriptedRobot` hook) renders the robot taking its
+    parts and using the tool, and strikes the operation from the operator's list. Each change is held for
+    ``hold`` frames; ``operator_observations`` is the truth, in order.
+    """
+
+    def __init__(self, layout: TrayLayout, operator: ScriptedOperator, camera: CameraModel = CameraModel(),
+                 hold: int = 8, idle: int = 24):
+        self.layout = layout
+        self.operator = operator
+        self.camera = camera
+        self.hold = hold
+        self.idle = idle
+        self.in_tray = set(layout.slots)
+        self.queue: deque = deque()
+        self.frames = 0
+        self.operator_observations = []  # the truth, in order
+
+    def __iter__(self):
+        return self
+
+    def __next__(self):
+        if not self.queue:
+            self._operator_turn()
+        return self.queue.popleft()
+
+    def robot(self, instruction: Instruction) -> None:
+        self.operator.robot_acting(instruction)
+        for part in instruction.picks:
+            self._take(part)
+        if instruction.tool is not None:
+            self._use_tool(instruction.tool)
+
+    def _operator_turn(self) -> None:
+        operation = self.operator.next_operation()
+        if operation is None:
+            self._show(self.idle)
+            return
+        observation = self.operator.observation_of(operation)
+        self.operator_observations.append(observation)
+        for part in observation.parts:
+            self._take(part)
+        if observation.tool is not None:
+            self._use_tool(observation.tool)
+
+    def _take(self, item: str) -> None:
+        self.in_tray.discard(item)
+        self._show(self.hold, reach=item)
+
+    def _use_tool(self, tool: str) -> None:
+        self.in_tray.discard(tool)
+        self._show(self.hold, reach=tool)
+        self.in_tray.add(tool)
+        self._show(self.hold, reach=tool)
+
+    def _show(self, count: int, reach: str | None = None) -> None:
+        for k in range(count):
+            occluders = ()
+            if self.camera.hands and reach is not None and k < 2:
+                # a hand over the slot just reached into, and an arm across the tray, for two frames
+                x, y = self.layout.slots[reach]
+                px = self.layout.marker_px
+                occluders = (Occluder((x + px // 2, y + px // 2), (px // 2, px // 3), 30.0),
+                             Occluder((self.layout.size[0] // 2, self.layout.size[1] // 2), (px * 3, px // 4), 10.0))
+            elif self.camera.hands and k == count // 2 + 1:
+                # a corner of every slot covered, for one frame (a marker flickers)
+                px = self.layout.marker_px
+                occluders = tuple(Occluder((x, y), (px // 3, px // 3)) for x, y in self.layout.slots.values())
+            self.frames += 1
+            self.queue.append(render_tray(self.layout, self.in_tray, self.camera.blur, self.camera.noise,
+                                          self.camera.perspective, occluders,
+                                          seed=self.camera.seed * 100_003 + self.frames,
+                                          camera_seed=self.camera.seed))
+
+
+def write_marker_sheet(product: Product, path: str | Path, marker_mm: float = 40.0) -> int:
+    """Write the markers of ``product`` (one per part and tool, with its name and id) on A4 pages as a PDF
+    or a PNG (by the suffix; a PNG holds the first page only when they do not fit one), atomically.
+
+    Returns the number of markers. Markers are ``marker_mm`` wide when printed at 100 %.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.backends.backend_pdf import PdfPages
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in (".pdf", ".png"):
+        raise PlannerError(f"{path}: the marker sheet is written as .pdf or .png; change the file name")
+    markers = marker_map(product, require_all=False)
+    entries = sorted(markers.items.items())
+    page_w, page_h = 210.0, 297.0
+    cell_w, cell_h = marker_mm + 20.0, marker_mm + 22.0
+    columns = max(1, int((page_w - 20) // cell_w))
+    rows = max(1, int((page_h - 30) // cell_h))
+    per_page = columns * rows
+    pages = [entries[i:i + per_page] for i in range(0, len(entries), per_page)]
+    labels = {p.id: p.label or p.id for p in product.parts} | {t.id: t.label or t.id for t in product.tools}
+    figures = []
+    for number, page in enumerate(pages, start=1):
+        fig = plt.figure(figsize=(page_w / 25.4, page_h / 25.4))
+        fig.text(0.5, 1 - 12 / page_h, f"{product.name or 'APLAN product'}: tray markers ({markers.dictionary}, "
+                 f"{marker_mm:g} mm){f', page {number}/{len(pages)}' if len(pages) > 1 else ''}",
+                 ha="center", va="center", fontsize=10)
+        for k, (marker, name) in enumerate(page):
+            col, row = k % columns, k // columns
+            left = 10 + col * cell_w + (cell_w - marker_mm) / 2
+            top = 22 + row * cell_h
+            ax = fig.add_axes((left / page_w, 1 - (top + marker_mm) / page_h, marker_mm / page_w, marker_mm / page_h))
+            ax.imshow(marker_image(markers.dictionary, marker, 240), cmap="gray", vmin=0, vmax=255,
+                      interpolation="nearest")
+            ax.set_axis_off()
+            kind = "tool" if name in markers.tools else "part"
+            fig.text((left + marker_mm / 2) / page_w, 1 - (top + marker_mm + 6) / page_h,
+                     f"{labels.get(name, name)} ({kind} {name!r}, marker {marker})", ha="center", va="center",
+                     fontsize=8)
+        figures.append(fig)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent or ".")
+    os.close(fd)
+    try:
+        if suffix == ".pdf":
+            with PdfPages(tmp) as pdf:
+                for fig in figures:
+                    pdf.savefig(fig)
+        else:
+            figures[0].savefig(tmp, dpi=300)
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
+    finally:
+        for fig in figures:
+            plt.close(fig)
+    return len(entries)

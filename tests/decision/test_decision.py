@@ -1,0 +1,67 @@
+"""The operator-intent POMDP (Alg. 3): sizes, stochastic tables, POMDPX round trip, and the authors' models."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import PEN_MODELS, require_shared
+from modelmatch import renumbering
+
+from planner import make_plan
+from planner.decision import Rewards, intention_pomdp
+from planner.decision.io.pomdpx import read_pomdpx, write_pomdpx
+
+
+@pytest.fixture(scope="module", params=[False, True], ids=["no-technical", "technical"])
+def pen_model(request, pen):
+    return request.param, intention_pomdp(make_plan(pen, request.param))
+
+
+def test_pen_sizes(pen):
+    model = intention_pomdp(make_plan(pen))
+    assert (model.n_states, model.n_actions, model.n_observations) == (69, 22, 12)
+    assert model.actions[-1] == "wait" and model.observations[0] == "blank"
+    technical = intention_pomdp(make_plan(pen, True))
+    assert (technical.n_states, technical.n_actions, technical.n_observations) == (39, 18, 10)
+
+
+def test_rows_sum_to_one(pen_model):
+    _, model = pen_model
+    T, O = model.dense()
+    assert np.allclose(T.sum(axis=2), 1) and np.allclose(O.sum(axis=2), 1)
+    assert model.initial.sum() == pytest.approx(1)
+
+
+@pytest.mark.parametrize("technical, name", [(False, "pen_no_technical"), (True, "pen_technical")])
+def test_the_authors_models(pen, technical, name):
+    reference = read_pomdpx(require_shared(PEN_MODELS / "reference_pomdp" / f"{name}.pomdpx.gz"))
+    ours = intention_pomdp(make_plan(pen, technical))
+    perm = renumbering(ours, reference)
+    assert perm is not None, "no renumbering makes the tables equal"
+    assert sorted(perm["s"]) == list(range(ours.n_states))  # a bijection
+    # Spelled out on the dense tables (renumbering() checks the same before returning).
+    T1, O1 = ours.dense()
+    T2, O2 = reference.dense()
+    s, a, z = perm["s"], perm["a"], perm["z"]
+    assert np.allclose(T1, T2[a][:, s][:, :, s], atol=1e-6)
+    assert np.allclose(O1, O2[a][:, s][:, :, z], atol=1e-6)
+    assert np.array_equal(ours.reward, reference.reward[a][:, s])
+    assert np.allclose(ours.initial, reference.initial[s], atol=1e-6)
+    assert ours.actions[-1] == "wait" and np.all(reference.reward[a[-1]] == 0)
+
+
+def test_pomdpx_round_trip_and_size(tmp_path, pen_model):
+    _, model = pen_model
+    path = tmp_path / "pen.pomdpx"
+    write_pomdpx(model, path)
+    again = read_pomdpx(path)
+    T1, O1 = model.dense()
+    T2, O2 = again.dense()
+    assert np.allclose(T1, T2, atol=1e-12) and np.allclose(O1, O2, atol=1e-12)
+    assert np.array_equal(model.reward, again.reward) and np.allclose(model.initial, again.initial)
+    assert again.discount == model.discount
+    assert path.stat().st_size < 300_000  # the authors' dense files: 5 and 18 MB
+
+
+def test_eagerness_is_configurable(pen):
+    model = intention_pomdp(make_plan(pen), Rewards(unfavorable=5, favorable=-1, wrong=-100, wait=-0.5))
+    assert set(np.unique(model.reward)) == {5, -1, -100, -0.5}

@@ -1,0 +1,253 @@
+"""From real CAD files to plans, through real FreeCAD: export, mesh analysis, statistics, bad input."""
+from __future__ import annotations
+
+import hashlib
+import json
+import re
+import subprocess
+import sys
+
+import pytest
+from conftest import PEN_MODELS, REPO, SHARED, require_freecadcmd, require_shared
+
+from planner import load_product
+from planner.geometry.bundle import bundle_product_path
+
+LIAISONS = {frozenset(p) for p in [("ink_001", "cartridge_001"), ("cartridge_001", "head_001"),
+                                   ("head_001", "body_001"), ("body_001", "cap_001"), ("body_001", "button_001")]}
+VARIANTS = [(v, ext) for v in ("simplified", "complex") for ext in ("FCStd", "stp")]
+
+
+def ground_truth(axis: str) -> set[tuple[str, str]]:
+    path = require_shared(PEN_MODELS / "simplified" / "GroundTruth" / f"GeomConstraints_POS_{axis[1]}.json")
+    return {(link["source"], link["target"]) for link in json.loads(path.read_text())["links"]}
+
+
+def freecad_result(done: subprocess.CompletedProcess) -> dict:
+    """The JSON a FreeCADCmd script printed after ``APLAN-RESULT`` (FreeCAD's progress output surrounds it)."""
+    found = re.search(r"APLAN-RESULT (.*)", done.stdout)
+    assert found, f"no result from FreeCAD:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
+    return json.loads(found.group(1))
+
+
+def aplan(*args: str, check: bool = True) -> subprocess.CompletedProcess:
+    done = subprocess.run([sys.executable, "-m", "planner", *args], capture_output=True, text=True, timeout=600)
+    if check and done.returncode != 0:
+        raise AssertionError(f"aplan {' '.join(args)} failed ({done.returncode}):\n{done.stdout}\n{done.stderr}")
+    return done
+
+
+@pytest.fixture(scope="module")
+def pen_bundles(tmp_path_factory):
+    require_freecadcmd()
+    out = {}
+    for variant, ext in VARIANTS:
+        model = require_shared(PEN_MODELS / variant / f"asm_bourjault_ballpoint.{ext}")
+        bundle = tmp_path_factory.mktemp("bundles") / f"{variant}_{ext}"
+        aplan("export-freecad", str(model), "-o", str(bundle))
+        out[variant, ext] = bundle
+    return out
+
+
+@pytest.mark.freecad
+@pytest.mark.parametrize("variant, ext", VARIANTS)
+def test_pen_models_give_the_ground_truth(pen_bundles, variant, ext):
+    product = load_product(bundle_product_path(pen_bundles[variant, ext]))
+    assert sorted(product.part_ids) == sorted(["ink_001", "cartridge_001", "head_001", "body_001", "cap_001",
+                                               "button_001"])
+    assert {frozenset(c) for c in product.contacts} == LIAISONS
+    assert [o.direction.name for o in product.obstructions] == ["+X", "+Y", "+Z"]
+    for obstruction in product.obstructions:
+        assert set(obstruction.blocks) == ground_truth(obstruction.direction.name), obstruction.direction.name
+    analysis = product.geometry["analysis"]
+    assert analysis["engine"] == "mesh" and analysis["interferences"] == []
+    assert product.geometry["tessellation"]["linear_deflection"] > 0
+    for part in product.parts:
+        assert (pen_bundles[variant, ext] / part.mesh).is_file() and (pen_bundles[variant, ext] / part.brep).is_file()
+
+
+@pytest.mark.freecad
+def test_bundle_and_model_to_stats(pen_bundles):
+    expected = {"subassemblies": 18, "states": 18, "intentions": 69, "sequences": 24}
+    for target in (str(pen_bundles["simplified", "FCStd"]), str(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd")):
+        stats = json.loads(aplan("stats", target, "--json").stdout)
+        assert {k: stats[k] for k in expected} == expected
+
+
+@pytest.mark.freecad
+def test_export_never_touches_the_model(tmp_path):
+    require_freecadcmd()
+    model = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
+    before = hashlib.sha256(model.read_bytes()).hexdigest()
+    aplan("export-freecad", str(model), "-o", str(tmp_path / "b"), "--engine", "none")
+    assert hashlib.sha256(model.read_bytes()).hexdigest() == before
+    product = load_product(tmp_path / "b" / "product.json")
+    assert product.contacts == () and "analysis" not in product.geometry
+    # An unanalysed bundle is analysed in memory when planned.
+    assert json.loads(aplan("stats", str(tmp_path / "b"), "--json").stdout)["intentions"] == 69
+
+
+PLACEMENTS = """
+import json, os, sys, tempfile
+sys.path.insert(0, {repo!r})
+import FreeCAD
+from freecad_aplan.document import open_model, read_components
+from freecad_aplan.export import export_components
+doc = open_model({model!r})
+def snapshot():
+    return {{o.Name: [list(o.Placement.Base), list(o.Placement.Rotation.Q), round(o.Shape.Volume, 6),
+                      list(o.Shape.Placement.Base)] for o in doc.Objects if hasattr(o, "Shape")}}
+before = snapshot()
+result = read_components(doc, groups={{"refill": ["ink_001", "cartridge_001"]}}, exclude=["button_001"])
+for c in result.components:
+    c.shape.translate(FreeCAD.Vector(1000, 0, 0))  # moving the copies must not move the document's parts
+export_components(result.components, tempfile.mkdtemp(), {model!r}, result.warnings)
+print("APLAN-RESULT " + json.dumps({{"same": snapshot() == before, "ids": sorted(c.id for c in result.components)}}))
+"""
+
+
+@pytest.mark.freecad
+def test_placements_unchanged_and_groups(tmp_path):
+    freecadcmd = require_freecadcmd()
+    script = tmp_path / "probe.py"
+    script.write_text(PLACEMENTS.format(repo=str(REPO), model=str(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd")))
+    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300)
+    data = freecad_result(done)
+    assert data["same"] is True
+    assert data["ids"] == ["body_001", "cap_001", "head_001", "refill"]
+
+
+@pytest.mark.freecad
+def test_group_and_exclude_from_the_command_line(tmp_path):
+    require_freecadcmd()
+    model = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
+    aplan("export-freecad", str(model), "-o", str(tmp_path / "b"), "--group", "refill=ink_001,cartridge_001",
+          "--exclude", "button_001")
+    product = load_product(tmp_path / "b" / "product.json")
+    assert sorted(product.part_ids) == ["body_001", "cap_001", "head_001", "refill"]
+    assert {frozenset(c) for c in product.contacts} == {frozenset(p) for p in [("refill", "head_001"),
+                                                                               ("head_001", "body_001"),
+                                                                               ("body_001", "cap_001")]}
+
+
+@pytest.mark.freecad
+@pytest.mark.parametrize("model, parts, contacts, interferences, skipped", [
+    ("toy_truck/asm_cement_mixer_truck.FCStd", 61, 113, 0, []),
+    ("diaphragm_pump/asm_diaphragm_pump.FCStd", 51, 68, 12, ["16_001", "21_001"]),
+])
+def test_truck_and_pump(tmp_path, model, parts, contacts, interferences, skipped):
+    """Parts from SOURCE.txt (61 and 51 solids; the pump's two shells are skipped by name); the pump's 68
+    contacts are the touching pairs SOURCE.txt reports; the truck's contacts and both interference counts
+    are this engine's own figures, printed for the record."""
+    require_freecadcmd()
+    path = require_shared(SHARED / "models" / model)
+    out = aplan("export-freecad", str(path), "-o", str(tmp_path / "b")).stdout
+    print(out)
+    product = load_product(tmp_path / "b" / "product.json")
+    found = product.geometry["analysis"]["interferences"]
+    print(f"{model}: {len(product.parts)} parts, {len(product.contacts)} contacts, {len(found)} interferences")
+    assert (len(product.parts), len(product.contacts), len(found)) == (parts, contacts, interferences)
+    for name in skipped:
+        assert any(w.startswith(f"{name}: has") and "no solid" in w for w in product.geometry["warnings"])
+    for item in found:
+        assert item["volume"] > 1.0
+
+
+@pytest.mark.freecad
+def test_bad_models_leave_nothing(tmp_path):
+    require_freecadcmd()
+    missing = aplan("export-freecad", str(tmp_path / "nope.FCStd"), "-o", str(tmp_path / "b"), check=False)
+    assert missing.returncode == 1 and "no such file" in missing.stderr
+    corrupt = tmp_path / "corrupt.FCStd"
+    corrupt.write_bytes(b"this is not a zip archive")
+    bad = aplan("export-freecad", str(corrupt), "-o", str(tmp_path / "b"), check=False)
+    assert bad.returncode == 1 and "corrupt.FCStd" in bad.stderr
+    (tmp_path / "b").mkdir()
+    exists = aplan("export-freecad", str(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"), "-o",
+                   str(tmp_path / "b"), check=False)
+    assert exists.returncode == 1 and "already exists" in exists.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["b", "corrupt.FCStd"]  # no partial bundles
+
+
+NO_SOLIDS = """
+import FreeCAD, Part
+doc = FreeCAD.newDocument("flat")
+face = doc.addObject("Part::Feature", "Sheet")
+face.Shape = Part.makePlane(10, 10)
+doc.saveAs({path!r})
+print("APLAN-RESULT {{}}")
+"""
+
+
+@pytest.mark.freecad
+def test_document_without_solids(tmp_path):
+    freecadcmd = require_freecadcmd()
+    script = tmp_path / "make.py"
+    script.write_text(NO_SOLIDS.format(path=str(tmp_path / "flat.FCStd")))
+    subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=120)
+    done = aplan("export-freecad", str(tmp_path / "flat.FCStd"), "-o", str(tmp_path / "b"), check=False)
+    assert done.returncode == 1
+    assert "the document has no solids to plan with" in done.stderr
+    assert not (tmp_path / "b").exists()
+
+
+DOCUMENT_TYPES = """
+import json, os, sys, tempfile
+sys.path.insert(0, {repo!r})
+import FreeCAD, Part
+folder = tempfile.mkdtemp()
+# A library document with one box, linked from the assembly.
+lib = FreeCAD.newDocument("lib")
+libbox = lib.addObject("Part::Box", "LibBox"); libbox.Length = libbox.Width = libbox.Height = 2
+lib.recompute(); lib.saveAs(os.path.join(folder, "lib.FCStd"))
+doc = FreeCAD.newDocument("asm"); doc.saveAs(os.path.join(folder, "asm.FCStd"))
+body = doc.addObject("PartDesign::Body", "Body")
+feature = doc.addObject("PartDesign::AdditiveBox", "Box")
+body.addObject(feature); feature.Length = feature.Width = feature.Height = 10
+a = doc.addObject("Part::Box", "CutBase"); a.Length = a.Width = a.Height = 10; a.Placement.Base = FreeCAD.Vector(20, 0, 0)
+b = doc.addObject("Part::Box", "CutTool"); b.Length = b.Width = b.Height = 5; b.Placement.Base = FreeCAD.Vector(20, 0, 0)
+cut = doc.addObject("Part::Cut", "Cut"); cut.Base = a; cut.Tool = b
+container = doc.addObject("App::Part", "Sub"); container.Placement.Base = FreeCAD.Vector(0, 50, 0)
+inner = doc.addObject("Part::Cylinder", "Pin"); inner.Radius = 1; inner.Height = 4; container.addObject(inner)
+link = doc.addObject("App::Link", "LinkedBox"); link.LinkedObject = libbox; link.Placement.Base = FreeCAD.Vector(0, 0, 30)
+sketchy = doc.addObject("Part::Feature", "Face"); sketchy.Shape = Part.makePlane(3, 3)
+doc.recompute()
+from freecad_aplan.document import read_components
+result = read_components(doc)
+out = {{c.id: [round(c.shape.Volume, 3), [round(v, 3) for v in (c.shape.BoundBox.XMin, c.shape.BoundBox.YMin, c.shape.BoundBox.ZMin)]] for c in result.components}}
+print("APLAN-RESULT " + json.dumps({{"components": out, "warnings": result.warnings}}))
+"""
+
+
+@pytest.mark.freecad
+def test_document_object_types(tmp_path):
+    """PartDesign bodies, booleans, App::Part containers and links to other documents, built in FreeCAD."""
+    freecadcmd = require_freecadcmd()
+    script = tmp_path / "document_types_probe.py"  # not types.py: it would shadow the standard module
+    script.write_text(DOCUMENT_TYPES.format(repo=str(REPO)))
+    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300)
+    data = freecad_result(done)
+    assert data["components"] == {
+        "Body": [1000.0, [0.0, 0.0, 0.0]],      # the body, not its feature
+        "Cut": [875.0, [20.0, 0.0, 0.0]],       # the boolean, not its operands
+        "Pin": [12.566, [-1.0, 49.0, 0.0]],     # inside an App::Part placed at y = 50
+        "LinkedBox": [8.0, [0.0, 0.0, 30.0]],   # a link to another document, with the link's placement
+    }
+    assert data["warnings"] == ["Face: has 1 faces but no solid (an open or unsewn shell); skipped "
+                                "(make it a solid in FreeCAD to include it)"]
+
+
+@pytest.mark.freecad
+def test_occt_engine_through_the_command_line(pen_bundles, tmp_path):
+    """aplan analyze --engine occt: the exact engine, run in FreeCADCmd on the bundle's B-reps."""
+    import shutil
+
+    bundle = tmp_path / "b"
+    shutil.copytree(pen_bundles["simplified", "FCStd"], bundle)
+    done = aplan("analyze", str(bundle), "--engine", "occt")
+    assert "(occt engine" in done.stdout
+    product = load_product(bundle / "product.json")
+    assert product.geometry["analysis"]["engine"] == "occt"
+    assert {frozenset(c) for c in product.contacts} == LIAISONS
+    for obstruction in product.obstructions:
+        assert set(obstruction.blocks) == ground_truth(obstruction.direction.name), obstruction.direction.name

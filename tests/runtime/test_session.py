@@ -1,0 +1,378 @@
+"""The decision loop: end to end on rendered frames, the robot and source interfaces, failures, the JSON-lines
+log and its replay."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from planner import BLANK, Observation, make_plan
+from planner.decision import intention_pomdp
+from planner.decision.solvers import PointBasedSolver
+from planner.runtime.session import (
+    ConsoleRobot,
+    EventLog,
+    KeyboardSource,
+    ObservationSource,
+    Robot,
+    ScriptedOperator,
+    ScriptedRobot,
+    SessionError,
+    replay,
+    run_session,
+)
+from planner.runtime.tray import CameraModel, SimulatedCell, tray_layout
+from planner.runtime.vision import VisionError, VisionSource, marker_map
+
+
+@pytest.fixture(scope="module")
+def setup(pen):
+    plan = make_plan(pen)
+    model = intention_pomdp(plan)
+    # A fixed amount of work (not of time), so the policy is the same on any machine.
+    policy = PointBasedSolver(max_iterations=300, time_limit=120, precision=1e-3, seed=0).solve(model).policy
+    return plan, model, policy, model.metadata["intention_graph"]
+
+
+def _true_intentions(model, graph, start, log_events, operator_done):
+    """The true intention after each step: the sequence's start moved one successor per operation done,
+    checking that the operations were done in the sequence's order."""
+    sequence, i = [], start
+    while graph.successor[i] >= 0:
+        sequence.append(int(graph.operation[i]))
+        i = int(graph.successor[i])
+    done, truth, operator = [], [], iter(operator_done)
+    for event in log_events:
+        if event["event"] == "action" and model.actions[event["action"]] != "wait":
+            done.append(int(model.metadata["operations"][event["action"]]))
+        elif event["event"] == "observation" and event["observation"] != "blank":
+            done.append(next(operator))
+        elif event["event"] == "belief":
+            assert sorted(done) == sorted(sequence[:len(done)])  # nobody left the operator's sequence
+            j = start
+            for _ in done:
+                j = int(graph.successor[j])
+            truth.append(j)
+    return truth
+
+
+def _vision_session(setup, start, camera, tmp_path=None):
+    plan, model, policy, graph = setup
+    markers = marker_map(plan.product)
+    operator = ScriptedOperator.following(plan, graph, start)
+    cell = SimulatedCell(tray_layout(markers, (960, 540), 48), operator, camera)
+    robot = ScriptedRobot(on_perform=cell.robot)
+    log = EventLog(tmp_path / "session.jsonl" if tmp_path else None)
+    result = run_session(plan, model, policy, VisionSource(cell, markers, quiet_frames=20), robot, log)
+    log.close()
+    return result, log, operator, robot
+
+
+def test_end_to_end_on_rendered_frames(setup, tmp_path):
+    """The pen, a scripted operator following one sequence, frames rendered per step: the loop ends with
+    the product assembled and the belief on the true intention above 0.9; the vision changes nothing."""
+    plan, model, policy, graph = setup
+    start = int(graph.full_sequences()[10])
+    result, log, operator, robot = _vision_session(setup, start, CameraModel(blur=1.2, noise=6, perspective=0.04,
+                                                                       hands=True, seed=7), tmp_path)
+    assert result.assembled, result.message
+    assert result.operations == 5 and operator.remaining == [] and operator.off_script == []
+    assert any(not i.is_wait for i in robot.performed)  # the robot did help
+    truth = _true_intentions(model, graph, start, log.events, operator.done)
+    p_true = [float(b[t]) for b, t in zip(result.beliefs[1:], truth)]
+    assert truth[-1] == 0 and p_true[-1] > 0.9  # the finished product
+    assert max(p_true[:-1]) > 0.9  # as in the paper: sure of the intention before the end
+
+    # The same session with the operator's observations handed over directly gives the same beliefs.
+    direct_operator = ScriptedOperator.following(plan, graph, start)
+    direct = run_session(plan, model, policy, direct_operator,
+                         ScriptedRobot(on_perform=direct_operator.robot_acting))
+    assert direct.actions == result.actions and direct.observations == result.observations
+    assert all(np.allclose(a, b) for a, b in zip(direct.beliefs, result.beliefs))
+
+    # The log replays to the same beliefs.
+    replayed = replay(tmp_path / "session.jsonl")
+    assert replayed.mismatches == [] and replayed.end["reason"] == "assembled"
+    assert len(replayed.beliefs) == len(result.beliefs)
+    assert all(np.allclose(a, b) for a, b in zip(replayed.beliefs, result.beliefs))
+
+
+@pytest.mark.parametrize("k", range(0, 24, 5))
+def test_every_kind_of_sequence_gets_assembled(setup, k):
+    plan, model, policy, graph = setup
+    start = int(graph.full_sequences()[k])
+    operator = ScriptedOperator.following(plan, graph, start)
+    log = EventLog()
+    result = run_session(plan, model, policy, operator, ScriptedRobot(), log)
+    assert result.assembled and operator.off_script == []
+    truth = _true_intentions(model, graph, start, log.events, operator.done)
+    assert result.beliefs[-1][truth[-1]] > 0.9
+
+
+def test_protocols(setup):
+    plan, _, _, graph = setup
+    markers = marker_map(plan.product)
+    assert isinstance(VisionSource([], markers), ObservationSource)
+    assert isinstance(ScriptedOperator(plan, []), ObservationSource)
+    assert isinstance(KeyboardSource(plan.product), ObservationSource)
+    assert isinstance(ScriptedRobot(), Robot) and isinstance(ConsoleRobot(), Robot)
+
+
+def test_robot_failure_stops_cleanly(setup, tmp_path):
+    plan, model, policy, graph = setup
+    operator = ScriptedOperator.following(plan, graph, int(graph.full_sequences()[0]))
+    log = EventLog(tmp_path / "fail.jsonl")
+    result = run_session(plan, model, policy, operator, ScriptedRobot(fail_at={3}), log)
+    assert result.reason == "robot failed" and "step 3: the robot could not" in result.message
+    assert "scripted failure at step 3" in result.message
+    assert result.steps == 3 and len(result.beliefs) == 3  # b0 and the beliefs after steps 1 and 2
+    assert np.array_equal(result.belief, result.beliefs[-1])
+    lines = [json.loads(line) for line in (tmp_path / "fail.jsonl").read_text().splitlines()]
+    assert [e["event"] for e in lines[-3:]] == ["action", "robot", "end"]
+    assert lines[-1]["reason"] == "robot failed"
+    assert replay(tmp_path / "fail.jsonl").mismatches == []
+
+
+class _Listed:
+    def __init__(self, observations):
+        self.observations = list(observations)
+
+    def observe(self):
+        return self.observations.pop(0) if self.observations else None
+
+    def robot_acting(self, instruction):
+        pass
+
+
+def test_observation_no_operation_explains(setup):
+    plan, model, policy, _ = setup
+    source = _Listed([BLANK, Observation(("body", "ink"), "hammer")])
+    log = EventLog()
+    result = run_session(plan, model, policy, source, ScriptedRobot(), log)
+    assert result.reason == "unexplained observation"
+    assert "body+ink+[hammer], which no operation of Bourjault ballpoint pen explains" in result.message
+    assert len(result.beliefs) == 2 and np.array_equal(result.belief, result.beliefs[-1])
+    assert log.events[-2]["event"] == "observation" and log.events[-2]["index"] is None
+
+
+def test_impossible_observation_resets_the_belief_and_goes_on(setup):
+    plan, model, policy, _ = setup
+    # The hammer alone joins two subassemblies: impossible before anything was built.
+    source = _Listed([Observation((), "hammer"), BLANK])
+    log = EventLog()
+    with pytest.warns(RuntimeWarning, match="has probability 0"):
+        result = run_session(plan, model, policy, source, ScriptedRobot(), log)
+    assert result.reason == "source ended" and "ended at step 3" in result.message
+    warnings = [e for e in log.events if e["event"] == "warning"]
+    assert len(warnings) == 1 and "[hammer]" in warnings[0]["message"]
+    assert [e["reset"] for e in log.events if e["event"] == "belief"][0] is not None
+    assert all(abs(b.sum() - 1) < 1e-9 and np.isfinite(b).all() for b in result.beliefs)
+
+
+def test_source_error_stops_cleanly(setup):
+    plan, model, policy, _ = setup
+    markers = marker_map(plan.product)
+
+    def frames():
+        yield np.zeros((540, 960, 3), np.uint8)
+        raise VisionError("tray/0002.png: cannot be read as an image")
+
+    result = run_session(plan, model, policy, VisionSource(frames(), markers), ScriptedRobot())
+    assert result.reason == "error" and "0002.png" in result.message
+
+
+def test_interrupt_and_step_limit_stop_cleanly(setup):
+    plan, model, policy, graph = setup
+
+    class Interrupted(_Listed):
+        def observe(self):
+            if not self.observations:
+                raise KeyboardInterrupt
+            return super().observe()
+
+    log = EventLog()
+    result = run_session(plan, model, policy, Interrupted([BLANK]), ScriptedRobot(), log)
+    assert result.reason == "interrupted" and result.message == "interrupted at step 2"
+    assert log.events[-1]["event"] == "end" and len(result.beliefs) == 2
+    operator = ScriptedOperator.following(plan, graph, int(graph.full_sequences()[0]), acts=lambda step: False)
+    result = run_session(plan, model, policy, operator, ScriptedRobot(), max_steps=3)
+    assert result.reason == "step limit" and result.steps == 3 and len(result.beliefs) == 4
+
+
+def test_console_robot_and_keyboard(setup):
+    plan, model, policy, _ = setup
+    shown = []
+    answers = iter(["", "f gripper jammed"])
+    robot = ConsoleRobot(read=lambda prompt: next(answers), write=shown.append)
+    from planner.runtime.session import instruction_for
+
+    join = instruction_for(plan, model, 0, 1)
+    assert robot.perform(join).ok and "join {" in shown[-1] and "using the hammer" in shown[-1]
+    report = robot.perform(join)
+    assert not report.ok and report.message == "gripper jammed"
+    wait = instruction_for(plan, model, model.actions.index("wait"), 2)
+    assert robot.perform(wait).ok  # waiting needs no confirmation
+
+    def eof(prompt):
+        raise EOFError
+
+    assert not ConsoleRobot(read=eof, write=shown.append).perform(join).ok
+
+    lines = iter(["ink, cartridge hammer", "pen", "ink hammer hammer2", "", "q"])
+    said = []
+    keyboard = KeyboardSource(plan.product, read=lambda prompt: next(lines), write=said.append)
+    assert keyboard.observe() == Observation(("cartridge", "ink"), "hammer")
+    assert keyboard.observe() == BLANK and "not a part or tool: pen" in said[0]
+    assert keyboard.observe() is None
+
+
+def test_log_is_never_overwritten_and_replay_checks(setup, tmp_path):
+    plan, model, policy, graph = setup
+    path = tmp_path / "s.jsonl"
+    operator = ScriptedOperator.following(plan, graph, int(graph.full_sequences()[5]))
+    log = EventLog(path)
+    run_session(plan, model, policy, operator, ScriptedRobot(on_perform=operator.robot_acting), log)
+    log.close()
+    with pytest.raises(SessionError, match="the log exists already"):
+        EventLog(path)
+    lines = path.read_text().splitlines()
+    assert all(json.loads(line)["event"] for line in lines)
+    # A line cut short by a crash is ignored; a tampered belief is reported.
+    path.write_text("\n".join(lines) + '\n{"event": "act')
+    assert replay(path).mismatches == []
+    events = [json.loads(line) for line in lines]
+    belief = next(e for e in events if e["event"] == "belief")
+    belief["top"][0][1] = round(belief["top"][0][1] / 2, 6)
+    path.write_text("".join(json.dumps(e) + "\n" for e in events))
+    assert replay(path).mismatches == [belief["step"]]
+    path.write_text("".join(json.dumps(e) + "\n" for e in events if e["event"] != "action"))
+    with pytest.raises(SessionError, match=r"event \d+ \('observation'\): malformed or out of order"):
+        replay(path)
+    path.write_text('{"event": "robot"}\n')
+    with pytest.raises(SessionError, match="not a session log"):
+        replay(path)
+    path.write_text('not json\n{"event": "start"}\n')
+    with pytest.raises(SessionError, match="line 1: not JSON"):
+        replay(path)
+
+
+# ---------------------------------------------------------------------------------------------- command line
+
+
+def _aplan(*args, stdin=""):
+    import subprocess
+    import sys
+
+    return subprocess.run([sys.executable, "-m", "planner", *map(str, args)], input=stdin, capture_output=True,
+                          text=True)
+
+
+@pytest.fixture(scope="module")
+def policy_file(setup, tmp_path_factory):
+    from planner.decision.policy import write_policy
+
+    path = tmp_path_factory.mktemp("policy") / "pen.policy"
+    write_policy(setup[2], path)
+    return path
+
+
+def test_cli_session_on_a_recorded_video_and_replay(setup, policy_file, tmp_path):
+    """Record the frames of a session (operator and robot in the same cell), then run `aplan session
+    --video` on the recording with a robot that confirms at once: the same beliefs, assembled."""
+    import cv2
+
+    plan, model, policy, graph = setup
+    markers = marker_map(plan.product)
+    start = int(graph.full_sequences()[3])
+    operator = ScriptedOperator.following(plan, graph, start)
+    cell = SimulatedCell(tray_layout(markers, (960, 540), 48), operator, CameraModel(blur=1.0, noise=4, seed=3))
+    recorded = []
+
+    def frames():
+        for frame in cell:
+            recorded.append(frame)
+            yield frame
+
+    result = run_session(plan, model, policy, VisionSource(frames(), markers, quiet_frames=20),
+                         ScriptedRobot(on_perform=cell.robot))
+    assert result.assembled
+    video = tmp_path / "session.avi"
+    writer = cv2.VideoWriter(str(video), cv2.VideoWriter_fourcc(*"MJPG"), 30, (960, 540))
+    for frame in recorded + recorded[-1:] * 30:
+        writer.write(frame)
+    writer.release()
+    log = tmp_path / "cli.jsonl"
+    done = _aplan("session", "pen", "--policy", policy_file, "--video", video, "--robot", "auto", "--log", log,
+                  "--quiet-frames", 20)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("assembled: the product is assembled after")
+    assert "step 1 | belief" in done.stderr
+    replayed = replay(log)
+    assert replayed.observations == result.observations and replayed.actions == result.actions
+    shown = _aplan("replay", log, "--plot", tmp_path / "fig7")
+    assert shown.returncode == 0 and f"beliefs reproduced at all {len(result.actions)} steps" in shown.stdout
+    assert (tmp_path / "fig7.png").stat().st_size > 0
+    steps = [json.loads(line) for line in _aplan("replay", log, "--json").stdout.splitlines()]
+    assert [s["observation"] for s in steps] == [model.observations[z] for z in result.observations]
+
+
+def test_cli_session_keyboard_and_console_robot(setup, policy_file, tmp_path):
+    """The operator's picks typed in and a person confirming the robot's instructions with Enter."""
+    plan, model, policy, graph = setup
+    operator = ScriptedOperator.following(plan, graph, int(graph.full_sequences()[0]))
+    robot = ScriptedRobot(on_perform=operator.robot_acting)
+    expected = run_session(plan, model, policy, operator, robot)
+    lines = []
+    for action, z in zip(expected.actions, expected.observations):
+        if model.actions[action] != "wait":
+            lines.append("")  # the person standing in for the robot presses Enter
+        observation = plan.observations[z]
+        lines.append(" ".join(observation.parts + ((observation.tool,) if observation.tool else ())))
+    log = tmp_path / "k.jsonl"
+    done = _aplan("session", "pen", "--policy", policy_file, "--keyboard", "--log", log, stdin="\n".join(lines) + "\n")
+    assert done.returncode == 0, done.stderr
+    assert "ROBOT, step" in done.stderr and "press Enter when done" in done.stderr
+    assert replay(log).observations == expected.observations
+
+
+def test_cli_session_errors(policy_file, tmp_path):
+    missing = _aplan("session", "pen", "--policy", policy_file, "--images", tmp_path / "nowhere",
+                     "--log", tmp_path / "x.jsonl")
+    assert missing.returncode == 1 and "no such folder of images" in missing.stderr
+    assert not (tmp_path / "x.jsonl").exists()  # nothing ran, nothing logged
+    camera = _aplan("session", "pen", "--policy", policy_file, "--camera", 97, "--log", tmp_path / "x.jsonl")
+    assert camera.returncode == 1 and "camera 97 cannot be opened" in camera.stderr
+    assert not (tmp_path / "x.jsonl").exists()
+    usage = _aplan("session", "pen", "--policy", policy_file)
+    assert usage.returncode == 2
+    assert "one of the arguments --camera --video --images --keyboard --demo is required" in usage.stderr
+    (tmp_path / "x.jsonl").write_text("")
+    exists = _aplan("session", "pen", "--policy", policy_file, "--keyboard", "--log", tmp_path / "x.jsonl")
+    assert exists.returncode == 1 and "the log exists already" in exists.stderr
+    failed = _aplan("session", "pen", "--policy", policy_file, "--keyboard", "--log", tmp_path / "f.jsonl",
+                    stdin="body ink hammer\n")
+    assert failed.returncode == 1 and failed.stdout.startswith("unexplained observation: step 1")
+    events = [json.loads(line)["event"] for line in (tmp_path / "f.jsonl").read_text().splitlines()]
+    assert events[0] == "start" and events[-1] == "end"
+    broken = _aplan("replay", tmp_path / "x.jsonl")
+    assert broken.returncode == 1 and "not a session log" in broken.stderr
+
+
+def test_cli_demo(policy_file, tmp_path):
+    """A simulated cell at 1080p through the whole pipeline, in one command."""
+    done = _aplan("session", "pen", "--policy", policy_file, "--demo", 57, "--log", tmp_path / "d.jsonl")
+    assert done.returncode == 0 and done.stdout.startswith("assembled"), done.stderr
+    assert replay(tmp_path / "d.jsonl").mismatches == []
+    bad = _aplan("session", "pen", "--policy", policy_file, "--demo", 3, "--log", tmp_path / "e.jsonl")
+    assert bad.returncode == 1 and "--demo 3 is not a full assembly sequence" in bad.stderr
+    both = _aplan("session", "pen", "--policy", policy_file, "--demo", 57, "--robot", "auto")
+    assert both.returncode == 1 and "leave out --robot" in both.stderr
+
+
+def test_cli_markers(tmp_path):
+    done = _aplan("markers", "pen", "-o", tmp_path / "sheet.pdf")
+    assert done.returncode == 0 and "7 markers (DICT_4X4_50, 40 mm)" in done.stdout
+    bad = _aplan("markers", "pen", "-o", tmp_path / "sheet.jpg")
+    assert bad.returncode == 1 and ".pdf or .png" in bad.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sheet.pdf"]

@@ -1,0 +1,359 @@
+"""The workbench in the real FreeCAD window (under Xvfb): activate APLAN, run its commands on the pen up to
+the statistics, take screenshots (tests/artifacts/), and check that the user's parts did not move."""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+
+import pytest
+from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
+from test_cad import aplan
+
+ARTIFACTS = REPO / "tests" / "artifacts"
+
+GUI_SCRIPT = r"""
+import json, os, sys, traceback
+from PySide import QtCore, QtGui
+import FreeCAD, FreeCADGui
+
+OUT, COPY, ARTIFACTS = {out!r}, {copy!r}, {artifacts!r}
+result = {{"ticks": 0, "cancel_ticks": 0}}
+
+
+def finish(code):
+    with open(OUT, "w") as handle:
+        json.dump(result, handle)
+    os._exit(code)
+
+
+def guarded(step):
+    def run():
+        try:
+            step()
+        except Exception:
+            result["error"] = traceback.format_exc()
+            finish(1)
+    return run
+
+
+def status():
+    return FreeCADGui.getMainWindow().statusBar().currentMessage()
+
+
+def snapshot(doc):
+    return {{o.Name: [list(o.Placement.Base), list(o.Placement.Rotation.Q)]
+            for o in doc.Objects if o.isDerivedFrom("Part::Feature")}}
+
+
+def start():
+    FreeCADGui.activateWorkbench("AplanWorkbench")
+    result["workbench"] = FreeCADGui.activeWorkbench().name()
+    from freecad_aplan.gui.commands import COMMANDS
+    result["commands"] = {{c.name: sorted(FreeCADGui.Command.get(c.name).getInfo()) != [] for c in COMMANDS}}
+    # Bad input first: no document open. The toolbar greys the command out (IsActive); run it anyway, as a
+    # macro could.
+    from freecad_aplan.gui import commands
+    result["active_without_document"] = [c().IsActive() for c in COMMANDS]
+    commands.Detect().Activated()
+    result["no_document"] = status()
+    doc = FreeCAD.openDocument(COPY)
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    result["before"] = snapshot(doc)
+    count = len(doc.Objects)
+    FreeCADGui.Selection.clearSelection()
+    result["active_without_analysis"] = [c.name for c in COMMANDS if c().IsActive()]
+    commands.Detect().Activated()                    # no analysis yet
+    result["no_analysis"] = status()
+    result["no_analysis_unchanged"] = len(doc.Objects) == count
+    FreeCADGui.runCommand("Aplan_CreateAnalysis")
+    FreeCADGui.runCommand("Aplan_ExcludeParts")      # nothing selected
+    result["nothing_selected"] = status()
+    FreeCADGui.runCommand("Aplan_Plan")              # nothing detected yet
+    result["not_detected"] = status()
+    FreeCADGui.runCommand("Aplan_Detect")            # the mesh engine, in a background process
+    QtCore.QTimer.singleShot(100, guarded(wait_detection))
+
+
+def wait_detection():
+    from freecad_aplan.gui.jobs import running_jobs
+    if running_jobs():
+        result["ticks"] += 1                          # the event loop runs while the engine works
+        QtCore.QTimer.singleShot(100, guarded(wait_detection))
+        return
+    from freecad_aplan.intent import find_analysis, read_intent
+    doc = FreeCAD.ActiveDocument
+    analysis = find_analysis(doc)
+    result["detected"] = status()
+    result["diagrams"] = read_intent(analysis).diagrams
+    # Cancel a second detection half-way: the stored diagrams stay as they are.
+    FreeCADGui.runCommand("Aplan_Detect")
+    jobs = running_jobs()
+    result["cancel_started"] = len(jobs)
+    QtCore.QTimer.singleShot(300, guarded(lambda: [job.cancel() for job in running_jobs()]))
+    QtCore.QTimer.singleShot(400, guarded(wait_cancel))
+
+
+def wait_cancel():
+    from freecad_aplan.gui.jobs import running_jobs
+    if running_jobs():
+        result["cancel_ticks"] += 1
+        QtCore.QTimer.singleShot(100, guarded(wait_cancel))
+        return
+    from freecad_aplan.intent import find_analysis, read_intent
+    doc = FreeCAD.ActiveDocument
+    result["cancelled"] = status()
+    result["diagrams_after_cancel"] = read_intent(find_analysis(doc)).diagrams == result["diagrams"]
+    # The diagrams panel: selecting a relation selects its two parts.
+    FreeCADGui.runCommand("Aplan_Diagrams")
+    panel = FreeCADGui.getMainWindow().findChild(QtGui.QTableWidget, "AplanDiagramsTable")
+    result["diagram_rows"] = panel.rowCount()
+    panel.selectRow(0)
+    result["row0"] = [panel.item(0, c).text() for c in range(3)]
+    result["selected"] = sorted(o.Label for o in FreeCADGui.Selection.getSelection())
+    FreeCADGui.Control.closeDialog()
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.runCommand("Aplan_Plan")
+    from freecad_aplan.gui.commands import last_plan
+    result["plan"] = last_plan()
+    dialog = FreeCADGui.getMainWindow().findChild(QtGui.QDialog, "AplanPlanDialog")
+    table = dialog.findChild(QtGui.QTableWidget, "AplanStatisticsTable")
+    result["shown"] = {{table.item(r, 0).text(): table.item(r, 1).text() for r in range(table.rowCount())}}
+    view = FreeCADGui.ActiveDocument.ActiveView
+    view.viewIsometric()
+    FreeCADGui.SendMsgToActiveView("ViewFit")  # the whole pen
+    view.saveImage(os.path.join(ARTIFACTS, "gui_3d_view.png"), 800, 600, "White")
+    # For the window's screenshot: the dialog on the right, the fitted pen centred in the 3D view left of it.
+    dialog.setGeometry(800, 100, 470, 640)
+    QtGui.QApplication.processEvents()
+    frame_left_of(dialog.frameGeometry().x())
+    QtCore.QTimer.singleShot(800, guarded(screenshots))
+
+
+def frame_left_of(right):
+    # Pan (and zoom by 1.25) the fitted camera: the pen's centre in the middle of the 3D view's part left of
+    # the screen column `right`.
+    from pivy import coin
+    view = FreeCADGui.ActiveDocument.ActiveView
+    widget = FreeCADGui.getMainWindow().findChild(QtGui.QMdiArea).currentSubWindow().widget()
+    left = widget.mapToGlobal(QtCore.QPoint(0, 0)).x()
+    width, height = view.getSize()
+    camera = view.getCameraNode()
+    camera.height.setValue(camera.height.getValue() * 0.8)
+    shift = (left + width / 2 - (left + right) / 2) * camera.height.getValue() / height  # pixels to model units
+    sideways = camera.orientation.getValue().multVec(coin.SbVec3f(1, 0, 0))
+    camera.position.setValue(camera.position.getValue() + sideways * shift)
+
+
+def screenshots():
+    doc = FreeCAD.ActiveDocument
+    screen = QtGui.QApplication.primaryScreen().grabWindow(0)
+    screen.save(os.path.join(ARTIFACTS, "gui_main_window.png"))
+    result["after"] = snapshot(doc)
+    # Designer intent in the task panel: the pen's technical constraint and a tag (body + button needs a
+    # screwdriver and is left to the human), then the plan again.
+    FreeCADGui.getMainWindow().findChild(QtGui.QDialog, "AplanPlanDialog").close()
+    FreeCADGui.runCommand("Aplan_Intent")
+    window = FreeCADGui.getMainWindow()
+    constraints = window.findChild(QtGui.QTableWidget, "AplanConstraintsTable")
+    tags = window.findChild(QtGui.QTableWidget, "AplanTagsTable")
+    constraints.insertRow(0)
+    constraints.setItem(0, 0, QtGui.QTableWidgetItem("ink_001, cartridge_001"))
+    constraints.setItem(0, 1, QtGui.QTableWidgetItem("head_001"))
+    active = QtGui.QTableWidgetItem()
+    active.setCheckState(QtCore.Qt.Checked)
+    constraints.setItem(0, 2, active)
+    row = [r for r in range(tags.rowCount()) if tags.item(r, 0).text() == "{{body_001}} + {{button_001}}"][0]
+    tags.item(row, 2).setCheckState(QtCore.Qt.Unchecked)
+    tags.item(row, 3).setText("screwdriver")
+    result["tag_rows"] = tags.rowCount()
+    from freecad_aplan.gui import commands
+    panel = commands._STATE.get("panel")
+    panel.accept()
+    from freecad_aplan.intent import find_analysis, read_intent, update_intent
+    intent = read_intent(find_analysis(doc))
+    result["stored"] = [intent.technical_constraints, intent.operations, intent.tools]
+    FreeCADGui.runCommand("Aplan_Plan")
+    result["tagged_plan"] = commands.last_plan()["statistics"]
+    doc.undo()
+    result["undone"] = read_intent(find_analysis(doc)).operations
+    # Components: group the selected ink and cartridge, then ungroup; exclude the cap, then include it.
+    analysis = find_analysis(doc)
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(doc.Name, "b_ink_001_")
+    FreeCADGui.Selection.addSelection(doc.Name, "b_cartridge_001_")
+    FreeCADGui.runCommand("Aplan_GroupComponent")
+    result["grouped"] = read_intent(analysis).groups
+    FreeCADGui.runCommand("Aplan_GroupComponent")
+    result["ungrouped"] = read_intent(analysis).groups
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(doc.Name, "b_cap_001_")
+    FreeCADGui.runCommand("Aplan_ExcludeParts")
+    result["excluded"] = read_intent(analysis).excluded
+    FreeCADGui.runCommand("Aplan_ExcludeParts")
+    result["included"] = read_intent(analysis).excluded
+    FreeCADGui.Selection.clearSelection()
+    # Diagrams panel: remove the first relation (a contact), OK; then undo.
+    FreeCADGui.runCommand("Aplan_Diagrams")
+    table = FreeCADGui.getMainWindow().findChild(QtGui.QTableWidget, "AplanDiagramsTable")
+    table.selectRow(0)
+    commands._STATE["panel"].remove_selected()
+    commands._STATE["panel"].accept()
+    result["contacts_after_remove"] = len(read_intent(analysis).diagrams["contacts"])
+    doc.undo()
+    result["contacts_after_undo"] = len(read_intent(analysis).diagrams["contacts"])
+    # Diagrams panel: add a relation with the panel's own fields and button. Bad ones first: a message in
+    # the panel, no new row; then a new contact, OK (one undoable step); then undo.
+    FreeCADGui.runCommand("Aplan_Diagrams")
+    form = FreeCADGui.getMainWindow().findChild(QtGui.QWidget, "AplanDiagramsPanel")
+    table = form.findChild(QtGui.QTableWidget, "AplanDiagramsTable")
+    kind, first, second = (form.findChild(QtGui.QComboBox, name)
+                           for name in ("AplanRelationKind", "AplanRelationFirst", "AplanRelationSecond"))
+    add = form.findChild(QtGui.QPushButton, "AplanAddRelation")
+    message = form.findChild(QtGui.QLabel, "AplanDiagramsMessage")
+
+    def fill_and_add(relation):
+        kind.setCurrentIndex(kind.findText(relation[0]))
+        first.setEditText(relation[1])
+        second.setEditText(relation[2])
+        add.click()
+        return message.text()
+
+    rows, steps = table.rowCount(), len(doc.UndoNames)
+    result["add_messages"] = [fill_and_add(r) for r in (("blocks -Y", "cap_001", "ink_001"),
+                                                        ("contact", "ink_01", "body_001"),
+                                                        ("contact", "body_001", "body_001"))]
+    result["rows_after_bad"] = table.rowCount() - rows
+    result["add_message"] = fill_and_add(("contact", "ink_001", "body_001"))
+    result["added_row"] = [table.item(table.rowCount() - 1, c).text() for c in range(3)]
+    result["stored_before_ok"] = len(read_intent(analysis).diagrams["contacts"])
+    commands._STATE["panel"].accept()
+    stored = read_intent(analysis).diagrams
+    result["after_add"] = [stored["contacts"], stored.get("edits"), doc.UndoNames[0], len(doc.UndoNames) - steps]
+    doc.undo()
+    undone = read_intent(analysis).diagrams
+    result["after_add_undo"] = [len(undone["contacts"]), "edits" in undone]
+    FreeCADGui.Selection.clearSelection()
+    # Save, close and reopen in the GUI: the analysis, its intent and its view provider come back.
+    from dataclasses import asdict
+    update_intent(analysis, "tag", tools=["screwdriver"], operations=[{{"inputs": [["body_001"], ["button_001"]],
+                                                                      "robot": False, "tool": "screwdriver"}}])
+    saved = asdict(read_intent(analysis))
+    path = os.path.join(os.path.dirname(COPY), "reopened.FCStd")
+    doc.saveAs(path)
+    FreeCAD.closeDocument(doc.Name)
+    doc = FreeCAD.openDocument(path)
+    analysis = find_analysis(doc)
+    result["reopened_same"] = asdict(read_intent(analysis)) == saved
+    result["reopened_view"] = type(FreeCADGui.getDocument(doc.Name).getObject(analysis.Name).Proxy).__name__
+    result["reopened_placements"] = snapshot(doc) == result["before"]
+    # An analysis from a newer APLAN: refused with a message, nothing changes.
+    analysis.FormatVersion = 2
+    names = list(analysis.Excluded)
+    FreeCADGui.runCommand("Aplan_Plan")
+    result["newer"] = status()
+    FreeCADGui.Selection.addSelection(doc.Name, "b_cap_001_")
+    FreeCADGui.runCommand("Aplan_ExcludeParts")
+    result["newer_unchanged"] = list(analysis.Excluded) == names
+    # A document without solids.
+    import Part
+    flat = FreeCAD.newDocument("flat")
+    flat.addObject("Part::Feature", "Sheet").Shape = Part.makePlane(10, 10)
+    flat.recompute()
+    FreeCADGui.runCommand("Aplan_CreateAnalysis")
+    FreeCADGui.runCommand("Aplan_Detect")
+    result["no_solids"] = status()
+    result["no_solids_jobs"] = len(__import__("freecad_aplan.gui.jobs", fromlist=["x"]).running_jobs())
+    finish(0)
+
+
+FreeCADGui.getMainWindow().showMaximized()
+QtCore.QTimer.singleShot(1500, guarded(start))
+"""
+
+
+@pytest.mark.freecad
+def test_workbench_in_the_real_freecad_window(tmp_path):
+    require_freecadcmd()
+    freecad, xvfb = shutil.which("freecad"), shutil.which("xvfb-run")
+    if freecad is None or xvfb is None:
+        if os.environ.get("APLAN_REQUIRE_FREECAD") == "1":
+            pytest.fail("APLAN_REQUIRE_FREECAD=1 but the FreeCAD GUI or xvfb-run is missing; install freecad and xvfb")
+        pytest.skip("the FreeCAD GUI (freecad) or xvfb-run is not installed")
+    home = tmp_path / "home"
+    mod = home / ".local" / "share" / "FreeCAD" / "Mod"
+    mod.mkdir(parents=True)
+    (mod / "APLAN").symlink_to(REPO, target_is_directory=True)
+    copy = tmp_path / "pen.FCStd"
+    shutil.copy(require_shared(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"), copy)
+    ARTIFACTS.mkdir(exist_ok=True)
+    out = tmp_path / "result.json"
+    script = tmp_path / "gui_test.py"
+    script.write_text(GUI_SCRIPT.format(out=str(out), copy=str(copy), artifacts=str(ARTIFACTS)))
+    env = {**{k: v for k, v in os.environ.items() if k not in ("DISPLAY", "APLAN_PYTHON")}, "HOME": str(home),
+           "QTWEBENGINE_CHROMIUM_FLAGS": "--no-sandbox --disable-gpu", "LANG": "C.UTF-8"}
+    done = subprocess.run([xvfb, "-a", "-s", "-screen 0 1280x800x24", freecad, str(script)], capture_output=True,
+                          text=True, timeout=300, env=env, stdin=subprocess.DEVNULL)
+    assert out.is_file(), f"the GUI test wrote no result:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
+    data = json.loads(out.read_text())
+    assert "error" not in data, data.get("error")
+    assert data["workbench"] == "AplanWorkbench" and all(data["commands"].values())
+    # Bad input: one clear line each, and the document untouched.
+    assert data["active_without_document"] == [False] * 11
+    assert data["active_without_analysis"] == ["Aplan_CreateAnalysis"]
+    assert "no document is open" in data["no_document"]
+    assert "no APLAN analysis; create one first" in data["no_analysis"] and data["no_analysis_unchanged"]
+    assert "nothing is selected" in data["nothing_selected"]
+    assert "run APLAN > Detect contacts and obstructions first" in data["not_detected"]
+    # Detection ran in the background (the event loop kept running) and found the pen's five liaisons.
+    assert data["ticks"] >= 2, data
+    diagrams = data["diagrams"]
+    assert sorted(diagrams["parts"]) == sorted(["ink_001", "cartridge_001", "head_001", "body_001", "cap_001",
+                                                "button_001"])
+    assert len(diagrams["contacts"]) == 5 and "5 contacts" in data["detected"]
+    assert data["cancel_started"] == 1 and "cancelled; nothing was changed" in data["cancelled"]
+    assert data["diagrams_after_cancel"] is True
+    # Diagrams table: contacts plus the +X/+Y/+Z obstruction pairs; a row selects its two parts.
+    assert data["diagram_rows"] == 5 + sum(len(o["blocks"]) for o in diagrams["obstructions"])
+    assert data["row0"][0] == "contact" and data["selected"] == sorted(data["row0"][1:])
+    # Statistics: the figures of `aplan stats` for the pen (README / paper: 69 intentions).
+    stats = data["plan"]["statistics"]
+    assert stats == json.loads(aplan("stats", str(copy), "--json").stdout)
+    assert (stats["subassemblies"], stats["states"], stats["intentions"], stats["sequences"]) == (18, 18, 69, 24)
+    assert data["shown"]["intentions"] == "69"
+    assert all(path.endswith(".png") for path in data["plan"]["images"].values())
+    assert data["after"] == data["before"]
+    # Intent edited in the task panel: stored as product-format entries, used by the next plan, undoable.
+    constraints, operations, tools = data["stored"]
+    assert constraints == [{"parts": ["ink_001", "cartridge_001"], "requires": "head_001", "active": True}]
+    assert operations == [{"inputs": [["body_001"], ["button_001"]], "unfavorable": False, "robot": False,
+                           "tool": "screwdriver"}] and tools == ["screwdriver"]
+    assert data["tag_rows"] == 21
+    tagged = data["tagged_plan"]
+    assert (tagged["intentions"], tagged["states"], tagged["actions"]) == (39, 14, 18 - 1)
+    assert data["undone"] == []
+    assert data["grouped"] == {"ink_001+cartridge_001": ["b_ink_001_", "b_cartridge_001_"]}
+    assert data["ungrouped"] == {} and data["excluded"] == ["b_cap_001_"] and data["included"] == []
+    assert (data["contacts_after_remove"], data["contacts_after_undo"]) == (4, 5)
+    # Adding a relation in the panel: refused with a message (duplicate, unknown, self), else one undoable step.
+    duplicate, unknown, itself = data["add_messages"]
+    assert duplicate == ("cannot add cap_001 blocked by ink_001 along -Y: the diagrams already hold it "
+                         "(as ink_001 blocked by cap_001 along +Y)")
+    assert "'ink_01' is not a component (did you mean 'ink_001'?)" in unknown
+    assert "a component cannot be related to itself" in itself
+    assert data["rows_after_bad"] == 0
+    assert data["add_message"] == "added contact ink_001 - body_001 (stored on OK)"
+    assert data["added_row"] == ["contact", "ink_001", "body_001"] and data["stored_before_ok"] == 5
+    contacts, edits, undo_name, steps = data["after_add"]
+    assert {frozenset(c) for c in contacts} == {frozenset(c) for c in diagrams["contacts"]} | {
+        frozenset(("ink_001", "body_001"))}
+    assert edits == [{"added": ["contact", "ink_001", "body_001"]}]
+    assert (undo_name, steps) == ("APLAN: add contact ink_001 - body_001", 1)
+    assert data["after_add_undo"] == [5, False]
+    assert data["reopened_same"] is True and data["reopened_view"] == "AnalysisViewProvider"
+    assert data["reopened_placements"] is True
+    assert "written by a newer APLAN" in data["newer"] and data["newer_unchanged"] is True
+    assert "the document has no solids to plan with" in data["no_solids"] and data["no_solids_jobs"] == 0
+    for name in ("gui_main_window.png", "gui_3d_view.png"):
+        assert (ARTIFACTS / name).stat().st_size > 10_000
