@@ -8,8 +8,8 @@ import shutil
 import subprocess
 
 import pytest
+from cad_support import aplan
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
-from test_cad import aplan
 
 ARTIFACTS = REPO / "tests" / "artifacts"
 
