@@ -26,7 +26,7 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from planner import make_plan, resolve_product  # noqa: E402
-from planner.decision import intention_pomdp  # noqa: E402
+from planner.decision import intention_model  # noqa: E402
 from planner.decision.simulate import simulate_episode  # noqa: E402
 from planner.decision.solvers import PointBasedSolver  # noqa: E402
 
@@ -38,8 +38,8 @@ def main() -> None:
     parser.add_argument("--technical", action="store_true")
     args = parser.parse_args()
     plan = make_plan(resolve_product("pen"), args.technical)
-    model = intention_pomdp(plan)
-    graph = model.metadata["intention_graph"]
+    decision = intention_model(plan)
+    model, graph = decision.pomdp, decision.graph
     result = PointBasedSolver(time_limit=args.time_limit, precision=1e-4).solve(model)
     print(f"policy: {result.policy.alphas.shape[0]} alpha vectors, bounds {result.lower_bound:.5f} / "
           f"{result.upper_bound:.5f} after {result.seconds:.0f} s; {args.episodes} episodes per sequence\n")
@@ -49,10 +49,7 @@ def main() -> None:
     medians = []
     for start in graph.full_sequences():
         start = int(start)
-        steps, i = [], start
-        while graph.successor[i] >= 0:
-            steps.append(plan.andor.describe(int(graph.operation[i])))
-            i = int(graph.successor[i])
+        steps = decision.describe_operations(start)
         counts = [simulate_episode(model, result.policy, start, rng, 100, graph.successor, 0, "turns")
                   .first_confident(0.9) for _ in range(args.episodes)]
         known = [c for c in counts if c is not None]

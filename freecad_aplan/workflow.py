@@ -197,15 +197,15 @@ def analysis_product(analysis, name: str = ""):
 def plan_report(product, folder: str | None = None, technical: bool | None = None):
     """The plan of ``product``, its statistics (``aplan stats``'s figures) and, with ``folder``, the pictures
     of its AND/OR, state and intention graphs (:func:`planner.assembly.figures.draw_plan`)."""
-    from planner import make_plan, plan_statistics
+    from planner import api
 
-    plan = make_plan(product, technical)
+    plan, statistics = api.plan_statistics_of(product, technical)
     images = {}
     if folder is not None:
         from planner.assembly.figures import draw_plan
 
         images = draw_plan(plan, folder)
-    return plan, plan_statistics(plan), images
+    return plan, statistics, images
 
 
 def export_analysis_bundle(document, analysis, bundle: str) -> None:
@@ -247,26 +247,23 @@ def analysis_diagrams(analysis) -> dict:
 
 def export_decision_model(product, path: str, technical: bool | None = None) -> dict:
     """Write the POMDP of ``product`` (Alg. 3) as POMDPX or ``.pomdp`` (by the file name); returns its sizes."""
-    from planner import make_plan
-    from planner.api import save_model
-    from planner.decision import intention_pomdp
+    from planner import api
 
-    model = intention_pomdp(make_plan(product, technical))
-    save_model(model, path)
-    return {"states": len(model.states), "actions": len(model.actions), "observations": len(model.observations)}
+    model = api.decision_model(product, technical)
+    api.save_model(model, path)
+    return {"states": model.pomdp.n_states, "actions": model.pomdp.n_actions,
+            "observations": model.pomdp.n_observations}
 
 
 def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE_TIME_LIMIT,
-                  precision: float = SOLVE_PRECISION,
-                  technical: bool | None = None, progress=None) -> dict:
-    """Solve the POMDP of the product file ``product`` and write the policy to ``output`` (a background job)."""
-    from planner import load_product, make_plan
-    from planner.decision import intention_pomdp
+                  precision: float = SOLVE_PRECISION, technical: bool | None = None, progress=None) -> dict:
+    """Solve the decision model of the product file ``product`` and write the policy to ``output`` (a
+    background job)."""
+    from planner import api
     from planner.decision.policy import write_policy
-    from planner.decision.solvers import PointBasedSolver
 
-    model = intention_pomdp(make_plan(load_product(product), technical))
-    result = PointBasedSolver(time_limit=time_limit, precision=precision).solve(model, progress)
+    model = api.decision_model(product, technical)
+    result = api.solve(model, time_limit, precision, progress=progress)
     write_policy(result.policy, output, model.name)
     return {"lower_bound": result.lower_bound, "upper_bound": result.upper_bound,
             "alpha_vectors": int(result.policy.alphas.shape[0]), "seconds": round(result.seconds, 2)}
@@ -274,26 +271,18 @@ def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE
 
 def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None = None, seed: int = 0,
                       technical: bool | None = None) -> dict:
-    """Play the operator through full sequence ``sequence`` (default: the first) against the policy and
-    write the belief plot ``stem.png``/``stem.svg``; returns the steps and the plot paths."""
-    import numpy as np
+    """Play the operator through full sequence ``sequence`` (default: the first) against the policy, taking
+    turns with the robot, and write the belief plot ``stem.png``/``stem.svg``; returns the steps and the plot
+    paths."""
+    from planner import api
+    from planner.decision.simulate import plot_beliefs
 
-    from planner import make_plan
-    from planner.decision import intention_pomdp
-    from planner.decision.policy import read_policy
-    from planner.decision.simulate import plot_beliefs, simulate_episode
-
-    model = intention_pomdp(make_plan(product, technical))
-    graph = model.metadata["intention_graph"]
-    starts = [int(s) for s in graph.full_sequences()]
-    start = starts[0] if sequence is None else sequence
-    if start not in starts:
-        raise PlannerError(f"{start} is not a full assembly sequence; the sequences are the intentions "
-                           f"{starts[0]}..{starts[-1]}")
-    policy = read_policy(policy_path, model)
-    episode = simulate_episode(model, policy, start, np.random.default_rng(seed), 100, graph.successor, 0, "turns")
-    written = plot_beliefs([episode], stem, [f"sequence {start}"])
-    return {"sequence": start, "steps": [(model.actions[s.action], str(model.observations[s.observation]),
-                                          round(s.p_true, 3)) for s in episode.steps],
+    model = api.decision_model(product, technical)
+    policy, _ = api.policy_for(model, policy_path)
+    episode, = api.simulate(model, policy, None if sequence is None else [sequence], seed=seed, operator="turns",
+                            what="sequence")
+    written = plot_beliefs([episode], stem, [f"sequence {episode.start}"])
+    return {"sequence": episode.start,
+            "steps": [(model.actions[s.action], str(model.observations[s.observation]), round(s.p_true, 3))
+                      for s in episode.steps],
             "confident_after": episode.first_confident(CONFIDENCE), "plots": written}
-

@@ -1,49 +1,51 @@
-"""Load a decision model from a POMDPX file, a ``.pomdp`` file, or a product (built by Alg. 3)."""
+"""The planner's application interface: what every front end (the ``aplan`` command line, the FreeCAD
+workbench, batch jobs, user scripts) does with a product, in one place.
+
+Front ends only parse their input and show results; the steps of the method live here, each a plain function:
+
+1. :func:`resolve_product`: a PRODUCT argument (a product file, a bundle folder, a CAD file read through
+   a plugin, or an embedded example) -> :class:`~planner.product.Product`;
+2. :func:`plan_statistics_of`: the plan of a product and its figures (``aplan stats``);
+3. :func:`decision_model` / :func:`load_model` / :func:`save_model`: the decision model of Alg. 3, or a
+   POMDP read from a file, and writing it as POMDPX or ``.pomdp``;
+4. :func:`solve`, :func:`policy_for`: a policy from a solver (the built-in point-based one, or SARSOP);
+5. :func:`simulate`, :func:`evaluate`: episodes of an operator against a policy.
+
+>>> from planner import api
+>>> model = api.decision_model("pen")
+>>> model.pomdp.n_states, model.pomdp.n_actions, model.pomdp.n_observations
+(69, 22, 12)
+"""
 from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Callable, Sequence
 
-from .assembly.plan import make_plan
-from .decision.intention_model import Rewards, intention_pomdp
+import numpy as np
+
+from .assembly.intentions import most_connected_part
+from .assembly.plan import Plan, make_plan
+from .assembly.stats import PlanStatistics, plan_statistics
+from .decision.intention_model import IntentionModel, Rewards, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
+from .decision.policy import AlphaVectorPolicy, read_policy
 from .decision.pomdp import POMDP
-from .defaults import DISCOUNT
+from .decision.simulate import Episode, evaluate_policy, simulate_episode
+from .decision.solvers import PointBasedSolver, SolveResult
+from .defaults import DISCOUNT, POLICY_TIME_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
 from .errors import PlannerError, UnknownProductError
 from .product.examples import EXAMPLES, example_path
 from .product.model import Product, load_product
 
-__all__ = ["resolve_product", "load_model", "save_model", "MODEL_SUFFIXES"]
+__all__ = ["resolve_product", "plan_of", "plan_statistics_of", "decision_model", "load_model", "save_model",
+           "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for", "simulate", "evaluate"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
+SOLVER_ENGINES = ("builtin", "sarsop")
 
-
-def _kind(path: str | Path) -> str | None:
-    name = str(path).lower()
-    return next((s for s in MODEL_SUFFIXES if name.endswith(s)), None)
-
-
-def load_model(argument: str | Path, technical: bool | None = None, rewards: Rewards = Rewards(),
-               discount: float = DISCOUNT) -> POMDP:
-    """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file, else a PRODUCT (file, bundle, example)."""
-    kind = _kind(argument)
-    if kind in (".pomdpx", ".pomdpx.gz"):
-        return read_pomdpx(argument)
-    if kind == ".pomdp":
-        return read_cassandra(argument)
-    return intention_pomdp(make_plan(resolve_product(argument), technical), rewards, discount)
-
-
-def save_model(model: POMDP, path: str | Path) -> None:
-    """Write POMDPX (``.pomdpx``) or Cassandra (``.pomdp``), by the file name."""
-    kind = _kind(path)
-    if kind == ".pomdpx":
-        write_pomdpx(model, path)
-    elif kind == ".pomdp":
-        write_cassandra(model, path)
-    else:
-        raise PlannerError(f"{path}: unknown model file type; use .pomdpx or .pomdp")
+Model = IntentionModel | POMDP
 
 
 def resolve_product(argument: str | os.PathLike) -> Product:
@@ -52,12 +54,7 @@ def resolve_product(argument: str | os.PathLike) -> Product:
 
     A bundle whose geometry has not been analysed yet is analysed in memory with the mesh engine.
     """
-    from .geometry.bundle import (
-        PRODUCT_FILE,
-        analyze_product,
-        apply_report,
-        is_analysed,
-    )
+    from .geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, is_analysed
     from .plugins import registry
 
     path = Path(argument)
@@ -78,3 +75,108 @@ def resolve_product(argument: str | os.PathLike) -> Product:
         return load_product(example_path(str(argument)))
     raise UnknownProductError(
         f"{argument}: no such file, and no embedded example of that name (embedded: {', '.join(EXAMPLES)})")
+
+
+def plan_of(product: str | os.PathLike | Product, technical: bool | None = None) -> Plan:
+    """The plan (AND/OR graph, assembly states, tags) of a product or PRODUCT argument; ``technical``:
+    ``True``/``False`` switches every technical constraint on/off, ``None`` keeps the file's."""
+    return make_plan(product if isinstance(product, Product) else resolve_product(product), technical)
+
+
+def plan_statistics_of(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
+                       base_part: str | None = None) -> tuple[Plan, PlanStatistics]:
+    """The plan and its figures (``aplan stats``). ``base_part``: count only the sequences whose first
+    operation joins it; ``"auto"``: the most connected part."""
+    plan = product if isinstance(product, Plan) else plan_of(product, technical)
+    base = most_connected_part(plan.product) if base_part == "auto" else base_part
+    return plan, plan_statistics(plan, base)
+
+
+def decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
+                   rewards: Rewards = Rewards(), discount: float = DISCOUNT) -> IntentionModel:
+    """The decision model of Alg. 3 of a product, PRODUCT argument or plan."""
+    plan = product if isinstance(product, Plan) else plan_of(product, technical)
+    return intention_model(plan, rewards, discount)
+
+
+def _model_file_kind(path: str | os.PathLike) -> str | None:
+    name = str(path).lower()
+    return next((s for s in MODEL_SUFFIXES if name.endswith(s)), None)
+
+
+def load_model(argument: str | os.PathLike, technical: bool | None = None, rewards: Rewards = Rewards(),
+               discount: float = DISCOUNT) -> Model:
+    """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`), else a PRODUCT
+    (its :class:`IntentionModel`; ``technical``, ``rewards`` and ``discount`` apply to it only)."""
+    kind = _model_file_kind(argument)
+    if kind in (".pomdpx", ".pomdpx.gz"):
+        return read_pomdpx(argument)
+    if kind == ".pomdp":
+        return read_cassandra(argument)
+    return decision_model(argument, technical, rewards, discount)
+
+
+def tables(model: Model) -> POMDP:
+    """The POMDP tables of a decision model (a :class:`POMDP` is its own tables)."""
+    return model.pomdp if isinstance(model, IntentionModel) else model
+
+
+def save_model(model: Model, path: str | os.PathLike) -> None:
+    """Write POMDPX (``.pomdpx``) or Cassandra (``.pomdp``), by the file name (atomically)."""
+    kind = _model_file_kind(path)
+    if kind == ".pomdpx":
+        write_pomdpx(tables(model), path)
+    elif kind == ".pomdp":
+        write_cassandra(tables(model), path)
+    else:
+        raise PlannerError(f"{path}: unknown model file type; use .pomdpx or .pomdp")
+
+
+def solve(model: Model, time_limit: float = SOLVE_TIME_LIMIT, precision: float = SOLVE_PRECISION,
+          engine: str = "builtin", progress: Callable[[float, float, float], None] | None = None) -> SolveResult:
+    """Solve ``model`` offline: ``engine`` ``builtin`` (:class:`PointBasedSolver`, ``progress(seconds,
+    lower, upper)`` after each step) or ``sarsop`` (APPL's ``pomdpsol``, when it is on PATH)."""
+    if engine == "sarsop":
+        from .decision.solvers.sarsop import solve_with_sarsop
+
+        return solve_with_sarsop(tables(model), time_limit, precision)
+    if engine != "builtin":
+        raise PlannerError(f"unknown solver engine {engine!r}; use one of {', '.join(SOLVER_ENGINES)}")
+    return PointBasedSolver(time_limit=time_limit, precision=precision).solve(tables(model), progress)
+
+
+def policy_for(model: Model, policy: str | os.PathLike | None = None,
+               time_limit: float = POLICY_TIME_LIMIT) -> tuple[AlphaVectorPolicy, SolveResult | None]:
+    """The policy in the file ``policy`` (checked against the model), or, without one, the built-in solver's
+    after ``time_limit`` seconds, with its result (bounds, time)."""
+    if policy:
+        return read_policy(policy, tables(model)), None
+    result = solve(model, time_limit, SOLVE_PRECISION)
+    return result.policy, result
+
+
+def simulate(model: IntentionModel, policy, sequences: Sequence[int] | None = None, every: bool = False,
+             random: int | None = None, seed: int = 0, max_steps: int = 100, operator: str = "model",
+             what: str = "--sequence") -> list[Episode]:
+    """One episode per full sequence played (``Episode.start``): ``every`` one, ``random`` ones drawn at
+    random, the listed ``sequences`` (each checked), or by default the first. The operator follows its
+    sequence (``operator``: ``model`` or ``turns``, see :func:`~planner.decision.simulate.simulate_episode`);
+    one random stream, seeded by ``seed``, draws the sequences and then every episode."""
+    starts = [int(s) for s in model.full_sequences()]
+    rng = np.random.default_rng(seed)
+    if every:
+        chosen = starts
+    elif random:
+        chosen = [int(s) for s in rng.choice(starts, size=random)]
+    else:
+        chosen = [model.full_sequence(s, what) for s in (sequences or [starts[0]])]
+    return [simulate_episode(model.pomdp, policy, start, rng, max_steps, model.graph.successor, model.final_state,
+                             operator) for start in chosen]
+
+
+def evaluate(model: Model, policy, episodes: int, seed: int = 0, max_steps: int = 100) -> tuple[float, float]:
+    """The mean discounted return over ``episodes`` simulated episodes and its 95 % confidence half-width;
+    episodes of an intention model end at the finished product."""
+    final = model.final_state if isinstance(model, IntentionModel) else None
+    mean, half, _ = evaluate_policy(tables(model), policy, episodes, seed, max_steps, final)
+    return mean, half

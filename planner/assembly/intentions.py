@@ -154,6 +154,14 @@ class IntentionGraph:
             intention = int(self.successor[intention])
         return out
 
+    def operations(self, intention: int) -> list[int]:
+        """The operations of an intention's steps, in order, to the finished product (empty for the final one)."""
+        out, i = [], int(intention)
+        while self.successor[i] >= 0:
+            out.append(int(self.states.edge_operation[self.step_edge[i]]))
+            i = int(self.successor[i])
+        return out
+
     def full_sequences(self) -> np.ndarray:
         """The intentions that start at the initial state (the full assembly sequences)."""
         return np.flatnonzero(self.first_state == self.states.initial)

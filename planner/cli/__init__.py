@@ -1,4 +1,74 @@
-"""The ``aplan`` command line (one module per group of commands) over :mod:`planner.api`."""
-from .main import add_tolerance_options, build_parser, main, tolerances_from
+"""The ``aplan`` command line: ``stats``, ``intentions``, ``synth`` (:mod:`.plan`), ``analyze``
+(:mod:`.geometry`), ``pomdp``, ``solve``, ``simulate``, ``evaluate`` (:mod:`.decision`), ``session``,
+``replay``, ``markers`` (:mod:`.runtime`), and the commands plugins add (``export-freecad``).
+
+Each module only parses arguments and prints; the work is done by :mod:`planner.api`. Messages for the user
+(notes, warnings) go through :mod:`logging` to standard error; results go to standard output.
+Exit status: 0 on success, 1 when the input is bad (the message says what, where and how to fix it),
+2 on a usage error. Nothing is written when a command fails.
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from typing import Sequence
+
+from ..errors import PlannerError
+from ..plugins import registry
+from . import decision, geometry, plan, runtime
+from .options import add_tolerance_options, tolerances_from
 
 __all__ = ["main", "build_parser", "add_tolerance_options", "tolerances_from"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="aplan", description="APLAN: assembly plans and operator intentions "
+                                     "for human-robot collaborative assembly (Cramer et al., RA-L 2021).")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for group in (plan, geometry, decision, runtime):
+        group.add_commands(commands)
+    for add in registry().commands:
+        add(commands)
+    return parser
+
+
+class _Format(logging.Formatter):
+    """``aplan: MESSAGE`` for notes, ``aplan: warning: MESSAGE`` for warnings and errors."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        message = record.getMessage()
+        return f"aplan: {message}" if record.levelno < logging.WARNING else f"aplan: warning: {message}"
+
+
+def _configure_logging() -> logging.Handler:
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(_Format())
+    for name in ("planner", "freecad_aplan"):
+        logger = logging.getLogger(name)
+        logger.addHandler(handler)
+        logger.setLevel(logging.INFO)
+        logger.propagate = False
+    return handler
+
+
+def _restore_logging(handler: logging.Handler) -> None:
+    for name in ("planner", "freecad_aplan"):
+        logger = logging.getLogger(name)
+        logger.removeHandler(handler)
+        logger.setLevel(logging.NOTSET)
+        logger.propagate = True
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    handler = _configure_logging()  # undone at the end: main() also runs inside tests and other programs
+    try:
+        return args.run(args)
+    except PlannerError as exc:
+        print(f"aplan: error: {exc}", file=sys.stderr)
+        return 1
+    except BrokenPipeError:  # e.g. `aplan intentions pen | head`
+        return 0
+    finally:
+        _restore_logging(handler)

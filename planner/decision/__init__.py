@@ -1,7 +1,7 @@
 """The decision model (the paper's Sec. III-C, Alg. 3) behind four small interfaces, as in POMDPs.jl:
 
 - the *model*: a discrete :class:`POMDP` in sparse tables (``pomdp``), built from a plan by
-  :func:`intention_pomdp` (``intention_model``) or read from POMDPX / Cassandra files (``io``);
+  :func:`intention_model` (an :class:`IntentionModel`: the plan, its intention graph and the tables) or read from POMDPX / Cassandra files (``io``);
 - the *solver*: ``solver.solve(model) -> SolveResult`` (``solvers``);
 - the *policy*: ``policy.action(belief)`` and ``policy.value(belief)`` (``policy``);
 - the *belief updater*: ``initialize`` and ``update(belief, action, observation)`` (``belief``).
@@ -9,11 +9,11 @@
 ``simulate`` plays episodes of any model against any policy with any updater.
 """
 from .belief import DiscreteUpdater, UnexplainedObservation
-from .intention_model import WAIT, Rewards, intention_pomdp
+from .intention_model import WAIT, IntentionModel, Rewards, intention_model, intention_pomdp
 from .policy import AlphaVectorPolicy, PolicyError, read_policy, write_policy
 from .pomdp import POMDP, ModelError
 from .solvers import PointBasedSolver, SolveResult
 
-__all__ = ["DiscreteUpdater", "UnexplainedObservation", "WAIT", "Rewards", "intention_pomdp",
+__all__ = ["DiscreteUpdater", "UnexplainedObservation", "WAIT", "IntentionModel", "Rewards", "intention_model", "intention_pomdp",
            "AlphaVectorPolicy", "PolicyError", "read_policy", "write_policy", "POMDP", "ModelError",
            "PointBasedSolver", "SolveResult"]

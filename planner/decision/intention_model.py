@@ -1,4 +1,5 @@
-"""The operator-intent POMDP of Cramer et al. 2021 (Alg. 3), built from a plan.
+"""The paper's decision model (Cramer et al. 2021, Alg. 3): a POMDP over the operator's intentions, built
+from a plan, as an :class:`IntentionModel` that keeps the plan and the intention graph beside the tables.
 
 Definitions (these match the authors' code, checked against the POMDPX files it writes):
 
@@ -30,9 +31,10 @@ from ..assembly.intentions import (
 )
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
+from ..errors import PlannerError
 from .pomdp import POMDP
 
-__all__ = ["Rewards", "WAIT", "intention_pomdp"]
+__all__ = ["Rewards", "WAIT", "IntentionModel", "intention_model", "intention_pomdp"]
 
 WAIT = "wait"
 
@@ -48,10 +50,72 @@ class Rewards:
     wait: float = 0.0
 
 
-def intention_pomdp(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
-                    graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT) -> POMDP:
-    """The POMDP of Alg. 3 over the intentions of ``plan`` (definitions in the module docstring).
+@dataclass(frozen=True)
+class IntentionModel:
+    """The decision model of one plan: the POMDP of Alg. 3 and what its numbers mean.
 
+    ``pomdp``: the tables (the *model* that solvers, policies and belief updaters work on); its state ``i``
+    is intention ``i`` of ``graph`` (0 is the finished product) and its action ``k`` performs the AND/OR
+    operation ``action_operations[k]`` of ``plan`` (-1: wait, the last action). ``rewards``: those the
+    tables were built with. Build it with :func:`intention_model`.
+    """
+
+    plan: Plan
+    graph: IntentionGraph
+    pomdp: POMDP
+    action_operations: np.ndarray
+    rewards: Rewards
+
+    @property
+    def name(self) -> str:
+        return self.pomdp.name
+
+    @property
+    def actions(self) -> tuple[str, ...]:
+        return self.pomdp.actions
+
+    @property
+    def observations(self) -> tuple[str, ...]:
+        return self.pomdp.observations
+
+    @property
+    def final_state(self) -> int:
+        """The finished product's intention (absorbing)."""
+        return 0
+
+    def operation(self, action: int) -> int | None:
+        """The AND/OR operation the robot performs for ``action``; None for ``wait``."""
+        operation = int(self.action_operations[action])
+        return None if operation < 0 else operation
+
+    def full_sequences(self) -> np.ndarray:
+        """The intentions that are full assembly sequences (where assembly starts), in increasing order."""
+        return self.graph.full_sequences()
+
+    def full_sequence(self, intention: int, what: str = "intention") -> int:
+        """``intention`` when it is a full assembly sequence, else a :class:`PlannerError` that lists them
+        (``what`` names it in the message, e.g. ``--sequence``)."""
+        starts = self.full_sequences()
+        if int(intention) not in set(starts.tolist()):
+            raise PlannerError(f"{what} {intention} is not a full assembly sequence; the sequences are the "
+                               f"intentions {starts[0]}..{starts[-1]} (see aplan intentions PRODUCT --full)")
+        return int(intention)
+
+    def sequence_operations(self, intention: int) -> list[int]:
+        """The operations, in order, that lead from ``intention`` to the finished product."""
+        return self.graph.operations(intention)
+
+    def describe_operations(self, intention: int) -> list[str]:
+        """:meth:`sequence_operations` as text (``ink+cartridge``, ...)."""
+        return [self.plan.andor.describe(o) for o in self.sequence_operations(intention)]
+
+
+def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
+                     graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT) -> IntentionModel:
+    """The decision model of Alg. 3 over the intentions of ``plan`` (definitions in the module docstring).
+
+    ``graph``: the plan's intention graph when it was built already (else it is built, refusing more than
+    ``limit`` intentions with :class:`~planner.errors.LimitExceededError`).
     Cost: O(I x A) for the reward table and O(I) for the sparse tables, I intentions, A actions.
     """
     graph = graph if graph is not None else intention_graph(plan.states, limit)
@@ -111,6 +175,14 @@ def intention_pomdp(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
     names = [f"i{i}" for i in range(n)]
     actions = [f"a{k}:" + andor.describe(int(op)).replace(" ", "") for k, op in enumerate(robot_ops)] + [WAIT]
     observations = [str(o) for o in plan.observations]
-    return POMDP(tuple(names), tuple(actions), tuple(observations), tuple(transition), observation, reward, initial,
-                 discount, name=plan.product.name or "aplan",
-                 metadata={"operations": robot_ops.tolist(), "intention_graph": graph})
+    pomdp = POMDP(tuple(names), tuple(actions), tuple(observations), tuple(transition), observation, reward,
+                  initial, discount, name=plan.product.name or "aplan")
+    action_operations = np.append(robot_ops, -1)
+    action_operations.flags.writeable = False
+    return IntentionModel(plan, graph, pomdp, action_operations, rewards)
+
+
+def intention_pomdp(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
+                    graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT) -> POMDP:
+    """The tables alone of :func:`intention_model` (for solvers, files and comparisons with other planners)."""
+    return intention_model(plan, rewards, discount, graph, limit).pomdp

@@ -13,7 +13,7 @@ Tables, for ``S`` states, ``A`` actions and ``Z`` observations:
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -43,7 +43,6 @@ class POMDP:
     initial: np.ndarray
     discount: float = DISCOUNT
     name: str = "aplan"
-    metadata: dict = field(default_factory=dict, compare=False)
 
     def __post_init__(self) -> None:
         self.check()

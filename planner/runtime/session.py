@@ -41,8 +41,7 @@ import numpy as np
 from ..assembly.plan import Plan
 from ..assembly.tags import BLANK, Observation
 from ..decision.belief import DiscreteUpdater
-from ..decision.intention_model import WAIT
-from ..decision.pomdp import POMDP
+from ..decision.intention_model import IntentionModel, intention_model
 from ..errors import PlannerError
 from ..product.model import Product, product_from_dict, product_to_dict
 
@@ -124,12 +123,13 @@ def read_line(prompt: str) -> str:
     return line.rstrip("\n")
 
 
-def instruction_for(plan: Plan, model: POMDP, action: int, step: int) -> Instruction:
-    """The instruction of ``action`` in ``model`` (an intention POMDP of ``plan``)."""
+def instruction_for(model: IntentionModel, action: int, step: int) -> Instruction:
+    """The instruction of ``action`` in ``model`` at ``step``."""
     name = model.actions[action]
-    if name == WAIT:
+    operation = model.operation(action)
+    if operation is None:
         return Instruction(step, action, name)
-    operation = int(model.metadata["operations"][action])
+    plan = model.plan
     first, second = (tuple(sorted(side)) for side in plan.andor.inputs(operation))
     return Instruction(step, action, name, operation, (first, second), plan.tags.tool[operation])
 
@@ -193,13 +193,9 @@ class ScriptedOperator:
         self.off_script: list[int] = []
 
     @classmethod
-    def following(cls, plan: Plan, graph, intention: int, acts=None) -> "ScriptedOperator":
-        """The operator whose intention is ``intention`` of the intention graph ``graph``."""
-        operations, i = [], int(intention)
-        while graph.successor[i] >= 0:
-            operations.append(int(graph.operation[i]))
-            i = int(graph.successor[i])
-        return cls(plan, operations, acts)
+    def following(cls, model: IntentionModel, intention: int, acts=None) -> "ScriptedOperator":
+        """The operator whose intention is ``intention`` of the decision model ``model``."""
+        return cls(model.plan, model.sequence_operations(intention), acts)
 
     def next_operation(self) -> int | None:
         """Advance one step: the operation the operator performs in it, or None."""
@@ -328,27 +324,26 @@ def status_line(step: int, belief: np.ndarray, observation: str, next_action: st
     return f"step {step} | belief {top} | seen {observation} | next {next_action}"
 
 
-def run_session(plan: Plan, model: POMDP, policy, source: ObservationSource, robot: Robot,
+def run_session(model: IntentionModel, policy, source: ObservationSource, robot: Robot,
                 log: EventLog | None = None, status: Callable[[str], None] | None = None, max_steps: int = 500,
                 finished_belief: float = 0.99, settings: dict | None = None) -> SessionResult:
     """Run the decision loop (module docstring) until the product is assembled or the loop has to stop.
 
-    ``model`` is :func:`planner.decision.intention_pomdp` of ``plan``; ``policy`` has ``action(belief)``;
+    ``model``: the decision model of the product (:func:`planner.decision.intention_model`); ``policy`` has
+    ``action(belief)``;
     ``settings`` (e.g. the policy file, rewards, discount) go into the log's start event. Never raises for a
     robot failure, an unexplained observation or a source error: the result says what happened.
     """
-    graph = model.metadata.get("intention_graph")
-    if graph is None or "operations" not in model.metadata:
-        raise SessionError("the session needs the intention POMDP of the product (planner.decision.intention_pomdp)")
+    plan = model.plan
     log = log if log is not None else EventLog()
-    final = int(np.flatnonzero(graph.successor < 0)[0])
+    final = model.final_state
     needed = len(plan.product.parts) - 1
     index = {o: k for k, o in enumerate(plan.observations)}
-    updater = DiscreteUpdater(model)
+    updater = DiscreteUpdater(model.pomdp)
     belief = updater.initialize()
     result = SessionResult("step limit", f"stopped after {max_steps} steps", 0, 0, belief, [belief])
     log.write("start", version=LOG_VERSION, product=product_to_dict(plan.product), settings=settings or {},
-              n_intentions=model.n_states, actions=list(model.actions), observations=list(model.observations),
+              n_intentions=model.pomdp.n_states, actions=list(model.actions), observations=list(model.observations),
               top=_top(belief))
 
     def stop(reason: str, message: str) -> SessionResult:
@@ -361,7 +356,7 @@ def run_session(plan: Plan, model: POMDP, policy, source: ObservationSource, rob
         action = policy.action(belief)
         for step in range(1, max_steps + 1):
             result.steps = step
-            instruction = instruction_for(plan, model, action, step)
+            instruction = instruction_for(model, action, step)
             log.write("action", step=step, action=action, name=instruction.name, instruction=instruction.text)
             source.robot_acting(instruction)
             report = robot.perform(instruction)
@@ -419,7 +414,7 @@ class Replay:
     initial one first), and the steps whose logged belief differs from the recomputed one."""
 
     product: Product
-    model: POMDP
+    model: IntentionModel
     actions: list[int]
     observations: list[int]
     beliefs: list[np.ndarray]
@@ -461,17 +456,16 @@ def replay(path: str | os.PathLike, tolerance: float = 1e-6) -> Replay:
     Raises :class:`SessionError` for a file that is not a session log.
     """
     from ..assembly.plan import make_plan
-    from ..decision.intention_model import intention_pomdp
 
     path = Path(path)
     events = _read_log(path)
     start = events[0]
     product = product_from_dict(start["product"], f"{path} (start event)")
-    model = intention_pomdp(make_plan(product))
+    model = intention_model(make_plan(product))
     if list(model.observations) != start.get("observations") or list(model.actions) != start.get("actions"):
         raise SessionError(f"{path}: the product in the log no longer gives the logged actions and observations "
                            "(the log was written by another planner version)")
-    updater = DiscreteUpdater(model)
+    updater = DiscreteUpdater(model.pomdp)
     belief = updater.initialize()
     beliefs, actions, observations, mismatches = [belief], [], [], []
     pending: dict[int, int] = {}

@@ -9,20 +9,25 @@ import numpy as np
 import pytest
 
 from planner import make_plan
-from planner.decision import intention_pomdp
+from planner.decision import intention_model
 from planner.decision.simulate import evaluate_policy, plot_beliefs, simulate_episode
 from planner.decision.solvers import PointBasedSolver
 
 
 @pytest.fixture(scope="module")
-def solved(pen):
-    model = intention_pomdp(make_plan(pen, True))
+def decision(pen):
+    return intention_model(make_plan(pen, True))
+
+
+@pytest.fixture(scope="module")
+def solved(decision):
+    model = decision.pomdp
     return model, PointBasedSolver(max_iterations=300, time_limit=120, precision=1e-3).solve(model)  # machine-independent
 
 
-def test_episodes_reach_the_finished_product(solved):
+def test_episodes_reach_the_finished_product(solved, decision):
     model, result = solved
-    graph = model.metadata["intention_graph"]
+    graph = decision.graph
     rng = np.random.default_rng(0)
     for start in graph.full_sequences():
         episode = simulate_episode(model, result.policy, int(start), rng, successor=graph.successor, final=0)
@@ -33,9 +38,9 @@ def test_episodes_reach_the_finished_product(solved):
         assert moves == sorted(moves)
 
 
-def test_operator_taking_turns_acts_every_step(solved):
+def test_operator_taking_turns_acts_every_step(solved, decision):
     model, result = solved
-    graph = model.metadata["intention_graph"]
+    graph = decision.graph
     wait = model.actions.index("wait")
     episode = simulate_episode(model, result.policy, int(graph.full_sequences()[0]), np.random.default_rng(0),
                                successor=graph.successor, final=0, operator="turns")
@@ -53,9 +58,9 @@ def test_evaluation_brackets_the_bounds(solved):
     assert result.lower_bound - 3 * half <= mean <= result.upper_bound + 3 * half
 
 
-def test_plot_files(tmp_path, solved):
+def test_plot_files(tmp_path, solved, decision):
     model, result = solved
-    graph = model.metadata["intention_graph"]
+    graph = decision.graph
     episodes = [simulate_episode(model, result.policy, int(s), np.random.default_rng(2), successor=graph.successor,
                                  final=0) for s in graph.full_sequences()[:3]]
     written = plot_beliefs(episodes, str(tmp_path / "fig7"))

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from planner import BLANK, Observation, make_plan
-from planner.decision import intention_pomdp
+from planner.decision import intention_model
 from planner.decision.solvers import PointBasedSolver
 from planner.runtime.session import (
     ConsoleRobot,
@@ -29,23 +29,20 @@ from planner.runtime.vision import VisionError, VisionSource, marker_map
 @pytest.fixture(scope="module")
 def setup(pen):
     plan = make_plan(pen)
-    model = intention_pomdp(plan)
+    model = intention_model(plan)
     # A fixed amount of work (not of time), so the policy is the same on any machine.
-    policy = PointBasedSolver(max_iterations=300, time_limit=120, precision=1e-3, seed=0).solve(model).policy
-    return plan, model, policy, model.metadata["intention_graph"]
+    policy = PointBasedSolver(max_iterations=300, time_limit=120, precision=1e-3, seed=0).solve(model.pomdp).policy
+    return plan, model, policy, model.graph
 
 
 def _true_intentions(model, graph, start, log_events, operator_done):
     """The true intention after each step: the sequence's start moved one successor per operation done,
     checking that the operations were done in the sequence's order."""
-    sequence, i = [], start
-    while graph.successor[i] >= 0:
-        sequence.append(int(graph.operation[i]))
-        i = int(graph.successor[i])
+    sequence = model.sequence_operations(start)
     done, truth, operator = [], [], iter(operator_done)
     for event in log_events:
         if event["event"] == "action" and model.actions[event["action"]] != "wait":
-            done.append(int(model.metadata["operations"][event["action"]]))
+            done.append(model.operation(event["action"]))
         elif event["event"] == "observation" and event["observation"] != "blank":
             done.append(next(operator))
         elif event["event"] == "belief":
@@ -60,11 +57,11 @@ def _true_intentions(model, graph, start, log_events, operator_done):
 def _vision_session(setup, start, camera, tmp_path=None):
     plan, model, policy, graph = setup
     markers = marker_map(plan.product)
-    operator = ScriptedOperator.following(plan, graph, start)
+    operator = ScriptedOperator.following(model, start)
     cell = SimulatedCell(tray_layout(markers, (960, 540), 48), operator, camera)
     robot = ScriptedRobot(on_perform=cell.robot)
     log = EventLog(tmp_path / "session.jsonl" if tmp_path else None)
-    result = run_session(plan, model, policy, VisionSource(cell, markers, quiet_frames=20), robot, log)
+    result = run_session(model, policy, VisionSource(cell, markers, quiet_frames=20), robot, log)
     log.close()
     return result, log, operator, robot
 
@@ -85,8 +82,8 @@ def test_end_to_end_on_rendered_frames(setup, tmp_path):
     assert max(p_true[:-1]) > 0.9  # as in the paper: sure of the intention before the end
 
     # The same session with the operator's observations handed over directly gives the same beliefs.
-    direct_operator = ScriptedOperator.following(plan, graph, start)
-    direct = run_session(plan, model, policy, direct_operator,
+    direct_operator = ScriptedOperator.following(model, start)
+    direct = run_session(model, policy, direct_operator,
                          ScriptedRobot(on_perform=direct_operator.robot_acting))
     assert direct.actions == result.actions and direct.observations == result.observations
     assert all(np.allclose(a, b) for a, b in zip(direct.beliefs, result.beliefs))
@@ -102,9 +99,9 @@ def test_end_to_end_on_rendered_frames(setup, tmp_path):
 def test_every_kind_of_sequence_gets_assembled(setup, k):
     plan, model, policy, graph = setup
     start = int(graph.full_sequences()[k])
-    operator = ScriptedOperator.following(plan, graph, start)
+    operator = ScriptedOperator.following(model, start)
     log = EventLog()
-    result = run_session(plan, model, policy, operator, ScriptedRobot(), log)
+    result = run_session(model, policy, operator, ScriptedRobot(), log)
     assert result.assembled and operator.off_script == []
     truth = _true_intentions(model, graph, start, log.events, operator.done)
     assert result.beliefs[-1][truth[-1]] > 0.9
@@ -121,9 +118,9 @@ def test_protocols(setup):
 
 def test_robot_failure_stops_cleanly(setup, tmp_path):
     plan, model, policy, graph = setup
-    operator = ScriptedOperator.following(plan, graph, int(graph.full_sequences()[0]))
+    operator = ScriptedOperator.following(model, int(graph.full_sequences()[0]))
     log = EventLog(tmp_path / "fail.jsonl")
-    result = run_session(plan, model, policy, operator, ScriptedRobot(fail_at={3}), log)
+    result = run_session(model, policy, operator, ScriptedRobot(fail_at={3}), log)
     assert result.reason == "robot failed" and "step 3: the robot could not" in result.message
     assert "scripted failure at step 3" in result.message
     assert result.steps == 3 and len(result.beliefs) == 3  # b0 and the beliefs after steps 1 and 2
@@ -149,7 +146,7 @@ def test_observation_no_operation_explains(setup):
     plan, model, policy, _ = setup
     source = _Listed([BLANK, Observation(("body", "ink"), "hammer")])
     log = EventLog()
-    result = run_session(plan, model, policy, source, ScriptedRobot(), log)
+    result = run_session(model, policy, source, ScriptedRobot(), log)
     assert result.reason == "unexplained observation"
     assert "body+ink+[hammer], which no operation of Bourjault ballpoint pen explains" in result.message
     assert len(result.beliefs) == 2 and np.array_equal(result.belief, result.beliefs[-1])
@@ -162,7 +159,7 @@ def test_impossible_observation_resets_the_belief_and_goes_on(setup):
     source = _Listed([Observation((), "hammer"), BLANK])
     log = EventLog()
     with pytest.warns(RuntimeWarning, match="has probability 0"):
-        result = run_session(plan, model, policy, source, ScriptedRobot(), log)
+        result = run_session(model, policy, source, ScriptedRobot(), log)
     assert result.reason == "source ended" and "ended at step 3" in result.message
     warnings = [e for e in log.events if e["event"] == "warning"]
     assert len(warnings) == 1 and "[hammer]" in warnings[0]["message"]
@@ -178,7 +175,7 @@ def test_source_error_stops_cleanly(setup):
         yield np.zeros((540, 960, 3), np.uint8)
         raise VisionError("tray/0002.png: cannot be read as an image")
 
-    result = run_session(plan, model, policy, VisionSource(frames(), markers), ScriptedRobot())
+    result = run_session(model, policy, VisionSource(frames(), markers), ScriptedRobot())
     assert result.reason == "error" and "0002.png" in result.message
 
 
@@ -192,11 +189,11 @@ def test_interrupt_and_step_limit_stop_cleanly(setup):
             return super().observe()
 
     log = EventLog()
-    result = run_session(plan, model, policy, Interrupted([BLANK]), ScriptedRobot(), log)
+    result = run_session(model, policy, Interrupted([BLANK]), ScriptedRobot(), log)
     assert result.reason == "interrupted" and result.message == "interrupted at step 2"
     assert log.events[-1]["event"] == "end" and len(result.beliefs) == 2
-    operator = ScriptedOperator.following(plan, graph, int(graph.full_sequences()[0]), acts=lambda step: False)
-    result = run_session(plan, model, policy, operator, ScriptedRobot(), max_steps=3)
+    operator = ScriptedOperator.following(model, int(graph.full_sequences()[0]), acts=lambda step: False)
+    result = run_session(model, policy, operator, ScriptedRobot(), max_steps=3)
     assert result.reason == "step limit" and result.steps == 3 and len(result.beliefs) == 4
 
 
@@ -207,11 +204,11 @@ def test_console_robot_and_keyboard(setup):
     robot = ConsoleRobot(read=lambda prompt: next(answers), write=shown.append)
     from planner.runtime.session import instruction_for
 
-    join = instruction_for(plan, model, 0, 1)
+    join = instruction_for(model, 0, 1)
     assert robot.perform(join).ok and "join {" in shown[-1] and "using the hammer" in shown[-1]
     report = robot.perform(join)
     assert not report.ok and report.message == "gripper jammed"
-    wait = instruction_for(plan, model, model.actions.index("wait"), 2)
+    wait = instruction_for(model, model.actions.index("wait"), 2)
     assert robot.perform(wait).ok  # waiting needs no confirmation
 
     def eof(prompt):
@@ -230,9 +227,9 @@ def test_console_robot_and_keyboard(setup):
 def test_log_is_never_overwritten_and_replay_checks(setup, tmp_path):
     plan, model, policy, graph = setup
     path = tmp_path / "s.jsonl"
-    operator = ScriptedOperator.following(plan, graph, int(graph.full_sequences()[5]))
+    operator = ScriptedOperator.following(model, int(graph.full_sequences()[5]))
     log = EventLog(path)
-    run_session(plan, model, policy, operator, ScriptedRobot(on_perform=operator.robot_acting), log)
+    run_session(model, policy, operator, ScriptedRobot(on_perform=operator.robot_acting), log)
     log.close()
     with pytest.raises(SessionError, match="the log exists already"):
         EventLog(path)
@@ -285,7 +282,7 @@ def test_cli_session_on_a_recorded_video_and_replay(setup, policy_file, tmp_path
     plan, model, policy, graph = setup
     markers = marker_map(plan.product)
     start = int(graph.full_sequences()[3])
-    operator = ScriptedOperator.following(plan, graph, start)
+    operator = ScriptedOperator.following(model, start)
     cell = SimulatedCell(tray_layout(markers, (960, 540), 48), operator, CameraModel(blur=1.0, noise=4, seed=3))
     recorded = []
 
@@ -294,7 +291,7 @@ def test_cli_session_on_a_recorded_video_and_replay(setup, policy_file, tmp_path
             recorded.append(frame)
             yield frame
 
-    result = run_session(plan, model, policy, VisionSource(frames(), markers, quiet_frames=20),
+    result = run_session(model, policy, VisionSource(frames(), markers, quiet_frames=20),
                          ScriptedRobot(on_perform=cell.robot))
     assert result.assembled
     video = tmp_path / "session.avi"
@@ -320,9 +317,9 @@ def test_cli_session_on_a_recorded_video_and_replay(setup, policy_file, tmp_path
 def test_cli_session_keyboard_and_console_robot(setup, policy_file, tmp_path):
     """The operator's picks typed in and a person confirming the robot's instructions with Enter."""
     plan, model, policy, graph = setup
-    operator = ScriptedOperator.following(plan, graph, int(graph.full_sequences()[0]))
+    operator = ScriptedOperator.following(model, int(graph.full_sequences()[0]))
     robot = ScriptedRobot(on_perform=operator.robot_acting)
-    expected = run_session(plan, model, policy, operator, robot)
+    expected = run_session(model, policy, operator, robot)
     lines = []
     for action, z in zip(expected.actions, expected.observations):
         if model.actions[action] != "wait":

@@ -10,11 +10,11 @@ import pytest
 from planner import (
     BLANK,
     Observation,
-    intention_graph,
     make_plan,
     product_from_dict,
     product_to_dict,
 )
+from planner.decision import intention_model
 from planner.runtime.session import Instruction, ScriptedOperator
 from planner.runtime.tray import (
     CameraModel,
@@ -44,8 +44,8 @@ def plan(pen):
 
 
 @pytest.fixture(scope="module")
-def graph(plan):
-    return intention_graph(plan.states)
+def model(plan):
+    return intention_model(plan)
 
 
 @pytest.fixture(scope="module")
@@ -129,8 +129,8 @@ def test_builder_closes_toolless_operations_at_quiet_periods(markers):
     assert builder.quiet() == BLANK
 
 
-def _recover(plan, graph, markers, sequence, camera, size=SMALL, debounce=3):
-    operator = ScriptedOperator.following(plan, graph, sequence)
+def _recover(plan, model, markers, sequence, camera, size=SMALL, debounce=3):
+    operator = ScriptedOperator.following(model, sequence)
     cell = SimulatedCell(tray_layout(markers, *size), operator, camera)
     source = VisionSource(cell, markers, debounce=debounce, quiet_frames=20)
     seen = [source.observe() for _ in range(len(plan.product.parts) - 1)]
@@ -143,10 +143,10 @@ CAMERAS = {"clean": CameraModel(), "blur": CameraModel(blur=1.6, seed=1), "noise
 
 
 @pytest.mark.parametrize("name", list(CAMERAS))
-def test_full_pen_assembly_is_recovered_exactly(plan, graph, markers, name):
-    sequences = graph.full_sequences()
+def test_full_pen_assembly_is_recovered_exactly(plan, model, markers, name):
+    sequences = model.full_sequences()
     sequence = int(sequences[list(CAMERAS).index(name) * 5 % len(sequences)])
-    seen, cell, source = _recover(plan, graph, markers, sequence, CAMERAS[name])
+    seen, cell, source = _recover(plan, model, markers, sequence, CAMERAS[name])
     truth = [plan.observations[plan.operation_observation[op]] for op in cell.operator.done]
     assert len(truth) == 5 and truth == cell.operator_observations
     assert seen == truth
@@ -162,15 +162,15 @@ def test_detection_at_1080p(markers):
         assert detector.detect(frame) == {k for k, name in markers.items.items() if name not in in_tray}
 
 
-def test_without_debounce_flickers_become_operations(plan, graph, markers):
+def test_without_debounce_flickers_become_operations(plan, model, markers):
     """The occlusion camera makes the hammer's marker flicker while in use: debounce is what removes it."""
-    seen, cell, _ = _recover(plan, graph, markers, int(graph.full_sequences()[0]), CAMERAS["occlusion"], debounce=1)
+    seen, cell, _ = _recover(plan, model, markers, int(model.full_sequences()[0]), CAMERAS["occlusion"], debounce=1)
     assert seen != cell.operator_observations and Observation((), "hammer") in seen
 
 
-def test_robot_picks_are_not_the_operators(plan, graph, markers):
-    sequence = int(graph.full_sequences()[0])
-    operator = ScriptedOperator.following(plan, graph, sequence)
+def test_robot_picks_are_not_the_operators(plan, model, markers):
+    sequence = int(model.full_sequences()[0])
+    operator = ScriptedOperator.following(model, sequence)
     cell = SimulatedCell(tray_layout(markers, *SMALL), operator)
     source = VisionSource(cell, markers, quiet_frames=20)
     first = source.observe()
@@ -217,8 +217,8 @@ def test_end_of_frames(markers):
     assert source.observe() is None
 
 
-def test_video_file_source(plan, graph, markers, tmp_path):
-    operator = ScriptedOperator.following(plan, graph, int(graph.full_sequences()[3]))
+def test_video_file_source(plan, model, markers, tmp_path):
+    operator = ScriptedOperator.following(model, int(model.full_sequences()[3]))
     cell = SimulatedCell(tray_layout(markers, *SMALL), operator)
     frames = [next(cell) for _ in range(110)]
     path = tmp_path / "tray.avi"

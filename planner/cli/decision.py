@@ -1,0 +1,159 @@
+"""``aplan pomdp``, ``solve``, ``simulate`` and ``evaluate``: the decision model (the paper's Alg. 3), its
+policy and episodes against it."""
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+
+from .. import api
+from ..decision.intention_model import IntentionModel
+from ..decision.policy import write_policy
+from ..defaults import CONFIDENCE, SOLVE_PRECISION, SOLVE_TIME_LIMIT
+from ..errors import PlannerError
+from .options import PRODUCT_HELP, add_decision_options, add_episode_options, add_policy_options, positive, rewards_from
+
+__all__ = ["add_commands", "model_from", "policy_from"]
+
+log = logging.getLogger(__name__)
+
+
+def model_from(args: argparse.Namespace, product_only: bool = False):
+    """The model of ``args.model`` (or ``args.product``): a PRODUCT's decision model, or a model file."""
+    argument = getattr(args, "model", None) or args.product
+    if product_only:
+        return api.decision_model(argument, args.technical, rewards_from(args), args.discount)
+    return api.load_model(argument, args.technical, rewards_from(args), args.discount)
+
+
+def policy_from(args: argparse.Namespace, model):
+    """``--policy``, or the solver's policy after ``--time-limit`` seconds (saying so)."""
+    policy, result = api.policy_for(model, args.policy, args.time_limit)
+    if result is not None:
+        log.info("no --policy: solved for %.1f s, lower bound %.5f, upper bound %.5f", result.seconds,
+                 result.lower_bound, result.upper_bound)
+    return policy
+
+
+def _pomdp(args: argparse.Namespace) -> int:
+    model = model_from(args)
+    api.save_model(model, args.output)
+    tables = api.tables(model)
+    print(f"{args.output}: {tables.n_states} states, {tables.n_actions} actions, {tables.n_observations} observations")
+    return 0
+
+
+def _solve(args: argparse.Namespace) -> int:
+    model = model_from(args)
+    show = not args.json and not args.quiet and args.engine == "builtin"
+
+    def progress(seconds: float, lower: float, upper: float) -> None:
+        print(f"\r  {seconds:7.1f} s  lower {lower:.6f}  upper {upper:.6f}  gap {upper - lower:.6f}",
+              end="", file=sys.stderr, flush=True)
+
+    result = api.solve(model, args.time_limit, args.precision, args.engine, progress if show else None)
+    if show:
+        print(file=sys.stderr)
+    write_policy(result.policy, args.output, api.tables(model).name)
+    if args.json:
+        print(json.dumps(result.as_dict()))
+    else:
+        print(f"{args.output}: lower bound {result.lower_bound:.6f}, upper bound {result.upper_bound:.6f} "
+              f"(gap {result.gap:.6f}), {result.policy.alphas.shape[0]} alpha vectors, {result.seconds:.1f} s")
+    return 0
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from ..decision.simulate import plot_beliefs
+
+    model = model_from(args)
+    if not isinstance(model, IntentionModel):
+        raise PlannerError("simulate needs a PRODUCT (the intention graph names the sequences), not a model file")
+    policy = policy_from(args, model)
+    episodes = api.simulate(model, policy, args.sequence, args.all, args.random, args.seed, args.max_steps,
+                            args.operator)
+    for episode in episodes:
+        operations = model.describe_operations(episode.start)
+        if args.json:
+            print(json.dumps({"sequence": episode.start, "operations": operations,
+                              "confident_after_operations": episode.first_confident(CONFIDENCE),
+                              "discounted_return": round(episode.discounted_return, 6)}))
+            continue
+        print(f"sequence {episode.start}: " + " ; ".join(operations))
+        print(f"  {'step':>4}  {'robot action':<44} {'observation':<28} {'p(true)':>7}  operator ops")
+        for k, step in enumerate(episode.steps, start=1):
+            print(f"  {k:>4}  {model.actions[step.action]:<44} {model.observations[step.observation]:<28} "
+                  f"{step.p_true:7.3f}  {step.operator_operations}")
+        print(f"  belief on the true intention first above {CONFIDENCE:g} after "
+              f"{episode.first_confident(CONFIDENCE)} operator operation(s); discounted return "
+              f"{episode.discounted_return:.3f}")
+    if args.plot:
+        written = plot_beliefs(episodes, args.plot, [f"sequence {e.start}" for e in episodes])
+        if not args.json:
+            print("wrote " + ", ".join(written))
+    return 0
+
+
+def _evaluate(args: argparse.Namespace) -> int:
+    model = model_from(args)
+    mean, half = api.evaluate(model, policy_from(args, model), args.episodes, args.seed, args.max_steps)
+    if args.json:
+        print(json.dumps({"mean_return": mean, "ci95": half, "episodes": args.episodes}))
+    else:
+        print(f"mean discounted return {mean:.4f} +- {half:.4f} (95 % confidence, {args.episodes} episodes)")
+    return 0
+
+
+def add_commands(commands) -> None:
+    pomdp = commands.add_parser("pomdp", help="write the operator-intent POMDP (Alg. 3) as POMDPX or .pomdp",
+                                description="Build the POMDP over operator intentions and write it: POMDPX "
+                                            "(APPL's pomdpsol reads it) or Cassandra's .pomdp, by the file name.")
+    pomdp.add_argument("model", metavar="PRODUCT", help=PRODUCT_HELP)
+    pomdp.add_argument("-o", "--output", required=True, metavar="MODEL", help="MODEL.pomdpx or MODEL.pomdp")
+    add_decision_options(pomdp)
+    pomdp.set_defaults(run=_pomdp)
+
+    solve = commands.add_parser("solve", help="solve a POMDP offline into a policy (certified bounds)",
+                                description="Anytime point-based solver with lower and upper bounds; stops at "
+                                            "the time limit or when upper - lower <= precision at the initial belief.")
+    solve.add_argument("model", metavar="MODEL", help="a .pomdpx or .pomdp file, or a PRODUCT")
+    solve.add_argument("-o", "--output", required=True, metavar="POLICY", help="the policy file (SARSOP's .policy XML)")
+    solve.add_argument("--time-limit", type=float, default=SOLVE_TIME_LIMIT, metavar="S",
+                       help=f"seconds (default {SOLVE_TIME_LIMIT:g})")
+    solve.add_argument("--precision", type=float, default=SOLVE_PRECISION, metavar="E",
+                       help=f"target gap (default {SOLVE_PRECISION:g})")
+    solve.add_argument("--engine", choices=api.SOLVER_ENGINES, default="builtin",
+                       help="builtin (default) or sarsop (APPL's pomdpsol, when it is on PATH)")
+    solve.add_argument("--json", action="store_true", help="print lower_bound, upper_bound, alpha_vectors, seconds")
+    solve.add_argument("--quiet", action="store_true", help="no progress line")
+    add_decision_options(solve)
+    solve.set_defaults(run=_solve)
+
+    simulate = commands.add_parser("simulate", help="play an operator through assembly sequences against a policy",
+                                   description="Per step: the robot's action, the observation, and the belief on "
+                                               "the true intention; optionally the Fig. 7 belief heat map.")
+    simulate.add_argument("model", metavar="PRODUCT", help=PRODUCT_HELP)
+    add_policy_options(simulate)
+    which = simulate.add_mutually_exclusive_group()
+    which.add_argument("--sequence", type=int, nargs="+", metavar="K",
+                       help="full sequences by intention number (aplan intentions PRODUCT --full)")
+    which.add_argument("--all", action="store_true", help="every full sequence")
+    which.add_argument("--random", type=positive, metavar="N", help="N sequences drawn at random")
+    simulate.add_argument("--plot", metavar="STEM", help="write STEM.png and STEM.svg (belief heat maps)")
+    simulate.add_argument("--operator", choices=("model", "turns"), default="model",
+                          help="model (default): the operator acts with the model's probability (1/2 per step); "
+                               "turns: it acts whenever the model lets it, taking turns with the robot as in the "
+                               "paper's experiment")
+    simulate.add_argument("--json", action="store_true",
+                          help="one JSON line per episode: sequence, confident_after_operations, discounted_return")
+    add_episode_options(simulate)
+    simulate.set_defaults(run=_simulate)
+
+    evaluate = commands.add_parser("evaluate", help="mean discounted return of a policy over simulated episodes")
+    evaluate.add_argument("model", metavar="MODEL", help="a PRODUCT, or a .pomdpx/.pomdp file")
+    add_policy_options(evaluate)
+    evaluate.add_argument("--episodes", type=positive, default=1000)
+    evaluate.add_argument("--json", action="store_true", help="print mean_return, ci95 and episodes")
+    add_episode_options(evaluate)
+    evaluate.set_defaults(run=_evaluate)

@@ -1,0 +1,48 @@
+"""``aplan analyze``: the connection and obstruction diagrams of a bundle from its geometry."""
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+from pathlib import Path
+
+from ..geometry.bundle import PRODUCT_FILE, analyze_product, apply_report
+from ..product.model import load_product, save_product
+from .options import add_tolerance_options, tolerances_from
+
+__all__ = ["add_commands"]
+
+log = logging.getLogger(__name__)
+
+
+def _analyze(args: argparse.Namespace) -> int:
+    target = Path(args.product)
+    path = target / PRODUCT_FILE if target.is_dir() else target
+    product = load_product(path)
+    report = analyze_product(product, args.engine, tolerances_from(args))
+    save_product(apply_report(product, report), args.output or path)
+    if args.json:
+        print(json.dumps(report.as_dict()))
+        return 0
+    print(f"{path}: {len(report.parts)} parts, {len(report.contacts)} contacts, "
+          f"{len(report.interferences)} interferences ({report.engine} engine, {report.seconds:.2f} s)")
+    for a, b, volume in report.interferences:
+        print(f"  interference {a} / {b}: {volume:.4g} cubic units")
+    for axis, pairs in report.obstructions.items():
+        print(f"  obstructions {axis}: {len(pairs)} pairs")
+    for warning in report.warnings:
+        log.warning("%s", warning)
+    return 0
+
+
+def add_commands(commands) -> None:
+    analyze = commands.add_parser(
+        "analyze", help="compute contacts and obstruction diagrams from a bundle's geometry",
+        description="Fill in the connection diagram and the +X/+Y/+Z obstruction diagrams of a product bundle "
+                    "from its part meshes (mesh engine) or B-reps (occt engine, through FreeCAD).")
+    analyze.add_argument("product", metavar="BUNDLE", help="a bundle folder (or its product .json)")
+    analyze.add_argument("-o", "--output", metavar="FILE", help="write the product here (default: in place)")
+    analyze.add_argument("--engine", default="mesh", help="mesh (default) or occt")
+    analyze.add_argument("--json", action="store_true", help="print the analysis as JSON")
+    add_tolerance_options(analyze)
+    analyze.set_defaults(run=_analyze)

@@ -1,0 +1,81 @@
+"""Options several commands share, and their conversion into the planner's arguments."""
+from __future__ import annotations
+
+import argparse
+
+from ..decision.intention_model import Rewards
+from ..defaults import DISCOUNT, POLICY_TIME_LIMIT
+from ..geometry.mesh_engine import Tolerances
+from ..product.examples import EXAMPLES
+
+__all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_decision_options", "rewards_from",
+           "add_tolerance_options", "tolerances_from", "add_policy_options", "add_episode_options"]
+
+PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or STEP file (read through "
+                f"FreeCAD), or an embedded example ({', '.join(EXAMPLES)})")
+
+
+def positive(text: str) -> int:
+    """An integer of at least 1 (an argparse type)."""
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
+def add_technical(parser) -> None:
+    parser.add_argument("--technical", action=argparse.BooleanOptionalAction, default=None,
+                        help="switch every technical constraint on (--technical) or off (--no-technical); "
+                             "by default each constraint is as the product file marks it ('active')")
+
+
+def add_decision_options(parser: argparse.ArgumentParser) -> None:
+    """The decision model's options (when MODEL is a product): technical constraints, discount, rewards."""
+    d = Rewards()
+    group = parser.add_argument_group("decision model (when MODEL is a product)")
+    add_technical(group)
+    group.add_argument("--discount", type=float, default=DISCOUNT, help=f"discount factor (default {DISCOUNT:g})")
+    group.add_argument("--reward-unfavorable", type=float, default=d.unfavorable, metavar="R",
+                       help=f"robot does the next step, unfavorable to humans (default {d.unfavorable:g})")
+    group.add_argument("--reward-favorable", type=float, default=d.favorable, metavar="R",
+                       help=f"robot does the next step, fine for humans (default {d.favorable:g})")
+    group.add_argument("--reward-wrong", type=float, default=d.wrong, metavar="R",
+                       help=f"robot does another operation: its eagerness (default {d.wrong:g})")
+    group.add_argument("--reward-wait", type=float, default=d.wait, metavar="R", help=f"wait (default {d.wait:g})")
+
+
+def rewards_from(args: argparse.Namespace) -> Rewards:
+    return Rewards(args.reward_unfavorable, args.reward_favorable, args.reward_wrong, args.reward_wait)
+
+
+def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
+    """The geometry engines' tolerances as options (shared by analyze and export-freecad)."""
+    d = Tolerances()
+    group = parser.add_argument_group("geometry tolerances (model units)")
+    group.add_argument("--contact", type=float, default=d.contact, metavar="T",
+                       help=f"surfaces closer than this touch (default {d.contact:g})")
+    group.add_argument("--interference", type=float, default=d.interference, metavar="V",
+                       help=f"report overlaps above this volume (default {d.interference:g})")
+    group.add_argument("--depth", type=float, default=d.depth, metavar="T",
+                       help=f"overlaps shallower than this along the motion do not block (default {d.depth:g})")
+    group.add_argument("--resolution", type=int, default=d.resolution, metavar="N",
+                       help=f"mesh engine: pixels across the product for the projection test (default {d.resolution})")
+
+
+def tolerances_from(args: argparse.Namespace) -> Tolerances:
+    return Tolerances(contact=args.contact, interference=args.interference, depth=args.depth,
+                      resolution=args.resolution)
+
+
+def add_policy_options(parser: argparse.ArgumentParser) -> None:
+    """A policy file, or the solver's time when there is none (simulate, evaluate, session)."""
+    parser.add_argument("--policy", metavar="POLICY", help="a .policy file (default: solve for --time-limit s)")
+    parser.add_argument("--time-limit", type=float, default=POLICY_TIME_LIMIT,
+                        help=f"solver seconds when no --policy (default {POLICY_TIME_LIMIT:g})")
+
+
+def add_episode_options(parser: argparse.ArgumentParser) -> None:
+    """Options shared by simulate and evaluate."""
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--max-steps", type=positive, default=100)
+    add_decision_options(parser)

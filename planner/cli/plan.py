@@ -1,0 +1,90 @@
+"""``aplan stats``, ``aplan intentions`` and ``aplan synth``: the plan of a product (the paper's Sec. III-B)."""
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+
+from .. import api
+from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, intention_graph
+from ..assembly.stats import STAT_KEYS
+from ..files import write_atomic
+from ..product.model import product_to_dict
+from ..product.synthetic import SYNTHETIC
+from .options import PRODUCT_HELP, add_technical, positive
+
+__all__ = ["add_commands"]
+
+log = logging.getLogger(__name__)
+
+
+def _stats(args: argparse.Namespace) -> int:
+    plan, stats = api.plan_statistics_of(args.product, args.technical, args.base_part)
+    if args.json:
+        print(json.dumps(stats.as_dict()))
+        return 0
+    print(f"{plan.product.name or str(args.product)} ({plan.product.source})")
+    values = stats.as_dict()
+    for key in STAT_KEYS:
+        value = values[key]
+        shown = f"{value:.2f}" if isinstance(value, float) else f"{value:,}"
+        print(f"  {key:<14}{shown:>22}")
+    if stats.base_part:
+        print(f"  (sequences whose first operation joins the base part {stats.base_part!r})")
+    print(f"  factored view: {stats.states:,} assembly states x {stats.sequences:,} sequences "
+          f"instead of {stats.intentions:,} intentions")
+    for k in plan.tags.unmatched:
+        log.warning("operations[%d] tags an operation that is not in the AND/OR graph", k)
+    return 0
+
+
+def _intentions(args: argparse.Namespace) -> int:
+    plan = api.plan_of(args.product, args.technical)
+    graph = intention_graph(plan.states, limit=args.limit)
+    for i in (graph.full_sequences() if args.full else range(graph.n_intentions)):
+        states = [plan.states.describe(s) for s in graph.path(int(i))]
+        if args.json:
+            operations = [plan.andor.describe(o) for o in graph.operations(int(i))]
+            print(json.dumps({"intention": int(i), "states": states, "operations": operations}))
+        else:
+            print(f"{int(i)}: " + " -> ".join(states))
+    return 0
+
+
+def _synth(args: argparse.Namespace) -> int:
+    text = json.dumps(product_to_dict(SYNTHETIC[args.kind](args.parts)), indent=1) + "\n"
+    if args.output:
+        write_atomic(args.output, text)
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
+def add_commands(commands) -> None:
+    stats = commands.add_parser("stats", help="count subassemblies, operations, states, intentions, ...",
+                                description="Print the figures of a product's plan: " + ", ".join(STAT_KEYS) + ".")
+    stats.add_argument("product", metavar="PRODUCT", help=PRODUCT_HELP)
+    stats.add_argument("--json", action="store_true", help="print one JSON object with exactly those keys")
+    add_technical(stats)
+    stats.add_argument("--base-part", nargs="?", const="auto", metavar="PART",
+                       help="count only the sequences whose first operation joins PART "
+                            "(without PART: the most connected part)")
+    stats.set_defaults(run=_stats)
+
+    intentions = commands.add_parser("intentions", help="enumerate operator intentions (paths of assembly states)")
+    intentions.add_argument("product", metavar="PRODUCT", help=PRODUCT_HELP)
+    intentions.add_argument("--limit", type=positive, default=DEFAULT_INTENTION_LIMIT,
+                            help=f"refuse to enumerate more intentions than this (default {DEFAULT_INTENTION_LIMIT:,})")
+    intentions.add_argument("--full", action="store_true", help="only the full assembly sequences")
+    intentions.add_argument("--json", action="store_true", help="one JSON object per line")
+    add_technical(intentions)
+    intentions.set_defaults(run=_intentions)
+
+    synth = commands.add_parser("synth", help="write a synthetic product of Table I",
+                                description="chain: weakly connected (each part touches the next); "
+                                            "complete: strongly connected (every part touches every other).")
+    synth.add_argument("kind", choices=sorted(SYNTHETIC))
+    synth.add_argument("parts", type=positive, metavar="N", help="number of parts")
+    synth.add_argument("-o", "--output", metavar="FILE", help="write here (default: standard output)")
+    synth.set_defaults(run=_synth)

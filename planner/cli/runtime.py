@@ -1,0 +1,215 @@
+"""``aplan session``, ``replay`` and ``markers``: the collaboration runtime (the paper's Sec. IV)."""
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+import time
+from pathlib import Path
+
+from .. import api
+from ..decision.intention_model import IntentionModel
+from ..errors import PlannerError
+from ..product.model import DEFAULT_MARKER_DICTIONARY
+from .decision import model_from, policy_from
+from .options import PRODUCT_HELP, add_decision_options, add_policy_options, positive
+
+__all__ = ["add_commands"]
+
+log = logging.getLogger(__name__)
+
+
+def _source_name(args: argparse.Namespace) -> str:
+    if args.camera is not None:
+        return f"camera {args.camera}"
+    if args.video:
+        return f"video {args.video}"
+    if args.images:
+        return f"images {args.images}"
+    return f"demo {args.demo}" if args.demo is not None else "keyboard"
+
+
+def _open_stream(args: argparse.Namespace, model: IntentionModel, markers, detector):
+    """The marker detections of each frame, and the robot: a simulated one for ``--demo``, else None."""
+    from ..runtime.session import ScriptedOperator, ScriptedRobot
+    from ..runtime.tray import CameraModel, SimulatedCell, tray_layout
+    from ..runtime.vision import camera_frames, detections, image_frames, in_background, video_frames
+
+    if args.camera is not None:
+        return in_background(detections(camera_frames(args.camera), detector)), None
+    if args.demo is not None:  # an operator following full sequence K on a rendered 1080p tray
+        operator = ScriptedOperator.following(model, model.full_sequence(args.demo, "--demo"))
+        camera = CameraModel(blur=1.2, noise=6, perspective=0.04, hands=True, seed=args.demo)
+        cell = SimulatedCell(tray_layout(markers), operator, camera)
+        return detections(cell, detector), ScriptedRobot(on_perform=cell.robot)
+    frames = video_frames(args.video) if args.video is not None else image_frames(args.images)
+    return detections(frames, detector), None
+
+
+def _session(args: argparse.Namespace) -> int:
+    import warnings
+
+    from ..runtime.session import ConsoleRobot, EventLog, KeyboardSource, ScriptedRobot, run_session
+    from ..runtime.vision import MarkerDetector, VisionSource, marker_map
+
+    if args.demo is not None and args.robot is not None:
+        raise PlannerError("--demo simulates the robot too; leave out --robot")
+    model = model_from(args, product_only=True)
+    plan = model.plan
+    policy = policy_from(args, model)
+    stream, robot = None, ConsoleRobot() if args.robot in (None, "console") else ScriptedRobot()
+    if not args.keyboard:  # open the frames first: a camera or file that cannot be read stops before any log
+        markers = marker_map(plan.product)
+        if plan.product.markers is None:
+            log.info("note: the product has no 'markers': parts then tools are markers 0, 1, ... in file order "
+                     "(see aplan markers)")
+        detector = MarkerDetector(markers.dictionary)
+        stream, simulated = _open_stream(args, model, markers, detector)
+        robot = simulated or robot
+    interactive = sys.stderr.isatty()
+
+    def show(event: dict) -> None:
+        if event["event"] == "warning":
+            print(f"{chr(10) if interactive else ''}aplan: warning: step {event.get('step', '-')}: {event['message']}",
+                  file=sys.stderr, flush=True)
+
+    def status(line: str) -> None:
+        print(("\r\033[K" if interactive else "") + line, end="" if interactive else "\n", file=sys.stderr,
+              flush=True)
+
+    log_path = args.log or f"session-{time.strftime('%Y%m%d-%H%M%S')}.jsonl"
+    events = EventLog(log_path, on_event=show)
+    if args.keyboard:
+        source = KeyboardSource(plan.product)
+    else:
+        close_without_tool = any(o.parts and o.tool is None for o in plan.observations)
+        source = VisionSource((), markers, detector, args.debounce, args.quiet_frames, close_without_tool,
+                              on_warning=lambda message: events.write("warning", step=_current_step(events),
+                                                                      message=message),
+                              detections=stream, robot_uses_tray_tools=not args.robot_own_tools)
+    settings = {"policy": args.policy, "technical": args.technical, "discount": args.discount,
+                "rewards": vars(model.rewards), "robot": args.robot, "source": _source_name(args),
+                "debounce": args.debounce, "quiet_frames": args.quiet_frames,
+                "robot_own_tools": args.robot_own_tools}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # logged and shown as warning events instead
+            result = run_session(model, policy, source, robot, events, status, args.max_steps, settings=settings)
+    finally:
+        events.close()
+        if stream is not None:
+            stream.close()
+    if interactive:
+        print(file=sys.stderr)
+    print(f"{result.reason}: {result.message}")
+    print(f"log: {log_path}")
+    return 0 if result.assembled else 1
+
+
+def _current_step(events) -> int:
+    return next((e["step"] for e in reversed(events.events) if "step" in e), 0)
+
+
+def _replay(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from ..decision.simulate import Episode, Step, plot_beliefs
+    from ..runtime.session import replay
+
+    done = replay(args.log)
+    model = done.model
+    steps = list(enumerate(zip(done.actions, done.observations, done.beliefs[1:]), start=1))
+    if not args.json:
+        print(f"{done.product.name or args.log}: {len(done.actions)} steps, "
+              f"ended: {done.end['reason'] + ' (' + done.end['message'] + ')' if done.end else 'no end event'}")
+        print(f"  {'step':>4}  {'robot action':<44} {'observation':<28} belief (top 3)")
+    for k, (a, z, b) in steps:
+        order = np.argsort(-b, kind="stable")[:3]
+        if args.json:
+            print(json.dumps({"step": k, "action": model.actions[a], "observation": model.observations[z],
+                              "top": [[int(i), round(float(b[i]), 6)] for i in order]}))
+        else:
+            top = " ".join(f"i{int(i)} {b[i]:.2f}" for i in order if b[i] > 0)
+            print(f"  {k:>4}  {model.actions[a]:<44} {model.observations[z]:<28} {top}")
+    if args.plot:
+        likely = [int(np.argmax(b)) for b in done.beliefs]
+        path = [Step(a, z, s, float(b[s]), 0, 0.0)
+                for a, z, s, b in zip(done.actions, done.observations, likely[1:], done.beliefs[1:])]
+        written = plot_beliefs([Episode(likely[0], path, done.beliefs)], args.plot, [Path(args.log).name],
+                               line_label="most probable intention")
+        if not args.json:
+            print("wrote " + ", ".join(written))
+    if done.mismatches:
+        raise PlannerError(f"{args.log}: the logged beliefs differ from the recomputed ones at steps "
+                           f"{', '.join(map(str, done.mismatches))}")
+    if not args.json:
+        print(f"beliefs reproduced at all {len(done.actions)} steps")
+    return 0
+
+
+def _markers(args: argparse.Namespace) -> int:
+    from ..runtime.tray import write_marker_sheet
+
+    product = api.resolve_product(args.product)
+    count = write_marker_sheet(product, args.output, args.size)
+    dictionary = product.markers.dictionary if product.markers else DEFAULT_MARKER_DICTIONARY
+    print(f"{args.output}: {count} markers ({dictionary}, {args.size:g} mm)")
+    if product.markers is None:
+        log.info("the product has no 'markers': they are numbered in file order (parts, then tools); add "
+                 "'markers' to the product file to keep them fixed")
+    return 0
+
+
+def _add_session(commands) -> None:
+    session = commands.add_parser(
+        "session", help="run the collaboration loop: observations -> belief -> robot instructions",
+        description="Watch the operator (camera, video, images of the parts tray, or picks typed in), update "
+                    "the belief over intentions, and tell the robot what to do, until the product is assembled. "
+                    "Every event is logged as JSON lines. Exit status 0 when the product was assembled.")
+    session.add_argument("product", metavar="PRODUCT", help=PRODUCT_HELP)
+    add_policy_options(session)
+    source = session.add_mutually_exclusive_group(required=True)
+    source.add_argument("--camera", type=int, metavar="N", help="camera index (OpenCV: /dev/videoN)")
+    source.add_argument("--video", metavar="FILE", help="a video file of the tray")
+    source.add_argument("--images", metavar="DIR", help="a folder of images of the tray, in file-name order")
+    source.add_argument("--keyboard", action="store_true", help="type the operator's picks (no camera)")
+    source.add_argument("--demo", type=int, metavar="K",
+                        help="a simulated cell: an operator following full sequence K (aplan intentions PRODUCT "
+                             "--full) and a robot, on a rendered tray seen through the vision pipeline")
+    session.add_argument("--robot", choices=("console", "auto"),
+                         help="console (default): print each instruction for the person standing in for the "
+                              "robot and wait for Enter; auto: confirm every instruction at once (dry runs)")
+    session.add_argument("--log", metavar="FILE", help="the JSON-lines log (default: session-DATE-TIME.jsonl; "
+                                                       "never overwritten)")
+    session.add_argument("--debounce", type=positive, default=3, metavar="F",
+                         help="frames a marker must stay seen or unseen before it counts (default 3)")
+    session.add_argument("--quiet-frames", type=positive, default=45, metavar="F",
+                         help="frames without any marker change that make a blank observation (default 45: "
+                              "1.5 s at 30 fps)")
+    session.add_argument("--robot-own-tools", action="store_true",
+                         help="the robot has tools of its own: every tool taken from the tray is the operator's "
+                              "(default: the robot takes its tool from the tray too, as in the paper)")
+    session.add_argument("--max-steps", type=positive, default=500)
+    add_decision_options(session)
+    session.set_defaults(run=_session)
+
+
+def add_commands(commands) -> None:
+    _add_session(commands)
+    replay_cmd = commands.add_parser("replay", help="recompute the beliefs of a session log; Fig. 7 plot",
+                                     description="Replay a session log: recompute every belief from the logged "
+                                                 "actions and observations, check them against the log, and "
+                                                 "optionally plot them (exit status 1 on a mismatch).")
+    replay_cmd.add_argument("log", metavar="LOG", help="a session log (.jsonl)")
+    replay_cmd.add_argument("--plot", metavar="STEM", help="write STEM.png and STEM.svg (belief heat map)")
+    replay_cmd.add_argument("--json", action="store_true", help="one JSON line per step")
+    replay_cmd.set_defaults(run=_replay)
+
+    markers = commands.add_parser("markers", help="print the tray's markers with part and tool names",
+                                  description="Write the ArUco markers of a product's parts and tools, labelled, "
+                                              "on A4 pages (PDF, or PNG: the first page).")
+    markers.add_argument("product", metavar="PRODUCT", help=PRODUCT_HELP)
+    markers.add_argument("-o", "--output", required=True, metavar="FILE", help="sheet.pdf or sheet.png")
+    markers.add_argument("--size", type=float, default=40.0, metavar="MM", help="marker width in mm (default 40)")
+    markers.set_defaults(run=_markers)
