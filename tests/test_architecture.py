@@ -1,23 +1,106 @@
-"""The planner never imports FreeCAD or Qt: data flows one way, from FreeCAD documents to the planner."""
+"""The architecture: data flows one way, from FreeCAD documents to the planner, and inside the planner from the
+product up the paper's pipeline. Imports inside functions count too."""
 from __future__ import annotations
 
 import ast
+from pathlib import Path
 
+import pytest
 from conftest import REPO
 
 FORBIDDEN = {"FreeCAD", "FreeCADGui", "Part", "Mesh", "PySide", "PySide2", "PySide6", "PyQt5", "freecad",
              "freecad_aplan"}
 
+# Each part of the planner may import its own level and those below it, never one above.
+LAYERS = {
+    "errors": 0, "defaults": 0, "files": 0, "plugins": 0,
+    "product": 1,
+    "geometry": 2,
+    "assembly": 3,
+    "decision": 4,
+    "runtime": 5,
+    "api": 6,
+    "cli": 7, "__main__": 7, "__init__": 7,
+}
+
+
+def _imports(path: Path, package: str) -> list[tuple[int, str]]:
+    """(line, absolute module) of every import in ``path``, a module of ``package`` (dotted)."""
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level == 0:
+                base = node.module or ""
+            else:
+                parts = package.split(".")
+                parts = parts[:len(parts) - node.level + 1]
+                base = ".".join(parts + ([node.module] if node.module else []))
+            out.append((node.lineno, base))
+            if node.module is None or node.level:  # `from . import x`: x may be a module of its own
+                out += [(node.lineno, f"{base}.{a.name}") for a in node.names]
+    return out
+
+
+def _planner_modules():
+    for path in sorted((REPO / "planner").rglob("*.py")):
+        relative = path.relative_to(REPO).with_suffix("").parts  # ("planner", "decision", "pomdp")
+        yield path, relative, ".".join(relative[:-1])
+
+
+def _layer(module_parts: tuple[str, ...] | list[str]) -> int:
+    top = module_parts[1] if len(module_parts) > 1 else "__init__"
+    return LAYERS[top]
+
+
+def test_every_planner_module_has_a_layer():
+    tops = {p.relative_to(REPO / "planner").parts[0].removesuffix(".py")
+            for p in (REPO / "planner").rglob("*.py")}
+    assert tops - set(LAYERS) == set(), "a new part of the planner: give it a layer in LAYERS"
+
 
 def test_planner_imports_no_freecad():
-    offenders = []
-    for path in sorted((REPO / "planner").rglob("*.py")):
-        for node in ast.walk(ast.parse(path.read_text(), str(path))):
-            if isinstance(node, ast.Import):
-                names = [a.name for a in node.names]
-            elif isinstance(node, ast.ImportFrom) and node.level == 0:
-                names = [node.module or ""]
-            else:
-                continue
-            offenders += [f"{path.name}:{node.lineno} {n}" for n in names if n.split(".")[0] in FORBIDDEN]
+    offenders = [f"{path.relative_to(REPO)}:{line} {name}" for path, _, package in _planner_modules()
+                 for line, name in _imports(path, package) if name.split(".")[0] in FORBIDDEN]
     assert offenders == []
+
+
+def test_nothing_runs_back_up_the_pipeline():
+    offenders = []
+    for path, relative, package in _planner_modules():
+        own = _layer(relative)
+        for line, name in _imports(path, package):
+            parts = name.split(".")
+            if parts[0] != "planner" or len(parts) < 2:
+                continue
+            if _layer(parts) > own:
+                offenders.append(f"{path.relative_to(REPO)}:{line} imports {name}")
+    assert offenders == []
+
+
+def test_product_does_not_need_geometry():
+    """The product (the bottom of the pipeline) is read and checked without any geometry."""
+    offenders = [f"{path.relative_to(REPO)}:{line} {name}" for path, relative, package in _planner_modules()
+                 if relative[1] == "product" for line, name in _imports(path, package)
+                 if name.startswith("planner.geometry")]
+    assert offenders == []
+
+
+@pytest.mark.parametrize("source, target, expected", [
+    ("from ..decision.pomdp import POMDP", "planner.runtime", "planner.decision.pomdp"),
+    ("from . import plan", "planner.cli", "planner.cli.plan"),
+    ("from ...errors import PlannerError", "planner.decision.io", "planner.errors"),
+])
+def test_relative_imports_are_resolved(tmp_path, source, target, expected):
+    module = tmp_path / "m.py"
+    module.write_text(source + "\n")
+    assert expected in [name for _, name in _imports(module, target)]
+
+
+def test_the_checker_sees_a_violation(tmp_path):
+    """A module of the product importing the decision model is caught (the check can fail)."""
+    module = tmp_path / "m.py"
+    module.write_text("def f():\n    from ..decision.pomdp import POMDP\n")
+    names = [name for _, name in _imports(module, "planner.product")]
+    assert _layer(names[0].split(".")) > _layer(("planner", "product"))

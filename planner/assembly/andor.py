@@ -159,6 +159,15 @@ def and_or_graph(product: Product, technical: bool | None = None) -> AndOrGraph:
         raise _stuck(full, parts, adjacency, splits, technically_feasible, separable)
 
     # Top-down: keep what the complete product can be disassembled into.
+    subassemblies = tuple(sorted(_reachable(splits, full), key=lambda m: (-m.bit_count(), m)))
+    position = {m: i for i, m in enumerate(subassemblies)}
+    operations = tuple(Operation(position[s], (position[a], position[b]))
+                       for s in subassemblies for a, b in sorted(splits[s]))
+    return AndOrGraph(parts, subassemblies, operations, position)
+
+
+def _reachable(splits: dict[int, list[tuple[int, int]]], full: int) -> set[int]:
+    """The subassemblies that ``full`` splits into, recursively (depth-first over ``splits``)."""
     reachable = {full}
     stack = [full]
     while stack:
@@ -167,11 +176,7 @@ def and_or_graph(product: Product, technical: bool | None = None) -> AndOrGraph:
                 if child not in reachable:
                     reachable.add(child)
                     stack.append(child)
-    subassemblies = tuple(sorted(reachable, key=lambda m: (-m.bit_count(), m)))
-    position = {m: i for i, m in enumerate(subassemblies)}
-    operations = tuple(Operation(position[s], (position[a], position[b]))
-                       for s in subassemblies for a, b in sorted(splits[s]))
-    return AndOrGraph(parts, subassemblies, operations, position)
+    return reachable
 
 
 def _separability_test(product: Product, index: dict[str, int]):

@@ -110,27 +110,13 @@ class IntentionModel:
         return [self.plan.andor.describe(o) for o in self.sequence_operations(intention)]
 
 
-def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
-                     graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT) -> IntentionModel:
-    """The decision model of Alg. 3 over the intentions of ``plan`` (definitions in the module docstring).
-
-    ``graph``: the plan's intention graph when it was built already (else it is built, refusing more than
-    ``limit`` intentions with :class:`~planner.errors.LimitExceededError`).
-    Cost: O(I x A) for the reward table and O(I) for the sparse tables, I intentions, A actions.
-    """
-    graph = graph if graph is not None else intention_graph(plan.states, limit)
-    andor = plan.andor
+def _transitions(graph: IntentionGraph, robot_ops: np.ndarray) -> list[sp.csr_matrix]:
+    """T(i' | i, a) of each action (module docstring), the robot's operations first, then ``wait``."""
     n = graph.n_intentions
-    successor = graph.successor
-    step = graph.operation  # operation index of each intention's next step (-1 at the finished product)
-    robot_ops = np.flatnonzero(plan.tags.robot)
-    action_of_op = np.full(len(andor.operations), -1)
-    action_of_op[robot_ops] = np.arange(len(robot_ops))
-    n_actions = len(robot_ops) + 1
-    wait = n_actions - 1
     states = np.arange(n)
-    has_next = successor >= 0
-    after = np.where(has_next, successor, states)  # the intention after one more step (itself at the end)
+    step = graph.operation  # operation of each intention's next step (-1 at the finished product)
+    has_next = graph.successor >= 0
+    after = np.where(has_next, graph.successor, states)  # the intention after one more step (itself at the end)
 
     def uniform_step(origin: np.ndarray, rows: np.ndarray) -> sp.csr_matrix:
         # From each row: uniform over {origin} and origin's successor (origin alone at the end).
@@ -140,43 +126,68 @@ def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
         vals = np.concatenate([np.where(moves, 0.5, 1.0), np.full(moves.sum(), 0.5)])
         return sp.csr_matrix((vals, (rr, cols)), shape=(n, n))
 
-    waiting = uniform_step(states, states)
     transition = []
-    for k, op in enumerate(robot_ops):
+    for op in robot_ops:
         doing = has_next & (step == op)  # the robot performs the intention's next step
         stay = ~doing
         performed = uniform_step(after[states[doing]], states[doing])
         kept = sp.csr_matrix((np.ones(stay.sum()), (states[stay], states[stay])), shape=(n, n))
         transition.append((performed + kept).tocsr())
-    transition.append(waiting)
+    transition.append(uniform_step(states, states))  # wait
+    return transition
 
-    # Observations: those of the steps that lead into each intention (its predecessors' next steps).
-    observed = plan.operation_observation
-    preds = np.flatnonzero(has_next)
-    pairs = np.unique(np.stack([successor[preds], observed[step[preds]]], axis=1), axis=0)
+
+def _observations(plan: Plan, graph: IntentionGraph) -> sp.csr_matrix:
+    """O(z | i) (the same for every action): uniform over the observations of the steps that lead into ``i``
+    (its predecessors' next steps), the blank one at a quarter of that weight."""
+    n = graph.n_intentions
+    states = np.arange(n)
+    step, successor = graph.operation, graph.successor
+    preds = np.flatnonzero(successor >= 0)
+    pairs = np.unique(np.stack([successor[preds], plan.operation_observation[step[preds]]], axis=1), axis=0)
     pairs = pairs[pairs[:, 1] != 0]  # an operation that looks like waiting adds nothing beyond the blank
     count = np.bincount(pairs[:, 0], minlength=n).astype(float)
     weight = 1.0 / (count + 0.25)
     rows = np.concatenate([pairs[:, 0], states])
     cols = np.concatenate([pairs[:, 1], np.zeros(n, dtype=np.int64)])
     vals = np.concatenate([weight[pairs[:, 0]], 0.25 * weight])
-    table = sp.csr_matrix((vals, (rows, cols)), shape=(n, len(plan.observations)))
-    observation = tuple(table for _ in range(n_actions))
+    return sp.csr_matrix((vals, (rows, cols)), shape=(n, len(plan.observations)))
 
-    reward = np.full((n_actions, n), rewards.wrong, dtype=float)
-    reward[wait] = rewards.wait
-    nexts = np.flatnonzero(has_next & (action_of_op[np.maximum(step, 0)] >= 0))
+
+def _rewards(plan: Plan, graph: IntentionGraph, robot_ops: np.ndarray, rewards: Rewards) -> np.ndarray:
+    """R(i, a) as an (A, I) array: the intention's next step, any other operation, or waiting."""
+    step = graph.operation
+    action_of_op = np.full(len(plan.andor.operations), -1)
+    action_of_op[robot_ops] = np.arange(len(robot_ops))
+    reward = np.full((len(robot_ops) + 1, graph.n_intentions), rewards.wrong, dtype=float)
+    reward[-1] = rewards.wait
+    nexts = np.flatnonzero((graph.successor >= 0) & (action_of_op[np.maximum(step, 0)] >= 0))
     reward[action_of_op[step[nexts]], nexts] = np.where(plan.tags.unfavorable[step[nexts]], rewards.unfavorable,
                                                         rewards.favorable)
-    initial = np.zeros(n)
+    return reward
+
+
+def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
+                     graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT) -> IntentionModel:
+    """The decision model of Alg. 3 over the intentions of ``plan`` (definitions in the module docstring).
+
+    ``graph``: the plan's intention graph when it was built already (else it is built, refusing more than
+    ``limit`` intentions with :class:`~planner.errors.LimitExceededError`).
+    Cost: O(I x A) for the reward table and O(I) for the sparse tables, I intentions, A actions.
+    """
+    graph = graph if graph is not None else intention_graph(plan.states, limit)
+    robot_ops = np.flatnonzero(plan.tags.robot)
+    transition = _transitions(graph, robot_ops)
+    table = _observations(plan, graph)
+    observation = tuple(table for _ in transition)  # one object: solvers and updaters share its products
+    initial = np.zeros(graph.n_intentions)
     starts = graph.full_sequences()
     initial[starts] = 1.0 / len(starts)
-
-    names = [f"i{i}" for i in range(n)]
-    actions = [f"a{k}:" + andor.describe(int(op)).replace(" ", "") for k, op in enumerate(robot_ops)] + [WAIT]
-    observations = [str(o) for o in plan.observations]
-    pomdp = POMDP(tuple(names), tuple(actions), tuple(observations), tuple(transition), observation, reward,
-                  initial, discount, name=plan.product.name or "aplan")
+    names = tuple(f"i{i}" for i in range(graph.n_intentions))
+    actions = tuple(f"a{k}:" + plan.andor.describe(int(op)).replace(" ", "") for k, op in enumerate(robot_ops))
+    pomdp = POMDP(names, actions + (WAIT,), tuple(str(o) for o in plan.observations), tuple(transition),
+                  observation, _rewards(plan, graph, robot_ops, rewards), initial, discount,
+                  name=plan.product.name or "aplan")
     action_operations = np.append(robot_ops, -1)
     action_operations.flags.writeable = False
     return IntentionModel(plan, graph, pomdp, action_operations, rewards)

@@ -78,6 +78,71 @@ def _is_number(tok) -> bool:
         return False
 
 
+_KEYS = ("discount", "values", "states", "actions", "observations", "start")
+
+
+def _names_end(st: _Stream, stop: tuple[str, ...]) -> bool:
+    """Whether a list of names ends here: the end of the file, a keyword, or the next ``key :``."""
+    return (st.peek() is None or st.peek() in stop
+            or (st.i + 1 < len(st.items) and st.items[st.i + 1][1] == ":"))
+
+
+def _declaration(st: _Stream, key: str, names: dict[str, list[str]], header: dict) -> None:
+    """One preamble declaration ``key: ...`` (``key`` taken already) into ``names`` or ``header``."""
+    if key == "start" and st.peek() in ("include", "exclude"):
+        mode = st.take()
+        st.expect(":")
+        items = []
+        while not _names_end(st, ("T", "O", "R")):
+            items.append(st.take())
+        header["start"] = (mode, items)
+        return
+    st.expect(":")
+    if key == "discount":
+        header["discount"] = st.number()
+    elif key == "values":
+        value = st.take()
+        if value not in ("reward", "cost"):
+            raise st.fail(f"values must be reward or cost, got {value!r}")
+        header["sign"] = 1.0 if value == "reward" else -1.0
+    elif key == "start":
+        if st.peek() == "uniform":
+            st.take()
+            header["start"] = ("uniform", None)
+        elif "states" in names and _is_number(st.peek()):
+            header["start"] = ("vector", st.numbers(len(names["states"])))
+        else:
+            header["start"] = ("state", st.take())
+    else:
+        tok = st.take()
+        if tok.isdigit():
+            prefix = {"states": "s", "actions": "a", "observations": "o"}[key]
+            names[key] = [f"{prefix}{k}" for k in range(int(tok))]
+        else:
+            items = [tok]
+            while not _names_end(st, _KEYS + ("T", "O", "R")):
+                items.append(st.take())
+            names[key] = items
+
+
+def _initial_belief(st: _Stream, names: dict[str, list[str]], spec) -> np.ndarray:
+    """The ``start`` declaration as a belief (uniform when there is none)."""
+    S = len(names["states"])
+    if spec is None or spec[0] == "uniform":
+        return np.full(S, 1.0 / S)
+    if spec[0] == "vector":
+        return spec[1]
+    initial = np.zeros(S)
+    if spec[0] == "state":
+        initial[_index(st, names["states"], spec[1])] = 1.0
+        return initial
+    chosen = {_index(st, names["states"], x) for x in spec[1]}
+    if spec[0] == "exclude":
+        chosen = set(range(S)) - chosen
+    initial[sorted(chosen)] = 1.0 / len(chosen)
+    return initial
+
+
 def read_cassandra(path: str | Path) -> POMDP:
     """Read a ``.pomdp`` file into a :class:`POMDP`."""
     source = str(path)
@@ -87,48 +152,12 @@ def read_cassandra(path: str | Path) -> POMDP:
         raise CassandraError(f"{source}: cannot read the file: {exc}") from None
     st = _Stream(text, source)
     names: dict[str, list[str]] = {}
-    discount, sign, start_spec = None, 1.0, None
+    header: dict = {"discount": None, "sign": 1.0, "start": None}
     T = O = R = None
     while st.peek() is not None:
         key = st.take()
-        if key in ("discount", "values", "states", "actions", "observations", "start"):
-            if key == "start" and st.peek() in ("include", "exclude"):
-                mode = st.take()
-                st.expect(":")
-                items = []
-                while st.peek() is not None and st.peek() not in ("T", "O", "R") and not \
-                        (st.i + 1 < len(st.items) and st.items[st.i + 1][1] == ":"):
-                    items.append(st.take())
-                start_spec = (mode, items)
-                continue
-            st.expect(":")
-            if key == "discount":
-                discount = st.number()
-            elif key == "values":
-                value = st.take()
-                if value not in ("reward", "cost"):
-                    raise st.fail(f"values must be reward or cost, got {value!r}")
-                sign = 1.0 if value == "reward" else -1.0
-            elif key == "start":
-                if st.peek() == "uniform":
-                    st.take()
-                    start_spec = ("uniform", None)
-                elif "states" in names and _is_number(st.peek()):
-                    start_spec = ("vector", st.numbers(len(names["states"])))
-                else:
-                    start_spec = ("state", st.take())
-            else:
-                tok = st.take()
-                if tok.isdigit():
-                    prefix = {"states": "s", "actions": "a", "observations": "o"}[key]
-                    names[key] = [f"{prefix}{k}" for k in range(int(tok))]
-                else:
-                    items = [tok]
-                    while st.peek() is not None and st.peek() not in ("discount", "values", "states", "actions",
-                                                                       "observations", "start", "T", "O", "R") \
-                            and not (st.i + 1 < len(st.items) and st.items[st.i + 1][1] == ":"):
-                        items.append(st.take())
-                    names[key] = items
+        if key in _KEYS:
+            _declaration(st, key, names, header)
             if all(k in names for k in ("states", "actions", "observations")) and T is None:
                 S, A, Z = (len(names[k]) for k in ("states", "actions", "observations"))
                 T, O, R = np.zeros((A, S, S)), np.zeros((A, S, Z)), np.zeros((A, S, S, Z))
@@ -140,27 +169,14 @@ def read_cassandra(path: str | Path) -> POMDP:
             raise st.fail(f"unexpected {key!r}")
     if T is None:
         raise CassandraError(f"{source}: states, actions and observations must be declared")
-    if discount is None:
+    if header["discount"] is None:
         raise CassandraError(f"{source}: no discount")
-    S = T.shape[1]
-    if start_spec is None or start_spec[0] == "uniform":
-        initial = np.full(S, 1.0 / S)
-    elif start_spec[0] == "vector":
-        initial = start_spec[1]
-    elif start_spec[0] == "state":
-        initial = np.zeros(S)
-        initial[_index(st, names["states"], start_spec[1])] = 1.0
-    else:
-        chosen = {_index(st, names["states"], x) for x in start_spec[1]}
-        if start_spec[0] == "exclude":
-            chosen = set(range(S)) - chosen
-        initial = np.zeros(S)
-        initial[sorted(chosen)] = 1.0 / len(chosen)
-    reward = sign * np.einsum("ast,atz,astz->as", T, O, R)
+    initial = _initial_belief(st, names, header["start"])
+    reward = header["sign"] * np.einsum("ast,atz,astz->as", T, O, R)
     try:
         return POMDP(tuple(names["states"]), tuple(names["actions"]), tuple(names["observations"]),
                      tuple(sp.csr_matrix(t) for t in T), tuple(sp.csr_matrix(o) for o in O), reward, initial,
-                     discount, name=Path(path).stem)
+                     header["discount"], name=Path(path).stem)
     except ModelError as exc:
         raise CassandraError(f"{source}: {exc}") from None
 
