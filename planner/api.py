@@ -133,16 +133,20 @@ def save_model(model: Model, path: str | os.PathLike) -> None:
 
 
 def solve(model: Model, time_limit: float = SOLVE_TIME_LIMIT, precision: float = SOLVE_PRECISION,
-          engine: str = "builtin", progress: Callable[[float, float, float], None] | None = None) -> SolveResult:
+          engine: str = "builtin", progress: Callable[[float, float, float], None] | None = None,
+          iterations: int | None = None) -> SolveResult:
     """Solve ``model`` offline: ``engine`` ``builtin`` (:class:`PointBasedSolver`, ``progress(seconds,
-    lower, upper)`` after each step) or ``sarsop`` (APPL's ``pomdpsol``, when it is on PATH)."""
+    lower, upper)`` after each step) or ``sarsop`` (APPL's ``pomdpsol``, when it is on PATH). The solver
+    stops at ``time_limit`` seconds, at a gap of ``precision``, or after ``iterations`` trials (builtin only:
+    a fixed amount of work gives the same policy on any machine)."""
     if engine == "sarsop":
         from .decision.solvers.sarsop import solve_with_sarsop
 
         return solve_with_sarsop(tables(model), time_limit, precision)
     if engine != "builtin":
         raise PlannerError(f"unknown solver engine {engine!r}; use one of {', '.join(SOLVER_ENGINES)}")
-    return PointBasedSolver(time_limit=time_limit, precision=precision).solve(tables(model), progress)
+    solver = PointBasedSolver(time_limit=time_limit, precision=precision, max_iterations=iterations)
+    return solver.solve(tables(model), progress)
 
 
 def policy_for(model: Model, policy: str | os.PathLike | None = None,

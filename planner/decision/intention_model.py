@@ -24,11 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from ..assembly.intentions import (
-    DEFAULT_INTENTION_LIMIT,
-    IntentionGraph,
-    intention_graph,
-)
+from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, IntentionGraph, intention_graph
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
 from ..errors import PlannerError

@@ -6,7 +6,7 @@ import pytest
 from conftest import PEN_MODELS, require_shared
 from modelmatch import renumbering
 
-from planner import make_plan
+from planner import PlannerError, make_plan
 from planner.decision import Rewards, intention_pomdp
 from planner.decision.io.pomdpx import read_pomdpx, write_pomdpx
 
@@ -65,3 +65,44 @@ def test_pomdpx_round_trip_and_size(tmp_path, pen_model):
 def test_eagerness_is_configurable(pen):
     model = intention_pomdp(make_plan(pen), Rewards(unfavorable=5, favorable=-1, wrong=-100, wait=-0.5))
     assert set(np.unique(model.reward)) == {5, -1, -100, -0.5}
+
+
+def test_the_model_says_what_each_action_does(pen):
+    """Each action but wait performs the robot-capable operation its name describes; the POMDP is the same
+    whether built alone or inside the model."""
+    from planner.decision import intention_model
+
+    plan = make_plan(pen)
+    model = intention_model(plan)
+    robot_operations = [int(o) for o in np.flatnonzero(plan.tags.robot)]
+    assert [model.operation(a) for a in range(len(model.actions) - 1)] == robot_operations
+    assert model.operation(len(model.actions) - 1) is None and model.actions[-1] == "wait"
+    for action, operation in enumerate(robot_operations):
+        assert model.actions[action] == f"a{action}:" + plan.andor.describe(operation).replace(" ", "")
+    alone = intention_pomdp(plan)
+    assert alone.states == model.pomdp.states and np.array_equal(alone.reward, model.pomdp.reward)
+    assert model.final_state == 0 and model.graph.successor[model.final_state] < 0
+
+
+def test_full_sequences_and_their_operations(pen):
+    """The full sequences are the intentions at the initial state, each with one operation per join (parts - 1),
+    joining every part exactly once in all; other intentions are refused, naming the range."""
+    from planner.decision import intention_model
+
+    model = intention_model(make_plan(pen))
+    starts = model.full_sequences()
+    assert len(starts) == 24  # the paper's 24 assembly sequences of the pen
+    andor = model.plan.andor
+    for start in starts:
+        operations = model.sequence_operations(int(start))
+        assert len(operations) == len(pen.parts) - 1
+        assert len(model.describe_operations(int(start))) == len(operations)
+        # Undoing the operations from the finished product ends with single parts: each split used once.
+        sizes = sorted(len(andor.parts_of(andor.operations[o].parent)) for o in operations)
+        assert sizes[-1] == len(pen.parts)
+        assert model.full_sequence(int(start)) == int(start)
+    inner = int(np.setdiff1d(np.arange(model.pomdp.n_states), starts)[0])
+    with pytest.raises(PlannerError, match=rf"--demo {inner} is not a full assembly sequence; the sequences are "
+                                            rf"the intentions {starts[0]}\.\.{starts[-1]}"):
+        model.full_sequence(inner, "--demo")
+    assert model.sequence_operations(model.final_state) == []

@@ -1,0 +1,92 @@
+"""planner.api, the steps every front end takes: resolving products, plans, decision models and their files,
+solving, simulating and evaluating."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from planner import PlannerError, UnknownProductError, api, example_path, save_product
+from planner.decision import POMDP, IntentionModel
+
+
+@pytest.fixture(scope="module")
+def model():
+    return api.decision_model("pen")
+
+
+@pytest.fixture(scope="module")
+def policy(model):
+    # A fixed amount of work, no clock: the same policy on any machine.
+    return api.solve(model, time_limit=math.inf, precision=1e-9, iterations=20).policy
+
+
+def test_resolve_product(tmp_path, pen):
+    assert api.resolve_product("pen") == pen
+    assert api.resolve_product(example_path("pen")).part_ids == pen.part_ids
+    save_product(pen, tmp_path / "copy.json")
+    assert api.resolve_product(tmp_path / "copy.json").part_ids == pen.part_ids
+    with pytest.raises(UnknownProductError, match="is a folder without product.json, so not a product bundle"):
+        api.resolve_product(tmp_path)
+    with pytest.raises(UnknownProductError, match=r"no-such: no such file, and no embedded example of that name "
+                                                  r"\(embedded: pen\)"):
+        api.resolve_product("no-such")
+
+
+def test_plan_statistics_with_a_base_part():
+    """The paper's Sec. V: only the sequences whose first operation joins the base part (the pen's body)."""
+    plan, stats = api.plan_statistics_of("pen", technical=True, base_part="auto")
+    assert stats.base_part == "body" and (stats.intentions, stats.sequences) == (39, 5)
+    _, whole = api.plan_statistics_of(plan)
+    assert whole.sequences == 12 and whole.base_part is None
+
+
+def test_models_from_products_and_files(tmp_path, model):
+    assert isinstance(model, IntentionModel) and api.tables(model) is model.pomdp
+    for name in ("m.pomdpx", "m.pomdp"):
+        api.save_model(model, tmp_path / name)
+        loaded = api.load_model(tmp_path / name)
+        assert isinstance(loaded, POMDP) and api.tables(loaded) is loaded
+        assert loaded.n_states == model.pomdp.n_states and np.allclose(loaded.reward, model.pomdp.reward)
+    with pytest.raises(PlannerError, match=r"m\.txt: unknown model file type; use \.pomdpx or \.pomdp"):
+        api.save_model(model, tmp_path / "m.txt")
+    assert not (tmp_path / "m.txt").exists()
+    technical = api.load_model("pen", technical=True)
+    assert technical.pomdp.n_states == 39  # the paper's pen with its technical constraint
+
+
+def test_solver_choice(model):
+    with pytest.raises(PlannerError, match="unknown solver engine 'fast'; use one of builtin, sarsop"):
+        api.solve(model, engine="fast")
+    first = api.solve(model, time_limit=math.inf, precision=1e-9, iterations=5)
+    second = api.solve(model, time_limit=math.inf, precision=1e-9, iterations=5)
+    assert first.iterations == 5 and first.lower_bound <= first.upper_bound
+    assert np.array_equal(first.policy.alphas, second.policy.alphas)
+
+
+def test_policy_from_a_file_or_solved(tmp_path, model, policy):
+    from planner.decision.policy import write_policy
+
+    write_policy(policy, tmp_path / "p.policy")
+    read, result = api.policy_for(model, tmp_path / "p.policy")
+    assert result is None and np.allclose(read.alphas, policy.alphas, atol=1e-9)
+
+
+def test_simulate_chooses_and_checks_sequences(model, policy):
+    starts = [int(s) for s in model.full_sequences()]
+    assert [e.start for e in api.simulate(model, policy, every=True)] == starts
+    assert [e.start for e in api.simulate(model, policy)] == starts[:1]
+    drawn = [e.start for e in api.simulate(model, policy, random=4, seed=3)]
+    assert len(drawn) == 4 and set(drawn) <= set(starts)
+    assert drawn == [e.start for e in api.simulate(model, policy, random=4, seed=3)]
+    with pytest.raises(PlannerError, match=r"--sequence 1 is not a full assembly sequence"):
+        api.simulate(model, policy, [starts[0], 1])
+    for episode in api.simulate(model, policy, [starts[2]], operator="turns"):
+        assert episode.steps[-1].state == model.final_state  # the operator finished the product
+
+
+def test_evaluate_a_model_or_its_tables(model, policy):
+    mean, half = api.evaluate(model, policy, 200, seed=1)
+    bare_mean, bare_half = api.evaluate(model.pomdp, policy, 200, seed=1)
+    assert math.isfinite(mean) and half > 0 and math.isfinite(bare_mean) and bare_half > 0
