@@ -12,8 +12,19 @@ import FreeCAD
 import freecad_aplan, planner   # no sys.path changes: FreeCAD puts the Mod folder on it
 from planner import make_plan, plan_statistics, resolve_product
 stats = plan_statistics(make_plan(resolve_product("pen"))).as_dict()
+# Messages about bad files come from FreeCAD's own jsonschema (Debian's) as they do from the venv's.
+from planner import ProductFormatError, example_path, product_from_dict
+messages = []
+for key, value in (("contacts", [["ink"]]), ("obstructions", [{"direction": "+W", "blocks": []}]),
+                   ("units", "furlong")):
+    doc = json.loads(example_path("pen").read_text())
+    doc[key] = value
+    try:
+        product_from_dict(doc, "pen.json")
+    except ProductFormatError as exc:
+        messages.append(str(exc))
 print("APLAN-RESULT " + json.dumps({"version": FreeCAD.Version()[:2], "planner": planner.__file__,
-                                     "stats": stats}))
+                                     "stats": stats, "messages": messages}))
 """
 
 
@@ -33,3 +44,8 @@ def test_planner_runs_in_freecad_from_the_mod_folder(tmp_path):
     assert data["version"] == ["0", "20"]
     assert "/Mod/APLAN/" in data["planner"]
     assert data["stats"]["intentions"] == 69 and data["stats"]["subassemblies"] == 18
+    assert data["messages"] == [
+        "pen.json: contacts[0]: expected a pair of two part ids, got 1 item",
+        "pen.json: obstructions[0].direction: unknown direction '+W'; use +X, -X, +Y, -Y, +Z, -Z or a unit vector "
+        "[x, y, z]",
+        "pen.json: units: unknown unit 'furlong'; use one of mm, cm, m, in"]
