@@ -20,10 +20,12 @@ from dataclasses import dataclass, field
 import FreeCAD
 import Part
 
+from planner.errors import PlannerError
+
 __all__ = ["Component", "ReadResult", "open_model", "read_components", "DocumentError"]
 
 
-class DocumentError(Exception):
+class DocumentError(PlannerError):
     """A model cannot be read: missing or unreadable file, unsupported type, no solids."""
 
 

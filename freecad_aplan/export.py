@@ -24,6 +24,7 @@ import FreeCAD
 import MeshPart
 
 from planner.defaults import PRODUCT_FILE, PRODUCT_FORMAT, PRODUCT_VERSION
+from planner.errors import GeometryError
 from planner.files import write_atomic
 
 from .document import open_model, read_components
@@ -63,7 +64,7 @@ def export_components(components, folder: str, source: str, warnings: list[str],
         mesh = MeshPart.meshFromShape(Shape=component.shape, LinearDeflection=linear_deflection,
                                       AngularDeflection=angular_deflection, Relative=False)
         if mesh.CountFacets == 0:
-            raise ValueError(f"part {component.id!r}: tessellation produced no triangles")
+            raise GeometryError(f"part {component.id!r}: tessellation produced no triangles")
         if not mesh.isSolid():
             # Points on face boundaries come once per face: merge them first.
             mesh.removeDuplicatedPoints()

@@ -3,38 +3,21 @@ from __future__ import annotations
 
 import hashlib
 import json
-import re
 import subprocess
-import sys
 
 import pytest
 from conftest import PEN_MODELS, REPO, SHARED, require_freecadcmd, require_shared
+from integration.freecad_tools import LIAISONS, aplan, freecad_result
 
 from planner import load_product
 from planner.geometry.bundle import bundle_product_path
 
-LIAISONS = {frozenset(p) for p in [("ink_001", "cartridge_001"), ("cartridge_001", "head_001"),
-                                   ("head_001", "body_001"), ("body_001", "cap_001"), ("body_001", "button_001")]}
 VARIANTS = [(v, ext) for v in ("simplified", "complex") for ext in ("FCStd", "stp")]
 
 
 def ground_truth(axis: str) -> set[tuple[str, str]]:
     path = require_shared(PEN_MODELS / "simplified" / "GroundTruth" / f"GeomConstraints_POS_{axis[1]}.json")
     return {(link["source"], link["target"]) for link in json.loads(path.read_text())["links"]}
-
-
-def freecad_result(done: subprocess.CompletedProcess) -> dict:
-    """The JSON a FreeCADCmd script printed after ``APLAN-RESULT`` (FreeCAD's progress output surrounds it)."""
-    found = re.search(r"APLAN-RESULT (.*)", done.stdout)
-    assert found, f"no result from FreeCAD:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
-    return json.loads(found.group(1))
-
-
-def aplan(*args: str, check: bool = True) -> subprocess.CompletedProcess:
-    done = subprocess.run([sys.executable, "-m", "planner", *args], capture_output=True, text=True, timeout=600)
-    if check and done.returncode != 0:
-        raise AssertionError(f"aplan {' '.join(args)} failed ({done.returncode}):\n{done.stdout}\n{done.stderr}")
-    return done
 
 
 @pytest.fixture(scope="module")
@@ -251,3 +234,4 @@ def test_occt_engine_through_the_command_line(pen_bundles, tmp_path):
     assert {frozenset(c) for c in product.contacts} == LIAISONS
     for obstruction in product.obstructions:
         assert set(obstruction.blocks) == ground_truth(obstruction.direction.name), obstruction.direction.name
+

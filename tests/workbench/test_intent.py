@@ -7,7 +7,7 @@ import subprocess
 
 import pytest
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
-from test_cad import aplan, freecad_result
+from integration.freecad_tools import aplan, freecad_result
 
 from planner import load_product
 

@@ -9,7 +9,7 @@ import subprocess
 
 import pytest
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
-from test_cad import LIAISONS, aplan, freecad_result
+from integration.freecad_tools import LIAISONS, aplan, freecad_result
 
 from planner import load_product, make_plan, plan_statistics
 from planner.api import load_model
