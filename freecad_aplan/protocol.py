@@ -36,9 +36,9 @@ class Answer:
     error: str | None = None
 
 
-def encode_job(action: str, arguments: Mapping[str, Any]) -> str:
-    """The value of ``APLAN_BATCH`` for ``action`` with ``arguments``."""
-    return json.dumps({"action": action, **arguments})
+def encode_job(job: Mapping[str, Any]) -> str:
+    """The value of ``APLAN_BATCH`` for ``job``: its ``action`` and the action's arguments."""
+    return json.dumps(dict(job))
 
 
 def decode_job(environment: Mapping[str, str]) -> dict:

@@ -42,7 +42,7 @@ def find_freecadcmd(explicit: str | None = None) -> str:
 def run_batch(action: str, arguments: dict, freecadcmd: str | None = None, timeout: float = 3600) -> dict:
     """Run ``action`` of ``freecad_aplan.batch`` in FreeCADCmd and return its JSON result."""
     executable = find_freecadcmd(freecadcmd)
-    env = {**os.environ, JOB_VARIABLE: encode_job(action, arguments)}
+    env = {**os.environ, JOB_VARIABLE: encode_job({"action": action, **arguments})}
     try:
         done = subprocess.run([executable, BATCH_SCRIPT], capture_output=True, text=True, env=env,
                               timeout=timeout, stdin=subprocess.DEVNULL)

@@ -34,8 +34,7 @@ class BackgroundJob(QtCore.QObject):
         self.progress_text = ""
         self.process = QtCore.QProcess(self)
         environment = QtCore.QProcessEnvironment.systemEnvironment()
-        job = dict(job)
-        environment.insert(JOB_VARIABLE, encode_job(job.pop("action"), job))
+        environment.insert(JOB_VARIABLE, encode_job(job))
         self.process.setProcessEnvironment(environment)
         self.process.setProcessChannelMode(QtCore.QProcess.MergedChannels)
         self.process.readyReadStandardOutput.connect(self._read)
