@@ -19,6 +19,7 @@ from __future__ import annotations
 import json
 import os
 import re
+from typing import TYPE_CHECKING
 
 import FreeCAD
 import MeshPart
@@ -28,6 +29,9 @@ from planner.errors import GeometryError
 from planner.files import write_atomic
 
 from .document import open_model, read_components
+
+if TYPE_CHECKING:
+    from .intent import Intent
 
 __all__ = ["export_components", "export_document", "export_model", "DEFAULT_LINEAR_DEFLECTION",
            "DEFAULT_ANGULAR_DEFLECTION"]
