@@ -18,7 +18,8 @@ class AplanWorkbench(FreeCADGui.Workbench):
         # Commands are imported here, when the workbench is first activated, not at FreeCAD start-up.
         from freecad_aplan.gui import commands
 
-        names = commands.register()
+        self.state = commands.WorkbenchState()  # what the commands keep between them (panels, jobs, ...)
+        names = commands.register(self.state)
         self.appendToolbar("APLAN", names)
         self.appendMenu("APLAN", names)
 

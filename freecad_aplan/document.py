@@ -14,16 +14,22 @@ are never changed.
 """
 from __future__ import annotations
 
+import contextlib
 import os
 from dataclasses import dataclass, field
+from typing import Iterator
 
 import FreeCAD
 import Part
 
+from planner.errors import PlannerError
+
 __all__ = ["Component", "ReadResult", "open_model", "read_components", "DocumentError"]
 
+_IMPORT_PREFERENCES = "User parameter:BaseApp/Preferences/Mod/Import"
 
-class DocumentError(Exception):
+
+class DocumentError(PlannerError):
     """A model cannot be read: missing or unreadable file, unsupported type, no solids."""
 
 
@@ -56,20 +62,41 @@ def open_model(path: str) -> "FreeCAD.Document":
         except Exception as exc:  # FreeCAD raises plain exceptions for corrupt archives
             raise DocumentError(f"{path}: FreeCAD cannot open it ({exc}); is it a FreeCAD document?") from None
     if extension in (".step", ".stp"):
-        import Import
-
-        # Import.insert with link groups can crash FreeCADCmd (checked on FreeCAD 0.20.2).
-        FreeCAD.ParamGet("User parameter:BaseApp/Preferences/Mod/Import").SetBool("UseLinkGroup", False)
-        name = "aplan_" + "".join(c if c.isalnum() else "_" for c in os.path.splitext(os.path.basename(path))[0])
-        document = FreeCAD.newDocument(name, hidden=True)
-        try:
-            Import.insert(path, document.Name)
-        except Exception as exc:
-            FreeCAD.closeDocument(document.Name)
-            raise DocumentError(f"{path}: the STEP file cannot be read ({exc})") from None
-        document.recompute()
-        return document
+        return _import_step(path)
     raise DocumentError(f"{path}: unsupported file type {extension!r}; use a FreeCAD document (.FCStd) or STEP (.step, .stp)")
+
+
+def _import_step(path: str) -> "FreeCAD.Document":
+    import Import
+
+    name = "aplan_" + "".join(c if c.isalnum() else "_" for c in os.path.splitext(os.path.basename(path))[0])
+    document = FreeCAD.newDocument(name, hidden=True)
+    try:
+        with _without_link_groups():
+            Import.insert(path, document.Name)
+    except Exception as exc:
+        FreeCAD.closeDocument(document.Name)
+        raise DocumentError(f"{path}: the STEP file cannot be read ({exc})") from None
+    document.recompute()
+    return document
+
+
+@contextlib.contextmanager
+def _without_link_groups() -> Iterator[None]:
+    """The import preference ``UseLinkGroup`` off for the duration, then as the user had it (unset when it
+    was): ``Import.insert`` with link groups can crash FreeCADCmd (checked on FreeCAD 0.20.2), and the
+    preference belongs to the user."""
+    group = FreeCAD.ParamGet(_IMPORT_PREFERENCES)
+    was_set = "UseLinkGroup" in group.GetBools()
+    before = group.GetBool("UseLinkGroup")
+    group.SetBool("UseLinkGroup", False)
+    try:
+        yield
+    finally:
+        if was_set:
+            group.SetBool("UseLinkGroup", before)
+        else:
+            group.RemBool("UseLinkGroup")
 
 
 def _is_consumer(obj) -> bool:

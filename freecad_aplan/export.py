@@ -19,13 +19,19 @@ from __future__ import annotations
 import json
 import os
 import re
+from typing import TYPE_CHECKING
 
 import FreeCAD
 import MeshPart
 
-from planner.defaults import PRODUCT_FILE
+from planner.defaults import PRODUCT_FILE, PRODUCT_FORMAT, PRODUCT_VERSION
+from planner.errors import GeometryError
+from planner.files import write_atomic
 
 from .document import open_model, read_components
+
+if TYPE_CHECKING:
+    from .intent import Intent
 
 __all__ = ["export_components", "export_document", "export_model", "DEFAULT_LINEAR_DEFLECTION",
            "DEFAULT_ANGULAR_DEFLECTION"]
@@ -62,7 +68,7 @@ def export_components(components, folder: str, source: str, warnings: list[str],
         mesh = MeshPart.meshFromShape(Shape=component.shape, LinearDeflection=linear_deflection,
                                       AngularDeflection=angular_deflection, Relative=False)
         if mesh.CountFacets == 0:
-            raise ValueError(f"part {component.id!r}: tessellation produced no triangles")
+            raise GeometryError(f"part {component.id!r}: tessellation produced no triangles")
         if not mesh.isSolid():
             # Points on face boundaries come once per face: merge them first.
             mesh.removeDuplicatedPoints()
@@ -79,17 +85,15 @@ def export_components(components, folder: str, source: str, warnings: list[str],
             part["material"] = component.material
         parts.append(part)
     product = {
-        "format": "aplan-product", "version": 1, "name": os.path.splitext(os.path.basename(source))[0],
-        "units": "mm", "parts": parts, "contacts": [], "obstructions": [],
+        "format": PRODUCT_FORMAT, "version": PRODUCT_VERSION,
+        "name": os.path.splitext(os.path.basename(source))[0], "units": "mm", "parts": parts, "contacts": [], "obstructions": [],
         "geometry": {"source": os.path.basename(source),
                      "tessellation": {"linear_deflection": linear_deflection,
                                       "angular_deflection": angular_deflection},
                      "warnings": warnings, **({"analysis": analysis} if analysis else {})},
         **(extra or {}),
     }
-    with open(os.path.join(folder, PRODUCT_FILE), "w", encoding="utf-8") as handle:
-        json.dump(product, handle, indent=1)
-        handle.write("\n")
+    write_atomic(os.path.join(folder, PRODUCT_FILE), json.dumps(product, indent=1) + "\n")
     return product
 
 
@@ -115,8 +119,8 @@ def _stored_diagrams(intent, components, extra: dict) -> tuple[dict | None, str 
             return None, (f"component {component.id!r} was made of {sorted(before)} when they were detected, "
                           f"and is made of {sorted(component.objects)} now")
     try:
-        product_from_dict({"format": "aplan-product", "version": 1, "parts": [{"id": i} for i in ids],
-                           "contacts": diagrams.get("contacts", []),
+        product_from_dict({"format": PRODUCT_FORMAT, "version": PRODUCT_VERSION,
+                           "parts": [{"id": i} for i in ids], "contacts": diagrams.get("contacts", []),
                            "obstructions": diagrams.get("obstructions", []), **extra}, "diagrams")
     except ProductFormatError as exc:
         return None, f"they are not valid: {exc.location}: {exc.problem}"
@@ -153,7 +157,7 @@ def export_document(document, folder: str, source: str, groups=None, exclude=Non
     ids = {c.id for c in result.components}
     if extra:
         try:  # check the intent against the components before writing anything
-            product_from_dict({"format": "aplan-product", "version": 1, "contacts": [],
+            product_from_dict({"format": PRODUCT_FORMAT, "version": PRODUCT_VERSION, "contacts": [],
                                "parts": [{"id": i} for i in sorted(ids)], **extra}, "product")
         except ProductFormatError as exc:
             from .intent import IntentError

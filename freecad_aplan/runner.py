@@ -1,21 +1,21 @@
 """Run FreeCAD jobs from any Python: find FreeCADCmd and run ``freecad_aplan.batch`` in it.
 
 This module does not import FreeCAD: the planner's command line uses it to reach FreeCAD as a separate
-program. A job's arguments travel as JSON in the environment; its answer is one ``APLAN-RESULT`` line.
+program. A job's arguments travel as JSON in the environment; its answer is one line of standard output
+(:mod:`freecad_aplan.protocol`).
 """
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import subprocess
-from pathlib import Path
 
 from planner.errors import PlannerError
 
+from .protocol import BATCH_SCRIPT, JOB_VARIABLE, encode_job, read_answer
+
 __all__ = ["FreeCADError", "find_freecadcmd", "run_batch"]
 
-BATCH_SCRIPT = Path(__file__).resolve().parent / "batch.py"
 _NAMES = ("freecadcmd", "FreeCADCmd", "freecadcmd-daily")
 
 
@@ -42,16 +42,16 @@ def find_freecadcmd(explicit: str | None = None) -> str:
 def run_batch(action: str, arguments: dict, freecadcmd: str | None = None, timeout: float = 3600) -> dict:
     """Run ``action`` of ``freecad_aplan.batch`` in FreeCADCmd and return its JSON result."""
     executable = find_freecadcmd(freecadcmd)
-    env = dict(os.environ, APLAN_BATCH=json.dumps({"action": action, **arguments}))
+    env = {**os.environ, JOB_VARIABLE: encode_job({"action": action, **arguments})}
     try:
-        done = subprocess.run([executable, str(BATCH_SCRIPT)], capture_output=True, text=True, env=env,
+        done = subprocess.run([executable, BATCH_SCRIPT], capture_output=True, text=True, env=env,
                               timeout=timeout, stdin=subprocess.DEVNULL)
     except subprocess.TimeoutExpired:
         raise FreeCADError(f"FreeCAD job {action!r} did not finish within {timeout:g} s") from None
-    for line in done.stdout.splitlines():
-        if line.startswith("APLAN-ERROR "):
-            raise FreeCADError(line[len("APLAN-ERROR "):])
-        if line.startswith("APLAN-RESULT "):
-            return json.loads(line[len("APLAN-RESULT "):])
+    answer = read_answer(done.stdout)
+    if answer is not None:
+        if answer.error is not None:
+            raise FreeCADError(answer.error)
+        return answer.result
     tail = "\n".join((done.stdout + done.stderr).strip().splitlines()[-15:])
     raise FreeCADError(f"FreeCAD job {action!r} gave no result (exit code {done.returncode}); its last output:\n{tail}")

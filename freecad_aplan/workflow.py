@@ -33,12 +33,12 @@ from planner.defaults import (
 from planner.errors import PlannerError
 
 from . import ADDON_DIR
+from .protocol import BATCH_SCRIPT
 
 __all__ = ["require_analysis", "export_for_detection", "worker_command", "analyze_bundle", "store_detection",
            "edit_analysis_diagrams", "analysis_product", "analysis_diagrams", "plan_report", "export_analysis_bundle", "export_decision_model",
            "solve_product", "simulate_sequence", "BATCH_SCRIPT"]
 
-BATCH_SCRIPT = os.path.join(ADDON_DIR, "freecad_aplan", "batch.py")
 
 
 def require_analysis(document):
@@ -104,12 +104,7 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
     Returns the counts (parts, contacts, interferences, seconds). Runs in a background job.
     """
     from planner.geometry import Tolerances
-    from planner.geometry.bundle import (
-        PRODUCT_FILE,
-        analyze_product,
-        apply_report,
-        load_bundle,
-    )
+    from planner.geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
     from planner.product import save_product
 
     product = load_bundle(folder)

@@ -36,8 +36,8 @@ from .decision.simulate import Episode, evaluate_policy, simulate_episode
 from .decision.solvers import PointBasedSolver, SolveResult
 from .defaults import DISCOUNT, POLICY_TIME_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
 from .errors import PlannerError, UnknownProductError
+from .product import Product, load_product
 from .product.examples import EXAMPLES, example_path
-from .product.model import Product, load_product
 
 __all__ = ["resolve_product", "plan_of", "plan_statistics_of", "decision_model", "load_model", "save_model",
            "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for", "simulate", "evaluate"]

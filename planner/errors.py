@@ -12,6 +12,7 @@ __all__ = [
     "DisconnectedProductError",
     "NotDisassemblableError",
     "LimitExceededError",
+    "GeometryError",
 ]
 
 
@@ -67,3 +68,8 @@ class LimitExceededError(PlannerError):
         self.count = count
         self.limit = limit
         super().__init__(f"{what}: {count:,} would be enumerated, more than the limit of {limit:,}. {hint}")
+
+
+class GeometryError(PlannerError):
+    """A part's geometry cannot be analysed (a mesh that is not closed, no volume, an unreadable file), or a
+    geometry engine was given bad tolerances."""

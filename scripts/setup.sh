@@ -2,8 +2,9 @@
 # Set up APLAN in ./.venv (idempotent). With --freecad, also install Debian's FreeCAD 0.20 (headless
 # freecadcmd, the GUI and Xvfb) and the Python packages FreeCAD's own interpreter needs, when they are
 # missing and apt can be used (as root, or through passwordless sudo). FreeCAD's own Python gets Debian's
-# numpy, networkx, lxml, scipy and matplotlib (the planner, the occt engine, solving, pictures); the mesh
-# engine's trimesh and manifold3d are not packaged by Debian, so the workbench runs that engine in this .venv.
+# numpy, networkx, lxml, scipy, matplotlib and jsonschema (the planner, the occt engine, solving, pictures);
+# the mesh engine's trimesh and manifold3d are not packaged by Debian, so the workbench runs that engine in
+# this .venv.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -19,7 +20,7 @@ if [ "${1:-}" = "--freecad" ] && ! command -v freecadcmd >/dev/null 2>&1; then
         "${as_root[@]}" apt-get update -qq
         DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends \
             freecad-python3 freecad xvfb xauth python3-numpy python3-networkx python3-lxml python3-scipy \
-            python3-matplotlib >/dev/null
+            python3-matplotlib python3-jsonschema >/dev/null
     else
         echo "setup: FreeCAD is not installed and apt-get cannot be used here: FreeCAD tests will be skipped" >&2
     fi

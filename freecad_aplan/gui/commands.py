@@ -3,7 +3,8 @@
 Each command has an icon (``resources/icons/<command>.svg``), a tooltip and an ``IsActive`` that never
 raises. Errors the user can fix (no document, nothing selected, no solids, an analysis from a newer APLAN,
 a cancelled job) are written to the report view and the status bar as one clear line; nothing in the
-document changes except what the command is for.
+document changes except what the command is for. What the commands keep between them (open panels and
+dialogs, the last plan and policy, running jobs) is a :class:`WorkbenchState` owned by the workbench.
 """
 from __future__ import annotations
 
@@ -29,10 +30,27 @@ from ..intent import (
     update_intent,
 )
 
-__all__ = ["COMMANDS", "register", "last_plan"]
+__all__ = ["COMMANDS", "WorkbenchState", "register"]
 
-_STATE: dict = {"policy": None, "plan_dialog": None, "job_folder": None}
 PARAMETERS = "User parameter:BaseApp/Preferences/Mod/APLAN"
+
+
+class WorkbenchState:
+    """What the commands keep between them, for one workbench.
+
+    ``panel``, ``plan_dialog``, ``belief_dialog``: the open task panel and dialogs (Qt destroys a window
+    that nothing in Python refers to). ``plan``: what the last plan command showed (statistics and image
+    paths). ``policy``: the path of the last policy saved by Solve (Simulate offers it). ``jobs``: the
+    background jobs still running.
+    """
+
+    def __init__(self) -> None:
+        self.panel = None
+        self.plan_dialog = None
+        self.belief_dialog = None
+        self.plan: dict | None = None
+        self.policy: str | None = None
+        self.jobs: list = []
 
 
 def _message(text: str, error: bool = True) -> None:
@@ -48,7 +66,7 @@ def _guarded(action):
     """Run a command body; expected errors become a message, unexpected ones a message plus a log entry."""
     try:
         action()
-    except (PlannerError, DocumentError) as exc:
+    except PlannerError as exc:
         _message(str(exc))
     except Exception as exc:  # a bug: say so in one line, keep the details in the log
         _message(f"internal error ({type(exc).__name__}: {exc}); please report it")
@@ -69,18 +87,19 @@ def _selected_objects() -> list:
     return objects
 
 
-def last_plan() -> dict | None:
-    """What the last plan command showed (statistics and images), for tests."""
-    return _STATE.get("plan")
-
-
 class _Command:
-    """Base: resources from the class attributes; active when there is a document (and an analysis)."""
+    """Base: resources from the class attributes; active when there is a document (and an analysis).
+
+    ``state`` is shared by the commands of one workbench (a command made alone gets its own).
+    """
 
     name = ""
     menu = ""
     tooltip = ""
     needs_analysis = True
+
+    def __init__(self, state: WorkbenchState | None = None):
+        self.state = state if state is not None else WorkbenchState()
 
     def GetResources(self):
         return {"Pixmap": icon_path(f"{self.name}.svg"), "MenuText": self.menu, "ToolTip": self.tooltip}
@@ -196,7 +215,7 @@ class Detect(_Command):
         job = {"action": "analyze", "folder": folder, "engine": intent.engine, "contact": intent.contact,
                "interference": intent.interference, "depth": intent.depth}
         BackgroundJob(f"Detecting contacts and obstructions of {len(product['parts'])} parts ({intent.engine} engine)",
-                      command, job, done, failed, FreeCADGui.getMainWindow()).start()
+                      command, job, done, failed, self.state.jobs, FreeCADGui.getMainWindow()).start()
 
     @staticmethod
     def _store(analysis, folder, result):
@@ -205,10 +224,10 @@ class Detect(_Command):
                  f"interferences ({result['seconds']:.1f} s); see Diagrams", error=False)
 
 
-def _show_panel(panel) -> None:
-    """Show ``panel`` in the task view, replacing any open one (kept in _STATE so Qt does not drop it)."""
+def _show_panel(state: WorkbenchState, panel) -> None:
+    """Show ``panel`` in the task view, replacing any open one (kept in ``state`` so Qt does not drop it)."""
     FreeCADGui.Control.closeDialog()
-    _STATE["panel"] = panel
+    state.panel = panel
     FreeCADGui.Control.showDialog(panel)
 
 
@@ -221,7 +240,7 @@ class Diagrams(_Command):
 
         analysis = workflow.require_analysis(_document())
         workflow.analysis_product(analysis)  # a clear message when nothing was detected yet
-        _show_panel(DiagramsPanel(analysis))
+        _show_panel(self.state, DiagramsPanel(analysis))
 
 
 class Intent(_Command):
@@ -235,7 +254,7 @@ class Intent(_Command):
 
         analysis = workflow.require_analysis(_document())
         plan = make_plan(workflow.analysis_product(analysis), technical=False)
-        _show_panel(IntentPanel(analysis, plan))
+        _show_panel(self.state, IntentPanel(analysis, plan))
 
 
 class Plan(_Command):
@@ -250,12 +269,11 @@ class Plan(_Command):
         folder = tempfile.mkdtemp(prefix="aplan-plan-")
         _, statistics, images = workflow.plan_report(product, folder)
         figures = statistics.as_dict()
-        _STATE["plan"] = {"statistics": figures, "images": images}
+        self.state.plan = {"statistics": figures, "images": images}
         _message(", ".join(f"{k} {v:,}" if isinstance(v, int) else f"{k} {v}" for k, v in figures.items()),
                  error=False)
-        dialog = PlanDialog(product.name, figures, images, FreeCADGui.getMainWindow())
-        _STATE["plan_dialog"] = dialog
-        dialog.show()
+        self.state.plan_dialog = PlanDialog(product.name, figures, images, FreeCADGui.getMainWindow())
+        self.state.plan_dialog.show()
 
 
 def _save_path(title: str, filters: str, suffix: str) -> str | None:
@@ -314,7 +332,7 @@ class Solve(_Command):
 
         def done(result):
             shutil.rmtree(folder, ignore_errors=True)
-            _STATE["policy"] = path
+            self.state.policy = path
             _message(f"wrote {path}: lower bound {result['lower_bound']:.5f}, upper bound "
                      f"{result['upper_bound']:.5f}, {result['alpha_vectors']} alpha vectors", error=False)
 
@@ -325,7 +343,7 @@ class Solve(_Command):
         job = {"action": "solve", "product": os.path.join(folder, PRODUCT_FILE), "output": path,
                "time_limit": seconds}
         BackgroundJob(f"Solving the decision model ({seconds:g} s)", workflow.worker_command("solve"), job, done,
-                      failed, FreeCADGui.getMainWindow()).start()
+                      failed, self.state.jobs, FreeCADGui.getMainWindow()).start()
 
 
 class Simulate(_Command):
@@ -337,7 +355,7 @@ class Simulate(_Command):
 
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
-        policy = _STATE["policy"]
+        policy = self.state.policy
         if not policy or not os.path.isfile(policy):
             policy, _ = QtGui.QFileDialog.getOpenFileName(FreeCADGui.getMainWindow(), "Policy to simulate", "",
                                                           "SARSOP policy (*.policy)")
@@ -352,17 +370,16 @@ class Simulate(_Command):
         caption = (f"Sequence {result['sequence']}: belief on the true intention first above {CONFIDENCE:g} after "
                    f"{result['confident_after']} operator operation(s). Steps: "
                    + "; ".join(f"{a} / {o} / {p}" for a, o, p in result["steps"]))
-        dialog = ImageDialog("APLAN belief", caption, result["plots"][0], FreeCADGui.getMainWindow())
-        _STATE["simulate_dialog"] = dialog
-        dialog.show()
+        self.state.belief_dialog = ImageDialog("APLAN belief", caption, result["plots"][0], FreeCADGui.getMainWindow())
+        self.state.belief_dialog.show()
 
 
-COMMANDS = [CreateAnalysis, GroupComponent, ExcludeParts, Detect, Diagrams, Intent, Plan, ExportBundle,
-            ExportModel, Solve, Simulate]
+COMMANDS = (CreateAnalysis, GroupComponent, ExcludeParts, Detect, Diagrams, Intent, Plan, ExportBundle,
+            ExportModel, Solve, Simulate)
 
 
-def register() -> list[str]:
-    """Register every command with FreeCAD; returns their names (toolbar order)."""
+def register(state: WorkbenchState) -> list[str]:
+    """Register every command with FreeCAD, sharing ``state``; returns their names (toolbar order)."""
     for command in COMMANDS:
-        FreeCADGui.addCommand(command.name, command())
+        FreeCADGui.addCommand(command.name, command(state))
     return [c.name for c in COMMANDS]

@@ -2,43 +2,39 @@
 
 The process runs through ``QProcess``, so FreeCAD's event loop keeps running (the GUI never freezes) and
 Cancel simply kills the process: its work happens in a temporary folder, so nothing reaches the document.
-The answer is the ``APLAN-RESULT``/``APLAN-ERROR`` line of :mod:`freecad_aplan.batch`; ``APLAN-PROGRESS``
-lines update the dialog.
+The job and its answer follow :mod:`freecad_aplan.protocol`; progress lines update the dialog.
 """
 from __future__ import annotations
 
-import json
 import time
 
 from PySide import QtCore, QtGui
 
-__all__ = ["BackgroundJob", "running_jobs"]
+from ..protocol import JOB_VARIABLE, encode_job, read_answer, read_progress
 
-_RUNNING: list["BackgroundJob"] = []
-
-
-def running_jobs() -> list["BackgroundJob"]:
-    """The jobs still running (tests wait on this)."""
-    return list(_RUNNING)
+__all__ = ["BackgroundJob"]
 
 
 class BackgroundJob(QtCore.QObject):
     """Run ``command`` (program and script) on ``job`` (the batch action's JSON) in the background.
 
     ``on_done(result)`` is called with the job's JSON result, ``on_failed(message)`` with a readable message
-    (also when cancelled: ``cancelled`` is then True). Both run in the GUI thread.
+    (also when cancelled: ``cancelled`` is then True). Both run in the GUI thread. While it runs, the job is
+    in the list ``running`` (the workbench's, so that it can wait for its jobs).
     """
 
-    def __init__(self, title: str, command: list[str], job: dict, on_done, on_failed, parent=None):
+    def __init__(self, title: str, command: list[str], job: dict, on_done, on_failed, running: list,
+                 parent=None):
         super().__init__(parent)
         self.title, self.on_done, self.on_failed = title, on_done, on_failed
+        self.running = running
         self.cancelled = False
         self.output = ""
         self.started = time.monotonic()
         self.progress_text = ""
         self.process = QtCore.QProcess(self)
         environment = QtCore.QProcessEnvironment.systemEnvironment()
-        environment.insert("APLAN_BATCH", json.dumps(job))
+        environment.insert(JOB_VARIABLE, encode_job(job))
         self.process.setProcessEnvironment(environment)
         self.process.setProcessChannelMode(QtCore.QProcess.MergedChannels)
         self.process.readyReadStandardOutput.connect(self._read)
@@ -55,7 +51,7 @@ class BackgroundJob(QtCore.QObject):
         self.program, self.arguments = command[0], command[1:]
 
     def start(self) -> "BackgroundJob":
-        _RUNNING.append(self)
+        self.running.append(self)
         self.process.start(self.program, self.arguments)
         self.timer.start(500)
         self.dialog.show()
@@ -63,7 +59,7 @@ class BackgroundJob(QtCore.QObject):
 
     def cancel(self) -> None:
         """Stop the job; nothing it computed is kept."""
-        if self not in _RUNNING:
+        if self not in self.running:
             return
         self.cancelled = True
         self.process.kill()
@@ -76,15 +72,14 @@ class BackgroundJob(QtCore.QObject):
         chunk = bytes(self.process.readAllStandardOutput()).decode("utf-8", "replace")
         self.output += chunk
         for line in chunk.splitlines():
-            if line.startswith("APLAN-PROGRESS "):
-                fields = line.split()[1:]
-                if len(fields) == 3:
-                    self.progress_text = f"  (bounds {fields[1]} .. {fields[2]})"
+            progress = read_progress(line)
+            if progress is not None:
+                self.progress_text = f"  (bounds {progress[1]} .. {progress[2]})"
 
     def _close(self) -> None:
         self.timer.stop()
-        if self in _RUNNING:
-            _RUNNING.remove(self)
+        if self in self.running:
+            self.running.remove(self)
         self.dialog.canceled.disconnect(self.cancel)
         self.dialog.close()
 
@@ -99,12 +94,12 @@ class BackgroundJob(QtCore.QObject):
         if self.cancelled:
             self.on_failed(f"{self.title}: cancelled; nothing was changed")
             return
-        for line in self.output.splitlines():
-            if line.startswith("APLAN-ERROR "):
-                self.on_failed(line[len("APLAN-ERROR "):])
-                return
-            if line.startswith("APLAN-RESULT "):
-                self.on_done(json.loads(line[len("APLAN-RESULT "):]))
-                return
+        answer = read_answer(self.output)
+        if answer is not None:
+            if answer.error is not None:
+                self.on_failed(answer.error)
+            else:
+                self.on_done(answer.result)
+            return
         tail = "\n".join(self.output.strip().splitlines()[-10:])
         self.on_failed(f"{self.title}: the job gave no result (exit code {self.process.exitCode()}); its last output:\n{tail}")

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from typing import Iterable
 
 from ..errors import DisconnectedProductError, NotDisassemblableError
-from ..product.model import Product
+from ..product import Product
 from .bitsets import bit_indices, components, connected_subsets, lowest_bit, mask_of
 
 __all__ = ["Operation", "AndOrGraph", "and_or_graph", "liaison_adjacency"]

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..defaults import INTENTION_LIMIT
 from ..errors import LimitExceededError, PlannerError
-from ..product.model import Product
+from ..product import Product
 from .states import AssemblyStateGraph
 
 __all__ = [

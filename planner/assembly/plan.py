@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..product.model import Product
+from ..product import Product
 from .andor import AndOrGraph, and_or_graph
 from .states import AssemblyStateGraph, assembly_state_graph
 from .tags import Observation, OperationTags, observation_table, operation_tags

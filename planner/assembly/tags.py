@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..product.model import Product
+from ..product import Product
 from .andor import AndOrGraph
 
 __all__ = ["Observation", "BLANK", "OperationTags", "operation_tags", "observation_table"]

@@ -7,7 +7,7 @@ import logging
 from pathlib import Path
 
 from ..geometry.bundle import PRODUCT_FILE, analyze_product, apply_report
-from ..product.model import load_product, save_product
+from ..product import load_product, save_product
 from .options import add_tolerance_options, tolerances_from
 
 __all__ = ["add_commands"]

@@ -10,7 +10,7 @@ from .. import api
 from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, intention_graph
 from ..assembly.stats import STAT_KEYS
 from ..files import write_atomic
-from ..product.model import product_to_dict
+from ..product import product_to_dict
 from ..product.synthetic import SYNTHETIC
 from .options import PRODUCT_HELP, add_technical, positive
 

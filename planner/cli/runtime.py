@@ -11,7 +11,7 @@ from pathlib import Path
 from .. import api
 from ..decision.intention_model import IntentionModel
 from ..errors import PlannerError
-from ..product.model import DEFAULT_MARKER_DICTIONARY
+from ..product import DEFAULT_MARKER_DICTIONARY
 from .decision import model_from, policy_from
 from .options import PRODUCT_HELP, add_decision_options, add_policy_options, positive
 

@@ -13,7 +13,7 @@ import numpy as np
 from lxml import etree
 
 from ..errors import PlannerError
-from ..product.model import write_atomic
+from ..files import write_atomic
 from .io.pomdpx import safe_parser
 from .pomdp import POMDP
 

@@ -1,5 +1,6 @@
 """Geometry: the connection diagram and the obstruction diagrams along +/-X, Y, Z from part meshes (the mesh
-engine), and product bundles (a product file with one mesh per part) that carry them."""
+engine, :mod:`.mesh_engine`, with its :mod:`.tolerances`), and product bundles (a product file with one mesh
+per part) that carry them (:mod:`.bundle`)."""
 from .bundle import (
            ENGINES,
            PRODUCT_FILE,
@@ -9,14 +10,8 @@ from .bundle import (
            is_analysed,
            load_part_meshes,
 )
-from .mesh_engine import (
-           AXES,
-           GeometryError,
-           GeometryReport,
-           PartMesh,
-           Tolerances,
-           analyze_meshes,
-)
+from .mesh_engine import AXES, GeometryError, GeometryReport, PartMesh, analyze_meshes
+from .tolerances import Tolerances
 
 __all__ = ["ENGINES", "PRODUCT_FILE", "analyze_product", "apply_report", "bundle_product_path", "is_analysed",
            "load_part_meshes", "AXES", "GeometryError", "GeometryReport", "PartMesh", "Tolerances", "analyze_meshes"]

@@ -12,25 +12,13 @@ from typing import Callable
 import numpy as np
 
 from ..defaults import PRODUCT_FILE
-from ..product.model import (
-    AXIS_DIRECTIONS,
-    Direction,
-    Obstruction,
-    Product,
-    load_product,
-)
-from .mesh_engine import (
-    AXES,
-    GeometryError,
-    GeometryReport,
-    PartMesh,
-    Tolerances,
-    analyze_meshes,
-)
+from ..errors import GeometryError
+from ..product import AXIS_DIRECTIONS, Direction, Obstruction, Product, load_product
+from .mesh_engine import AXES, GeometryReport, PartMesh, analyze_meshes
+from .tolerances import Tolerances
 
-__all__ = ["PRODUCT_FILE", "bundle_product_path", "is_analysed", "load_part_meshes", "analyze_product",
-           "apply_report", "ENGINES"]
-
+__all__ = ["PRODUCT_FILE", "bundle_product_path", "load_bundle", "is_analysed", "load_part_meshes",
+           "analyze_product", "apply_report", "ENGINES"]
 
 
 def bundle_product_path(folder: str | Path) -> Path:

@@ -1,31 +1,25 @@
 """The product: parts, the connection and obstruction diagrams, technical constraints and the designer's tags
 (the paper's Sec. III-A), their JSON file format, synthetic products (Table I) and the embedded example.
 
-Everything else in the planner starts from a :class:`Product`.
+Everything else in the planner starts from a :class:`Product`. Modules: :mod:`.model` (the dataclasses),
+:mod:`.io` (reading and writing product files), :mod:`.schema` (their structure, with the JSON Schema),
+:mod:`.validation` (the checks the schema cannot express), :mod:`.constants`, :mod:`.synthetic`,
+:mod:`.examples`.
 """
+from ..files import write_atomic
+from .constants import AXIS_DIRECTIONS, DEFAULT_MARKER_DICTIONARY, FORMAT, MARKER_DICTIONARIES, UNITS, VERSION
 from .examples import EXAMPLES, example_path, resources_dir
+from .io import load_product, loads_product, product_from_dict, product_to_dict, save_product
 from .model import (
-                    AXIS_DIRECTIONS,
-                    DEFAULT_MARKER_DICTIONARY,
-                    FORMAT,
-                    MARKER_DICTIONARIES,
-                    UNITS,
-                    VERSION,
-                    Direction,
-                    Markers,
-                    Obstruction,
-                    OperationTag,
-                    Part,
-                    Product,
-                    TagDefaults,
-                    TechnicalConstraint,
-                    Tool,
-                    load_product,
-                    loads_product,
-                    product_from_dict,
-                    product_to_dict,
-                    save_product,
-                    write_atomic,
+    Direction,
+    Markers,
+    Obstruction,
+    OperationTag,
+    Part,
+    Product,
+    TagDefaults,
+    TechnicalConstraint,
+    Tool,
 )
 from .synthetic import SYNTHETIC, chain_product, complete_product
 

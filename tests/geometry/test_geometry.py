@@ -118,3 +118,32 @@ def test_boxes_match_the_closed_form(boxes):
     touching = {(f"b{i}", f"b{j}") for i in range(len(boxes)) for j in range(i + 1, len(boxes))
                 if all(min(boxes[i][1][k], boxes[j][1][k]) >= max(boxes[i][0][k], boxes[j][0][k]) for k in range(3))}
     assert set(report.contacts) == touching
+
+
+def _erode_by_hand(mask: np.ndarray, radius: int) -> np.ndarray:
+    """The mesh engine's erosion before it used scipy: ``radius`` times, a pixel stays when it and its 8
+    neighbours are set; pixels beyond the border count as not set."""
+    out = mask.copy()
+    for _ in range(radius):
+        padded = np.pad(out, 1, constant_values=False)
+        out = padded[1:-1, 1:-1].copy()
+        for di in (-1, 0, 1):
+            for dj in (-1, 0, 1):
+                out &= padded[1 + di:padded.shape[0] - 1 + di, 1 + dj:padded.shape[1] - 1 + dj]
+    return out
+
+
+def test_erosion_equals_the_hand_written_one():
+    from planner.geometry.mesh_engine import _erode
+
+    rng = np.random.default_rng(7)
+    eroded = 0
+    for trial in range(400):
+        shape = tuple(int(n) for n in rng.integers(1, 40, size=2))
+        density = rng.choice([0.5, 0.8, 0.95, 1.0])
+        mask = rng.random(shape) < density
+        radius = int(rng.integers(0, 5))
+        expected = _erode_by_hand(mask, radius)
+        assert np.array_equal(_erode(mask, radius), expected), (trial, shape, density, radius)
+        eroded += int(expected.sum() < mask.sum())
+    assert eroded > 200  # most cases did remove pixels: the comparison is not between unchanged masks

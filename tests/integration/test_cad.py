@@ -6,8 +6,8 @@ import json
 import subprocess
 
 import pytest
-from cad_support import LIAISONS, aplan, freecad_result
 from conftest import PEN_MODELS, REPO, SHARED, require_freecadcmd, require_shared
+from integration.freecad_tools import LIAISONS, aplan, freecad_result
 
 from planner import load_product
 from planner.geometry.bundle import bundle_product_path
@@ -234,3 +234,55 @@ def test_occt_engine_through_the_command_line(pen_bundles, tmp_path):
     assert {frozenset(c) for c in product.contacts} == LIAISONS
     for obstruction in product.obstructions:
         assert set(obstruction.blocks) == ground_truth(obstruction.direction.name), obstruction.direction.name
+
+
+IMPORT_PREFERENCE = """
+import json, sys
+sys.path.insert(0, {repo!r})
+import FreeCAD, Import
+from freecad_aplan.document import DocumentError, open_model
+group = FreeCAD.ParamGet("User parameter:BaseApp/Preferences/Mod/Import")
+during = []
+insert = Import.insert
+def spy(*args):
+    during.append("UseLinkGroup" in group.GetBools() and group.GetBool("UseLinkGroup"))
+    return insert(*args)
+Import.insert = spy
+out = {{}}
+for setting in (True, False, None):
+    if setting is None:
+        group.RemBool("UseLinkGroup")
+    else:
+        group.SetBool("UseLinkGroup", setting)
+    for model in ({model!r}, {corrupt!r}):
+        try:
+            FreeCAD.closeDocument(open_model(model).Name)
+            failed = False
+        except DocumentError:
+            failed = True
+        names = group.GetBools()
+        out[f"{{setting}} {{'corrupt' if failed else 'pen'}}"] = (
+            group.GetBool("UseLinkGroup") if "UseLinkGroup" in names else None)
+out["during"] = during
+print("APLAN-RESULT " + json.dumps(out))
+"""
+
+
+@pytest.mark.freecad
+def test_step_import_restores_the_link_group_preference(tmp_path):
+    """STEP files are imported without link groups (they can crash FreeCADCmd); the user's preference is
+    put back afterwards, as it was (also unset), when the import fails too."""
+    freecadcmd = require_freecadcmd()
+    corrupt = tmp_path / "corrupt.step"
+    corrupt.write_text("ISO-10303-21;\nnot a step file\n")
+    script = tmp_path / "preference_probe.py"
+    script.write_text(IMPORT_PREFERENCE.format(repo=str(REPO), corrupt=str(corrupt),
+                                               model=str(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.stp")))
+    home = tmp_path / "home"  # FreeCAD saves its preferences there on exit
+    home.mkdir()
+    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300,
+                          env={"HOME": str(home), "PATH": "/usr/bin:/bin", "LANG": "C.UTF-8"})
+    data = freecad_result(done)
+    assert data.pop("during") == [False] * 6  # every import ran without link groups
+    assert data == {"True pen": True, "True corrupt": True, "False pen": False, "False corrupt": False,
+                    "None pen": None, "None corrupt": None}

@@ -2,6 +2,9 @@
 from __future__ import annotations
 
 import json
+import os
+import secrets
+import stat
 
 import jsonschema
 import pytest
@@ -168,3 +171,52 @@ def test_write_atomic_leaves_nothing_on_failure(tmp_path):
     assert list(tmp_path.iterdir()) == []
     write_atomic(target, "ok\n")
     assert target.read_text() == "ok\n" and [p.name for p in tmp_path.iterdir()] == ["out.json"]
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o077, 0o002])
+def test_write_atomic_gives_the_usual_permissions(tmp_path, umask):
+    """Outputs get 0o666 less the umask, like any new file, also when they replace a file."""
+    target = tmp_path / "out.json"
+    target.write_text("old\n")
+    target.chmod(0o600)
+    old = os.umask(umask)
+    try:
+        write_atomic(target, "new\n")
+        write_atomic(tmp_path / "fresh.json", "new\n")
+    finally:
+        os.umask(old)
+    for path in (target, tmp_path / "fresh.json"):
+        assert stat.S_IMODE(path.stat().st_mode) == 0o666 & ~umask
+        assert path.read_text() == "new\n"
+
+
+def test_write_atomic_never_touches_the_umask(tmp_path, monkeypatch):
+    """The umask is process-wide: setting it, even to read it, races with threads that create files."""
+
+    def umask(_):
+        raise AssertionError("write_atomic changed the process' umask")
+
+    monkeypatch.setattr(os, "umask", umask)
+    write_atomic(tmp_path / "out.json", "ok\n")
+    assert (tmp_path / "out.json").read_text() == "ok\n"
+
+
+def test_write_atomic_skips_a_temporary_name_in_use(tmp_path, monkeypatch):
+    names = iter(["aaaa", "aaaa", "bbbb"])
+    monkeypatch.setattr(secrets, "token_hex", lambda _: next(names))
+    (tmp_path / ".out.json.aaaa.tmp").write_text("someone else's\n")
+    write_atomic(tmp_path / "out.json", "ok\n")
+    assert (tmp_path / ".out.json.aaaa.tmp").read_text() == "someone else's\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".out.json.aaaa.tmp", "out.json"]
+
+
+def test_names_moved_out_of_model_still_import_from_it():
+    """Other packages import the file functions from planner.product.model, where they were before the split."""
+    from planner import files
+    from planner.product import constants, io, model
+
+    for name in ("product_from_dict", "product_to_dict", "load_product", "loads_product", "save_product"):
+        assert getattr(model, name) is getattr(io, name)
+    assert model.MARKER_DICTIONARIES is constants.MARKER_DICTIONARIES and model.write_atomic is files.write_atomic
+    with pytest.raises(AttributeError, match="has no attribute 'nothing'"):
+        model.nothing  # noqa: B018

@@ -8,8 +8,8 @@ import shutil
 import subprocess
 
 import pytest
-from cad_support import aplan
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
+from integration.freecad_tools import aplan
 
 ARTIFACTS = REPO / "tests" / "artifacts"
 
@@ -40,6 +40,11 @@ def guarded(step):
 
 def status():
     return FreeCADGui.getMainWindow().statusBar().currentMessage()
+
+
+def state():
+    # What the commands keep between them, owned by the workbench.
+    return FreeCADGui.getWorkbench("AplanWorkbench").state
 
 
 def snapshot(doc):
@@ -77,8 +82,7 @@ def start():
 
 
 def wait_detection():
-    from freecad_aplan.gui.jobs import running_jobs
-    if running_jobs():
+    if state().jobs:
         result["ticks"] += 1                          # the event loop runs while the engine works
         QtCore.QTimer.singleShot(100, guarded(wait_detection))
         return
@@ -89,15 +93,13 @@ def wait_detection():
     result["diagrams"] = read_intent(analysis).diagrams
     # Cancel a second detection half-way: the stored diagrams stay as they are.
     FreeCADGui.runCommand("Aplan_Detect")
-    jobs = running_jobs()
-    result["cancel_started"] = len(jobs)
-    QtCore.QTimer.singleShot(300, guarded(lambda: [job.cancel() for job in running_jobs()]))
+    result["cancel_started"] = len(state().jobs)
+    QtCore.QTimer.singleShot(300, guarded(lambda: [job.cancel() for job in list(state().jobs)]))
     QtCore.QTimer.singleShot(400, guarded(wait_cancel))
 
 
 def wait_cancel():
-    from freecad_aplan.gui.jobs import running_jobs
-    if running_jobs():
+    if state().jobs:
         result["cancel_ticks"] += 1
         QtCore.QTimer.singleShot(100, guarded(wait_cancel))
         return
@@ -115,8 +117,7 @@ def wait_cancel():
     FreeCADGui.Control.closeDialog()
     FreeCADGui.Selection.clearSelection()
     FreeCADGui.runCommand("Aplan_Plan")
-    from freecad_aplan.gui.commands import last_plan
-    result["plan"] = last_plan()
+    result["plan"] = state().plan
     dialog = FreeCADGui.getMainWindow().findChild(QtGui.QDialog, "AplanPlanDialog")
     table = dialog.findChild(QtGui.QTableWidget, "AplanStatisticsTable")
     result["shown"] = {{table.item(r, 0).text(): table.item(r, 1).text() for r in range(table.rowCount())}}
@@ -168,14 +169,12 @@ def screenshots():
     tags.item(row, 2).setCheckState(QtCore.Qt.Unchecked)
     tags.item(row, 3).setText("screwdriver")
     result["tag_rows"] = tags.rowCount()
-    from freecad_aplan.gui import commands
-    panel = commands._STATE.get("panel")
-    panel.accept()
+    state().panel.accept()
     from freecad_aplan.intent import find_analysis, read_intent, update_intent
     intent = read_intent(find_analysis(doc))
     result["stored"] = [intent.technical_constraints, intent.operations, intent.tools]
     FreeCADGui.runCommand("Aplan_Plan")
-    result["tagged_plan"] = commands.last_plan()["statistics"]
+    result["tagged_plan"] = state().plan["statistics"]
     doc.undo()
     result["undone"] = read_intent(find_analysis(doc)).operations
     # Components: group the selected ink and cartridge, then ungroup; exclude the cap, then include it.
@@ -198,8 +197,8 @@ def screenshots():
     FreeCADGui.runCommand("Aplan_Diagrams")
     table = FreeCADGui.getMainWindow().findChild(QtGui.QTableWidget, "AplanDiagramsTable")
     table.selectRow(0)
-    commands._STATE["panel"].remove_selected()
-    commands._STATE["panel"].accept()
+    state().panel.remove_selected()
+    state().panel.accept()
     result["contacts_after_remove"] = len(read_intent(analysis).diagrams["contacts"])
     doc.undo()
     result["contacts_after_undo"] = len(read_intent(analysis).diagrams["contacts"])
@@ -228,7 +227,7 @@ def screenshots():
     result["add_message"] = fill_and_add(("contact", "ink_001", "body_001"))
     result["added_row"] = [table.item(table.rowCount() - 1, c).text() for c in range(3)]
     result["stored_before_ok"] = len(read_intent(analysis).diagrams["contacts"])
-    commands._STATE["panel"].accept()
+    state().panel.accept()
     stored = read_intent(analysis).diagrams
     result["after_add"] = [stored["contacts"], stored.get("edits"), doc.UndoNames[0], len(doc.UndoNames) - steps]
     doc.undo()
@@ -264,7 +263,7 @@ def screenshots():
     FreeCADGui.runCommand("Aplan_CreateAnalysis")
     FreeCADGui.runCommand("Aplan_Detect")
     result["no_solids"] = status()
-    result["no_solids_jobs"] = len(__import__("freecad_aplan.gui.jobs", fromlist=["x"]).running_jobs())
+    result["no_solids_jobs"] = len(state().jobs)
     finish(0)
 
 

@@ -6,8 +6,8 @@ import shutil
 import subprocess
 
 import pytest
-from cad_support import aplan, freecad_result
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
+from integration.freecad_tools import aplan, freecad_result
 
 from planner import load_product
 

@@ -8,8 +8,8 @@ import shutil
 import subprocess
 
 import pytest
-from cad_support import LIAISONS, aplan, freecad_result
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
+from integration.freecad_tools import LIAISONS, aplan, freecad_result
 
 from planner import load_product, make_plan, plan_statistics
 from planner.api import load_model

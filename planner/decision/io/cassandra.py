@@ -15,7 +15,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...errors import PlannerError
-from ...product.model import write_atomic
+from ...files import write_atomic
 from ..pomdp import POMDP, ModelError
 
 __all__ = ["CassandraError", "read_cassandra", "write_cassandra", "cassandra_text"]

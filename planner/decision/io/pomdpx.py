@@ -20,7 +20,7 @@ import scipy.sparse as sp
 from lxml import etree
 
 from ...errors import PlannerError
-from ...product.model import write_atomic
+from ...files import write_atomic
 from ..pomdp import POMDP, ModelError
 
 __all__ = ["PomdpxError", "read_pomdpx", "write_pomdpx", "pomdpx_text", "safe_parser"]

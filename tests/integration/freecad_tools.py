@@ -1,5 +1,5 @@
-"""Helpers the CAD tests share: running ``aplan`` as a user does, reading a FreeCADCmd script's result, and the
-pen's connection diagram (ground truth)."""
+"""Helpers of the tests that run FreeCAD or the command line: the pen's liaisons, ``aplan`` in a subprocess,
+and the answer of a FreeCADCmd script."""
 from __future__ import annotations
 
 import json
@@ -7,8 +7,12 @@ import re
 import subprocess
 import sys
 
+__all__ = ["LIAISONS", "aplan", "freecad_result"]
+
+#: The pen's connection diagram (the ground truth of the models in ../shared).
 LIAISONS = {frozenset(p) for p in [("ink_001", "cartridge_001"), ("cartridge_001", "head_001"),
                                    ("head_001", "body_001"), ("body_001", "cap_001"), ("body_001", "button_001")]}
+
 
 def freecad_result(done: subprocess.CompletedProcess) -> dict:
     """The JSON a FreeCADCmd script printed after ``APLAN-RESULT`` (FreeCAD's progress output surrounds it)."""
@@ -18,6 +22,7 @@ def freecad_result(done: subprocess.CompletedProcess) -> dict:
 
 
 def aplan(*args: str, check: bool = True) -> subprocess.CompletedProcess:
+    """Run the command line ``aplan ARGS`` (``python -m planner``); fails the test when it fails, if ``check``."""
     done = subprocess.run([sys.executable, "-m", "planner", *args], capture_output=True, text=True, timeout=600)
     if check and done.returncode != 0:
         raise AssertionError(f"aplan {' '.join(args)} failed ({done.returncode}):\n{done.stdout}\n{done.stderr}")

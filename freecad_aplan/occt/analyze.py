@@ -1,0 +1,123 @@
+"""The OCCT engine's entry points: exact part shapes, or the B-reps of a bundle, to the report of contacts,
+interferences and obstruction diagrams."""
+from __future__ import annotations
+
+import json
+import os
+import time
+
+import Part
+
+from planner.defaults import BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, PRODUCT_FILE
+from planner.errors import GeometryError
+
+from ..document import DocumentError
+from .contacts import find_contacts
+from .obstructions import find_obstructions
+from .solids import bounding_box, inner_points
+
+__all__ = ["BrepError", "analyze_shapes", "analyze_bundle_breps"]
+
+
+class BrepError(DocumentError):
+    """A part's B-rep cannot be used: missing or unreadable file, no solid, no volume."""
+
+
+def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTACT_TOLERANCE,
+                   interference: float = INTERFERENCE_VOLUME, depth: float = BLOCKING_DEPTH) -> dict:
+    """Contacts, interferences and the +X, +Y, +Z obstruction diagrams of exact part shapes.
+
+    ``parts``: (id, shape) pairs, shapes holding solids in global coordinates (they are not modified).
+    Returns the layout of :meth:`planner.geometry.GeometryReport.as_dict` with engine ``"occt"``; contact and
+    interference pairs follow the order of ``parts``; obstruction pair ``(x, y)`` along ``+d`` means ``x``
+    moving along ``+d`` collides with ``y``.
+
+    Tolerances: ``contact`` (model units) for contacts, and the grazing width of the obstruction broad
+    phase; ``interference`` (cubic units) for reporting overlaps; ``depth`` (model units) for obstruction:
+    ``y`` must reach more than ``depth`` beyond the start of ``x``, and ``x``'s sweep must take more than
+    ``depth ** 3`` of ``y`` outside what they already share. Raises :class:`BrepError` naming the part when
+    a shape holds no solid or no volume, :class:`~planner.errors.GeometryError` for a negative tolerance.
+
+    >>> import FreeCAD, Part
+    >>> report = analyze_shapes([("a", Part.makeBox(1, 1, 1)), ("b", Part.makeBox(1, 1, 1, FreeCAD.Vector(1, 0, 0)))])
+    >>> report["contacts"], report["obstructions"]["+X"]
+    ([['a', 'b']], [['a', 'b']])
+
+    Cost: one ``distToShape`` per pair whose boxes are within ``contact`` and one ``common`` per pair that
+    touches; per axis, the prisms of each part's backward faces (one ``generalFuse`` per face split at its
+    silhouette) and, per candidate pair, one to four ``common`` per prism whose box meets the other part
+    (an empty result is cross-checked) plus up to 100 point classifications. Booleans take 0.01-1 s each;
+    the pen takes about 2 s, a 61-part toy truck about 90 s.
+    """
+    start = time.perf_counter()
+    for name, value in (("contact", contact), ("interference", interference), ("depth", depth)):
+        if not value >= 0:
+            raise GeometryError(f"tolerance {name} must be >= 0, got {value!r}")
+    if not parts:
+        raise BrepError("no parts to analyse")
+    ids = [str(p[0]) for p in parts]
+    shapes = []
+    for part_id, shape in parts:
+        if shape is None or shape.isNull() or not shape.Solids:
+            raise BrepError(f"part {part_id!r}: its shape holds no solid")
+        if not shape.Volume > 0:
+            raise BrepError(f"part {part_id!r}: its solid has no volume ({shape.Volume:g})")
+        shapes.append(shape.copy())  # booleans may raise the tolerances of their arguments
+    boxes = [bounding_box(s) for s in shapes]
+    warnings: list[str] = []
+    fuzzies = (0.0, contact * 1e-4, contact * 1e-3)
+    cache: dict[int, list] = {}
+
+    def points(j: int) -> list:
+        if j not in cache:
+            cache[j] = inner_points(shapes[j], min(contact, 0.01 * shapes[j].BoundBox.DiagonalLength))
+        return cache[j]
+
+    contacts, overlap = find_contacts(ids, shapes, boxes, points, contact, fuzzies, warnings)
+    interferences = [(i, j, overlap[i, j][0]) for i, j in contacts if overlap.get((i, j), (0.0,))[0] > interference]
+    for i, j, volume in interferences:
+        warnings.append(f"parts {ids[i]!r} and {ids[j]!r} interpenetrate by {volume:.4g} cubic units "
+                        f"(more than the interference tolerance {interference:g})")
+    obstructions = find_obstructions(ids, shapes, boxes, overlap, contact, depth, fuzzies, warnings)
+    return {
+        "engine": "occt", "parts": len(ids),
+        "contacts": [[ids[i], ids[j]] for i, j in contacts],
+        "interferences": [{"parts": [ids[i], ids[j]], "volume": round(v, 6)} for i, j, v in interferences],
+        "obstructions": {name: [[ids[i], ids[j]] for i, j in pairs] for name, pairs in obstructions.items()},
+        "tolerances": {"contact": contact, "interference": interference, "depth": depth,
+                       "volume": depth ** 3},
+        "warnings": warnings, "seconds": round(time.perf_counter() - start, 3),
+    }
+
+
+def analyze_bundle_breps(folder: str, **tolerances) -> dict:
+    """:func:`analyze_shapes` on the B-reps of a bundle: ``folder/product.json`` and its ``breps/*.brep``.
+
+    ``tolerances``: ``contact``, ``interference``, ``depth`` as in :func:`analyze_shapes`.
+    Raises :class:`BrepError` naming the part and the file when a B-rep is missing or unreadable.
+    Cost: reading the files, then that of :func:`analyze_shapes`.
+    """
+    path = os.path.join(folder, PRODUCT_FILE)
+    try:
+        with open(path, encoding="utf-8") as handle:
+            product = json.load(handle)
+    except (OSError, ValueError) as exc:
+        raise BrepError(f"{path}: cannot read the bundle's product file ({exc})") from None
+    parts = []
+    for index, part in enumerate(product.get("parts", [])):
+        part_id = part.get("id", f"parts[{index}]")
+        relative = part.get("brep")
+        if not relative:
+            raise BrepError(f"part {part_id!r}: no B-rep file in {path} (re-export the bundle)")
+        brep = os.path.join(folder, relative)
+        if not os.path.isfile(brep):
+            raise BrepError(f"part {part_id!r}: B-rep file {brep} is missing (re-export the bundle)")
+        shape = Part.Shape()
+        try:
+            shape.read(brep)
+        except Exception as exc:
+            raise BrepError(f"part {part_id!r}: B-rep file {brep} cannot be read ({exc})") from None
+        if shape.isNull():
+            raise BrepError(f"part {part_id!r}: B-rep file {brep} holds no shape")
+        parts.append((part_id, shape))
+    return analyze_shapes(parts, **tolerances)
