@@ -33,7 +33,7 @@ class UnexplainedObservation:
 
 
 class DiscreteUpdater:
-    """Exact belief updates for a :class:`~planner.pomdp.POMDP` (tables transposed once, sparse).
+    """Exact belief updates for a :class:`~planner.decision.pomdp.POMDP` (tables transposed once, sparse).
 
     Cost per update: O(nnz(T_a) + S); memory: one dense (Z, S) array per distinct observation table (sparse
     columns beyond ``DENSE_LIMIT`` numbers).

@@ -20,8 +20,9 @@ import numpy as np
 
 from ..errors import PlannerError
 from ..product.model import Product
-from .session import Instruction, ScriptedOperator
-from .vision import MarkerMap, marker_map
+from .interfaces import Instruction
+from .scripted import ScriptedOperator
+from .vision.markers import MarkerMap, marker_map
 
 __all__ = ["marker_image", "TrayLayout", "tray_layout", "render_tray", "Occluder", "CameraModel", "SimulatedCell",
            "write_marker_sheet"]
@@ -135,7 +136,7 @@ class SimulatedCell:
 
     When its queue of frames runs dry it is the operator's turn: the operator performs its next operation
     (takes the operation's single parts, grasps the tool, puts it back) or idles for ``idle`` frames.
-    ``robot(instruction)`` (a :class:`~planner.session.ScriptedRobot` hook) renders the robot taking its
+    ``robot(instruction)`` (a :class:`~planner.runtime.scripted.ScriptedRobot` hook) renders the robot taking its
     parts and using the tool, and strikes the operation from the operator's list. Each change is held for
     ``hold`` frames; ``operator_observations`` is the truth, in order.
     """

@@ -10,18 +10,11 @@ import pytest
 from planner import BLANK, Observation, make_plan
 from planner.decision import intention_model
 from planner.decision.solvers import PointBasedSolver
-from planner.runtime.session import (
-    ConsoleRobot,
-    EventLog,
-    KeyboardSource,
-    ObservationSource,
-    Robot,
-    ScriptedOperator,
-    ScriptedRobot,
-    SessionError,
-    replay,
-    run_session,
-)
+from planner.runtime.console import ConsoleRobot, KeyboardSource
+from planner.runtime.interfaces import ObservationSource, Robot, instruction_for
+from planner.runtime.log import EventLog, SessionError, replay
+from planner.runtime.scripted import ScriptedOperator, ScriptedRobot
+from planner.runtime.session import run_session
 from planner.runtime.tray import CameraModel, SimulatedCell, tray_layout
 from planner.runtime.vision import VisionError, VisionSource, marker_map
 
@@ -202,8 +195,6 @@ def test_console_robot_and_keyboard(setup):
     shown = []
     answers = iter(["", "f gripper jammed"])
     robot = ConsoleRobot(read=lambda prompt: next(answers), write=shown.append)
-    from planner.runtime.session import instruction_for
-
     join = instruction_for(model, 0, 1)
     assert robot.perform(join).ok and "join {" in shown[-1] and "using the hammer" in shown[-1]
     report = robot.perform(join)

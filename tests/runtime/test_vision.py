@@ -15,7 +15,8 @@ from planner import (
     product_to_dict,
 )
 from planner.decision import intention_model
-from planner.runtime.session import Instruction, ScriptedOperator
+from planner.runtime.interfaces import Instruction
+from planner.runtime.scripted import ScriptedOperator
 from planner.runtime.tray import (
     CameraModel,
     SimulatedCell,
