@@ -48,8 +48,6 @@ def _open_stream(args: argparse.Namespace, model: IntentionModel, markers, detec
 
 
 def _session(args: argparse.Namespace) -> int:
-    import warnings
-
     from ..runtime.console import ConsoleRobot, KeyboardSource
     from ..runtime.log import EventLog
     from ..runtime.scripted import ScriptedRobot
@@ -96,9 +94,7 @@ def _session(args: argparse.Namespace) -> int:
                 "debounce": args.debounce, "quiet_frames": args.quiet_frames,
                 "robot_own_tools": args.robot_own_tools}
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # logged and shown as warning events instead
-            result = run_session(model, policy, source, robot, events, status, args.max_steps, settings=settings)
+        result = run_session(model, policy, source, robot, events, status, args.max_steps, settings=settings)
     finally:
         events.close()
         if stream is not None:

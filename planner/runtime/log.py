@@ -20,7 +20,6 @@ from __future__ import annotations
 import json
 import os
 import time
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -143,6 +142,10 @@ def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel]:
     return product, model
 
 
+def _in_the_log(event) -> None:
+    """A reset met again while replaying: the session logged it as a warning event already."""
+
+
 def replay(path: str | os.PathLike, tolerance: float = 1e-6) -> Replay:
     """Recompute the beliefs of the session logged at ``path`` (the product is stored in the log).
 
@@ -154,7 +157,7 @@ def replay(path: str | os.PathLike, tolerance: float = 1e-6) -> Replay:
     path = Path(path)
     events = read_log(path)
     product, model = _model_of(path, events[0])
-    updater = DiscreteUpdater(model.pomdp)
+    updater = DiscreteUpdater(model.pomdp, on_reset=_in_the_log)
     belief = updater.initialize()
     done = Replay(product, model, [], [], [belief], None, [], events)
     pending: dict[int, int] = {}  # step -> the action logged for it
@@ -165,9 +168,7 @@ def replay(path: str | os.PathLike, tolerance: float = 1e-6) -> Replay:
                 pending[event["step"]] = int(event["action"])
             elif kind == "observation" and event.get("index") is not None:
                 action, observation = pending[event["step"]], int(event["index"])
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", RuntimeWarning)  # a reset, logged by the session already
-                    belief = updater.update(belief, action, observation)
+                belief = updater.update(belief, action, observation)
                 done.actions.append(action)
                 done.observations.append(observation)
                 done.beliefs.append(belief)

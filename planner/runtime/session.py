@@ -27,7 +27,7 @@ from typing import Callable
 import numpy as np
 
 from ..assembly.tags import BLANK, Observation
-from ..decision.belief import DiscreteUpdater
+from ..decision.belief import DiscreteUpdater, UnexplainedObservation
 from ..decision.intention_model import IntentionModel
 from ..errors import PlannerError
 from ..product.model import product_to_dict
@@ -114,9 +114,9 @@ class _Run:
         self.log = log
         self.needed = len(model.plan.product.parts) - 1  # operations that assemble the product
         self.index = {o: k for k, o in enumerate(model.plan.observations)}
-        self.updater = DiscreteUpdater(model.pomdp)
+        self.resets: list[UnexplainedObservation] = []  # those of the current step, logged as warning events
+        self.updater = DiscreteUpdater(model.pomdp, on_reset=self.resets.append)
         self.belief = self.updater.initialize()
-        self.reset: str | None = None  # how the last update reset the belief, if it did
         self.result = SessionResult("running", "", 0, 0, self.belief, [self.belief])  # stop() says how it ended
 
     @property
@@ -167,12 +167,11 @@ class _Run:
         return observation, z
 
     def update(self, step: int, action: int, observation: Observation, z: int) -> None:
-        """The Bayes filter's update; a reset (an observation of probability 0) is logged as a warning."""
-        resets = len(self.updater.events)
+        """The Bayes filter's update; a reset (an observation of probability 0) is logged as a warning event."""
+        self.resets.clear()
         self.belief = self.updater.update(self.belief, action, z)
-        for event in self.updater.events[resets:]:
+        for event in self.resets:
             self.log.write("warning", step=step, message=f"{observation}: {event}")
-        self.reset = self.updater.events[-1].reset_to if len(self.updater.events) > resets else None
         result = self.result
         result.actions.append(action)
         result.observations.append(z)
@@ -185,6 +184,6 @@ class _Run:
         belief = self.belief
         self.log.write("belief", step=step, top=top_intentions(belief),
                        p_finished=round(float(belief[self.model.final_state]), 6), operations=self.operations,
-                       reset=self.reset)
+                       reset=self.resets[-1].reset_to if self.resets else None)
         if status is not None:
             status(status_line(step, belief, str(observation), next_name))

@@ -7,7 +7,7 @@ Unknown marker ids are ignored with one warning each.
 """
 from __future__ import annotations
 
-import warnings
+import logging
 from typing import TYPE_CHECKING, Callable, Iterable
 
 import numpy as np
@@ -21,6 +21,8 @@ if TYPE_CHECKING:
 
 __all__ = ["VisionSource"]
 
+log = logging.getLogger(__name__)
+
 
 class VisionSource:
     """An observation source (:class:`planner.runtime.interfaces.ObservationSource`) over a stream of frames.
@@ -31,7 +33,7 @@ class VisionSource:
     ``robot_uses_tray_tools``: the robot takes its tool from the tray too (the paper's setup), so one tool
     event per robot operation is the robot's; False when the robot has tools of its own.
     ``on_warning`` receives each warning (an unknown marker id, once per id; a robot pick that never showed);
-    default: :func:`warnings.warn`. ``detections`` replaces ``frames`` by the marker ids of each frame.
+    default: a warning on the ``planner.runtime.vision.source`` logger. ``detections`` replaces ``frames`` by the marker ids of each frame.
     """
 
     def __init__(self, frames: Iterable[np.ndarray], markers: MarkerMap, detector: MarkerDetector | None = None,
@@ -48,7 +50,7 @@ class VisionSource:
         self.robot_uses_tray_tools = robot_uses_tray_tools
         self.frames_read = 0
         self.unknown: set[int] = set()
-        self._warn = on_warning or (lambda message: warnings.warn(message, RuntimeWarning, stacklevel=3))
+        self._warn = on_warning or log.warning
         self._detections = iter(detections) if detections is not None else (self.detector.detect(f) for f in frames)
         self._queued: list[Observation] = []
 
