@@ -33,7 +33,8 @@ class VisionSource:
     ``robot_uses_tray_tools``: the robot takes its tool from the tray too (the paper's setup), so one tool
     event per robot operation is the robot's; False when the robot has tools of its own.
     ``on_warning`` receives each warning (an unknown marker id, once per id; a robot pick that never showed);
-    default: a warning on the ``planner.runtime.vision.source`` logger. ``detections`` replaces ``frames`` by the marker ids of each frame.
+    default: a warning on the ``planner.runtime.vision.source`` logger. ``detections`` replaces ``frames`` by
+    the marker ids of each frame.
     """
 
     def __init__(self, frames: Iterable[np.ndarray], markers: MarkerMap, detector: MarkerDetector | None = None,
