@@ -6,6 +6,7 @@ import logging
 
 import cv2
 import pytest
+from figure_support import pyplot_untouched
 
 from planner import (
     BLANK,
@@ -73,7 +74,8 @@ def test_default_markers_and_missing_ones(pen):
 
 
 @pytest.mark.parametrize("camera", [CameraModel(), CameraModel(blur=1.5), CameraModel(noise=10),
-                                    CameraModel(perspective=0.06, seed=2)], ids=["clean", "blur", "noise", "perspective"])
+                                    CameraModel(perspective=0.06, seed=2)],
+                         ids=["clean", "blur", "noise", "perspective"])
 def test_detector_sees_exactly_the_uncovered_markers(markers, camera):
     layout = tray_layout(markers, *SMALL)
     detector = MarkerDetector()
@@ -273,9 +275,10 @@ def test_camera_that_cannot_be_opened():
         camera_frames(97)
 
 
-def test_marker_sheet_is_detectable(pen, markers, tmp_path):
+def test_marker_sheet_is_detectable(pen, markers, tmp_path, monkeypatch):
     png = tmp_path / "sheet.png"
-    assert write_marker_sheet(pen, png) == 7
+    with pyplot_untouched(monkeypatch):
+        assert write_marker_sheet(pen, png) == 7
     sheet = cv2.imread(str(png))
     assert abs(sheet.shape[0] / sheet.shape[1] - 297 / 210) < 0.01  # A4
     assert MarkerDetector().detect(sheet) == set(markers.items)
@@ -287,14 +290,15 @@ def test_marker_sheet_is_detectable(pen, markers, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sheet.pdf", "sheet.png"]
 
 
-def test_marker_sheet_pages(tmp_path):
+def test_marker_sheet_pages(tmp_path, monkeypatch):
     import re
 
     from planner import Part, Product
 
     parts = tuple(Part(f"p{k}") for k in range(30))
     product = Product(parts, tuple((f"p{k}", f"p{k + 1}") for k in range(29)))
-    assert write_marker_sheet(product, tmp_path / "big.pdf") == 30
+    with pyplot_untouched(monkeypatch):
+        assert write_marker_sheet(product, tmp_path / "big.pdf") == 30
     pages = re.findall(rb"/Type\s*/Page\b(?!s)", (tmp_path / "big.pdf").read_bytes())
     assert len(pages) == 3  # 12 markers of 40 mm per A4 page (3 columns, 4 rows)
 
