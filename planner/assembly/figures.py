@@ -1,6 +1,8 @@
 """Pictures of a plan: the AND/OR graph, the assembly state graph and the intention graph, as PNG files.
 
-Each graph is drawn in layers with matplotlib (Agg, no screen needed) from its ``to_networkx()`` view:
+Each graph is drawn in layers with matplotlib from its ``to_networkx()`` view, on a ``Figure`` of its own (no
+pyplot, no screen, no change to the process's backend: this also runs inside FreeCAD's GUI), and written
+atomically:
 
 - AND/OR graph (Fig. 1 of the paper): subassemblies by number of parts, the complete product on top; each
   operation is a small dot joining its parent to its two children;
@@ -15,6 +17,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..errors import LimitExceededError
+from ..files import save_figure
 from .intentions import intention_graph
 from .plan import Plan
 
@@ -30,18 +33,16 @@ def _check(what: str, count: int, limit: int) -> None:
 
 
 def _save(graph, layer: dict, labels: dict, path: str | Path, title: str, small: set = frozenset()) -> str:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import networkx as nx
+    from matplotlib.figure import Figure  # no pyplot: its backend and figures are process-wide state
 
     for node in graph.nodes:
         graph.nodes[node]["layer"] = layer[node]
     position = {node: (x, -y) for node, (x, y) in
                 nx.multipartite_layout(graph, subset_key="layer", align="horizontal").items()}  # layer 0 on top
     widest = max(sum(1 for v in layer.values() if v == k) for k in set(layer.values()))
-    fig, ax = plt.subplots(figsize=(min(4 + 0.9 * widest, 24), 2 + 1.2 * len(set(layer.values()))))
+    fig = Figure(figsize=(min(4 + 0.9 * widest, 24), 2 + 1.2 * len(set(layer.values()))))
+    ax = fig.subplots()
     big = [n for n in graph.nodes if n not in small]
     nx.draw_networkx_edges(graph, position, ax=ax, arrows=False, edge_color="#7a7a7a", width=0.8)
     nx.draw_networkx_nodes(graph, position, nodelist=big, ax=ax, node_size=260, node_color="#1f4e79")
@@ -53,9 +54,7 @@ def _save(graph, layer: dict, labels: dict, path: str | Path, title: str, small:
     ax.set_title(title, fontsize=10)
     ax.axis("off")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return str(path)
+    return save_figure(fig, path, dpi=110)
 
 
 def draw_andor(plan: Plan, path: str | Path, limit: int = DEFAULT_DRAW_LIMIT) -> str:

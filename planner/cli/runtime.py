@@ -32,7 +32,7 @@ def _source_name(args: argparse.Namespace) -> str:
 
 def _open_stream(args: argparse.Namespace, model: IntentionModel, markers, detector):
     """The marker detections of each frame, and the robot: a simulated one for ``--demo``, else None."""
-    from ..runtime.session import ScriptedOperator, ScriptedRobot
+    from ..runtime.scripted import ScriptedOperator, ScriptedRobot
     from ..runtime.tray import CameraModel, SimulatedCell, tray_layout
     from ..runtime.vision import camera_frames, detections, image_frames, in_background, video_frames
 
@@ -48,9 +48,10 @@ def _open_stream(args: argparse.Namespace, model: IntentionModel, markers, detec
 
 
 def _session(args: argparse.Namespace) -> int:
-    import warnings
-
-    from ..runtime.session import ConsoleRobot, EventLog, KeyboardSource, ScriptedRobot, run_session
+    from ..runtime.console import ConsoleRobot, KeyboardSource
+    from ..runtime.log import EventLog
+    from ..runtime.scripted import ScriptedRobot
+    from ..runtime.session import run_session
     from ..runtime.vision import MarkerDetector, VisionSource, marker_map
 
     if args.demo is not None and args.robot is not None:
@@ -93,9 +94,7 @@ def _session(args: argparse.Namespace) -> int:
                 "debounce": args.debounce, "quiet_frames": args.quiet_frames,
                 "robot_own_tools": args.robot_own_tools}
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # logged and shown as warning events instead
-            result = run_session(model, policy, source, robot, events, status, args.max_steps, settings=settings)
+        result = run_session(model, policy, source, robot, events, status, args.max_steps, settings=settings)
     finally:
         events.close()
         if stream is not None:
@@ -115,7 +114,7 @@ def _replay(args: argparse.Namespace) -> int:
     import numpy as np
 
     from ..decision.simulate import Episode, Step, plot_beliefs
-    from ..runtime.session import replay
+    from ..runtime.log import replay
 
     done = replay(args.log)
     model = done.model

@@ -3,11 +3,13 @@
 ``update(b, a, z)``: ``b'(s') ~ O(z | s', a) * sum_s T(s' | s, a) b(s)``. An observation that no state
 explains (probability 0) never produces NaN: the update reports an :class:`UnexplainedObservation` and
 resets the belief to the states that are reachable from the previous belief's support and can emit ``z``
-(uniform), else to every state that can emit ``z``, else to the uniform belief.
+(uniform), else to every state that can emit ``z``, else to the uniform belief. The report goes to the
+updater's ``on_reset`` (default: a warning on this module's logger) and its ``events`` list.
 """
 from __future__ import annotations
 
-import warnings
+import logging
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -17,6 +19,8 @@ from .pomdp import POMDP
 __all__ = ["DiscreteUpdater", "UnexplainedObservation"]
 
 DENSE_LIMIT = 50_000_000  # observation-table numbers kept dense (400 MB)
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -32,15 +36,21 @@ class UnexplainedObservation:
                 f"belief reset to the {self.reset_to} states")
 
 
+def _log_reset(event: UnexplainedObservation) -> None:
+    log.warning("%s", event)
+
+
 class DiscreteUpdater:
-    """Exact belief updates for a :class:`~planner.pomdp.POMDP` (tables transposed once, sparse).
+    """Exact belief updates for a :class:`~planner.decision.pomdp.POMDP` (tables transposed once, sparse).
 
     Cost per update: O(nnz(T_a) + S); memory: one dense (Z, S) array per distinct observation table (sparse
-    columns beyond ``DENSE_LIMIT`` numbers).
+    columns beyond ``DENSE_LIMIT`` numbers). ``on_reset`` receives each :class:`UnexplainedObservation`
+    (default: a warning on the ``planner.decision.belief`` logger); ``events`` keeps them all.
     """
 
-    def __init__(self, model: POMDP):
+    def __init__(self, model: POMDP, on_reset: Callable[[UnexplainedObservation], None] | None = None):
         self.model = model
+        self.on_reset = on_reset or _log_reset
         self._transposed = [t.T.tocsr() for t in model.transition]
         # O(z | s', a) as dense rows per observation, once per distinct table (actions often share one), when
         # they fit in DENSE_LIMIT numbers; else sparse columns.
@@ -81,7 +91,7 @@ class DiscreteUpdater:
             if mask.any():
                 event = UnexplainedObservation(action, observation, name)
                 self.events.append(event)
-                warnings.warn(str(event), RuntimeWarning, stacklevel=3)
+                self.on_reset(event)
                 return mask / mask.sum()
         raise AssertionError("unreachable")
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..defaults import CONFIDENCE
+from ..files import save_figure
 from .belief import DiscreteUpdater
 from .policy import AlphaVectorPolicy
 from .pomdp import POMDP
@@ -126,13 +127,11 @@ def plot_beliefs(episodes: list[Episode], path_stem: str, titles: list[str] | No
     """Fig. 7-style heat maps (belief over intentions per time step, darker = more probable) with each
     episode's ``start`` and steps' ``state`` drawn as a line (the true intention; a replayed session, which
     does not know it, draws the most probable one and says so in ``line_label``); writes ``path_stem.png``
-    and ``path_stem.svg`` and returns their paths."""
-    import matplotlib
+    and ``path_stem.svg`` (each atomically) and returns their paths."""
+    from matplotlib.figure import Figure  # no pyplot: its backend and figures are process-wide state
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(1, len(episodes), figsize=(3.2 * len(episodes), 4.2), squeeze=False)
+    fig = Figure(figsize=(3.2 * len(episodes), 4.2))
+    axes = fig.subplots(1, len(episodes), squeeze=False)
     for k, (episode, ax) in enumerate(zip(episodes, axes[0])):
         grid = np.stack(episode.beliefs, axis=1)
         ax.imshow(grid, aspect="auto", cmap="Greys", vmin=0, vmax=1, interpolation="nearest", origin="lower")
@@ -143,9 +142,4 @@ def plot_beliefs(episodes: list[Episode], path_stem: str, titles: list[str] | No
         ax.set_ylabel("intention")
         ax.set_title(titles[k] if titles else f"episode {k + 1}", fontsize=9)
     fig.tight_layout()
-    out = []
-    for suffix in (".png", ".svg"):
-        fig.savefig(path_stem + suffix, dpi=120)
-        out.append(path_stem + suffix)
-    plt.close(fig)
-    return out
+    return [save_figure(fig, path_stem + suffix, dpi=120) for suffix in (".png", ".svg")]

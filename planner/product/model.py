@@ -169,26 +169,3 @@ class Product:
             return self
         constraints = tuple(replace(c, active=technical) for c in self.technical_constraints)
         return replace(self, technical_constraints=constraints)
-
-
-# Names this module held before it was split (issue 11): other packages still import some of them from here.
-# They are looked up on first use, since planner.product.io imports this module (a plain import would be
-# circular). New code imports them from planner.product.
-_MOVED = {
-    "FORMAT": "constants", "VERSION": "constants", "UNITS": "constants", "AXIS_DIRECTIONS": "constants",
-    "MARKER_DICTIONARIES": "constants", "DEFAULT_MARKER_DICTIONARY": "constants",
-    "product_from_dict": "io", "product_to_dict": "io", "load_product": "io", "loads_product": "io",
-    "save_product": "io",
-}
-
-
-def __getattr__(name: str) -> Any:
-    if name == "write_atomic":
-        from ..files import write_atomic
-
-        return write_atomic
-    if name in _MOVED:
-        import importlib
-
-        return getattr(importlib.import_module(f"{__package__}.{_MOVED[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

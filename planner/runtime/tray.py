@@ -9,8 +9,6 @@ and benchmarks render their frames with them, so the vision pipeline runs on ima
 from __future__ import annotations
 
 import math
-import os
-import tempfile
 from collections import deque
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,9 +17,11 @@ from typing import Iterable, Sequence
 import numpy as np
 
 from ..errors import PlannerError
-from ..product.model import Product
-from .session import Instruction, ScriptedOperator
-from .vision import MarkerMap, marker_map
+from ..files import open_atomic, save_figure
+from ..product import Product
+from .interfaces import Instruction
+from .scripted import ScriptedOperator
+from .vision.markers import MarkerMap, marker_map
 
 __all__ = ["marker_image", "TrayLayout", "tray_layout", "render_tray", "Occluder", "CameraModel", "SimulatedCell",
            "write_marker_sheet"]
@@ -135,7 +135,7 @@ class SimulatedCell:
 
     When its queue of frames runs dry it is the operator's turn: the operator performs its next operation
     (takes the operation's single parts, grasps the tool, puts it back) or idles for ``idle`` frames.
-    ``robot(instruction)`` (a :class:`~planner.session.ScriptedRobot` hook) renders the robot taking its
+    ``robot(instruction)`` (a :class:`~planner.runtime.scripted.ScriptedRobot` hook) renders the robot taking its
     parts and using the tool, and strikes the operation from the operator's list. Each change is held for
     ``hold`` frames; ``operator_observations`` is the truth, in order.
     """
@@ -215,35 +215,47 @@ def write_marker_sheet(product: Product, path: str | Path, marker_mm: float = 40
 
     Returns the number of markers. Markers are ``marker_mm`` wide when printed at 100 %.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.backends.backend_pdf import PdfPages
-
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in (".pdf", ".png"):
         raise PlannerError(f"{path}: the marker sheet is written as .pdf or .png; change the file name")
     markers = marker_map(product, require_all=False)
-    entries = sorted(markers.items.items())
-    page_w, page_h = 210.0, 297.0
+    pages = _sheet_pages(product, markers, marker_mm)
+    if suffix == ".png":
+        save_figure(pages[0], path, dpi=300)
+    else:
+        from matplotlib.backends.backend_pdf import PdfPages
+
+        with open_atomic(path) as handle, PdfPages(handle) as pdf:
+            for page in pages:
+                pdf.savefig(page)
+    return len(markers.items)
+
+
+_A4 = (210.0, 297.0)  # page width and height, mm
+
+
+def _sheet_pages(product: Product, markers: MarkerMap, marker_mm: float) -> list:
+    """The marker sheet's pages as matplotlib ``Figure`` objects (no pyplot: its state is process-wide), as many
+    markers per A4 page as fit in cells of ``marker_mm`` + 20 by ``marker_mm`` + 22 mm under a 22 mm title."""
+    from matplotlib.figure import Figure
+
+    page_w, page_h = _A4
     cell_w, cell_h = marker_mm + 20.0, marker_mm + 22.0
     columns = max(1, int((page_w - 20) // cell_w))
     rows = max(1, int((page_h - 30) // cell_h))
-    per_page = columns * rows
-    pages = [entries[i:i + per_page] for i in range(0, len(entries), per_page)]
+    entries = sorted(markers.items.items())
+    chunks = [entries[i:i + columns * rows] for i in range(0, len(entries), columns * rows)]
     labels = {p.id: p.label or p.id for p in product.parts} | {t.id: t.label or t.id for t in product.tools}
     figures = []
-    for number, page in enumerate(pages, start=1):
-        fig = plt.figure(figsize=(page_w / 25.4, page_h / 25.4))
+    for number, chunk in enumerate(chunks, start=1):
+        fig = Figure(figsize=(page_w / 25.4, page_h / 25.4))
         fig.text(0.5, 1 - 12 / page_h, f"{product.name or 'APLAN product'}: tray markers ({markers.dictionary}, "
-                 f"{marker_mm:g} mm){f', page {number}/{len(pages)}' if len(pages) > 1 else ''}",
+                 f"{marker_mm:g} mm){f', page {number}/{len(chunks)}' if len(chunks) > 1 else ''}",
                  ha="center", va="center", fontsize=10)
-        for k, (marker, name) in enumerate(page):
-            col, row = k % columns, k // columns
-            left = 10 + col * cell_w + (cell_w - marker_mm) / 2
-            top = 22 + row * cell_h
+        for k, (marker, name) in enumerate(chunk):
+            left = 10 + (k % columns) * cell_w + (cell_w - marker_mm) / 2
+            top = 22 + (k // columns) * cell_h
             ax = fig.add_axes((left / page_w, 1 - (top + marker_mm) / page_h, marker_mm / page_w, marker_mm / page_h))
             ax.imshow(marker_image(markers.dictionary, marker, 240), cmap="gray", vmin=0, vmax=255,
                       interpolation="nearest")
@@ -253,20 +265,4 @@ def write_marker_sheet(product: Product, path: str | Path, marker_mm: float = 40
                      f"{labels.get(name, name)} ({kind} {name!r}, marker {marker})", ha="center", va="center",
                      fontsize=8)
         figures.append(fig)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent or ".")
-    os.close(fd)
-    try:
-        if suffix == ".pdf":
-            with PdfPages(tmp) as pdf:
-                for fig in figures:
-                    pdf.savefig(fig)
-        else:
-            figures[0].savefig(tmp, dpi=300)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
-    finally:
-        for fig in figures:
-            plt.close(fig)
-    return len(entries)
+    return figures

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import logging
 import subprocess
 import sys
 
@@ -107,7 +108,7 @@ def test_policy_round_trip_and_mismatch(tmp_path, doors):
         read_policy(tmp_path / "t.policy")
 
 
-def test_belief_update_and_unexplained_observation(pen):
+def test_belief_update_and_unexplained_observation(pen, caplog):
     model = intention_pomdp(make_plan(pen))
     updater = DiscreteUpdater(model)
     belief = updater.initialize()
@@ -118,8 +119,10 @@ def test_belief_update_and_unexplained_observation(pen):
     # One step from the start, the operator can only have joined two single parts: "ink+[hammer]" (ink added to
     # a subassembly) is unexplained.
     impossible = model.observations.index("ink+[hammer]")
-    with pytest.warns(RuntimeWarning, match="has probability 0"):
+    with caplog.at_level(logging.WARNING, logger="planner.decision.belief"):
         reset = updater.update(model.initial, wait, impossible)
+    assert [r.getMessage() for r in caplog.records] == [str(updater.events[-1])]
+    assert "has probability 0 under the belief" in caplog.records[0].getMessage()
     assert not np.isnan(reset).any() and reset.sum() == pytest.approx(1)
     assert updater.events and updater.events[-1].reset_to in ("reachable", "emitting")
     likelihood = updater.observation_likelihood(wait, impossible)

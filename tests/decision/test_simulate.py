@@ -7,6 +7,7 @@ import sys
 
 import numpy as np
 import pytest
+from figure_support import pyplot_untouched
 
 from planner import make_plan
 from planner.decision import intention_model
@@ -58,13 +59,15 @@ def test_evaluation_brackets_the_bounds(solved):
     assert result.lower_bound - 3 * half <= mean <= result.upper_bound + 3 * half
 
 
-def test_plot_files(tmp_path, solved, decision):
+def test_plot_files(tmp_path, solved, decision, monkeypatch):
     model, result = solved
     graph = decision.graph
     episodes = [simulate_episode(model, result.policy, int(s), np.random.default_rng(2), successor=graph.successor,
                                  final=0) for s in graph.full_sequences()[:3]]
-    written = plot_beliefs(episodes, str(tmp_path / "fig7"))
+    with pyplot_untouched(monkeypatch):
+        written = plot_beliefs(episodes, str(tmp_path / "fig7"))
     assert [p.rsplit(".", 1)[1] for p in written] == ["png", "svg"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fig7.png", "fig7.svg"]  # no temporary file left
     assert (tmp_path / "fig7.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert b"<svg" in (tmp_path / "fig7.svg").read_bytes()[:400]
 

@@ -208,15 +208,3 @@ def test_write_atomic_skips_a_temporary_name_in_use(tmp_path, monkeypatch):
     write_atomic(tmp_path / "out.json", "ok\n")
     assert (tmp_path / ".out.json.aaaa.tmp").read_text() == "someone else's\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == [".out.json.aaaa.tmp", "out.json"]
-
-
-def test_names_moved_out_of_model_still_import_from_it():
-    """Other packages import the file functions from planner.product.model, where they were before the split."""
-    from planner import files
-    from planner.product import constants, io, model
-
-    for name in ("product_from_dict", "product_to_dict", "load_product", "loads_product", "save_product"):
-        assert getattr(model, name) is getattr(io, name)
-    assert model.MARKER_DICTIONARIES is constants.MARKER_DICTIONARIES and model.write_atomic is files.write_atomic
-    with pytest.raises(AttributeError, match="has no attribute 'nothing'"):
-        model.nothing  # noqa: B018

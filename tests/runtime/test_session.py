@@ -3,6 +3,7 @@ log and its replay."""
 from __future__ import annotations
 
 import json
+import logging
 
 import numpy as np
 import pytest
@@ -10,18 +11,11 @@ import pytest
 from planner import BLANK, Observation, make_plan
 from planner.decision import intention_model
 from planner.decision.solvers import PointBasedSolver
-from planner.runtime.session import (
-    ConsoleRobot,
-    EventLog,
-    KeyboardSource,
-    ObservationSource,
-    Robot,
-    ScriptedOperator,
-    ScriptedRobot,
-    SessionError,
-    replay,
-    run_session,
-)
+from planner.runtime.console import ConsoleRobot, KeyboardSource
+from planner.runtime.interfaces import ObservationSource, Robot, instruction_for
+from planner.runtime.log import EventLog, SessionError, replay
+from planner.runtime.scripted import ScriptedOperator, ScriptedRobot
+from planner.runtime.session import run_session
 from planner.runtime.tray import CameraModel, SimulatedCell, tray_layout
 from planner.runtime.vision import VisionError, VisionSource, marker_map
 
@@ -153,16 +147,18 @@ def test_observation_no_operation_explains(setup):
     assert log.events[-2]["event"] == "observation" and log.events[-2]["index"] is None
 
 
-def test_impossible_observation_resets_the_belief_and_goes_on(setup):
+def test_impossible_observation_resets_the_belief_and_goes_on(setup, caplog):
     plan, model, policy, _ = setup
     # The hammer alone joins two subassemblies: impossible before anything was built.
     source = _Listed([Observation((), "hammer"), BLANK])
     log = EventLog()
-    with pytest.warns(RuntimeWarning, match="has probability 0"):
+    with caplog.at_level(logging.WARNING, logger="planner"):
         result = run_session(model, policy, source, ScriptedRobot(), log)
     assert result.reason == "source ended" and "ended at step 3" in result.message
     warnings = [e for e in log.events if e["event"] == "warning"]
-    assert len(warnings) == 1 and "[hammer]" in warnings[0]["message"]
+    assert len(warnings) == 1 and warnings[0]["message"].startswith("[hammer]: observation ")
+    assert "has probability 0 under the belief; belief reset to the" in warnings[0]["message"]
+    assert caplog.records == []  # the session's log holds the reset; no second report through logging
     assert [e["reset"] for e in log.events if e["event"] == "belief"][0] is not None
     assert all(abs(b.sum() - 1) < 1e-9 and np.isfinite(b).all() for b in result.beliefs)
 
@@ -202,8 +198,6 @@ def test_console_robot_and_keyboard(setup):
     shown = []
     answers = iter(["", "f gripper jammed"])
     robot = ConsoleRobot(read=lambda prompt: next(answers), write=shown.append)
-    from planner.runtime.session import instruction_for
-
     join = instruction_for(model, 0, 1)
     assert robot.perform(join).ok and "join {" in shown[-1] and "using the hammer" in shown[-1]
     report = robot.perform(join)
@@ -354,6 +348,20 @@ def test_cli_session_errors(policy_file, tmp_path):
     assert events[0] == "start" and events[-1] == "end"
     broken = _aplan("replay", tmp_path / "x.jsonl")
     assert broken.returncode == 1 and "not a session log" in broken.stderr
+
+
+def test_cli_reports_a_reset_once(policy_file, tmp_path):
+    """An observation of probability 0 (the hammer alone before anything was built) is a warning event in the
+    log, shown once on standard error; replaying the log reports nothing again."""
+    log = tmp_path / "r.jsonl"
+    done = _aplan("session", "pen", "--policy", policy_file, "--keyboard", "--robot", "auto", "--log", log,
+                  stdin="hammer\n")
+    assert done.returncode == 1 and done.stdout.startswith("source ended")
+    shown = [line for line in done.stderr.splitlines() if "has probability 0" in line]
+    assert len(shown) == 1 and "aplan: warning: step 1: [hammer]: observation " in shown[0], done.stderr
+    assert [e["event"] for e in map(json.loads, log.read_text().splitlines())].count("warning") == 1
+    replayed = _aplan("replay", log)
+    assert replayed.returncode == 0 and replayed.stderr == ""
 
 
 def test_cli_demo(policy_file, tmp_path):

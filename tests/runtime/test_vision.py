@@ -2,10 +2,11 @@
 blur, noise, perspective and occlusion, the sources' errors, and the printable marker sheet."""
 from __future__ import annotations
 
-import warnings
+import logging
 
 import cv2
 import pytest
+from figure_support import pyplot_untouched
 
 from planner import (
     BLANK,
@@ -15,7 +16,8 @@ from planner import (
     product_to_dict,
 )
 from planner.decision import intention_model
-from planner.runtime.session import Instruction, ScriptedOperator
+from planner.runtime.interfaces import Instruction
+from planner.runtime.scripted import ScriptedOperator
 from planner.runtime.tray import (
     CameraModel,
     SimulatedCell,
@@ -72,7 +74,8 @@ def test_default_markers_and_missing_ones(pen):
 
 
 @pytest.mark.parametrize("camera", [CameraModel(), CameraModel(blur=1.5), CameraModel(noise=10),
-                                    CameraModel(perspective=0.06, seed=2)], ids=["clean", "blur", "noise", "perspective"])
+                                    CameraModel(perspective=0.06, seed=2)],
+                         ids=["clean", "blur", "noise", "perspective"])
 def test_detector_sees_exactly_the_uncovered_markers(markers, camera):
     layout = tray_layout(markers, *SMALL)
     detector = MarkerDetector()
@@ -202,12 +205,13 @@ def test_robot_expectations_last_one_step(markers):
     assert own.observe() == Observation((), "hammer")  # a robot with its own hammer: the tray's is the operator's
 
 
-def test_unknown_marker_ids_warn_once(markers):
+def test_unknown_marker_ids_warn_once(markers, caplog):
     source = VisionSource([], markers, detections=[{42}, {42, 0}, {42, 0}, {42, 0}] + [set(), {0}] * 30,
                           quiet_frames=10)
-    with pytest.warns(RuntimeWarning, match="marker 42 is not in the product's marker map") as caught:
+    with caplog.at_level(logging.WARNING, logger="planner.runtime.vision"):
         assert source.observe() == BLANK
-    assert len([w for w in caught if "42" in str(w.message)]) == 1
+    caught = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert caught == ["marker 42 is not in the product's marker map (DICT_4X4_50); ignored"]
     assert source.builder.pending == ["ink"]
 
 
@@ -267,15 +271,14 @@ def test_sources_fail_clearly(tmp_path):
 def test_camera_that_cannot_be_opened():
     from planner.runtime.vision import camera_frames
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        with pytest.raises(VisionError, match="camera 97 cannot be opened; check the index"):
-            camera_frames(97)
+    with pytest.raises(VisionError, match="camera 97 cannot be opened; check the index"):
+        camera_frames(97)
 
 
-def test_marker_sheet_is_detectable(pen, markers, tmp_path):
+def test_marker_sheet_is_detectable(pen, markers, tmp_path, monkeypatch):
     png = tmp_path / "sheet.png"
-    assert write_marker_sheet(pen, png) == 7
+    with pyplot_untouched(monkeypatch):
+        assert write_marker_sheet(pen, png) == 7
     sheet = cv2.imread(str(png))
     assert abs(sheet.shape[0] / sheet.shape[1] - 297 / 210) < 0.01  # A4
     assert MarkerDetector().detect(sheet) == set(markers.items)
@@ -287,14 +290,15 @@ def test_marker_sheet_is_detectable(pen, markers, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sheet.pdf", "sheet.png"]
 
 
-def test_marker_sheet_pages(tmp_path):
+def test_marker_sheet_pages(tmp_path, monkeypatch):
     import re
 
     from planner import Part, Product
 
     parts = tuple(Part(f"p{k}") for k in range(30))
     product = Product(parts, tuple((f"p{k}", f"p{k + 1}") for k in range(29)))
-    assert write_marker_sheet(product, tmp_path / "big.pdf") == 30
+    with pyplot_untouched(monkeypatch):
+        assert write_marker_sheet(product, tmp_path / "big.pdf") == 30
     pages = re.findall(rb"/Type\s*/Page\b(?!s)", (tmp_path / "big.pdf").read_bytes())
     assert len(pages) == 3  # 12 markers of 40 mm per A4 page (3 columns, 4 rows)
 

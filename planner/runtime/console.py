@@ -1,0 +1,89 @@
+"""A person at the console: :class:`ConsoleRobot` (someone standing in for the robot, as in the paper's
+experiment) and :class:`KeyboardSource` (the operator's picks typed in).
+
+Both talk to the person through ``read`` and ``write`` callables: prompts and instructions go to standard
+error, so standard output stays for results. This is user interaction, not logging.
+"""
+from __future__ import annotations
+
+import sys
+from typing import Callable
+
+from ..assembly.tags import Observation
+from ..product import Product
+from .interfaces import Instruction, RobotReport
+
+__all__ = ["read_line", "ConsoleRobot", "KeyboardSource"]
+
+
+def read_line(prompt: str) -> str:
+    """Like :func:`input`, but the prompt goes to standard error (standard output stays for results)."""
+    sys.stderr.write(prompt)
+    sys.stderr.flush()
+    line = sys.stdin.readline()
+    if not line:
+        raise EOFError
+    return line.rstrip("\n")
+
+
+def _to_stderr(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
+class ConsoleRobot:
+    """A person stands in for the robot: the instruction is printed and the person confirms with Enter
+    (or types ``f`` and a reason, then Enter, when it could not be done). Waiting needs no confirmation
+    unless ``confirm_wait``. End of input counts as a failure (nobody confirmed)."""
+
+    def __init__(self, read: Callable[[str], str] = read_line, write: Callable[[str], None] | None = None,
+                 confirm_wait: bool = False):
+        self._read = read
+        self._write = write or _to_stderr
+        self.confirm_wait = confirm_wait
+
+    def perform(self, instruction: Instruction) -> RobotReport:
+        self._write(f"\nROBOT, step {instruction.step}: {instruction.text}")
+        if instruction.is_wait and not self.confirm_wait:
+            return RobotReport(True)
+        try:
+            answer = self._read("  press Enter when done (f REASON + Enter if it failed): ").strip()
+        except EOFError:
+            return RobotReport(False, "no confirmation (end of input)")
+        if answer.lower().startswith("f"):
+            return RobotReport(False, answer[1:].strip() or "reported failure")
+        return RobotReport(True)
+
+
+class KeyboardSource:
+    """The operator's picks typed in, one line per step: part and tool ids separated by spaces or commas
+    (``ink cartridge hammer``), an empty line for nothing, ``q`` to stop. A line naming something that is
+    not a part or tool, or two tools, is refused and asked again."""
+
+    def __init__(self, product: Product, read: Callable[[str], str] = read_line,
+                 write: Callable[[str], None] | None = None):
+        self.parts = set(product.part_ids)
+        self.tools = {t.id for t in product.tools}
+        self._read = read
+        self._write = write or _to_stderr
+
+    def observe(self) -> Observation | None:
+        while True:
+            try:
+                line = self._read("operator picked (parts and tool; Enter: nothing; q: stop): ")
+            except EOFError:
+                return None
+            names = line.replace(",", " ").split()
+            if names in (["q"], ["quit"]):
+                return None
+            unknown = [n for n in names if n not in self.parts | self.tools]
+            tools = [n for n in names if n in self.tools]
+            if unknown:
+                self._write(f"  not a part or tool: {', '.join(unknown)} (parts: {', '.join(sorted(self.parts))}; "
+                            f"tools: {', '.join(sorted(self.tools)) or 'none'})")
+            elif len(tools) > 1:
+                self._write(f"  one tool per operation, got {', '.join(tools)}")
+            else:
+                return Observation(tuple(sorted(set(n for n in names if n in self.parts))), tools[0] if tools else None)
+
+    def robot_acting(self, instruction: Instruction) -> None:
+        """Nothing to do: the person types only the operator's picks."""

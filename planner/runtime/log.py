@@ -1,0 +1,183 @@
+"""The session log (JSON lines) and its replay.
+
+Format, version :data:`LOG_VERSION`: one JSON object per line, each with ``event`` and ``time`` (Unix
+seconds, to the millisecond):
+
+- ``start``: ``version``, ``product`` (the product itself, in the product file format), ``settings``,
+  ``n_intentions``, ``actions`` and ``observations`` (the model's names), ``top``;
+- per step: ``action`` (``step``, ``action``, ``name``, ``instruction``), ``robot`` (``step``, ``ok``,
+  ``message``), ``observation`` (``step``, ``observation``, ``index``: null when no operation explains it),
+  any ``warning`` (``step``, ``message``), ``belief`` (``step``, ``top``, ``p_finished``, ``operations``,
+  ``reset``: null, or how an observation of probability 0 reset the belief);
+- ``end``: ``step``, ``reason``, ``message``, ``operations``, ``top``.
+
+``top``: the five most probable intentions, ``[[intention, probability], ...]``, probabilities rounded to
+6 digits. Each line is written with one ``write``, then flushed and fsynced, so a crash loses at most the line
+being written; :func:`replay` ignores such a cut last line.
+"""
+from __future__ import annotations
+
+import json
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from ..decision.belief import DiscreteUpdater
+from ..decision.intention_model import IntentionModel, intention_model
+from ..errors import PlannerError
+from ..product import Product, product_from_dict
+
+__all__ = ["LOG_VERSION", "SessionError", "EventLog", "top_intentions", "Replay", "read_log", "replay"]
+
+LOG_VERSION = 1
+
+
+class SessionError(PlannerError):
+    """A session cannot start or go on: a log that cannot be written or read, a model that does not fit."""
+
+
+def top_intentions(belief: np.ndarray, k: int = 5) -> list[list]:
+    """The ``k`` most probable intentions with a positive probability, as the log's ``top`` field."""
+    order = np.argsort(-belief, kind="stable")[:k]
+    return [[int(i), round(float(belief[i]), 6)] for i in order if belief[i] > 0]
+
+
+class EventLog:
+    """Session events as JSON lines. Each event is one line written with one ``write``, then flushed and
+    fsynced. ``path`` None keeps the events in memory only (``events`` always holds them); ``on_event`` sees
+    every event as it is written. A log is never overwritten: an existing ``path`` is an error."""
+
+    def __init__(self, path: str | os.PathLike | None = None, on_event: Callable[[dict], None] | None = None):
+        self.path = Path(path) if path is not None else None
+        self.events: list[dict] = []
+        self.on_event = on_event
+        self._handle = None
+        if self.path is not None:
+            try:
+                self._handle = open(self.path, "x", encoding="utf-8")
+            except FileExistsError:
+                raise SessionError(f"{self.path}: the log exists already; choose another file name "
+                                   "(a log is never overwritten)") from None
+            except OSError as exc:
+                raise SessionError(f"{self.path}: cannot create the log: {exc}") from None
+
+    def write(self, event: str, **fields) -> dict:
+        """Append the event ``event`` with ``fields`` (and the time); returns the record."""
+        record = {"event": event, "time": round(time.time(), 3), **fields}
+        self.events.append(record)
+        if self._handle is not None:
+            try:
+                self._handle.write(json.dumps(record) + "\n")
+                self._handle.flush()
+                os.fsync(self._handle.fileno())
+            except OSError as exc:
+                raise SessionError(f"{self.path}: cannot write the log: {exc}") from None
+        if self.on_event is not None:
+            self.on_event(record)
+        return record
+
+    def close(self) -> None:
+        if self._handle is not None:
+            self._handle.close()
+            self._handle = None
+
+
+@dataclass
+class Replay:
+    """A session log replayed: the product, the beliefs recomputed from its actions and observations (the
+    initial one first), and the steps whose logged belief differs from the recomputed one."""
+
+    product: Product
+    model: IntentionModel
+    actions: list[int]
+    observations: list[int]
+    beliefs: list[np.ndarray]
+    end: dict | None
+    mismatches: list[int]
+    events: list[dict]
+
+
+def read_log(path: str | os.PathLike) -> list[dict]:
+    """The events of the session log at ``path``, checked to be a log of this version; a last line cut
+    short (the one being written when the session died) is dropped. Raises :class:`SessionError`."""
+    path = Path(path)
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except OSError as exc:
+        raise SessionError(f"{path}: cannot read the log: {exc}") from None
+    events = []
+    for number, line in enumerate(lines, start=1):
+        if not line.strip():
+            continue
+        try:
+            event = json.loads(line)
+        except json.JSONDecodeError as exc:
+            if number == len(lines):  # the line being written when the session died
+                break
+            raise SessionError(f"{path}: line {number}: not JSON ({exc.msg}); the log is damaged") from None
+        if not isinstance(event, dict) or "event" not in event:
+            raise SessionError(f"{path}: line {number}: not a session event")
+        events.append(event)
+    if not events or events[0]["event"] != "start":
+        raise SessionError(f"{path}: not a session log (it must start with a 'start' event)")
+    if events[0].get("version") != LOG_VERSION:
+        raise SessionError(f"{path}: log version {events[0].get('version')!r}; this planner reads version "
+                           f"{LOG_VERSION}")
+    return events
+
+
+def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel]:
+    """The product stored in the start event and its decision model, checked against the logged names."""
+    from ..assembly.plan import make_plan
+
+    product = product_from_dict(start["product"], f"{path} (start event)")
+    model = intention_model(make_plan(product))
+    if list(model.observations) != start.get("observations") or list(model.actions) != start.get("actions"):
+        raise SessionError(f"{path}: the product in the log no longer gives the logged actions and observations "
+                           "(the log was written by another planner version)")
+    return product, model
+
+
+def _in_the_log(event) -> None:
+    """A reset met again while replaying: the session logged it as a warning event already."""
+
+
+def replay(path: str | os.PathLike, tolerance: float = 1e-6) -> Replay:
+    """Recompute the beliefs of the session logged at ``path`` (the product is stored in the log).
+
+    Beliefs depend on the model's transitions and observations only, not on rewards or the policy. A logged
+    belief whose top intentions differ from the recomputed ones by more than ``tolerance`` is a mismatch.
+    Cost: one model build and one belief update per step. Raises :class:`SessionError` for a file that is
+    not a session log.
+    """
+    path = Path(path)
+    events = read_log(path)
+    product, model = _model_of(path, events[0])
+    updater = DiscreteUpdater(model.pomdp, on_reset=_in_the_log)
+    belief = updater.initialize()
+    done = Replay(product, model, [], [], [belief], None, [], events)
+    pending: dict[int, int] = {}  # step -> the action logged for it
+    for number, event in enumerate(events[1:], start=2):
+        kind = event["event"]
+        try:
+            if kind == "action":
+                pending[event["step"]] = int(event["action"])
+            elif kind == "observation" and event.get("index") is not None:
+                action, observation = pending[event["step"]], int(event["index"])
+                belief = updater.update(belief, action, observation)
+                done.actions.append(action)
+                done.observations.append(observation)
+                done.beliefs.append(belief)
+            elif kind == "belief":
+                if any(abs(belief[int(i)] - float(p)) > tolerance for i, p in event["top"]):
+                    done.mismatches.append(event["step"])
+            elif kind == "end":
+                done.end = event
+        except (KeyError, TypeError, ValueError, IndexError) as exc:
+            raise SessionError(f"{path}: event {number} ({kind!r}): malformed or out of order ({exc!r}); "
+                               "the log is damaged") from None
+    return done

@@ -1,0 +1,112 @@
+"""Which marker is which item, and which markers a frame shows.
+
+- :class:`MarkerMap` / :func:`marker_map`: marker id -> part or tool id, from the product file's ``markers``
+  (or :func:`default_markers`: parts then tools numbered 0, 1, ... in file order).
+- :class:`MarkerDetector`: the marker ids seen in one frame (OpenCV's ``ArucoDetector``, imported on first
+  use); :func:`detections` maps it over a stream of frames.
+
+Cost: detection dominates the vision pipeline (about 15 ms per 1920x1080 frame on one core, see
+``bench/bench_vision.py``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable, Iterator, Sequence
+
+import numpy as np
+
+from ...errors import PlannerError
+from ...product import DEFAULT_MARKER_DICTIONARY, MARKER_DICTIONARIES, Markers, Product
+
+__all__ = ["VisionError", "MarkerMap", "default_markers", "marker_map", "MarkerDetector", "detections"]
+
+
+class VisionError(PlannerError):
+    """A camera, video or image cannot be opened or read, or the markers do not cover the product."""
+
+
+@dataclass(frozen=True)
+class MarkerMap:
+    """Marker id -> part or tool id, for one dictionary; ``tools`` says which items are tools."""
+
+    dictionary: str
+    items: dict[int, str]
+    tools: frozenset[str]
+
+    def id_of(self, item: str) -> int:
+        return next(marker for marker, name in self.items.items() if name == item)
+
+
+def default_markers(product: Product) -> Markers:
+    """Markers numbered 0, 1, ... in the product file's order: the parts, then the tools."""
+    names = [p.id for p in product.parts] + [t.id for t in product.tools]
+    return Markers(tuple((name, k) for k, name in enumerate(names)), DEFAULT_MARKER_DICTIONARY)
+
+
+def marker_map(product: Product, require_all: bool = True) -> MarkerMap:
+    """The product's marker map (its ``markers``, else :func:`default_markers`).
+
+    With ``require_all``, every part and every tool the operations use must have a marker, since the camera
+    cannot see an item without one: :class:`VisionError` lists the missing ones.
+    """
+    markers = product.markers if product.markers is not None else default_markers(product)
+    items = markers.by_id()
+    if require_all:
+        used_tools = {t.id for t in product.tools}
+        missing = [name for name in list(product.part_ids) + sorted(used_tools) if markers.of(name) is None]
+        if missing:
+            raise VisionError(f"{product.source}: no marker for {', '.join(missing)}; add them to the product's "
+                              "'markers.ids' (see docs/product-format.md)")
+    return MarkerMap(markers.dictionary, items, frozenset(t.id for t in product.tools))
+
+
+class MarkerDetector:
+    """ArUco marker detection in one frame (grey or BGR ``(H, W[, 3]) uint8``).
+
+    ``threshold_windows``: the adaptive-threshold window sizes (pixels, odd, evenly spaced) tried on each
+    frame. OpenCV's default tries 3, 13 and 23; every window costs a thresholding and a contour pass, and the
+    single window 23 finds markers 40 pixels wide and more under blur, noise and perspective at more than
+    twice OpenCV's default frame rate (``bench/bench_vision.py``); ``(13, 23)`` reaches down to about 32
+    pixels. ``downscale``: detect on the frame shrunk by this factor (1: full size).
+    """
+
+    def __init__(self, dictionary: str = DEFAULT_MARKER_DICTIONARY, threshold_windows: Sequence[int] = (23,),
+                 downscale: float = 1.0):
+        import cv2
+
+        if dictionary not in MARKER_DICTIONARIES or not hasattr(cv2.aruco, dictionary):
+            raise VisionError(f"unknown marker dictionary {dictionary!r}; use one of OpenCV's, e.g. "
+                              f"{DEFAULT_MARKER_DICTIONARY}")
+        if downscale < 1:
+            raise VisionError(f"downscale must be at least 1, got {downscale}")
+        windows = sorted(int(w) for w in threshold_windows)
+        steps = {b - a for a, b in zip(windows, windows[1:])}
+        if not windows or windows[0] < 3 or any(w % 2 == 0 for w in windows) or len(steps) > 1 or 0 in steps:
+            raise VisionError("threshold windows must be distinct odd sizes >= 3, evenly spaced; "
+                              f"got {threshold_windows}")
+        self.dictionary = dictionary
+        self.downscale = downscale
+        parameters = cv2.aruco.DetectorParameters()
+        parameters.adaptiveThreshWinSizeMin = windows[0]
+        parameters.adaptiveThreshWinSizeMax = windows[-1]
+        parameters.adaptiveThreshWinSizeStep = steps.pop() if steps else 10
+        self._detector = cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, dictionary)),
+                                                 parameters)
+        self._cv2 = cv2
+
+    def detect(self, frame: np.ndarray) -> set[int]:
+        """The ids of the markers found in ``frame``."""
+        cv2 = self._cv2
+        grey = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        if self.downscale > 1:
+            height, width = grey.shape
+            grey = cv2.resize(grey, (round(width / self.downscale), round(height / self.downscale)),
+                              interpolation=cv2.INTER_AREA)
+        _, ids, _ = self._detector.detectMarkers(grey)
+        return set() if ids is None else {int(i) for i in ids.ravel()}
+
+
+def detections(frames: Iterable[np.ndarray], detector: MarkerDetector) -> Iterator[set[int]]:
+    """The marker ids of each frame."""
+    for frame in frames:
+        yield detector.detect(frame)
