@@ -98,8 +98,8 @@ def test_pruning_the_points_of_trials_on_the_pen(pen):
     m = Tables(model)
     lower, upper = LowerBound.blind(m), UpperBound(fast_informed_bound(m), np.random.default_rng(0).random(m.S))
     beliefs = BeliefSet(m.S)
-    for i in range(30):
-        trial(m, model.initial, lower, upper, beliefs, epsilon=0.1, follow_lower=i % 2 == 0)
+    for i in range(20):
+        trial(m, model.initial, lower, upper, beliefs, epsilon=1.0, follow_lower=i % 2 == 0)
     B = np.vstack([model.initial, upper.points.rows, beliefs.rows])
     before, n = upper.at(B), upper.n
     upper.prune()
