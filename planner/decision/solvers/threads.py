@@ -18,7 +18,10 @@ __all__ = ["BLAS_VARIABLES", "THREADED_STATES", "automatic_threads", "blas_threa
 
 BLAS_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS",
                   "VECLIB_MAXIMUM_THREADS")
-THREADED_STATES = 1_000_000  # states from which the BLAS gets more than one thread (measured: bench/README.md)
+# States from which the BLAS gets every core: on 2 cores, one thread was faster for the pen (39 and 69 states,
+# up to 4x), chains of 5 to 7 parts (65 to 1,957 states, 3x to 6x) and about even at 6,872 states (complete
+# graph of 6 parts); bench/README.md.
+THREADED_STATES = 10_000
 
 
 def automatic_threads(m: Tables) -> int:
