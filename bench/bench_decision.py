@@ -19,6 +19,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
+from threadpoolctl import threadpool_limits  # noqa: E402
 
 from planner import chain_product, complete_product, make_plan, resolve_product  # noqa: E402
 from planner.decision import intention_pomdp  # noqa: E402
@@ -113,7 +114,8 @@ def main() -> None:
         thread_rows()
         return
     solver_rows(args.time_limit, args.blas_threads)
-    belief_rows()
+    with threadpool_limits(1, user_api="blas"):  # as measured before: one thread
+        belief_rows()
 
 
 if __name__ == "__main__":
