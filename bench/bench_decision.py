@@ -1,7 +1,10 @@
-"""Decision-model benchmarks: the solver on the pen (ours and the authors' files), and belief updates at scale.
+"""Decision-model benchmarks: the solver on the pen (ours and the authors' files), belief updates at scale,
+and the solver's BLAS threads.
 
-Run: ``.venv/bin/python bench/bench_decision.py [--time-limit 60]`` (about 4 x the time limit). One core:
-BLAS threads are limited to one before numpy loads.
+Run: ``.venv/bin/python bench/bench_decision.py [--time-limit 60]`` (about 4 x the time limit). The solver
+picks its BLAS threads itself (``planner.decision.solvers.threads``); ``--blas-threads N`` imposes N.
+``--threads`` instead times a fixed amount of solver work (no clock) with one thread and with every core,
+on models of growing size (about 2 minutes).
 """
 from __future__ import annotations
 
@@ -12,15 +15,13 @@ import sys
 import time
 from pathlib import Path
 
-for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ[_variable] = "1"
-
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
+from threadpoolctl import threadpool_limits  # noqa: E402
 
-from planner import chain_product, make_plan, resolve_product  # noqa: E402
+from planner import chain_product, complete_product, make_plan, resolve_product  # noqa: E402
 from planner.decision import intention_pomdp  # noqa: E402
 from planner.decision.belief import DiscreteUpdater  # noqa: E402
 from planner.decision.io.pomdpx import read_pomdpx  # noqa: E402
@@ -36,7 +37,7 @@ def _first(history, test) -> str:
     return next((f"{s:.1f} s" for s, lo, up in history if test(lo, up)), "-")
 
 
-def solver_rows(time_limit: float) -> None:
+def solver_rows(time_limit: float, blas_threads: int | None = None) -> None:
     pen = resolve_product("pen")
     cases = [("ours, no technical constraint", False, intention_pomdp(make_plan(pen, False))),
              ("authors' file, no technical constraint", False,
@@ -48,7 +49,7 @@ def solver_rows(time_limit: float) -> None:
           + " | lower >= target at | gap <= 0.05 at | gap <= 0.01 at |")
     print("|---|" + "---|" * (len(marks) + 3))
     for name, technical, model in cases:
-        result = PointBasedSolver(time_limit=time_limit, precision=1e-4).solve(model)
+        result = PointBasedSolver(time_limit=time_limit, precision=1e-4, blas_threads=blas_threads).solve(model)
         cells = []
         for t in marks:
             lower, upper = [(lo, up) for s, lo, up in result.history if s <= t][-1]
@@ -82,12 +83,39 @@ def belief_rows() -> None:
           f"{statistics.median(times) * 1e3:.3f} ms, max {max(times) * 1e3:.3f} ms over 200 updates")
 
 
+def thread_rows() -> None:
+    """The same solver work (trials, no time limit) with one BLAS thread and with every core; best of two."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    pen = resolve_product("pen")
+    cases = [("pen, technical constraint", make_plan(pen, True), 150),
+             ("pen, no technical constraint", make_plan(pen, False), 150),
+             ("chain of 5 parts", make_plan(chain_product(5)), 100),
+             ("chain of 6 parts", make_plan(chain_product(6)), 40),
+             ("complete graph of 5 parts", make_plan(complete_product(5)), 20)]
+    print(f"| model | states | trials | 1 thread | {cores} threads |\n|---|---:|---:|---:|---:|")
+    for name, plan, trials in cases:
+        model = intention_pomdp(plan)
+        best = {}
+        for _ in range(2):
+            for threads in (1, cores):
+                start = time.perf_counter()
+                PointBasedSolver(time_limit=None, max_iterations=trials, blas_threads=threads).solve(model)
+                best[threads] = min(best.get(threads, np.inf), time.perf_counter() - start)
+        print(f"| {name} | {model.n_states:,} | {trials} | {best[1]:.2f} s | {best[cores]:.2f} s |", flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--time-limit", type=float, default=60.0)
+    parser.add_argument("--blas-threads", type=int, default=None, help="impose this many BLAS threads")
+    parser.add_argument("--threads", action="store_true", help="time fixed work at 1 thread and every core")
     args = parser.parse_args()
-    solver_rows(args.time_limit)
-    belief_rows()
+    if args.threads:
+        thread_rows()
+        return
+    solver_rows(args.time_limit, args.blas_threads)
+    with threadpool_limits(1, user_api="blas"):  # as measured before: one thread
+        belief_rows()
 
 
 if __name__ == "__main__":

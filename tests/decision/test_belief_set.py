@@ -71,10 +71,15 @@ def test_sweep_skips_nothing_that_could_improve(doors):
     assert np.array_equal(a[2], b[2]) and np.allclose(a[0], b[0])
 
 
+# Trials after which the lower bound is within 0.0005 of the best known one (the solver is deterministic
+# without a clock; it gets there after 322 and 141 trials).
+TRIALS = {False: 330, True: 150}
+
+
 @pytest.mark.parametrize("technical", [False, True])
 def test_pen_lower_bound_reaches_the_optimum_bracket(pen, technical):
     model = intention_pomdp(make_plan(pen, technical))
-    result = PointBasedSolver(max_iterations=400, time_limit=120, precision=1e-4).solve(model)
+    result = PointBasedSolver(max_iterations=TRIALS[technical], time_limit=None, precision=1e-4).solve(model)
     low, high = OPTIMUM[technical]
     # Within 0.0005 of the best known lower bound, never above the best known upper bound; the upper bound
     # never below the best known lower bound.
@@ -101,7 +106,7 @@ def test_sparse_tables_compute_what_dense_ones_do(pen, monkeypatch):
         assert np.allclose(dense.step(B, a), sparse.step(B, a))
         assert np.allclose(dense.expect_one(a, B), sparse.expect_one(a, B))
     # And the solver on the sparse path still brackets the optimum.
-    result = PointBasedSolver(max_iterations=400, time_limit=120, precision=1e-4).solve(model)
+    result = PointBasedSolver(max_iterations=TRIALS[True], time_limit=None, precision=1e-4).solve(model)
     low, high = OPTIMUM[True]
     assert low - 5e-4 <= result.lower_bound <= high and result.upper_bound >= low
 
@@ -112,7 +117,7 @@ def test_sweep_with_sparse_rows_equals_dense(pen, monkeypatch):
 
     model = intention_pomdp(make_plan(pen, False))
     m = Tables(model)
-    result = PointBasedSolver(max_iterations=20, time_limit=60).solve(model)
+    result = PointBasedSolver(max_iterations=20, time_limit=None).solve(model)
     rng = np.random.default_rng(2)
     beliefs = np.vstack([model.initial, rng.dirichlet(np.ones(model.n_states) * 0.05, size=30)])
     q = fast_informed_bound(m)

@@ -23,7 +23,8 @@ def decision(pen):
 @pytest.fixture(scope="module")
 def solved(decision):
     model = decision.pomdp
-    return model, PointBasedSolver(max_iterations=300, time_limit=120, precision=1e-3).solve(model)  # machine-independent
+    # No clock: the same policy on any machine; 150 trials bring its lower bound within the optimum's bracket.
+    return model, PointBasedSolver(max_iterations=150, time_limit=None, precision=1e-3).solve(model)
 
 
 def test_episodes_reach_the_finished_product(solved, decision):

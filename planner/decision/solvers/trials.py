@@ -1,0 +1,166 @@
+"""Trials (Smith & Simmons, HSVI2, 2005): descend from ``b0`` along the largest weighted excess gap, then
+back up both bounds at every belief on the way up.
+
+At depth ``t`` a belief is *finished* when ``V^(b) - V_(b) <= epsilon gamma^-t`` (its gap cannot move the
+gap at ``b0`` by more than ``epsilon``). Otherwise the trial takes the action that is best for the upper
+bound (or, when ``follow_lower``, for the lower bound: the beliefs the current policy visits get backed up
+too, as SARSOP samples near it) and the observation ``z`` that maximises
+``P(z | b, a) (V^(b') - V_(b') - epsilon gamma^-(t+1))``, and stops where that is not positive.
+
+A *backup* at ``b`` is the point-based Bellman update of both bounds from the bounds at its successors: the
+alpha vector ``R_a + gamma sum_z T_a diag(O_z,a) alpha_{k(z)}`` of the best action (``k(z)``: the vector
+best at the successor), kept if it raises ``V_(b)``, and ``max_a R_a . b + gamma sum_z P(z | b, a) V^(b')``,
+kept as a point if it lowers ``V^(b)``.
+
+A step evaluates all actions and observations at once (numpy) and costs
+O(A (nnz(T) + S Z) + (K + N) S M) for K alpha vectors, N upper-bound points and M = A x Z successors.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .belief_set import BeliefSet
+from .lower import LowerBound
+from .tables import Tables
+from .upper import UpperBound
+
+__all__ = ["Successors", "successors", "q_upper", "q_lower", "backup", "descend", "trial"]
+
+Bounds = tuple[float, int, float]  # (lower bound, index of its best vector, upper bound) at one belief
+
+
+@dataclass
+class Successors:
+    """The successors of a belief with probability > 0, in order of action, and the bounds at each: arrays
+    of length M, ``beliefs`` (M, S). ``low``, ``best`` and ``high`` are updated in place by a trial."""
+
+    action: np.ndarray
+    observation: np.ndarray
+    probability: np.ndarray
+    beliefs: np.ndarray
+    low: np.ndarray
+    best: np.ndarray
+    high: np.ndarray
+
+
+@dataclass
+class Step:
+    """One belief of a trial's path: its successors, the one the trial went on to (or None) and the bounds
+    at it when the trial went down (still valid bounds on the way up: they can only have tightened)."""
+
+    belief: np.ndarray
+    successors: Successors
+    next: int | None
+    known: Bounds
+
+
+def successors(m: Tables, b: np.ndarray, lower: LowerBound, upper: UpperBound) -> Successors:
+    """The successors of ``b`` under every action and observation, with both bounds at each.
+    Cost: O(A (nnz(T) + S Z)) for the beliefs and O((K + N) S d) for the bounds at the d distinct ones."""
+    a_idx, z_idx, probs, nxt = m.successors(b)
+    # Many actions leave most intentions as they are: bound each distinct successor belief once.
+    _, first, back = np.unique(nxt @ upper.fingerprint, return_index=True, return_inverse=True)
+    distinct = nxt[first]
+    if not np.array_equal(distinct[back], nxt):  # a fingerprint collision: compare whole rows
+        distinct, back = np.unique(nxt, axis=0, return_inverse=True)
+    back = back.reshape(-1)
+    lo, best = lower.at(distinct)
+    return Successors(a_idx, z_idx, probs, nxt, lo[back], best[back], upper.at(distinct)[back])
+
+
+def q_upper(m: Tables, b: np.ndarray, s: Successors) -> np.ndarray:
+    """(A,): ``R_a . b + gamma sum_z P(z | b, a) V^(b_az)``, an upper bound on Q(b, a). Cost: O(A S + M)."""
+    q = m.R @ b
+    q += np.bincount(s.action, m.gamma * s.probability * s.high, minlength=m.A)
+    return q
+
+
+def q_lower(m: Tables, b: np.ndarray, s: Successors) -> np.ndarray:
+    """(A,): the same with the lower bound at the successors. Cost: O(A S + M)."""
+    q = m.R @ b
+    q += np.bincount(s.action, m.gamma * s.probability * s.low, minlength=m.A)
+    return q
+
+
+def backup_vectors(m: Tables, s: Successors, vectors: np.ndarray) -> np.ndarray:
+    """(A, S): for each action, ``R_a + gamma sum_z T_a diag(O_z,a) alpha_{best(a, z)}``, the backed-up
+    alpha vector (``vectors``: the lower bound's). Cost: O(M S + A nnz(T))."""
+    chosen = vectors[s.best]                                        # (M, S): best vector per successor
+    weighted = m.OZ[s.action, s.observation] * chosen               # (M, S')
+    per_action = np.zeros((m.A, m.S))
+    # The action indices are sorted (successors come action by action): sum each action's block at once.
+    present, starts = np.unique(s.action, return_index=True)
+    per_action[present] = np.add.reduceat(weighted, starts, axis=0)
+    return m.R + m.gamma * m.expect(per_action)
+
+
+def backup(m: Tables, b: np.ndarray, s: Successors, known: Bounds, lower: LowerBound,
+           upper: UpperBound) -> Bounds:
+    """Back up both bounds at ``b`` from its successors ``s``; ``known``: the bounds at ``b`` (module
+    docstring). Returns the new ones. Cost: O(M S + A nnz(T))."""
+    low, best_vector, high = known
+    vectors = backup_vectors(m, s, lower.vectors)
+    a = int(np.argmax(vectors @ b))
+    if vectors[a] @ b > low + 1e-12:
+        low, best_vector = float(vectors[a] @ b), lower.n
+        lower.add(vectors[a], a)
+    value = float(q_upper(m, b, s).max())
+    if value < high - 1e-12:
+        high = value
+        upper.update(b, value)
+    return low, best_vector, high
+
+
+def descend(m: Tables, b0: np.ndarray, lower: LowerBound, upper: UpperBound, epsilon: float,
+            follow_lower: bool = False, max_depth: int = 300) -> list[Step]:
+    """The path of one trial from ``b0`` (module docstring), at most ``max_depth`` steps down.
+    Cost: one :func:`successors` per step."""
+    low, best_vector = (float(v[0]) for v in lower.at(b0[None]))
+    b, depth, known = b0, 0, (low, int(best_vector), upper.value(b0))
+    path: list[Step] = []
+    while depth < max_depth:
+        s = successors(m, b, lower, upper)
+        path.append(Step(b, s, None, known))
+        if known[2] - known[0] <= epsilon * m.gamma ** (-depth):
+            break
+        a = int(np.argmax(q_lower(m, b, s) if follow_lower else q_upper(m, b, s)))
+        mine = np.flatnonzero(s.action == a)
+        if mine.size == 0:
+            break
+        excess = s.probability[mine] * (s.high[mine] - s.low[mine] - epsilon * m.gamma ** (-(depth + 1)))
+        if excess.max() <= 0:
+            break
+        k = int(mine[int(np.argmax(excess))])
+        path[-1].next = k
+        b, depth = s.beliefs[k], depth + 1
+        known = (float(s.low[k]), int(s.best[k]), float(s.high[k]))
+    return path
+
+
+def trial(m: Tables, b0: np.ndarray, lower: LowerBound, upper: UpperBound, beliefs: BeliefSet | None,
+          epsilon: float, follow_lower: bool = False, max_depth: int = 300) -> float:
+    """One trial from ``b0``: :func:`descend`, then :func:`backup` at each belief of the path, deepest
+    first. The beliefs it reached join ``beliefs`` (the sweeps back them up from then on) with their reach
+    weight ``gamma^t P(path)``. Returns its work in estimated multiply-adds (module docstring)."""
+    path = descend(m, b0, lower, upper, epsilon, follow_lower, max_depth)
+    child = None
+    for step in reversed(path):
+        if step.next is not None and child is not None:
+            # Only the successor the trial went through has new bounds; the others' bounds can only have
+            # tightened since, so their stored values remain valid bounds.
+            s, k = step.successors, step.next
+            s.low[k], s.best[k], s.high[k] = child
+        child = backup(m, step.belief, step.successors, step.known, lower, upper)
+    went = [step for step in path if step.next is not None]
+    if beliefs is not None and went:
+        weights, weight = [], 1.0
+        for step in went:
+            weight = weight * m.gamma * step.successors.probability[step.next]
+            weights.append(weight)
+        beliefs.add(np.asarray([step.successors.beliefs[step.next] for step in went]), np.asarray(weights))
+    # Per step: every action and observation, then each distinct successor against both bounds (counted to
+    # 6 digits, so that a model written with rounded numbers costs the same).
+    distinct = sum(len(np.unique(np.round(step.successors.beliefs @ upper.fingerprint, 6))) for step in path)
+    return float(len(path) * m.A * m.Z * m.S + distinct * m.S * (lower.n + upper.n))

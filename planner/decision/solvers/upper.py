@@ -1,0 +1,104 @@
+"""The upper bound: the fast informed bound, tightened by belief points with values (the sawtooth rule).
+
+With ``Q`` (A, S) an upper bound on the Q-function and ``c = max_a Q(a, .)`` the *corner values* (the
+bound at each state's corner belief), a stored point ``(b_i, v_i)`` with ``v_i >= V*(b_i)`` has the *excess* ``e_i = v_i - c . b_i``
+(how far it lies below the corner interpolation; negative for any point worth storing). Then, for every
+belief ``b`` (Hauskrecht 2000; Smith & Simmons 2005)::
+
+    V^(b) = min( max_a Q(a) . b,  c . b + min_i lambda_i(b) e_i ),   lambda_i(b) = min_{s: b_i(s) > 0} b(s) / b_i(s)
+
+where ``lambda_i(b)`` is the largest ``lambda`` with ``b - lambda b_i >= 0`` (zero unless the support of
+``b_i`` lies within that of ``b``). Both terms are upper bounds by convexity of ``V*``.
+
+Points are keyed by a *fingerprint* (a random projection ``b . f``), so backing up a belief that is already
+stored lowers its value instead of adding a second point. :meth:`UpperBound.prune` drops the points that the
+others already bound as tightly at their own belief (HSVI2): dropping them never loosens the bound.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .tables import Rows
+
+__all__ = ["UpperBound"]
+
+
+class UpperBound:
+    """The informed bound ``Q`` (A, S) with sawtooth points; ``fingerprint`` (S,): random weights that key
+    beliefs (module docstring)."""
+
+    def __init__(self, Q: np.ndarray, fingerprint: np.ndarray):
+        self.Q = Q
+        self.corner = Q.max(axis=0)
+        self.fingerprint = fingerprint
+        self.points = Rows(Q.shape[1])
+        self._excess = np.zeros(64)
+        self._key: dict[float, int] = {}   # fingerprint -> row of points
+
+    @property
+    def n(self) -> int:
+        """How many points are stored."""
+        return self.points.n
+
+    @property
+    def excess(self) -> np.ndarray:
+        """(n,): ``v_i - c . b_i`` for each stored point."""
+        return self._excess[:self.points.n]
+
+    def at(self, B: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
+        """The bound at the beliefs ``B`` (m, S); ``allowed`` (n, m): which points may serve which belief
+        (default: all). Cost: O(m S (A + n)) (the sawtooth only over the pairs whose supports nest)."""
+        base = B @ self.corner
+        bound = np.minimum((B @ self.Q.T).max(axis=1), base)
+        if not self.points.n:
+            return bound
+        inside = self.points.support @ (B <= 0).T.astype(np.float32) == 0  # supp(point) within supp(b)
+        if allowed is not None:
+            inside &= allowed
+        i_idx, b_idx = np.nonzero(inside)
+        if i_idx.size:
+            # Sawtooth: the largest lambda with b - lambda b_i >= 0 is 1 / max_s b_i(s) / b(s).
+            cols = np.flatnonzero((B > 0).any(axis=0))
+            Bc = B[:, cols]
+            inverse = np.divide(1.0, Bc, out=np.zeros_like(Bc), where=Bc > 0)
+            ratio = 1.0 / (self.points.rows[i_idx][:, cols] * inverse[b_idx]).max(axis=1)
+            best_gain = np.zeros(len(B))
+            np.minimum.at(best_gain, b_idx, self.excess[i_idx] * ratio)
+            bound = np.minimum(bound, base + best_gain)
+        return bound
+
+    def value(self, b: np.ndarray) -> float:
+        """The bound at one belief ``b`` (S,). Cost: O(S (A + n))."""
+        return float(self.at(b[None])[0])
+
+    def update(self, b: np.ndarray, value: float) -> None:
+        """Store the point ``(b, value)``; if ``b`` is stored already, its value becomes ``value``. The
+        caller checks that ``value`` is an upper bound at ``b``. Amortised cost: O(S)."""
+        excess = value - float(b @ self.corner)
+        key = float(b @ self.fingerprint)
+        row = self._key.get(key)
+        if row is not None and np.array_equal(self.points.rows[row], b):
+            self._excess[row] = excess
+            return
+        self._key[key] = self.points.n
+        if self.points.n == len(self._excess):
+            self._excess = np.concatenate([self._excess, np.zeros_like(self._excess)])
+        self._excess[self.points.n] = excess
+        self.points.append(b)
+
+    def prune(self, chunk: int = 64) -> None:
+        """Drop the points that the others (and the informed bound) already bound as tightly at their own
+        belief (HSVI2's pruning), ``chunk`` points at a time. The bound anywhere stays the same (up to
+        1e-12 per dropped point): if ``V^_{-i}(b_i) <= v_i``, point ``i``'s sawtooth term is implied at every
+        belief by the terms that bound it. Cost: O(n^2 S)."""
+        keep = np.ones(self.points.n, dtype=bool)
+        for first in range(0, self.points.n, chunk):
+            query = np.arange(first, min(first + chunk, self.points.n))
+            B = self.points.rows[query]
+            others = np.repeat(keep[:, None], len(query), axis=1)
+            others[query, np.arange(len(query))] = False                       # not the point itself
+            keep[query] &= self.at(B, others) > B @ self.corner + self.excess[query] + 1e-12
+        excess = self.excess[keep]
+        self.points.keep(keep)
+        self._excess[:len(excess)] = excess
+        self._key = {float(b @ self.fingerprint): i for i, b in enumerate(self.points.rows)}
