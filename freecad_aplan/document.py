@@ -158,15 +158,7 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
     linked_hidden = {o.LinkedObject.Name for o in objects
                      if o.isDerivedFrom("App::Link") and o.LinkedObject is not None
                      and o.LinkedObject.Document == document and not o.LinkedObject.Visibility}
-    known = {o.Label for o in objects} | {o.Name for o in objects}
-    for name in sorted(exclude - known):
-        raise DocumentError(f"{document.FileName or document.Name}: exclude names no object {name!r}")
-    group_of: dict[str, str] = {}
-    for group, members in groups.items():
-        for member in members:
-            if member not in known:
-                raise DocumentError(f"{document.FileName or document.Name}: group {group!r} names no object {member!r}")
-            group_of[member] = group
+    group_of = _group_of(document, objects, groups, exclude)
 
     singles: list[Component] = []
     grouped: dict[str, list[tuple[object, "Part.Shape"]]] = {g: [] for g in groups}
@@ -208,6 +200,20 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
         raise DocumentError(f"{document.FileName or document.Name}: the document has no solids to plan with")
     _unique_ids(components, warnings)
     return ReadResult(components, warnings, document)
+
+
+def _group_of(document, objects: list, groups: dict[str, list[str]], exclude: set[str]) -> dict[str, str]:
+    """Object label or name -> its group; :class:`DocumentError` when a group or exclusion names no object."""
+    known = {o.Label for o in objects} | {o.Name for o in objects}
+    for name in sorted(exclude - known):
+        raise DocumentError(f"{document.FileName or document.Name}: exclude names no object {name!r}")
+    group_of: dict[str, str] = {}
+    for group, members in groups.items():
+        for member in members:
+            if member not in known:
+                raise DocumentError(f"{document.FileName or document.Name}: group {group!r} names no object {member!r}")
+            group_of[member] = group
+    return group_of
 
 
 def _unique_ids(components: list[Component], warnings: list[str]) -> None:

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 import FreeCAD
 import MeshPart
 
-from planner.defaults import PRODUCT_FILE, PRODUCT_FORMAT, PRODUCT_VERSION
+from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION, PRODUCT_FILE, PRODUCT_FORMAT, PRODUCT_VERSION
 from planner.errors import GeometryError
 from planner.files import write_atomic
 
@@ -36,8 +36,8 @@ if TYPE_CHECKING:
 __all__ = ["export_components", "export_document", "export_model", "DEFAULT_LINEAR_DEFLECTION",
            "DEFAULT_ANGULAR_DEFLECTION"]
 
-DEFAULT_LINEAR_DEFLECTION = 0.05  # model units (mm): the largest distance between mesh and surface
-DEFAULT_ANGULAR_DEFLECTION = 0.25  # radians between neighbouring facet normals on curved faces
+DEFAULT_LINEAR_DEFLECTION = LINEAR_DEFLECTION  # model units (mm): the largest distance between mesh and surface
+DEFAULT_ANGULAR_DEFLECTION = ANGULAR_DEFLECTION  # radians between neighbouring facet normals on curved faces
 
 
 def _file_name(part_id: str, used: set[str]) -> str:

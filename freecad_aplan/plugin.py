@@ -16,6 +16,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION
 from planner.geometry import GeometryReport, Tolerances
 from planner.geometry.bundle import (
     PRODUCT_FILE,
@@ -148,9 +149,10 @@ def _export_command(subparsers) -> None:
     parser.add_argument("--split-solids", action="store_true",
                         help="one part per solid of objects holding several solids (STEP files of one product)")
     parser.add_argument("--linear-deflection", type=float, metavar="D",
-                        help="tessellation: largest distance between mesh and surface, model units (default 0.05)")
+                        help="tessellation: largest distance between mesh and surface, model units "
+                             f"(default {LINEAR_DEFLECTION:g})")
     parser.add_argument("--angular-deflection", type=float, metavar="A",
-                        help="tessellation: largest angle between facet normals, radians (default 0.25)")
+                        help=f"tessellation: largest angle between facet normals, radians (default {ANGULAR_DEFLECTION:g})")
     parser.add_argument("--freecadcmd", metavar="PATH", help="the FreeCADCmd executable (default: from PATH)")
     parser.add_argument("--force", action="store_true", help="replace BUNDLE if it exists")
     add_tolerance_options(parser)

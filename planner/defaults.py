@@ -8,6 +8,7 @@ from __future__ import annotations
 __all__ = [
     "PRODUCT_FORMAT", "PRODUCT_VERSION", "PRODUCT_FILE",
     "CONTACT_TOLERANCE", "INTERFERENCE_VOLUME", "BLOCKING_DEPTH", "RASTER_RESOLUTION",
+    "LINEAR_DEFLECTION", "ANGULAR_DEFLECTION",
     "INTENTION_LIMIT", "DISCOUNT",
     "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
     "CONFIDENCE",
@@ -23,6 +24,10 @@ CONTACT_TOLERANCE = 0.1      # surfaces closer than this touch
 INTERFERENCE_VOLUME = 1.0    # overlaps above this volume are reported as interferences
 BLOCKING_DEPTH = 0.1         # overlaps shallower than this along the motion do not block
 RASTER_RESOLUTION = 2048     # mesh engine: pixels across the product for the projection test
+
+# Tessellation of CAD parts into the bundle's meshes (FreeCAD's MeshPart, on export).
+LINEAR_DEFLECTION = 0.05     # the largest distance between mesh and surface
+ANGULAR_DEFLECTION = 0.25    # radians between neighbouring facet normals on curved faces
 
 # Assembly plans: intention graphs larger than this are refused before they are built.
 INTENTION_LIMIT = 1_000_000
