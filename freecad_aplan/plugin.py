@@ -18,12 +18,7 @@ from pathlib import Path
 
 from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION
 from planner.geometry import GeometryReport, Tolerances
-from planner.geometry.bundle import (
-    PRODUCT_FILE,
-    analyze_product,
-    apply_report,
-    load_bundle,
-)
+from planner.geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
 from planner.product import Product, save_product
 
 from .runner import FreeCADError, run_batch

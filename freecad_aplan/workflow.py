@@ -27,6 +27,8 @@ from planner.defaults import (
     CONTACT_TOLERANCE,
     INTERFERENCE_VOLUME,
     PRODUCT_FILE,
+    PRODUCT_FORMAT,
+    PRODUCT_VERSION,
     SOLVE_PRECISION,
     WORKBENCH_SOLVE_TIME_LIMIT,
 )
@@ -179,7 +181,7 @@ def analysis_product(analysis, name: str = ""):
     if not diagrams.get("parts"):
         raise IntentError(f"{analysis.Label}: no contacts and obstructions yet; run APLAN > Detect contacts "
                           "and obstructions first")
-    data = {"format": "aplan-product", "version": 1, "name": name or analysis.Document.Label,
+    data = {"format": PRODUCT_FORMAT, "version": PRODUCT_VERSION, "name": name or analysis.Document.Label,
             "parts": [{"id": p} for p in diagrams["parts"]], "contacts": diagrams["contacts"],
             "obstructions": diagrams["obstructions"], **product_intent(intent)}
     try:

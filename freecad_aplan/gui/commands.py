@@ -22,13 +22,7 @@ from planner.errors import PlannerError
 
 from .. import icon_path, workflow
 from ..document import DocumentError
-from ..intent import (
-    create_analysis,
-    find_analysis,
-    is_analysis,
-    read_intent,
-    update_intent,
-)
+from ..intent import create_analysis, find_analysis, is_analysis, read_intent, update_intent
 
 __all__ = ["COMMANDS", "WorkbenchState", "register"]
 

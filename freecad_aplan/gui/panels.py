@@ -9,13 +9,7 @@ import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
-from ..diagrams import (
-    RELATION_KINDS,
-    RelationError,
-    describe_relation,
-    edited_diagrams,
-    relation_rows,
-)
+from ..diagrams import RELATION_KINDS, RelationError, describe_relation, edited_diagrams, relation_rows
 from ..intent import IntentError, read_intent, update_intent
 
 __all__ = ["DiagramsPanel", "IntentPanel", "PlanDialog", "ImageDialog", "relation_rows"]

@@ -17,17 +17,7 @@ from typing import Any
 from ..errors import ProductFormatError
 from ..files import write_atomic
 from .constants import AXIS_DIRECTIONS, DEFAULT_MARKER_DICTIONARY, FORMAT, UNIT_TOLERANCE, VERSION
-from .model import (
-    Direction,
-    Markers,
-    Obstruction,
-    OperationTag,
-    Part,
-    Product,
-    TagDefaults,
-    TechnicalConstraint,
-    Tool,
-)
+from .model import Direction, Markers, Obstruction, OperationTag, Part, Product, TagDefaults, TechnicalConstraint, Tool
 from .schema import check_document
 
 __all__ = ["product_from_dict", "product_to_dict", "loads_product", "load_product", "save_product"]

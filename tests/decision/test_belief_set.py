@@ -10,11 +10,7 @@ from planner.decision import intention_pomdp
 from planner.decision.io.cassandra import read_cassandra
 from planner.decision.solvers import PointBasedSolver
 from planner.decision.solvers.belief_set import BeliefSet, policy_successors, sweep
-from planner.decision.solvers.tables import (
-    Tables,
-    blind_lower_bound,
-    fast_informed_bound,
-)
+from planner.decision.solvers.tables import Tables, blind_lower_bound, fast_informed_bound
 
 # The authors' models, solved at length (shared/models/bourjault_pen/reference_pomdp/README.txt): the optimal
 # values lie in [2.79697, 2.8158] without the technical constraint and [3.93058, 3.93155] with it.

@@ -13,18 +13,9 @@ from conftest import PEN_MODELS, require_shared
 from planner import make_plan
 from planner.decision import intention_pomdp
 from planner.decision.belief import DiscreteUpdater
-from planner.decision.io.cassandra import (
-    CassandraError,
-    read_cassandra,
-    write_cassandra,
-)
+from planner.decision.io.cassandra import CassandraError, read_cassandra, write_cassandra
 from planner.decision.io.pomdpx import PomdpxError, read_pomdpx
-from planner.decision.policy import (
-    AlphaVectorPolicy,
-    PolicyError,
-    read_policy,
-    write_policy,
-)
+from planner.decision.policy import AlphaVectorPolicy, PolicyError, read_policy, write_policy
 from planner.decision.solvers import PointBasedSolver
 
 # Two doors, the prize behind one: 'look' (reward 0) shows where it is for sure; opening the right door gives

@@ -7,8 +7,8 @@ import subprocess
 
 import pytest
 from conftest import PEN_MODELS, REPO, SHARED, require_freecadcmd, require_shared
-from integration.freecad_tools import LIAISONS, aplan, freecad_result
 
+from integration.freecad_tools import LIAISONS, aplan, freecad_result
 from planner import load_product
 from planner.geometry.bundle import bundle_product_path
 

@@ -8,23 +8,11 @@ import cv2
 import pytest
 from figure_support import pyplot_untouched
 
-from planner import (
-    BLANK,
-    Observation,
-    make_plan,
-    product_from_dict,
-    product_to_dict,
-)
+from planner import BLANK, Observation, make_plan, product_from_dict, product_to_dict
 from planner.decision import intention_model
 from planner.runtime.interfaces import Instruction
 from planner.runtime.scripted import ScriptedOperator
-from planner.runtime.tray import (
-    CameraModel,
-    SimulatedCell,
-    render_tray,
-    tray_layout,
-    write_marker_sheet,
-)
+from planner.runtime.tray import CameraModel, SimulatedCell, render_tray, tray_layout, write_marker_sheet
 from planner.runtime.vision import (
     MarkerDetector,
     MarkerTracker,
