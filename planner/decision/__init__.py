@@ -2,18 +2,22 @@
 
 - the *model*: a discrete :class:`POMDP` in sparse tables (``pomdp``), built from a plan by
   :func:`intention_model` (an :class:`IntentionModel`: the plan, its intention graph and the tables) or read from POMDPX / Cassandra files (``io``);
+  the same model without enumerating intentions: :func:`factored_model` (``factored_model``, paper Sec. V);
 - the *solver*: ``solver.solve(model) -> SolveResult`` (``solvers``);
 - the *policy*: ``policy.action(belief)`` and ``policy.value(belief)`` (``policy``);
-- the *belief updater*: ``initialize`` and ``update(belief, action, observation)`` (``belief``).
+- the *belief updater*: ``initialize`` and ``update(belief, action, observation)`` (``belief``;
+  :class:`FactoredUpdater` on the factored model).
 
 ``simulate`` plays episodes of any model against any policy with any updater.
 """
 from .belief import DiscreteUpdater, UnexplainedObservation
+from .factored_model import FactoredBelief, FactoredIntentionModel, FactoredUpdater, factored_model, to_flat
 from .intention_model import WAIT, IntentionModel, Rewards, intention_model, intention_pomdp
 from .policy import AlphaVectorPolicy, PolicyError, read_policy, write_policy
 from .pomdp import POMDP, ModelError
 from .solvers import PointBasedSolver, SolveResult
 
-__all__ = ["DiscreteUpdater", "UnexplainedObservation", "WAIT", "IntentionModel", "Rewards", "intention_model", "intention_pomdp",
+__all__ = ["DiscreteUpdater", "UnexplainedObservation", "FactoredBelief", "FactoredIntentionModel", "FactoredUpdater",
+           "factored_model", "to_flat", "WAIT", "IntentionModel", "Rewards", "intention_model", "intention_pomdp",
            "AlphaVectorPolicy", "PolicyError", "read_policy", "write_policy", "POMDP", "ModelError",
            "PointBasedSolver", "SolveResult"]

@@ -1,0 +1,388 @@
+"""The factored decision model (paper Sec. V): Alg. 3's POMDP without enumerating intentions.
+
+An intention ``i`` is its current assembly state ``s`` and its remaining path of state edges to the final
+state. In Alg. 3 (:mod:`planner.decision.intention_model`) the observation table depends on ``i`` only
+through ``s`` (the observations of the operations of the edges *into* ``s``), and the transitions and
+rewards only through ``s`` and the first edge ``e`` of the remaining path (``wait``: stay or advance one
+step, 1/2 each; the robot performing ``e``'s operation: advance one step, then stay or advance one more,
+1/2 each; any other action: stay). The initial belief is uniform over the full sequences. So the belief
+keeps the property "within the *class* of the edge ``e``, every completion of the path after ``e`` is equally
+likely", and it is a vector of masses over the classes: one per state edge (its source is the current
+state) plus one for the finished product.
+
+Classes: ``c < E`` is state edge ``c``; ``c == E`` (``model.final_class``) is the finished product. With
+``N(t)`` the number of paths from state ``t`` to the final state (:func:`~planner.assembly.paths_to_final`,
+exact integers), class ``c`` holds ``N(target(c))`` intentions (1 for the final class), each with the flat
+belief ``mass[c] / N(target(c))``. Advancing one step from class ``c`` moves its mass to the classes that
+start at ``t = target(c)`` in proportion ``N(target(c2)) / N(t)`` (the final class when ``t`` is final);
+those ratios are computed from the exact counts and are at most 1, so nothing overflows however many
+intentions there are.
+
+Beliefs are sparse (:class:`FactoredBelief`: sorted classes and their positive masses); an update costs
+O(k log k) for the k classes the belief reaches after the action's steps (support, its out-edges and,
+after the robot's action, their out-edges).
+"""
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..assembly.intentions import IntentionGraph, paths_to_final
+from ..assembly.plan import Plan
+from ..defaults import DISCOUNT
+from ..errors import PlannerError
+from .belief import UnexplainedObservation, _log_reset
+from .intention_model import WAIT, Rewards
+
+__all__ = ["FactoredBelief", "FactoredIntentionModel", "FactoredUpdater", "factored_model", "to_flat"]
+
+
+@dataclass(frozen=True)
+class FactoredBelief:
+    """A belief over classes: ``classes`` sorted and distinct, ``mass[k] > 0`` the probability of
+    ``classes[k]`` (they sum to 1)."""
+
+    classes: np.ndarray
+    mass: np.ndarray
+
+    def dense(self, n_classes: int) -> np.ndarray:
+        """The masses as a vector over all ``n_classes`` classes."""
+        out = np.zeros(n_classes)
+        out[self.classes] = self.mass
+        return out
+
+
+def _combine(classes: np.ndarray, mass: np.ndarray) -> FactoredBelief:
+    """Sum the masses of equal classes (one sort), dropping zeros."""
+    keys, inverse = np.unique(classes, return_inverse=True)
+    total = np.bincount(inverse, weights=mass, minlength=keys.size)
+    keep = total > 0
+    return FactoredBelief(keys[keep], total[keep])
+
+
+@dataclass(frozen=True)
+class FactoredIntentionModel:
+    """Alg. 3's POMDP over classes (module docstring); the same names as :class:`IntentionModel`.
+
+    Per class (``E + 1`` entries): ``class_source`` (the current assembly state), ``class_target`` (after the
+    step; -1 for the final class), ``class_operation`` (the step's AND/OR operation; -1 for the final
+    class), ``class_fraction`` (``N(target) / N(source)``, 1 for the final class), ``class_log_size``
+    (``log N(target)``, the log of the number of intentions in the class). Per state: ``state_classes``,
+    ``state_class_start`` (CSR of the classes that start at each state), ``paths`` (``N`` per state, exact:
+    int64 or Python ints), ``emit_weight`` (``1 / (k + 1/4)``, ``k`` distinct non-blank observations into the
+    state), ``emit_keys`` (sorted ``state * Z + z`` of those observations). Build with :func:`factored_model`.
+    """
+
+    plan: Plan
+    rewards: Rewards
+    discount: float
+    action_operations: np.ndarray
+    class_source: np.ndarray
+    class_target: np.ndarray
+    class_operation: np.ndarray
+    class_fraction: np.ndarray
+    class_log_size: np.ndarray
+    state_classes: np.ndarray
+    state_class_start: np.ndarray
+    paths: np.ndarray
+    emit_weight: np.ndarray
+    emit_keys: np.ndarray
+    class_action: np.ndarray
+    class_match_reward: np.ndarray
+
+    @property
+    def name(self) -> str:
+        return self.plan.product.name or "aplan"
+
+    @property
+    def actions(self) -> tuple[str, ...]:
+        """The robot-capable operations in AND/OR order (named as in the flat model), then ``wait``."""
+        describe = self.plan.andor.describe
+        robot = self.action_operations[:-1]
+        return tuple(f"a{k}:" + describe(int(op)).replace(" ", "") for k, op in enumerate(robot)) + (WAIT,)
+
+    @property
+    def observations(self) -> tuple[str, ...]:
+        """What the operator is seen picking; observation 0 is the blank one."""
+        return tuple(str(o) for o in self.plan.observations)
+
+    @property
+    def n_classes(self) -> int:
+        return int(self.class_source.shape[0])
+
+    @property
+    def final_class(self) -> int:
+        """The finished product's class (absorbing); it holds the final intention alone."""
+        return self.n_classes - 1
+
+    @property
+    def final_state(self) -> int:
+        """The finished product's assembly state."""
+        return self.plan.states.final
+
+    @property
+    def wait(self) -> int:
+        return len(self.action_operations) - 1
+
+    def operation(self, action: int) -> int | None:
+        """The AND/OR operation the robot performs for ``action``; None for ``wait``."""
+        operation = int(self.action_operations[action])
+        return None if operation < 0 else operation
+
+    # --- full sequences, named by rank without enumerating them ----------------------------------------
+
+    @property
+    def n_sequences(self) -> int:
+        """The number of full assembly sequences (exact)."""
+        return int(self.paths[self.plan.states.initial])
+
+    def class_sizes(self) -> np.ndarray:
+        """The number of intentions in each class (exact: int64 or Python ints); they sum to the intentions."""
+        sizes = self.paths[np.maximum(self.class_target, 0)]
+        sizes[-1] = 1
+        return sizes
+
+    def classes_from(self, state: int) -> np.ndarray:
+        """The classes that start at ``state`` (its out-edges; the final class at the final state)."""
+        return self.state_classes[self.state_class_start[state]:self.state_class_start[state + 1]]
+
+    def sequence(self, rank: int) -> list[int]:
+        """The state edges of full sequence number ``rank`` (0 <= rank < :attr:`n_sequences`; the order is the
+        edges' order at each state). Cost: O(length x out-degree)."""
+        rank = int(rank)
+        if not 0 <= rank < self.n_sequences:
+            raise PlannerError(f"sequence {rank} does not exist: there are {self.n_sequences} full sequences")
+        edges, state = [], self.plan.states.initial
+        while state != self.final_state:
+            for c in self.classes_from(state):
+                size = int(self.paths[self.class_target[c]])
+                if rank < size:
+                    edges.append(int(c))
+                    state = int(self.class_target[c])
+                    break
+                rank -= size
+        return edges
+
+    def sample_sequence(self, rng: np.random.Generator) -> list[int]:
+        """A full sequence drawn uniformly (the initial belief), as state edges. Cost: O(length x out-degree)."""
+        edges, state = [], self.plan.states.initial
+        while state != self.final_state:
+            options = self.classes_from(state)
+            c = int(rng.choice(options, p=self.class_fraction[options]))
+            edges.append(c)
+            state = int(self.class_target[c])
+        return edges
+
+    def sequence_operations(self, edges: list[int]) -> list[int]:
+        """The operations of a path of state edges, in order."""
+        return [int(self.class_operation[e]) for e in edges]
+
+    def describe_operations(self, edges: list[int]) -> list[str]:
+        """:meth:`sequence_operations` as text (``ink+cartridge``, ...)."""
+        return [self.plan.andor.describe(o) for o in self.sequence_operations(edges)]
+
+    # --- the tables, per class ------------------------------------------------------------------------
+
+    def initial_belief(self) -> FactoredBelief:
+        """Uniform over the full sequences: class ``c`` from the initial state gets ``N(target(c)) / N(initial)``."""
+        classes = self.classes_from(self.plan.states.initial)
+        order = np.argsort(classes)
+        return FactoredBelief(classes[order].astype(np.int64), self.class_fraction[classes[order]].copy())
+
+    def advance(self, classes: np.ndarray, mass: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """One step of the operator (or robot) along the path: each class's mass goes to the classes that
+        start at its target in proportion to their sizes. ``classes`` must not hold the final class. The
+        result is not combined (a class may repeat). Cost: O(out-edges of the targets)."""
+        out, count = self.starting_at(self.class_target[classes])
+        return out, np.repeat(mass, count) * self.class_fraction[out]
+
+    def starting_at(self, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The classes that start at each of ``states``, concatenated, and how many per state."""
+        start = self.state_class_start[states]
+        count = self.state_class_start[states + 1] - start
+        ends = np.cumsum(count)
+        total = int(ends[-1]) if ends.size else 0
+        return self.state_classes[np.repeat(start - ends + count, count) + np.arange(total)], count
+
+    def _wait_step(self, classes: np.ndarray, mass: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        # Stay or advance one step, 1/2 each; the final class stays.
+        moving = classes != self.final_class
+        half = np.where(moving, 0.5 * mass, mass)
+        return [(classes, half), self.advance(classes[moving], half[moving])]
+
+    def predict(self, belief: FactoredBelief, action: int) -> FactoredBelief:
+        """The distribution over classes after ``action`` (before the observation), module docstring."""
+        classes, mass = belief.classes, belief.mass
+        if action == self.wait:
+            return _combine(*map(np.concatenate, zip(*self._wait_step(classes, mass))))
+        performs = self.class_action[classes] == action
+        parts = [(classes[~performs], mass[~performs])]
+        if performs.any():
+            moved = _combine(*self.advance(classes[performs], mass[performs]))
+            parts += self._wait_step(moved.classes, moved.mass)
+        return _combine(*map(np.concatenate, zip(*parts)))
+
+    def observation_likelihood(self, observation: int, classes: np.ndarray | None = None) -> np.ndarray:
+        """O(z | class) for ``classes`` (default: all), the same for every action: that of the class's
+        current state. Cost: O(k log K) for k classes and K (state, observation) pairs."""
+        states = self.class_source if classes is None else self.class_source[classes]
+        weight = self.emit_weight[states]
+        if observation == 0:
+            return 0.25 * weight
+        keys = states.astype(np.int64) * len(self.plan.observations) + int(observation)
+        at = np.searchsorted(self.emit_keys, keys)
+        found = self.emit_keys[np.minimum(at, self.emit_keys.size - 1)] == keys if self.emit_keys.size else \
+            np.zeros(keys.shape, dtype=bool)
+        return np.where(found, weight, 0.0)
+
+    def state_observations(self, state: int) -> tuple[np.ndarray, np.ndarray]:
+        """The observations ``state`` can emit (blank first) and their probabilities."""
+        Z = len(self.plan.observations)
+        lo, hi = np.searchsorted(self.emit_keys, [state * Z, (state + 1) * Z])
+        observations = np.concatenate([[0], self.emit_keys[lo:hi] - state * Z])
+        weight = self.emit_weight[state]
+        return observations, np.concatenate([[0.25 * weight], np.full(hi - lo, weight)])
+
+    def rewards_of(self, classes: np.ndarray, action: int) -> np.ndarray:
+        """R(class, action): the class's next step (un)favorable, any other operation wrong, wait."""
+        if action == self.wait:
+            return np.full(len(classes), self.rewards.wait)
+        return np.where(self.class_action[classes] == action, self.class_match_reward[classes], self.rewards.wrong)
+
+    def expected_rewards(self, belief: FactoredBelief) -> np.ndarray:
+        """R(b, a) = sum over classes of mass x R(class, a), for every action at once. Cost: O(support + A)."""
+        total = float(belief.mass.sum())
+        out = np.full(len(self.action_operations), self.rewards.wrong * total)
+        out[-1] = self.rewards.wait * total
+        act = self.class_action[belief.classes]
+        hit = act >= 0
+        np.add.at(out, act[hit], belief.mass[hit] * (self.class_match_reward[belief.classes[hit]] - self.rewards.wrong))
+        return out
+
+    def expected_reward(self, belief: FactoredBelief, action: int) -> float:
+        return float(belief.mass @ self.rewards_of(belief.classes, action))
+
+    def reachable(self, classes: np.ndarray) -> np.ndarray:
+        """Boolean mask over classes of those reachable from ``classes`` (themselves included): every class
+        that starts at a state reachable from one of their targets. Cost: O(S + E)."""
+        mask = np.zeros(self.n_classes, dtype=bool)
+        mask[classes] = True
+        seen = np.zeros(len(self.paths), dtype=bool)
+        frontier = np.unique(self.class_target[classes[classes != self.final_class]])
+        while frontier.size:
+            seen[frontier] = True
+            out, _ = self.starting_at(frontier)
+            mask[out] = True
+            nxt = self.class_target[out]
+            frontier = np.unique(nxt[nxt >= 0])
+            frontier = frontier[~seen[frontier]]
+        return mask
+
+
+def _counts_per_state(plan: Plan) -> np.ndarray:
+    levels = paths_to_final(plan.states)
+    if any(level.dtype == object for level in levels):
+        levels = [level.astype(object) for level in levels]
+    counts = np.concatenate(levels)
+    if counts.shape[0] != plan.states.n_states:
+        raise AssertionError("paths_to_final does not cover every state")
+    return counts
+
+
+def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT) -> FactoredIntentionModel:
+    """The factored model of Alg. 3 over ``plan`` (module docstring), without enumerating intentions.
+
+    Cost: O(S + E log E) time and O(S + E) memory for S states and E state edges (one sort of the edges by
+    source, one of the (state, observation) pairs); Python-int arithmetic only where the counts pass 2**52.
+    """
+    states = plan.states
+    S, E, Z = states.n_states, states.n_edges, len(plan.observations)
+    final = states.final
+    counts = _counts_per_state(plan)
+    source = np.append(states.edge_source, final).astype(np.int64)
+    target = np.append(states.edge_target, -1).astype(np.int64)
+    operation = np.append(states.edge_operation, -1).astype(np.int64)
+    size = counts[np.maximum(target, 0)]
+    size[-1] = 1
+    # Ratios of exact counts: Python-int true division is correctly rounded and never overflows.
+    fraction = (size / counts[source]).astype(float)
+    if counts.dtype == object:
+        log_size = np.array([math.log(x) for x in size], dtype=float)
+    else:
+        log_size = np.log(size.astype(float))
+    order = np.argsort(source, kind="stable")
+    start = np.searchsorted(source[order], np.arange(S + 1))
+    # Observations into each state: the distinct non-blank observations of the operations of its in-edges.
+    seen = plan.operation_observation[states.edge_operation]
+    keys = np.unique(states.edge_target.astype(np.int64)[seen != 0] * Z + seen[seen != 0])
+    emit_weight = 1.0 / (np.bincount(keys // Z, minlength=S) + 0.25)
+    robot_ops = np.flatnonzero(plan.tags.robot)
+    action_of_op = np.full(len(plan.andor.operations), -1, dtype=np.int64)
+    action_of_op[robot_ops] = np.arange(len(robot_ops))
+    class_action = np.where(operation >= 0, action_of_op[np.maximum(operation, 0)], -1)
+    match = np.where(plan.tags.unfavorable[np.maximum(operation, 0)], rewards.unfavorable, rewards.favorable)
+    action_operations = np.append(robot_ops, -1)
+    arrays = (action_operations, source, target, operation, fraction, log_size, order, start, counts, emit_weight,
+              keys, class_action, match)
+    for a in arrays:
+        a.flags.writeable = False
+    return FactoredIntentionModel(plan, rewards, discount, *arrays)
+
+
+class FactoredUpdater:
+    """The exact Bayes filter on a :class:`FactoredIntentionModel`, with :class:`DiscreteUpdater`'s interface
+    and reset rule: an observation with probability 0 resets the belief to the intentions reachable from the
+    previous belief's support that can emit it (uniform over intentions), else to every intention that can
+    emit it, else to the uniform belief; the event goes to ``on_reset`` and ``events``.
+
+    Cost per update: that of :meth:`FactoredIntentionModel.predict` plus O(k log K) for the likelihoods; a
+    reset costs O(S + E).
+    """
+
+    def __init__(self, model: FactoredIntentionModel,
+                 on_reset: Callable[[UnexplainedObservation], None] | None = None):
+        self.model = model
+        self.on_reset = on_reset or _log_reset
+        self.events: list[UnexplainedObservation] = []
+
+    def initialize(self) -> FactoredBelief:
+        return self.model.initial_belief()
+
+    def update(self, belief: FactoredBelief, action: int, observation: int) -> FactoredBelief:
+        """The posterior belief; on an unexplained observation, a reset (class docstring)."""
+        predicted = self.model.predict(belief, action)
+        posterior = predicted.mass * self.model.observation_likelihood(observation, predicted.classes)
+        total = posterior.sum()
+        if total > 0:
+            keep = posterior > 0
+            return FactoredBelief(predicted.classes[keep], posterior[keep] / total)
+        return self._reset(belief, action, observation)
+
+    def _reset(self, belief: FactoredBelief, action: int, observation: int) -> FactoredBelief:
+        model = self.model
+        emitting = model.observation_likelihood(observation) > 0
+        reachable = model.reachable(belief.classes)
+        for name, mask in (("reachable", emitting & reachable), ("emitting", emitting),
+                           ("uniform", np.ones_like(emitting))):
+            if mask.any():
+                event = UnexplainedObservation(action, observation, name)
+                self.events.append(event)
+                self.on_reset(event)
+                classes = np.flatnonzero(mask)
+                log_size = model.class_log_size[classes]
+                weight = np.exp(log_size - log_size.max())  # uniform over intentions: mass ~ class size
+                return FactoredBelief(classes, weight / weight.sum())
+        raise AssertionError("unreachable")
+
+
+def to_flat(belief: FactoredBelief, graph: IntentionGraph) -> np.ndarray:
+    """The flat belief over ``graph``'s intentions: ``mass[class] / size(class)``, intention ``i``'s class being
+    its first state edge (the final class for the final intention). Cost: O(I) (for tests and small models)."""
+    E = graph.states.n_edges
+    of = np.where(graph.step_edge >= 0, graph.step_edge, E)
+    size = np.bincount(of, minlength=E + 1).astype(float)
+    mass = belief.dense(E + 1)
+    return mass[of] / size[of]
