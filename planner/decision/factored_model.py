@@ -55,12 +55,20 @@ class FactoredBelief:
         return out
 
 
-def _combine(classes: np.ndarray, mass: np.ndarray) -> FactoredBelief:
-    """Sum the masses of equal classes (one sort), dropping zeros."""
-    keys, inverse = np.unique(classes, return_inverse=True)
-    total = np.bincount(inverse, weights=mass, minlength=keys.size)
+def _sum_by(keys: np.ndarray, values: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct ``keys`` (sorted, in ``range(size)``) whose ``values`` sum to more than 0, and the sums.
+
+    One sort when the keys are few; one dense ``bincount`` over ``size`` when they are many (it is then the
+    cheaper of the two). Cost: O(k log k) or O(k + size) for k keys.
+    """
+    if keys.size * 8 > size:
+        total = np.bincount(keys, weights=values, minlength=size)
+        distinct = np.flatnonzero(total > 0)
+        return distinct, total[distinct]
+    distinct, inverse = np.unique(keys, return_inverse=True)
+    total = np.bincount(inverse, weights=values, minlength=distinct.size)
     keep = total > 0
-    return FactoredBelief(keys[keep], total[keep])
+    return distinct[keep], total[keep]
 
 
 @dataclass(frozen=True)
@@ -195,9 +203,14 @@ class FactoredIntentionModel:
     def advance(self, classes: np.ndarray, mass: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """One step of the operator (or robot) along the path: each class's mass goes to the classes that
         start at its target in proportion to their sizes. ``classes`` must not hold the final class. The
-        result is not combined (a class may repeat). Cost: O(out-edges of the targets)."""
-        out, count = self.starting_at(self.class_target[classes])
-        return out, np.repeat(mass, count) * self.class_fraction[out]
+        result's classes are distinct, not sorted. Cost: O(k log k + the classes of the distinct targets)."""
+        # Mass per target state first: the classes of one state are reached once, however many lead there.
+        targets, per_target = _sum_by(self.class_target[classes], mass, len(self.paths))
+        out, count = self.starting_at(targets)
+        return out, np.repeat(per_target, count) * self.class_fraction[out]
+
+    def _combine(self, classes: np.ndarray, mass: np.ndarray) -> FactoredBelief:
+        return FactoredBelief(*_sum_by(classes, mass, self.n_classes))
 
     def starting_at(self, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The classes that start at each of ``states``, concatenated, and how many per state."""
@@ -217,13 +230,12 @@ class FactoredIntentionModel:
         """The distribution over classes after ``action`` (before the observation), module docstring."""
         classes, mass = belief.classes, belief.mass
         if action == self.wait:
-            return _combine(*map(np.concatenate, zip(*self._wait_step(classes, mass))))
+            return self._combine(*map(np.concatenate, zip(*self._wait_step(classes, mass))))
         performs = self.class_action[classes] == action
         parts = [(classes[~performs], mass[~performs])]
         if performs.any():
-            moved = _combine(*self.advance(classes[performs], mass[performs]))
-            parts += self._wait_step(moved.classes, moved.mass)
-        return _combine(*map(np.concatenate, zip(*parts)))
+            parts += self._wait_step(*self.advance(classes[performs], mass[performs]))
+        return self._combine(*map(np.concatenate, zip(*parts)))
 
     def observation_likelihood(self, observation: int, classes: np.ndarray | None = None) -> np.ndarray:
         """O(z | class) for ``classes`` (default: all), the same for every action: that of the class's
@@ -317,7 +329,8 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     start = np.searchsorted(source[order], np.arange(S + 1))
     # Observations into each state: the distinct non-blank observations of the operations of its in-edges.
     seen = plan.operation_observation[states.edge_operation]
-    keys = np.unique(states.edge_target.astype(np.int64)[seen != 0] * Z + seen[seen != 0])
+    keys = np.sort(states.edge_target.astype(np.int64)[seen != 0] * Z + seen[seen != 0])
+    keys = keys[np.r_[True, keys[1:] != keys[:-1]]] if keys.size else keys  # distinct (a sort beats hashing)
     emit_weight = 1.0 / (np.bincount(keys // Z, minlength=S) + 0.25)
     robot_ops = np.flatnonzero(plan.tags.robot)
     action_of_op = np.full(len(plan.andor.operations), -1, dtype=np.int64)
