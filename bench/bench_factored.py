@@ -6,7 +6,8 @@ Each product runs in a fresh subprocess so its peak resident memory (ru_maxrss) 
 Per product: the plan is built, then the factored model (timed); then ``EPISODES`` episodes are simulated on
 the factored model itself (a full sequence drawn uniformly; the operator acts with probability 1/2 per step;
 the robot waits half the time and otherwise performs a random robot action, mostly wrong ones, after which
-the model's operator does not act (this slows assembly and lets the belief spread); observations drawn from the model, missed detections included), and
+the model's operator does not act (this slows assembly and lets the belief spread); observations drawn
+from the model, missed detections included), and
 every ``FactoredUpdater.update`` is timed. Where the flat model has at most ``FLAT_LIMIT`` intentions, the
 flat ``DiscreteUpdater`` runs beside it on the same actions and observations (its time, and the largest
 difference between the flat belief and ``to_flat`` of the factored one).
@@ -93,7 +94,8 @@ def one(name: str) -> dict:
             "intentions": count_intentions(plan.states), "sequences": model.n_sequences, "build_s": built,
             "updates": len(times), "median_ms": statistics.median(times) * 1e3, "max_ms": max(times) * 1e3,
             "flat_median_ms": statistics.median(flat_times) * 1e3 if flat_times else None,
-            "difference": difference if flat else None, "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+            "difference": difference if flat else None,
+            "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
 
 
 def main() -> None:

@@ -185,6 +185,7 @@ def test_unexplained_observations_reset_like_the_flat_filter(pen_models):
     assert kinds == {"reachable", "emitting"}
 
 
+@pytest.mark.slow
 def test_complete_11_without_enumerating_intentions():
     """678,570 states and 7,841,108 state edges (3.7e11 intentions): built in seconds, belief updates work."""
     plan = make_plan(complete_product(11))
