@@ -58,14 +58,8 @@ def _episode(model, updater, rng, flat=None) -> tuple[list[float], list[float], 
         if position == len(path):
             break
         action = model.wait if rng.random() < 0.5 or n_actions == 1 else int(rng.integers(n_actions - 1))
-        performs = action != model.wait and model.class_action[path[position]] == action
-        position += performs  # the robot performed the intention's next step
-        # After wait or the robot's step the operator may act (1/2); after any other operation the model stays.
-        if (performs or action == model.wait) and position < len(path) and rng.random() < 0.5:
-            position += 1
-        state = model.class_source[path[position]] if position < len(path) else model.final_state
-        observations, p = model.state_observations(int(state))
-        z = int(rng.choice(observations, p=p))
+        position = model.sample_position(path, position, action, rng)
+        z = model.sample_observation(path, position, rng)
         start = time.perf_counter()
         belief = updater.update(belief, action, z)
         times.append(time.perf_counter() - start)

@@ -192,6 +192,41 @@ class FactoredIntentionModel:
         """:meth:`sequence_operations` as text (``ink+cartridge``, ...)."""
         return [self.plan.andor.describe(o) for o in self.sequence_operations(edges)]
 
+    # --- one true intention: a full sequence's edges and how far along it the world is ------------------
+
+    def position_transition(self, path: list[int], position: int, action: int) -> list[tuple[int, float]]:
+        """T of the intention ``path[position:]`` (``path``: state edges to the final state) under ``action``,
+        as (next position, probability) pairs: the flat model's transition row, by position along ``path``."""
+        end = len(path)
+        if position >= end:
+            return [(end, 1.0)]
+        if action == self.wait:
+            return [(position, 0.5), (position + 1, 0.5)]
+        if self.class_action[path[position]] != action:
+            return [(position, 1.0)]
+        if position + 1 == end:
+            return [(end, 1.0)]
+        return [(position + 1, 0.5), (position + 2, 0.5)]
+
+    def sample_position(self, path: list[int], position: int, action: int, rng: np.random.Generator) -> int:
+        """The next position along ``path`` drawn from :meth:`position_transition` (a simulator's step)."""
+        options = self.position_transition(path, position, action)
+        return options[0][0] if len(options) == 1 else options[int(rng.random() < options[1][1])][0]
+
+    def sample_observation(self, path: list[int], position: int, rng: np.random.Generator) -> int:
+        """An observation drawn from the table of the state the world is in (blank included)."""
+        state = int(self.class_source[path[position]]) if position < len(path) else self.final_state
+        observations, p = self.state_observations(state)
+        return int(rng.choice(observations, p=p))
+
+    def check_step(self, action: int, observation: int) -> None:
+        """A :class:`PlannerError` unless ``action`` and ``observation`` are indices of this model's."""
+        if not 0 <= action < len(self.action_operations):
+            raise PlannerError(f"action {action} is not one of the model's {len(self.action_operations)} actions")
+        if not 0 <= observation < len(self.plan.observations):
+            raise PlannerError(f"observation {observation} is not one of the model's "
+                               f"{len(self.plan.observations)} observations")
+
     # --- the tables, per class ------------------------------------------------------------------------
 
     def initial_belief(self) -> FactoredBelief:
@@ -365,7 +400,9 @@ class FactoredUpdater:
         return self.model.initial_belief()
 
     def update(self, belief: FactoredBelief, action: int, observation: int) -> FactoredBelief:
-        """The posterior belief; on an unexplained observation, a reset (class docstring)."""
+        """The posterior belief; on an unexplained observation, a reset (class docstring). An action or
+        observation that is not the model's raises :class:`PlannerError`."""
+        self.model.check_step(action, observation)
         predicted = self.model.predict(belief, action)
         posterior = predicted.mass * self.model.observation_likelihood(observation, predicted.classes)
         total = posterior.sum()

@@ -8,7 +8,7 @@ import time
 import numpy as np
 import pytest
 
-from planner import chain_product, complete_product, count_intentions, intention_graph, make_plan
+from planner import PlannerError, chain_product, complete_product, count_intentions, intention_graph, make_plan
 from planner.decision import (DiscreteUpdater, FactoredUpdater, UnexplainedObservation, factored_model,
                               intention_model, to_flat)
 
@@ -212,3 +212,32 @@ def test_to_flat_refuses_nothing_on_small_graphs(pen):
     fact = factored_model(plan)
     flat = to_flat(fact.initial_belief(), intention_graph(plan.states))
     assert flat.sum() == pytest.approx(1) and np.count_nonzero(flat) == fact.n_sequences
+
+
+def test_one_intention_moves_as_the_flat_model_says(pen_models):
+    """position_transition along each full sequence equals the flat transition rows of its intentions."""
+    flat_model, fact = pen_models
+    graph, transition = flat_model.graph, flat_model.pomdp.transition
+    for start in flat_model.full_sequences():
+        chain = [int(start)]
+        while graph.successor[chain[-1]] >= 0:
+            chain.append(int(graph.successor[chain[-1]]))
+        path = [int(graph.step_edge[i]) for i in chain[:-1]]
+        assert fact.sequence_operations(path) == flat_model.sequence_operations(int(start))
+        for position, intention in enumerate(chain):
+            for action in range(len(fact.actions)):
+                row = transition[action].getrow(intention)
+                expected = dict(zip(row.indices.tolist(), row.data.tolist()))
+                got = {}
+                for q, p in fact.position_transition(path, position, action):
+                    got[chain[q]] = got.get(chain[q], 0) + p
+                assert got == expected
+
+
+def test_bad_actions_and_observations_are_refused(pen):
+    fact = factored_model(make_plan(pen))
+    updater = FactoredUpdater(fact)
+    belief = updater.initialize()
+    for action, z in ((len(fact.actions), 0), (-1, 0), (0, len(fact.observations)), (0, -1)):
+        with pytest.raises(PlannerError, match="is not one of the model's"):
+            updater.update(belief, action, z)
