@@ -349,9 +349,10 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     S, E, Z = states.n_states, states.n_edges, len(plan.observations)
     final = states.final
     counts = _counts_per_state(plan)
-    source = np.append(states.edge_source, final).astype(np.int64)
-    target = np.append(states.edge_target, -1).astype(np.int64)
-    operation = np.append(states.edge_operation, -1).astype(np.int64)
+    index = np.int32 if max(E + 1, S, len(plan.andor.operations)) < 2 ** 31 else np.int64  # half the memory
+    source = np.append(states.edge_source, final).astype(index)
+    target = np.append(states.edge_target, -1).astype(index)
+    operation = np.append(states.edge_operation, -1).astype(index)
     size = counts[np.maximum(target, 0)]
     size[-1] = 1
     # Ratios of exact counts: Python-int true division is correctly rounded and never overflows.
@@ -360,7 +361,7 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
         log_size = np.array([math.log(x) for x in size], dtype=float)
     else:
         log_size = np.log(size.astype(float))
-    order = np.argsort(source, kind="stable")
+    order = np.argsort(source, kind="stable").astype(index)
     start = np.searchsorted(source[order], np.arange(S + 1))
     # Observations into each state: the distinct non-blank observations of the operations of its in-edges.
     seen = plan.operation_observation[states.edge_operation]
@@ -370,7 +371,7 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     robot_ops = np.flatnonzero(plan.tags.robot)
     action_of_op = np.full(len(plan.andor.operations), -1, dtype=np.int64)
     action_of_op[robot_ops] = np.arange(len(robot_ops))
-    class_action = np.where(operation >= 0, action_of_op[np.maximum(operation, 0)], -1)
+    class_action = np.where(operation >= 0, action_of_op[np.maximum(operation, 0)], -1).astype(index)
     match = np.where(plan.tags.unfavorable[np.maximum(operation, 0)], rewards.unfavorable, rewards.favorable)
     action_operations = np.append(robot_ops, -1)
     arrays = (action_operations, source, target, operation, fraction, log_size, order, start, counts, emit_weight,
