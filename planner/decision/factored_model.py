@@ -78,7 +78,8 @@ class FactoredIntentionModel:
     Per class (``E + 1`` entries): ``class_source`` (the current assembly state), ``class_target`` (after the
     step; -1 for the final class), ``class_operation`` (the step's AND/OR operation; -1 for the final
     class), ``class_fraction`` (``N(target) / N(source)``, 1 for the final class), ``class_log_size``
-    (``log N(target)``, the log of the number of intentions in the class). Per state: ``state_classes``,
+    (``log N(target)``, the log of the number of intentions in the class), ``class_action`` (the action that
+    performs the step, -1 when none does), ``class_match_reward`` (the reward of performing it). Per state: ``state_classes``,
     ``state_class_start`` (CSR of the classes that start at each state), ``paths`` (``N`` per state, exact:
     int64 or Python ints), ``emit_weight`` (``1 / (k + 1/4)``, ``k`` distinct non-blank observations into the
     state), ``emit_keys`` (sorted ``state * Z + z`` of those observations). Build with :func:`factored_model`.
