@@ -11,7 +11,8 @@
 ``simulate`` plays episodes of any model against any policy with any updater.
 """
 from .belief import DiscreteUpdater, UnexplainedObservation
-from .factored_model import FactoredBelief, FactoredIntentionModel, FactoredUpdater, factored_model, to_flat
+from .factored_model import FactoredBelief, FactoredIntentionModel, factored_model
+from .factored_updater import FactoredUpdater, to_flat
 from .intention_model import WAIT, IntentionModel, Rewards, intention_model, intention_pomdp
 from .policy import AlphaVectorPolicy, PolicyError, read_policy, write_policy
 from .pomdp import POMDP, ModelError

@@ -18,26 +18,24 @@ start at ``t = target(c)`` in proportion ``N(target(c2)) / N(t)`` (the final cla
 those ratios are computed from the exact counts and are at most 1, so nothing overflows however many
 intentions there are.
 
-Beliefs are sparse (:class:`FactoredBelief`: sorted classes and their positive masses); an update costs
+The Bayes filter is :class:`~planner.decision.factored_updater.FactoredUpdater`. Beliefs are sparse (:class:`FactoredBelief`: sorted classes and their positive masses); an update costs
 O(k log k) for the k classes the belief reaches after the action's steps (support, its out-edges and,
 after the robot's action, their out-edges).
 """
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..assembly.intentions import IntentionGraph, paths_to_final
+from ..assembly.intentions import paths_to_final
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
 from ..errors import PlannerError
-from .belief import UnexplainedObservation, _log_reset
 from .intention_model import WAIT, Rewards
 
-__all__ = ["FactoredBelief", "FactoredIntentionModel", "FactoredUpdater", "factored_model", "to_flat"]
+__all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model"]
 
 
 @dataclass(frozen=True)
@@ -380,61 +378,3 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     for a in arrays:
         a.flags.writeable = False
     return FactoredIntentionModel(plan, rewards, discount, *arrays)
-
-
-class FactoredUpdater:
-    """The exact Bayes filter on a :class:`FactoredIntentionModel`, with :class:`DiscreteUpdater`'s interface
-    and reset rule: an observation with probability 0 resets the belief to the intentions reachable from the
-    previous belief's support that can emit it (uniform over intentions), else to every intention that can
-    emit it, else to the uniform belief; the event goes to ``on_reset`` and ``events``.
-
-    Cost per update: that of :meth:`FactoredIntentionModel.predict` plus O(k log K) for the likelihoods; a
-    reset costs O(S + E).
-    """
-
-    def __init__(self, model: FactoredIntentionModel,
-                 on_reset: Callable[[UnexplainedObservation], None] | None = None):
-        self.model = model
-        self.on_reset = on_reset or _log_reset
-        self.events: list[UnexplainedObservation] = []
-
-    def initialize(self) -> FactoredBelief:
-        return self.model.initial_belief()
-
-    def update(self, belief: FactoredBelief, action: int, observation: int) -> FactoredBelief:
-        """The posterior belief; on an unexplained observation, a reset (class docstring). An action or
-        observation that is not the model's raises :class:`PlannerError`."""
-        self.model.check_step(action, observation)
-        predicted = self.model.predict(belief, action)
-        posterior = predicted.mass * self.model.observation_likelihood(observation, predicted.classes)
-        total = posterior.sum()
-        if total > 0:
-            keep = posterior > 0
-            return FactoredBelief(predicted.classes[keep], posterior[keep] / total)
-        return self._reset(belief, action, observation)
-
-    def _reset(self, belief: FactoredBelief, action: int, observation: int) -> FactoredBelief:
-        model = self.model
-        emitting = model.observation_likelihood(observation) > 0
-        reachable = model.reachable(belief.classes)
-        for name, mask in (("reachable", emitting & reachable), ("emitting", emitting),
-                           ("uniform", np.ones_like(emitting))):
-            if mask.any():
-                event = UnexplainedObservation(action, observation, name)
-                self.events.append(event)
-                self.on_reset(event)
-                classes = np.flatnonzero(mask)
-                log_size = model.class_log_size[classes]
-                weight = np.exp(log_size - log_size.max())  # uniform over intentions: mass ~ class size
-                return FactoredBelief(classes, weight / weight.sum())
-        raise AssertionError("unreachable")
-
-
-def to_flat(belief: FactoredBelief, graph: IntentionGraph) -> np.ndarray:
-    """The flat belief over ``graph``'s intentions: ``mass[class] / size(class)``, intention ``i``'s class being
-    its first state edge (the final class for the final intention). Cost: O(I) (for tests and small models)."""
-    E = graph.states.n_edges
-    of = np.where(graph.step_edge >= 0, graph.step_edge, E)
-    size = np.bincount(of, minlength=E + 1).astype(float)
-    mass = belief.dense(E + 1)
-    return mass[of] / size[of]

@@ -1,0 +1,71 @@
+"""The exact Bayes filter of the factored decision model (:mod:`planner.decision.factored_model`), and the
+map from its beliefs to the flat model's (for tests and small models)."""
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from ..assembly.intentions import IntentionGraph
+from .belief import UnexplainedObservation, _log_reset
+from .factored_model import FactoredBelief, FactoredIntentionModel
+
+__all__ = ["FactoredUpdater", "to_flat"]
+
+
+class FactoredUpdater:
+    """The exact Bayes filter on a :class:`FactoredIntentionModel`, with :class:`DiscreteUpdater`'s interface
+    and reset rule: an observation with probability 0 resets the belief to the intentions reachable from the
+    previous belief's support that can emit it (uniform over intentions), else to every intention that can
+    emit it, else to the uniform belief; the event goes to ``on_reset`` and ``events``.
+
+    Cost per update: that of :meth:`FactoredIntentionModel.predict` plus O(k log K) for the likelihoods; a
+    reset costs O(S + E).
+    """
+
+    def __init__(self, model: FactoredIntentionModel,
+                 on_reset: Callable[[UnexplainedObservation], None] | None = None):
+        self.model = model
+        self.on_reset = on_reset or _log_reset
+        self.events: list[UnexplainedObservation] = []
+
+    def initialize(self) -> FactoredBelief:
+        return self.model.initial_belief()
+
+    def update(self, belief: FactoredBelief, action: int, observation: int) -> FactoredBelief:
+        """The posterior belief; on an unexplained observation, a reset (class docstring). An action or
+        observation that is not the model's raises :class:`PlannerError`."""
+        self.model.check_step(action, observation)
+        predicted = self.model.predict(belief, action)
+        posterior = predicted.mass * self.model.observation_likelihood(observation, predicted.classes)
+        total = posterior.sum()
+        if total > 0:
+            keep = posterior > 0
+            return FactoredBelief(predicted.classes[keep], posterior[keep] / total)
+        return self._reset(belief, action, observation)
+
+    def _reset(self, belief: FactoredBelief, action: int, observation: int) -> FactoredBelief:
+        model = self.model
+        emitting = model.observation_likelihood(observation) > 0
+        reachable = model.reachable(belief.classes)
+        for name, mask in (("reachable", emitting & reachable), ("emitting", emitting),
+                           ("uniform", np.ones_like(emitting))):
+            if mask.any():
+                event = UnexplainedObservation(action, observation, name)
+                self.events.append(event)
+                self.on_reset(event)
+                classes = np.flatnonzero(mask)
+                log_size = model.class_log_size[classes]
+                weight = np.exp(log_size - log_size.max())  # uniform over intentions: mass ~ class size
+                return FactoredBelief(classes, weight / weight.sum())
+        raise AssertionError("unreachable")
+
+
+def to_flat(belief: FactoredBelief, graph: IntentionGraph) -> np.ndarray:
+    """The flat belief over ``graph``'s intentions: ``mass[class] / size(class)``, intention ``i``'s class being
+    its first state edge (the final class for the final intention). Cost: O(I) (for tests and small models)."""
+    E = graph.states.n_edges
+    of = np.where(graph.step_edge >= 0, graph.step_edge, E)
+    size = np.bincount(of, minlength=E + 1).astype(float)
+    mass = belief.dense(E + 1)
+    return mass[of] / size[of]
