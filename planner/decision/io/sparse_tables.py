@@ -50,6 +50,7 @@ class SparseTable:
         self.listed: list[tuple[tuple, str, tuple[int, ...], np.ndarray | None, int]] = []
         self._full = tuple(True for _ in self.shape)
         self._full_group = self._group(self._full)
+        self._resolved: tuple[int, dict] = (-1, {})  # (entries when sorted, per group: its last entry per key)
 
     def _group(self, mask: tuple[bool, ...]) -> _Group:
         group = self.groups.get(mask)
@@ -160,6 +161,21 @@ class SparseTable:
             return empty, np.zeros(0), empty
         return np.concatenate(lin), np.concatenate(val), np.concatenate(order)
 
+    def _last_per_key(self) -> dict:
+        """Per group: its distinct keys, increasing, the index of the last entry of each and every entry's
+        order (computed once per set of entries: the reward is looked up once per action)."""
+        if self._resolved[0] != self.order:
+            out = {}
+            for mask, group in self.groups.items():
+                keys = np.frombuffer(group.keys, dtype=np.int64)
+                if keys.size:
+                    orders = np.frombuffer(group.orders, dtype=np.int64)
+                    sort = np.lexsort((orders, keys))  # by key, then by order: the last of each run wins
+                    last = sort[_run_ends(keys[sort])]
+                    out[mask] = (keys[last], last, orders)
+            self._resolved = (self.order, out)
+        return self._resolved[1]
+
     def _last(self, lin: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """For each cell in ``lin``: the order of the last entry covering it (-1: none), its group's constant
         value and its block number (-1: a constant)."""
@@ -167,15 +183,8 @@ class SparseTable:
         value = np.zeros(lin.size)
         block = np.full(lin.size, -1, dtype=np.int64)
         coords = None
-        for mask, group in self.groups.items():
-            keys = np.frombuffer(group.keys, dtype=np.int64)
-            if not keys.size:
-                continue
-            orders = np.frombuffer(group.orders, dtype=np.int64)
-            # the last entry per key: sort by key, then by order, keep the last of each run
-            sort = np.lexsort((orders, keys))
-            last = sort[_run_ends(keys[sort])]
-            ukeys = keys[last]
+        for mask, (ukeys, last, orders) in self._last_per_key().items():
+            group = self.groups[mask]
             if mask == self._full:
                 query = lin
             else:
