@@ -185,10 +185,14 @@ def _read(lines, source: str) -> POMDP:
             if all(k in names for k in ("states", "actions", "observations")) and tables is None:
                 S, A, Z = (len(names[k]) for k in ("states", "actions", "observations"))
                 tables = {"T": SparseTable((A, S, S)), "O": SparseTable((A, S, Z)), "R": SparseTable((A, S, S, Z))}
+                positions = {k: {} for k in ("states", "actions", "observations")}
+                for k, table in positions.items():
+                    for i, n in enumerate(names[k]):
+                        table.setdefault(n, i)
         elif key in ("T", "O", "R"):
             if tables is None:
                 raise st.fail(f"{key} entry before states, actions and observations are declared")
-            _entry(st, key, names, tables[key])
+            _entry(st, key, names, positions, tables[key])
         else:
             raise st.fail(f"unexpected {key!r}")
     if tables is None:
@@ -229,21 +233,24 @@ def expected_reward(transition, observation, table: SparseTable) -> np.ndarray:
     return reward
 
 
-def _index(st: _Stream, names: list[str], tok: str):
+def _index(st: _Stream, names: list[str], tok: str, positions: dict[str, int] | None = None):
+    """The position of ``tok`` in ``names``: a number below their count, else a name (``positions``: the
+    names' positions, the first of duplicates, so that a lookup is O(1)); ``None`` for ``*``."""
     if tok == "*":
         return None
     if tok.isdigit() and int(tok) < len(names):
         return int(tok)
-    if tok in names:
-        return names.index(tok)
-    raise st.fail(f"unknown name {tok!r}")
+    position = positions.get(tok) if positions is not None else (names.index(tok) if tok in names else None)
+    if position is None:
+        raise st.fail(f"unknown name {tok!r}")
+    return position
 
 
 _SETS = {"T": ("actions", "states", "states"), "O": ("actions", "states", "observations"),
          "R": ("actions", "states", "states", "observations")}
 
 
-def _entry(st: _Stream, key: str, names, table: SparseTable) -> None:
+def _entry(st: _Stream, key: str, names, positions, table: SparseTable) -> None:
     """One ``T``, ``O`` or ``R`` entry (``key`` taken already) into ``table``: a single value when every index
     is given, else ``identity``, ``uniform`` or the numbers over the indices left out (a row, a matrix)."""
     line = st.line
@@ -255,7 +262,7 @@ def _entry(st: _Stream, key: str, names, table: SparseTable) -> None:
             if st.peek() != ":":
                 break
             st.take()
-        idx.append(_index(st, names[kind], st.take()))
+        idx.append(_index(st, names[kind], st.take(), positions[kind]))
     if len(idx) == len(sets):
         table.set(tuple(idx), st.number())
         return
@@ -275,7 +282,8 @@ def _entry(st: _Stream, key: str, names, table: SparseTable) -> None:
 
 
 def _num(x: float) -> str:
-    return f"{float(x):.15f}".rstrip("0").rstrip(".") or "0"
+    """The shortest fixed-point text that reads back as the same float: files round-trip exactly."""
+    return np.format_float_positional(float(x), unique=True, trim="-")
 
 
 def cassandra_chunks(model: POMDP):

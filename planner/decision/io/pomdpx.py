@@ -70,10 +70,13 @@ class _Section:
     def entry(self, entry) -> None:
         """Add one ``<Entry>`` to the table (APPL's semantics: ``*`` spreads one number, ``-`` lists them)."""
         source, order = self.source, self.order
-        inst = entry.find("Instance")
-        table = entry.find("ProbTable")
-        if table is None:
-            table = entry.find("ValueTable")
+        inst = table = None
+        for child in entry:  # cheaper than find(): an entry has two children
+            tag = child.tag
+            if tag == "Instance":
+                inst = child
+            elif tag == "ProbTable" or (tag == "ValueTable" and table is None):
+                table = child
         if inst is None or table is None or inst.text is None or table.text is None:
             raise _fail(source, entry, "an <Entry> needs an <Instance> and a <ProbTable> or <ValueTable>")
         tokens = inst.text.split()
@@ -163,31 +166,37 @@ def _read(stream, source: str) -> POMDP:
     names = {}  # variable name -> its values
     roles = {}  # 'prev', 'curr', 'obs', 'act' -> variable name
     found: dict[str, _Section] = {}
-    section = None  # the section whose <Parameter> is being read
+    section = section_of = None  # the table being read, and its <Parameter>
     text = {}  # texts of the top-level elements
-    for event, element in etree.iterparse(stream, events=("start", "end"), **_SAFE):
+    for _, element in etree.iterparse(stream, events=("end",), **_SAFE):
         tag = element.tag
-        if event == "start":
-            if root is None:
-                root = element
-                if tag != "pomdpx":
-                    raise _fail(source, root, f"the root element is <{tag}>, not <pomdpx>")
-            elif tag == "Parameter" and element.getparent().tag in ("CondProb", "Func"):
-                section = _start_section(source, element, names, roles, found)
+        if tag == "Entry":
+            parameter = element.getparent()
+            if parameter is not section_of:  # the first entry of a table: its <Var> and <Parent> are read
+                section_of = parameter
+                section = None
+                if parameter is not None and parameter.tag == "Parameter":
+                    section = _start_section(source, parameter, names, roles, found)
+            if section is not None:
+                section.entry(element)
+                element.clear()
+                while element.getprevious() is not None:  # drop the entries read so far
+                    del parameter[0]
             continue
-        if tag == "Entry" and section is not None:
-            section.entry(element)
-            element.clear()
-            parent = element.getparent()
-            while element.getprevious() is not None:  # drop the entries read so far
-                del parent[0]
-        elif tag == "Parameter":
-            section = None
-        elif tag == "Variable" and element.getparent() is root:
+        if root is None:
+            root = element.getroottree().getroot()
+            if root.tag != "pomdpx":
+                raise _fail(source, root, f"the root element is <{root.tag}>, not <pomdpx>")
+        parent = element.getparent()
+        if tag == "Parameter" and parent is not None and element is not section_of:
+            _start_section(source, element, names, roles, found)  # a table with no entries
+        elif tag == "Variable" and parent is root:
             variable = element
             _variables(source, variable, names, roles)
-        elif tag in ("Discount", "Description") and element.getparent() is root:
+        elif tag in ("Discount", "Description") and parent is root:
             text[tag] = element.text
+    if root is None:
+        raise PomdpxError(f"{source}: no XML element")
     if variable is None:
         raise _fail(source, root, "no <Variable> element")
     for tag, child in _SECTIONS.items():
@@ -277,8 +286,9 @@ def _tokens(names) -> list[str]:
 
 
 def _num(x: float) -> str:
-    """Fixed-point text: APPL's parser does not read scientific notation."""
-    return f"{float(x):.15f}".rstrip("0").rstrip(".") or "0"
+    """Fixed-point text (APPL's parser does not read scientific notation), the shortest that reads back as
+    the same float: files round-trip exactly."""
+    return np.format_float_positional(float(x), unique=True, trim="-")
 
 
 def _numbers(values: np.ndarray) -> np.ndarray:
