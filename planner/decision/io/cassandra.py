@@ -325,7 +325,8 @@ def _num(x: float) -> str:
 
 def cassandra_chunks(model: POMDP):
     """The ``.pomdp`` text of ``model`` in pieces, streamed from the sparse tables: one ``T``/``O`` line per
-    non-zero entry, one ``R: a : s : * : *`` line per non-zero reward; names as identifiers.
+    non-zero entry (``O: *`` once when the observation table does not depend on the action), one
+    ``R: a : s : * : *`` line per non-zero reward; names as identifiers.
     Memory O(S) beyond the model; time O(nnz)."""
     token = lambda n: re.sub(r"[^A-Za-z0-9_]+", "_", n).strip("_") or "x"  # noqa: E731
     S = [f"s{i}_{token(n)}" for i, n in enumerate(model.states)]
@@ -335,11 +336,14 @@ def cassandra_chunks(model: POMDP):
     yield "\n".join([f"# {name}", f"discount: {_num(model.discount)}", "values: reward", "states: " + " ".join(S),
                      "actions: " + " ".join(A), "observations: " + " ".join(Z),
                      "start: " + " ".join(_num(p) for p in model.initial), "", ""])
-    for key, tables, cols in (("T", model.transition, S), ("O", model.observation, Z)):
-        for a, table in enumerate(tables):
+    first = model.observation[0]
+    same = all(o is first or (o != first).nnz == 0 for o in model.observation[1:])
+    observation = [("*", first)] if same else list(zip(A, model.observation))
+    for key, tables, cols in (("T", list(zip(A, model.transition)), S), ("O", observation, Z)):
+        for action, table in tables:
             coo = _sorted_coo(table)
             texts = _numbers(coo.data)
-            yield "".join(f"{key}: {A[a]} : {S[r]} : {cols[c]} {v}\n"
+            yield "".join(f"{key}: {action} : {S[r]} : {cols[c]} {v}\n"
                           for r, c, v in zip(coo.row.tolist(), coo.col.tolist(), texts))
     for a in range(model.n_actions):
         nonzero = np.flatnonzero(model.reward[a])
