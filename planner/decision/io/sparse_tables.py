@@ -17,6 +17,7 @@ from __future__ import annotations
 from array import array
 
 import numpy as np
+import scipy.sparse as sp
 
 __all__ = ["SparseTable", "split_rows"]
 
@@ -243,7 +244,6 @@ class SparseTable:
 def split_rows(table: SparseTable):
     """The CSR matrices ``M[k]`` (shape ``shape[1:]``) of a resolved 3-axis table, ``M[k][i, j] = table[k, i, j]``,
     built from its non-zero cells (never dense). Cost: O(nnz + shape[0] x shape[1])."""
-    import scipy.sparse as sp
     K, R, C = table.shape
     lin, val = table.cells()
     bounds = np.searchsorted(lin, np.arange(K + 1, dtype=np.int64) * (R * C))
