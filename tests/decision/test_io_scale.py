@@ -11,6 +11,7 @@ from planner import chain_product, complete_product, make_plan
 from planner.decision import intention_pomdp
 from planner.decision.io.cassandra import CassandraError, read_cassandra, write_cassandra
 from planner.decision.io.pomdpx import PomdpxError, pomdpx_text, read_pomdpx, write_pomdpx
+from planner.decision.io import sparse_tables
 from planner.decision.io.sparse_tables import SparseTable, split_rows
 
 FORMATS = {"pomdpx": (".pomdpx", write_pomdpx, read_pomdpx), "cassandra": (".pomdp", write_cassandra, read_cassandra)}
@@ -133,8 +134,11 @@ def _covered(shape, index):
     return grid, covered
 
 
-def test_sparse_table_agrees_with_dense_assignment():
-    """Random entries of every kind, applied in order to a dense array, give the table's cells."""
+@pytest.mark.parametrize("chunk", [5, 1 << 21])
+def test_sparse_table_agrees_with_dense_assignment(monkeypatch, chunk):
+    """Random entries of every kind, applied in order to a dense array, give the table's cells (also when
+    the cells are resolved a few at a time)."""
+    monkeypatch.setattr(sparse_tables, "_CHUNK", chunk)
     rng = np.random.default_rng(7)
     for _ in range(200):
         shape = tuple(int(n) for n in rng.integers(1, 4, size=3))

@@ -22,6 +22,9 @@ import scipy.sparse as sp
 __all__ = ["SparseTable", "split_rows"]
 
 
+_CHUNK = 1 << 21  # cells looked up at a time when resolving overlapping entries
+
+
 def _run_ends(keys: np.ndarray) -> np.ndarray:
     """Where each run of equal values ends in the sorted ``keys`` (a boolean mask)."""
     return np.append(keys[1:] != keys[:-1], True) if keys.size else np.zeros(0, dtype=bool)
@@ -215,8 +218,10 @@ class SparseTable:
             last = last[values[last] != 0]
             return keys[last].copy(), values[last].copy()
         lin, val, order = self._spread()
-        last, _, _ = self._last(lin)
-        keep = np.flatnonzero(last == order)
+        # in chunks: the lookups' temporaries (coordinates, keys, positions) stay a few times _CHUNK
+        keep = np.flatnonzero(np.concatenate(
+            [self._last(lin[i:i + _CHUNK])[0] == order[i:i + _CHUNK] for i in range(0, lin.size, _CHUNK)]
+            or [np.zeros(0, dtype=bool)]))
         keep = keep[np.argsort(lin[keep], kind="stable")]
         return lin[keep], val[keep]
 
