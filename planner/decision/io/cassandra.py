@@ -3,55 +3,75 @@
 Read: ``discount``, ``values`` (``reward`` or ``cost``), ``states``/``actions``/``observations`` (a count or
 names), ``start`` (a vector, ``uniform``, a state, or ``include:``/``exclude:`` lists), and ``T``, ``O``, ``R``
 entries in all three shapes (single value, row, matrix, with ``*`` wildcards and ``identity``/``uniform``).
-Rewards that depend on the next state or the observation are folded into ``R(s, a)`` by expectation.
-Errors name the line.
+Where entries overlap, the later one wins. Rewards that depend on the next state or the observation are
+folded into ``R(s, a)`` by expectation over ``T`` and ``O``. Errors name the line.
+
+Both directions stay sparse: the reader streams the file's tokens into
+:class:`~planner.decision.io.sparse_tables.SparseTable` and CSR matrices (never a dense A x S x S table, nor the
+A x S x S x Z reward) and evaluates the reward only where ``T(s' | s, a) O(z | s', a)`` is non-zero; the
+writer streams the CSR entries. Memory O(nnz), time O(nnz log nnz) for nnz non-zero entries.
 """
 from __future__ import annotations
 
 import re
+from collections import deque
 from pathlib import Path
 
 import numpy as np
-import scipy.sparse as sp
 
 from ...errors import PlannerError
-from ...files import write_atomic
+from ...files import open_atomic
 from ..pomdp import POMDP, ModelError
+from .sparse_tables import SparseTable, split_rows
 
-__all__ = ["CassandraError", "read_cassandra", "write_cassandra", "cassandra_text"]
+__all__ = ["CassandraError", "read_cassandra", "write_cassandra", "cassandra_text", "cassandra_chunks",
+           "expected_reward"]
 
 
 class CassandraError(PlannerError):
     """A ``.pomdp`` file is malformed (the message names the line)."""
 
 
-def _tokens(text: str):
-    """(line number, token) pairs; ``#`` starts a comment; ``:`` is a token of its own."""
-    for number, line in enumerate(text.splitlines(), start=1):
-        line = line.split("#", 1)[0]
-        for tok in re.findall(r":|[^\s:]+", line):
-            yield number, tok
+_SPLIT = re.compile(r":|[^\s:]+").findall  # ':' is a token of its own
 
 
 class _Stream:
-    def __init__(self, text: str, source: str):
-        self.items = list(_tokens(text))
-        self.i = 0
+    """The file's tokens, read a line at a time (the file is never held as a token list); ``#`` starts a
+    comment. Errors name the line of the last token taken."""
+
+    def __init__(self, lines, source: str):
+        self.lines = enumerate(lines, start=1)
+        self.ahead: deque = deque()  # (line number, token) pairs read but not taken
+        self.line = 0  # the line of the last token taken
         self.source = source
 
-    def fail(self, problem: str, line: int | None = None) -> CassandraError:
-        if line is None:
-            line = self.items[min(self.i, len(self.items) - 1)][0] if self.items else 0
-        return CassandraError(f"{self.source}: line {line}: {problem}")
+    def _fill(self, k: int) -> bool:
+        while len(self.ahead) <= k:
+            item = next(self.lines, None)
+            if item is None:
+                return False
+            self.push(item)
+        return True
 
-    def peek(self):
-        return self.items[self.i][1] if self.i < len(self.items) else None
+    def push(self, item: tuple[int, str]) -> None:
+        """Queue the tokens of the line ``item`` (its number, its text)."""
+        number, text = item
+        self.ahead.extend((number, tok) for tok in _SPLIT(text.split("#", 1)[0]))
+
+    def raw_line(self) -> tuple[int, str] | None:
+        """The next line as it is, when no token is pending (for one-line entries); else None."""
+        return None if self.ahead else next(self.lines, None)
+
+    def fail(self, problem: str, line: int | None = None) -> CassandraError:
+        return CassandraError(f"{self.source}: line {self.line if line is None else line}: {problem}")
+
+    def peek(self, k: int = 0):
+        return self.ahead[k][1] if self._fill(k) else None
 
     def take(self):
-        if self.i >= len(self.items):
+        if not self._fill(0):
             raise self.fail("unexpected end of file")
-        tok = self.items[self.i][1]
-        self.i += 1
+        self.line, tok = self.ahead.popleft()
         return tok
 
     def expect(self, tok):
@@ -83,8 +103,7 @@ _KEYS = ("discount", "values", "states", "actions", "observations", "start")
 
 def _names_end(st: _Stream, stop: tuple[str, ...]) -> bool:
     """Whether a list of names ends here: the end of the file, a keyword, or the next ``key :``."""
-    return (st.peek() is None or st.peek() in stop
-            or (st.i + 1 < len(st.items) and st.items[st.i + 1][1] == ":"))
+    return st.peek() is None or st.peek() in stop or st.peek(1) == ":"
 
 
 def _declaration(st: _Stream, key: str, names: dict[str, list[str]], header: dict) -> None:
@@ -144,110 +163,214 @@ def _initial_belief(st: _Stream, names: dict[str, list[str]], spec) -> np.ndarra
 
 
 def read_cassandra(path: str | Path) -> POMDP:
-    """Read a ``.pomdp`` file into a :class:`POMDP`."""
+    """Read a ``.pomdp`` file into a :class:`POMDP`.
+
+    Memory: O(entries) for the entries the file lists (kept sparse) plus the dense (A, S) reward; never
+    A x S x S. Time: O(tokens + nnz log nnz), the reward O(sum over actions a of nnz(T_a) x k log N), k the
+    mean non-zeros of an observation row, N the reward entries."""
     source = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8", errors="strict")
+        with open(path, encoding="utf-8", errors="strict") as lines:
+            return _read(lines, source)
     except (OSError, UnicodeDecodeError) as exc:
         raise CassandraError(f"{source}: cannot read the file: {exc}") from None
-    st = _Stream(text, source)
+
+
+def _read(lines, source: str) -> POMDP:
+    st = _Stream(lines, source)
     names: dict[str, list[str]] = {}
     header: dict = {"discount": None, "sign": 1.0, "start": None}
-    T = O = R = None
-    while st.peek() is not None:
+    tables = None
+    while True:
+        if tables is not None and not st.ahead:
+            item = st.raw_line()
+            if item is None:
+                break
+            if _one_line_entry(st, item, names, positions, tables):
+                continue
+            st.push(item)
+        if st.peek() is None:
+            break
         key = st.take()
         if key in _KEYS:
             _declaration(st, key, names, header)
-            if all(k in names for k in ("states", "actions", "observations")) and T is None:
+            if all(k in names for k in ("states", "actions", "observations")) and tables is None:
                 S, A, Z = (len(names[k]) for k in ("states", "actions", "observations"))
-                T, O, R = np.zeros((A, S, S)), np.zeros((A, S, Z)), np.zeros((A, S, S, Z))
+                tables = {"T": SparseTable((A, S, S)), "O": SparseTable((A, S, Z)), "R": SparseTable((A, S, S, Z))}
+                positions = {k: {} for k in ("states", "actions", "observations")}
+                for k, table in positions.items():
+                    for i, n in enumerate(names[k]):
+                        table.setdefault(n, i)
         elif key in ("T", "O", "R"):
-            if T is None:
+            if tables is None:
                 raise st.fail(f"{key} entry before states, actions and observations are declared")
-            _entry(st, key, names, T, O, R)
+            _entry(st, key, names, positions, tables[key])
         else:
             raise st.fail(f"unexpected {key!r}")
-    if T is None:
+    if tables is None:
         raise CassandraError(f"{source}: states, actions and observations must be declared")
     if header["discount"] is None:
         raise CassandraError(f"{source}: no discount")
     initial = _initial_belief(st, names, header["start"])
-    reward = header["sign"] * np.einsum("ast,atz,astz->as", T, O, R)
+    transition, observation = split_rows(tables["T"]), split_rows(tables["O"])
+    reward = header["sign"] * expected_reward(transition, observation, tables["R"])
     try:
         return POMDP(tuple(names["states"]), tuple(names["actions"]), tuple(names["observations"]),
-                     tuple(sp.csr_matrix(t) for t in T), tuple(sp.csr_matrix(o) for o in O), reward, initial,
-                     header["discount"], name=Path(path).stem)
+                     transition, observation, reward, initial, header["discount"], name=Path(source).stem)
     except ModelError as exc:
         raise CassandraError(f"{source}: {exc}") from None
 
 
-def _index(st: _Stream, names: list[str], tok: str):
+def expected_reward(transition, observation, table: SparseTable) -> np.ndarray:
+    """``R(s, a) = sum over s', z of T(s' | s, a) O(z | s', a) R(s, a, s', z)`` for the (A, S, S, Z) reward
+    ``table``, evaluated only where ``T O`` is non-zero (never the dense A x S x S x Z array).
+    Cost per action a: O(nnz(T_a) k log N) time and O(nnz(T_a) k) memory, k the mean non-zeros of an
+    observation row, N the reward entries."""
+    A, S, _, Z = table.shape
+    reward = np.zeros((A, S))
+    if not table.order:
+        return reward
+    for a, (t, o) in enumerate(zip(transition, observation)):
+        coo = t.tocoo()
+        counts = np.diff(o.indptr)[coo.col]
+        total = int(counts.sum())
+        if not total:
+            continue
+        # every (s, s', z) with T(s' | s, a) O(z | s', a) > 0: each T entry repeated over its observation row
+        position = np.repeat(o.indptr[coo.col] - (np.cumsum(counts) - counts), counts) + np.arange(total)
+        s, s2 = np.repeat(coo.row, counts).astype(np.int64), np.repeat(coo.col, counts).astype(np.int64)
+        weight = np.repeat(coo.data, counts) * o.data[position]
+        lin = ((a * S + s) * S + s2) * Z + o.indices[position]
+        reward[a] = np.bincount(s, weights=weight * table.values_at(lin), minlength=S)
+    return reward
+
+
+def _index(st: _Stream, names: list[str], tok: str, positions: dict[str, int] | None = None):
+    """The position of ``tok`` in ``names``: a number below their count, else a name (``positions``: the
+    names' positions, the first of duplicates, so that a lookup is O(1)); ``None`` for ``*``."""
     if tok == "*":
-        return slice(None)
+        return None
     if tok.isdigit() and int(tok) < len(names):
         return int(tok)
-    if tok in names:
-        return names.index(tok)
-    raise st.fail(f"unknown name {tok!r}")
+    position = positions.get(tok) if positions is not None else (names.index(tok) if tok in names else None)
+    if position is None:
+        raise st.fail(f"unknown name {tok!r}")
+    return position
 
 
-def _entry(st: _Stream, key: str, names, T, O, R) -> None:
-    line = st.items[st.i - 1][0]
+_SETS = {"T": ("actions", "states", "states"), "O": ("actions", "states", "observations"),
+         "R": ("actions", "states", "states", "observations")}
+
+
+def _one_line_entry(st: _Stream, item: tuple[int, str], names, positions, tables) -> bool:
+    """Read ``item`` (a line's number and text) if it is one whole single-value entry, ``T: a : s : s' p``
+    (the bulk of a large file), and say whether it was; the same result as :func:`_entry`, several times
+    faster."""
+    parts = item[1].split("#", 1)[0].split(":")
+    key = parts[0].strip()
+    if key not in tables or len(parts) != len(_SETS[key]) + 1:
+        return False
+    last = parts[-1].split()
+    if len(last) != 2:
+        return False
+    tokens = [part.split() for part in parts[1:-1]]
+    if any(len(t) != 1 for t in tokens):
+        return False
+    st.line = item[0]
+    index = tuple(_index(st, names[kind], tok, positions[kind])
+                  for kind, tok in zip(_SETS[key], [t[0] for t in tokens] + [last[0]]))
+    try:
+        value = float(last[1])
+    except ValueError:
+        raise st.fail(f"expected a number, got {last[1]!r}") from None
+    tables[key].set(index, value)
+    return True
+
+
+def _entry(st: _Stream, key: str, names, positions, table: SparseTable) -> None:
+    """One ``T``, ``O`` or ``R`` entry (``key`` taken already) into ``table``: a single value when every index
+    is given, else ``identity``, ``uniform`` or the numbers over the indices left out (a row, a matrix)."""
+    line = st.line
     st.expect(":")
-    sets = {"T": ("actions", "states", "states"), "O": ("actions", "states", "observations"),
-            "R": ("actions", "states", "states", "observations")}[key]
+    sets = _SETS[key]
     idx = []
     for k, kind in enumerate(sets):
         if k > 0:
             if st.peek() != ":":
                 break
             st.take()
-        idx.append(_index(st, names[kind], st.take()))
-    table = {"T": T, "O": O, "R": R}[key]
-    target = table[tuple(idx)]
+        idx.append(_index(st, names[kind], st.take(), positions[kind]))
     if len(idx) == len(sets):
-        table[tuple(idx)] = st.number()
+        table.set(tuple(idx), st.number())
         return
-    shape = np.shape(target)
+    rest = tuple(range(len(idx), len(sets)))
+    index = tuple(idx) + (None,) * len(rest)
     if st.peek() in ("identity", "uniform"):
         word = st.take()
         if word == "identity" and key == "T" and len(idx) == 1:
-            table[tuple(idx)] = np.eye(shape[-1])
+            table.set_identity(index, (1, 2))
         elif word == "uniform":
-            table[tuple(idx)] = 1.0 / shape[-1]
+            table.set(index, 1.0 / table.shape[-1])
         else:
             raise st.fail(f"{word!r} does not fit this {key} entry", line)
         return
-    count = int(np.prod(shape[len(shape) - (len(sets) - len(idx)):])) if key != "R" else shape[-1]
-    values = st.numbers(count)
-    if key == "R":
-        table[tuple(idx)] = values  # broadcast over any remaining wildcard axes
-    else:
-        table[tuple(idx)] = values.reshape(shape[len(shape) - (len(sets) - len(idx)):])
+    shape = tuple(table.shape[k] for k in rest)
+    table.set_listed(index, rest, st.numbers(int(np.prod(shape))).reshape(shape))
 
 
-def cassandra_text(model: POMDP) -> str:
-    """The ``.pomdp`` text of ``model`` (sparse entries; names as identifiers)."""
+def _num(x: float) -> str:
+    """The shortest fixed-point text that reads back as the same float: files round-trip exactly."""
+    return np.format_float_positional(float(x), unique=True, trim="-")
+
+
+def cassandra_chunks(model: POMDP):
+    """The ``.pomdp`` text of ``model`` in pieces, streamed from the sparse tables: one ``T``/``O`` line per
+    non-zero entry (``O: *`` once when the observation table does not depend on the action), one
+    ``R: a : s : * : *`` line per non-zero reward; names as identifiers.
+    Memory O(S) beyond the model; time O(nnz)."""
     token = lambda n: re.sub(r"[^A-Za-z0-9_]+", "_", n).strip("_") or "x"  # noqa: E731
     S = [f"s{i}_{token(n)}" for i, n in enumerate(model.states)]
     A = [f"a{i}_{token(n)}" for i, n in enumerate(model.actions)]
     Z = [f"o{i}_{token(n)}" for i, n in enumerate(model.observations)]
-    num = lambda x: f"{float(x):.15f}".rstrip("0").rstrip(".") or "0"  # noqa: E731
-    lines = [f"# {model.name}", f"discount: {num(model.discount)}", "values: reward", "states: " + " ".join(S),
-             "actions: " + " ".join(A), "observations: " + " ".join(Z),
-             "start: " + " ".join(num(p) for p in model.initial), ""]
-    for a, t in enumerate(model.transition):
-        coo = t.tocoo()
-        lines += [f"T: {A[a]} : {S[s]} : {S[s2]} {num(p)}" for s, s2, p in sorted(zip(coo.row, coo.col, coo.data))]
-    for a, o in enumerate(model.observation):
-        coo = o.tocoo()
-        lines += [f"O: {A[a]} : {S[s]} : {Z[z]} {num(p)}" for s, z, p in sorted(zip(coo.row, coo.col, coo.data))]
+    name = " ".join(model.name.splitlines())
+    yield "\n".join([f"# {name}", f"discount: {_num(model.discount)}", "values: reward", "states: " + " ".join(S),
+                     "actions: " + " ".join(A), "observations: " + " ".join(Z),
+                     "start: " + " ".join(_num(p) for p in model.initial), "", ""])
+    first = model.observation[0]
+    same = all(o is first or (o != first).nnz == 0 for o in model.observation[1:])
+    observation = [("*", first)] if same else list(zip(A, model.observation))
+    for key, tables, cols in (("T", list(zip(A, model.transition)), S), ("O", observation, Z)):
+        for action, table in tables:
+            coo = _sorted_coo(table)
+            texts = _numbers(coo.data)
+            yield "".join(f"{key}: {action} : {S[r]} : {cols[c]} {v}\n"
+                          for r, c, v in zip(coo.row.tolist(), coo.col.tolist(), texts))
     for a in range(model.n_actions):
-        lines += [f"R: {A[a]} : {S[s]} : * : * {num(model.reward[a, s])}"
-                  for s in np.flatnonzero(model.reward[a])]
-    return "\n".join(lines) + "\n"
+        nonzero = np.flatnonzero(model.reward[a])
+        yield "".join(f"R: {A[a]} : {S[s]} : * : * {v}\n"
+                      for s, v in zip(nonzero.tolist(), _numbers(model.reward[a, nonzero])))
+
+
+def _numbers(values: np.ndarray) -> list[str]:
+    """``_num`` of each value, formatting each distinct value once (a model has few distinct probabilities)."""
+    distinct, inverse = np.unique(values, return_inverse=True)
+    return np.array([_num(v) for v in distinct], dtype=object)[inverse.ravel()].tolist()
+
+
+def _sorted_coo(table):
+    """The entries of a CSR table in row-major order, columns increasing within a row."""
+    table = table.tocsr()
+    return (table if table.has_sorted_indices else table.sorted_indices()).tocoo()
+
+
+def cassandra_text(model: POMDP) -> str:
+    """The ``.pomdp`` text of ``model`` as one string (:func:`cassandra_chunks`; for small models)."""
+    return "".join(cassandra_chunks(model))
 
 
 def write_cassandra(model: POMDP, path: str | Path) -> None:
-    """Write ``model`` as a ``.pomdp`` file (atomically)."""
-    write_atomic(path, cassandra_text(model))
+    """Write ``model`` as a ``.pomdp`` file (atomically), streamed: memory O(S + the largest table) beyond
+    the model."""
+    with open_atomic(path) as handle:
+        for chunk in cassandra_chunks(model):
+            handle.write(chunk.encode("utf-8"))

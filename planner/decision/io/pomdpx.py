@@ -3,27 +3,35 @@
 Only *flat* models are read: one state variable (``vnamePrev``/``vnameCurr``), one observation variable, one
 action variable and one reward variable, with ``TBL`` parameters. Instances may use ``*`` (every value,
 same probability) and ``-`` (every value, listed in the table) and tables may be ``identity`` or
-``uniform``, as APPL defines them. The writer lists only non-zero entries and uses ``*`` for the action
-when the observation table does not depend on it, so a model of the pen takes kilobytes.
+``uniform``, as APPL defines them; where entries overlap, the later one wins. The writer lists only non-zero
+entries, uses ``*`` for the action when the observation table does not depend on it and ``identity`` for an
+action that leaves the state as it is, so a model of the pen takes kilobytes.
+
+Both directions stay sparse: the reader streams the XML (one ``<Entry>`` in memory at a time) into
+:class:`~planner.decision.io.sparse_tables.SparseTable` and CSR matrices, never a dense actions x states x
+states array; the writer streams the entries of the CSR matrices to the file. Memory: O(nnz) for nnz non-zero
+entries (plus the dense (A, S) reward table), time O(nnz log nnz).
 
 The XML parser never expands entities, loads DTDs or touches the network.
 """
 from __future__ import annotations
 
 import gzip
-import itertools
 import re
 from pathlib import Path
+from xml.sax.saxutils import escape
 
 import numpy as np
-import scipy.sparse as sp
 from lxml import etree
 
 from ...errors import PlannerError
-from ...files import write_atomic
+from ...files import open_atomic
 from ..pomdp import POMDP, ModelError
+from .sparse_tables import SparseTable, split_rows
 
-__all__ = ["PomdpxError", "read_pomdpx", "write_pomdpx", "pomdpx_text", "safe_parser"]
+__all__ = ["PomdpxError", "read_pomdpx", "write_pomdpx", "pomdpx_text", "pomdpx_chunks", "safe_parser"]
+
+_SAFE = dict(resolve_entities=False, no_network=True, load_dtd=False, huge_tree=False, remove_comments=True)
 
 
 class PomdpxError(PlannerError):
@@ -32,8 +40,7 @@ class PomdpxError(PlannerError):
 
 def safe_parser() -> etree.XMLParser:
     """An XML parser with entity expansion, DTD loading and network access disabled."""
-    return etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, huge_tree=False,
-                           remove_comments=True)
+    return etree.XMLParser(**_SAFE)
 
 
 def _fail(source: str, element, problem: str) -> PomdpxError:
@@ -51,119 +58,214 @@ def _values(source, var, prefix):
     return [f"{prefix}{i}" for i in range(int(count.text))]
 
 
-def _read_tables(source, cond, order, sizes, index):
-    """Fill a dense array with axes ``order`` (variable names) from a ``<CondProb>``/``<Func>`` element."""
-    out = np.zeros([sizes[v] for v in order])
-    param = cond.find("Parameter")
-    if param is None or param.get("type", "TBL") != "TBL":
-        raise _fail(source, cond, "only TBL parameters are supported")
-    for entry in param.findall("Entry"):
-        inst = entry.find("Instance")
-        table = entry.find("ProbTable")
-        if table is None:
-            table = entry.find("ValueTable")
+class _Section:
+    """One table being read: its variables in the file's order and their axes in the table."""
+
+    def __init__(self, source, cond, order, axes, shape, index):
+        self.source, self.cond, self.order, self.index = source, cond, order, index
+        self.axes = [axes[v] for v in order]  # file position -> table axis
+        self.sizes = [shape[a] for a in self.axes]
+        self.table = SparseTable(shape)
+
+    def entry(self, entry) -> None:
+        """Add one ``<Entry>`` to the table (APPL's semantics: ``*`` spreads one number, ``-`` lists them)."""
+        source, order = self.source, self.order
+        inst = table = None
+        for child in entry:  # cheaper than find(): an entry has two children
+            tag = child.tag
+            if tag == "Instance":
+                inst = child
+            elif tag == "ProbTable" or (tag == "ValueTable" and table is None):
+                table = child
         if inst is None or table is None or inst.text is None or table.text is None:
             raise _fail(source, entry, "an <Entry> needs an <Instance> and a <ProbTable> or <ValueTable>")
         tokens = inst.text.split()
         if len(tokens) != len(order):
             raise _fail(source, inst, f"instance {inst.text.strip()!r} has {len(tokens)} values, expected "
                                       f"{len(order)} ({' '.join(order)})")
-        axes = []
-        for tok, var in zip(tokens, order):
-            if tok in ("*", "-"):
-                axes.append(tok)
-            elif tok in index[var]:
-                axes.append(index[var][tok])
-            else:
-                raise _fail(source, inst, f"unknown value {tok!r} of variable {var!r}")
-        dash = [sizes[v] for tok, v in zip(tokens, order) if tok == "-"]
+        index = [None] * len(tokens)
+        dash = []  # file positions of '-'
+        for k, (tok, var) in enumerate(zip(tokens, order)):
+            if tok == "-":
+                dash.append(k)
+            elif tok != "*":
+                i = self.index[var].get(tok)
+                if i is None:
+                    raise _fail(source, inst, f"unknown value {tok!r} of variable {var!r}")
+                index[self.axes[k]] = i
         text = table.text.split()
         if text == ["identity"]:
-            values = np.eye(*dash[-2:]) if len(dash) >= 2 else None
-            if values is None:
+            if len(dash) < 2:
                 raise _fail(source, table, "'identity' needs two '-' in the instance")
-            values = np.broadcast_to(values, dash).copy()
-        elif text == ["uniform"]:
-            values = np.full(dash, 1.0 / dash[-1]) if dash else None
-            if values is None:
+            self.table.set_identity(index, tuple(sorted((self.axes[dash[-2]], self.axes[dash[-1]]))))
+            return
+        if text == ["uniform"]:
+            if not dash:
                 raise _fail(source, table, "'uniform' needs a '-' in the instance")
-        else:
-            try:
-                flat = np.array([float(x) for x in text])
-            except ValueError:
-                raise _fail(source, table, f"not a list of numbers: {table.text.strip()[:60]!r}") from None
-            expected = int(np.prod(dash)) if dash else 1
-            if flat.size != expected:
-                raise _fail(source, table, f"{flat.size} values for instance {inst.text.strip()!r}, expected {expected}")
-            values = flat.reshape(dash) if dash else flat[0]
-        ranges = [range(sizes[v]) if tok in ("*", "-") else [ax] for ax, tok, v in zip(axes, tokens, order)]
-        dash_positions = [k for k, tok in enumerate(tokens) if tok == "-"]
-        for point in itertools.product(*ranges):
-            out[point] = values[tuple(point[k] for k in dash_positions)] if dash_positions else values
-    return out
+            self.table.set(index, 1.0 / self.sizes[dash[-1]])
+            return
+        expected = 1
+        for k in dash:
+            expected *= self.sizes[k]
+        if len(text) != expected:
+            if not all(_is_number(x) for x in text):
+                raise _fail(source, table, f"not a list of numbers: {table.text.strip()[:60]!r}")
+            raise _fail(source, table, f"{len(text)} values for instance {inst.text.strip()!r}, expected {expected}")
+        try:
+            if not dash:
+                self.table.set(index, float(text[0]))
+                return
+            values = np.array(text, dtype=float)
+        except ValueError:
+            raise _fail(source, table, f"not a list of numbers: {table.text.strip()[:60]!r}") from None
+        # the file lists the '-' axes in its own order; the table wants them in increasing axis order
+        listed = [self.axes[k] for k in dash]
+        values = values.reshape([self.sizes[k] for k in dash]).transpose(np.argsort(listed))
+        self.table.set_listed(index, tuple(sorted(listed)), values)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
+
+
+def _open(path, source):
+    try:
+        return gzip.open(path) if source.endswith(".gz") else open(path, "rb")
+    except OSError as exc:
+        raise PomdpxError(f"{source}: cannot read the file: {exc}") from None
 
 
 def read_pomdpx(path: str | Path) -> POMDP:
-    """Read a flat POMDPX file (optionally gzip-compressed, ``.gz``) into a :class:`POMDP`."""
+    """Read a flat POMDPX file (optionally gzip-compressed, ``.gz``) into a :class:`POMDP`.
+
+    The XML is streamed: each ``<Entry>`` goes into its table and is dropped. Memory: O(nnz) for the
+    transition and observation tables' non-zero entries (and the cells the file lists, zeros included), plus
+    the dense (A, S) reward; never A x S x S. Time: O(entries + nnz log nnz).
+    """
     source = str(path)
+    stream = _open(path, source)
     try:
-        raw = gzip.open(path).read() if source.endswith(".gz") else Path(path).read_bytes()
+        with stream:
+            return _read(stream, source)
     except (OSError, EOFError) as exc:
         raise PomdpxError(f"{source}: cannot read the file: {exc}") from None
-    try:
-        root = etree.fromstring(raw, safe_parser())
     except etree.XMLSyntaxError as exc:
         raise PomdpxError(f"{source}: line {exc.lineno}: malformed XML: {exc.msg}") from None
-    if root.tag != "pomdpx":
-        raise _fail(source, root, f"the root element is <{root.tag}>, not <pomdpx>")
-    variable = root.find("Variable")
+
+
+_SECTIONS = {"InitialStateBelief": "CondProb", "StateTransitionFunction": "CondProb", "ObsFunction": "CondProb",
+             "RewardFunction": "Func"}
+
+
+def _read(stream, source: str) -> POMDP:
+    root = variable = None
+    names = {}  # variable name -> its values
+    roles = {}  # 'prev', 'curr', 'obs', 'act' -> variable name
+    found: dict[str, _Section] = {}
+    section = section_of = None  # the table being read, and its <Parameter>
+    text = {}  # texts of the top-level elements
+    for _, element in etree.iterparse(stream, events=("end",), **_SAFE):
+        tag = element.tag
+        if tag == "Entry":
+            parameter = element.getparent()
+            if parameter is not section_of:  # the first entry of a table: its <Var> and <Parent> are read
+                section_of = parameter
+                section = None
+                if parameter is not None and parameter.tag == "Parameter":
+                    section = _start_section(source, parameter, names, roles, found)
+            if section is not None:
+                section.entry(element)
+                element.clear()
+                while element.getprevious() is not None:  # drop the entries read so far
+                    del parameter[0]
+            continue
+        if root is None:
+            root = element.getroottree().getroot()
+            if root.tag != "pomdpx":
+                raise _fail(source, root, f"the root element is <{root.tag}>, not <pomdpx>")
+        parent = element.getparent()
+        if tag == "Parameter" and parent is not None and element is not section_of:
+            _start_section(source, element, names, roles, found)  # a table with no entries
+        elif tag == "Variable" and parent is root:
+            variable = element
+            _variables(source, variable, names, roles)
+        elif tag in ("Discount", "Description") and parent is root:
+            text[tag] = element.text
+    if root is None:
+        raise PomdpxError(f"{source}: no XML element")
     if variable is None:
         raise _fail(source, root, "no <Variable> element")
+    for tag, child in _SECTIONS.items():
+        if tag not in found:
+            raise _fail(source, root, f"no <{tag}><{child}>")
+    S = len(names[roles["prev"]])
+    initial = found["InitialStateBelief"].table.dense().reshape(S)
+    transition = split_rows(found["StateTransitionFunction"].table)
+    observation = split_rows(found["ObsFunction"].table)
+    reward = found["RewardFunction"].table.dense()
+    try:
+        discount = float(text.get("Discount"))
+    except (TypeError, ValueError):
+        raise _fail(source, root, "missing or invalid <Discount>") from None
+    try:
+        return POMDP(tuple(names[roles["prev"]]), tuple(names[roles["act"]]), tuple(names[roles["obs"]]),
+                     transition, observation, reward, initial, discount,
+                     name=(text.get("Description") or root.get("id") or "pomdpx").strip())
+    except ModelError as exc:
+        raise PomdpxError(f"{source}: {exc}") from None
+
+
+def _variables(source, variable, names, roles) -> None:
+    """The flat model's variables from ``<Variable>``: their names into ``roles``, values into ``names``."""
     state_vars, obs_vars, action_vars = (variable.findall(t) for t in ("StateVar", "ObsVar", "ActionVar"))
     if len(state_vars) != 1 or len(obs_vars) != 1 or len(action_vars) != 1:
         raise _fail(source, variable, f"a factored model ({len(state_vars)} state, {len(obs_vars)} observation, "
                                       f"{len(action_vars)} action variables) is not supported; flat models only")
     sv, ov, av = state_vars[0], obs_vars[0], action_vars[0]
-    prev, curr, obs, act = sv.get("vnamePrev"), sv.get("vnameCurr"), ov.get("vname"), av.get("vname")
-    states, observations, actions = _values(source, sv, "s"), _values(source, ov, "o"), _values(source, av, "a")
-    sizes = {prev: len(states), curr: len(states), obs: len(observations), act: len(actions)}
-    index = {prev: {n: i for i, n in enumerate(states)}, curr: {n: i for i, n in enumerate(states)},
-             obs: {n: i for i, n in enumerate(observations)}, act: {n: i for i, n in enumerate(actions)}}
+    roles.update(prev=sv.get("vnamePrev"), curr=sv.get("vnameCurr"), obs=ov.get("vname"), act=av.get("vname"))
+    states = _values(source, sv, "s")
+    names.update({roles["prev"]: states, roles["curr"]: states, roles["obs"]: _values(source, ov, "o"),
+                  roles["act"]: _values(source, av, "a")})
 
-    def section(tag, child="CondProb"):
-        node = root.find(tag)
-        cond = node.find(child) if node is not None else None
-        if cond is None:
-            raise _fail(source, node if node is not None else root, f"no <{tag}><{child}>")
-        var = (cond.findtext("Var") or "").strip()
-        parents = (cond.findtext("Parent") or "").split()
-        return cond, var, [p for p in parents if p != "null"]
 
-    cond, var, parents = section("InitialStateBelief")
-    initial = _read_tables(source, cond, parents + [var], sizes, index).reshape(-1)
-    cond, var, parents = section("StateTransitionFunction")
-    if var != curr or sorted(parents) != sorted([prev, act]):
-        raise _fail(source, cond, f"transition must be P({curr} | {prev}, {act})")
-    T = np.moveaxis(_read_tables(source, cond, parents + [var], sizes, index), parents.index(act), 0)
-    cond, var, parents = section("ObsFunction")
-    if var != obs or sorted(parents) != sorted([curr, act]):
-        raise _fail(source, cond, f"observation must be P({obs} | {curr}, {act})")
-    O = np.moveaxis(_read_tables(source, cond, parents + [var], sizes, index), parents.index(act), 0)
-    cond, var, parents = section("RewardFunction", "Func")
-    if sorted(parents) != sorted([prev, act]):
-        raise _fail(source, cond, f"reward must be R({prev}, {act})")
-    R = _read_tables(source, cond, parents, sizes, index)
-    R = R if parents[0] == act else R.T
-    try:
-        discount = float(root.findtext("Discount"))
-    except (TypeError, ValueError):
-        raise _fail(source, root, "missing or invalid <Discount>") from None
-    try:
-        return POMDP(tuple(states), tuple(actions), tuple(observations),
-                     tuple(sp.csr_matrix(t) for t in T), tuple(sp.csr_matrix(o) for o in O), R, initial, discount,
-                     name=(root.findtext("Description") or root.get("id") or "pomdpx").strip())
-    except ModelError as exc:
-        raise PomdpxError(f"{source}: {exc}") from None
+def _start_section(source, parameter, names, roles, found) -> _Section | None:
+    """The table a ``<Parameter>`` fills, from its section's ``<Var>`` and ``<Parent>`` (read already)."""
+    cond = parameter.getparent()
+    tag = cond.getparent().tag if cond.getparent() is not None else None
+    if tag not in _SECTIONS or cond.tag != _SECTIONS[tag]:
+        return None
+    if not roles:
+        raise _fail(source, cond, f"<{tag}> before <Variable>")
+    if parameter.get("type", "TBL") != "TBL":
+        raise _fail(source, cond, "only TBL parameters are supported")
+    var = (cond.findtext("Var") or "").strip()
+    parents = [p for p in (cond.findtext("Parent") or "").split() if p != "null"]
+    prev, curr, obs, act = (roles[k] for k in ("prev", "curr", "obs", "act"))
+    S, Z, A = len(names[prev]), len(names[obs]), len(names[act])
+    if tag == "InitialStateBelief":
+        if var not in (prev, curr) or parents:
+            raise _fail(source, cond, f"the initial belief must be P({prev})")
+        axes, shape = {var: 0}, (S,)
+    elif tag == "StateTransitionFunction":
+        if var != curr or sorted(parents) != sorted([prev, act]):
+            raise _fail(source, cond, f"transition must be P({curr} | {prev}, {act})")
+        axes, shape = {act: 0, prev: 1, curr: 2}, (A, S, S)
+    elif tag == "ObsFunction":
+        if var != obs or sorted(parents) != sorted([curr, act]):
+            raise _fail(source, cond, f"observation must be P({obs} | {curr}, {act})")
+        axes, shape = {act: 0, curr: 1, obs: 2}, (A, S, Z)
+    else:
+        if sorted(parents) != sorted([prev, act]):
+            raise _fail(source, cond, f"reward must be R({prev}, {act})")
+        axes, shape = {act: 0, prev: 1}, (A, S)
+    order = parents + [var] if tag != "RewardFunction" else parents
+    index = {v: {n: i for i, n in enumerate(names[v])} for v in order}
+    found[tag] = _Section(source, cond, order, axes, shape, index)
+    return found[tag]
 
 
 def _token(name: str) -> str:
@@ -184,59 +286,108 @@ def _tokens(names) -> list[str]:
 
 
 def _num(x: float) -> str:
-    """Fixed-point text: APPL's parser does not read scientific notation."""
-    return f"{float(x):.15f}".rstrip("0").rstrip(".") or "0"
+    """Fixed-point text (APPL's parser does not read scientific notation), the shortest that reads back as
+    the same float: files round-trip exactly."""
+    return np.format_float_positional(float(x), unique=True, trim="-")
 
 
-def pomdpx_text(model: POMDP) -> str:
-    """The POMDPX document of ``model``: sparse entries, names as ``ValueEnum`` tokens."""
+def _numbers(values: np.ndarray) -> np.ndarray:
+    """``_num`` of each value, formatting each distinct value once (a model has few distinct probabilities)."""
+    distinct, inverse = np.unique(values, return_inverse=True)
+    return np.array([_num(v) for v in distinct], dtype=object)[inverse.ravel()]
+
+
+def _entries(rows, cols, values, prefix, row_names, col_names, tag="ProbTable"):
+    """The ``<Entry>`` lines of the non-zero entries ``(rows, cols, values)``, in row-major order."""
+    texts = _numbers(values)
+    for r, c, v in zip(rows.tolist(), cols.tolist(), texts):
+        yield f"<Entry><Instance>{prefix}{row_names[r]} {col_names[c]}</Instance><{tag}>{v}</{tag}></Entry>\n"
+
+
+def _is_identity(table) -> bool:
+    S = table.shape[0]
+    table = table.tocsr()
+    return (table.shape == (S, S) and table.nnz == S and np.array_equal(table.indices, np.arange(S))
+            and np.array_equal(table.indptr, np.arange(S + 1)) and bool(np.all(table.data == 1)))
+
+
+def pomdpx_chunks(model: POMDP):
+    """The POMDPX document of ``model`` in pieces of text, streamed from the sparse tables: one ``<Entry>``
+    per non-zero entry, ``identity`` for an action that leaves the state as it is, ``*`` for the action when
+    the observation table does not depend on it. Names become ``ValueEnum`` tokens.
+    Memory: O(S) beyond the model (one table's entries at a time); time O(nnz)."""
     S, A, Z = _tokens(model.states), _tokens(model.actions), _tokens(model.observations)
-    root = etree.Element("pomdpx", version="0.1", id=_token(model.name))
-    etree.SubElement(root, "Description").text = model.name
-    etree.SubElement(root, "Discount").text = _num(model.discount)
-    variable = etree.SubElement(root, "Variable")
-    sv = etree.SubElement(variable, "StateVar", vnamePrev="state_0", vnameCurr="state_1", fullyObs="false")
-    etree.SubElement(sv, "ValueEnum").text = " ".join(S)
-    ov = etree.SubElement(variable, "ObsVar", vname="obs")
-    etree.SubElement(ov, "ValueEnum").text = " ".join(Z)
-    av = etree.SubElement(variable, "ActionVar", vname="action")
-    etree.SubElement(av, "ValueEnum").text = " ".join(A)
-    etree.SubElement(variable, "RewardVar", vname="reward")
+    yield ('<?xml version="1.0" encoding="ISO-8859-1"?>\n'
+           f'<pomdpx version="0.1" id="{_token(model.name)}">\n'
+           f"<Description>{escape(model.name)}</Description>\n<Discount>{_num(model.discount)}</Discount>\n"
+           "<Variable>\n"
+           f'<StateVar vnamePrev="state_0" vnameCurr="state_1" fullyObs="false"><ValueEnum>{" ".join(S)}'
+           "</ValueEnum></StateVar>\n"
+           f'<ObsVar vname="obs"><ValueEnum>{" ".join(Z)}</ValueEnum></ObsVar>\n'
+           f'<ActionVar vname="action"><ValueEnum>{" ".join(A)}</ValueEnum></ActionVar>\n'
+           '<RewardVar vname="reward"/>\n</Variable>\n')
 
-    def cond(parent_tag, var, parents, child="CondProb"):
-        node = etree.SubElement(root, parent_tag)
-        c = etree.SubElement(node, child)
-        etree.SubElement(c, "Var").text = var
-        etree.SubElement(c, "Parent").text = parents
-        return etree.SubElement(c, "Parameter", type="TBL")
+    def section(tag, var, parents, child="CondProb"):
+        return (f"<{tag}><{child}><Var>{var}</Var><Parent>{parents}</Parent><Parameter type=\"TBL\">\n",
+                f"</Parameter></{child}></{tag}>\n")
 
-    def entry(param, instance, values, tag="ProbTable"):
-        e = etree.SubElement(param, "Entry")
-        etree.SubElement(e, "Instance").text = instance
-        etree.SubElement(e, tag).text = values
-
-    param = cond("InitialStateBelief", "state_0", "null")
-    for s in np.flatnonzero(model.initial):
-        entry(param, S[s], _num(model.initial[s]))
-    param = cond("StateTransitionFunction", "state_1", "action state_0")
+    start, end = section("InitialStateBelief", "state_0", "null")
+    yield start
+    nonzero = np.flatnonzero(model.initial)
+    yield from (f"<Entry><Instance>{S[s]}</Instance><ProbTable>{v}</ProbTable></Entry>\n"
+                for s, v in zip(nonzero.tolist(), _numbers(model.initial[nonzero])))
+    yield end
+    start, end = section("StateTransitionFunction", "state_1", "action state_0")
+    yield start
     for a, table in enumerate(model.transition):
-        coo = table.tocoo()
-        for s, t, p in sorted(zip(coo.row, coo.col, coo.data)):
-            entry(param, f"{A[a]} {S[s]} {S[t]}", _num(p))
-    param = cond("ObsFunction", "obs", "action state_1")
-    same = all((o != model.observation[0]).nnz == 0 for o in model.observation[1:])
+        if _is_identity(table):
+            yield f"<Entry><Instance>{A[a]} - -</Instance><ProbTable>identity</ProbTable></Entry>\n"
+            continue
+        coo = _sorted_coo(table)
+        yield from _entries(coo.row, coo.col, coo.data, f"{A[a]} ", S, S)
+    yield end
+    start, end = section("ObsFunction", "obs", "action state_1")
+    yield start
+    first = model.observation[0]
+    same = all(o is first or (o != first).nnz == 0 for o in model.observation[1:])
     for a, table in enumerate(model.observation[:1] if same else model.observation):
-        coo = table.tocoo()
-        for s, z, p in sorted(zip(coo.row, coo.col, coo.data)):
-            entry(param, f"{'*' if same else A[a]} {S[s]} {Z[z]}", _num(p))
-    param = cond("RewardFunction", "reward", "action state_0", child="Func")
+        coo = _sorted_coo(table)
+        yield from _entries(coo.row, coo.col, coo.data, f"{'*' if same else A[a]} ", S, Z)
+    yield end
+    start, end = section("RewardFunction", "reward", "action state_0", child="Func")
+    yield start
     for a in range(model.n_actions):
         row = model.reward[a]
         if np.any(row):  # a whole row at once: no reliance on how a reader resolves overlapping entries
-            entry(param, f"{A[a]} -", " ".join(_num(v) for v in row), "ValueTable")
-    return etree.tostring(root, pretty_print=True, xml_declaration=True, encoding="ISO-8859-1").decode("latin-1")
+            yield (f"<Entry><Instance>{A[a]} -</Instance><ValueTable>{' '.join(_numbers(row))}</ValueTable>"
+                   "</Entry>\n")
+    yield end
+    yield "</pomdpx>\n"
+
+
+def _sorted_coo(table):
+    """The entries of a CSR table in row-major order, columns increasing within a row."""
+    table = table.tocsr()
+    if not table.has_sorted_indices:
+        table = table.sorted_indices()
+    return table.tocoo()
+
+
+def pomdpx_text(model: POMDP) -> str:
+    """The POMDPX document of ``model`` as one string (:func:`pomdpx_chunks`; for small models)."""
+    return "".join(pomdpx_chunks(model))
 
 
 def write_pomdpx(model: POMDP, path: str | Path) -> None:
-    """Write ``model`` as POMDPX (atomically)."""
-    write_atomic(path, pomdpx_text(model))
+    """Write ``model`` as POMDPX (atomically), streamed from its sparse tables: memory O(S) beyond the model.
+
+    ISO-8859-1, as the header says; characters outside it (in the description) become character references.
+    """
+    with open_atomic(path) as handle:
+        batch = []
+        for chunk in pomdpx_chunks(model):
+            batch.append(chunk)
+            if len(batch) >= 4096:
+                handle.write("".join(batch).encode("latin-1", "xmlcharrefreplace"))
+                batch.clear()
+        handle.write("".join(batch).encode("latin-1", "xmlcharrefreplace"))
