@@ -41,7 +41,8 @@ def _open_stream(args: argparse.Namespace, model: IntentionModel, markers, detec
     if args.demo is not None:  # an operator following full sequence K on a rendered 1080p tray
         operator = ScriptedOperator.following(model, model.full_sequence(args.demo, "--demo"))
         camera = CameraModel(blur=1.2, noise=6, perspective=0.04, hands=True, seed=args.demo)
-        cell = SimulatedCell(tray_layout(markers), operator, camera)
+        # Operations without a tool end when the tray stays quiet: the simulated operator takes that long.
+        cell = SimulatedCell(tray_layout(markers), operator, camera, settle=args.quiet_frames + 5)
         return detections(cell, detector), ScriptedRobot(on_perform=cell.robot)
     frames = video_frames(args.video) if args.video is not None else image_frames(args.images)
     return detections(frames, detector), None

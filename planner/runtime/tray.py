@@ -137,16 +137,19 @@ class SimulatedCell:
     (takes the operation's single parts, grasps the tool, puts it back) or idles for ``idle`` frames.
     ``robot(instruction)`` (a :class:`~planner.runtime.scripted.ScriptedRobot` hook) renders the robot taking its
     parts and using the tool, and strikes the operation from the operator's list. Each change is held for
-    ``hold`` frames; ``operator_observations`` is the truth, in order.
+    ``hold`` frames; ``operator_observations`` is the truth, in order. After an operation without a tool the
+    operator spends ``settle`` frames joining the parts: the quiet period by which a camera tells that such an
+    operation is over (give it more frames than the vision source's ``quiet_frames``).
     """
 
     def __init__(self, layout: TrayLayout, operator: ScriptedOperator, camera: CameraModel = CameraModel(),
-                 hold: int = 8, idle: int = 24):
+                 hold: int = 8, idle: int = 24, settle: int = 0):
         self.layout = layout
         self.operator = operator
         self.camera = camera
         self.hold = hold
         self.idle = idle
+        self.settle = settle
         self.in_tray = set(layout.slots)
         self.queue: deque = deque()
         self.frames = 0
@@ -178,6 +181,8 @@ class SimulatedCell:
             self._take(part)
         if observation.tool is not None:
             self._use_tool(observation.tool)
+        elif self.settle:
+            self._show(self.settle)
 
     def _take(self, item: str) -> None:
         self.in_tray.discard(item)

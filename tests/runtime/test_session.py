@@ -382,3 +382,26 @@ def test_cli_markers(tmp_path):
     bad = _aplan("markers", "pen", "-o", tmp_path / "sheet.jpg")
     assert bad.returncode == 1 and ".pdf or .png" in bad.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sheet.pdf"]
+
+
+def test_cli_demo_on_a_product_without_tools(tmp_path):
+    """Operations without a tool end when the tray goes quiet: the simulated operator pauses that long, so a
+    synthetic chain (no tools) is assembled through the vision pipeline, every operation seen as it was done."""
+    from planner import chain_product, save_product
+    from planner.decision.policy import write_policy
+
+    product = chain_product(4)
+    save_product(product, tmp_path / "chain4.json")
+    model = intention_model(make_plan(product))
+    policy = PointBasedSolver(max_iterations=100, time_limit=None, precision=1e-3, seed=0).solve(model.pomdp).policy
+    write_policy(policy, tmp_path / "chain4.policy")
+    start = int(model.full_sequences()[0])
+    done = _aplan("session", tmp_path / "chain4.json", "--policy", tmp_path / "chain4.policy", "--demo", start,
+                  "--log", tmp_path / "d.jsonl", "--quiet-frames", 20)
+    assert done.returncode == 0 and done.stdout.startswith("assembled"), done.stderr
+    events = [json.loads(line) for line in (tmp_path / "d.jsonl").read_text().splitlines()]
+    seen = [e["observation"] for e in events if e["event"] == "observation" and e["observation"] != "blank"]
+    truth = [str(model.plan.observations[model.plan.operation_observation[o]])
+             for o in model.sequence_operations(start)]
+    assert seen == truth[:len(seen)] and "unexplained" not in done.stdout
+    assert replay(tmp_path / "d.jsonl").mismatches == []
