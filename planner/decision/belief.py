@@ -16,7 +16,7 @@ import numpy as np
 
 from .pomdp import POMDP
 
-__all__ = ["DiscreteUpdater", "UnexplainedObservation"]
+__all__ = ["DiscreteUpdater", "UnexplainedObservation", "reset_support"]
 
 DENSE_LIMIT = 50_000_000  # observation-table numbers kept dense (400 MB)
 
@@ -38,6 +38,22 @@ class UnexplainedObservation:
 
 def _log_reset(event: UnexplainedObservation) -> None:
     log.warning("%s", event)
+
+
+def reset_support(emitting: np.ndarray, reachable: np.ndarray, action: int, observation: int,
+                  events: list[UnexplainedObservation],
+                  on_reset: Callable[[UnexplainedObservation], None]) -> np.ndarray:
+    """The reset rule of an unexplained observation, shared by every belief updater: the states (boolean
+    masks over the updater's states or classes) that can emit it and are reachable from the previous belief,
+    else those that can emit it, else all. The event is appended to ``events`` and passed to ``on_reset``."""
+    for name, mask in (("reachable", emitting & reachable), ("emitting", emitting),
+                       ("uniform", np.ones_like(emitting))):
+        if mask.any():
+            event = UnexplainedObservation(action, observation, name)
+            events.append(event)
+            on_reset(event)
+            return mask
+    raise AssertionError("unreachable: the uniform mask is never empty")
 
 
 class DiscreteUpdater:
@@ -84,16 +100,9 @@ class DiscreteUpdater:
         return self._reset(belief, action, observation, likelihood)
 
     def _reset(self, belief, action, observation, likelihood) -> np.ndarray:
-        emitting = likelihood > 0
-        reachable = self._reachable(belief > 0)
-        for name, mask in (("reachable", emitting & reachable), ("emitting", emitting),
-                           ("uniform", np.ones_like(emitting))):
-            if mask.any():
-                event = UnexplainedObservation(action, observation, name)
-                self.events.append(event)
-                self.on_reset(event)
-                return mask / mask.sum()
-        raise AssertionError("unreachable")
+        mask = reset_support(likelihood > 0, self._reachable(belief > 0), action, observation, self.events,
+                             self.on_reset)
+        return mask / mask.sum()
 
     def _reachable(self, support: np.ndarray) -> np.ndarray:
         if self._reach is None:

@@ -7,7 +7,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..assembly.intentions import IntentionGraph
-from .belief import UnexplainedObservation, _log_reset
+from .belief import UnexplainedObservation, _log_reset, reset_support
 from .factored_model import FactoredBelief, FactoredIntentionModel
 
 __all__ = ["FactoredUpdater", "to_flat"]
@@ -46,19 +46,12 @@ class FactoredUpdater:
 
     def _reset(self, belief: FactoredBelief, action: int, observation: int) -> FactoredBelief:
         model = self.model
-        emitting = model.observation_likelihood(observation) > 0
-        reachable = model.reachable(belief.classes)
-        for name, mask in (("reachable", emitting & reachable), ("emitting", emitting),
-                           ("uniform", np.ones_like(emitting))):
-            if mask.any():
-                event = UnexplainedObservation(action, observation, name)
-                self.events.append(event)
-                self.on_reset(event)
-                classes = np.flatnonzero(mask)
-                log_size = model.class_log_size[classes]
-                weight = np.exp(log_size - log_size.max())  # uniform over intentions: mass ~ class size
-                return FactoredBelief(classes, weight / weight.sum())
-        raise AssertionError("unreachable")
+        mask = reset_support(model.observation_likelihood(observation) > 0, model.reachable(belief.classes),
+                             action, observation, self.events, self.on_reset)
+        classes = np.flatnonzero(mask)
+        log_size = model.class_log_size[classes]
+        weight = np.exp(log_size - log_size.max())  # uniform over intentions: mass ~ class size
+        return FactoredBelief(classes, weight / weight.sum())
 
 
 def to_flat(belief: FactoredBelief, graph: IntentionGraph) -> np.ndarray:

@@ -180,7 +180,7 @@ def _read(lines, source: str) -> POMDP:
     st = _Stream(lines, source)
     names: dict[str, list[str]] = {}
     header: dict = {"discount": None, "sign": 1.0, "start": None}
-    tables = None
+    tables, positions = None, {}  # both set once states, actions and observations are declared
     while True:
         if tables is not None and not st.ahead:
             item = st.raw_line()
