@@ -9,7 +9,10 @@ Front ends only parse their input and show results; the steps of the method live
 3. :func:`decision_model` / :func:`load_model` / :func:`save_model`: the decision model of Alg. 3, or a
    POMDP read from a file, and writing it as POMDPX or ``.pomdp``;
 4. :func:`solve`, :func:`policy_for`: a policy from a solver (the built-in point-based one, or SARSOP);
-5. :func:`simulate`, :func:`evaluate`: episodes of an operator against a policy.
+5. :func:`simulate`, :func:`evaluate`: episodes of an operator against a policy;
+6. :func:`decision_maker`: the model and policy a session, a simulation or an evaluation runs: the offline
+   policy on the flat model (the paper's), or the online planner on the factored model (paper Sec. V), chosen
+   by :func:`choose_planner`.
 
 >>> from planner import api
 >>> model = api.decision_model("pen")
@@ -24,26 +27,40 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .assembly.intentions import most_connected_part
+from .assembly.intentions import count_intentions, most_connected_part
 from .assembly.plan import Plan, make_plan
 from .assembly.stats import PlanStatistics, plan_statistics
+from .decision.factored_model import FactoredIntentionModel, factored_model
+from .decision.factored_simulate import FactoredEpisode, evaluate_factored, simulate_factored_episode
 from .decision.intention_model import IntentionModel, Rewards, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
+from .decision.online import OnlinePlanner
 from .decision.policy import AlphaVectorPolicy, read_policy
 from .decision.pomdp import POMDP
 from .decision.simulate import Episode, evaluate_policy, simulate_episode
 from .decision.solvers import PointBasedSolver, SolveResult
-from .defaults import DISCOUNT, POLICY_TIME_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
+from .defaults import (
+    DECISION_TIME,
+    DISCOUNT,
+    INTENTION_LIMIT,
+    ONLINE_EXPANSIONS,
+    POLICY_TIME_LIMIT,
+    SOLVE_PRECISION,
+    SOLVE_TIME_LIMIT,
+)
 from .errors import PlannerError, UnknownProductError
 from .product import Product, load_product
 from .product.examples import EXAMPLES, example_path
 
 __all__ = ["resolve_product", "plan_of", "plan_statistics_of", "decision_model", "load_model", "save_model",
-           "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for", "simulate", "evaluate"]
+           "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for", "simulate", "evaluate",
+           "PLANNERS", "factored_decision_model", "online_planner", "choose_planner", "decision_maker"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
 SOLVER_ENGINES = ("builtin", "sarsop")
+
+PLANNERS = ("offline", "online")
 
 Model = IntentionModel | POMDP
 
@@ -97,6 +114,79 @@ def decision_model(product: str | os.PathLike | Product | Plan, technical: bool 
     """The decision model of Alg. 3 of a product, PRODUCT argument or plan."""
     plan = product if isinstance(product, Plan) else plan_of(product, technical)
     return intention_model(plan, rewards, discount)
+
+
+def factored_decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
+                            rewards: Rewards = Rewards(), discount: float = DISCOUNT) -> FactoredIntentionModel:
+    """The same decision model without enumerating intentions (paper Sec. V): beliefs over classes."""
+    plan = product if isinstance(product, Plan) else plan_of(product, technical)
+    return factored_model(plan, rewards, discount)
+
+
+def online_planner(model: FactoredIntentionModel, decision_time: float | None = DECISION_TIME,
+                   expansions: int | None = None) -> OnlinePlanner:
+    """The online planner on ``model``: at most ``decision_time`` seconds and ``expansions`` expansions per
+    decision. ``expansions`` alone (``decision_time`` None) is a fixed amount of work: the same actions on any
+    machine."""
+    if decision_time is None and expansions is None:
+        raise PlannerError("the online planner needs a decision time or a number of expansions")
+    return OnlinePlanner(model, expansions if expansions is not None else ONLINE_EXPANSIONS, decision_time)
+
+
+def choose_planner(plan: Plan, planner: str | None, policy: str | os.PathLike | None,
+                   limit: int = INTENTION_LIMIT) -> tuple[str, str | None]:
+    """``offline`` or ``online``, and why when it was not asked for. ``planner`` None: offline with a policy
+    file, else online (no policy to follow); the flat model of more than ``limit`` intentions is never built:
+    offline then needs a policy over the lumped model's classes, and without one the online planner decides."""
+    if planner is not None and planner not in PLANNERS:
+        raise PlannerError(f"unknown planner {planner!r}; use one of {', '.join(PLANNERS)}")
+    if planner is not None:
+        return planner, None
+    if policy:
+        return "offline", None
+    intentions = count_intentions(plan.states)
+    if intentions > limit:
+        return "online", (f"the flat model would hold {intentions:,} intentions (more than {limit:,}) and no "
+                          "--policy was given: using the online planner")
+    return "online", "no --policy: using the online planner"
+
+
+def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | None = None,
+                   policy: str | os.PathLike | None = None, technical: bool | None = None,
+                   rewards: Rewards = Rewards(), discount: float = DISCOUNT,
+                   decision_time: float | None = DECISION_TIME, expansions: int | None = None,
+                   time_limit: float = POLICY_TIME_LIMIT, limit: int = INTENTION_LIMIT):
+    """The model, the policy and a note (what was chosen and why, or None) that a session, a simulation or an
+    evaluation runs on:
+
+    - online: the factored model and :func:`online_planner`;
+    - offline with a policy over the lumped model's classes: the factored model and that policy;
+    - offline otherwise: the flat model of Alg. 3 (refused above ``limit`` intentions, naming ``--planner
+      online``) and the policy file, or the built-in solver's policy after ``time_limit`` seconds.
+    """
+    plan = product if isinstance(product, Plan) else plan_of(product, technical)
+    choice, note = choose_planner(plan, planner, policy, limit)
+    if choice == "online":
+        model = factored_model(plan, rewards, discount)
+        return model, online_planner(model, decision_time, expansions), note
+    if policy:
+        vectors = read_policy(policy)
+        lumped = factored_model(plan, rewards, discount)
+        if vectors.alphas.shape[1] == lumped.n_classes and vectors.alphas.shape[1] != count_intentions(plan.states):
+            if vectors.actions.size and vectors.actions.max() >= len(lumped.actions):
+                raise PlannerError(f"{policy}: action {int(vectors.actions.max())} out of range; the model has "
+                                   f"{len(lumped.actions)} actions")
+            return lumped, vectors, None
+    intentions = count_intentions(plan.states)
+    if intentions > limit:
+        raise PlannerError(f"the flat decision model would hold {intentions:,} intentions (more than {limit:,}); "
+                           "use --planner online, or a policy over the lumped model (aplan solve --lumped)")
+    model = intention_model(plan, rewards, discount)
+    vectors, result = policy_for(model, policy, time_limit)
+    if result is not None:
+        note = (f"no --policy: solved for {result.seconds:.1f} s, lower bound {result.lower_bound:.5f}, upper "
+                f"bound {result.upper_bound:.5f}")
+    return model, vectors, note
 
 
 def _model_file_kind(path: str | os.PathLike) -> str | None:
@@ -159,13 +249,18 @@ def policy_for(model: Model, policy: str | os.PathLike | None = None,
     return result.policy, result
 
 
-def simulate(model: IntentionModel, policy, sequences: Sequence[int] | None = None, every: bool = False,
-             random: int | None = None, seed: int = 0, max_steps: int = 100, operator: str = "model",
-             what: str = "--sequence") -> list[Episode]:
+def simulate(model: IntentionModel | FactoredIntentionModel, policy, sequences: Sequence[int] | None = None,
+             every: bool = False, random: int | None = None, seed: int = 0, max_steps: int = 100,
+             operator: str = "model", what: str = "--sequence") -> list[Episode] | list[FactoredEpisode]:
     """One episode per full sequence played (``Episode.start``): ``every`` one, ``random`` ones drawn at
     random, the listed ``sequences`` (each checked), or by default the first. The operator follows its
     sequence (``operator``: ``model`` or ``turns``, see :func:`~planner.decision.simulate.simulate_episode`);
-    one random stream, seeded by ``seed``, draws the sequences and then every episode."""
+    one random stream, seeded by ``seed``, draws the sequences and then every episode.
+
+    On a :class:`FactoredIntentionModel` the sequences are numbered by rank (0 to the number of sequences - 1,
+    :meth:`~FactoredIntentionModel.sequence`) and random ones are drawn uniformly without enumerating them."""
+    if isinstance(model, FactoredIntentionModel):
+        return _simulate_factored(model, policy, sequences, every, random, seed, max_steps, operator, what)
     starts = [int(s) for s in model.full_sequences()]
     rng = np.random.default_rng(seed)
     if every:
@@ -178,9 +273,33 @@ def simulate(model: IntentionModel, policy, sequences: Sequence[int] | None = No
                              operator) for start in chosen]
 
 
-def evaluate(model: Model, policy, episodes: int, seed: int = 0, max_steps: int = 100) -> tuple[float, float]:
+def _simulate_factored(model: FactoredIntentionModel, policy, sequences, every, random, seed, max_steps, operator,
+                       what) -> list[FactoredEpisode]:
+    rng = np.random.default_rng(seed)
+    if every:
+        if model.n_sequences > 10_000:
+            raise PlannerError(f"the product has {model.n_sequences:,} full sequences: too many to play every one; "
+                               "use --random N or --sequence K")
+        paths = [model.sequence(k) for k in range(model.n_sequences)]
+    elif random:
+        paths = [model.sample_sequence(rng) for _ in range(random)]
+    else:
+        paths = []
+        for k in sequences or [0]:
+            if not 0 <= int(k) < model.n_sequences:
+                raise PlannerError(f"{what} {k}: with the online planner sequences are numbered by rank, from 0 to "
+                                   f"{model.n_sequences - 1:,}")
+            paths.append(model.sequence(int(k)))
+    return [simulate_factored_episode(model, policy, path, rng, max_steps, operator) for path in paths]
+
+
+def evaluate(model: Model | FactoredIntentionModel, policy, episodes: int, seed: int = 0,
+             max_steps: int = 100) -> tuple[float, float]:
     """The mean discounted return over ``episodes`` simulated episodes and its 95 % confidence half-width;
     episodes of an intention model end at the finished product."""
+    if isinstance(model, FactoredIntentionModel):
+        mean, half, _ = evaluate_factored(model, policy, episodes, seed, max_steps)
+        return mean, half
     final = model.final_state if isinstance(model, IntentionModel) else None
     mean, half, _ = evaluate_policy(tables(model), policy, episodes, seed, max_steps, final)
     return mean, half

@@ -11,7 +11,7 @@ __all__ = [
     "LINEAR_DEFLECTION", "ANGULAR_DEFLECTION",
     "INTENTION_LIMIT", "DISCOUNT",
     "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
-    "CONFIDENCE",
+    "CONFIDENCE", "DECISION_TIME", "ONLINE_EXPANSIONS", "ONLINE_DEPTH",
 ]
 
 # The product file (docs/product-format.md): its "format" and "version" keys, and its name in a bundle.
@@ -38,6 +38,11 @@ SOLVE_TIME_LIMIT = 60.0            # aplan solve
 POLICY_TIME_LIMIT = 20.0           # simulate, evaluate and session when no --policy is given
 WORKBENCH_SOLVE_TIME_LIMIT = 10.0  # the workbench's Solve command (its parameter SolveTimeLimit overrides it)
 SOLVE_PRECISION = 1e-3             # target gap between the bounds at the initial belief
+
+# The online planner (planner.decision.online): per decision, a time budget and a cap on the work.
+DECISION_TIME = 0.1                # seconds per decision (--decision-time)
+ONLINE_EXPANSIONS = 1000           # expansions per decision at most (--expansions sets it and drops the clock)
+ONLINE_DEPTH = 8                   # the deepest belief the search expands
 
 # The belief on the true intention above which the robot counts as confident (paper's Fig. 7 discussion).
 CONFIDENCE = 0.9

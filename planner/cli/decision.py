@@ -7,14 +7,24 @@ import json
 import logging
 import sys
 
+import numpy as np
+
 from .. import api
 from ..decision.intention_model import IntentionModel
 from ..decision.policy import write_policy
 from ..defaults import CONFIDENCE, SOLVE_PRECISION, SOLVE_TIME_LIMIT
 from ..errors import PlannerError
-from .options import PRODUCT_HELP, add_decision_options, add_episode_options, add_policy_options, positive, rewards_from
+from .options import (
+    PRODUCT_HELP,
+    add_decision_options,
+    add_episode_options,
+    add_policy_options,
+    online_budget,
+    positive,
+    rewards_from,
+)
 
-__all__ = ["add_commands", "model_from", "policy_from"]
+__all__ = ["add_commands", "model_from", "policy_from", "decision_maker_from"]
 
 log = logging.getLogger(__name__)
 
@@ -34,6 +44,22 @@ def policy_from(args: argparse.Namespace, model):
         log.info("no --policy: solved for %.1f s, lower bound %.5f, upper bound %.5f", result.seconds,
                  result.lower_bound, result.upper_bound)
     return policy
+
+
+def decision_maker_from(args: argparse.Namespace):
+    """The model and policy of ``args`` (:func:`planner.api.decision_maker`), logging what was chosen."""
+    argument = getattr(args, "model", None) or args.product
+    decision_time, expansions = online_budget(args)
+    if api._model_file_kind(argument):
+        if args.planner == "online":
+            raise PlannerError(f"{argument}: the online planner needs a PRODUCT (its factored model), not a model file")
+        model = model_from(args)
+        return model, policy_from(args, model)
+    model, policy, note = api.decision_maker(argument, args.planner, args.policy, args.technical, rewards_from(args),
+                                             args.discount, decision_time, expansions, args.time_limit)
+    if note:
+        log.info("%s", note)
+    return model, policy
 
 
 def _pomdp(args: argparse.Namespace) -> int:
@@ -67,12 +93,13 @@ def _solve(args: argparse.Namespace) -> int:
 def _simulate(args: argparse.Namespace) -> int:
     from ..decision.simulate import plot_beliefs
 
-    model = model_from(args)
-    if not isinstance(model, IntentionModel):
+    if api._model_file_kind(args.model):
         raise PlannerError("simulate needs a PRODUCT (the intention graph names the sequences), not a model file")
-    policy = policy_from(args, model)
+    model, policy = decision_maker_from(args)
     episodes = api.simulate(model, policy, args.sequence, args.all, args.random, args.seed, args.max_steps,
                             args.operator)
+    if not isinstance(model, IntentionModel):
+        return _print_factored(model, episodes, args)
     for episode in episodes:
         operations = model.describe_operations(episode.start)
         if args.json:
@@ -95,9 +122,36 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _print_factored(model, episodes, args: argparse.Namespace) -> int:
+    """Episodes on the factored model (online planner, or a policy over classes): the same report, sequences
+    named by their operations."""
+    if args.plot:
+        raise PlannerError("--plot draws beliefs over intentions: use it with --planner offline (the flat model)")
+    for episode in episodes:
+        operations = model.describe_operations(episode.path)
+        times = [s.decision_seconds for s in episode.steps]
+        if args.json:
+            print(json.dumps({"operations": operations, "finished": episode.finished,
+                              "confident_after_operations": episode.first_confident(CONFIDENCE),
+                              "discounted_return": round(episode.discounted_return, 6),
+                              "decision_seconds_median": round(float(np.median(times)), 6) if times else None,
+                              "decision_seconds_max": round(max(times), 6) if times else None}))
+            continue
+        print("sequence: " + " ; ".join(operations))
+        print(f"  {'step':>4}  {'robot action':<44} {'observation':<28} {'p(true)':>7}  operator ops")
+        for k, step in enumerate(episode.steps, start=1):
+            print(f"  {k:>4}  {model.actions[step.action]:<44} {model.observations[step.observation]:<28} "
+                  f"{step.p_true:7.3f}  {step.operator_operations}")
+        print(f"  belief on the true intention first above {CONFIDENCE:g} after "
+              f"{episode.first_confident(CONFIDENCE)} operator operation(s); discounted return "
+              f"{episode.discounted_return:.3f}; decision time median {1000 * float(np.median(times)):.1f} ms, "
+              f"max {1000 * max(times):.1f} ms" if times else "  no step")
+    return 0
+
+
 def _evaluate(args: argparse.Namespace) -> int:
-    model = model_from(args)
-    mean, half = api.evaluate(model, policy_from(args, model), args.episodes, args.seed, args.max_steps)
+    model, policy = decision_maker_from(args)
+    mean, half = api.evaluate(model, policy, args.episodes, args.seed, args.max_steps)
     if args.json:
         print(json.dumps({"mean_return": mean, "ci95": half, "episodes": args.episodes}))
     else:
@@ -137,7 +191,8 @@ def add_commands(commands) -> None:
     add_policy_options(simulate)
     which = simulate.add_mutually_exclusive_group()
     which.add_argument("--sequence", type=int, nargs="+", metavar="K",
-                       help="full sequences by intention number (aplan intentions PRODUCT --full)")
+                       help="full sequences by intention number (aplan intentions PRODUCT --full); on the factored "
+                            "model (--planner online) by rank, from 0")
     which.add_argument("--all", action="store_true", help="every full sequence")
     which.add_argument("--random", type=positive, metavar="N", help="N sequences drawn at random")
     simulate.add_argument("--plot", metavar="STEM", help="write STEM.png and STEM.svg (belief heat maps)")

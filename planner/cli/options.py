@@ -4,12 +4,13 @@ from __future__ import annotations
 import argparse
 
 from ..decision.intention_model import Rewards
-from ..defaults import DISCOUNT, POLICY_TIME_LIMIT
+from ..defaults import DECISION_TIME, DISCOUNT, POLICY_TIME_LIMIT
 from ..geometry.mesh_engine import Tolerances
 from ..product.examples import EXAMPLES
 
 __all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_decision_options", "rewards_from",
-           "add_tolerance_options", "tolerances_from", "add_policy_options", "add_episode_options"]
+           "add_tolerance_options", "tolerances_from", "add_policy_options", "add_episode_options", "positive_seconds",
+           "online_budget"]
 
 PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or STEP file (read through "
                 f"FreeCAD), or an embedded example ({', '.join(EXAMPLES)})")
@@ -67,11 +68,42 @@ def tolerances_from(args: argparse.Namespace) -> Tolerances:
                       resolution=args.resolution)
 
 
+def positive_seconds(text: str) -> float:
+    """A finite number of seconds above 0 (an argparse type)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number of seconds, got {text!r}") from None
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a positive, finite number of seconds, got {text}")
+    return value
+
+
 def add_policy_options(parser: argparse.ArgumentParser) -> None:
-    """A policy file, or the solver's time when there is none (simulate, evaluate, session)."""
-    parser.add_argument("--policy", metavar="POLICY", help="a .policy file (default: solve for --time-limit s)")
-    parser.add_argument("--time-limit", type=float, default=POLICY_TIME_LIMIT,
-                        help=f"solver seconds when no --policy (default {POLICY_TIME_LIMIT:g})")
+    """Who decides (simulate, evaluate, session): the offline policy in a file, the offline solver's after
+    --time-limit, or the online planner within --decision-time per decision."""
+    group = parser.add_argument_group("planner")
+    group.add_argument("--planner", choices=("offline", "online"), default=None,
+                       help="offline: follow a policy (--policy, or solve the flat model for --time-limit s); "
+                            "online: search the factored model at every decision (any product size). Default: "
+                            "offline with --policy, else online")
+    group.add_argument("--policy", metavar="POLICY",
+                       help="a .policy file over the model's intentions, or over its classes (aplan solve --lumped)")
+    group.add_argument("--time-limit", type=positive_seconds, default=POLICY_TIME_LIMIT,
+                       help=f"offline solver seconds when --planner offline and no --policy "
+                            f"(default {POLICY_TIME_LIMIT:g})")
+    group.add_argument("--decision-time", type=positive_seconds, default=None, metavar="S",
+                       help=f"online planner: seconds per decision (default {DECISION_TIME:g})")
+    group.add_argument("--expansions", type=positive, default=None, metavar="N",
+                       help="online planner: expansions per decision; alone, a fixed amount of work without a "
+                            "clock (the same actions on any machine)")
+
+
+def online_budget(args: argparse.Namespace) -> tuple[float | None, int | None]:
+    """(decision time, expansions) from --decision-time and --expansions (module defaults when neither)."""
+    if args.expansions is not None and args.decision_time is None:
+        return None, args.expansions
+    return (args.decision_time if args.decision_time is not None else DECISION_TIME), args.expansions
 
 
 def add_episode_options(parser: argparse.ArgumentParser) -> None:

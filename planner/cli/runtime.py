@@ -10,10 +10,11 @@ from pathlib import Path
 
 from .. import api
 from ..decision.intention_model import IntentionModel
+from ..decision.policy import AlphaVectorPolicy
 from ..errors import PlannerError
 from ..product import DEFAULT_MARKER_DICTIONARY
-from .decision import model_from, policy_from
-from .options import PRODUCT_HELP, add_decision_options, add_policy_options, positive
+from .decision import decision_maker_from
+from .options import PRODUCT_HELP, add_decision_options, add_policy_options, online_budget, positive
 
 __all__ = ["add_commands"]
 
@@ -39,13 +40,23 @@ def _open_stream(args: argparse.Namespace, model: IntentionModel, markers, detec
     if args.camera is not None:
         return in_background(detections(camera_frames(args.camera), detector)), None
     if args.demo is not None:  # an operator following full sequence K on a rendered 1080p tray
-        operator = ScriptedOperator.following(model, model.full_sequence(args.demo, "--demo"))
+        operator = ScriptedOperator(model.plan, _demo_operations(model, args.demo))
         camera = CameraModel(blur=1.2, noise=6, perspective=0.04, hands=True, seed=args.demo)
         # Operations without a tool end when the tray stays quiet: the simulated operator takes that long.
         cell = SimulatedCell(tray_layout(markers), operator, camera, settle=args.quiet_frames + 5)
         return detections(cell, detector), ScriptedRobot(on_perform=cell.robot)
     frames = video_frames(args.video) if args.video is not None else image_frames(args.images)
     return detections(frames, detector), None
+
+
+def _demo_operations(model, k: int) -> list[int]:
+    """The operations of full sequence ``k``: an intention number on the flat model, a rank on the factored one."""
+    if isinstance(model, IntentionModel):
+        return model.sequence_operations(model.full_sequence(k, "--demo"))
+    if not 0 <= k < model.n_sequences:
+        raise PlannerError(f"--demo {k}: on the factored model (--planner online) sequences are numbered by rank, "
+                           f"from 0 to {model.n_sequences - 1:,}")
+    return model.sequence_operations(model.sequence(k))
 
 
 def _session(args: argparse.Namespace) -> int:
@@ -57,9 +68,11 @@ def _session(args: argparse.Namespace) -> int:
 
     if args.demo is not None and args.robot is not None:
         raise PlannerError("--demo simulates the robot too; leave out --robot")
-    model = model_from(args, product_only=True)
+    if api._model_file_kind(args.product):
+        raise PlannerError(f"{args.product}: a session needs a PRODUCT (its parts, tools and operations), not a "
+                           "model file")
+    model, policy = decision_maker_from(args)
     plan = model.plan
-    policy = policy_from(args, model)
     stream, robot = None, ConsoleRobot() if args.robot in (None, "console") else ScriptedRobot()
     if not args.keyboard:  # open the frames first: a camera or file that cannot be read stops before any log
         markers = marker_map(plan.product)
@@ -90,7 +103,11 @@ def _session(args: argparse.Namespace) -> int:
                               on_warning=lambda message: events.write("warning", step=_current_step(events),
                                                                       message=message),
                               detections=stream, robot_uses_tray_tools=not args.robot_own_tools)
-    settings = {"policy": args.policy, "technical": args.technical, "discount": args.discount,
+    decision_time, expansions = online_budget(args)
+    online = not isinstance(policy, AlphaVectorPolicy)
+    settings = {"planner": "online" if online else "offline", "policy": args.policy,
+                "decision_time": decision_time if online else None, "expansions": expansions if online else None,
+                "technical": args.technical, "discount": args.discount,
                 "rewards": vars(model.rewards), "robot": args.robot, "source": _source_name(args),
                 "debounce": args.debounce, "quiet_frames": args.quiet_frames,
                 "robot_own_tools": args.robot_own_tools}
@@ -115,22 +132,26 @@ def _replay(args: argparse.Namespace) -> int:
     import numpy as np
 
     from ..decision.simulate import Episode, Step, plot_beliefs
-    from ..runtime.log import replay
+    from ..runtime.log import replay, top_intentions
 
     done = replay(args.log)
     model = done.model
+    factored = not isinstance(model, IntentionModel)
+    if factored and args.plot:
+        raise PlannerError(f"{args.log}: the session's beliefs are over classes (the factored model); --plot draws "
+                           "beliefs over intentions")
     steps = list(enumerate(zip(done.actions, done.observations, done.beliefs[1:]), start=1))
     if not args.json:
         print(f"{done.product.name or args.log}: {len(done.actions)} steps, "
               f"ended: {done.end['reason'] + ' (' + done.end['message'] + ')' if done.end else 'no end event'}")
         print(f"  {'step':>4}  {'robot action':<44} {'observation':<28} belief (top 3)")
     for k, (a, z, b) in steps:
-        order = np.argsort(-b, kind="stable")[:3]
+        best = top_intentions(b, 3)
         if args.json:
             print(json.dumps({"step": k, "action": model.actions[a], "observation": model.observations[z],
-                              "top": [[int(i), round(float(b[i]), 6)] for i in order]}))
+                              "top": best}))
         else:
-            top = " ".join(f"i{int(i)} {b[i]:.2f}" for i in order if b[i] > 0)
+            top = " ".join(f"{'c' if factored else 'i'}{i} {p:.2f}" for i, p in best)
             print(f"  {k:>4}  {model.actions[a]:<44} {model.observations[z]:<28} {top}")
     if args.plot:
         likely = [int(np.argmax(b)) for b in done.beliefs]
@@ -176,7 +197,8 @@ def _add_session(commands) -> None:
     source.add_argument("--keyboard", action="store_true", help="type the operator's picks (no camera)")
     source.add_argument("--demo", type=int, metavar="K",
                         help="a simulated cell: an operator following full sequence K (aplan intentions PRODUCT "
-                             "--full) and a robot, on a rendered tray seen through the vision pipeline")
+                             "--full; by rank from 0 with the online planner) and a robot, on a rendered tray seen "
+                             "through the vision pipeline")
     session.add_argument("--robot", choices=("console", "auto"),
                          help="console (default): print each instruction for the person standing in for the "
                               "robot and wait for Enter; auto: confirm every instruction at once (dry runs)")

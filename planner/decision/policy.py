@@ -31,7 +31,12 @@ class AlphaVectorPolicy:
     alphas: np.ndarray
     actions: np.ndarray
 
-    def values(self, belief: np.ndarray) -> np.ndarray:
+    def values(self, belief) -> np.ndarray:
+        """``alphas @ belief`` for a dense belief, or for a sparse :class:`FactoredBelief` over the lumped model's
+        states (the classes of :mod:`planner.decision.factored_model`)."""
+        classes = getattr(belief, "classes", None)
+        if classes is not None:
+            return self.alphas[:, classes] @ belief.mass
         return self.alphas @ belief
 
     def action(self, belief: np.ndarray) -> int:

@@ -12,7 +12,9 @@ seconds, to the millisecond):
 - ``end``: ``step``, ``reason``, ``message``, ``operations``, ``top``.
 
 ``top``: the five most probable intentions, ``[[intention, probability], ...]``, probabilities rounded to
-6 digits. Each line is written with one ``write``, then flushed and fsynced, so a crash loses at most the line
+6 digits; on the factored model (``belief_over``: ``classes`` in the start event; the online planner or a
+policy over classes) the five most probable classes instead (class ``c`` < the number of state edges: the
+world is at state edge ``c``'s source and the operator's next step is that edge; the last class: finished). Each line is written with one ``write``, then flushed and fsynced, so a crash loses at most the line
 being written; :func:`replay` ignores such a cut last line.
 """
 from __future__ import annotations
@@ -27,11 +29,13 @@ from typing import Callable
 import numpy as np
 
 from ..decision.belief import DiscreteUpdater
+from ..decision.factored_model import FactoredBelief, FactoredIntentionModel, factored_model
+from ..decision.factored_updater import FactoredUpdater
 from ..decision.intention_model import IntentionModel, intention_model
 from ..errors import PlannerError
 from ..product import Product, product_from_dict
 
-__all__ = ["LOG_VERSION", "SessionError", "EventLog", "top_intentions", "Replay", "read_log", "replay"]
+__all__ = ["LOG_VERSION", "SessionError", "EventLog", "top_intentions", "belief_at", "updater_for", "Replay", "read_log", "replay"]
 
 LOG_VERSION = 1
 
@@ -40,10 +44,22 @@ class SessionError(PlannerError):
     """A session cannot start or go on: a log that cannot be written or read, a model that does not fit."""
 
 
-def top_intentions(belief: np.ndarray, k: int = 5) -> list[list]:
-    """The ``k`` most probable intentions with a positive probability, as the log's ``top`` field."""
+def top_intentions(belief, k: int = 5) -> list[list]:
+    """The ``k`` most probable intentions (or classes, for a :class:`FactoredBelief`) with a positive
+    probability, as the log's ``top`` field."""
+    if isinstance(belief, FactoredBelief):
+        order = np.argsort(-belief.mass, kind="stable")[:k]
+        return [[int(belief.classes[i]), round(float(belief.mass[i]), 6)] for i in order]
     order = np.argsort(-belief, kind="stable")[:k]
     return [[int(i), round(float(belief[i]), 6)] for i in order if belief[i] > 0]
+
+
+def belief_at(belief, index: int) -> float:
+    """The probability of intention (or class) ``index``."""
+    if isinstance(belief, FactoredBelief):
+        at = int(np.searchsorted(belief.classes, index))
+        return float(belief.mass[at]) if at < belief.classes.size and belief.classes[at] == index else 0.0
+    return float(belief[index])
 
 
 class EventLog:
@@ -92,7 +108,7 @@ class Replay:
     initial one first), and the steps whose logged belief differs from the recomputed one."""
 
     product: Product
-    model: IntentionModel
+    model: IntentionModel | FactoredIntentionModel
     actions: list[int]
     observations: list[int]
     beliefs: list[np.ndarray]
@@ -130,16 +146,25 @@ def read_log(path: str | os.PathLike) -> list[dict]:
     return events
 
 
-def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel]:
-    """The product stored in the start event and its decision model, checked against the logged names."""
+def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel | FactoredIntentionModel]:
+    """The product stored in the start event and its decision model (flat, or factored when the session's
+    beliefs were over classes), checked against the logged names."""
     from ..assembly.plan import make_plan
 
     product = product_from_dict(start["product"], f"{path} (start event)")
-    model = intention_model(make_plan(product))
+    plan = make_plan(product)
+    model = factored_model(plan) if start.get("belief_over") == "classes" else intention_model(plan)
     if list(model.observations) != start.get("observations") or list(model.actions) != start.get("actions"):
         raise SessionError(f"{path}: the product in the log no longer gives the logged actions and observations "
                            "(the log was written by another planner version)")
     return product, model
+
+
+def updater_for(model: IntentionModel | FactoredIntentionModel, on_reset=None):
+    """The exact Bayes filter of ``model``: over intentions, or over classes on the factored model."""
+    if isinstance(model, FactoredIntentionModel):
+        return FactoredUpdater(model, on_reset=on_reset)
+    return DiscreteUpdater(model.pomdp, on_reset=on_reset)
 
 
 def _in_the_log(event) -> None:
@@ -157,7 +182,7 @@ def replay(path: str | os.PathLike, tolerance: float = 1e-6) -> Replay:
     path = Path(path)
     events = read_log(path)
     product, model = _model_of(path, events[0])
-    updater = DiscreteUpdater(model.pomdp, on_reset=_in_the_log)
+    updater = updater_for(model, on_reset=_in_the_log)
     belief = updater.initialize()
     done = Replay(product, model, [], [], [belief], None, [], events)
     pending: dict[int, int] = {}  # step -> the action logged for it
@@ -173,7 +198,7 @@ def replay(path: str | os.PathLike, tolerance: float = 1e-6) -> Replay:
                 done.observations.append(observation)
                 done.beliefs.append(belief)
             elif kind == "belief":
-                if any(abs(belief[int(i)] - float(p)) > tolerance for i, p in event["top"]):
+                if any(abs(belief_at(belief, int(i)) - float(p)) > tolerance for i, p in event["top"]):
                     done.mismatches.append(event["step"])
             elif kind == "end":
                 done.end = event

@@ -26,13 +26,15 @@ from typing import Callable
 
 import numpy as np
 
+from ..assembly.intentions import count_intentions
 from ..assembly.tags import BLANK, Observation
-from ..decision.belief import DiscreteUpdater, UnexplainedObservation
+from ..decision.belief import UnexplainedObservation
+from ..decision.factored_model import FactoredBelief, FactoredIntentionModel
 from ..decision.intention_model import IntentionModel
 from ..errors import PlannerError
 from ..product import product_to_dict
 from .interfaces import Instruction, ObservationSource, Robot, instruction_for
-from .log import LOG_VERSION, EventLog, top_intentions
+from .log import LOG_VERSION, EventLog, belief_at, top_intentions, updater_for
 
 __all__ = ["SessionResult", "run_session", "status_line"]
 
@@ -46,8 +48,8 @@ class SessionResult:
     message: str
     steps: int
     operations: int
-    belief: np.ndarray
-    beliefs: list[np.ndarray] = field(default_factory=list)
+    belief: np.ndarray | FactoredBelief
+    beliefs: list = field(default_factory=list)
     actions: list[int] = field(default_factory=list)
     observations: list[int] = field(default_factory=list)
 
@@ -56,19 +58,22 @@ class SessionResult:
         return self.reason == "assembled"
 
 
-def status_line(step: int, belief: np.ndarray, observation: str, next_action: str, k: int = 3) -> str:
-    """``step 3 | belief i12 0.71 i15 0.20 i3 0.05 | seen ink+[hammer] | next a4:...``"""
-    top = " ".join(f"i{i} {p:.2f}" for i, p in top_intentions(belief, k))
+def status_line(step: int, belief, observation: str, next_action: str, k: int = 3) -> str:
+    """``step 3 | belief i12 0.71 i15 0.20 i3 0.05 | seen ink+[hammer] | next a4:...`` (classes ``c12`` on the
+    factored model)"""
+    prefix = "c" if isinstance(belief, FactoredBelief) else "i"
+    top = " ".join(f"{prefix}{i} {p:.2f}" for i, p in top_intentions(belief, k))
     return f"step {step} | belief {top} | seen {observation} | next {next_action}"
 
 
-def run_session(model: IntentionModel, policy, source: ObservationSource, robot: Robot,
+def run_session(model: IntentionModel | FactoredIntentionModel, policy, source: ObservationSource, robot: Robot,
                 log: EventLog | None = None, status: Callable[[str], None] | None = None, max_steps: int = 500,
                 finished_belief: float = 0.99, settings: dict | None = None) -> SessionResult:
     """Run the decision loop (module docstring) until the product is assembled or the loop has to stop.
 
-    ``model``: the decision model of the product (:func:`planner.decision.intention_model`); ``policy`` has
-    ``action(belief)``; ``status`` receives a :func:`status_line` after each step;
+    ``model``: the decision model of the product, flat (:func:`planner.decision.intention_model`, beliefs over
+    intentions) or factored (:func:`planner.decision.factored_model`, beliefs over classes); ``policy`` has
+    ``action(belief)`` for that belief (an offline policy, or the online planner); ``status`` receives a :func:`status_line` after each step;
     ``settings`` (e.g. the policy file, rewards, discount) go into the log's start event. Never raises for a
     robot failure, an unexplained observation or a source error: the result says what happened.
     Cost per step: one policy lookup and one belief update, plus what the source and the robot take.
@@ -82,7 +87,7 @@ def run_session(model: IntentionModel, policy, source: ObservationSource, robot:
             run.perform(step, instruction_for(model, action, step), source, robot)
             observation, z = run.observe(step, source)
             run.update(step, action, observation, z)
-            done = run.operations >= run.needed or run.belief[model.final_state] >= finished_belief
+            done = run.operations >= run.needed or run.finished() >= finished_belief
             action = policy.action(run.belief)
             run.report(step, observation, "done" if done else model.actions[action], status)
             if done:
@@ -109,13 +114,15 @@ class _Stop(Exception):
 class _Run:
     """One session's state (belief, result so far, log) and the parts of a step, each logging its events."""
 
-    def __init__(self, model: IntentionModel, log: EventLog):
+    def __init__(self, model: IntentionModel | FactoredIntentionModel, log: EventLog):
         self.model = model
         self.log = log
         self.needed = len(model.plan.product.parts) - 1  # operations that assemble the product
         self.index = {o: k for k, o in enumerate(model.plan.observations)}
         self.resets: list[UnexplainedObservation] = []  # those of the current step, logged as warning events
-        self.updater = DiscreteUpdater(model.pomdp, on_reset=self.resets.append)
+        self.updater = updater_for(model, on_reset=self.resets.append)
+        self.factored = isinstance(model, FactoredIntentionModel)
+        self.final = model.final_class if self.factored else model.final_state
         self.belief = self.updater.initialize()
         self.result = SessionResult("running", "", 0, 0, self.belief, [self.belief])  # stop() says how it ended
 
@@ -123,11 +130,17 @@ class _Run:
     def operations(self) -> int:
         return self.result.operations
 
+    def finished(self) -> float:
+        """The belief that the product is finished."""
+        return belief_at(self.belief, self.final)
+
     def begin(self, settings: dict) -> None:
         model = self.model
+        intentions = count_intentions(model.plan.states) if self.factored else model.pomdp.n_states
         self.log.write("start", version=LOG_VERSION, product=product_to_dict(model.plan.product), settings=settings,
-                       n_intentions=model.pomdp.n_states, actions=list(model.actions),
-                       observations=list(model.observations), top=top_intentions(self.belief))
+                       n_intentions=intentions, belief_over="classes" if self.factored else "intentions",
+                       actions=list(model.actions), observations=list(model.observations),
+                       top=top_intentions(self.belief))
 
     def stop(self, reason: str, message: str) -> SessionResult:
         result = self.result
@@ -183,7 +196,7 @@ class _Run:
                status: Callable[[str], None] | None) -> None:
         belief = self.belief
         self.log.write("belief", step=step, top=top_intentions(belief),
-                       p_finished=round(float(belief[self.model.final_state]), 6), operations=self.operations,
+                       p_finished=round(self.finished(), 6), operations=self.operations,
                        reset=self.resets[-1].reset_to if self.resets else None)
         if status is not None:
             status(status_line(step, belief, str(observation), next_name))

@@ -1,0 +1,107 @@
+"""Episodes on the factored model: the operator follows one full sequence (a path of state edges), the robot acts
+by any policy on the factored Bayes filter's belief (the online planner, or alpha vectors over classes).
+
+The world is the flat model's (the same transitions, observations and rewards, :mod:`planner.decision.
+factored_model`), played along the sequence's edges by position, so an episode never enumerates intentions.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .factored_model import FactoredBelief, FactoredIntentionModel
+from .factored_updater import FactoredUpdater
+
+__all__ = ["FactoredStep", "FactoredEpisode", "simulate_factored_episode", "evaluate_factored",
+           "true_intention_probability"]
+
+OPERATORS = ("turns", "model")
+
+
+@dataclass(frozen=True)
+class FactoredStep:
+    action: int
+    observation: int
+    position: int             # steps of the sequence done after the step
+    p_true: float             # the belief on the true intention (the flat model's number) after the update
+    operator_operations: int  # operations the operator has performed so far
+    reward: float
+    decision_seconds: float   # the time the policy took to choose ``action``
+
+
+@dataclass
+class FactoredEpisode:
+    path: list[int]                                    # the full sequence's state edges
+    steps: list[FactoredStep] = field(default_factory=list)
+    discounted_return: float = 0.0
+    resets: int = 0                                    # unexplained observations (never with the model's world)
+
+    @property
+    def finished(self) -> bool:
+        return bool(self.steps) and self.steps[-1].position == len(self.path) or not self.path
+
+    def first_confident(self, threshold: float) -> int | None:
+        """Operator operations done when the belief on the true intention first exceeds ``threshold``."""
+        return next((s.operator_operations for s in self.steps if s.p_true > threshold), None)
+
+    def confident_before_finished(self, threshold: float) -> bool:
+        """True when the belief on the true intention passed ``threshold`` before the last step."""
+        return any(s.p_true > threshold for s in self.steps if s.position < len(self.path))
+
+
+def true_intention_probability(model: FactoredIntentionModel, belief: FactoredBelief, path: list[int],
+                               position: int) -> float:
+    """The flat model's belief on the intention ``path[position:]``: its class's mass over the class size."""
+    c = path[position] if position < len(path) else model.final_class
+    at = np.searchsorted(belief.classes, c)
+    if at >= belief.classes.size or belief.classes[at] != c or belief.mass[at] <= 0:
+        return 0.0
+    return math.exp(math.log(float(belief.mass[at])) - float(model.class_log_size[c]))
+
+
+def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[int], rng: np.random.Generator,
+                              max_steps: int = 100, operator: str = "model") -> FactoredEpisode:
+    """One episode along ``path`` (state edges from the initial state) until the product is finished or
+    ``max_steps``. ``operator``: ``model`` (it acts with probability 1/2 per step, as the model says) or
+    ``turns`` (it acts whenever the model lets it). ``policy.action(belief)`` picks the robot's actions."""
+    if operator not in OPERATORS:
+        raise ValueError(f"operator must be one of {OPERATORS}, got {operator!r}")
+    updater = FactoredUpdater(model, on_reset=lambda event: None)
+    belief = updater.initialize()
+    episode = FactoredEpisode(list(path))
+    position, operations, discount = 0, 0, 1.0
+    for _ in range(max_steps):
+        if position >= len(path):
+            break
+        started = time.perf_counter()
+        action = int(policy.action(belief))
+        seconds = time.perf_counter() - started
+        reward = float(model.rewards_of(np.array([path[position]]), action)[0])
+        robot_steps = 1 if action != model.wait and model.class_action[path[position]] == action else 0
+        options = model.position_transition(path, position, action)
+        nxt = max(p for p, _ in options) if operator == "turns" else model.sample_position(path, position, action, rng)
+        operations += nxt - position - robot_steps
+        z = model.sample_observation(path, nxt, rng)
+        belief = updater.update(belief, action, z)
+        episode.discounted_return += discount * reward
+        discount *= model.discount
+        position = nxt
+        episode.steps.append(FactoredStep(action, z, position, true_intention_probability(model, belief, path, position),
+                                          operations, reward, seconds))
+    episode.resets = len(updater.events)
+    return episode
+
+
+def evaluate_factored(model: FactoredIntentionModel, policy, episodes: int, seed: int = 0, max_steps: int = 100
+                      ) -> tuple[float, float, list[float]]:
+    """Mean discounted return over ``episodes`` episodes (each sequence drawn from the initial belief) and the
+    half-width of its 95 % confidence interval (normal approximation)."""
+    rng = np.random.default_rng(seed)
+    returns = [simulate_factored_episode(model, policy, model.sample_sequence(rng), rng, max_steps).discounted_return
+               for _ in range(episodes)]
+    mean = float(np.mean(returns))
+    half = 1.96 * float(np.std(returns, ddof=1)) / math.sqrt(episodes) if episodes > 1 else float("nan")
+    return mean, half, returns

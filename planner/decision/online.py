@@ -1,0 +1,305 @@
+"""The online planner: the robot's next action from the current belief, by lookahead on the factored model.
+
+Why this search. The factored belief (:mod:`planner.decision.factored_model`) is exact and cheap to update,
+and its observations are few per step, so the planner searches the *exact* belief tree (no particles, no
+sampling: the same belief and the same amount of work give the same action on any machine) and bounds
+what it has not expanded by closed forms over the classes:
+
+- upper bound: QMDP on the classes (:func:`class_values`): the value if the robot knew the class (the current
+  state and the operator's next step) from the next step on, ``max_a sum_c b(c) Q(c, a)``. Knowing more
+  never hurts, so it bounds the value from above; one backward pass over the state graph computes it (the
+  state graph is acyclic but for the self-loops of waiting, which have a closed form);
+- lower bound: the best of "do ``a`` now, then wait for ever", a policy the robot can always follow.
+
+The search is best-first, as AO* and HSVI: from the root it follows the action with the highest upper bound;
+an action not expanded yet is expanded (one prediction and one split by observation: its children are the
+posterior beliefs); else it descends into the observation whose probability times gap is the largest. The
+bounds are backed up to the root after each expansion. The search stops after ``expansions`` expansions, at
+``decision_time`` seconds (if set), or when the root's gap is below ``precision``. The action is the one
+with the highest lower bound (the robot never bets on what it has not looked at), ties going to ``wait``.
+
+An action that is the next step of no class in the belief costs the ``wrong`` reward and stops the operator
+for a step; only actions with an upper bound above the root's lower bound are expanded, so such actions are
+ruled out by their bound, not by a rule.
+
+Cost per expansion: one :meth:`~FactoredIntentionModel.predict` (O(k log k) for k classes in the belief)
+and O(k x Z') for the split into the Z' observations the belief can emit.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..defaults import ONLINE_DEPTH, ONLINE_EXPANSIONS
+from ..errors import PlannerError
+from .factored_model import FactoredBelief, FactoredIntentionModel
+
+__all__ = ["ClassValues", "class_values", "observation_split", "OnlinePlanner", "SearchReport"]
+
+
+@dataclass(frozen=True)
+class ClassValues:
+    """The class MDP's values (QMDP on the factored model): ``value[c]`` and, per class, the Q-values of
+    waiting, of performing its next step (``match``: -inf where no robot action performs it) and of any other
+    operation (``wrong``)."""
+
+    value: np.ndarray
+    wait: np.ndarray
+    match: np.ndarray
+    wrong: np.ndarray
+
+    def q_values(self, model: FactoredIntentionModel, belief: FactoredBelief) -> np.ndarray:
+        """``sum_c b(c) Q(c, a)`` for every action (an upper bound on each action's value). Cost: O(k + A)."""
+        classes, mass = belief.classes, belief.mass
+        out = np.full(len(model.action_operations), float(mass @ self.wrong[classes]))
+        out[-1] = float(mass @ self.wait[classes])
+        act = model.class_action[classes]
+        hit = act >= 0
+        np.add.at(out, act[hit], mass[hit] * (self.match[classes[hit]] - self.wrong[classes[hit]]))
+        return out
+
+
+def class_values(model: FactoredIntentionModel) -> ClassValues:
+    """QMDP on the classes, by one backward pass over the assembly states (fewest blocks first).
+
+    Definitions (``t`` the target of class ``c``, ``W(t) = sum over the classes c' from t of fraction(c')
+    V(c')`` the value on arriving at ``t`` and ``W2(t) = sum fraction(c') W(target(c'))`` one step later;
+    both ``V(final)`` at the final state; ``g`` the discount):
+
+    - ``Q_wait(c) = R_wait + g (V(c) + W(t)) / 2``,
+    - ``Q_match(c) = R_match(c) + g (W(t) + W2(t)) / 2`` (the robot performs ``c``'s step; the operator may
+      perform one more),
+    - ``Q_wrong(c) = R_wrong + g V(c)``,
+
+    and ``V(c)`` is the largest of the three, where each self-loop is solved in closed form: ``(R_wait + g
+    W(t) / 2) / (1 - g / 2)`` for waiting, ``R_wrong / (1 - g)`` for stalling. ``V(final) = max(R_wait,
+    R_wrong) / (1 - g)`` (``R_wait / (1 - g)`` without robot actions). Cost: O(S + E).
+    """
+    g, r = model.discount, model.rewards
+    n = model.n_classes
+    has_robot = len(model.action_operations) > 1
+    final_value = (max(r.wait, r.wrong) if has_robot else r.wait) / (1 - g)
+    arrive = np.full(len(model.paths), np.nan)  # W(t)
+    later = np.full(len(model.paths), np.nan)   # W2(t)
+    arrive[model.final_state] = later[model.final_state] = final_value
+    value, wait, match, wrong = (np.empty(n) for _ in range(4))
+    fc = model.final_class
+    value[fc], wait[fc], wrong[fc] = final_value, r.wait + g * final_value, r.wrong + g * final_value
+    match[fc] = -np.inf
+    level_start = model.plan.states.level_start
+    for k in range(1, len(level_start) - 1):  # states with k + 1 blocks: their targets are done already
+        lo, hi = int(level_start[k]), int(level_start[k + 1])
+        if lo >= hi:
+            break
+        classes = model.state_classes[model.state_class_start[lo]:model.state_class_start[hi]]
+        target, source = model.class_target[classes], model.class_source[classes]
+        w, w2 = arrive[target], later[target]
+        stay_wait = (r.wait + g * w / 2) / (1 - g / 2)
+        stall = np.full(classes.size, r.wrong / (1 - g)) if has_robot else np.full(classes.size, -np.inf)
+        can = model.class_action[classes] >= 0
+        m = np.where(can, model.class_match_reward[classes] + g * (w + w2) / 2, -np.inf)
+        v = np.maximum(np.maximum(stay_wait, stall), m)
+        value[classes], match[classes] = v, m
+        wait[classes] = r.wait + g * (v + w) / 2
+        wrong[classes] = r.wrong + g * v
+        fraction = model.class_fraction[classes]
+        size = hi - lo
+        arrive[lo:hi] = np.bincount(source - lo, weights=fraction * v, minlength=size)
+        later[lo:hi] = np.bincount(source - lo, weights=fraction * w, minlength=size)
+    for array in (value, wait, match, wrong):
+        array.flags.writeable = False
+    return ClassValues(value, wait, match, wrong)
+
+
+def observation_split(model: FactoredIntentionModel, predicted: FactoredBelief
+                      ) -> list[tuple[int, float, FactoredBelief]]:
+    """The observations ``predicted`` can emit, each with its probability and the posterior belief:
+    ``(z, P(z), b_z)``, the blank observation first. Cost: O(k x Z') for k classes and Z' observations."""
+    classes, mass = predicted.classes, predicted.mass
+    Z = len(model.plan.observations)
+    states, inverse = np.unique(model.class_source[classes], return_inverse=True)
+    state_mass = np.bincount(inverse, weights=mass, minlength=states.size)
+    weight = model.emit_weight[states]
+    lo = np.searchsorted(model.emit_keys, states.astype(np.int64) * Z)
+    hi = np.searchsorted(model.emit_keys, (states.astype(np.int64) + 1) * Z)
+    count = hi - lo
+    owner = np.repeat(np.arange(states.size), count)
+    ends = np.cumsum(count)
+    keys = model.emit_keys[np.repeat(lo - ends + count, count) + np.arange(int(ends[-1]) if ends.size else 0)]
+    seen = keys - states[owner].astype(np.int64) * Z
+    out = []
+    blank = 0.25 * weight
+    p_blank = float(state_mass @ blank)
+    if p_blank > 0:
+        out.append((0, p_blank, _posterior(classes, mass * blank[inverse])))
+    if seen.size:
+        probability = np.bincount(seen, weights=state_mass[owner] * weight[owner], minlength=Z)
+        order = np.argsort(seen, kind="stable")
+        seen, owner = seen[order], owner[order]
+        starts = np.flatnonzero(np.r_[True, seen[1:] != seen[:-1]])
+        for first, last in zip(starts, np.r_[starts[1:], seen.size]):
+            z = int(seen[first])
+            likelihood = np.zeros(states.size)
+            likelihood[owner[first:last]] = weight[owner[first:last]]
+            out.append((z, float(probability[z]), _posterior(classes, mass * likelihood[inverse])))
+    return out
+
+
+def _posterior(classes: np.ndarray, weighted: np.ndarray) -> FactoredBelief:
+    keep = weighted > 0
+    kept = weighted[keep]
+    return FactoredBelief(classes[keep], kept / kept.sum())
+
+
+@dataclass
+class _Node:
+    """A belief in the search tree; ``children[a]``: ``(reward, [(P(z), child), ...])`` once ``a`` is expanded."""
+
+    belief: FactoredBelief
+    upper: float
+    lower: float
+    action_upper: np.ndarray   # per action: QMDP until expanded, then the backed-up bound
+    action_lower: np.ndarray
+    depth: int
+    children: dict = field(default_factory=dict)
+    closed_actions: set = field(default_factory=set)  # expanded actions with every branch closed
+    closed: bool = False  # nothing below can change the bounds (depth limit or gap closed)
+
+
+@dataclass(frozen=True)
+class SearchReport:
+    """One decision: the action, the root's bounds, the work done and the time it took."""
+
+    action: int
+    lower: float
+    upper: float
+    expansions: int
+    seconds: float
+
+
+class OnlinePlanner:
+    """Best-first lookahead on a :class:`FactoredIntentionModel` (module docstring); a policy: ``action(belief)``
+    for a :class:`FactoredBelief`.
+
+    ``expansions``: the work per decision (the result depends only on it when ``decision_time`` is None);
+    ``decision_time``: seconds per decision (the search also stops there; the default of the runtime is
+    :data:`~planner.defaults.DECISION_TIME`); ``max_depth``: the deepest belief expanded; ``precision``: stop
+    when the root's gap is this small. ``last`` holds the :class:`SearchReport` of the latest decision.
+    """
+
+    def __init__(self, model: FactoredIntentionModel, expansions: int = ONLINE_EXPANSIONS,
+                 decision_time: float | None = None, max_depth: int = ONLINE_DEPTH, precision: float = 1e-3,
+                 values: ClassValues | None = None):
+        if not (isinstance(expansions, int) and expansions >= 1):
+            raise PlannerError(f"the online planner's expansions must be a positive integer, got {expansions!r}")
+        if decision_time is not None and not (np.isfinite(decision_time) and decision_time > 0):
+            raise PlannerError(f"the decision time must be a positive number of seconds, got {decision_time!r}")
+        self.model = model
+        self.expansions = expansions
+        self.decision_time = decision_time
+        self.max_depth = max_depth
+        self.precision = precision
+        self.values = values if values is not None else class_values(model)
+        r, g = model.rewards, model.discount
+        self._after_now = g * r.wait / (1 - g)  # then wait for ever
+        self.last: SearchReport | None = None
+
+    # --- the policy interface ----------------------------------------------------------------------------
+
+    def action(self, belief: FactoredBelief) -> int:
+        """The action with the highest lower bound after the search (module docstring)."""
+        return self.search(belief).action
+
+    def value(self, belief: FactoredBelief) -> float:
+        """The root's lower bound after the search (the value the robot can count on)."""
+        return self.search(belief).lower
+
+    def search(self, belief: FactoredBelief) -> SearchReport:
+        start = time.perf_counter()
+        deadline = None if self.decision_time is None else start + self.decision_time
+        root = self._node(belief, 0)
+        done = 0
+        while done < self.expansions and root.upper - root.lower > self.precision:
+            # Stop when one more expansion (at the mean pace so far) would pass the deadline.
+            now = time.perf_counter()
+            if deadline is not None and now + (now - start) / max(done, 1) >= deadline:
+                break
+            if not self._expand_best(root):
+                break
+            done += 1
+        best = _argmax_prefer_last(root.action_lower)
+        self.last = SearchReport(best, root.lower, root.upper, done, time.perf_counter() - start)
+        return self.last
+
+    # --- the tree ----------------------------------------------------------------------------------------
+
+    def _node(self, belief: FactoredBelief, depth: int) -> _Node:
+        upper = self.values.q_values(self.model, belief)
+        lower = self.model.expected_rewards(belief) + self._after_now
+        node = _Node(belief, float(upper.max()), float(lower.max()), upper, lower, depth)
+        node.closed = node.upper - node.lower <= self.precision
+        return node
+
+    def _expand_best(self, root: _Node) -> bool:
+        """Follow the best upper bounds down to an unexpanded action, expand it and back up the bounds; False
+        when nothing is left to expand (every open path ends at ``max_depth`` or is exact)."""
+        path, node = [], root
+        while True:
+            action = self._open_action(node)
+            if action is None:  # nothing to learn below this node: close it and back up
+                node.closed = True
+                break
+            path.append((node, action))
+            if action not in node.children:
+                self._expand(node, action)
+                break
+            _, branches = node.children[action]
+            open_branches = [(p, c) for p, c in branches if not c.closed]
+            if not open_branches:
+                node.closed_actions.add(action)
+                continue
+            node = max(open_branches, key=lambda pc: pc[0] * (pc[1].upper - pc[1].lower))[1]
+        for node, action in reversed(path):
+            self._backup(node, action)
+        return not root.closed
+
+    def _open_action(self, node: _Node) -> int | None:
+        """The action with the highest upper bound that could still beat the node's lower bound."""
+        if node.depth >= self.max_depth:
+            return None
+        for a in np.argsort(-node.action_upper, kind="stable"):
+            a = int(a)
+            if node.action_upper[a] <= node.lower + self.precision:
+                return None
+            if a not in node.closed_actions:
+                return a
+        return None
+
+    def _expand(self, node: _Node, action: int) -> None:
+        model = self.model
+        reward = float(model.expected_rewards(node.belief)[action])
+        predicted = model.predict(node.belief, action)
+        branches = [(p, self._node(b, node.depth + 1)) for _, p, b in observation_split(model, predicted)]
+        node.children[action] = (reward, branches)
+
+    def _backup(self, node: _Node, action: int) -> None:
+        if action in node.children:
+            reward, branches = node.children[action]
+            g = self.model.discount
+            upper = reward + g * sum(p * c.upper for p, c in branches)
+            lower = reward + g * sum(p * c.lower for p, c in branches)
+            node.action_upper[action] = min(node.action_upper[action], upper)
+            node.action_lower[action] = max(node.action_lower[action], lower)
+        _refresh(node)
+
+
+def _refresh(node: _Node) -> None:
+    node.upper = float(node.action_upper.max())
+    node.lower = float(node.action_lower.max())
+
+
+def _argmax_prefer_last(values: np.ndarray) -> int:
+    """The index of the largest value, ties to the last (``wait``)."""
+    return int(len(values) - 1 - np.argmax(values[::-1]))

@@ -1,0 +1,111 @@
+"""The online planner on the factored model: its bounds against independent computations (value iteration on
+the class MDP, the flat model's solver), its observation split against the Bayes filter, reproducibility at a
+fixed amount of work, and that it helps (a return above never acting) and finishes products too large for the
+flat model."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner import PlannerError, chain_product, count_intentions, make_plan
+from planner.decision import FactoredUpdater, factored_model, intention_model
+from planner.decision.factored_model import FactoredBelief
+from planner.decision.factored_simulate import evaluate_factored, simulate_factored_episode
+from planner.decision.online import OnlinePlanner, class_values, observation_split
+from planner.decision.solvers import PointBasedSolver
+
+
+@pytest.fixture(scope="module", params=[False, True], ids=["no-technical", "technical"])
+def pen_factored(request, pen):
+    return factored_model(make_plan(pen, request.param))
+
+
+def _one_hot(model, c):
+    return FactoredBelief(np.array([c]), np.array([1.0]))
+
+
+def _value_iteration(model, sweeps=400):
+    """The class MDP solved by plain value iteration over the tables the factored filter itself predicts."""
+    n, A = model.n_classes, len(model.actions)
+    moves = [[model.predict(_one_hot(model, c), a) for a in range(A)] for c in range(n)]
+    reward = np.array([[model.expected_reward(_one_hot(model, c), a) for a in range(A)] for c in range(n)])
+    value = np.zeros(n)
+    for _ in range(sweeps):
+        q = reward + model.discount * np.array([[m.mass @ value[m.classes] for m in row] for row in moves])
+        value = q.max(axis=1)
+    return value
+
+
+def test_class_values_equal_value_iteration(pen_factored):
+    values = class_values(pen_factored)
+    assert np.max(np.abs(values.value - _value_iteration(pen_factored))) < 1e-6
+    chain = factored_model(make_plan(chain_product(5)))
+    assert np.max(np.abs(class_values(chain).value - _value_iteration(chain))) < 1e-6
+
+
+def test_bounds_bracket_the_flat_models_value(pen):
+    """The planner's root bounds contain the flat POMDP's value at the initial belief (the solver's bounds,
+    at a fixed amount of work)."""
+    plan = make_plan(pen)
+    flat = PointBasedSolver(max_iterations=300, time_limit=None, precision=1e-3, seed=0).solve(
+        intention_model(plan).pomdp)
+    planner = OnlinePlanner(factored_model(plan), expansions=300)
+    report = planner.search(planner.model.initial_belief())
+    assert report.lower <= flat.upper_bound + 1e-9 and flat.lower_bound <= report.upper + 1e-9
+    assert report.upper - report.lower < class_values(planner.model).value.max()  # the search tightened them
+
+
+def test_observation_split_is_the_bayes_filter(pen_factored):
+    model = pen_factored
+    updater = FactoredUpdater(model)
+    rng = np.random.default_rng(0)
+    belief = updater.initialize()
+    for _ in range(12):
+        action = int(rng.integers(len(model.actions)))
+        branches = observation_split(model, model.predict(belief, action))
+        assert sum(p for _, p, _ in branches) == pytest.approx(1.0, abs=1e-12)
+        for z, p, posterior in branches:
+            expected = updater.update(belief, action, z)
+            assert np.array_equal(posterior.classes, expected.classes)
+            assert np.max(np.abs(posterior.mass - expected.mass)) < 1e-12
+        z, _, belief = branches[int(rng.integers(len(branches)))]
+    assert not updater.events
+
+
+def test_reproducible_at_a_fixed_amount_of_work(pen_factored):
+    def actions():
+        planner = OnlinePlanner(pen_factored, expansions=30)
+        rng = np.random.default_rng(7)
+        episode = simulate_factored_episode(pen_factored, planner, pen_factored.sample_sequence(rng), rng)
+        return [s.action for s in episode.steps], [s.observation for s in episode.steps]
+
+    assert actions() == actions()
+
+
+def test_the_planner_helps(pen):
+    """On the pen, acting by the planner earns more than never acting (return 0) beyond the 95 % interval."""
+    model = factored_model(make_plan(pen))
+    mean, half, _ = evaluate_factored(model, OnlinePlanner(model, expansions=3), 150, seed=3)
+    assert mean - half > 0
+
+
+def test_finishes_a_product_beyond_the_flat_model():
+    """A chain of 11 parts (9,864,101 intentions, beyond the flat model's limit): every episode ends with the
+    product assembled, and the filter never rules out the true intention."""
+    plan = make_plan(chain_product(11))
+    assert count_intentions(plan.states) == 9_864_101
+    model = factored_model(plan)
+    planner = OnlinePlanner(model, expansions=4)
+    rng = np.random.default_rng(0)
+    for _ in range(2):
+        episode = simulate_factored_episode(model, planner, model.sample_sequence(rng), rng, max_steps=200)
+        assert episode.finished and episode.resets == 0
+        assert all(step.p_true > 0 for step in episode.steps)
+
+
+@pytest.mark.parametrize("bad", [0.0, -1.0, float("nan"), float("inf")])
+def test_bad_decision_time(pen_factored, bad):
+    with pytest.raises(PlannerError, match="decision time must be a positive number"):
+        OnlinePlanner(pen_factored, decision_time=bad)
+    with pytest.raises(PlannerError, match="expansions must be a positive integer"):
+        OnlinePlanner(pen_factored, expansions=0)
