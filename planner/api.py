@@ -5,7 +5,8 @@ Front ends only parse their input and show results; the steps of the method live
 
 1. :func:`resolve_product`: a PRODUCT argument (a product file, a bundle folder, a CAD file read through
    a plugin, or an embedded example) -> :class:`~planner.product.Product`;
-2. :func:`plan_statistics_of`: the plan of a product and its figures (``aplan stats``);
+2. :func:`plan_statistics_of`: the plan of a product and its figures (``aplan stats``); :func:`base_part_of`:
+   the base part every sequence starts from (paper Sec. V), ``"auto"`` for the most connected part;
 3. :func:`decision_model` / :func:`load_model` / :func:`save_model`: the decision model of Alg. 3, or a
    POMDP read from a file, and writing it as POMDPX or ``.pomdp``;
 4. :func:`solve`, :func:`policy_for`: a policy from a solver (the built-in point-based one, or SARSOP);
@@ -24,7 +25,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .assembly.intentions import most_connected_part
+from .assembly.intentions import base_part_first_edges, most_connected_part
 from .assembly.plan import Plan, make_plan
 from .assembly.stats import PlanStatistics, plan_statistics
 from .decision.intention_model import IntentionModel, Rewards, intention_model
@@ -39,7 +40,7 @@ from .errors import PlannerError, UnknownProductError
 from .product import Product, load_product
 from .product.examples import EXAMPLES, example_path
 
-__all__ = ["resolve_product", "plan_of", "plan_statistics_of", "decision_model", "load_model", "save_model",
+__all__ = ["resolve_product", "plan_of", "plan_statistics_of", "base_part_of", "decision_model", "load_model", "save_model",
            "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for", "simulate", "evaluate"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
@@ -83,20 +84,35 @@ def plan_of(product: str | os.PathLike | Product, technical: bool | None = None)
     return make_plan(product if isinstance(product, Product) else resolve_product(product), technical)
 
 
+AUTO_BASE_PART = "auto"
+
+
+def base_part_of(plan: Plan, base_part: str | None) -> str | None:
+    """The base part that sequences start from (paper Sec. V): None (every sequence), ``"auto"`` (the most
+    connected part, :func:`~planner.assembly.intentions.most_connected_part`) or a part id, checked: a
+    :class:`PlannerError` that lists the parts when it is not one. The one place ``"auto"`` is resolved."""
+    if base_part is None or base_part == "":
+        return None
+    base = most_connected_part(plan.product) if base_part == AUTO_BASE_PART else str(base_part)
+    base_part_first_edges(plan.states, base)  # raises for a part the product does not have
+    return base
+
+
 def plan_statistics_of(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                        base_part: str | None = None) -> tuple[Plan, PlanStatistics]:
     """The plan and its figures (``aplan stats``). ``base_part``: count only the sequences whose first
-    operation joins it; ``"auto"``: the most connected part."""
+    operation joins it, and their intentions; ``"auto"``: the most connected part (:func:`base_part_of`)."""
     plan = product if isinstance(product, Plan) else plan_of(product, technical)
-    base = most_connected_part(plan.product) if base_part == "auto" else base_part
-    return plan, plan_statistics(plan, base)
+    return plan, plan_statistics(plan, base_part_of(plan, base_part))
 
 
 def decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
-                   rewards: Rewards = Rewards(), discount: float = DISCOUNT) -> IntentionModel:
-    """The decision model of Alg. 3 of a product, PRODUCT argument or plan."""
+                   rewards: Rewards = Rewards(), discount: float = DISCOUNT,
+                   base_part: str | None = None) -> IntentionModel:
+    """The decision model of Alg. 3 of a product, PRODUCT argument or plan; ``base_part``: only the sequences
+    that start from it (``"auto"``: the most connected part, :func:`base_part_of`)."""
     plan = product if isinstance(product, Plan) else plan_of(product, technical)
-    return intention_model(plan, rewards, discount)
+    return intention_model(plan, rewards, discount, base_part=base_part_of(plan, base_part))
 
 
 def _model_file_kind(path: str | os.PathLike) -> str | None:
@@ -105,15 +121,19 @@ def _model_file_kind(path: str | os.PathLike) -> str | None:
 
 
 def load_model(argument: str | os.PathLike, technical: bool | None = None, rewards: Rewards = Rewards(),
-               discount: float = DISCOUNT) -> Model:
+               discount: float = DISCOUNT, base_part: str | None = None) -> Model:
     """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`), else a PRODUCT
-    (its :class:`IntentionModel`; ``technical``, ``rewards`` and ``discount`` apply to it only)."""
+    (its :class:`IntentionModel`; ``technical``, ``rewards``, ``discount`` and ``base_part`` apply to it only:
+    a base part with a model file is a :class:`PlannerError`, since the file's intentions are fixed)."""
     kind = _model_file_kind(argument)
+    if kind is not None and base_part:
+        raise PlannerError(f"{argument}: a base part applies to products only, and this is a model file whose "
+                           "intentions are fixed; leave out the base part (--base-part), or give the PRODUCT")
     if kind in (".pomdpx", ".pomdpx.gz"):
         return read_pomdpx(argument)
     if kind == ".pomdp":
         return read_cassandra(argument)
-    return decision_model(argument, technical, rewards, discount)
+    return decision_model(argument, technical, rewards, discount, base_part)
 
 
 def tables(model: Model) -> POMDP:

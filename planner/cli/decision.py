@@ -23,8 +23,8 @@ def model_from(args: argparse.Namespace, product_only: bool = False):
     """The model of ``args.model`` (or ``args.product``): a PRODUCT's decision model, or a model file."""
     argument = getattr(args, "model", None) or args.product
     if product_only:
-        return api.decision_model(argument, args.technical, rewards_from(args), args.discount)
-    return api.load_model(argument, args.technical, rewards_from(args), args.discount)
+        return api.decision_model(argument, args.technical, rewards_from(args), args.discount, args.base_part)
+    return api.load_model(argument, args.technical, rewards_from(args), args.discount, args.base_part)
 
 
 def policy_from(args: argparse.Namespace, model):

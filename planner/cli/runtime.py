@@ -90,7 +90,8 @@ def _session(args: argparse.Namespace) -> int:
                               on_warning=lambda message: events.write("warning", step=_current_step(events),
                                                                       message=message),
                               detections=stream, robot_uses_tray_tools=not args.robot_own_tools)
-    settings = {"policy": args.policy, "technical": args.technical, "discount": args.discount,
+    settings = {"policy": args.policy, "technical": args.technical, "base_part": model.base_part,
+                "discount": args.discount,
                 "rewards": vars(model.rewards), "robot": args.robot, "source": _source_name(args),
                 "debounce": args.debounce, "quiet_frames": args.quiet_frames,
                 "robot_own_tools": args.robot_own_tools}
