@@ -73,8 +73,8 @@ _PROPERTIES = (
     ("OperationTags", "App::PropertyStringList", "Designer intent",
      'one JSON object per operation: {"inputs": [[...], [...]], "unfavorable": b, "robot": b, "tool": t}'),
     ("BasePart", "App::PropertyString", "Designer intent",
-     "the part every assembly sequence starts from (paper Sec. V): a component id, 'auto' for the most connected "
-     "part, empty for none"),
+     ("the part every assembly sequence starts from (paper Sec. V): a component id, 'auto' for the most "
+      "connected part, empty for none")),
     ("Engine", "App::PropertyEnumeration", "Detection", "geometry engine for contacts and obstructions"),
     ("ContactTolerance", "App::PropertyFloat", "Detection", "surfaces closer than this touch (mm)"),
     ("InterferenceVolume", "App::PropertyFloat", "Detection", "overlaps above this volume are reported (mm^3)"),

@@ -39,7 +39,8 @@ from . import ADDON_DIR
 from .protocol import BATCH_SCRIPT
 
 __all__ = ["require_analysis", "export_for_detection", "worker_command", "analyze_bundle", "store_detection",
-           "edit_analysis_diagrams", "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report", "export_analysis_bundle", "export_decision_model",
+           "edit_analysis_diagrams", "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report",
+           "export_analysis_bundle", "export_decision_model",
            "solve_product", "simulate_sequence", "BATCH_SCRIPT"]
 
 

@@ -40,8 +40,8 @@ from .errors import PlannerError, UnknownProductError
 from .product import Product, load_product
 from .product.examples import EXAMPLES, example_path
 
-__all__ = ["resolve_product", "plan_of", "plan_statistics_of", "base_part_of", "decision_model", "load_model", "save_model",
-           "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for", "simulate", "evaluate"]
+__all__ = ["resolve_product", "plan_of", "plan_statistics_of", "base_part_of", "decision_model", "load_model",
+           "save_model", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for", "simulate", "evaluate"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
 SOLVER_ENGINES = ("builtin", "sarsop")

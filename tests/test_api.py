@@ -7,7 +7,15 @@ import math
 import numpy as np
 import pytest
 
-from planner import PlannerError, UnknownProductError, api, count_intentions, example_path, intention_graph, save_product
+from planner import (
+    PlannerError,
+    UnknownProductError,
+    api,
+    count_intentions,
+    example_path,
+    intention_graph,
+    save_product,
+)
 from planner.decision import POMDP, IntentionModel
 
 

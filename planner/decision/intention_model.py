@@ -103,8 +103,9 @@ class IntentionModel:
         (``what`` names it in the message, e.g. ``--sequence``)."""
         starts = self.full_sequences()
         if int(intention) not in set(starts.tolist()):
+            base = f" --base-part {self.base_part}" if self.base_part else ""
             raise PlannerError(f"{what} {intention} is not a full assembly sequence; the sequences are the "
-                               f"intentions {starts[0]}..{starts[-1]} (see aplan intentions PRODUCT --full)")
+                               f"intentions {starts[0]}..{starts[-1]} (see aplan intentions PRODUCT --full{base})")
         return int(intention)
 
     def sequence_operations(self, intention: int) -> list[int]:

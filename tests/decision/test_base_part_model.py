@@ -40,7 +40,8 @@ def test_synthetic_factored_belief_equals_flat_with_a_base_part(product, base_pa
     rng = np.random.default_rng(5)
     starts = rng.choice(flat_model.full_sequences(), size=4, replace=False)
     for k, start in enumerate(starts):
-        _episode(flat_model, fact, int(start), rng, (_random_actions, _wrong_actions, _right_actions)[k % 3](flat_model))
+        policy = (_random_actions, _wrong_actions, _right_actions)[k % 3]
+        _episode(flat_model, fact, int(start), rng, policy(flat_model))
 
 
 def test_observations_come_from_allowed_steps_only(pen):
