@@ -8,7 +8,7 @@ import pytest
 from test_factored_model import _episode, _random_actions, _right_actions, _wrong_actions
 
 from planner import PlannerError, chain_product, complete_product, count_intentions, count_sequences, make_plan
-from planner.decision import factored_model, intention_model, to_flat
+from planner.decision import DiscreteUpdater, FactoredUpdater, factored_model, intention_model, to_flat
 
 
 def _models(product, base_part, technical=None):
@@ -95,3 +95,21 @@ def test_bad_base_parts(pen):
     for build in (factored_model, intention_model):  # the cap never takes part in the first operation
         with pytest.raises(PlannerError, match="no assembly sequence starts from the base part 'cap'"):
             build(plan, base_part="cap")
+
+
+@pytest.mark.parametrize("base_part", ["body", "button"])
+def test_resets_stay_among_the_base_parts_intentions(pen, base_part):
+    """An observation no intention of the restricted model can emit (the body picked alone with the hammer, when
+    every sequence starts from the body) resets both beliefs to uniform over the restricted intentions; then an
+    observation some can emit, from there."""
+    flat_model, fact = _models(pen, base_part, False)
+    allowed = fact.reachable(fact.initial_classes)
+    impossible = [z for z in range(1, len(fact.observations)) if not (fact.observation_likelihood(z)[allowed] > 0).any()]
+    assert fact.observations.index("body+[hammer]") in impossible
+    flat, factored = DiscreteUpdater(flat_model.pomdp), FactoredUpdater(fact)
+    b, belief = flat.initialize(), factored.initialize()
+    wait = len(fact.actions) - 1
+    for z in (impossible[0], 0, impossible[-1]):
+        b, belief = flat.update(b, wait, z), factored.update(belief, wait, z)
+        assert np.max(np.abs(to_flat(belief, flat_model.graph) - b)) <= 1e-9
+    assert [e.reset_to for e in flat.events] == [e.reset_to for e in factored.events] == ["uniform", "uniform"]
