@@ -2,8 +2,11 @@
 and enumerated by Alg. 2, against brute force over the paths of the assembly state graph (networkx)."""
 from __future__ import annotations
 
+from math import comb, factorial
+
 import networkx as nx
 import pytest
+from test_properties import merge_orders, stirling2
 
 from planner import PlannerError, chain_product, complete_product, count_intentions, count_sequences, make_plan
 from planner.assembly import base_part_first_edges, intention_graph
@@ -89,3 +92,31 @@ def test_restricted_limit_counts_the_restricted_intentions(pen):
     with pytest.raises(PlannerError, match=f"{total} would be enumerated"):
         intention_graph(states, limit=total - 1, base_part="body")
     assert intention_graph(states, limit=total, base_part="body").n_intentions == total
+
+
+@pytest.mark.parametrize("n", range(2, 11))
+def test_chain_closed_form(n):
+    """Chain p1..pn: a state is the set of links joined, and N(state with m links) = (n-1-m)!. The base part pj has d
+    links (1 at the ends, else 2): d (n-2)! sequences start from it, and the reachable states are those that join
+    at least one of its links: C(n-1, m) - C(n-1-d, m) of them with m links."""
+    states = make_plan(chain_product(n)).states
+    parts = states.andor.parts
+    for j, part in enumerate(parts):
+        d = (j > 0) + (j < n - 1)
+        sequences = d * factorial(n - 2)
+        reachable = sum((comb(n - 1, m) - comb(n - 1 - d, m)) * factorial(n - 1 - m) for m in range(1, n))
+        assert count_sequences(states, part) == sequences
+        assert count_intentions(states, base_part=part) == sequences + reachable
+
+
+@pytest.mark.parametrize("n", range(2, 9))
+def test_complete_closed_form(n):
+    """Complete graph of n parts: a state with k blocks has M(k) = k!(k-1)!/2^(k-1) paths to the end; the first
+    operation joins one of the C(n, 2) pairs, 2/n of them holding the base part; the reachable states are the set
+    partitions where its block has two parts or more: S(n, k) - S(n-1, k-1) with k blocks."""
+    states = make_plan(complete_product(n)).states
+    sequences = 2 * merge_orders(n) // n
+    reachable = sum((stirling2(n, k) - stirling2(n - 1, k - 1)) * merge_orders(k) for k in range(1, n + 1))
+    for part in states.andor.parts[:2]:
+        assert count_sequences(states, part) == sequences
+        assert count_intentions(states, base_part=part) == sequences + reachable
