@@ -23,6 +23,10 @@ def model_from(args: argparse.Namespace, product_only: bool = False):
     """The model of ``args.model`` (or ``args.product``): a PRODUCT's decision model, or a model file."""
     argument = getattr(args, "model", None) or args.product
     if product_only:
+        if str(argument).lower().endswith(api.MODEL_SUFFIXES):
+            extra = "; --base-part, too, applies to products only" if args.base_part else ""
+            raise PlannerError(f"{argument}: a model file, but this command needs a PRODUCT (its plan names what the "
+                               f"operator and the robot do){extra}")
         return api.decision_model(argument, args.technical, rewards_from(args), args.discount, args.base_part)
     return api.load_model(argument, args.technical, rewards_from(args), args.discount, args.base_part)
 

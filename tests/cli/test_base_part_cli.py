@@ -114,6 +114,9 @@ def test_bad_base_parts(capsys, tmp_path):
         code, _, err = run(capsys, command, tmp_path / "pen.pomdpx", "--base-part", "-o", tmp_path / "p.policy")\
             if command == "solve" else run(capsys, command, tmp_path / "pen.pomdpx", "--base-part", "--episodes", 1)
         assert code == 1 and "a base part applies to products only" in err
+    done = _aplan("session", tmp_path / "pen.pomdpx", "--base-part", "--keyboard", "--log", tmp_path / "s.jsonl")
+    assert done.returncode == 1 and "needs a PRODUCT" in done.stderr and "--base-part, too, applies to products only" \
+        in done.stderr and not (tmp_path / "s.jsonl").exists()
 
 
 def test_session_logs_the_base_part_and_replay_rebuilds_the_model(body_model, body_policy, tmp_path):
