@@ -9,6 +9,9 @@ top of the geometry (everything is saved in the ``.FCStd`` and restored on reope
 - ``TechnicalConstraints``, ``Tools`` and ``OperationTags``: one product-format JSON object per entry
   (``docs/product-format.md``: ``{"parts": [...], "requires": r, "active": b}``,
   ``{"inputs": [[...], [...]], "unfavorable": b, "robot": b, "tool": t}``), over component ids;
+- ``BasePart``: the part every assembly sequence starts from (paper Sec. V) for the decision model: empty for
+  none, ``auto`` for the most connected part, or a component id (an analysis saved before it existed gets
+  the property, empty, when it is read or restored);
 - ``Engine`` and the tolerances of the geometry engines (``ContactTolerance``, ``InterferenceVolume``,
   ``DepthTolerance``);
 - ``Diagrams``: the connection and obstruction diagrams the last detection found (product-format JSON);
@@ -28,11 +31,12 @@ from planner.defaults import BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOL
 
 from .document import DocumentError
 
-__all__ = ["FORMAT_VERSION", "ENGINES", "Intent", "IntentError", "AnalysisProxy", "create_analysis",
+__all__ = ["FORMAT_VERSION", "ENGINES", "BASE_PART_AUTO", "Intent", "IntentError", "AnalysisProxy", "create_analysis",
            "find_analysis", "read_intent", "update_intent", "product_intent", "is_analysis"]
 
 FORMAT_VERSION = 1
 ENGINES = ("mesh", "occt")
+BASE_PART_AUTO = "auto"  # the most connected part (planner.api.base_part_of)
 _TYPE = "AplanAnalysis"
 
 
@@ -50,6 +54,7 @@ class Intent:
     technical_constraints: list[dict] = field(default_factory=list)
     tools: list[str] = field(default_factory=list)
     operations: list[dict] = field(default_factory=list)
+    base_part: str = ""
     engine: str = "mesh"
     contact: float = CONTACT_TOLERANCE
     interference: float = INTERFERENCE_VOLUME
@@ -67,6 +72,9 @@ _PROPERTIES = (
     ("Tools", "App::PropertyStringList", "Designer intent", "tools the operator picks up (ids)"),
     ("OperationTags", "App::PropertyStringList", "Designer intent",
      'one JSON object per operation: {"inputs": [[...], [...]], "unfavorable": b, "robot": b, "tool": t}'),
+    ("BasePart", "App::PropertyString", "Designer intent",
+     ("the part every assembly sequence starts from (paper Sec. V): a component id, 'auto' for the most "
+      "connected part, empty for none")),
     ("Engine", "App::PropertyEnumeration", "Detection", "geometry engine for contacts and obstructions"),
     ("ContactTolerance", "App::PropertyFloat", "Detection", "surfaces closer than this touch (mm)"),
     ("InterferenceVolume", "App::PropertyFloat", "Detection", "overlaps above this volume are reported (mm^3)"),
@@ -97,6 +105,7 @@ class AnalysisProxy:
 
     def onDocumentRestored(self, obj):
         self.Type = _TYPE
+        _add_missing_properties(obj)
 
     def __getstate__(self):  # FreeCAD 0.20 serialises the proxy through these
         return {"Type": _TYPE}
@@ -105,6 +114,14 @@ class AnalysisProxy:
         self.Type = _TYPE
 
     dumps, loads = __getstate__, __setstate__  # FreeCAD 0.21 and later
+
+
+def _add_missing_properties(obj) -> None:
+    """Properties added since the analysis was saved (``BasePart``), with their defaults: an older analysis
+    reads as it did."""
+    for name, kind, group, tip in _PROPERTIES:
+        if name not in obj.PropertiesList:
+            obj.addProperty(kind, name, group, tip)
 
 
 def is_analysis(obj) -> bool:
@@ -197,7 +214,8 @@ def read_intent(analysis) -> Intent:
         raise IntentError(f"{analysis.Label}.Diagrams: not valid JSON ({exc.msg}); run the detection again") from None
     return Intent(groups=groups, excluded=list(analysis.Excluded), split_solids=bool(analysis.SplitSolids),
                   technical_constraints=_json_entries(analysis, "TechnicalConstraints"), tools=list(analysis.Tools),
-                  operations=_json_entries(analysis, "OperationTags"), engine=str(analysis.Engine),
+                  operations=_json_entries(analysis, "OperationTags"),
+                  base_part=str(getattr(analysis, "BasePart", "")).strip(), engine=str(analysis.Engine),
                   contact=float(analysis.ContactTolerance), interference=float(analysis.InterferenceVolume),
                   depth=float(analysis.DepthTolerance), diagrams=diagrams)
 
@@ -211,6 +229,12 @@ def _write(analysis, intent: Intent) -> None:
     for name in ("contact", "interference", "depth"):
         if not getattr(intent, name) >= 0:
             raise IntentError(f"tolerance {name} must be >= 0, got {getattr(intent, name)!r}")
+    parts = intent.diagrams.get("parts") or []
+    base = intent.base_part.strip()
+    if base not in ("", BASE_PART_AUTO) and parts and base not in parts:
+        raise IntentError(f"{analysis.Label}.BasePart: {base!r} is not a component; use one of {', '.join(parts)}, "
+                          f"'{BASE_PART_AUTO}' (the most connected part) or leave it empty (no base part)")
+    _add_missing_properties(analysis)
     values = {
         "Groups": [f"{n}={','.join(m)}" for n, m in intent.groups.items()],
         "Excluded": list(intent.excluded),
@@ -218,6 +242,7 @@ def _write(analysis, intent: Intent) -> None:
         "TechnicalConstraints": [json.dumps(c, sort_keys=True) for c in intent.technical_constraints],
         "Tools": list(intent.tools),
         "OperationTags": [json.dumps(t, sort_keys=True) for t in intent.operations],
+        "BasePart": base,
         "Engine": intent.engine,
         "ContactTolerance": float(intent.contact),
         "InterferenceVolume": float(intent.interference),

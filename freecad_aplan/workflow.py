@@ -6,6 +6,7 @@ From an open document with an APLAN analysis (:mod:`freecad_aplan.intent`):
    job (:func:`worker_command`: ``batch.py analyze``, i.e. :func:`analyze_bundle`) runs a geometry engine on
    it; :func:`store_detection` keeps the connection and obstruction diagrams in the analysis;
 2. :func:`analysis_product` is the product the planner sees: those diagrams plus the designer intent;
+   :func:`analysis_base_part` the base part the decision model starts from (the analysis' ``BasePart``);
 3. :func:`plan_report` gives the statistics (the figures of ``aplan stats``) and the graph pictures;
 4. :func:`export_analysis_bundle`, :func:`export_decision_model`, :func:`solve_product` (a background job)
    and :func:`simulate_sequence` write the bundle, the POMDPX/``.pomdp`` model, the policy and the belief plot.
@@ -38,7 +39,8 @@ from . import ADDON_DIR
 from .protocol import BATCH_SCRIPT
 
 __all__ = ["require_analysis", "export_for_detection", "worker_command", "analyze_bundle", "store_detection",
-           "edit_analysis_diagrams", "analysis_product", "analysis_diagrams", "plan_report", "export_analysis_bundle", "export_decision_model",
+           "edit_analysis_diagrams", "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report",
+           "export_analysis_bundle", "export_decision_model",
            "solve_product", "simulate_sequence", "BATCH_SCRIPT"]
 
 
@@ -191,12 +193,21 @@ def analysis_product(analysis, name: str = ""):
                           "or run the detection again if the components changed") from None
 
 
-def plan_report(product, folder: str | None = None, technical: bool | None = None):
-    """The plan of ``product``, its statistics (``aplan stats``'s figures) and, with ``folder``, the pictures
-    of its AND/OR, state and intention graphs (:func:`planner.assembly.figures.draw_plan`)."""
+def analysis_base_part(analysis) -> str | None:
+    """The analysis' base part (``BasePart``): None when empty, else ``auto`` or a component id, as the
+    planner's ``base_part`` arguments take it (:func:`planner.api.base_part_of` resolves and checks it)."""
+    from .intent import read_intent
+
+    return read_intent(analysis).base_part or None
+
+
+def plan_report(product, folder: str | None = None, technical: bool | None = None, base_part: str | None = None):
+    """The plan of ``product``, its statistics (``aplan stats``'s figures; with ``base_part``, the sequences that
+    start from it and their intentions) and, with ``folder``, the pictures of its AND/OR, state and intention
+    graphs (:func:`planner.assembly.figures.draw_plan`)."""
     from planner import api
 
-    plan, statistics = api.plan_statistics_of(product, technical)
+    plan, statistics = api.plan_statistics_of(product, technical, base_part)
     images = {}
     if folder is not None:
         from planner.assembly.figures import draw_plan
@@ -242,24 +253,26 @@ def analysis_diagrams(analysis) -> dict:
     return stored_analysis(read_intent(analysis).diagrams)
 
 
-def export_decision_model(product, path: str, technical: bool | None = None) -> dict:
-    """Write the POMDP of ``product`` (Alg. 3) as POMDPX or ``.pomdp`` (by the file name); returns its sizes."""
+def export_decision_model(product, path: str, technical: bool | None = None, base_part: str | None = None) -> dict:
+    """Write the POMDP of ``product`` (Alg. 3; with ``base_part``, over the sequences that start from it) as
+    POMDPX or ``.pomdp`` (by the file name); returns its sizes."""
     from planner import api
 
-    model = api.decision_model(product, technical)
+    model = api.decision_model(product, technical, base_part=base_part)
     api.save_model(model, path)
     return {"states": model.pomdp.n_states, "actions": model.pomdp.n_actions,
             "observations": model.pomdp.n_observations}
 
 
 def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE_TIME_LIMIT,
-                  precision: float = SOLVE_PRECISION, technical: bool | None = None, progress=None) -> dict:
-    """Solve the decision model of the product file ``product`` and write the policy to ``output`` (a
-    background job)."""
+                  precision: float = SOLVE_PRECISION, technical: bool | None = None, progress=None,
+                  base_part: str | None = None) -> dict:
+    """Solve the decision model of the product file ``product`` (with ``base_part``: over the sequences that
+    start from it) and write the policy to ``output`` (a background job)."""
     from planner import api
     from planner.decision.policy import write_policy
 
-    model = api.decision_model(product, technical)
+    model = api.decision_model(product, technical, base_part=base_part)
     result = api.solve(model, time_limit, precision, progress=progress)
     write_policy(result.policy, output, model.name)
     return {"lower_bound": result.lower_bound, "upper_bound": result.upper_bound,
@@ -267,14 +280,14 @@ def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE
 
 
 def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None = None, seed: int = 0,
-                      technical: bool | None = None) -> dict:
+                      technical: bool | None = None, base_part: str | None = None) -> dict:
     """Play the operator through full sequence ``sequence`` (default: the first) against the policy, taking
     turns with the robot, and write the belief plot ``stem.png``/``stem.svg``; returns the steps and the plot
-    paths."""
+    paths. ``base_part``: the model's, as the policy was solved for."""
     from planner import api
     from planner.decision.simulate import plot_beliefs
 
-    model = api.decision_model(product, technical)
+    model = api.decision_model(product, technical, base_part=base_part)
     policy, _ = api.policy_for(model, policy_path)
     episode, = api.simulate(model, policy, None if sequence is None else [sequence], seed=seed, operator="turns",
                             what="sequence")

@@ -5,7 +5,8 @@ Front ends only parse their input and show results; the steps of the method live
 
 1. :func:`resolve_product`: a PRODUCT argument (a product file, a bundle folder, a CAD file read through
    a plugin, or an embedded example) -> :class:`~planner.product.Product`;
-2. :func:`plan_statistics_of`: the plan of a product and its figures (``aplan stats``);
+2. :func:`plan_statistics_of`: the plan of a product and its figures (``aplan stats``); :func:`base_part_of`:
+   the base part every sequence starts from (paper Sec. V), ``"auto"`` for the most connected part;
 3. :func:`decision_model` / :func:`load_model` / :func:`save_model`: the decision model of Alg. 3, or a
    POMDP read from a file, and writing it as POMDPX or ``.pomdp``;
 4. :func:`solve`, :func:`policy_for`: a policy from a solver (the built-in point-based one, or SARSOP);
@@ -27,7 +28,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .assembly.intentions import count_intentions, most_connected_part
+from .assembly.intentions import base_part_first_edges, count_intentions, most_connected_part
 from .assembly.plan import Plan, make_plan
 from .assembly.stats import PlanStatistics, plan_statistics
 from .decision.factored_model import FactoredIntentionModel, factored_model
@@ -53,8 +54,8 @@ from .errors import PlannerError, UnknownProductError
 from .product import Product, load_product
 from .product.examples import EXAMPLES, example_path
 
-__all__ = ["resolve_product", "plan_of", "plan_statistics_of", "decision_model", "load_model", "save_model",
-           "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for", "simulate", "evaluate",
+__all__ = ["resolve_product", "plan_of", "plan_statistics_of", "base_part_of", "decision_model", "load_model",
+           "save_model", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for", "simulate", "evaluate",
            "PLANNERS", "factored_decision_model", "online_planner", "choose_planner", "decision_maker"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
@@ -100,27 +101,43 @@ def plan_of(product: str | os.PathLike | Product, technical: bool | None = None)
     return make_plan(product if isinstance(product, Product) else resolve_product(product), technical)
 
 
+AUTO_BASE_PART = "auto"
+
+
+def base_part_of(plan: Plan, base_part: str | None) -> str | None:
+    """The base part that sequences start from (paper Sec. V): None (every sequence), ``"auto"`` (the most
+    connected part, :func:`~planner.assembly.intentions.most_connected_part`) or a part id, checked: a
+    :class:`PlannerError` that lists the parts when it is not one. The one place ``"auto"`` is resolved."""
+    if base_part is None or base_part == "":
+        return None
+    base = most_connected_part(plan.product) if base_part == AUTO_BASE_PART else str(base_part)
+    base_part_first_edges(plan.states, base)  # raises for a part the product does not have
+    return base
+
+
 def plan_statistics_of(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                        base_part: str | None = None) -> tuple[Plan, PlanStatistics]:
     """The plan and its figures (``aplan stats``). ``base_part``: count only the sequences whose first
-    operation joins it; ``"auto"``: the most connected part."""
+    operation joins it, and their intentions; ``"auto"``: the most connected part (:func:`base_part_of`)."""
     plan = product if isinstance(product, Plan) else plan_of(product, technical)
-    base = most_connected_part(plan.product) if base_part == "auto" else base_part
-    return plan, plan_statistics(plan, base)
+    return plan, plan_statistics(plan, base_part_of(plan, base_part))
 
 
 def decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
-                   rewards: Rewards = Rewards(), discount: float = DISCOUNT) -> IntentionModel:
-    """The decision model of Alg. 3 of a product, PRODUCT argument or plan."""
+                   rewards: Rewards = Rewards(), discount: float = DISCOUNT,
+                   base_part: str | None = None) -> IntentionModel:
+    """The decision model of Alg. 3 of a product, PRODUCT argument or plan; ``base_part``: only the sequences
+    that start from it (``"auto"``: the most connected part, :func:`base_part_of`)."""
     plan = product if isinstance(product, Plan) else plan_of(product, technical)
-    return intention_model(plan, rewards, discount)
+    return intention_model(plan, rewards, discount, base_part=base_part_of(plan, base_part))
 
 
 def factored_decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
-                            rewards: Rewards = Rewards(), discount: float = DISCOUNT) -> FactoredIntentionModel:
+                            rewards: Rewards = Rewards(), discount: float = DISCOUNT,
+                            base_part: str | None = None) -> FactoredIntentionModel:
     """The same decision model without enumerating intentions (paper Sec. V): beliefs over classes."""
     plan = product if isinstance(product, Plan) else plan_of(product, technical)
-    return factored_model(plan, rewards, discount)
+    return factored_model(plan, rewards, discount, base_part_of(plan, base_part))
 
 
 def online_planner(model: FactoredIntentionModel, decision_time: float | None = DECISION_TIME,
@@ -134,7 +151,7 @@ def online_planner(model: FactoredIntentionModel, decision_time: float | None = 
 
 
 def choose_planner(plan: Plan, planner: str | None, policy: str | os.PathLike | None,
-                   limit: int = INTENTION_LIMIT) -> tuple[str, str | None]:
+                   limit: int = INTENTION_LIMIT, base_part: str | None = None) -> tuple[str, str | None]:
     """``offline`` or ``online``, and why when it was not asked for. ``planner`` None: offline with a policy
     file, else online (no policy to follow); the flat model of more than ``limit`` intentions is never built:
     offline then needs a policy over the lumped model's classes, and without one the online planner decides."""
@@ -144,7 +161,7 @@ def choose_planner(plan: Plan, planner: str | None, policy: str | os.PathLike | 
         return planner, None
     if policy:
         return "offline", None
-    intentions = count_intentions(plan.states)
+    intentions = count_intentions(plan.states, base_part=base_part)
     if intentions > limit:
         return "online", (f"the flat model would hold {intentions:,} intentions (more than {limit:,}) and no "
                           "--policy was given: using the online planner")
@@ -155,7 +172,8 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
                    policy: str | os.PathLike | None = None, technical: bool | None = None,
                    rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                    decision_time: float | None = DECISION_TIME, expansions: int | None = None,
-                   time_limit: float = POLICY_TIME_LIMIT, limit: int = INTENTION_LIMIT):
+                   time_limit: float = POLICY_TIME_LIMIT, limit: int = INTENTION_LIMIT,
+                   base_part: str | None = None):
     """The model, the policy and a note (what was chosen and why, or None) that a session, a simulation or an
     evaluation runs on:
 
@@ -163,25 +181,28 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
     - offline with a policy over the lumped model's classes: the factored model and that policy;
     - offline otherwise: the flat model of Alg. 3 (refused above ``limit`` intentions, naming ``--planner
       online``) and the policy file, or the built-in solver's policy after ``time_limit`` seconds.
+
+    ``base_part``: only the sequences that start from it (``"auto"``: the most connected part).
     """
     plan = product if isinstance(product, Plan) else plan_of(product, technical)
-    choice, note = choose_planner(plan, planner, policy, limit)
+    base_part = base_part_of(plan, base_part)
+    choice, note = choose_planner(plan, planner, policy, limit, base_part)
     if choice == "online":
-        model = factored_model(plan, rewards, discount)
+        model = factored_model(plan, rewards, discount, base_part)
         return model, online_planner(model, decision_time, expansions), note
+    intentions = count_intentions(plan.states, base_part=base_part)
     if policy:
         vectors = read_policy(policy)
-        lumped = factored_model(plan, rewards, discount)
-        if vectors.alphas.shape[1] == lumped.n_classes and vectors.alphas.shape[1] != count_intentions(plan.states):
+        lumped = factored_model(plan, rewards, discount, base_part)
+        if vectors.alphas.shape[1] == lumped.n_classes and vectors.alphas.shape[1] != intentions:
             if vectors.actions.size and vectors.actions.max() >= len(lumped.actions):
                 raise PlannerError(f"{policy}: action {int(vectors.actions.max())} out of range; the model has "
                                    f"{len(lumped.actions)} actions")
             return lumped, vectors, None
-    intentions = count_intentions(plan.states)
     if intentions > limit:
         raise PlannerError(f"the flat decision model would hold {intentions:,} intentions (more than {limit:,}); "
                            "use --planner online, or a policy over the lumped model (aplan solve --lumped)")
-    model = intention_model(plan, rewards, discount)
+    model = intention_model(plan, rewards, discount, base_part=base_part)
     vectors, result = policy_for(model, policy, time_limit)
     if result is not None:
         note = (f"no --policy: solved for {result.seconds:.1f} s, lower bound {result.lower_bound:.5f}, upper "
@@ -195,15 +216,19 @@ def _model_file_kind(path: str | os.PathLike) -> str | None:
 
 
 def load_model(argument: str | os.PathLike, technical: bool | None = None, rewards: Rewards = Rewards(),
-               discount: float = DISCOUNT) -> Model:
+               discount: float = DISCOUNT, base_part: str | None = None) -> Model:
     """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`), else a PRODUCT
-    (its :class:`IntentionModel`; ``technical``, ``rewards`` and ``discount`` apply to it only)."""
+    (its :class:`IntentionModel`; ``technical``, ``rewards``, ``discount`` and ``base_part`` apply to it only:
+    a base part with a model file is a :class:`PlannerError`, since the file's intentions are fixed)."""
     kind = _model_file_kind(argument)
+    if kind is not None and base_part:
+        raise PlannerError(f"{argument}: a base part applies to products only, and this is a model file whose "
+                           "intentions are fixed; leave out the base part (--base-part), or give the PRODUCT")
     if kind in (".pomdpx", ".pomdpx.gz"):
         return read_pomdpx(argument)
     if kind == ".pomdp":
         return read_cassandra(argument)
-    return decision_model(argument, technical, rewards, discount)
+    return decision_model(argument, technical, rewards, discount, base_part)
 
 
 def tables(model: Model) -> POMDP:

@@ -7,7 +7,15 @@ import math
 import numpy as np
 import pytest
 
-from planner import PlannerError, UnknownProductError, api, example_path, save_product
+from planner import (
+    PlannerError,
+    UnknownProductError,
+    api,
+    count_intentions,
+    example_path,
+    intention_graph,
+    save_product,
+)
 from planner.decision import POMDP, IntentionModel
 
 
@@ -35,11 +43,31 @@ def test_resolve_product(tmp_path, pen):
 
 
 def test_plan_statistics_with_a_base_part():
-    """The paper's Sec. V: only the sequences whose first operation joins the base part (the pen's body)."""
+    """The paper's Sec. V: only the sequences whose first operation joins the base part (the pen's body), and their
+    intentions (the counts against the intention graph filtered by hand)."""
     plan, stats = api.plan_statistics_of("pen", technical=True, base_part="auto")
-    assert stats.base_part == "body" and (stats.intentions, stats.sequences) == (39, 5)
+    graph = intention_graph(plan.states)
+    body = plan.andor.parts.index("body")
+    allowed = [tuple(graph.path(int(i))) for i in graph.full_sequences()
+               if plan.andor.subassemblies[plan.andor.operations[graph.operations(int(i))[0]].parent] >> body & 1]
+    suffixes = {path[k:] for path in allowed for k in range(len(path))}
+    assert stats.base_part == "body" and (stats.intentions, stats.sequences) == (len(suffixes), len(allowed)) == (22, 5)
     _, whole = api.plan_statistics_of(plan)
-    assert whole.sequences == 12 and whole.base_part is None
+    assert (whole.intentions, whole.sequences) == (39, 12) and whole.base_part is None
+    assert api.base_part_of(plan, None) is None and api.base_part_of(plan, "") is None
+    assert api.base_part_of(plan, "auto") == "body" == api.base_part_of(plan, "body")
+    with pytest.raises(PlannerError, match="base part 'lid' is not a part of the product; parts: ink"):
+        api.base_part_of(plan, "lid")
+
+
+def test_decision_model_with_a_base_part(tmp_path):
+    model = api.decision_model("pen", base_part="auto")
+    assert model.base_part == "body" and model.pomdp.n_states == count_intentions(model.plan.states, base_part="body")
+    path = tmp_path / "pen.pomdp"
+    api.save_model(model, path)
+    assert api.load_model(path).n_states == model.pomdp.n_states
+    with pytest.raises(PlannerError, match="a base part applies to products only"):
+        api.load_model(path, base_part="auto")
 
 
 def test_models_from_products_and_files(tmp_path, model):

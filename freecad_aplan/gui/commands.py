@@ -238,8 +238,9 @@ class Diagrams(_Command):
 
 
 class Intent(_Command):
-    name, menu = "Aplan_Intent", "Technical constraints and operation tags"
-    tooltip = "Edit technical constraints; tag operations as unfavorable to humans, robot-capable, and their tool"
+    name, menu = "Aplan_Intent", "Technical constraints, operation tags and base part"
+    tooltip = ("Edit technical constraints; tag operations as unfavorable to humans, robot-capable, and their tool; "
+               "choose the base part assembly starts from")
 
     def run(self):
         from planner import make_plan
@@ -261,8 +262,10 @@ class Plan(_Command):
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
         folder = tempfile.mkdtemp(prefix="aplan-plan-")
-        _, statistics, images = workflow.plan_report(product, folder)
+        _, statistics, images = workflow.plan_report(product, folder, base_part=workflow.analysis_base_part(analysis))
         figures = statistics.as_dict()
+        if statistics.base_part:  # intentions and sequences are those that start from it
+            figures["base part"] = statistics.base_part
         self.state.plan = {"statistics": figures, "images": images}
         _message(", ".join(f"{k} {v:,}" if isinstance(v, int) else f"{k} {v}" for k, v in figures.items()),
                  error=False)
@@ -300,7 +303,7 @@ class ExportModel(_Command):
         product = workflow.analysis_product(analysis)
         path = _save_path("Export decision model", "POMDPX (*.pomdpx);;POMDP (*.pomdp)", ".pomdpx")
         if path:
-            sizes = workflow.export_decision_model(product, path)
+            sizes = workflow.export_decision_model(product, path, base_part=workflow.analysis_base_part(analysis))
             _message(f"wrote {path}: {sizes['states']} states, {sizes['actions']} actions, "
                      f"{sizes['observations']} observations", error=False)
 
@@ -335,7 +338,7 @@ class Solve(_Command):
             _message(message)
 
         job = {"action": "solve", "product": os.path.join(folder, PRODUCT_FILE), "output": path,
-               "time_limit": seconds}
+               "time_limit": seconds, "base_part": workflow.analysis_base_part(analysis)}
         BackgroundJob(f"Solving the decision model ({seconds:g} s)", workflow.worker_command("solve"), job, done,
                       failed, self.state.jobs, FreeCADGui.getMainWindow()).start()
 
@@ -360,7 +363,8 @@ class Simulate(_Command):
         if not ok:
             return
         stem = os.path.join(tempfile.mkdtemp(prefix="aplan-simulate-"), "belief")
-        result = workflow.simulate_sequence(product, policy, stem, None if sequence < 0 else sequence)
+        result = workflow.simulate_sequence(product, policy, stem, None if sequence < 0 else sequence,
+                                            base_part=workflow.analysis_base_part(analysis))
         caption = (f"Sequence {result['sequence']}: belief on the true intention first above {CONFIDENCE:g} after "
                    f"{result['confident_after']} operator operation(s). Steps: "
                    + "; ".join(f"{a} / {o} / {p}" for a, o, p in result["steps"]))

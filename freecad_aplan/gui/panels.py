@@ -10,7 +10,7 @@ import FreeCADGui
 from PySide import QtCore, QtGui
 
 from ..diagrams import RELATION_KINDS, RelationError, describe_relation, edited_diagrams, relation_rows
-from ..intent import IntentError, read_intent, update_intent
+from ..intent import BASE_PART_AUTO, IntentError, read_intent, update_intent
 
 __all__ = ["DiagramsPanel", "IntentPanel", "PlanDialog", "ImageDialog", "relation_rows"]
 
@@ -165,11 +165,12 @@ class DiagramsPanel:
 
 
 class IntentPanel:
-    """Technical constraints and operation tags, as two tables.
+    """Technical constraints and operation tags, as two tables, and the base part.
 
     Constraints: parts (comma-separated), the part they require, active. Operation tags: every operation of
     the plan without technical constraints, with its resolved tags; rows the designer changes are stored as
-    tags, the others keep following the defaults.
+    tags, the others keep following the defaults. Base part (paper Sec. V): the part every assembly sequence
+    of the decision model starts from; empty for none, ``auto`` for the most connected part, or a component.
     """
 
     def __init__(self, analysis, plan):
@@ -204,6 +205,17 @@ class IntentPanel:
             self.tags.setItem(j, 3, _item(tags.tool[j] or "", editable=True))
             self.defaults.append((bool(tags.unfavorable[j]), bool(tags.robot[j]), tags.tool[j] or ""))
         layout.addWidget(self.tags)
+        row = QtGui.QHBoxLayout()
+        row.addWidget(QtGui.QLabel("Base part"))
+        self.base_part = QtGui.QComboBox()
+        self.base_part.setObjectName("AplanBasePart")
+        self.base_part.setEditable(True)
+        self.base_part.setToolTip("The part every assembly sequence starts from (paper Sec. V): empty for none, "
+                                  "auto for the most connected part, or a component")
+        self.base_part.addItems(["", BASE_PART_AUTO, *plan.andor.parts])
+        self.base_part.setEditText(intent.base_part)
+        row.addWidget(self.base_part)
+        layout.addLayout(row)
 
     def _add_constraint(self, parts: str, requires: str, active: bool) -> None:
         row = self.constraints.rowCount()
@@ -213,7 +225,7 @@ class IntentPanel:
         self.constraints.setItem(row, 2, _check(active))
 
     def values(self) -> dict:
-        """The intent fields the tables hold (technical_constraints, operations, tools)."""
+        """The intent fields the panel holds (technical_constraints, operations, tools, base_part)."""
         constraints = []
         for row in range(self.constraints.rowCount()):
             parts = [p.strip() for p in self.constraints.item(row, 0).text().split(",") if p.strip()]
@@ -235,7 +247,8 @@ class IntentPanel:
                     tag["tool"] = now[2]
                 operations.append(tag)
         tools = sorted({t["tool"] for t in operations if t.get("tool")} | set(self.intent.tools))
-        return {"technical_constraints": constraints, "operations": operations, "tools": tools}
+        return {"technical_constraints": constraints, "operations": operations, "tools": tools,
+                "base_part": self.base_part.currentText().strip()}
 
     def accept(self) -> bool:
         from ..workflow import analysis_product

@@ -6,6 +6,9 @@ from .andor import AndOrGraph, Operation, and_or_graph
 from .intentions import (
                          DEFAULT_INTENTION_LIMIT,
                          IntentionGraph,
+                         allowed_edges,
+                         base_part_first_edges,
+                         base_part_states,
                          count_intentions,
                          count_sequences,
                          intention_graph,
@@ -19,7 +22,7 @@ from .tags import BLANK, Observation, OperationTags, observation_table, operatio
 
 __all__ = ["AndOrGraph", "Operation", "and_or_graph",
            "DEFAULT_INTENTION_LIMIT", "IntentionGraph", "count_intentions", "count_sequences", "intention_graph",
-           "most_connected_part", "paths_to_final",
+           "most_connected_part", "paths_to_final", "allowed_edges", "base_part_first_edges", "base_part_states",
            "Plan", "make_plan", "AssemblyStateGraph", "assembly_state_graph",
            "STAT_KEYS", "PlanStatistics", "plan_statistics",
            "BLANK", "Observation", "OperationTags", "observation_table", "operation_tags"]

@@ -17,6 +17,16 @@ With ``P(final) = 1`` and ``P(s) = sum over edges (s, t) of P(t)``, ``P(s)`` is 
 ``s`` to the final state; there are ``sum_s P(s)`` intentions and ``P(initial)`` full sequences. The sums run
 level by level in floating point while they stay below 2**52, where they are exact, and in Python
 integers above, so the counts are exact for any size.
+
+Base part (paper Sec. V)
+------------------------
+With a *base part* ``b``, assembly starts from ``b``: the allowed full sequences are those whose first state
+edge (from the initial state) is an operation whose result contains ``b`` (:func:`base_part_first_edges`).
+After that first step every continuation is allowed, so the restricted intentions are the allowed full
+sequences plus every intention that starts at a state reachable from the target of an allowed first edge
+(:func:`base_part_states`); they are closed under "next step", so they form a subtree of the intention
+graph. Their number is ``sum over allowed first edges (i, t) of P(t)`` plus ``sum over reachable states s of
+P(s)``.
 """
 from __future__ import annotations
 
@@ -34,6 +44,9 @@ __all__ = [
     "paths_to_final",
     "count_intentions",
     "count_sequences",
+    "base_part_first_edges",
+    "base_part_states",
+    "allowed_edges",
     "most_connected_part",
     "intention_graph",
     "DEFAULT_INTENTION_LIMIT",
@@ -76,12 +89,75 @@ def paths_to_final(states: AssemblyStateGraph) -> list[np.ndarray]:
     return counts
 
 
-def count_intentions(states: AssemblyStateGraph, paths: list[np.ndarray] | None = None) -> int:
+def base_part_first_edges(states: AssemblyStateGraph, base_part: str) -> np.ndarray:
+    """The state edges from the initial state whose operation's result (its parent subassembly) contains
+    ``base_part``: the first steps of the sequences that start from the base part. Sorted edge indices.
+
+    Raises :class:`~planner.errors.PlannerError`, listing the parts, when ``base_part`` is not a part.
+    Cost: O(E).
+    """
+    andor = states.andor
+    if base_part not in andor.parts:
+        raise PlannerError(f"base part {base_part!r} is not a part of the product; parts: {', '.join(andor.parts)}")
+    bit = 1 << andor.parts.index(base_part)
+    first = np.flatnonzero(states.edge_source == states.initial)
+    joins = [bool(andor.subassemblies[andor.operations[int(op)].parent] & bit)
+             for op in states.edge_operation[first]]
+    return first[np.array(joins, dtype=bool)] if first.size else first
+
+
+def base_part_states(states: AssemblyStateGraph, base_part: str) -> np.ndarray:
+    """Boolean mask over states: those reachable (themselves included) from the target of an allowed first
+    edge (:func:`base_part_first_edges`); the initial state is not among them. Every continuation from these
+    states is allowed. A product of one part: the single state. Cost: O(E log E) (one sort of the edges by
+    source, then one pass per level, most assembled last)."""
+    first = base_part_first_edges(states, base_part)
+    reached = np.zeros(states.n_states, dtype=bool)
+    if states.initial == states.final:
+        reached[states.final] = True
+        return reached
+    reached[states.edge_target[first]] = True
+    order = np.argsort(states.edge_source, kind="stable")
+    source, target = states.edge_source[order], states.edge_target[order]
+    start = states.level_start
+    # States are numbered by their number of blocks, and an edge removes one block: levels from the most
+    # blocks down, each reached state passes reachability to its targets.
+    for k in range(len(start) - 3, 0, -1):  # sources with k + 1 blocks, from n - 1 down to 2
+        lo, hi = np.searchsorted(source, [start[k], start[k + 1]])
+        live = reached[source[lo:hi]]
+        reached[target[lo:hi][live]] = True
+    reached[states.initial] = False
+    return reached
+
+
+def allowed_edges(states: AssemblyStateGraph, base_part: str | None) -> np.ndarray:
+    """Boolean mask over state edges that restricted intentions may take: the allowed first edges and every
+    edge out of a reachable state (:func:`base_part_states`); all edges when ``base_part`` is None."""
+    if base_part is None:
+        return np.ones(states.n_edges, dtype=bool)
+    allowed = base_part_states(states, base_part)[states.edge_source]
+    allowed[base_part_first_edges(states, base_part)] = True
+    return allowed
+
+
+def count_intentions(states: AssemblyStateGraph, paths: list[np.ndarray] | None = None,
+                     base_part: str | None = None) -> int:
     """The number of operator intentions (vertices of the intention graph), without enumerating them.
 
-    ``paths``: the result of :func:`paths_to_final`, if already computed.
+    With ``base_part``: those of the sequences that start from it (module docstring: the allowed full
+    sequences plus the paths from every reachable state). ``paths``: :func:`paths_to_final`, if computed.
+    Cost: O(E) (O(E log E) with a base part).
     """
-    return sum(int(level.sum()) for level in (paths if paths is not None else paths_to_final(states)))
+    counts = paths if paths is not None else paths_to_final(states)
+    if base_part is None:
+        return sum(int(level.sum()) for level in counts)
+    reached = base_part_states(states, base_part)
+    if states.initial == states.final:
+        return 1
+    start = states.level_start
+    continuations = sum(int(level[reached[start[k]:start[k] + level.shape[0]]].sum())
+                        for k, level in enumerate(counts[:-1]))
+    return count_sequences(states, base_part, counts) + continuations
 
 
 def count_sequences(states: AssemblyStateGraph, base_part: str | None = None,
@@ -94,19 +170,11 @@ def count_sequences(states: AssemblyStateGraph, base_part: str | None = None,
     counts = paths if paths is not None else paths_to_final(states)
     if base_part is None:
         return int(counts[-1][-1])
-    andor = states.andor
-    if base_part not in andor.parts:
-        raise PlannerError(f"base part {base_part!r} is not a part of the product; parts: {', '.join(andor.parts)}")
+    first = base_part_first_edges(states, base_part)
     if len(counts) == 1:
         return 1  # a single part: the empty sequence starts from it
-    bit = 1 << andor.parts.index(base_part)
-    first = states.edge_source == states.initial
     before_last, offset = counts[-2], states.level_start[len(counts) - 2]
-    total = 0
-    for target, operation in zip(states.edge_target[first], states.edge_operation[first]):
-        if andor.subassemblies[andor.operations[operation].parent] & bit:
-            total += int(before_last[target - offset])
-    return total
+    return sum(int(before_last[t - offset]) for t in states.edge_target[first])
 
 
 def most_connected_part(product: Product) -> str:
@@ -126,13 +194,15 @@ class IntentionGraph:
     ``successor[i]``: the intention after ``i``'s next step (-1 for the final intention);
     ``step_edge[i]``: the state edge of that step (-1 for the final intention), so the edge
     ``(i, successor[i])`` maps to operation ``states.edge_operation[step_edge[i]]`` (``m_I``).
-    Intentions are numbered by their length, then by the order Alg. 2 finds them.
+    Intentions are numbered by their length, then by the order Alg. 2 finds them. ``base_part``: the part
+    the sequences start from when the graph is restricted to them (module docstring), else None.
     """
 
     states: AssemblyStateGraph
     first_state: np.ndarray
     successor: np.ndarray
     step_edge: np.ndarray
+    base_part: str | None = None
 
     @property
     def n_intentions(self) -> int:
@@ -178,18 +248,27 @@ class IntentionGraph:
         return graph
 
 
-def intention_graph(states: AssemblyStateGraph, limit: int = DEFAULT_INTENTION_LIMIT) -> IntentionGraph:
+def intention_graph(states: AssemblyStateGraph, limit: int = DEFAULT_INTENTION_LIMIT,
+                    base_part: str | None = None) -> IntentionGraph:
     """Enumerate the intention graph (Alg. 2) with the map from its edges to operations.
 
+    With ``base_part``, only the intentions of the sequences that start from it (module docstring), numbered
+    in the same order (the final intention is still 0); Alg. 2 then extends an intention only along the
+    allowed edges (:func:`allowed_edges`), which yields exactly them since they are closed under "next step".
     Raises :class:`~planner.errors.LimitExceededError`, stating the count, when there are more than
-    ``limit`` intentions; the count itself never needs enumeration (:func:`count_intentions`).
-    Cost: O(I) time and memory for I intentions.
+    ``limit`` intentions; the count itself never needs enumeration (:func:`count_intentions`);
+    :class:`~planner.errors.PlannerError` when ``base_part`` is not a part or no sequence starts from it.
+    Cost: O(I) time and memory for I intentions (plus O(E log E) with a base part).
     """
-    total = count_intentions(states)
+    total = count_intentions(states, base_part=base_part)
+    if base_part is not None and count_sequences(states, base_part) == 0:
+        raise PlannerError(f"no assembly sequence starts from the base part {base_part!r} (no first operation "
+                           "joins it); choose another base part, or check the technical constraints")
     if total > limit:
         raise LimitExceededError(
             "intention graph", total, limit,
             "Raise the limit (aplan: --limit) or use the counts, which need no enumeration.")
+    allowed = None if base_part is None else allowed_edges(states, base_part)
     in_start, in_count = states.incoming()
     first = [np.array([states.final], dtype=np.int64)]
     successor = [np.array([-1], dtype=np.int64)]
@@ -204,9 +283,17 @@ def intention_graph(states: AssemblyStateGraph, limit: int = DEFAULT_INTENTION_L
             break
         ends = np.cumsum(count)
         edge = np.repeat(in_start[at] - ends + count, count) + np.arange(size)
-        successor.append(np.repeat(frontier, count))
+        after = np.repeat(frontier, count)
+        if allowed is not None:
+            keep = allowed[edge]
+            edge, after = edge[keep], after[keep]
+            size = int(edge.size)
+            if size == 0:
+                break
+        successor.append(after)
         step.append(edge)
         first.append(states.edge_source[edge].astype(np.int64))
         frontier = produced + np.arange(size)
         produced += size
-    return IntentionGraph(states, np.concatenate(first), np.concatenate(successor), np.concatenate(step))
+    return IntentionGraph(states, np.concatenate(first), np.concatenate(successor), np.concatenate(step),
+                          base_part)

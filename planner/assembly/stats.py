@@ -18,7 +18,8 @@ class PlanStatistics:
 
     ``complexity`` is Lambert & Gupta's index 2K/N (K contacts, N parts), rounded to 2 decimals;
     ``actions`` = robot-capable operations + wait; ``observations`` counts the blank one;
-    ``sequences`` counts full assembly sequences, those whose first operation joins ``base_part`` if set.
+    ``sequences`` counts full assembly sequences, those whose first operation joins ``base_part`` if set;
+    ``intentions`` then counts the intentions of those sequences only (paper Sec. V).
     ``states`` and ``sequences`` together are the size of the factored view of paper Sec. V.
     """
 
@@ -55,7 +56,7 @@ def plan_statistics(plan: Plan, base_part: str | None = None) -> PlanStatistics:
         actions=int(plan.tags.robot.sum()) + 1,
         states=plan.states.n_states,
         state_edges=plan.states.n_edges,
-        intentions=count_intentions(plan.states, paths),
+        intentions=count_intentions(plan.states, paths, base_part),
         observations=len(plan.observations),
         sequences=count_sequences(plan.states, base_part, paths),
         base_part=base_part,

@@ -33,8 +33,12 @@ def model_from(args: argparse.Namespace, product_only: bool = False):
     """The model of ``args.model`` (or ``args.product``): a PRODUCT's decision model, or a model file."""
     argument = getattr(args, "model", None) or args.product
     if product_only:
-        return api.decision_model(argument, args.technical, rewards_from(args), args.discount)
-    return api.load_model(argument, args.technical, rewards_from(args), args.discount)
+        if str(argument).lower().endswith(api.MODEL_SUFFIXES):
+            extra = "; --base-part, too, applies to products only" if args.base_part else ""
+            raise PlannerError(f"{argument}: a model file, but this command needs a PRODUCT (its plan names what the "
+                               f"operator and the robot do){extra}")
+        return api.decision_model(argument, args.technical, rewards_from(args), args.discount, args.base_part)
+    return api.load_model(argument, args.technical, rewards_from(args), args.discount, args.base_part)
 
 
 def policy_from(args: argparse.Namespace, model):
@@ -56,7 +60,8 @@ def decision_maker_from(args: argparse.Namespace):
         model = model_from(args)
         return model, policy_from(args, model)
     model, policy, note = api.decision_maker(argument, args.planner, args.policy, args.technical, rewards_from(args),
-                                             args.discount, decision_time, expansions, args.time_limit)
+                                             args.discount, decision_time, expansions, args.time_limit,
+                                             base_part=args.base_part)
     if note:
         log.info("%s", note)
     return model, policy

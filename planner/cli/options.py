@@ -8,7 +8,7 @@ from ..defaults import DECISION_TIME, DISCOUNT, POLICY_TIME_LIMIT
 from ..geometry.mesh_engine import Tolerances
 from ..product.examples import EXAMPLES
 
-__all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_decision_options", "rewards_from",
+__all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_base_part", "add_decision_options", "rewards_from",
            "add_tolerance_options", "tolerances_from", "add_policy_options", "add_episode_options", "positive_seconds",
            "online_budget"]
 
@@ -30,11 +30,20 @@ def add_technical(parser) -> None:
                              "by default each constraint is as the product file marks it ('active')")
 
 
+def add_base_part(parser) -> None:
+    """``--base-part [PART]`` (paper Sec. V); the value is ``auto`` when PART is left out, None without the option."""
+    parser.add_argument("--base-part", nargs="?", const="auto", metavar="PART",
+                        help="only the assembly sequences that start from PART (their first operation joins it) "
+                             "and their intentions; without PART: the most connected part (paper Sec. V)")
+
+
 def add_decision_options(parser: argparse.ArgumentParser) -> None:
-    """The decision model's options (when MODEL is a product): technical constraints, discount, rewards."""
+    """The decision model's options (when MODEL is a product): technical constraints, base part, discount,
+    rewards."""
     d = Rewards()
     group = parser.add_argument_group("decision model (when MODEL is a product)")
     add_technical(group)
+    add_base_part(group)
     group.add_argument("--discount", type=float, default=DISCOUNT, help=f"discount factor (default {DISCOUNT:g})")
     group.add_argument("--reward-unfavorable", type=float, default=d.unfavorable, metavar="R",
                        help=f"robot does the next step, unfavorable to humans (default {d.unfavorable:g})")

@@ -12,7 +12,7 @@ from ..assembly.stats import STAT_KEYS
 from ..files import write_atomic
 from ..product import product_to_dict
 from ..product.synthetic import SYNTHETIC
-from .options import PRODUCT_HELP, add_technical, positive
+from .options import PRODUCT_HELP, add_base_part, add_technical, positive
 
 __all__ = ["add_commands"]
 
@@ -31,7 +31,8 @@ def _stats(args: argparse.Namespace) -> int:
         shown = f"{value:.2f}" if isinstance(value, float) else f"{value:,}"
         print(f"  {key:<14}{shown:>22}")
     if stats.base_part:
-        print(f"  (sequences whose first operation joins the base part {stats.base_part!r})")
+        print(f"  (only the sequences that start from the base part {stats.base_part!r}, whose first operation "
+              "joins it, and their intentions)")
     print(f"  factored view: {stats.states:,} assembly states x {stats.sequences:,} sequences "
           f"instead of {stats.intentions:,} intentions")
     for k in plan.tags.unmatched:
@@ -41,7 +42,7 @@ def _stats(args: argparse.Namespace) -> int:
 
 def _intentions(args: argparse.Namespace) -> int:
     plan = api.plan_of(args.product, args.technical)
-    graph = intention_graph(plan.states, limit=args.limit)
+    graph = intention_graph(plan.states, limit=args.limit, base_part=api.base_part_of(plan, args.base_part))
     for i in (graph.full_sequences() if args.full else range(graph.n_intentions)):
         states = [plan.states.describe(s) for s in graph.path(int(i))]
         if args.json:
@@ -67,9 +68,7 @@ def add_commands(commands) -> None:
     stats.add_argument("product", metavar="PRODUCT", help=PRODUCT_HELP)
     stats.add_argument("--json", action="store_true", help="print one JSON object with exactly those keys")
     add_technical(stats)
-    stats.add_argument("--base-part", nargs="?", const="auto", metavar="PART",
-                       help="count only the sequences whose first operation joins PART "
-                            "(without PART: the most connected part)")
+    add_base_part(stats)
     stats.set_defaults(run=_stats)
 
     intentions = commands.add_parser("intentions", help="enumerate operator intentions (paths of assembly states)")
@@ -79,6 +78,7 @@ def add_commands(commands) -> None:
     intentions.add_argument("--full", action="store_true", help="only the full assembly sequences")
     intentions.add_argument("--json", action="store_true", help="one JSON object per line")
     add_technical(intentions)
+    add_base_part(intentions)
     intentions.set_defaults(run=_intentions)
 
     synth = commands.add_parser("synth", help="write a synthetic product of Table I",

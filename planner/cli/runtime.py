@@ -13,7 +13,7 @@ from ..decision.intention_model import IntentionModel
 from ..decision.policy import AlphaVectorPolicy
 from ..errors import PlannerError
 from ..product import DEFAULT_MARKER_DICTIONARY
-from .decision import decision_maker_from
+from .decision import decision_maker_from, model_from
 from .options import PRODUCT_HELP, add_decision_options, add_policy_options, online_budget, positive
 
 __all__ = ["add_commands"]
@@ -69,8 +69,7 @@ def _session(args: argparse.Namespace) -> int:
     if args.demo is not None and args.robot is not None:
         raise PlannerError("--demo simulates the robot too; leave out --robot")
     if api._model_file_kind(args.product):
-        raise PlannerError(f"{args.product}: a session needs a PRODUCT (its parts, tools and operations), not a "
-                           "model file")
+        model_from(args, product_only=True)  # the error that says a session needs a product
     model, policy = decision_maker_from(args)
     plan = model.plan
     stream, robot = None, ConsoleRobot() if args.robot in (None, "console") else ScriptedRobot()
@@ -107,7 +106,7 @@ def _session(args: argparse.Namespace) -> int:
     online = not isinstance(policy, AlphaVectorPolicy)
     settings = {"planner": "online" if online else "offline", "policy": args.policy,
                 "decision_time": decision_time if online else None, "expansions": expansions if online else None,
-                "technical": args.technical, "discount": args.discount,
+                "technical": args.technical, "base_part": model.base_part, "discount": args.discount,
                 "rewards": vars(model.rewards), "robot": args.robot, "source": _source_name(args),
                 "debounce": args.debounce, "quiet_frames": args.quiet_frames,
                 "robot_own_tools": args.robot_own_tools}

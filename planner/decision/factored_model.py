@@ -18,6 +18,12 @@ start at ``t = target(c)`` in proportion ``N(target(c2)) / N(t)`` (the final cla
 those ratios are computed from the exact counts and are at most 1, so nothing overflows however many
 intentions there are.
 
+With a base part (paper Sec. V), the flat model's states are the intentions of the sequences that start from
+it (:func:`~planner.assembly.intentions.intention_graph`): the initial belief goes to the allowed first classes
+only (``initial_classes``, in proportion to their sizes), every class reachable from them holds all its
+``N(target)`` intentions as before, and a state's observations are those of its *allowed* in-edges only
+(:func:`~planner.assembly.intentions.allowed_edges`), as Alg. 3 on the restricted intention graph gives them.
+
 The Bayes filter is :class:`~planner.decision.factored_updater.FactoredUpdater`. Beliefs are sparse (:class:`FactoredBelief`: sorted classes and their positive masses); an update costs
 O(k log k) for the k classes the belief reaches after the action's steps (support, its out-edges and,
 after the robot's action, their out-edges).
@@ -29,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..assembly.intentions import paths_to_final
+from ..assembly.intentions import allowed_edges, base_part_first_edges, paths_to_final
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
 from ..errors import PlannerError
@@ -80,7 +86,9 @@ class FactoredIntentionModel:
     performs the step, -1 when none does), ``class_match_reward`` (the reward of performing it). Per state: ``state_classes``,
     ``state_class_start`` (CSR of the classes that start at each state), ``paths`` (``N`` per state, exact:
     int64 or Python ints), ``emit_weight`` (``1 / (k + 1/4)``, ``k`` distinct non-blank observations into the
-    state), ``emit_keys`` (sorted ``state * Z + z`` of those observations). Build with :func:`factored_model`.
+    state), ``emit_keys`` (sorted ``state * Z + z`` of those observations). ``initial_classes``: the classes
+    the full sequences may start with (sorted; all the initial state's out-edges unless ``base_part`` is set).
+    Build with :func:`factored_model`.
     """
 
     plan: Plan
@@ -99,6 +107,8 @@ class FactoredIntentionModel:
     emit_keys: np.ndarray
     class_action: np.ndarray
     class_match_reward: np.ndarray
+    initial_classes: np.ndarray
+    base_part: str | None = None
 
     @property
     def name(self) -> str:
@@ -143,8 +153,10 @@ class FactoredIntentionModel:
 
     @property
     def n_sequences(self) -> int:
-        """The number of full assembly sequences (exact)."""
-        return int(self.paths[self.plan.states.initial])
+        """The number of full assembly sequences (exact; those that start from the base part, if set)."""
+        if self.base_part is None or self.plan.states.initial == self.final_state:
+            return int(self.paths[self.plan.states.initial])
+        return sum(int(x) for x in self.paths[self.class_target[self.initial_classes]])
 
     def class_sizes(self) -> np.ndarray:
         """The number of intentions in each class (exact: int64 or Python ints); they sum to the intentions."""
@@ -164,7 +176,7 @@ class FactoredIntentionModel:
             raise PlannerError(f"sequence {rank} does not exist: there are {self.n_sequences} full sequences")
         edges, state = [], self.plan.states.initial
         while state != self.final_state:
-            for c in self.classes_from(state):
+            for c in self._sequence_options(state):
                 size = int(self.paths[self.class_target[c]])
                 if rank < size:
                     edges.append(int(c))
@@ -177,11 +189,17 @@ class FactoredIntentionModel:
         """A full sequence drawn uniformly (the initial belief), as state edges. Cost: O(length x out-degree)."""
         edges, state = [], self.plan.states.initial
         while state != self.final_state:
-            options = self.classes_from(state)
-            c = int(rng.choice(options, p=self.class_fraction[options]))
+            options = self._sequence_options(state)
+            p = self.class_fraction[options]
+            c = int(rng.choice(options, p=p if self.base_part is None or state != self.plan.states.initial
+                               else p / p.sum()))
             edges.append(c)
             state = int(self.class_target[c])
         return edges
+
+    def _sequence_options(self, state: int) -> np.ndarray:
+        """The classes a full sequence may take at ``state``: the allowed first ones at the initial state."""
+        return self.initial_classes if state == self.plan.states.initial else self.classes_from(state)
 
     def sequence_operations(self, edges: list[int]) -> list[int]:
         """The operations of a path of state edges, in order."""
@@ -229,10 +247,15 @@ class FactoredIntentionModel:
     # --- the tables, per class ------------------------------------------------------------------------
 
     def initial_belief(self) -> FactoredBelief:
-        """Uniform over the full sequences: class ``c`` from the initial state gets ``N(target(c)) / N(initial)``."""
-        classes = self.classes_from(self.plan.states.initial)
-        order = np.argsort(classes)
-        return FactoredBelief(classes[order].astype(np.int64), self.class_fraction[classes[order]].copy())
+        """Uniform over the full sequences: class ``c`` of :attr:`initial_classes` gets ``N(target(c))`` over
+        their total (``N(initial)`` without a base part)."""
+        classes = self.initial_classes
+        if self.base_part is None or self.plan.states.initial == self.final_state:
+            return FactoredBelief(classes.astype(np.int64), self.class_fraction[classes].copy())
+        # Ratios of exact counts (Python ints where they pass 2**52): correctly rounded, never overflowing.
+        total = self.n_sequences
+        mass = np.array([int(x) / total for x in self.paths[self.class_target[classes]]], dtype=float)
+        return FactoredBelief(classes.astype(np.int64), mass)
 
     def advance(self, classes: np.ndarray, mass: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """One step of the operator (or robot) along the path: each class's mass goes to the classes that
@@ -338,8 +361,12 @@ def _counts_per_state(plan: Plan) -> np.ndarray:
     return counts
 
 
-def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT) -> FactoredIntentionModel:
+def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
+                   base_part: str | None = None) -> FactoredIntentionModel:
     """The factored model of Alg. 3 over ``plan`` (module docstring), without enumerating intentions.
+
+    ``base_part``: only the sequences that start from this part (paper Sec. V); :class:`PlannerError` when it
+    is not a part or no sequence starts from it.
 
     Cost: O(S + E log E) time and O(S + E) memory for S states and E state edges (one sort of the edges by
     source, one of the (state, observation) pairs); Python-int arithmetic only where the counts pass 2**52.
@@ -362,8 +389,11 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
         log_size = np.log(size.astype(float))
     order = np.argsort(source, kind="stable").astype(index)
     start = np.searchsorted(source[order], np.arange(S + 1))
-    # Observations into each state: the distinct non-blank observations of the operations of its in-edges.
+    # Observations into each state: the distinct non-blank observations of the operations of its (allowed)
+    # in-edges.
     seen = plan.operation_observation[states.edge_operation]
+    if base_part is not None:
+        seen = np.where(allowed_edges(states, base_part), seen, 0)
     keys = np.sort(states.edge_target.astype(np.int64)[seen != 0] * Z + seen[seen != 0])
     keys = keys[np.r_[True, keys[1:] != keys[:-1]]] if keys.size else keys  # distinct (a sort beats hashing)
     emit_weight = 1.0 / (np.bincount(keys // Z, minlength=S) + 0.25)
@@ -373,8 +403,17 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     class_action = np.where(operation >= 0, action_of_op[np.maximum(operation, 0)], -1).astype(index)
     match = np.where(plan.tags.unfavorable[np.maximum(operation, 0)], rewards.unfavorable, rewards.favorable)
     action_operations = np.append(robot_ops, -1)
+    if base_part is None:
+        initial = np.sort(order[start[states.initial]:start[states.initial + 1]]).astype(np.int64)
+    else:
+        initial = base_part_first_edges(states, base_part).astype(np.int64)  # class c < E is state edge c
+        if S == 1:
+            initial = np.array([E], dtype=np.int64)  # one part: the finished product is where assembly starts
+        elif initial.size == 0:
+            raise PlannerError(f"no assembly sequence starts from the base part {base_part!r} (no first "
+                               "operation joins it); choose another base part, or check the technical constraints")
     arrays = (action_operations, source, target, operation, fraction, log_size, order, start, counts, emit_weight,
-              keys, class_action, match)
+              keys, class_action, match, initial)
     for a in arrays:
         a.flags.writeable = False
-    return FactoredIntentionModel(plan, rewards, discount, *arrays)
+    return FactoredIntentionModel(plan, rewards, discount, *arrays, base_part=base_part)

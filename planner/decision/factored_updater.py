@@ -48,6 +48,8 @@ class FactoredUpdater:
         model = self.model
         mask = reset_support(model.observation_likelihood(observation) > 0, model.reachable(belief.classes),
                              action, observation, self.events, self.on_reset)
+        if model.base_part is not None:  # the flat model's states are the base part's intentions only
+            mask &= model.reachable(model.initial_classes)
         classes = np.flatnonzero(mask)
         log_size = model.class_log_size[classes]
         weight = np.exp(log_size - log_size.max())  # uniform over intentions: mass ~ class size

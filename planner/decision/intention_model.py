@@ -16,6 +16,11 @@ Definitions (these match the authors' code, checked against the POMDPX files it 
 - Rewards: ``wait`` 0; ``i``'s next step +10 when it is unfavorable to humans, else -2; any other operation
   -50 (all four configurable: the paper's "eagerness").
 - Initial belief: uniform over the full sequences.
+
+With a base part (paper Sec. V), the states are the intentions of the sequences that start from it
+(:func:`~planner.assembly.intentions.intention_graph` with ``base_part``) and the same definitions apply to
+that graph: the observations of an intention are those of its predecessors *in it*, and the initial belief is
+uniform over the allowed full sequences.
 """
 from __future__ import annotations
 
@@ -79,6 +84,11 @@ class IntentionModel:
         """The finished product's intention (absorbing)."""
         return 0
 
+    @property
+    def base_part(self) -> str | None:
+        """The part every sequence starts from (paper Sec. V), or None when all sequences are allowed."""
+        return self.graph.base_part
+
     def operation(self, action: int) -> int | None:
         """The AND/OR operation the robot performs for ``action``; None for ``wait``."""
         operation = int(self.action_operations[action])
@@ -93,8 +103,9 @@ class IntentionModel:
         (``what`` names it in the message, e.g. ``--sequence``)."""
         starts = self.full_sequences()
         if int(intention) not in set(starts.tolist()):
+            base = f" --base-part {self.base_part}" if self.base_part else ""
             raise PlannerError(f"{what} {intention} is not a full assembly sequence; the sequences are the "
-                               f"intentions {starts[0]}..{starts[-1]} (see aplan intentions PRODUCT --full)")
+                               f"intentions {starts[0]}..{starts[-1]} (see aplan intentions PRODUCT --full{base})")
         return int(intention)
 
     def sequence_operations(self, intention: int) -> list[int]:
@@ -164,14 +175,19 @@ def _rewards(plan: Plan, graph: IntentionGraph, robot_ops: np.ndarray, rewards: 
 
 
 def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
-                     graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT) -> IntentionModel:
+                     graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT,
+                     base_part: str | None = None) -> IntentionModel:
     """The decision model of Alg. 3 over the intentions of ``plan`` (definitions in the module docstring).
 
     ``graph``: the plan's intention graph when it was built already (else it is built, refusing more than
-    ``limit`` intentions with :class:`~planner.errors.LimitExceededError`).
+    ``limit`` intentions with :class:`~planner.errors.LimitExceededError`). ``base_part``: only the sequences
+    that start from this part (the graph must then be restricted to it too; :class:`PlannerError` if not).
     Cost: O(I x A) for the reward table and O(I) for the sparse tables, I intentions, A actions.
     """
-    graph = graph if graph is not None else intention_graph(plan.states, limit)
+    graph = graph if graph is not None else intention_graph(plan.states, limit, base_part)
+    if graph.base_part != base_part:
+        raise PlannerError(f"the intention graph starts from base part {graph.base_part!r}, the model from "
+                           f"{base_part!r}; build them with the same base part")
     robot_ops = np.flatnonzero(plan.tags.robot)
     transition = _transitions(graph, robot_ops)
     table = _observations(plan, graph)
@@ -190,6 +206,7 @@ def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
 
 
 def intention_pomdp(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
-                    graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT) -> POMDP:
+                    graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT,
+                    base_part: str | None = None) -> POMDP:
     """The tables alone of :func:`intention_model` (for solvers, files and comparisons with other planners)."""
-    return intention_model(plan, rewards, discount, graph, limit).pomdp
+    return intention_model(plan, rewards, discount, graph, limit, base_part).pomdp

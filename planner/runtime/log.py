@@ -3,7 +3,8 @@
 Format, version :data:`LOG_VERSION`: one JSON object per line, each with ``event`` and ``time`` (Unix
 seconds, to the millisecond):
 
-- ``start``: ``version``, ``product`` (the product itself, in the product file format), ``settings``,
+- ``start``: ``version``, ``product`` (the product itself, in the product file format), ``settings``
+  (``base_part``: the part the model's sequences start from, or null; replay rebuilds the same model),
   ``n_intentions``, ``actions`` and ``observations`` (the model's names), ``top``;
 - per step: ``action`` (``step``, ``action``, ``name``, ``instruction``), ``robot`` (``step``, ``ok``,
   ``message``), ``observation`` (``step``, ``observation``, ``index``: null when no operation explains it),
@@ -152,8 +153,10 @@ def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel | Factor
     from ..assembly.plan import make_plan
 
     product = product_from_dict(start["product"], f"{path} (start event)")
+    base_part = (start.get("settings") or {}).get("base_part")  # the part resolved at the start, never "auto"
     plan = make_plan(product)
-    model = factored_model(plan) if start.get("belief_over") == "classes" else intention_model(plan)
+    model = (factored_model(plan, base_part=base_part) if start.get("belief_over") == "classes"
+             else intention_model(plan, base_part=base_part))
     if list(model.observations) != start.get("observations") or list(model.actions) != start.get("actions"):
         raise SessionError(f"{path}: the product in the log no longer gives the logged actions and observations "
                            "(the log was written by another planner version)")
