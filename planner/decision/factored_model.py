@@ -328,7 +328,8 @@ class FactoredIntentionModel:
         out[-1] = self.rewards.wait * total
         act = self.class_action[belief.classes]
         hit = act >= 0
-        np.add.at(out, act[hit], belief.mass[hit] * (self.class_match_reward[belief.classes[hit]] - self.rewards.wrong))
+        out[:-1] += np.bincount(act[hit], weights=belief.mass[hit] * (self.class_match_reward[belief.classes[hit]]
+                                                                      - self.rewards.wrong), minlength=out.size - 1)
         return out
 
     def expected_reward(self, belief: FactoredBelief, action: int) -> float:

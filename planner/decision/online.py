@@ -57,7 +57,8 @@ class ClassValues:
         out[-1] = float(mass @ self.wait[classes])
         act = model.class_action[classes]
         hit = act >= 0
-        np.add.at(out, act[hit], mass[hit] * (self.match[classes[hit]] - self.wrong[classes[hit]]))
+        out[:-1] += np.bincount(act[hit], weights=mass[hit] * (self.match[classes[hit]] - self.wrong[classes[hit]]),
+                                minlength=out.size - 1)
         return out
 
 
@@ -153,16 +154,57 @@ def _posterior(classes: np.ndarray, weighted: np.ndarray) -> FactoredBelief:
     return FactoredBelief(classes[keep], kept / kept.sum())
 
 
+class _Split:
+    """One action's predicted belief split by observation; each child's posterior is made when the search first
+    enters it (most children are never entered). Cost: O(k log k) to build, O(k) per posterior."""
+
+    def __init__(self, model: FactoredIntentionModel, predicted: FactoredBelief, value: np.ndarray):
+        self.classes, self.mass = predicted.classes, predicted.mass
+        Z = len(model.plan.observations)
+        states, self.inverse = np.unique(model.class_source[self.classes], return_inverse=True)
+        state_mass = np.bincount(self.inverse, weights=self.mass, minlength=states.size)
+        state_value = np.bincount(self.inverse, weights=self.mass * value[self.classes], minlength=states.size)
+        self.weight = model.emit_weight[states]
+        lo = np.searchsorted(model.emit_keys, states.astype(np.int64) * Z)
+        count = np.searchsorted(model.emit_keys, (states.astype(np.int64) + 1) * Z) - lo
+        owner = np.repeat(np.arange(states.size), count)
+        ends = np.cumsum(count)
+        keys = model.emit_keys[np.repeat(lo - ends + count, count) + np.arange(int(ends[-1]) if ends.size else 0)]
+        seen = keys - states[owner].astype(np.int64) * Z
+        order = np.argsort(seen, kind="stable")
+        self.seen, self.owner = seen[order], owner[order]
+        w = self.weight[self.owner]
+        probability = np.bincount(self.seen, weights=state_mass[self.owner] * w, minlength=Z)
+        upper = np.bincount(self.seen, weights=state_value[self.owner] * w, minlength=Z)
+        probability[0] = float(state_mass @ (0.25 * self.weight))
+        upper[0] = float(state_value @ (0.25 * self.weight))
+        #: (z, P(z), an upper bound on the posterior's value: sum_c b_z(c) V(c))
+        self.branches = [(int(z), float(probability[z]), float(upper[z] / probability[z]))
+                         for z in np.flatnonzero(probability > 0)]
+
+    def posterior(self, z: int) -> FactoredBelief:
+        if z == 0:
+            likelihood = 0.25 * self.weight
+        else:
+            first, last = np.searchsorted(self.seen, [z, z + 1])
+            likelihood = np.zeros(self.weight.size)
+            likelihood[self.owner[first:last]] = self.weight[self.owner[first:last]]
+        return _posterior(self.classes, self.mass * likelihood[self.inverse])
+
+
 @dataclass
 class _Node:
-    """A belief in the search tree; ``children[a]``: ``(reward, [(P(z), child), ...])`` once ``a`` is expanded."""
+    """A belief in the search tree; ``children[a]``: ``(reward, [(P(z), child), ...])`` once ``a`` is expanded.
+    A child's belief is None until the search enters it (``origin``: the split and the observation that make
+    it); its bounds are then the cheap ones of :class:`_Split`."""
 
-    belief: FactoredBelief
+    belief: FactoredBelief | None
     upper: float
     lower: float
-    action_upper: np.ndarray   # per action: QMDP until expanded, then the backed-up bound
-    action_lower: np.ndarray
     depth: int
+    action_upper: np.ndarray | None = None  # per action: QMDP until expanded, then the backed-up bound
+    action_lower: np.ndarray | None = None
+    origin: tuple | None = None
     children: dict = field(default_factory=dict)
     closed_actions: set = field(default_factory=set)  # expanded actions with every branch closed
     closed: bool = False  # nothing below can change the bounds (depth limit or gap closed)
@@ -218,16 +260,19 @@ class OnlinePlanner:
 
     def search(self, belief: FactoredBelief) -> SearchReport:
         start = time.perf_counter()
-        deadline = None if self.decision_time is None else start + self.decision_time
+        # 5 % of the budget is kept for the work after the search (choosing, returning, the caller's bookkeeping).
+        deadline = None if self.decision_time is None else start + 0.95 * self.decision_time
         root = self._node(belief, 0)
         done = 0
+        longest = 2 * (time.perf_counter() - start)  # the longest expansion so far (at first: twice the root's time)
         while done < self.expansions and root.upper - root.lower > self.precision:
-            # Stop when one more expansion (at the mean pace so far) would pass the deadline.
+            # Stop when one more expansion as long as the longest so far would pass the deadline.
             now = time.perf_counter()
-            if deadline is not None and now + (now - start) / max(done, 1) >= deadline:
+            if deadline is not None and now + longest >= deadline:
                 break
             if not self._expand_best(root):
                 break
+            longest = max(longest, time.perf_counter() - now)
             done += 1
         best = _argmax_prefer_last(root.action_lower)
         self.last = SearchReport(best, root.lower, root.upper, done, time.perf_counter() - start)
@@ -236,11 +281,25 @@ class OnlinePlanner:
     # --- the tree ----------------------------------------------------------------------------------------
 
     def _node(self, belief: FactoredBelief, depth: int) -> _Node:
-        upper = self.values.q_values(self.model, belief)
-        lower = self.model.expected_rewards(belief) + self._after_now
-        node = _Node(belief, float(upper.max()), float(lower.max()), upper, lower, depth)
-        node.closed = node.upper - node.lower <= self.precision
+        node = _Node(belief, 0.0, 0.0, depth)
+        self._bound(node)
         return node
+
+    def _bound(self, node: _Node) -> None:
+        """The per-action bounds of a node whose belief is known: QMDP above, "act, then wait" below."""
+        node.action_upper = self.values.q_values(self.model, node.belief)
+        node.action_lower = self.model.expected_rewards(node.belief) + self._after_now
+        _refresh(node)
+        node.closed = node.upper - node.lower <= self.precision
+
+    def _enter(self, node: _Node) -> None:
+        """Make a child's posterior belief and its per-action bounds (the cheap bounds were its only ones)."""
+        split, z = node.origin
+        node.belief, node.origin = split.posterior(z), None
+        upper = node.upper
+        self._bound(node)
+        node.action_upper = np.minimum(node.action_upper, upper)
+        _refresh(node)
 
     def _expand_best(self, root: _Node) -> bool:
         """Follow the best upper bounds down to an unexpanded action, expand it and back up the bounds; False
@@ -261,6 +320,8 @@ class OnlinePlanner:
                 node.closed_actions.add(action)
                 continue
             node = max(open_branches, key=lambda pc: pc[0] * (pc[1].upper - pc[1].lower))[1]
+            if node.belief is None:
+                self._enter(node)
         for node, action in reversed(path):
             self._backup(node, action)
         return not root.closed
@@ -269,19 +330,23 @@ class OnlinePlanner:
         """The action with the highest upper bound that could still beat the node's lower bound."""
         if node.depth >= self.max_depth:
             return None
-        for a in np.argsort(-node.action_upper, kind="stable"):
-            a = int(a)
-            if node.action_upper[a] <= node.lower + self.precision:
-                return None
-            if a not in node.closed_actions:
-                return a
-        return None
+        upper = node.action_upper
+        if node.closed_actions:
+            upper = upper.copy()
+            upper[list(node.closed_actions)] = -np.inf
+        a = int(len(upper) - 1 - np.argmax(upper[::-1]))  # ties to the last action (wait)
+        return a if upper[a] > node.lower + self.precision else None
 
     def _expand(self, node: _Node, action: int) -> None:
         model = self.model
         reward = float(model.expected_rewards(node.belief)[action])
-        predicted = model.predict(node.belief, action)
-        branches = [(p, self._node(b, node.depth + 1)) for _, p, b in observation_split(model, predicted)]
+        split = _Split(model, model.predict(node.belief, action), self.values.value)
+        wait_forever = self._after_now / model.discount
+        branches = []
+        for z, p, upper in split.branches:
+            child = _Node(None, upper, wait_forever, node.depth + 1, origin=(split, z))
+            child.closed = upper - wait_forever <= self.precision
+            branches.append((p, child))
         node.children[action] = (reward, branches)
 
     def _backup(self, node: _Node, action: int) -> None:

@@ -6,7 +6,8 @@ seconds, to the millisecond):
 - ``start``: ``version``, ``product`` (the product itself, in the product file format), ``settings``
   (``base_part``: the part the model's sequences start from, or null; replay rebuilds the same model),
   ``n_intentions``, ``actions`` and ``observations`` (the model's names), ``top``;
-- per step: ``action`` (``step``, ``action``, ``name``, ``instruction``), ``robot`` (``step``, ``ok``,
+- per step: ``action`` (``step``, ``action``, ``name``, ``instruction``, ``decision_ms``: the milliseconds the
+  policy took to choose it), ``robot`` (``step``, ``ok``,
   ``message``), ``observation`` (``step``, ``observation``, ``index``: null when no operation explains it),
   any ``warning`` (``step``, ``message``), ``belief`` (``step``, ``top``, ``p_finished``, ``operations``,
   ``reset``: null, or how an observation of probability 0 reset the belief);

@@ -21,6 +21,7 @@ consistent one, the log holds every event up to the stop, and the result says wh
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -52,6 +53,7 @@ class SessionResult:
     beliefs: list = field(default_factory=list)
     actions: list[int] = field(default_factory=list)
     observations: list[int] = field(default_factory=list)
+    decision_seconds: list[float] = field(default_factory=list)  # the time the policy took for each action
 
     @property
     def assembled(self) -> bool:
@@ -81,14 +83,14 @@ def run_session(model: IntentionModel | FactoredIntentionModel, policy, source: 
     run = _Run(model, log if log is not None else EventLog())
     run.begin(settings or {})
     try:
-        action = policy.action(run.belief)
+        action = run.decide(policy)
         for step in range(1, max_steps + 1):
             run.result.steps = step
             run.perform(step, instruction_for(model, action, step), source, robot)
             observation, z = run.observe(step, source)
             run.update(step, action, observation, z)
             done = run.operations >= run.needed or run.finished() >= finished_belief
-            action = policy.action(run.belief)
+            action = run.decide(policy)
             run.report(step, observation, "done" if done else model.actions[action], status)
             if done:
                 return run.stop("assembled", f"the product is assembled after {step} steps "
@@ -130,6 +132,13 @@ class _Run:
     def operations(self) -> int:
         return self.result.operations
 
+    def decide(self, policy) -> int:
+        """The policy's action for the current belief, timed (the log's ``decision_ms``)."""
+        started = time.perf_counter()
+        action = int(policy.action(self.belief))
+        self.result.decision_seconds.append(time.perf_counter() - started)
+        return action
+
     def finished(self) -> float:
         """The belief that the product is finished."""
         return belief_at(self.belief, self.final)
@@ -152,7 +161,7 @@ class _Run:
     def perform(self, step: int, instruction: Instruction, source: ObservationSource, robot: Robot) -> None:
         """Tell the source, then have the robot perform ``instruction``; a failure stops the loop."""
         self.log.write("action", step=step, action=instruction.action, name=instruction.name,
-                       instruction=instruction.text)
+                       instruction=instruction.text, decision_ms=round(1000 * self.result.decision_seconds[-1], 3))
         source.robot_acting(instruction)
         report = robot.perform(instruction)
         self.log.write("robot", step=step, ok=report.ok, message=report.message)

@@ -9,9 +9,9 @@ from test_pomdp_io import DOORS
 
 from planner import chain_product, complete_product, make_plan
 from planner.decision import intention_pomdp
+from planner.decision.io import sparse_tables
 from planner.decision.io.cassandra import CassandraError, read_cassandra, write_cassandra
 from planner.decision.io.pomdpx import PomdpxError, pomdpx_text, read_pomdpx, write_pomdpx
-from planner.decision.io import sparse_tables
 from planner.decision.io.sparse_tables import SparseTable, split_rows
 
 FORMATS = {"pomdpx": (".pomdpx", write_pomdpx, read_pomdpx), "cassandra": (".pomdp", write_cassandra, read_cassandra)}

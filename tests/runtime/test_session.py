@@ -405,3 +405,39 @@ def test_cli_demo_on_a_product_without_tools(tmp_path):
              for o in model.sequence_operations(start)]
     assert seen == truth[:len(seen)] and "unexplained" not in done.stdout
     assert replay(tmp_path / "d.jsonl").mismatches == []
+
+
+def test_online_session_on_the_factored_model_and_its_replay(tmp_path):
+    """A session decided by the online planner on the factored model (beliefs over classes): assembled, every
+    decision timed in the log, and the replay rebuilds the factored model and reproduces every belief."""
+    from planner import chain_product
+    from planner.decision import factored_model
+    from planner.decision.online import OnlinePlanner
+
+    model = factored_model(make_plan(chain_product(6)))
+    operator = ScriptedOperator(model.plan, model.sequence_operations(model.sequence(7)))
+    log = EventLog(tmp_path / "online.jsonl")
+    result = run_session(model, OnlinePlanner(model, expansions=5), operator,
+                         ScriptedRobot(on_perform=operator.robot_acting), log)
+    log.close()
+    assert result.assembled and not operator.off_script
+    events = [json.loads(line) for line in (tmp_path / "online.jsonl").read_text().splitlines()]
+    assert events[0]["belief_over"] == "classes" and events[0]["n_intentions"] == 326  # chain 6: closed form
+    assert all(e["decision_ms"] >= 0 for e in events if e["event"] == "action")
+    again = replay(tmp_path / "online.jsonl")
+    assert again.mismatches == [] and len(again.actions) == result.steps
+    assert type(again.model).__name__ == "FactoredIntentionModel"
+
+
+def test_cli_demo_with_the_online_planner(tmp_path):
+    """`aplan session PRODUCT --demo K` without a policy: the online planner decides, on a tool-less chain."""
+    from planner import chain_product, save_product
+
+    save_product(chain_product(4), tmp_path / "chain4.json")
+    done = _aplan("session", tmp_path / "chain4.json", "--demo", 2, "--expansions", 5, "--log", tmp_path / "d.jsonl",
+                  "--quiet-frames", 20)
+    assert done.returncode == 0 and done.stdout.startswith("assembled"), done.stderr
+    assert "using the online planner" in done.stderr
+    start = json.loads((tmp_path / "d.jsonl").read_text().splitlines()[0])
+    assert start["settings"]["planner"] == "online" and start["settings"]["expansions"] == 5
+    assert replay(tmp_path / "d.jsonl").mismatches == []
