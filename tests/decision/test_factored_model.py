@@ -9,14 +9,8 @@ import numpy as np
 import pytest
 
 from planner import PlannerError, chain_product, complete_product, count_intentions, intention_graph, make_plan
-from planner.decision import (
-    DiscreteUpdater,
-    FactoredUpdater,
-    UnexplainedObservation,
-    factored_model,
-    intention_model,
-    to_flat,
-)
+from planner.decision import (DiscreteUpdater, FactoredUpdater, UnexplainedObservation, factored_model,
+                              intention_model, to_flat)
 
 TOLERANCE = 1e-9
 
