@@ -37,7 +37,7 @@ from .decision.intention_model import IntentionModel, Rewards, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
 from .decision.online import OnlinePlanner
-from .decision.policy import AlphaVectorPolicy, read_policy
+from .decision.policy import AlphaVectorPolicy, PolicyError, read_policy
 from .decision.pomdp import POMDP
 from .decision.simulate import Episode, evaluate_policy, simulate_episode
 from .decision.solvers import PointBasedSolver, SolveResult
@@ -191,22 +191,28 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
         model = factored_model(plan, rewards, discount, base_part)
         return model, online_planner(model, decision_time, expansions), note
     intentions = count_intentions(plan.states, base_part=base_part)
-    if policy:
-        vectors = read_policy(policy)
+    vectors = read_policy(policy) if policy else None
+    if vectors is not None:
         lumped = factored_model(plan, rewards, discount, base_part)
-        if vectors.alphas.shape[1] == lumped.n_classes and vectors.alphas.shape[1] != intentions:
-            if vectors.actions.size and vectors.actions.max() >= len(lumped.actions):
-                raise PlannerError(f"{policy}: action {int(vectors.actions.max())} out of range; the model has "
-                                   f"{len(lumped.actions)} actions")
+        length = vectors.alphas.shape[1]
+        if length not in (intentions, lumped.n_classes):
+            raise PolicyError(f"{policy}: vectors of length {length:,}, but this product's model has {intentions:,} "
+                              f"intentions (flat) and {lumped.n_classes:,} classes (lumped): the policy belongs to "
+                              "another model (check the product, --technical and --base-part)")
+        if length == lumped.n_classes and length != intentions:
+            if vectors.actions.size and not 0 <= vectors.actions.min() <= vectors.actions.max() < len(lumped.actions):
+                raise PolicyError(f"{policy}: actions out of range; the model has {len(lumped.actions)} actions")
             return lumped, vectors, None
     if intentions > limit:
         raise PlannerError(f"the flat decision model would hold {intentions:,} intentions (more than {limit:,}); "
                            "use --planner online, or a policy over the lumped model (aplan solve --lumped)")
     model = intention_model(plan, rewards, discount, base_part=base_part)
-    vectors, result = policy_for(model, policy, time_limit)
-    if result is not None:
-        note = (f"no --policy: solved for {result.seconds:.1f} s, lower bound {result.lower_bound:.5f}, upper "
-                f"bound {result.upper_bound:.5f}")
+    if vectors is not None:
+        vectors.check(model.pomdp, str(policy))
+        return model, vectors, note
+    vectors, result = policy_for(model, None, time_limit)
+    note = (f"no --policy: solved for {result.seconds:.1f} s, lower bound {result.lower_bound:.5f}, upper "
+            f"bound {result.upper_bound:.5f}")
     return model, vectors, note
 
 

@@ -68,3 +68,12 @@ def test_the_online_planner_needs_a_product(tmp_path):
     assert _aplan("pomdp", "pen", "-o", model).returncode == 0
     done = _aplan("evaluate", model, "--planner", "online", "--episodes", 2)
     assert done.returncode == 1 and "the online planner needs a PRODUCT" in done.stderr
+
+
+def test_a_policy_of_another_model_is_refused(tmp_path):
+    """A policy solved for the pen without the technical constraint does not fit the model with it."""
+    policy = tmp_path / "pen.policy"
+    assert _aplan("solve", "pen", "-o", policy, "--time-limit", 1, "--quiet").returncode == 0
+    done = _aplan("evaluate", "pen", "--technical", "--policy", policy, "--episodes", 2)
+    assert done.returncode == 1 and "vectors of length 69" in done.stderr
+    assert "belongs to another model" in done.stderr and "Traceback" not in done.stderr
