@@ -24,9 +24,10 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from .assembly.guards import SizeLimits
 from .assembly.intentions import most_connected_part
 from .assembly.plan import Plan, make_plan
-from .assembly.stats import PlanStatistics, plan_statistics
+from .assembly.stats import PlanStatistics, plan_statistics, statistics_within
 from .decision.intention_model import IntentionModel, Rewards, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
@@ -77,26 +78,37 @@ def resolve_product(argument: str | os.PathLike) -> Product:
         f"{argument}: no such file, and no embedded example of that name (embedded: {', '.join(EXAMPLES)})")
 
 
-def plan_of(product: str | os.PathLike | Product, technical: bool | None = None) -> Plan:
+def plan_of(product: str | os.PathLike | Product, technical: bool | None = None,
+            limits: SizeLimits = SizeLimits()) -> Plan:
     """The plan (AND/OR graph, assembly states, tags) of a product or PRODUCT argument; ``technical``:
-    ``True``/``False`` switches every technical constraint on/off, ``None`` keeps the file's."""
-    return make_plan(product if isinstance(product, Product) else resolve_product(product), technical)
+    ``True``/``False`` switches every technical constraint on/off, ``None`` keeps the file's; ``limits``: the
+    size limits the plan is built within (past them: :class:`~planner.errors.LimitExceededError`)."""
+    return make_plan(product if isinstance(product, Product) else resolve_product(product), technical, limits)
 
 
 def plan_statistics_of(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
-                       base_part: str | None = None) -> tuple[Plan, PlanStatistics]:
+                       base_part: str | None = None, limits: SizeLimits = SizeLimits(),
+                       partial: bool = False) -> tuple[Plan | None, PlanStatistics]:
     """The plan and its figures (``aplan stats``). ``base_part``: count only the sequences whose first
-    operation joins it; ``"auto"``: the most connected part."""
-    plan = product if isinstance(product, Plan) else plan_of(product, technical)
-    base = most_connected_part(plan.product) if base_part == "auto" else base_part
-    return plan, plan_statistics(plan, base)
+    operation joins it; ``"auto"``: the most connected part. With ``partial``, a plan past ``limits`` gives
+    the figures that could be counted (the others None, the reason in ``refused``) and no plan, instead of
+    :class:`~planner.errors.LimitExceededError`."""
+    if isinstance(product, Plan) or not partial:
+        plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
+        base = most_connected_part(plan.product) if base_part == "auto" else base_part
+        return plan, plan_statistics(plan, base)
+    product = product if isinstance(product, Product) else resolve_product(product)
+    base = most_connected_part(product) if base_part == "auto" else base_part
+    return statistics_within(product, technical, base, limits)
 
 
 def decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
-                   rewards: Rewards = Rewards(), discount: float = DISCOUNT) -> IntentionModel:
-    """The decision model of Alg. 3 of a product, PRODUCT argument or plan."""
-    plan = product if isinstance(product, Plan) else plan_of(product, technical)
-    return intention_model(plan, rewards, discount)
+                   rewards: Rewards = Rewards(), discount: float = DISCOUNT,
+                   limits: SizeLimits = SizeLimits()) -> IntentionModel:
+    """The decision model of Alg. 3 of a product, PRODUCT argument or plan; refused, with the estimate, past
+    ``limits`` (the plan's, and the flat model's memory: :func:`~planner.decision.intention_model.flat_model_bytes`)."""
+    plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
+    return intention_model(plan, rewards, discount, max_bytes=limits.memory)
 
 
 def _model_file_kind(path: str | os.PathLike) -> str | None:
@@ -105,15 +117,15 @@ def _model_file_kind(path: str | os.PathLike) -> str | None:
 
 
 def load_model(argument: str | os.PathLike, technical: bool | None = None, rewards: Rewards = Rewards(),
-               discount: float = DISCOUNT) -> Model:
+               discount: float = DISCOUNT, limits: SizeLimits = SizeLimits()) -> Model:
     """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`), else a PRODUCT
-    (its :class:`IntentionModel`; ``technical``, ``rewards`` and ``discount`` apply to it only)."""
+    (its :class:`IntentionModel`; ``technical``, ``rewards``, ``discount`` and ``limits`` apply to it only)."""
     kind = _model_file_kind(argument)
     if kind in (".pomdpx", ".pomdpx.gz"):
         return read_pomdpx(argument)
     if kind == ".pomdp":
         return read_cassandra(argument)
-    return decision_model(argument, technical, rewards, discount)
+    return decision_model(argument, technical, rewards, discount, limits)
 
 
 def tables(model: Model) -> POMDP:

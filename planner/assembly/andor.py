@@ -24,9 +24,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Iterable
 
-from ..errors import DisconnectedProductError, NotDisassemblableError
+from ..defaults import CUTS_PER_SUBASSEMBLY, SUBASSEMBLY_LIMIT
+from ..errors import DisconnectedProductError, LimitExceededError, NotDisassemblableError
 from ..product import Product
 from .bitsets import bit_indices, components, connected_subsets, lowest_bit, mask_of
+from .guards import OPTIONS, fewer_parts_hint
 
 __all__ = ["Operation", "AndOrGraph", "and_or_graph", "liaison_adjacency"]
 
@@ -100,13 +102,15 @@ def liaison_adjacency(product: Product) -> list[int]:
     return adjacency
 
 
-def and_or_graph(product: Product, technical: bool | None = None) -> AndOrGraph:
+def and_or_graph(product: Product, technical: bool | None = None, limit: int = SUBASSEMBLY_LIMIT) -> AndOrGraph:
     """Build the AND/OR graph of ``product`` by the reverse cut-set algorithm.
 
     Parameters
     ----------
     product : the product (parts, contacts, obstruction diagrams, technical constraints).
     technical : ``True`` applies every technical constraint, ``False`` none, ``None`` those marked active.
+    limit : the most connected part sets to enumerate, and ``CUTS_PER_SUBASSEMBLY * limit`` the most cuts
+        to examine; past either the build stops (its work is bounded by the limit, whatever the product).
 
     Returns
     -------
@@ -116,6 +120,8 @@ def and_or_graph(product: Product, technical: bool | None = None) -> AndOrGraph:
     ------
     DisconnectedProductError : the connection diagram is not connected (the groups are named).
     NotDisassemblableError : the complete product has no feasible split (the reasons are given).
+    LimitExceededError : more connected part sets or cuts than the limit allows (the count reached, the
+        product's fastener-like parts and the options that help are given).
 
     Notes
     -----
@@ -140,18 +146,23 @@ def and_or_graph(product: Product, technical: bool | None = None) -> AndOrGraph:
         return all(mask & r1 != r1 or mask & r2 for r1, r2 in constraints)
 
     # Bottom-up: every connected set, smallest first; keep it when a cut joins two kept, separable halves.
-    connected = sorted((s for r in range(n) for s in connected_subsets(adjacency, full & ~((1 << r) - 1), r)),
-                       key=int.bit_count)
+    connected = sorted(_connected_sets(product, adjacency, limit), key=int.bit_count)
     splits: dict[int, list[tuple[int, int]]] = {1 << i: [] for i in range(n)}
+    cuts_left = CUTS_PER_SUBASSEMBLY * limit  # a set's cuts are connected sets too: at most `limit` per set
     for subset in connected:
         if subset & (subset - 1) == 0 or not technically_feasible(subset):
             continue
         root = lowest_bit(subset).bit_length() - 1
         found = []
         for first in connected_subsets(adjacency, subset, root):
+            cuts_left -= 1
             second = subset ^ first
             if second and first in splits and second in splits and separable(first, second):
                 found.append((first, second))
+        if cuts_left < 0:
+            raise _too_many(product, "cuts (splits of a connected part set into two connected halves)",
+                            CUTS_PER_SUBASSEMBLY * limit - cuts_left, CUTS_PER_SUBASSEMBLY * limit,
+                            f" (over {len(connected):,} connected part sets)")
         if found:
             splits[subset] = found
 
@@ -164,6 +175,26 @@ def and_or_graph(product: Product, technical: bool | None = None) -> AndOrGraph:
     operations = tuple(Operation(position[s], (position[a], position[b]))
                        for s in subassemblies for a, b in sorted(splits[s]))
     return AndOrGraph(parts, subassemblies, operations, position)
+
+
+def _connected_sets(product: Product, adjacency: list[int], limit: int) -> list[int]:
+    """Every connected part set, each once (by its lowest part); refused past ``limit`` of them."""
+    full = (1 << len(adjacency)) - 1
+    found = []
+    for r in range(len(adjacency)):
+        for subset in connected_subsets(adjacency, full & ~((1 << r) - 1), r):
+            if len(found) == limit:
+                raise _too_many(product, "connected part sets (candidate subassemblies)", limit + 1, limit)
+            found.append(subset)
+    return found
+
+
+def _too_many(product: Product, noun: str, count: int, limit: int, where: str = "") -> LimitExceededError:
+    return LimitExceededError(
+        "AND/OR graph", count, limit,
+        f"The reverse cut-set algorithm enumerates every connected set of parts{where}, and each part that "
+        f"joins two others can double them. {fewer_parts_hint(product)}",
+        [OPTIONS[k] for k in ("subassemblies", "exclude", "group")], noun=noun, at_least=True)
 
 
 def _reachable(splits: dict[int, list[tuple[int, int]]], full: int) -> set[int]:

@@ -27,6 +27,7 @@ import numpy as np
 from ..defaults import INTENTION_LIMIT
 from ..errors import LimitExceededError, PlannerError
 from ..product import Product
+from .guards import OPTIONS
 from .states import AssemblyStateGraph
 
 __all__ = [
@@ -189,7 +190,7 @@ def intention_graph(states: AssemblyStateGraph, limit: int = DEFAULT_INTENTION_L
     if total > limit:
         raise LimitExceededError(
             "intention graph", total, limit,
-            "Raise the limit (aplan: --limit) or use the counts, which need no enumeration.")
+            "The counts (aplan stats) and the factored model need no enumeration.", [OPTIONS["intentions"]])
     in_start, in_count = states.incoming()
     first = [np.array([states.final], dtype=np.int64)]
     successor = [np.array([-1], dtype=np.int64)]

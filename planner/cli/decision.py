@@ -12,7 +12,15 @@ from ..decision.intention_model import IntentionModel
 from ..decision.policy import write_policy
 from ..defaults import CONFIDENCE, SOLVE_PRECISION, SOLVE_TIME_LIMIT
 from ..errors import PlannerError
-from .options import PRODUCT_HELP, add_decision_options, add_episode_options, add_policy_options, positive, rewards_from
+from .options import (
+    PRODUCT_HELP,
+    add_decision_options,
+    add_episode_options,
+    add_policy_options,
+    limits_from,
+    positive,
+    rewards_from,
+)
 
 __all__ = ["add_commands", "model_from", "policy_from"]
 
@@ -23,8 +31,8 @@ def model_from(args: argparse.Namespace, product_only: bool = False):
     """The model of ``args.model`` (or ``args.product``): a PRODUCT's decision model, or a model file."""
     argument = getattr(args, "model", None) or args.product
     if product_only:
-        return api.decision_model(argument, args.technical, rewards_from(args), args.discount)
-    return api.load_model(argument, args.technical, rewards_from(args), args.discount)
+        return api.decision_model(argument, args.technical, rewards_from(args), args.discount, limits_from(args))
+    return api.load_model(argument, args.technical, rewards_from(args), args.discount, limits_from(args))
 
 
 def policy_from(args: argparse.Namespace, model):
