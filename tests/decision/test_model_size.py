@@ -1,0 +1,51 @@
+"""The flat decision model's size, estimated from counts before it is built, and refused past the budget."""
+from __future__ import annotations
+
+import pytest
+
+from planner import LimitExceededError, MemoryLimitError, chain_product, complete_product, make_plan
+from planner.decision.intention_model import check_flat_model, flat_model_bytes, intention_model
+
+
+def table_bytes(model) -> int:
+    """The bytes of the model's arrays: transition and observation tables, rewards, initial belief, graph."""
+    pomdp, graph = model.pomdp, model.graph
+    sparse = sum(t.data.nbytes + t.indices.nbytes + t.indptr.nbytes for t in pomdp.transition)
+    shared = {id(o): o for o in pomdp.observation}.values()  # one table for every action
+    sparse += sum(t.data.nbytes + t.indices.nbytes + t.indptr.nbytes for t in shared)
+    arrays = pomdp.reward.nbytes + pomdp.initial.nbytes
+    return sparse + arrays + graph.first_state.nbytes + graph.successor.nbytes + graph.step_edge.nbytes
+
+
+@pytest.mark.parametrize("product", [chain_product(7), complete_product(5), chain_product(4)],
+                         ids=["chain7", "complete5", "chain4"])
+def test_estimate_bounds_the_tables(pen, product):
+    """The estimate covers the model's arrays, and is not more than twice them plus the names' strings."""
+    for plan in (make_plan(pen), make_plan(product)):
+        model = intention_model(plan)
+        estimate = flat_model_bytes(plan)
+        intentions = model.pomdp.n_states
+        assert estimate == flat_model_bytes(plan, intentions)
+        assert table_bytes(model) <= estimate <= 2 * table_bytes(model) + 100 * intentions
+
+
+def test_model_refused_past_the_budget():
+    plan = make_plan(chain_product(6))
+    needed = flat_model_bytes(plan)
+    assert intention_model(plan, max_bytes=needed).pomdp.n_states == 326
+    with pytest.raises(MemoryLimitError, match=r"flat decision model would need about .* \(326 intentions x 36 "
+                                               r"actions\), more than the memory budget") as info:
+        intention_model(plan, max_bytes=needed - 1)
+    assert [option for option, _ in info.value.options] == ["--planner", "--base-part", "--max-memory"]
+    with pytest.raises(LimitExceededError, match="flat decision model: 326 intentions would be enumerated, more "
+                                                 "than the limit of 325") as info:
+        check_flat_model(plan, limit=325)
+    assert "--limit" not in [option for option, _ in info.value.options]  # the model commands have no --limit
+
+
+def test_eleven_part_chain_is_refused_from_counts():
+    """9,864,101 intentions x 221 actions: tens of GiB, refused before anything is enumerated."""
+    plan = make_plan(chain_product(11))
+    assert flat_model_bytes(plan) > 9_864_101 * 221 * 24  # at least a float64 reward and a sparse row each
+    with pytest.raises(MemoryLimitError, match=r"9,864,101 intentions x 221 actions"):
+        intention_model(plan, max_bytes=4 * 2 ** 30)
