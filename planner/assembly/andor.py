@@ -21,6 +21,7 @@ A final top-down pass keeps what the complete product can be disassembled into.
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 from typing import Iterable
 
@@ -28,9 +29,11 @@ from ..defaults import CUTS_PER_SUBASSEMBLY, SUBASSEMBLY_LIMIT
 from ..errors import DisconnectedProductError, LimitExceededError, NotDisassemblableError
 from ..product import Product
 from .bitsets import bit_indices, components, connected_subsets, lowest_bit, mask_of
-from .guards import OPTIONS, fewer_parts_hint
+from .guards import OPTIONS, Progress, fewer_parts_hint
 
 __all__ = ["Operation", "AndOrGraph", "and_or_graph", "liaison_adjacency"]
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -149,7 +152,11 @@ def and_or_graph(product: Product, technical: bool | None = None, limit: int = S
     connected = sorted(_connected_sets(product, adjacency, limit), key=int.bit_count)
     splits: dict[int, list[tuple[int, int]]] = {1 << i: [] for i in range(n)}
     cuts_left = CUTS_PER_SUBASSEMBLY * limit  # a set's cuts are connected sets too: at most `limit` per set
-    for subset in connected:
+    progress = Progress(log)
+    for done, subset in enumerate(connected):
+        if done & 0xFFF == 0:
+            progress.report("AND/OR graph: %s of %s connected part sets split, %s cuts examined", f"{done:,}",
+                            f"{len(connected):,}", f"{CUTS_PER_SUBASSEMBLY * limit - cuts_left:,}")
         if subset & (subset - 1) == 0 or not technically_feasible(subset):
             continue
         root = lowest_bit(subset).bit_length() - 1
@@ -181,11 +188,15 @@ def _connected_sets(product: Product, adjacency: list[int], limit: int) -> list[
     """Every connected part set, each once (by its lowest part); refused past ``limit`` of them."""
     full = (1 << len(adjacency)) - 1
     found = []
+    progress = Progress(log)
     for r in range(len(adjacency)):
         for subset in connected_subsets(adjacency, full & ~((1 << r) - 1), r):
             if len(found) == limit:
                 raise _too_many(product, "connected part sets (candidate subassemblies)", limit + 1, limit)
             found.append(subset)
+            if len(found) & 0xFFFF == 0:
+                progress.report("AND/OR graph: %s connected part sets so far (limit %s)", f"{len(found):,}",
+                                f"{limit:,}")
     return found
 
 

@@ -9,14 +9,16 @@ line keeps those the command has.
 """
 from __future__ import annotations
 
+import logging
 import os
 import re
+import time
 from dataclasses import dataclass, field
 
 from ..defaults import MEMORY_LIMIT, SUBASSEMBLY_LIMIT
 from ..product import Product
 
-__all__ = ["SizeLimits", "default_memory_budget", "OPTIONS", "fastener_like", "fewer_parts_hint"]
+__all__ = ["SizeLimits", "default_memory_budget", "OPTIONS", "fastener_like", "fewer_parts_hint", "Progress"]
 
 
 def default_memory_budget() -> int:
@@ -83,3 +85,20 @@ def fewer_parts_hint(product: Product) -> str:
     return (f"The product has {len(product.parts)} parts and {len(product.contacts)} contacts; {seen}Plan with "
             "fewer parts: leave the fasteners out, or group each with a part it holds, or plan one subassembly "
             "(one workstation) at a time.")
+
+
+class Progress:
+    """Tells the user how far a long step has got: ``report(text)`` logs ``text`` (at INFO, through
+    ``logger``) once the step has run ``after`` seconds, then at most every ``every`` seconds. The clock only
+    decides when to speak, never what is computed; callers call it now and then (every few thousand items)."""
+
+    def __init__(self, logger: logging.Logger, after: float = 2.0, every: float = 5.0):
+        self.logger = logger
+        self.every = every
+        self.next = time.monotonic() + after
+
+    def report(self, text: str, *args) -> None:
+        now = time.monotonic()
+        if now >= self.next:
+            self.logger.info(text, *args)
+            self.next = now + self.every

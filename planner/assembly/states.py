@@ -21,16 +21,19 @@ which each operation changes by a constant, so a level costs one sort of its edg
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import MemoryLimitError
+from ..errors import MemoryLimitError, gib
 from .andor import AndOrGraph
 from .bitsets import bit_indices
-from .guards import OPTIONS, default_memory_budget
+from .guards import OPTIONS, Progress, default_memory_budget
 
 __all__ = ["AssemblyStateGraph", "assembly_state_graph", "state_table_bytes"]
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -188,7 +191,10 @@ def assembly_state_graph(andor: AndOrGraph, max_bytes: int | None = None) -> Ass
     sources, targets, operations = [], [], []
     offset = 0
     held = rows.nbytes  # states' rows and edges (int32 x 3) so far: concatenated at the end, so held twice then
+    progress = Progress(log)
     for level in range(1, n):
+        progress.report("assembly state graph: %s states with at most %d of %d subassemblies, about %s",
+                        f"{offset + rows.shape[0]:,}", level, n, gib(tables + held))
         state, part = np.nonzero(lowest[rows] == parts)  # one (state, block) pair per block, by its lowest part
         block = rows[state, part]
         count = op_count[block]

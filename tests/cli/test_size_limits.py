@@ -29,7 +29,7 @@ def test_stats_of_an_exploding_product(capsys, screwed):
     """Refused at the default limit (1,000,000 connected part sets: a few seconds of work)."""
     code, out, err = run(capsys, "stats", screwed, "--json")
     data = json.loads(out)
-    assert code == 3 and err == ""
+    assert code == 3 and "error" not in err  # a progress line, at most, on a slow machine
     assert list(data) == list(STAT_KEYS) + ["not_computed"]
     assert (data["parts"], data["contacts"], data["complexity"]) == (42, 81, 3.86)
     assert data["not_computed"]["figures"] == [k for k in STAT_KEYS if k not in ("parts", "contacts", "complexity")]
