@@ -32,7 +32,7 @@ from ..errors import LimitExceededError, MemoryLimitError, PlannerError
 from .pomdp import POMDP
 
 __all__ = ["Rewards", "WAIT", "IntentionModel", "intention_model", "intention_pomdp", "flat_model_bytes",
-           "check_flat_model"]
+           "check_flat_model", "flat_model_fits"]
 
 WAIT = "wait"
 
@@ -210,6 +210,17 @@ def check_flat_model(plan: Plan, max_bytes: int | None = None, limit: int | None
     return needed
 
 
+def flat_model_fits(plan: Plan, max_bytes: int | None = None, limit: int | None = DEFAULT_INTENTION_LIMIT,
+                    intentions: int | None = None) -> bool:
+    """Whether :func:`intention_model` would build the flat model within ``max_bytes`` and ``limit`` (the
+    arguments of :func:`check_flat_model`), e.g. to choose the online planner instead. Cost: O(state edges)."""
+    try:
+        check_flat_model(plan, max_bytes, limit, intentions)
+    except LimitExceededError:
+        return False
+    return True
+
+
 def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                      graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT,
                      max_bytes: int | None = None) -> IntentionModel:
@@ -217,7 +228,8 @@ def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
 
     ``graph``: the plan's intention graph when it was built already. Before anything is built the model's
     size is estimated (:func:`check_flat_model`): more than ``limit`` intentions (when ``graph`` is to be
-    built), or more than ``max_bytes`` (default: the machine's budget), is refused with :class:`~planner.errors.LimitExceededError`.
+    built), or more than ``max_bytes`` (default: the machine's budget), is refused with
+    :class:`~planner.errors.LimitExceededError`.
     Cost: O(I x A) for the reward table and O(I) for the sparse tables, I intentions, A actions.
     """
     if graph is None:

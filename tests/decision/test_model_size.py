@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from planner import LimitExceededError, MemoryLimitError, chain_product, complete_product, make_plan
-from planner.decision.intention_model import check_flat_model, flat_model_bytes, intention_model
+from planner.decision.intention_model import check_flat_model, flat_model_bytes, flat_model_fits, intention_model
 
 
 def table_bytes(model) -> int:
@@ -33,6 +33,8 @@ def test_model_refused_past_the_budget():
     plan = make_plan(chain_product(6))
     needed = flat_model_bytes(plan)
     assert intention_model(plan, max_bytes=needed).pomdp.n_states == 326
+    assert flat_model_fits(plan, needed) and not flat_model_fits(plan, needed - 1)
+    assert not flat_model_fits(plan, limit=325)
     with pytest.raises(MemoryLimitError, match=r"flat decision model would need about .* \(326 intentions x 36 "
                                                r"actions\), more than the memory budget") as info:
         intention_model(plan, max_bytes=needed - 1)
