@@ -33,8 +33,9 @@ ANGULAR_DEFLECTION = 0.25    # radians between neighbouring facet normals on cur
 INTENTION_LIMIT = 1_000_000
 
 # Size guards: what a command may build before it refuses, with the estimate and the option that helps.
-# The AND/OR graph enumerates at most SUBASSEMBLY_LIMIT connected part sets (about 1.6 us each: 2 s) and
-# examines at most CUTS_PER_SUBASSEMBLY times as many cuts (aplan --max-subassemblies raises both);
+# The AND/OR graph enumerates at most SUBASSEMBLY_LIMIT connected part sets (about 1.6 us each: 2 s; refused
+# at once when a lower bound passes it) and examines at most CUTS_PER_SUBASSEMBLY times as many cuts
+# (aplan --max-subassemblies raises both);
 # graphs and models estimated above MEMORY_LIMIT bytes, or a quarter of the machine's memory if that is
 # less, are not built (aplan --max-memory).
 SUBASSEMBLY_LIMIT = 1_000_000

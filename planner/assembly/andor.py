@@ -123,8 +123,9 @@ def and_or_graph(product: Product, technical: bool | None = None, limit: int = S
     ------
     DisconnectedProductError : the connection diagram is not connected (the groups are named).
     NotDisassemblableError : the complete product has no feasible split (the reasons are given).
-    LimitExceededError : more connected part sets or cuts than the limit allows (the count reached, the
-        product's fastener-like parts and the options that help are given).
+    LimitExceededError : more connected part sets or cuts than the limit allows (the count reached, or a
+        lower bound computed before any enumeration; the product's fastener-like parts and the options that
+        help are given).
 
     Notes
     -----
@@ -185,7 +186,17 @@ def and_or_graph(product: Product, technical: bool | None = None, limit: int = S
 
 
 def _connected_sets(product: Product, adjacency: list[int], limit: int) -> list[int]:
-    """Every connected part set, each once (by its lowest part); refused past ``limit`` of them."""
+    """Every connected part set, each once (by its lowest part); refused past ``limit`` of them.
+
+    A part with any set of its later neighbours is connected, and such sets differ by their lowest part, so
+    ``sum over parts of 2^(later neighbours)`` connected sets exist: past the limit, refused before any work.
+    """
+    bound = sum(1 << (adjacency[v] >> (v + 1)).bit_count() for v in range(len(adjacency)))
+    if bound > limit:
+        hub = max(range(len(adjacency)), key=lambda v: adjacency[v].bit_count())
+        raise _too_many(product, "connected part sets (candidate subassemblies)", bound, limit,
+                        f" (a part with any set of its neighbours is one: {product.part_ids[hub]} alone has "
+                        f"{adjacency[hub].bit_count()} neighbours)")
     full = (1 << len(adjacency)) - 1
     found = []
     progress = Progress(log)

@@ -10,6 +10,7 @@ from planner import (
     SizeLimits,
     and_or_graph,
     assembly_state_graph,
+    chain_product,
     complete_product,
     make_plan,
     plan_statistics,
@@ -57,10 +58,16 @@ def test_cut_limit_is_sharp():
         and_or_graph(complete_product(8), limit=smallest_limit(3272) - 1)
 
 
-def test_exploding_product_is_refused_at_the_limit():
-    """40 screws on one joint: 3 * 2^40 connected sets; the build stops after the limit's worth of them."""
-    with pytest.raises(LimitExceededError, match="at least 2,001 connected part sets .* limit of 2,000"):
+def test_exploding_product_is_refused_before_any_work():
+    """A part with any set of its later neighbours is a connected set: for two parts and 40 screws that lower
+    bound, 2^41 + 2^40 + 40, is the exact count, and far past the limit, so nothing is enumerated."""
+    count = 3 * 2 ** 40 + 40
+    with pytest.raises(LimitExceededError, match=f"at least {count:,} connected part sets .* limit of 2,000. .*"
+                                                 r"\(a part with any set of its neighbours is one: p1 alone has 41"):
         and_or_graph(fastened_product(2, 40), limit=2000)
+    # Past the bound, the enumeration itself stops at the limit: a chain's bound is 2n - 1, its count n(n+1)/2.
+    with pytest.raises(LimitExceededError, match="at least 101 connected part sets .* limit of 100"):
+        and_or_graph(chain_product(20), limit=100)
 
 
 def test_state_graph_memory_budget():
