@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import re
 import subprocess
 import sys
@@ -62,12 +63,14 @@ def main() -> None:
     parser.add_argument("--address-space", type=int, default=8_000_000_000)
     args = parser.parse_args()
     models = sorted(p for p in MODELS.rglob("*.FCStd") if args.only in p.name)
+    print("load average before: %.2f %.2f %.2f" % os.getloadavg())
     print("| document | exit | wall s | peak MiB | printed |")
     print("|---|---:|---:|---:|---|")
     for model in models:
         result = run_stats(model, args.timeout, args.address_space)
         print(f"| {model.relative_to(MODELS)} | {result['status']} | {result['seconds']:.1f} | "
               f"{result['peak_mib']:.0f} | {summary(result)} |", flush=True)
+    print("load average after: %.2f %.2f %.2f" % os.getloadavg())
 
 
 if __name__ == "__main__":

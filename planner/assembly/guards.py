@@ -18,17 +18,30 @@ from dataclasses import dataclass, field
 from ..defaults import MEMORY_LIMIT, SUBASSEMBLY_LIMIT
 from ..product import Product
 
-__all__ = ["SizeLimits", "default_memory_budget", "OPTIONS", "fastener_like", "fewer_parts_hint", "Progress"]
+__all__ = ["SizeLimits", "physical_memory", "default_memory_budget", "memory_options", "OPTIONS", "fastener_like",
+           "fewer_parts_hint", "Progress"]
+
+
+def physical_memory() -> int | None:
+    """The machine's physical memory in bytes (None where the system does not say)."""
+    try:
+        physical = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):  # not a POSIX system
+        return None
+    return physical if physical > 0 else None
 
 
 def default_memory_budget() -> int:
     """The bytes one graph or model may take by default: ``MEMORY_LIMIT`` (4 GiB), or a quarter of the
     machine's physical memory when that is less."""
-    try:
-        physical = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (AttributeError, ValueError, OSError):  # not a POSIX system: the fixed budget
-        return MEMORY_LIMIT
-    return min(MEMORY_LIMIT, physical // 4) if physical > 0 else MEMORY_LIMIT
+    physical = physical_memory()
+    return MEMORY_LIMIT if physical is None else min(MEMORY_LIMIT, physical // 4)
+
+
+def memory_options(needed: int) -> list[tuple[str, str]]:
+    """``--max-memory`` when raising the budget could help: ``needed`` is at most half the machine's memory."""
+    physical = physical_memory()
+    return [OPTIONS["memory"]] if physical is None or needed <= physical // 2 else []
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ import numpy as np
 from ..errors import MemoryLimitError, gib
 from .andor import AndOrGraph
 from .bitsets import bit_indices
-from .guards import OPTIONS, Progress, default_memory_budget
+from .guards import OPTIONS, Progress, default_memory_budget, memory_options
 
 __all__ = ["AssemblyStateGraph", "assembly_state_graph", "state_table_bytes"]
 
@@ -153,7 +153,7 @@ def _refuse(andor: AndOrGraph, needed: int, budget: int, detail: str) -> MemoryL
         "Its states are the ways the parts can be partitioned into subassemblies, which grow about as the "
         "Bell numbers for strongly connected products. Plan with fewer parts (leave fasteners out, or group "
         "parts that are always assembled together), or plan one subassembly at a time.",
-        [OPTIONS[k] for k in ("memory", "exclude", "group")])
+        memory_options(needed) + [OPTIONS[k] for k in ("exclude", "group")])
 
 
 def assembly_state_graph(andor: AndOrGraph, max_bytes: int | None = None) -> AssemblyStateGraph:

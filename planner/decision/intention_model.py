@@ -19,12 +19,13 @@ Definitions (these match the authors' code, checked against the POMDPX files it 
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
-from ..assembly.guards import OPTIONS, default_memory_budget
+from ..assembly.guards import OPTIONS, Progress, default_memory_budget, memory_options
 from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, IntentionGraph, count_intentions, intention_graph
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
@@ -35,6 +36,8 @@ __all__ = ["Rewards", "WAIT", "IntentionModel", "intention_model", "intention_po
            "check_flat_model", "flat_model_fits"]
 
 WAIT = "wait"
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -125,7 +128,9 @@ def _transitions(graph: IntentionGraph, robot_ops: np.ndarray) -> list[sp.csr_ma
         return sp.csr_matrix((vals, (rr, cols)), shape=(n, n))
 
     transition = []
-    for op in robot_ops:
+    progress = Progress(log)
+    for done, op in enumerate(robot_ops):
+        progress.report("flat decision model: transition tables of %d of %d actions", done, len(robot_ops) + 1)
         doing = has_next & (step == op)  # the robot performs the intention's next step
         stay = ~doing
         performed = uniform_step(after[states[doing]], states[doing])
@@ -204,7 +209,7 @@ def check_flat_model(plan: Plan, max_bytes: int | None = None, limit: int | None
     if needed > budget:
         raise MemoryLimitError("flat decision model", needed, budget,
                                f"{count:,} intentions x {actions:,} actions", hint,
-                               _FLAT_OPTIONS + [OPTIONS["memory"]])
+                               _FLAT_OPTIONS + memory_options(needed))
     if limit is not None and count > limit:
         raise LimitExceededError("flat decision model", count, limit, hint, _FLAT_OPTIONS, noun="intentions")
     return needed

@@ -15,7 +15,7 @@ from planner import (
     make_plan,
     plan_statistics,
 )
-from planner.assembly.guards import fastener_like, fewer_parts_hint
+from planner.assembly.guards import OPTIONS, fastener_like, fewer_parts_hint, memory_options, physical_memory
 from planner.assembly.stats import statistics_within
 from planner.defaults import CUTS_PER_SUBASSEMBLY
 from planner.product.synthetic import fastened_product
@@ -105,3 +105,9 @@ def test_fastener_hint_names_the_parts():
     assert named == ["screw_1", "screw_2", "screw_3", "screw_4"] and two == named
     hint = fewer_parts_hint(complete_product(3))
     assert "fasteners by name" not in hint and "3 parts and 3 contacts" in hint
+
+
+def test_a_larger_budget_is_offered_only_when_it_could_help():
+    assert memory_options(2 ** 20) == [OPTIONS["memory"]]
+    physical = physical_memory()
+    assert memory_options(2 ** 60) == ([] if physical else [OPTIONS["memory"]])
