@@ -25,9 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..defaults import INTENTION_LIMIT
-from ..errors import LimitExceededError, PlannerError
+from ..errors import LimitExceededError, MemoryLimitError, PlannerError
 from ..product import Product
-from .guards import OPTIONS
+from .guards import OPTIONS, default_memory_budget, memory_options
 from .states import AssemblyStateGraph
 
 __all__ = [
@@ -179,18 +179,28 @@ class IntentionGraph:
         return graph
 
 
-def intention_graph(states: AssemblyStateGraph, limit: int = DEFAULT_INTENTION_LIMIT) -> IntentionGraph:
+# Bytes per intention while the graph is built: three int64 arrays, held twice while they are concatenated.
+_GRAPH_BYTES_PER_INTENTION = 56
+
+
+def intention_graph(states: AssemblyStateGraph, limit: int = DEFAULT_INTENTION_LIMIT,
+                    max_bytes: int | None = None) -> IntentionGraph:
     """Enumerate the intention graph (Alg. 2) with the map from its edges to operations.
 
     Raises :class:`~planner.errors.LimitExceededError`, stating the count, when there are more than
-    ``limit`` intentions; the count itself never needs enumeration (:func:`count_intentions`).
-    Cost: O(I) time and memory for I intentions.
+    ``limit`` intentions, or when the graph would take more than ``max_bytes`` (default: the machine's
+    budget, :func:`~planner.assembly.guards.default_memory_budget`); the count itself never needs
+    enumeration (:func:`count_intentions`). Cost: O(I) time and memory for I intentions.
     """
     total = count_intentions(states)
+    hint = "The counts (aplan stats) and the factored model need no enumeration."
     if total > limit:
-        raise LimitExceededError(
-            "intention graph", total, limit,
-            "The counts (aplan stats) and the factored model need no enumeration.", [OPTIONS["intentions"]])
+        raise LimitExceededError("intention graph", total, limit, hint, [OPTIONS["intentions"]])
+    needed = _GRAPH_BYTES_PER_INTENTION * total
+    budget = default_memory_budget() if max_bytes is None else max_bytes
+    if needed > budget:
+        raise MemoryLimitError("intention graph", needed, budget, f"{total:,} intentions", hint,
+                               memory_options(needed))
     in_start, in_count = states.incoming()
     first = [np.array([states.final], dtype=np.int64)]
     successor = [np.array([-1], dtype=np.int64)]

@@ -53,8 +53,9 @@ def _stats(args: argparse.Namespace) -> int:
 
 
 def _intentions(args: argparse.Namespace) -> int:
-    plan = api.plan_of(args.product, args.technical, limits_from(args))
-    graph = intention_graph(plan.states, limit=args.limit)
+    limits = limits_from(args)
+    plan = api.plan_of(args.product, args.technical, limits)
+    graph = intention_graph(plan.states, limit=args.limit, max_bytes=limits.memory)
     for i in (graph.full_sequences() if args.full else range(graph.n_intentions)):
         states = [plan.states.describe(s) for s in graph.path(int(i))]
         if args.json:

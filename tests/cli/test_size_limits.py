@@ -86,6 +86,8 @@ def test_model_commands_name_their_own_options(capsys, tmp_path, chain11):
                          "1,000,000" in err and "--limit" not in err and not target.exists()
     code, _, err = run(capsys, "intentions", chain11, "--limit", "5")
     assert code == 1 and "intention graph: 9,864,101 would be enumerated" in err and "--limit N raises" in err
+    code, _, err = run(capsys, "intentions", chain11, "--limit", "10000000", "--max-memory", "0.25")
+    assert code == 1 and "intention graph would need about 526.8 MiB (9,864,101 intentions)" in err
 
 
 def test_bad_size_options(capsys):
