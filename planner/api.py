@@ -19,31 +19,35 @@ Front ends only parse their input and show results; the steps of the method live
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
 
-from .assembly.guards import SizeLimits
+from .assembly.guards import OPTIONS, SizeLimits
 from .assembly.intentions import most_connected_part
 from .assembly.plan import Plan, make_plan
 from .assembly.stats import PlanStatistics, plan_statistics, statistics_within
 from .decision.intention_model import IntentionModel, Rewards, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
+from .decision.io.size import model_file_bytes
 from .decision.policy import AlphaVectorPolicy, read_policy
 from .decision.pomdp import POMDP
 from .decision.simulate import Episode, evaluate_policy, simulate_episode
 from .decision.solvers import PointBasedSolver, SolveResult
-from .defaults import DISCOUNT, POLICY_TIME_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
-from .errors import PlannerError, UnknownProductError
+from .defaults import DISCOUNT, FILE_LIMIT, POLICY_TIME_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
+from .errors import FileLimitError, PlannerError, UnknownProductError
 from .product import Product, load_product
 from .product.examples import EXAMPLES, example_path
 
 __all__ = ["resolve_product", "plan_of", "plan_statistics_of", "decision_model", "load_model", "save_model",
+           "check_model_file",
            "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for", "simulate", "evaluate"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
+FILE_OPTION = ("--max-file", "--max-file GIB raises the file size budget")
 SOLVER_ENGINES = ("builtin", "sarsop")
 
 Model = IntentionModel | POMDP
@@ -133,8 +137,31 @@ def tables(model: Model) -> POMDP:
     return model.pomdp if isinstance(model, IntentionModel) else model
 
 
-def save_model(model: Model, path: str | os.PathLike) -> None:
-    """Write POMDPX (``.pomdpx``) or Cassandra (``.pomdp``), by the file name (atomically)."""
+def check_model_file(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT) -> int:
+    """The bytes :func:`save_model` would write to ``path`` (:func:`~planner.decision.io.size.model_file_bytes`),
+    after checking them against ``max_bytes`` and the free space of the target's disk: past either,
+    :class:`~planner.errors.FileLimitError` with the estimate. Cost: O(non-zeros) in numpy."""
+    kind = _model_file_kind(path)
+    if kind not in (".pomdpx", ".pomdp"):
+        raise PlannerError(f"{path}: unknown model file type; use .pomdpx or .pomdp")
+    pomdp = tables(model)
+    needed = model_file_bytes(pomdp, "pomdpx" if kind == ".pomdpx" else "cassandra")
+    folder = Path(path).resolve().parent
+    free = shutil.disk_usage(folder).free if folder.is_dir() else None
+    detail = (f"{pomdp.n_states:,} states, {pomdp.n_actions:,} actions, "
+              f"{sum(t.nnz for t in pomdp.transition):,} non-zero transitions")
+    hint = "A smaller model (fewer intentions) makes a smaller file."
+    if free is not None and needed > free:
+        raise FileLimitError(f"{path}", needed, free, detail, hint, budget_name=f"the free space in {folder}")
+    if needed > max_bytes:
+        raise FileLimitError(f"{path}", needed, max_bytes, detail, hint, [FILE_OPTION, OPTIONS["base_part"]])
+    return needed
+
+
+def save_model(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT) -> None:
+    """Write POMDPX (``.pomdpx``) or Cassandra (``.pomdp``), by the file name (atomically), after estimating
+    its size (:func:`check_model_file`: refused past ``max_bytes`` or the free disk space)."""
+    check_model_file(model, path, max_bytes)
     kind = _model_file_kind(path)
     if kind == ".pomdpx":
         write_pomdpx(tables(model), path)

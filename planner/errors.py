@@ -15,6 +15,7 @@ __all__ = [
     "NotDisassemblableError",
     "LimitExceededError",
     "MemoryLimitError",
+    "FileLimitError",
     "gib",
     "GeometryError",
 ]
@@ -100,6 +101,20 @@ class MemoryLimitError(LimitExceededError):
 
     def _message(self, size: str) -> str:
         return (f"{self.what} would need about {gib(self.count)} ({self.detail}), more than the memory budget "
+                f"of {gib(self.limit)}. {self.hint}")
+
+
+class FileLimitError(MemoryLimitError):
+    """A file would be larger than allowed: more than the file budget, or than the free space of its disk
+    (``budget_name`` says which); ``count`` and ``limit`` are bytes."""
+
+    def __init__(self, what: str, needed: int, budget: int, detail: str, hint: str,
+                 options: Sequence[tuple[str, str]] = (), budget_name: str = "the file size budget"):
+        self.budget_name = budget_name
+        super().__init__(what, needed, budget, detail, hint, options)
+
+    def _message(self, size: str) -> str:
+        return (f"{self.what} would take about {gib(self.count)} ({self.detail}), more than {self.budget_name} "
                 f"of {gib(self.limit)}. {self.hint}")
 
 

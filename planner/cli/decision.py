@@ -10,13 +10,14 @@ import sys
 from .. import api
 from ..decision.intention_model import IntentionModel
 from ..decision.policy import write_policy
-from ..defaults import CONFIDENCE, SOLVE_PRECISION, SOLVE_TIME_LIMIT
+from ..defaults import CONFIDENCE, FILE_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
 from ..errors import PlannerError
 from .options import (
     PRODUCT_HELP,
     add_decision_options,
     add_episode_options,
     add_policy_options,
+    gibibytes,
     limits_from,
     positive,
     rewards_from,
@@ -46,7 +47,7 @@ def policy_from(args: argparse.Namespace, model):
 
 def _pomdp(args: argparse.Namespace) -> int:
     model = model_from(args)
-    api.save_model(model, args.output)
+    api.save_model(model, args.output, int(args.max_file * 2 ** 30))
     tables = api.tables(model)
     print(f"{args.output}: {tables.n_states} states, {tables.n_actions} actions, {tables.n_observations} observations")
     return 0
@@ -119,6 +120,9 @@ def add_commands(commands) -> None:
                                             "(APPL's pomdpsol reads it) or Cassandra's .pomdp, by the file name.")
     pomdp.add_argument("model", metavar="PRODUCT", help=PRODUCT_HELP)
     pomdp.add_argument("-o", "--output", required=True, metavar="MODEL", help="MODEL.pomdpx or MODEL.pomdp")
+    pomdp.add_argument("--max-file", type=gibibytes, default=FILE_LIMIT / 2 ** 30, metavar="GIB",
+                       help=f"refuse to write a file estimated larger than this, or than the free disk space "
+                            f"(default {FILE_LIMIT / 2 ** 30:g} GiB)")
     add_decision_options(pomdp)
     pomdp.set_defaults(run=_pomdp)
 

@@ -12,7 +12,7 @@ from ..product.examples import EXAMPLES
 
 __all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_decision_options", "rewards_from",
            "add_tolerance_options", "tolerances_from", "add_policy_options", "add_episode_options",
-           "add_size_options", "limits_from", "offer_options", "advice"]
+           "add_size_options", "limits_from", "offer_options", "advice", "gibibytes"]
 
 PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or STEP file (read through "
                 f"FreeCAD), or an embedded example ({', '.join(EXAMPLES)})")

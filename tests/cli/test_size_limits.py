@@ -94,3 +94,13 @@ def test_bad_size_options(capsys):
     with pytest.raises(SystemExit) as info:
         main(["stats", "pen", "--max-memory", "0"])
     assert info.value.code == 2 and "must be a positive number of GiB" in capsys.readouterr().err
+
+
+def test_pomdp_file_budget(capsys, tmp_path):
+    """The chain of 7's POMDPX takes about 10 MiB: refused with a 1 MiB budget, nothing written."""
+    product = tmp_path / "chain7.json"
+    product.write_text(json.dumps(product_to_dict(chain_product(7))))
+    target = tmp_path / "chain7.pomdpx"
+    code, _, err = run(capsys, "pomdp", str(product), "-o", str(target), "--max-file", str(1 / 1024))
+    assert code == 1 and "chain7.pomdpx would take about 10." in err and "--max-file GIB raises" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["chain7.json"]

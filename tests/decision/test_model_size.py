@@ -3,8 +3,11 @@ from __future__ import annotations
 
 import pytest
 
-from planner import LimitExceededError, MemoryLimitError, chain_product, complete_product, make_plan
+from planner import LimitExceededError, MemoryLimitError, api, chain_product, complete_product, make_plan
 from planner.decision.intention_model import check_flat_model, flat_model_bytes, flat_model_fits, intention_model
+from planner.decision.io import write_cassandra, write_pomdpx
+from planner.decision.io.size import model_file_bytes
+from planner.errors import FileLimitError
 
 
 def table_bytes(model) -> int:
@@ -51,3 +54,27 @@ def test_eleven_part_chain_is_refused_from_counts():
     assert flat_model_bytes(plan) > 9_864_101 * 221 * 24  # at least a float64 reward and a sparse row each
     with pytest.raises(MemoryLimitError, match=r"9,864,101 intentions x 221 actions"):
         intention_model(plan, max_bytes=4 * 2 ** 30)
+
+
+@pytest.mark.parametrize("kind, write", [("pomdpx", write_pomdpx), ("cassandra", write_cassandra)])
+def test_file_size_estimate(tmp_path, pen, kind, write):
+    """Within 5 % of the bytes the writer writes (pen, a chain of 6, a complete graph of 5)."""
+    for product in (pen, chain_product(6), complete_product(5)):
+        model = intention_model(make_plan(product)).pomdp
+        path = tmp_path / f"model.{kind}"
+        write(model, path)
+        assert abs(model_file_bytes(model, kind) - path.stat().st_size) <= 0.05 * path.stat().st_size
+
+
+def test_file_refused_past_the_budget(tmp_path):
+    model = intention_model(make_plan(chain_product(6)))
+    target = tmp_path / "chain6.pomdpx"
+    needed = api.check_model_file(model, target)
+    with pytest.raises(FileLimitError, match=r"chain6.pomdpx would take about 1.1 MiB \(326 states, 36 actions, "
+                                             r"[\d,]+ non-zero transitions\), more than the file size budget of "
+                                             r"1.0 MiB") as info:
+        api.save_model(model, target, max_bytes=2 ** 20)
+    assert info.value.count == needed and not target.exists()
+    assert [option for option, _ in info.value.options] == ["--max-file", "--base-part"]
+    api.save_model(model, target, max_bytes=needed)
+    assert abs(target.stat().st_size - needed) <= 0.05 * needed
