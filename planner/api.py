@@ -25,7 +25,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .assembly.guards import OPTIONS, SizeLimits
+from .assembly.guards import OPTIONS, SizeLimits, memory_options
 from .assembly.intentions import most_connected_part
 from .assembly.plan import Plan, make_plan
 from .assembly.stats import PlanStatistics, plan_statistics, statistics_within
@@ -38,7 +38,7 @@ from .decision.pomdp import POMDP
 from .decision.simulate import Episode, evaluate_policy, simulate_episode
 from .decision.solvers import PointBasedSolver, SolveResult
 from .defaults import DISCOUNT, FILE_LIMIT, POLICY_TIME_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
-from .errors import FileLimitError, PlannerError, UnknownProductError
+from .errors import FileLimitError, MemoryLimitError, PlannerError, UnknownProductError, gib
 from .product import Product, load_product
 from .product.examples import EXAMPLES, example_path
 
@@ -125,11 +125,28 @@ def load_model(argument: str | os.PathLike, technical: bool | None = None, rewar
     """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`), else a PRODUCT
     (its :class:`IntentionModel`; ``technical``, ``rewards``, ``discount`` and ``limits`` apply to it only)."""
     kind = _model_file_kind(argument)
+    if kind in (".pomdpx", ".pomdp") and os.path.isfile(argument):
+        _check_model_read(argument, limits.memory)
     if kind in (".pomdpx", ".pomdpx.gz"):
         return read_pomdpx(argument)
     if kind == ".pomdp":
         return read_cassandra(argument)
     return decision_model(argument, technical, rewards, discount, limits)
+
+
+# Reading a model file peaks at about 3 bytes of memory per byte of file (bench/README.md, model files).
+_READ_BYTES_PER_FILE_BYTE = 3
+
+
+def _check_model_read(path: str | os.PathLike, max_bytes: int) -> None:
+    """Refuse to read a model file whose reading would pass the memory budget (estimated from its size)."""
+    size = os.path.getsize(path)
+    needed = _READ_BYTES_PER_FILE_BYTE * size
+    if needed > max_bytes:
+        raise MemoryLimitError(f"reading {path}", needed, max_bytes, f"{_READ_BYTES_PER_FILE_BYTE} x its "
+                               f"{gib(size)}", "A model file that large holds more than the "
+                               "solvers can use; plan the product with fewer parts or a base part instead.",
+                               memory_options(needed))
 
 
 def tables(model: Model) -> POMDP:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from planner import LimitExceededError, MemoryLimitError, api, chain_product, complete_product, make_plan
+from planner import LimitExceededError, MemoryLimitError, SizeLimits, api, chain_product, complete_product, make_plan
 from planner.decision.intention_model import check_flat_model, flat_model_bytes, flat_model_fits, intention_model
 from planner.decision.io import write_cassandra, write_pomdpx
 from planner.decision.io.size import model_file_bytes
@@ -78,3 +78,12 @@ def test_file_refused_past_the_budget(tmp_path):
     assert [option for option, _ in info.value.options] == ["--max-file", "--base-part"]
     api.save_model(model, target, max_bytes=needed)
     assert abs(target.stat().st_size - needed) <= 0.05 * needed
+
+
+def test_reading_a_model_file_is_estimated_first(tmp_path, pen):
+    target = tmp_path / "pen.pomdpx"
+    api.save_model(api.decision_model(pen), target)
+    size = target.stat().st_size
+    assert api.load_model(target, limits=SizeLimits(memory=3 * size)).n_states == 69
+    with pytest.raises(MemoryLimitError, match=r"reading .*pen.pomdpx would need about 0.5 MiB \(3 x its 0.2 MiB\)"):
+        api.load_model(target, limits=SizeLimits(memory=3 * size - 1))
