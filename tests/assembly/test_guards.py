@@ -15,7 +15,7 @@ from planner import (
     make_plan,
     plan_statistics,
 )
-from planner.assembly.guards import OPTIONS, fastener_like, fewer_parts_hint, memory_options, physical_memory
+from planner.assembly.guards import OPTIONS, Progress, fastener_like, fewer_parts_hint, memory_options, physical_memory
 from planner.assembly.stats import statistics_within
 from planner.defaults import CUTS_PER_SUBASSEMBLY
 from planner.product.synthetic import fastened_product
@@ -111,3 +111,14 @@ def test_a_larger_budget_is_offered_only_when_it_could_help():
     assert memory_options(2 ** 20) == [OPTIONS["memory"]]
     physical = physical_memory()
     assert memory_options(2 ** 60) == ([] if physical else [OPTIONS["memory"]])
+
+
+def test_progress_speaks_once_per_period(caplog):
+    import logging
+
+    logger = logging.getLogger("planner.test_progress")
+    progress = Progress(logger, after=0.0, every=3600.0)
+    with caplog.at_level(logging.INFO, logger="planner.test_progress"):
+        progress.report("step %s", "one")
+        progress.report("step %s", "two")  # within the hour: silent
+    assert [r.getMessage() for r in caplog.records] == ["step one"]
