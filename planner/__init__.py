@@ -19,6 +19,7 @@ from .assembly import (
                        OperationTags,
                        Plan,
                        PlanStatistics,
+                       SizeLimits,
                        and_or_graph,
                        assembly_state_graph,
                        count_intentions,
@@ -34,6 +35,7 @@ from .assembly import (
 from .errors import (
                        DisconnectedProductError,
                        LimitExceededError,
+                       MemoryLimitError,
                        NotDisassemblableError,
                        PlannerError,
                        ProductFormatError,
@@ -64,7 +66,7 @@ __version__ = "0.1.0"
 __all__ = [
     "AndOrGraph", "Operation", "and_or_graph",
     "PlannerError", "ProductFormatError", "UnknownProductError", "DisconnectedProductError",
-    "NotDisassemblableError", "LimitExceededError",
+    "NotDisassemblableError", "LimitExceededError", "MemoryLimitError", "SizeLimits",
     "EXAMPLES", "example_path", "resolve_product",
     "IntentionGraph", "count_intentions", "count_sequences", "intention_graph", "most_connected_part",
     "paths_to_final",

@@ -23,42 +23,40 @@ Front ends only parse their input and show results; the steps of the method live
 from __future__ import annotations
 
 import os
+import shutil
 from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
 
+from .assembly.guards import OPTIONS, SizeLimits, memory_options
 from .assembly.intentions import base_part_first_edges, count_intentions, most_connected_part
 from .assembly.plan import Plan, make_plan
-from .assembly.stats import PlanStatistics, plan_statistics
+from .assembly.stats import PlanStatistics, plan_statistics, statistics_within
 from .decision.factored_model import FactoredIntentionModel, factored_model
 from .decision.factored_simulate import FactoredEpisode, evaluate_factored, simulate_factored_episode
-from .decision.intention_model import IntentionModel, Rewards, intention_model
+from .decision.intention_model import IntentionModel, Rewards, flat_model_fits, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
+from .decision.io.size import model_file_bytes
 from .decision.online import OnlinePlanner
 from .decision.policy import AlphaVectorPolicy, PolicyError, read_policy
 from .decision.pomdp import POMDP
 from .decision.simulate import Episode, evaluate_policy, simulate_episode
 from .decision.solvers import PointBasedSolver, SolveResult
-from .defaults import (
-    DECISION_TIME,
-    DISCOUNT,
-    INTENTION_LIMIT,
-    ONLINE_EXPANSIONS,
-    POLICY_TIME_LIMIT,
-    SOLVE_PRECISION,
-    SOLVE_TIME_LIMIT,
-)
-from .errors import PlannerError, UnknownProductError
+from .defaults import (DECISION_TIME, DISCOUNT, FILE_LIMIT, INTENTION_LIMIT, ONLINE_EXPANSIONS, POLICY_TIME_LIMIT,
+                       SOLVE_PRECISION, SOLVE_TIME_LIMIT)
+from .errors import FileLimitError, MemoryLimitError, PlannerError, UnknownProductError, gib
 from .product import Product, load_product
 from .product.examples import EXAMPLES, example_path
 
 __all__ = ["resolve_product", "plan_of", "plan_statistics_of", "base_part_of", "decision_model", "load_model",
-           "save_model", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for", "simulate", "evaluate",
-           "PLANNERS", "factored_decision_model", "online_planner", "choose_planner", "decision_maker"]
+           "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for",
+           "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner", "choose_planner",
+           "decision_maker"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
+FILE_OPTION = ("--max-file", "--max-file GIB raises the file size budget")
 SOLVER_ENGINES = ("builtin", "sarsop")
 
 PLANNERS = ("offline", "online")
@@ -95,10 +93,12 @@ def resolve_product(argument: str | os.PathLike) -> Product:
         f"{argument}: no such file, and no embedded example of that name (embedded: {', '.join(EXAMPLES)})")
 
 
-def plan_of(product: str | os.PathLike | Product, technical: bool | None = None) -> Plan:
+def plan_of(product: str | os.PathLike | Product, technical: bool | None = None,
+            limits: SizeLimits = SizeLimits()) -> Plan:
     """The plan (AND/OR graph, assembly states, tags) of a product or PRODUCT argument; ``technical``:
-    ``True``/``False`` switches every technical constraint on/off, ``None`` keeps the file's."""
-    return make_plan(product if isinstance(product, Product) else resolve_product(product), technical)
+    ``True``/``False`` switches every technical constraint on/off, ``None`` keeps the file's; ``limits``: the
+    size limits the plan is built within (past them: :class:`~planner.errors.LimitExceededError`)."""
+    return make_plan(product if isinstance(product, Product) else resolve_product(product), technical, limits)
 
 
 AUTO_BASE_PART = "auto"
@@ -116,27 +116,36 @@ def base_part_of(plan: Plan, base_part: str | None) -> str | None:
 
 
 def plan_statistics_of(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
-                       base_part: str | None = None) -> tuple[Plan, PlanStatistics]:
+                       base_part: str | None = None, limits: SizeLimits = SizeLimits(),
+                       partial: bool = False) -> tuple[Plan | None, PlanStatistics]:
     """The plan and its figures (``aplan stats``). ``base_part``: count only the sequences whose first
-    operation joins it, and their intentions; ``"auto"``: the most connected part (:func:`base_part_of`)."""
-    plan = product if isinstance(product, Plan) else plan_of(product, technical)
-    return plan, plan_statistics(plan, base_part_of(plan, base_part))
+    operation joins it, and their intentions; ``"auto"``: the most connected part (:func:`base_part_of`). With
+    ``partial``, a plan past ``limits`` gives the figures that could be counted (the others None, the reason in
+    ``refused``) and no plan, instead of :class:`~planner.errors.LimitExceededError`."""
+    if isinstance(product, Plan) or not partial:
+        plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
+        return plan, plan_statistics(plan, base_part_of(plan, base_part))
+    product = product if isinstance(product, Product) else resolve_product(product)
+    base = most_connected_part(product) if base_part == AUTO_BASE_PART else base_part
+    return statistics_within(product, technical, base, limits)
 
 
 def decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                    rewards: Rewards = Rewards(), discount: float = DISCOUNT,
-                   base_part: str | None = None) -> IntentionModel:
+                   base_part: str | None = None, limits: SizeLimits = SizeLimits()) -> IntentionModel:
     """The decision model of Alg. 3 of a product, PRODUCT argument or plan; ``base_part``: only the sequences
-    that start from it (``"auto"``: the most connected part, :func:`base_part_of`)."""
-    plan = product if isinstance(product, Plan) else plan_of(product, technical)
-    return intention_model(plan, rewards, discount, base_part=base_part_of(plan, base_part))
+    that start from it (``"auto"``: the most connected part, :func:`base_part_of`); refused, with the estimate,
+    past ``limits`` (the plan's, and the flat model's memory:
+    :func:`~planner.decision.intention_model.flat_model_bytes`)."""
+    plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
+    return intention_model(plan, rewards, discount, base_part=base_part_of(plan, base_part), max_bytes=limits.memory)
 
 
 def factored_decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                             rewards: Rewards = Rewards(), discount: float = DISCOUNT,
-                            base_part: str | None = None) -> FactoredIntentionModel:
+                            base_part: str | None = None, limits: SizeLimits = SizeLimits()) -> FactoredIntentionModel:
     """The same decision model without enumerating intentions (paper Sec. V): beliefs over classes."""
-    plan = product if isinstance(product, Plan) else plan_of(product, technical)
+    plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
     return factored_model(plan, rewards, discount, base_part_of(plan, base_part))
 
 
@@ -151,10 +160,12 @@ def online_planner(model: FactoredIntentionModel, decision_time: float | None = 
 
 
 def choose_planner(plan: Plan, planner: str | None, policy: str | os.PathLike | None,
-                   limit: int = INTENTION_LIMIT, base_part: str | None = None) -> tuple[str, str | None]:
+                   limit: int = INTENTION_LIMIT, base_part: str | None = None,
+                   limits: SizeLimits = SizeLimits()) -> tuple[str, str | None]:
     """``offline`` or ``online``, and why when it was not asked for. ``planner`` None: offline with a policy
-    file, else online (no policy to follow); the flat model of more than ``limit`` intentions is never built:
-    offline then needs a policy over the lumped model's classes, and without one the online planner decides."""
+    file, else online (no policy to follow); a flat model of more than ``limit`` intentions or past
+    ``limits.memory`` is never built: offline then needs a policy over the lumped model's classes, and without
+    one the online planner decides."""
     if planner is not None and planner not in PLANNERS:
         raise PlannerError(f"unknown planner {planner!r}; use one of {', '.join(PLANNERS)}")
     if planner is not None:
@@ -162,9 +173,9 @@ def choose_planner(plan: Plan, planner: str | None, policy: str | os.PathLike | 
     if policy:
         return "offline", None
     intentions = count_intentions(plan.states, base_part=base_part)
-    if intentions > limit:
-        return "online", (f"the flat model would hold {intentions:,} intentions (more than {limit:,}) and no "
-                          "--policy was given: using the online planner")
+    if not flat_model_fits(plan, limits.memory, limit, intentions):
+        return "online", (f"the flat model would hold {intentions:,} intentions (past the limit of {limit:,} or "
+                          f"the memory budget) and no --policy was given: using the online planner")
     return "online", "no --policy: using the online planner"
 
 
@@ -173,7 +184,7 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
                    rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                    decision_time: float | None = DECISION_TIME, expansions: int | None = None,
                    time_limit: float = POLICY_TIME_LIMIT, limit: int = INTENTION_LIMIT,
-                   base_part: str | None = None):
+                   base_part: str | None = None, limits: SizeLimits = SizeLimits()):
     """The model, the policy and a note (what was chosen and why, or None) that a session, a simulation or an
     evaluation runs on:
 
@@ -184,9 +195,9 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
 
     ``base_part``: only the sequences that start from it (``"auto"``: the most connected part).
     """
-    plan = product if isinstance(product, Plan) else plan_of(product, technical)
+    plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
     base_part = base_part_of(plan, base_part)
-    choice, note = choose_planner(plan, planner, policy, limit, base_part)
+    choice, note = choose_planner(plan, planner, policy, limit, base_part, limits)
     if choice == "online":
         model = factored_model(plan, rewards, discount, base_part)
         return model, online_planner(model, decision_time, expansions), note
@@ -203,10 +214,8 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
             if vectors.actions.size and not 0 <= vectors.actions.min() <= vectors.actions.max() < len(lumped.actions):
                 raise PolicyError(f"{policy}: actions out of range; the model has {len(lumped.actions)} actions")
             return lumped, vectors, None
-    if intentions > limit:
-        raise PlannerError(f"the flat decision model would hold {intentions:,} intentions (more than {limit:,}); "
-                           "use --planner online, or a policy over the lumped model (aplan solve --lumped)")
-    model = intention_model(plan, rewards, discount, base_part=base_part)
+    # Past the limits this raises, with the estimate and the options (--planner online among them).
+    model = intention_model(plan, rewards, discount, limit=limit, base_part=base_part, max_bytes=limits.memory)
     if vectors is not None:
         vectors.check(model.pomdp, str(policy))
         return model, vectors, note
@@ -222,19 +231,37 @@ def _model_file_kind(path: str | os.PathLike) -> str | None:
 
 
 def load_model(argument: str | os.PathLike, technical: bool | None = None, rewards: Rewards = Rewards(),
-               discount: float = DISCOUNT, base_part: str | None = None) -> Model:
+               discount: float = DISCOUNT, base_part: str | None = None, limits: SizeLimits = SizeLimits()) -> Model:
     """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`), else a PRODUCT
-    (its :class:`IntentionModel`; ``technical``, ``rewards``, ``discount`` and ``base_part`` apply to it only:
-    a base part with a model file is a :class:`PlannerError`, since the file's intentions are fixed)."""
+    (its :class:`IntentionModel`; ``technical``, ``rewards``, ``discount``, ``base_part`` and ``limits`` apply
+    to it only: a base part with a model file is a :class:`PlannerError`, since the file's intentions are
+    fixed)."""
     kind = _model_file_kind(argument)
     if kind is not None and base_part:
         raise PlannerError(f"{argument}: a base part applies to products only, and this is a model file whose "
                            "intentions are fixed; leave out the base part (--base-part), or give the PRODUCT")
+    if kind in (".pomdpx", ".pomdp") and os.path.isfile(argument):
+        _check_model_read(argument, limits.memory)
     if kind in (".pomdpx", ".pomdpx.gz"):
         return read_pomdpx(argument)
     if kind == ".pomdp":
         return read_cassandra(argument)
-    return decision_model(argument, technical, rewards, discount, base_part)
+    return decision_model(argument, technical, rewards, discount, base_part, limits)
+
+
+# Reading a model file peaks at about 3 bytes of memory per byte of file (bench/README.md, model files).
+_READ_BYTES_PER_FILE_BYTE = 3
+
+
+def _check_model_read(path: str | os.PathLike, max_bytes: int) -> None:
+    """Refuse to read a model file whose reading would pass the memory budget (estimated from its size)."""
+    size = os.path.getsize(path)
+    needed = _READ_BYTES_PER_FILE_BYTE * size
+    if needed > max_bytes:
+        raise MemoryLimitError(f"reading {path}", needed, max_bytes, f"{_READ_BYTES_PER_FILE_BYTE} x its "
+                               f"{gib(size)}", "A model file that large holds more than the "
+                               "solvers can use; plan the product with fewer parts or a base part instead.",
+                               memory_options(needed))
 
 
 def tables(model: Model) -> POMDP:
@@ -242,8 +269,31 @@ def tables(model: Model) -> POMDP:
     return model.pomdp if isinstance(model, IntentionModel) else model
 
 
-def save_model(model: Model, path: str | os.PathLike) -> None:
-    """Write POMDPX (``.pomdpx``) or Cassandra (``.pomdp``), by the file name (atomically)."""
+def check_model_file(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT) -> int:
+    """The bytes :func:`save_model` would write to ``path`` (:func:`~planner.decision.io.size.model_file_bytes`),
+    after checking them against ``max_bytes`` and the free space of the target's disk: past either,
+    :class:`~planner.errors.FileLimitError` with the estimate. Cost: O(non-zeros) in numpy."""
+    kind = _model_file_kind(path)
+    if kind not in (".pomdpx", ".pomdp"):
+        raise PlannerError(f"{path}: unknown model file type; use .pomdpx or .pomdp")
+    pomdp = tables(model)
+    needed = model_file_bytes(pomdp, "pomdpx" if kind == ".pomdpx" else "cassandra")
+    folder = Path(path).resolve().parent
+    free = shutil.disk_usage(folder).free if folder.is_dir() else None
+    detail = (f"{pomdp.n_states:,} states, {pomdp.n_actions:,} actions, "
+              f"{sum(t.nnz for t in pomdp.transition):,} non-zero transitions")
+    hint = "A smaller model (fewer intentions) makes a smaller file."
+    if free is not None and needed > free:
+        raise FileLimitError(f"{path}", needed, free, detail, hint, budget_name=f"the free space in {folder}")
+    if needed > max_bytes:
+        raise FileLimitError(f"{path}", needed, max_bytes, detail, hint, [FILE_OPTION, OPTIONS["base_part"]])
+    return needed
+
+
+def save_model(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT) -> None:
+    """Write POMDPX (``.pomdpx``) or Cassandra (``.pomdp``), by the file name (atomically), after estimating
+    its size (:func:`check_model_file`: refused past ``max_bytes`` or the free disk space)."""
+    check_model_file(model, path, max_bytes)
     kind = _model_file_kind(path)
     if kind == ".pomdpx":
         write_pomdpx(tables(model), path)

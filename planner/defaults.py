@@ -9,7 +9,7 @@ __all__ = [
     "PRODUCT_FORMAT", "PRODUCT_VERSION", "PRODUCT_FILE",
     "CONTACT_TOLERANCE", "INTERFERENCE_VOLUME", "BLOCKING_DEPTH", "RASTER_RESOLUTION",
     "LINEAR_DEFLECTION", "ANGULAR_DEFLECTION",
-    "INTENTION_LIMIT", "DISCOUNT",
+    "INTENTION_LIMIT", "SUBASSEMBLY_LIMIT", "CUTS_PER_SUBASSEMBLY", "MEMORY_LIMIT", "FILE_LIMIT", "DISCOUNT",
     "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
     "CONFIDENCE", "DECISION_TIME", "ONLINE_EXPANSIONS", "ONLINE_DEPTH",
 ]
@@ -31,6 +31,19 @@ ANGULAR_DEFLECTION = 0.25    # radians between neighbouring facet normals on cur
 
 # Assembly plans: intention graphs larger than this are refused before they are built.
 INTENTION_LIMIT = 1_000_000
+
+# Size guards: what a command may build before it refuses, with the estimate and the option that helps.
+# The AND/OR graph enumerates at most SUBASSEMBLY_LIMIT connected part sets (about 1.6 us each: 2 s; refused
+# at once when a lower bound passes it) and examines at most CUTS_PER_SUBASSEMBLY times as many cuts
+# (aplan --max-subassemblies raises both);
+# graphs and models estimated above MEMORY_LIMIT bytes, or a quarter of the machine's memory if that is
+# less, are not built (aplan --max-memory).
+SUBASSEMBLY_LIMIT = 1_000_000
+CUTS_PER_SUBASSEMBLY = 2
+MEMORY_LIMIT = 4 * 2 ** 30
+# Model files (aplan pomdp) estimated above FILE_LIMIT bytes, or the free space of their disk, are not
+# written (aplan pomdp --max-file): 4 GiB of POMDPX take about a minute to write and more to read.
+FILE_LIMIT = 4 * 2 ** 30
 
 # Decision model (Alg. 3) and solving.
 DISCOUNT = 0.9

@@ -5,6 +5,8 @@ object at fault, shows the offending values and says how to fix it, so the CLI c
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 __all__ = [
     "PlannerError",
     "ProductFormatError",
@@ -12,6 +14,9 @@ __all__ = [
     "DisconnectedProductError",
     "NotDisassemblableError",
     "LimitExceededError",
+    "MemoryLimitError",
+    "FileLimitError",
+    "gib",
     "GeometryError",
 ]
 
@@ -62,12 +67,60 @@ class NotDisassemblableError(PlannerError):
 
 
 class LimitExceededError(PlannerError):
-    """An enumeration would produce more items than the caller allowed."""
+    """Something would be larger than the caller allowed, so it was not built (nothing was written).
 
-    def __init__(self, what: str, count: int, limit: int, hint: str):
+    ``count`` is the size found (a lower bound when ``at_least``: the work stopped at the limit), ``limit``
+    the limit, ``hint`` what helps, in words. ``options`` are the command-line options that help, each as
+    ``(option, advice)``, e.g. ``("--max-memory", "--max-memory GIB raises the budget")``: the command line
+    names those its command has, and the commands that have the others, so the library need not know which
+    command called it.
+    """
+
+    def __init__(self, what: str, count: int, limit: int, hint: str, options: Sequence[tuple[str, str]] = (),
+                 noun: str = "", at_least: bool = False):
+        self.what = what
         self.count = count
         self.limit = limit
-        super().__init__(f"{what}: {count:,} would be enumerated, more than the limit of {limit:,}. {hint}")
+        self.hint = hint
+        self.options = tuple(options)
+        size = f"{'at least ' if at_least else ''}{count:,}{' ' + noun if noun else ''}"
+        super().__init__(self._message(size))
+
+    def _message(self, size: str) -> str:
+        return f"{self.what}: {size} would be enumerated, more than the limit of {self.limit:,}. {self.hint}"
+
+
+class MemoryLimitError(LimitExceededError):
+    """A graph or model would take more memory than the budget; ``count`` and ``limit`` are bytes, ``detail``
+    says what the estimate counts (the sizes it comes from)."""
+
+    def __init__(self, what: str, needed: int, budget: int, detail: str, hint: str,
+                 options: Sequence[tuple[str, str]] = ()):
+        self.detail = detail
+        super().__init__(what, needed, budget, hint, options)
+
+    def _message(self, size: str) -> str:
+        return (f"{self.what} would need about {gib(self.count)} ({self.detail}), more than the memory budget "
+                f"of {gib(self.limit)}. {self.hint}")
+
+
+class FileLimitError(MemoryLimitError):
+    """A file would be larger than allowed: more than the file budget, or than the free space of its disk
+    (``budget_name`` says which); ``count`` and ``limit`` are bytes."""
+
+    def __init__(self, what: str, needed: int, budget: int, detail: str, hint: str,
+                 options: Sequence[tuple[str, str]] = (), budget_name: str = "the file size budget"):
+        self.budget_name = budget_name
+        super().__init__(what, needed, budget, detail, hint, options)
+
+    def _message(self, size: str) -> str:
+        return (f"{self.what} would take about {gib(self.count)} ({self.detail}), more than {self.budget_name} "
+                f"of {gib(self.limit)}. {self.hint}")
+
+
+def gib(size: int) -> str:
+    """``1.5 GiB``, ``12.0 MiB``: a byte count for messages."""
+    return f"{size / 2 ** 30:,.1f} GiB" if size >= 2 ** 30 else f"{size / 2 ** 20:,.1f} MiB"
 
 
 class GeometryError(PlannerError):

@@ -21,14 +21,19 @@ A final top-down pass keeps what the complete product can be disassembled into.
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 from typing import Iterable
 
-from ..errors import DisconnectedProductError, NotDisassemblableError
+from ..defaults import CUTS_PER_SUBASSEMBLY, SUBASSEMBLY_LIMIT
+from ..errors import DisconnectedProductError, LimitExceededError, NotDisassemblableError
 from ..product import Product
 from .bitsets import bit_indices, components, connected_subsets, lowest_bit, mask_of
+from .guards import OPTIONS, Progress, fewer_parts_hint
 
 __all__ = ["Operation", "AndOrGraph", "and_or_graph", "liaison_adjacency"]
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -100,13 +105,15 @@ def liaison_adjacency(product: Product) -> list[int]:
     return adjacency
 
 
-def and_or_graph(product: Product, technical: bool | None = None) -> AndOrGraph:
+def and_or_graph(product: Product, technical: bool | None = None, limit: int = SUBASSEMBLY_LIMIT) -> AndOrGraph:
     """Build the AND/OR graph of ``product`` by the reverse cut-set algorithm.
 
     Parameters
     ----------
     product : the product (parts, contacts, obstruction diagrams, technical constraints).
     technical : ``True`` applies every technical constraint, ``False`` none, ``None`` those marked active.
+    limit : the most connected part sets to enumerate, and ``CUTS_PER_SUBASSEMBLY * limit`` the most cuts
+        to examine; past either the build stops (its work is bounded by the limit, whatever the product).
 
     Returns
     -------
@@ -116,6 +123,9 @@ def and_or_graph(product: Product, technical: bool | None = None) -> AndOrGraph:
     ------
     DisconnectedProductError : the connection diagram is not connected (the groups are named).
     NotDisassemblableError : the complete product has no feasible split (the reasons are given).
+    LimitExceededError : more connected part sets or cuts than the limit allows (the count reached, or a
+        lower bound computed before any enumeration; the product's fastener-like parts and the options that
+        help are given).
 
     Notes
     -----
@@ -140,18 +150,27 @@ def and_or_graph(product: Product, technical: bool | None = None) -> AndOrGraph:
         return all(mask & r1 != r1 or mask & r2 for r1, r2 in constraints)
 
     # Bottom-up: every connected set, smallest first; keep it when a cut joins two kept, separable halves.
-    connected = sorted((s for r in range(n) for s in connected_subsets(adjacency, full & ~((1 << r) - 1), r)),
-                       key=int.bit_count)
+    connected = sorted(_connected_sets(product, adjacency, limit), key=int.bit_count)
     splits: dict[int, list[tuple[int, int]]] = {1 << i: [] for i in range(n)}
-    for subset in connected:
+    cuts_left = CUTS_PER_SUBASSEMBLY * limit  # a set's cuts are connected sets too: at most `limit` per set
+    progress = Progress(log)
+    for done, subset in enumerate(connected):
+        if done & 0xFFF == 0:
+            progress.report("AND/OR graph: %s of %s connected part sets split, %s cuts examined", f"{done:,}",
+                            f"{len(connected):,}", f"{CUTS_PER_SUBASSEMBLY * limit - cuts_left:,}")
         if subset & (subset - 1) == 0 or not technically_feasible(subset):
             continue
         root = lowest_bit(subset).bit_length() - 1
         found = []
         for first in connected_subsets(adjacency, subset, root):
+            cuts_left -= 1
             second = subset ^ first
             if second and first in splits and second in splits and separable(first, second):
                 found.append((first, second))
+        if cuts_left < 0:
+            raise _too_many(product, "cuts (splits of a connected part set into two connected halves)",
+                            CUTS_PER_SUBASSEMBLY * limit - cuts_left, CUTS_PER_SUBASSEMBLY * limit,
+                            f" (over {len(connected):,} connected part sets)")
         if found:
             splits[subset] = found
 
@@ -164,6 +183,40 @@ def and_or_graph(product: Product, technical: bool | None = None) -> AndOrGraph:
     operations = tuple(Operation(position[s], (position[a], position[b]))
                        for s in subassemblies for a, b in sorted(splits[s]))
     return AndOrGraph(parts, subassemblies, operations, position)
+
+
+def _connected_sets(product: Product, adjacency: list[int], limit: int) -> list[int]:
+    """Every connected part set, each once (by its lowest part); refused past ``limit`` of them.
+
+    A part with any set of its later neighbours is connected, and such sets differ by their lowest part, so
+    ``sum over parts of 2^(later neighbours)`` connected sets exist: past the limit, refused before any work.
+    """
+    bound = sum(1 << (adjacency[v] >> (v + 1)).bit_count() for v in range(len(adjacency)))
+    if bound > limit:
+        hub = max(range(len(adjacency)), key=lambda v: adjacency[v].bit_count())
+        raise _too_many(product, "connected part sets (candidate subassemblies)", bound, limit,
+                        f" (a part with any set of its neighbours is one: {product.part_ids[hub]} alone has "
+                        f"{adjacency[hub].bit_count()} neighbours)")
+    full = (1 << len(adjacency)) - 1
+    found = []
+    progress = Progress(log)
+    for r in range(len(adjacency)):
+        for subset in connected_subsets(adjacency, full & ~((1 << r) - 1), r):
+            if len(found) == limit:
+                raise _too_many(product, "connected part sets (candidate subassemblies)", limit + 1, limit)
+            found.append(subset)
+            if len(found) & 0xFFFF == 0:
+                progress.report("AND/OR graph: %s connected part sets so far (limit %s)", f"{len(found):,}",
+                                f"{limit:,}")
+    return found
+
+
+def _too_many(product: Product, noun: str, count: int, limit: int, where: str = "") -> LimitExceededError:
+    return LimitExceededError(
+        "AND/OR graph", count, limit,
+        f"The reverse cut-set algorithm enumerates every connected set of parts{where}, and each part that "
+        f"joins two others can double them. {fewer_parts_hint(product)}",
+        [OPTIONS[k] for k in ("subassemblies", "exclude", "group")], noun=noun, at_least=True)
 
 
 def _reachable(splits: dict[int, list[tuple[int, int]]], full: int) -> set[int]:

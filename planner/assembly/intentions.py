@@ -35,8 +35,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..defaults import INTENTION_LIMIT
-from ..errors import LimitExceededError, PlannerError
+from ..errors import LimitExceededError, MemoryLimitError, PlannerError
 from ..product import Product
+from .guards import OPTIONS, default_memory_budget, memory_options
 from .states import AssemblyStateGraph
 
 __all__ = [
@@ -248,26 +249,36 @@ class IntentionGraph:
         return graph
 
 
+# Bytes per intention while the graph is built: three int64 arrays, held twice while they are concatenated.
+_GRAPH_BYTES_PER_INTENTION = 56
+
+
 def intention_graph(states: AssemblyStateGraph, limit: int = DEFAULT_INTENTION_LIMIT,
-                    base_part: str | None = None) -> IntentionGraph:
+                    base_part: str | None = None, max_bytes: int | None = None) -> IntentionGraph:
     """Enumerate the intention graph (Alg. 2) with the map from its edges to operations.
 
     With ``base_part``, only the intentions of the sequences that start from it (module docstring), numbered
     in the same order (the final intention is still 0); Alg. 2 then extends an intention only along the
     allowed edges (:func:`allowed_edges`), which yields exactly them since they are closed under "next step".
     Raises :class:`~planner.errors.LimitExceededError`, stating the count, when there are more than
-    ``limit`` intentions; the count itself never needs enumeration (:func:`count_intentions`);
-    :class:`~planner.errors.PlannerError` when ``base_part`` is not a part or no sequence starts from it.
+    ``limit`` intentions, or when the graph would take more than ``max_bytes`` (default: the machine's
+    budget, :func:`~planner.assembly.guards.default_memory_budget`); the count itself never needs
+    enumeration (:func:`count_intentions`); :class:`~planner.errors.PlannerError` when ``base_part`` is not a
+    part or no sequence starts from it.
     Cost: O(I) time and memory for I intentions (plus O(E log E) with a base part).
     """
     total = count_intentions(states, base_part=base_part)
     if base_part is not None and count_sequences(states, base_part) == 0:
         raise PlannerError(f"no assembly sequence starts from the base part {base_part!r} (no first operation "
                            "joins it); choose another base part, or check the technical constraints")
+    hint = "The counts (aplan stats) and the factored model need no enumeration."
     if total > limit:
-        raise LimitExceededError(
-            "intention graph", total, limit,
-            "Raise the limit (aplan: --limit) or use the counts, which need no enumeration.")
+        raise LimitExceededError("intention graph", total, limit, hint, [OPTIONS["intentions"]])
+    needed = _GRAPH_BYTES_PER_INTENTION * total
+    budget = default_memory_budget() if max_bytes is None else max_bytes
+    if needed > budget:
+        raise MemoryLimitError("intention graph", needed, budget, f"{total:,} intentions", hint,
+                               memory_options(needed))
     allowed = None if base_part is None else allowed_edges(states, base_part)
     in_start, in_count = states.incoming()
     first = [np.array([states.final], dtype=np.int64)]

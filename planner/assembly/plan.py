@@ -7,6 +7,7 @@ import numpy as np
 
 from ..product import Product
 from .andor import AndOrGraph, and_or_graph
+from .guards import SizeLimits
 from .states import AssemblyStateGraph, assembly_state_graph
 from .tags import Observation, OperationTags, observation_table, operation_tags
 
@@ -29,15 +30,17 @@ class Plan:
     operation_observation: np.ndarray
 
 
-def make_plan(product: Product, technical: bool | None = None) -> Plan:
+def make_plan(product: Product, technical: bool | None = None, limits: SizeLimits = SizeLimits()) -> Plan:
     """Build the AND/OR graph (reverse cut-set), the assembly state graph (Alg. 1) and the tags of ``product``.
 
     ``technical``: ``True``/``False`` switches every technical constraint on/off, ``None`` keeps the file's.
+    ``limits``: the AND/OR graph's work and the state graph's memory; past them a
+    :class:`~planner.errors.LimitExceededError` says how far it got and what helps.
     The intention graph is built on request (:func:`planner.intention_graph`), since it can be huge.
     """
     product = product.with_technical(technical)
-    andor = and_or_graph(product)
-    states = assembly_state_graph(andor)
+    andor = and_or_graph(product, limit=limits.subassemblies)
+    states = assembly_state_graph(andor, limits.memory)
     tags = operation_tags(andor, product)
     observations, operation_observation = observation_table(andor, tags)
     return Plan(product, andor, states, tags, observations, operation_observation)

@@ -1,12 +1,19 @@
-"""The figures of a plan (the columns of Table I of Cramer et al. 2021, and more)."""
+"""The figures of a plan (the columns of Table I of Cramer et al. 2021, and more), as many as the size
+limits allow."""
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, field
 
+from ..errors import LimitExceededError, PlannerError
+from ..product import Product
+from .andor import and_or_graph
+from .guards import SizeLimits
 from .intentions import count_intentions, count_sequences, paths_to_final
 from .plan import Plan
+from .states import assembly_state_graph
+from .tags import observation_table, operation_tags
 
-__all__ = ["STAT_KEYS", "PlanStatistics", "plan_statistics"]
+__all__ = ["STAT_KEYS", "PlanStatistics", "plan_statistics", "statistics_within"]
 
 STAT_KEYS = ("parts", "contacts", "complexity", "subassemblies", "operations", "actions", "states",
              "state_edges", "intentions", "observations", "sequences")
@@ -21,25 +28,32 @@ class PlanStatistics:
     ``sequences`` counts full assembly sequences, those whose first operation joins ``base_part`` if set;
     ``intentions`` then counts the intentions of those sequences only (paper Sec. V).
     ``states`` and ``sequences`` together are the size of the factored view of paper Sec. V.
+    Figures that could not be computed within the size limits are None, and ``refused`` says why.
     """
 
     parts: int
     contacts: int
     complexity: float
-    subassemblies: int
-    operations: int
-    actions: int
-    states: int
-    state_edges: int
-    intentions: int
-    observations: int
-    sequences: int
+    subassemblies: int | None
+    operations: int | None
+    actions: int | None
+    states: int | None
+    state_edges: int | None
+    intentions: int | None
+    observations: int | None
+    sequences: int | None
     base_part: str | None = None
+    refused: LimitExceededError | None = field(default=None, compare=False)
+
+    @property
+    def not_computed(self) -> tuple[str, ...]:
+        """The figures (of :data:`STAT_KEYS`) left out because a size limit was reached."""
+        data = self.as_dict()
+        return tuple(key for key in STAT_KEYS if data[key] is None)
 
     def as_dict(self) -> dict:
-        """Exactly the keys of :data:`STAT_KEYS`."""
-        data = asdict(self)
-        return {key: data[key] for key in STAT_KEYS}
+        """Exactly the keys of :data:`STAT_KEYS` (None for a figure not computed)."""
+        return {key: getattr(self, key) for key in STAT_KEYS}
 
 
 def plan_statistics(plan: Plan, base_part: str | None = None) -> PlanStatistics:
@@ -61,3 +75,35 @@ def plan_statistics(plan: Plan, base_part: str | None = None) -> PlanStatistics:
         sequences=count_sequences(plan.states, base_part, paths),
         base_part=base_part,
     )
+
+
+def statistics_within(product: Product, technical: bool | None = None, base_part: str | None = None,
+                      limits: SizeLimits = SizeLimits()) -> tuple[Plan | None, PlanStatistics]:
+    """The plan of ``product`` and its figures, as far as ``limits`` allow.
+
+    The plan is built stage by stage as :func:`~planner.assembly.make_plan` builds it: parts, contacts and
+    complexity always; then the AND/OR graph (subassemblies, operations, actions, observations), the
+    assembly state graph (states, state edges) and the counts (intentions, sequences). When a stage passes
+    a limit (:class:`~planner.errors.LimitExceededError`, raised after at most the limit's worth of work),
+    the figures of that stage and the later ones are None, ``refused`` is the error, and the plan is None.
+    Other errors (a product that is not connected, not disassemblable, a base part that is not a part)
+    are raised. Cost: that of the stages computed.
+    """
+    product = product.with_technical(technical)
+    if base_part is not None and base_part not in product.part_ids:
+        raise PlannerError(f"base part {base_part!r} is not a part of the product; parts: "
+                           f"{', '.join(product.part_ids)}")
+    n = len(product.parts)
+    figures = {"parts": n, "contacts": len(product.contacts), "complexity": round(2 * len(product.contacts) / n, 2)}
+    try:
+        andor = and_or_graph(product, limit=limits.subassemblies)
+        tags = operation_tags(andor, product)
+        observations, operation_observation = observation_table(andor, tags)
+        figures.update(subassemblies=len(andor.subassemblies), operations=len(andor.operations),
+                       actions=int(tags.robot.sum()) + 1, observations=len(observations))
+        states = assembly_state_graph(andor, limits.memory)
+    except LimitExceededError as refused:
+        return None, PlanStatistics(**{key: figures.get(key) for key in STAT_KEYS}, base_part=base_part,
+                                    refused=refused)
+    plan = Plan(product, andor, states, tags, observations, operation_observation)
+    return plan, plan_statistics(plan, base_part)

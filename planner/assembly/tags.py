@@ -52,40 +52,90 @@ class OperationTags:
     unmatched: tuple[int, ...]
 
 
+def _children(andor: AndOrGraph) -> tuple[np.ndarray, np.ndarray]:
+    """The two children (subassembly indices) of every operation."""
+    count = len(andor.operations)
+    first = np.fromiter((op.children[0] for op in andor.operations), dtype=np.int64, count=count)
+    second = np.fromiter((op.children[1] for op in andor.operations), dtype=np.int64, count=count)
+    return first, second
+
+
+def _single_part(andor: AndOrGraph) -> np.ndarray:
+    """Per subassembly: the index of its part when it is a single part, else -1."""
+    return np.fromiter(((m.bit_length() - 1) if m & (m - 1) == 0 else -1 for m in andor.subassemblies),
+                       dtype=np.int64, count=len(andor.subassemblies))
+
+
+def _tagged(andor: AndOrGraph, product: Product) -> dict[int, int]:
+    """Operation index -> index in ``product.operations`` of the tag that names exactly its two inputs."""
+    index = {p: i for i, p in enumerate(andor.parts)}
+    parents = np.fromiter((op.parent for op in andor.operations), dtype=np.int64, count=len(andor.operations))
+    found = {}
+    for k, tag in enumerate(product.operations):
+        if not all(p in index for side in tag.inputs for p in side):
+            continue
+        a, b = (sum(1 << index[p] for p in side) for side in tag.inputs)
+        parent = andor.index.get(a | b)
+        if parent is None or a & b:
+            continue
+        lo, hi = np.searchsorted(parents, [parent, parent + 1])  # operations are ordered by parent
+        for j in range(int(lo), int(hi)):
+            first, second = (andor.subassemblies[c] for c in andor.operations[j].children)
+            if {first, second} == {a, b}:
+                found.setdefault(j, k)
+    return found
+
+
 def operation_tags(andor: AndOrGraph, product: Product) -> OperationTags:
-    """Resolve the designer tags of every operation of ``andor`` (explicit tags, else the defaults)."""
-    by_inputs = {frozenset(tag.inputs): i for i, tag in enumerate(product.operations)}
+    """Resolve the designer tags of every operation of ``andor`` (explicit tags, else the defaults).
+
+    Cost: O(operations) in numpy, plus O(tags x operations of the tagged subassembly).
+    """
     defaults = product.defaults
     count = len(andor.operations)
-    unfavorable = np.zeros(count, dtype=bool)
-    robot = np.zeros(count, dtype=bool)
-    tools: list[str | None] = []
-    used = set()
-    for j in range(count):
-        first, second = andor.inputs(j)
-        k = by_inputs.get(frozenset((first, second)))
-        tag = product.operations[k] if k is not None else None
-        if k is not None:
-            used.add(k)
-        if tag is not None and tag.unfavorable is not None:
+    first, second = _children(andor)
+    single = _single_part(andor) >= 0
+    if defaults.unfavorable == "single-part-rule":
+        unfavorable = single[first] != single[second]
+    else:
+        unfavorable = np.full(count, defaults.unfavorable == "all")
+    robot = np.full(count, bool(defaults.robot))
+    tools: list[str | None] = [defaults.tool] * count
+    tagged = _tagged(andor, product)
+    for j, k in tagged.items():
+        tag = product.operations[k]
+        if tag.unfavorable is not None:
             unfavorable[j] = tag.unfavorable
-        elif defaults.unfavorable == "single-part-rule":
-            unfavorable[j] = (len(first) == 1) != (len(second) == 1)
-        else:
-            unfavorable[j] = defaults.unfavorable == "all"
-        robot[j] = tag.robot if tag is not None and tag.robot is not None else defaults.robot
-        tools.append(tag.tool if tag is not None and tag.tool is not None else defaults.tool)
+        if tag.robot is not None:
+            robot[j] = tag.robot
+        if tag.tool is not None:
+            tools[j] = tag.tool
+    used = set(tagged.values())
     unmatched = tuple(k for k in range(len(product.operations)) if k not in used)
     return OperationTags(unfavorable, robot, tuple(tools), unmatched)
 
 
 def observation_table(andor: AndOrGraph, tags: OperationTags) -> tuple[list[Observation], np.ndarray]:
-    """The distinct observations (``BLANK`` first, then sorted) and each operation's observation index."""
-    per_operation = []
-    for j in range(len(andor.operations)):
-        singles = sorted(next(iter(side)) for side in andor.inputs(j) if len(side) == 1)
-        per_operation.append(Observation(tuple(singles), tags.tool[j]))
-    others = sorted(set(per_operation) - {BLANK}, key=lambda o: (len(o.parts), o.parts, o.tool or ""))
+    """The distinct observations (``BLANK`` first, then sorted) and each operation's observation index.
+
+    Cost: O(operations log operations) in numpy (the distinct (single parts, tool) keys are found by one sort).
+    """
+    count = len(andor.operations)
+    if count == 0:
+        return [BLANK], np.zeros(0, dtype=np.int64)
+    first, second = _children(andor)
+    single = _single_part(andor)
+    tool_names = sorted({t for t in tags.tool if t is not None})
+    tool_code = {None: -1, **{t: i for i, t in enumerate(tool_names)}}
+    keys = np.stack([single[first], single[second], np.fromiter((tool_code[t] for t in tags.tool), dtype=np.int64,
+                                                                  count=count)], axis=1)
+    distinct, inverse = np.unique(keys, axis=0, return_inverse=True)
+    per_key = []
+    for a, b, tool in distinct.tolist():
+        singles = sorted(andor.parts[i] for i in (a, b) if i >= 0)
+        per_key.append(Observation(tuple(singles), None if tool < 0 else tool_names[tool]))
+    others = sorted(set(per_key) - {BLANK}, key=lambda o: (len(o.parts), o.parts, o.tool or ""))
     observations = [BLANK] + others
     position = {o: i for i, o in enumerate(observations)}
-    return observations, np.array([position[o] for o in per_operation], dtype=np.int64)
+    lookup = np.array([position[o] for o in per_key], dtype=np.int64)
+    return observations, lookup[np.asarray(inverse).reshape(-1)]

@@ -4,8 +4,10 @@
 
 Each module only parses arguments and prints; the work is done by :mod:`planner.api`. Messages for the user
 (notes, warnings) go through :mod:`logging` to standard error; results go to standard output.
-Exit status: 0 on success, 1 when the input is bad (the message says what, where and how to fix it),
-2 on a usage error. Nothing is written when a command fails.
+Exit status: 0 on success, 1 when the input is bad (the message says what, where and how to fix it) or
+what it would build exceeds a size limit (the message gives the estimate and the options that help), 2 on
+a usage error, 3 when ``aplan stats`` printed only some figures (the others would exceed a size limit).
+Nothing is written when a command fails.
 """
 from __future__ import annotations
 
@@ -14,10 +16,10 @@ import logging
 import sys
 from typing import Sequence
 
-from ..errors import PlannerError
+from ..errors import LimitExceededError, PlannerError
 from ..plugins import registry
 from . import decision, geometry, plan, runtime
-from .options import add_tolerance_options, tolerances_from
+from .options import add_tolerance_options, advice, offer_options, tolerances_from
 
 __all__ = ["main", "build_parser", "add_tolerance_options", "tolerances_from"]
 
@@ -30,6 +32,7 @@ def build_parser() -> argparse.ArgumentParser:
         group.add_commands(commands)
     for add in registry().commands:
         add(commands)
+    offer_options(parser, commands)
     return parser
 
 
@@ -66,7 +69,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return args.run(args)
     except PlannerError as exc:
-        print(f"aplan: error: {exc}", file=sys.stderr)
+        helps = advice(exc, args) if isinstance(exc, LimitExceededError) else ""
+        print(f"aplan: error: {exc}" + (f" {helps}" if helps else ""), file=sys.stderr)
         return 1
     except BrokenPipeError:  # e.g. `aplan intentions pen | head`
         return 0

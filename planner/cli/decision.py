@@ -12,13 +12,15 @@ import numpy as np
 from .. import api
 from ..decision.intention_model import IntentionModel
 from ..decision.policy import write_policy
-from ..defaults import CONFIDENCE, SOLVE_PRECISION, SOLVE_TIME_LIMIT
+from ..defaults import CONFIDENCE, FILE_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
 from ..errors import PlannerError
 from .options import (
     PRODUCT_HELP,
     add_decision_options,
     add_episode_options,
     add_policy_options,
+    gibibytes,
+    limits_from,
     online_budget,
     positive,
     rewards_from,
@@ -37,8 +39,10 @@ def model_from(args: argparse.Namespace, product_only: bool = False):
             extra = "; --base-part, too, applies to products only" if args.base_part else ""
             raise PlannerError(f"{argument}: a model file, but this command needs a PRODUCT (its plan names what the "
                                f"operator and the robot do){extra}")
-        return api.decision_model(argument, args.technical, rewards_from(args), args.discount, args.base_part)
-    return api.load_model(argument, args.technical, rewards_from(args), args.discount, args.base_part)
+        return api.decision_model(argument, args.technical, rewards_from(args), args.discount, args.base_part,
+                                  limits_from(args))
+    return api.load_model(argument, args.technical, rewards_from(args), args.discount, args.base_part,
+                          limits_from(args))
 
 
 def policy_from(args: argparse.Namespace, model):
@@ -61,7 +65,7 @@ def decision_maker_from(args: argparse.Namespace):
         return model, policy_from(args, model)
     model, policy, note = api.decision_maker(argument, args.planner, args.policy, args.technical, rewards_from(args),
                                              args.discount, decision_time, expansions, args.time_limit,
-                                             base_part=args.base_part)
+                                             base_part=args.base_part, limits=limits_from(args))
     if note:
         log.info("%s", note)
     return model, policy
@@ -69,7 +73,7 @@ def decision_maker_from(args: argparse.Namespace):
 
 def _pomdp(args: argparse.Namespace) -> int:
     model = model_from(args)
-    api.save_model(model, args.output)
+    api.save_model(model, args.output, int(args.max_file * 2 ** 30))
     tables = api.tables(model)
     print(f"{args.output}: {tables.n_states} states, {tables.n_actions} actions, {tables.n_observations} observations")
     return 0
@@ -170,6 +174,9 @@ def add_commands(commands) -> None:
                                             "(APPL's pomdpsol reads it) or Cassandra's .pomdp, by the file name.")
     pomdp.add_argument("model", metavar="PRODUCT", help=PRODUCT_HELP)
     pomdp.add_argument("-o", "--output", required=True, metavar="MODEL", help="MODEL.pomdpx or MODEL.pomdp")
+    pomdp.add_argument("--max-file", type=gibibytes, default=FILE_LIMIT / 2 ** 30, metavar="GIB",
+                       help=f"refuse to write a file estimated larger than this, or than the free disk space "
+                            f"(default {FILE_LIMIT / 2 ** 30:g} GiB)")
     add_decision_options(pomdp)
     pomdp.set_defaults(run=_pomdp)
 

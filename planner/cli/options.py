@@ -3,14 +3,16 @@ from __future__ import annotations
 
 import argparse
 
+from ..assembly.guards import SizeLimits, default_memory_budget
 from ..decision.intention_model import Rewards
-from ..defaults import DECISION_TIME, DISCOUNT, POLICY_TIME_LIMIT
+from ..defaults import CUTS_PER_SUBASSEMBLY, DECISION_TIME, DISCOUNT, POLICY_TIME_LIMIT, SUBASSEMBLY_LIMIT
+from ..errors import LimitExceededError
 from ..geometry.mesh_engine import Tolerances
 from ..product.examples import EXAMPLES
 
 __all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_base_part", "add_decision_options", "rewards_from",
            "add_tolerance_options", "tolerances_from", "add_policy_options", "add_episode_options", "positive_seconds",
-           "online_budget"]
+           "online_budget", "add_size_options", "limits_from", "offer_options", "advice", "gibibytes"]
 
 PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or STEP file (read through "
                 f"FreeCAD), or an embedded example ({', '.join(EXAMPLES)})")
@@ -52,6 +54,7 @@ def add_decision_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--reward-wrong", type=float, default=d.wrong, metavar="R",
                        help=f"robot does another operation: its eagerness (default {d.wrong:g})")
     group.add_argument("--reward-wait", type=float, default=d.wait, metavar="R", help=f"wait (default {d.wait:g})")
+    add_size_options(parser)
 
 
 def rewards_from(args: argparse.Namespace) -> Rewards:
@@ -120,3 +123,54 @@ def add_episode_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--max-steps", type=positive, default=100)
     add_decision_options(parser)
+
+
+def gibibytes(text: str) -> float:
+    """A positive number of GiB (an argparse type)."""
+    value = float(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be a positive number of GiB, got {text}")
+    return value
+
+
+def add_size_options(parser) -> None:
+    """The size limits every command that builds a plan or a model refuses past (with the estimate)."""
+    budget = default_memory_budget() / 2 ** 30
+    group = parser.add_argument_group("size limits (past them the command refuses at once, saying why)")
+    group.add_argument("--max-subassemblies", type=positive, default=SUBASSEMBLY_LIMIT, metavar="N",
+                       help=f"the AND/OR graph enumerates at most N connected part sets and examines at most "
+                            f"{CUTS_PER_SUBASSEMBLY} N cuts (default {SUBASSEMBLY_LIMIT:,}: about 2 s)")
+    group.add_argument("--max-memory", type=gibibytes, default=budget, metavar="GIB",
+                       help=f"the memory one graph or model may take, estimated before it is built (default "
+                            f"{budget:g} GiB: 4 GiB or a quarter of this machine's memory, if less)")
+
+
+def limits_from(args: argparse.Namespace) -> SizeLimits:
+    return SizeLimits(args.max_subassemblies, int(args.max_memory * 2 ** 30))
+
+
+def offer_options(parser: argparse.ArgumentParser, commands) -> None:
+    """Let :func:`advice` know which options each command has (``commands``: the subparsers' action)."""
+    parser.set_defaults(offered_options={name: frozenset(sub._option_string_actions)
+                                         for name, sub in commands.choices.items()})
+
+
+# Options worth naming when another command has them (they do the job differently there); the others
+# (a limit of this command) help only where the refusal happened.
+_ELSEWHERE = ("--exclude", "--group", "--planner")
+
+
+def advice(error: LimitExceededError, args: argparse.Namespace) -> str:
+    """The options of ``error`` that help, as one sentence: those of this command, then those of other
+    commands that do the job another way (``--planner online`` in simulate, ...), with their command."""
+    offered = getattr(args, "offered_options", {})
+    here = offered.get(getattr(args, "command", None), frozenset())
+    found = []
+    for option, text in error.options:
+        if option in here:
+            found.append(text)
+        elif option in _ELSEWHERE:
+            others = [name for name, options in offered.items() if option in options]
+            if others:
+                found.append(f"aplan {'/'.join(others)} {text}")
+    return ("What helps: " + "; ".join(found) + ".") if found else ""

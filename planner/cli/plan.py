@@ -12,24 +12,37 @@ from ..assembly.stats import STAT_KEYS
 from ..files import write_atomic
 from ..product import product_to_dict
 from ..product.synthetic import SYNTHETIC
-from .options import PRODUCT_HELP, add_base_part, add_technical, positive
+from .options import PRODUCT_HELP, add_base_part, add_size_options, add_technical, advice, limits_from, positive
 
 __all__ = ["add_commands"]
 
 log = logging.getLogger(__name__)
 
 
+# aplan stats: some figures were not computed (they would exceed a size limit); those printed are exact.
+PARTIAL = 3
+
+
 def _stats(args: argparse.Namespace) -> int:
-    plan, stats = api.plan_statistics_of(args.product, args.technical, args.base_part)
+    product = api.resolve_product(args.product)
+    plan, stats = api.plan_statistics_of(product, args.technical, args.base_part, limits_from(args), partial=True)
+    refused = stats.refused
+    reason = f"{refused} {advice(refused, args)}".strip() if refused else None
     if args.json:
-        print(json.dumps(stats.as_dict()))
-        return 0
-    print(f"{plan.product.name or str(args.product)} ({plan.product.source})")
+        data = stats.as_dict()
+        if refused:
+            data["not_computed"] = {"figures": list(stats.not_computed), "reason": reason}
+        print(json.dumps(data))
+        return PARTIAL if refused else 0
+    print(f"{product.name or str(args.product)} ({product.source})")
     values = stats.as_dict()
     for key in STAT_KEYS:
         value = values[key]
-        shown = f"{value:.2f}" if isinstance(value, float) else f"{value:,}"
+        shown = "not computed" if value is None else f"{value:.2f}" if isinstance(value, float) else f"{value:,}"
         print(f"  {key:<14}{shown:>22}")
+    if refused:
+        print(f"  not computed: {', '.join(stats.not_computed)}: {reason}")
+        return PARTIAL
     if stats.base_part:
         print(f"  (only the sequences that start from the base part {stats.base_part!r}, whose first operation "
               "joins it, and their intentions)")
@@ -41,8 +54,10 @@ def _stats(args: argparse.Namespace) -> int:
 
 
 def _intentions(args: argparse.Namespace) -> int:
-    plan = api.plan_of(args.product, args.technical)
-    graph = intention_graph(plan.states, limit=args.limit, base_part=api.base_part_of(plan, args.base_part))
+    limits = limits_from(args)
+    plan = api.plan_of(args.product, args.technical, limits)
+    graph = intention_graph(plan.states, limit=args.limit, base_part=api.base_part_of(plan, args.base_part),
+                            max_bytes=limits.memory)
     for i in (graph.full_sequences() if args.full else range(graph.n_intentions)):
         states = [plan.states.describe(s) for s in graph.path(int(i))]
         if args.json:
@@ -63,12 +78,21 @@ def _synth(args: argparse.Namespace) -> int:
 
 
 def add_commands(commands) -> None:
-    stats = commands.add_parser("stats", help="count subassemblies, operations, states, intentions, ...",
-                                description="Print the figures of a product's plan: " + ", ".join(STAT_KEYS) + ".")
+    stats = commands.add_parser(
+        "stats", help="count subassemblies, operations, states, intentions, ...",
+        description="Print the figures of a product's plan: " + ", ".join(STAT_KEYS) + ". Parts, contacts and "
+                    "complexity are always printed; a figure whose graph would exceed a size limit is not "
+                    "computed, and the reason (the size reached, what helps) is printed instead.",
+        epilog=f"Exit status: 0 when every figure was computed, {PARTIAL} when some were not (they would exceed "
+               "a size limit: the others are printed, with the reason), 1 on bad input (a product that cannot be "
+               "read or planned: not connected, not disassemblable), 2 on a usage error.")
     stats.add_argument("product", metavar="PRODUCT", help=PRODUCT_HELP)
-    stats.add_argument("--json", action="store_true", help="print one JSON object with exactly those keys")
+    stats.add_argument("--json", action="store_true",
+                       help="print one JSON object with exactly those keys (null when not computed, and then "
+                            "not_computed: the figures and the reason)")
     add_technical(stats)
     add_base_part(stats)
+    add_size_options(stats)
     stats.set_defaults(run=_stats)
 
     intentions = commands.add_parser("intentions", help="enumerate operator intentions (paths of assembly states)")
@@ -79,6 +103,7 @@ def add_commands(commands) -> None:
     intentions.add_argument("--json", action="store_true", help="one JSON object per line")
     add_technical(intentions)
     add_base_part(intentions)
+    add_size_options(intentions)
     intentions.set_defaults(run=_intentions)
 
     synth = commands.add_parser("synth", help="write a synthetic product of Table I",

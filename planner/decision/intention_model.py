@@ -24,20 +24,25 @@ uniform over the allowed full sequences.
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
-from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, IntentionGraph, intention_graph
+from ..assembly.guards import OPTIONS, Progress, default_memory_budget, memory_options
+from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, IntentionGraph, count_intentions, intention_graph
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
-from ..errors import PlannerError
+from ..errors import LimitExceededError, MemoryLimitError, PlannerError
 from .pomdp import POMDP
 
-__all__ = ["Rewards", "WAIT", "IntentionModel", "intention_model", "intention_pomdp"]
+__all__ = ["Rewards", "WAIT", "IntentionModel", "intention_model", "intention_pomdp", "flat_model_bytes",
+           "check_flat_model", "flat_model_fits"]
 
 WAIT = "wait"
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -134,7 +139,9 @@ def _transitions(graph: IntentionGraph, robot_ops: np.ndarray) -> list[sp.csr_ma
         return sp.csr_matrix((vals, (rr, cols)), shape=(n, n))
 
     transition = []
-    for op in robot_ops:
+    progress = Progress(log)
+    for done, op in enumerate(robot_ops):
+        progress.report("flat decision model: transition tables of %d of %d actions", done, len(robot_ops) + 1)
         doing = has_next & (step == op)  # the robot performs the intention's next step
         stay = ~doing
         performed = uniform_step(after[states[doing]], states[doing])
@@ -174,16 +181,78 @@ def _rewards(plan: Plan, graph: IntentionGraph, robot_ops: np.ndarray, rewards: 
     return reward
 
 
+# Bytes per intention and action (a transition row of 1.02 entries on average: float64 + int32 column, an
+# int32 row pointer; a float64 reward) and per intention (the intention graph, its names, the initial belief).
+# Measured peaks (chain 7-9, complete 5-6): 25 to 34 bytes per intention and action in all.
+_BYTES_PER_INTENTION_ACTION = 28
+_BYTES_PER_INTENTION = 200
+
+
+def flat_model_bytes(plan: Plan, intentions: int | None = None) -> int:
+    """The memory :func:`intention_model` would take for ``plan``, from counts alone (nothing is enumerated).
+
+    About ``28 I A + 200 I`` bytes for I intentions and A actions (robot operations + wait): the dense
+    reward table (A x I float64) and one sparse transition table per action (about one entry per row).
+    ``intentions``: the number of intentions the model would hold, when not all of the plan's (e.g. only
+    those of the sequences from a base part); by default :func:`~planner.assembly.count_intentions`.
+    Cost: O(state edges).
+    """
+    count = count_intentions(plan.states) if intentions is None else int(intentions)
+    actions = int(plan.tags.robot.sum()) + 1
+    return count * (_BYTES_PER_INTENTION_ACTION * actions + _BYTES_PER_INTENTION)
+
+
+_FLAT_OPTIONS = [OPTIONS[k] for k in ("online", "base_part")]
+
+
+def check_flat_model(plan: Plan, max_bytes: int | None = None, limit: int | None = DEFAULT_INTENTION_LIMIT,
+                     intentions: int | None = None) -> int:
+    """The estimate :func:`flat_model_bytes`, after checking it against ``max_bytes`` (by default the
+    machine's budget, :func:`~planner.assembly.guards.default_memory_budget`) and the intention count against
+    ``limit`` (None: no limit): raises :class:`~planner.errors.MemoryLimitError` or
+    :class:`~planner.errors.LimitExceededError` naming the sizes and what helps. Cost: O(state edges)."""
+    count = count_intentions(plan.states) if intentions is None else int(intentions)
+    needed = flat_model_bytes(plan, count)
+    budget = default_memory_budget() if max_bytes is None else max_bytes
+    actions = int(plan.tags.robot.sum()) + 1
+    hint = ("The flat model enumerates every intention (every path of assembly states to the finished "
+            "product); the factored model and the online planner need no enumeration.")
+    if needed > budget:
+        raise MemoryLimitError("flat decision model", needed, budget,
+                               f"{count:,} intentions x {actions:,} actions", hint,
+                               _FLAT_OPTIONS + memory_options(needed))
+    if limit is not None and count > limit:
+        raise LimitExceededError("flat decision model", count, limit, hint, _FLAT_OPTIONS, noun="intentions")
+    return needed
+
+
+def flat_model_fits(plan: Plan, max_bytes: int | None = None, limit: int | None = DEFAULT_INTENTION_LIMIT,
+                    intentions: int | None = None) -> bool:
+    """Whether :func:`intention_model` would build the flat model within ``max_bytes`` and ``limit`` (the
+    arguments of :func:`check_flat_model`), e.g. to choose the online planner instead. Cost: O(state edges)."""
+    try:
+        check_flat_model(plan, max_bytes, limit, intentions)
+    except LimitExceededError:
+        return False
+    return True
+
+
 def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                      graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT,
-                     base_part: str | None = None) -> IntentionModel:
+                     base_part: str | None = None, max_bytes: int | None = None) -> IntentionModel:
     """The decision model of Alg. 3 over the intentions of ``plan`` (definitions in the module docstring).
 
-    ``graph``: the plan's intention graph when it was built already (else it is built, refusing more than
-    ``limit`` intentions with :class:`~planner.errors.LimitExceededError`). ``base_part``: only the sequences
-    that start from this part (the graph must then be restricted to it too; :class:`PlannerError` if not).
+    ``graph``: the plan's intention graph when it was built already. Before anything is built the model's
+    size is estimated (:func:`check_flat_model`): more than ``limit`` intentions (when ``graph`` is to be
+    built), or more than ``max_bytes`` (default: the machine's budget), is refused with
+    :class:`~planner.errors.LimitExceededError`. ``base_part``: only the sequences that start from this part
+    (the graph must then be restricted to it too; :class:`PlannerError` if not).
     Cost: O(I x A) for the reward table and O(I) for the sparse tables, I intentions, A actions.
     """
+    if graph is None:
+        check_flat_model(plan, max_bytes, limit, count_intentions(plan.states, base_part=base_part))
+    else:  # enumerated already: only its tables are to come
+        check_flat_model(plan, max_bytes, None, graph.n_intentions)
     graph = graph if graph is not None else intention_graph(plan.states, limit, base_part)
     if graph.base_part != base_part:
         raise PlannerError(f"the intention graph starts from base part {graph.base_part!r}, the model from "
@@ -207,6 +276,6 @@ def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
 
 def intention_pomdp(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                     graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT,
-                    base_part: str | None = None) -> POMDP:
+                    base_part: str | None = None, max_bytes: int | None = None) -> POMDP:
     """The tables alone of :func:`intention_model` (for solvers, files and comparisons with other planners)."""
-    return intention_model(plan, rewards, discount, graph, limit, base_part).pomdp
+    return intention_model(plan, rewards, discount, graph, limit, base_part, max_bytes).pomdp

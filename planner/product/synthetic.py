@@ -4,13 +4,17 @@ Neither has obstruction relations or technical constraints, so every connected s
 forms for n parts (used by the tests): chain: n(n+1)/2 subassemblies, C(n+1, 3) operations, 2^(n-1) states,
 (n-1)! sequences; complete: 2^n - 1 subassemblies, (3^n + 1)/2 - 2^n operations, Bell(n) states,
 n!(n-1)!/2^(n-1) sequences.
+
+``fastened_product(parts, screws)`` adds fasteners: a chain of parts, and screws that each touch the two
+parts of one joint, as wood screws do in a real product. Each screw doubles the connected part sets that
+hold its joint: two parts and m screws give 3 * 2^m + m connected sets (every one a subassembly).
 """
 from __future__ import annotations
 
 from ..errors import PlannerError
 from .model import Part, Product
 
-__all__ = ["chain_product", "complete_product", "SYNTHETIC"]
+__all__ = ["chain_product", "complete_product", "fastened_product", "SYNTHETIC"]
 
 
 def _parts(n: int) -> tuple[Part, ...]:
@@ -32,6 +36,20 @@ def complete_product(n: int) -> Product:
     parts = _parts(n)
     contacts = tuple((parts[i].id, parts[j].id) for i in range(n) for j in range(i + 1, n))
     return Product(parts, contacts, name=f"complete graph of {n} parts (strongly connected)")
+
+
+def fastened_product(parts: int, screws: int) -> Product:
+    """A chain of ``parts`` parts (``p1``, ...) and ``screws`` screws (``screw_01``, ...), screw ``k`` touching
+    the two parts of joint ``k mod (parts - 1)``: the connection diagram of a screwed product."""
+    if parts < 2:
+        raise PlannerError(f"a fastened product needs at least 2 parts to join, got {parts}")
+    chain = chain_product(parts)
+    width = len(str(screws))
+    fasteners = tuple(Part(f"screw_{k:0{width}d}", f"Screw {k}") for k in range(1, screws + 1))
+    joints = [chain.contacts[k % (parts - 1)] for k in range(screws)]
+    contacts = chain.contacts + tuple((a, s.id) for (a, _), s in zip(joints, fasteners)) + \
+        tuple((b, s.id) for (_, b), s in zip(joints, fasteners))
+    return Product(chain.parts + fasteners, contacts, name=f"{parts} parts joined by {screws} screws")
 
 
 SYNTHETIC = {"chain": chain_product, "complete": complete_product}
