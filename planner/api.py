@@ -150,13 +150,14 @@ def factored_decision_model(product: str | os.PathLike | Product | Plan, technic
 
 
 def online_planner(model: FactoredIntentionModel, decision_time: float | None = DECISION_TIME,
-                   expansions: int | None = None) -> OnlinePlanner:
+                   expansions: int | None = None, lower: AlphaVectorPolicy | None = None) -> OnlinePlanner:
     """The online planner on ``model``: at most ``decision_time`` seconds and ``expansions`` expansions per
     decision. ``expansions`` alone (``decision_time`` None) is a fixed amount of work: the same actions on any
-    machine."""
+    machine. ``lower``: an offline policy over the model's classes whose value the search starts from."""
     if decision_time is None and expansions is None:
         raise PlannerError("the online planner needs a decision time or a number of expansions")
-    return OnlinePlanner(model, expansions if expansions is not None else ONLINE_EXPANSIONS, decision_time)
+    return OnlinePlanner(model, expansions if expansions is not None else ONLINE_EXPANSIONS, decision_time,
+                         lower=lower)
 
 
 def choose_planner(plan: Plan, planner: str | None, policy: str | os.PathLike | None,
@@ -188,7 +189,8 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
     """The model, the policy and a note (what was chosen and why, or None) that a session, a simulation or an
     evaluation runs on:
 
-    - online: the factored model and :func:`online_planner`;
+    - online: the factored model and :func:`online_planner` (with ``policy``, a policy over the classes, as
+      the lower bound it starts from);
     - offline with a policy over the lumped model's classes: the factored model and that policy;
     - offline otherwise: the flat model of Alg. 3 (refused above ``limit`` intentions, naming ``--planner
       online``) and the policy file, or the built-in solver's policy after ``time_limit`` seconds.
@@ -200,7 +202,8 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
     choice, note = choose_planner(plan, planner, policy, limit, base_part, limits)
     if choice == "online":
         model = factored_model(plan, rewards, discount, base_part)
-        return model, online_planner(model, decision_time, expansions), note
+        lower = read_policy(policy) if policy else None
+        return model, online_planner(model, decision_time, expansions, lower), note
     intentions = count_intentions(plan.states, base_part=base_part)
     vectors = read_policy(policy) if policy else None
     if vectors is not None:

@@ -100,7 +100,9 @@ def add_policy_options(parser: argparse.ArgumentParser) -> None:
                             "online: search the factored model at every decision (any product size). Default: "
                             "offline with --policy, else online")
     group.add_argument("--policy", metavar="POLICY",
-                       help="a .policy file over the model's intentions, or over its classes (aplan solve --lumped)")
+                       help="a .policy file over the model's intentions, or over its classes (aplan solve --lumped); "
+                            "with --planner online, a policy over the classes is the lower bound the search starts "
+                            "from")
     group.add_argument("--time-limit", type=positive_seconds, default=POLICY_TIME_LIMIT,
                        help=f"offline solver seconds when --planner offline and no --policy "
                             f"(default {POLICY_TIME_LIMIT:g})")

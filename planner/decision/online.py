@@ -9,7 +9,10 @@ what it has not expanded by closed forms over the classes:
   state and the operator's next step) from the next step on, ``max_a sum_c b(c) Q(c, a)``. Knowing more
   never hurts, so it bounds the value from above; one backward pass over the state graph computes it (the
   state graph is acyclic but for the self-loops of waiting, which have a closed form);
-- lower bound: the best of "do ``a`` now, then wait for ever", a policy the robot can always follow.
+- lower bound: the best of "do ``a`` now, then wait for ever", a policy the robot can always follow, and,
+  when an offline policy over the classes is given (``lower``: the lumped model's alpha vectors), the value
+  of each of its vectors for the vector's action (each is a plan that starts with that action). With it the
+  planner starts from the offline policy's value and only improves on it.
 
 The search is best-first, as AO* and HSVI: from the root it follows the action with the highest upper bound;
 an action not expanded yet is expanded (one prediction and one split by observation: its children are the
@@ -35,6 +38,7 @@ import numpy as np
 from ..defaults import ONLINE_DEPTH, ONLINE_EXPANSIONS
 from ..errors import PlannerError
 from .factored_model import FactoredBelief, FactoredIntentionModel
+from .policy import AlphaVectorPolicy
 
 __all__ = ["ClassValues", "class_values", "observation_split", "OnlinePlanner", "SearchReport"]
 
@@ -233,7 +237,7 @@ class OnlinePlanner:
 
     def __init__(self, model: FactoredIntentionModel, expansions: int = ONLINE_EXPANSIONS,
                  decision_time: float | None = None, max_depth: int = ONLINE_DEPTH, precision: float = 1e-3,
-                 values: ClassValues | None = None):
+                 values: ClassValues | None = None, lower: AlphaVectorPolicy | None = None):
         if not (isinstance(expansions, int) and expansions >= 1):
             raise PlannerError(f"the online planner's expansions must be a positive integer, got {expansions!r}")
         if decision_time is not None and not (np.isfinite(decision_time) and decision_time > 0):
@@ -244,6 +248,14 @@ class OnlinePlanner:
         self.max_depth = max_depth
         self.precision = precision
         self.values = values if values is not None else class_values(model)
+        if lower is not None and lower.alphas.shape[1] != model.n_classes:
+            raise PlannerError(f"the online planner's lower bound has vectors of length {lower.alphas.shape[1]:,}; "
+                               f"it needs a policy over the model's {model.n_classes:,} classes (aplan solve --lumped)")
+        if lower is not None and lower.actions.size and not 0 <= lower.actions.min() <= lower.actions.max() < len(
+                model.action_operations):
+            raise PlannerError(f"the online planner's lower bound names actions out of range; the model has "
+                               f"{len(model.action_operations)} actions")
+        self.lower = lower
         r, g = model.rewards, model.discount
         self._after_now = g * r.wait / (1 - g)  # then wait for ever
         self.last: SearchReport | None = None
@@ -289,6 +301,9 @@ class OnlinePlanner:
         """The per-action bounds of a node whose belief is known: QMDP above, "act, then wait" below."""
         node.action_upper = self.values.q_values(self.model, node.belief)
         node.action_lower = self.model.expected_rewards(node.belief) + self._after_now
+        if self.lower is not None:  # each alpha vector is a plan that starts with its action: a lower bound
+            values = self.lower.values(node.belief)
+            np.maximum.at(node.action_lower, self.lower.actions, values)
         _refresh(node)
         node.closed = node.upper - node.lower <= self.precision
 
