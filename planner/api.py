@@ -6,8 +6,9 @@ Front ends only parse their input and show results; the steps of the method live
 1. :func:`resolve_product`: a PRODUCT argument (a product file, a bundle folder, a CAD file read through
    a plugin, or an embedded example) -> :class:`~planner.product.Product`;
 2. :func:`plan_statistics_of`: the plan of a product and its figures (``aplan stats``);
-3. :func:`decision_model` / :func:`load_model` / :func:`save_model`: the decision model of Alg. 3, or a
-   POMDP read from a file, and writing it as POMDPX or ``.pomdp``;
+3. :func:`decision_model` / :func:`lumped_model` / :func:`load_model` / :func:`save_model`: the decision model
+   of Alg. 3 (over intentions, or lumped over the factored model's classes), or a POMDP read from a file, and
+   writing it as POMDPX or ``.pomdp``;
 4. :func:`solve`, :func:`policy_for`: a policy from a solver (the built-in point-based one, or SARSOP);
 5. :func:`simulate`, :func:`evaluate`: episodes of an operator against a policy.
 
@@ -30,6 +31,8 @@ from .assembly.stats import PlanStatistics, plan_statistics
 from .decision.intention_model import IntentionModel, Rewards, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
+from .decision.lumped_model import LumpedModel
+from .decision.lumped_model import lumped_model as build_lumped_model
 from .decision.policy import AlphaVectorPolicy, read_policy
 from .decision.pomdp import POMDP
 from .decision.simulate import Episode, evaluate_policy, simulate_episode
@@ -39,13 +42,14 @@ from .errors import PlannerError, UnknownProductError
 from .product import Product, load_product
 from .product.examples import EXAMPLES, example_path
 
-__all__ = ["resolve_product", "plan_of", "plan_statistics_of", "decision_model", "load_model", "save_model",
+__all__ = ["resolve_product", "plan_of", "plan_statistics_of", "decision_model", "lumped_model", "load_model",
+           "save_model",
            "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for", "simulate", "evaluate"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
 SOLVER_ENGINES = ("builtin", "sarsop")
 
-Model = IntentionModel | POMDP
+Model = IntentionModel | LumpedModel | POMDP
 
 
 def resolve_product(argument: str | os.PathLike) -> Product:
@@ -99,26 +103,41 @@ def decision_model(product: str | os.PathLike | Product | Plan, technical: bool 
     return intention_model(plan, rewards, discount)
 
 
+def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
+                 rewards: Rewards = Rewards(), discount: float = DISCOUNT) -> LumpedModel:
+    """The decision model of Alg. 3 lumped onto the factored model's classes (state edges and the finished
+    product; :mod:`~planner.decision.lumped_model`): the same value as the flat model, far fewer states.
+    ``.factored`` filters beliefs over classes, ``.pomdp`` (named ``<product>:lumped``) is what solvers take."""
+    plan = product if isinstance(product, Plan) else plan_of(product, technical)
+    return build_lumped_model(plan, rewards, discount)
+
+
 def _model_file_kind(path: str | os.PathLike) -> str | None:
     name = str(path).lower()
     return next((s for s in MODEL_SUFFIXES if name.endswith(s)), None)
 
 
 def load_model(argument: str | os.PathLike, technical: bool | None = None, rewards: Rewards = Rewards(),
-               discount: float = DISCOUNT) -> Model:
+               discount: float = DISCOUNT, lumped: bool = False) -> Model:
     """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`), else a PRODUCT
-    (its :class:`IntentionModel`; ``technical``, ``rewards`` and ``discount`` apply to it only)."""
+    (its :class:`IntentionModel`, or with ``lumped`` its :class:`LumpedModel`; ``technical``, ``rewards`` and
+    ``discount`` apply to it only)."""
     kind = _model_file_kind(argument)
+    if kind is not None and lumped:
+        raise PlannerError(f"{argument}: --lumped builds the lumped model of a PRODUCT; a model file is solved "
+                           "as it is (write the lumped model with aplan pomdp PRODUCT --lumped -o FILE)")
     if kind in (".pomdpx", ".pomdpx.gz"):
         return read_pomdpx(argument)
     if kind == ".pomdp":
         return read_cassandra(argument)
+    if lumped:
+        return lumped_model(argument, technical, rewards, discount)
     return decision_model(argument, technical, rewards, discount)
 
 
 def tables(model: Model) -> POMDP:
     """The POMDP tables of a decision model (a :class:`POMDP` is its own tables)."""
-    return model.pomdp if isinstance(model, IntentionModel) else model
+    return model.pomdp if isinstance(model, (IntentionModel, LumpedModel)) else model
 
 
 def save_model(model: Model, path: str | os.PathLike) -> None:

@@ -18,13 +18,16 @@ __all__ = ["add_commands", "model_from", "policy_from"]
 
 log = logging.getLogger(__name__)
 
+LUMPED_HELP = ("when MODEL is a product: the model over the factored model's classes (state edges and the "
+               "finished product) instead of intentions, with the same value and far fewer states")
+
 
 def model_from(args: argparse.Namespace, product_only: bool = False):
     """The model of ``args.model`` (or ``args.product``): a PRODUCT's decision model, or a model file."""
     argument = getattr(args, "model", None) or args.product
     if product_only:
         return api.decision_model(argument, args.technical, rewards_from(args), args.discount)
-    return api.load_model(argument, args.technical, rewards_from(args), args.discount)
+    return api.load_model(argument, args.technical, rewards_from(args), args.discount, getattr(args, "lumped", False))
 
 
 def policy_from(args: argparse.Namespace, model):
@@ -111,6 +114,7 @@ def add_commands(commands) -> None:
                                             "(APPL's pomdpsol reads it) or Cassandra's .pomdp, by the file name.")
     pomdp.add_argument("model", metavar="PRODUCT", help=PRODUCT_HELP)
     pomdp.add_argument("-o", "--output", required=True, metavar="MODEL", help="MODEL.pomdpx or MODEL.pomdp")
+    pomdp.add_argument("--lumped", action="store_true", help=LUMPED_HELP)
     add_decision_options(pomdp)
     pomdp.set_defaults(run=_pomdp)
 
@@ -127,6 +131,9 @@ def add_commands(commands) -> None:
                        help="builtin (default) or sarsop (APPL's pomdpsol, when it is on PATH)")
     solve.add_argument("--json", action="store_true", help="print lower_bound, upper_bound, alpha_vectors, seconds")
     solve.add_argument("--quiet", action="store_true", help="no progress line")
+    solve.add_argument("--lumped", action="store_true",
+                       help=LUMPED_HELP + "; the policy's vectors are over the classes (its model attribute "
+                            "ends in :lumped)")
     add_decision_options(solve)
     solve.set_defaults(run=_solve)
 

@@ -34,13 +34,18 @@ product ``M M`` (the two-step advance), one row selection per action and a dense
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.sparse as sp
 
-from .factored_model import FactoredIntentionModel
+from ..assembly.plan import Plan
+from ..defaults import DISCOUNT
+from .factored_model import FactoredIntentionModel, factored_model
+from .intention_model import Rewards
 from .pomdp import POMDP
 
-__all__ = ["lumped_pomdp", "class_names", "advance_matrix", "LUMPED_SUFFIX"]
+__all__ = ["LumpedModel", "lumped_model", "lumped_pomdp", "class_names", "advance_matrix", "LUMPED_SUFFIX"]
 
 LUMPED_SUFFIX = ":lumped"  # appended to the model's name: a policy file's ``model`` attribute tells it apart
 
@@ -117,3 +122,23 @@ def lumped_pomdp(model: FactoredIntentionModel) -> POMDP:
     return POMDP(class_names(model), model.actions, model.observations, transition, observation,
                  _rewards(model), model.initial_belief().dense(model.n_classes), model.discount,
                  name=model.name + LUMPED_SUFFIX)
+
+
+@dataclass(frozen=True)
+class LumpedModel:
+    """The factored model (what the classes mean, its Bayes filter) and its lumped POMDP (for solvers and
+    files): a policy of ``pomdp`` is over class masses, ``factored.initial_belief().dense(n)`` its start."""
+
+    factored: FactoredIntentionModel
+    pomdp: POMDP
+
+    @property
+    def name(self) -> str:
+        return self.pomdp.name
+
+
+def lumped_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT) -> LumpedModel:
+    """The factored model of ``plan`` and its lumped POMDP. Cost: that of :func:`factored_model` plus
+    :func:`lumped_pomdp`."""
+    factored = factored_model(plan, rewards, discount)
+    return LumpedModel(factored, lumped_pomdp(factored))

@@ -97,7 +97,7 @@ class PointBasedSolver:
     sweeps_per_round: int = 3
     chunk: int = 4096
     belief_memory: int = 50_000_000
-    min_share: float = 0.2
+    min_share: float = 0.35
     rate_horizon: float = 1e9
     seed: int = 0
     blas_threads: int | None = None
