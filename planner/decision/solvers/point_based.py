@@ -90,7 +90,7 @@ class PointBasedSolver:
     informed_sweeps: int = 1000
     prune_points_at: int = 512
     max_depth: int = 300
-    gap_fraction: float = 0.5
+    gap_fraction: float = 0.9
     lower_trial_every: int = 2
     theta: float = 1e-3
     theta_factor: float = 3.0

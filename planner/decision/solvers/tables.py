@@ -22,6 +22,9 @@ def best_products(B: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     """For each row b of ``B`` (m, S): ``max_k V[k] . b`` and its ``k``, over ``V`` (n, S), computed
     ``BLOCK`` products at a time. Cost: O(m n S) time, O(BLOCK) extra memory."""
     values, best = np.empty(len(B)), np.empty(len(B), dtype=np.int64)
+    cols = np.flatnonzero((B != 0).any(axis=0))
+    if 4 * len(cols) < 3 * B.shape[1] and len(B) >= 8:  # beliefs with small supports: only their columns
+        B, V = B[:, cols], V[:, cols]
     step = max(1, BLOCK // max(1, len(V)))
     for first in range(0, len(B), step):
         products = B[first:first + step] @ V.T

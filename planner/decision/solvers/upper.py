@@ -52,13 +52,17 @@ class UpperBound:
         bound = np.minimum((B @ self.Q.T).max(axis=1), base)
         if not self.points.n:
             return bound
-        inside = self.points.support @ (B <= 0).T.astype(np.float32) == 0  # supp(point) within supp(b)
+        # supp(point) within supp(b): counted over the columns some belief covers (a point reaching outside
+        # them is inside none), so the product is only as wide as the beliefs' supports.
+        cols = np.flatnonzero((B > 0).any(axis=0))
+        support = self.points.support
+        covered = support[:, cols] @ (B[:, cols] > 0).T.astype(np.float32)
+        inside = covered == support.sum(axis=1, dtype=np.float32)[:, None]
         if allowed is not None:
             inside &= allowed
         i_idx, b_idx = np.nonzero(inside)
         if i_idx.size:
             # Sawtooth: the largest lambda with b - lambda b_i >= 0 is 1 / max_s b_i(s) / b(s).
-            cols = np.flatnonzero((B > 0).any(axis=0))
             Bc = B[:, cols]
             inverse = np.divide(1.0, Bc, out=np.zeros_like(Bc), where=Bc > 0)
             best_gain = np.zeros(len(B))
