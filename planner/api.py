@@ -7,8 +7,9 @@ Front ends only parse their input and show results; the steps of the method live
    a plugin, or an embedded example) -> :class:`~planner.product.Product`;
 2. :func:`plan_statistics_of`: the plan of a product and its figures (``aplan stats``); :func:`base_part_of`:
    the base part every sequence starts from (paper Sec. V), ``"auto"`` for the most connected part;
-3. :func:`decision_model` / :func:`load_model` / :func:`save_model`: the decision model of Alg. 3, or a
-   POMDP read from a file, and writing it as POMDPX or ``.pomdp``;
+3. :func:`decision_model` / :func:`lumped_model` / :func:`load_model` / :func:`save_model`: the decision model
+   of Alg. 3 (over intentions, or lumped over the factored model's classes), or a POMDP read from a file, and
+   writing it as POMDPX or ``.pomdp``;
 4. :func:`solve`, :func:`policy_for`: a policy from a solver (the built-in point-based one, or SARSOP);
 5. :func:`simulate`, :func:`evaluate`: episodes of an operator against a policy;
 6. :func:`decision_maker`: the model and policy a session, a simulation or an evaluation runs: the offline
@@ -39,6 +40,8 @@ from .decision.intention_model import IntentionModel, Rewards, flat_model_fits, 
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
 from .decision.io.size import model_file_bytes
+from .decision.lumped_model import LumpedModel
+from .decision.lumped_model import lumped_model as build_lumped_model
 from .decision.online import OnlinePlanner
 from .decision.policy import AlphaVectorPolicy, PolicyError, read_policy
 from .decision.pomdp import POMDP
@@ -50,10 +53,10 @@ from .errors import FileLimitError, MemoryLimitError, PlannerError, UnknownProdu
 from .product import Product, load_product
 from .product.examples import EXAMPLES, example_path
 
-__all__ = ["resolve_product", "plan_of", "plan_statistics_of", "base_part_of", "decision_model", "load_model",
-           "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve", "policy_for",
-           "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner", "choose_planner",
-           "decision_maker"]
+__all__ = ["resolve_product", "plan_of", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
+           "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
+           "policy_for", "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner",
+           "choose_planner", "decision_maker"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
 FILE_OPTION = ("--max-file", "--max-file GIB raises the file size budget")
@@ -61,7 +64,7 @@ SOLVER_ENGINES = ("builtin", "sarsop")
 
 PLANNERS = ("offline", "online")
 
-Model = IntentionModel | POMDP
+Model = IntentionModel | LumpedModel | POMDP
 
 
 def resolve_product(argument: str | os.PathLike) -> Product:
@@ -228,27 +231,43 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
     return model, vectors, note
 
 
+def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
+                 rewards: Rewards = Rewards(), discount: float = DISCOUNT, base_part: str | None = None,
+                 limits: SizeLimits = SizeLimits()) -> LumpedModel:
+    """The decision model of Alg. 3 lumped onto the factored model's classes (state edges and the finished
+    product; :mod:`~planner.decision.lumped_model`): the same value as the flat model, far fewer states.
+    ``.factored`` filters beliefs over classes, ``.pomdp`` (named ``<product>:lumped``) is what solvers take."""
+    plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
+    return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part))
+
+
 def _model_file_kind(path: str | os.PathLike) -> str | None:
     name = str(path).lower()
     return next((s for s in MODEL_SUFFIXES if name.endswith(s)), None)
 
 
 def load_model(argument: str | os.PathLike, technical: bool | None = None, rewards: Rewards = Rewards(),
-               discount: float = DISCOUNT, base_part: str | None = None, limits: SizeLimits = SizeLimits()) -> Model:
+               discount: float = DISCOUNT, base_part: str | None = None, limits: SizeLimits = SizeLimits(),
+               lumped: bool = False) -> Model:
     """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`), else a PRODUCT
-    (its :class:`IntentionModel`; ``technical``, ``rewards``, ``discount``, ``base_part`` and ``limits`` apply
-    to it only: a base part with a model file is a :class:`PlannerError`, since the file's intentions are
-    fixed)."""
+    (its :class:`IntentionModel`, or with ``lumped`` its :class:`LumpedModel`; ``technical``, ``rewards``,
+    ``discount``, ``base_part`` and ``limits`` apply to it only: a base part with a model file is a
+    :class:`PlannerError`, since the file's intentions are fixed)."""
     kind = _model_file_kind(argument)
     if kind is not None and base_part:
         raise PlannerError(f"{argument}: a base part applies to products only, and this is a model file whose "
                            "intentions are fixed; leave out the base part (--base-part), or give the PRODUCT")
+    if kind is not None and lumped:
+        raise PlannerError(f"{argument}: --lumped builds the lumped model of a PRODUCT; a model file is solved "
+                           "as it is (write the lumped model with aplan pomdp PRODUCT --lumped -o FILE)")
     if kind in (".pomdpx", ".pomdp") and os.path.isfile(argument):
         _check_model_read(argument, limits.memory)
     if kind in (".pomdpx", ".pomdpx.gz"):
         return read_pomdpx(argument)
     if kind == ".pomdp":
         return read_cassandra(argument)
+    if lumped:
+        return lumped_model(argument, technical, rewards, discount, base_part, limits)
     return decision_model(argument, technical, rewards, discount, base_part, limits)
 
 
@@ -269,7 +288,7 @@ def _check_model_read(path: str | os.PathLike, max_bytes: int) -> None:
 
 def tables(model: Model) -> POMDP:
     """The POMDP tables of a decision model (a :class:`POMDP` is its own tables)."""
-    return model.pomdp if isinstance(model, IntentionModel) else model
+    return model.pomdp if isinstance(model, (IntentionModel, LumpedModel)) else model
 
 
 def check_model_file(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT) -> int:

@@ -118,3 +118,21 @@ def test_evaluate_a_model_or_its_tables(model, policy):
     mean, half = api.evaluate(model, policy, 200, seed=1)
     bare_mean, bare_half = api.evaluate(model.pomdp, policy, 200, seed=1)
     assert math.isfinite(mean) and half > 0 and math.isfinite(bare_mean) and bare_half > 0
+
+
+def test_lumped_model(tmp_path):
+    from planner.decision.lumped_model import LumpedModel
+
+    lumped = api.load_model("pen", technical=True, lumped=True)
+    assert isinstance(lumped, LumpedModel) and api.tables(lumped) is lumped.pomdp
+    plan = api.plan_of("pen", True)
+    assert lumped.pomdp.n_states == plan.states.n_edges + 1 == lumped.factored.n_classes
+    assert np.array_equal(lumped.pomdp.initial, lumped.factored.initial_belief().dense(lumped.factored.n_classes))
+    # The same value as the flat model: a fixed amount of work brackets V*(b0) from both, and the brackets meet.
+    a = api.solve(lumped, time_limit=math.inf, precision=1e-9, iterations=150)
+    b = api.solve(api.decision_model(plan), time_limit=math.inf, precision=1e-9, iterations=150)
+    assert max(a.lower_bound, b.lower_bound) <= min(a.upper_bound, b.upper_bound) + 1e-9
+    api.save_model(lumped, tmp_path / "pen.pomdp")
+    assert api.load_model(tmp_path / "pen.pomdp").n_states == lumped.pomdp.n_states
+    with pytest.raises(PlannerError, match="--lumped builds the lumped model of a PRODUCT"):
+        api.load_model(tmp_path / "pen.pomdp", lumped=True)

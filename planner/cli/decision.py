@@ -30,6 +30,9 @@ __all__ = ["add_commands", "model_from", "policy_from", "decision_maker_from"]
 
 log = logging.getLogger(__name__)
 
+LUMPED_HELP = ("when MODEL is a product: the model over the factored model's classes (state edges and the "
+               "finished product) instead of intentions, with the same value and far fewer states")
+
 
 def model_from(args: argparse.Namespace, product_only: bool = False):
     """The model of ``args.model`` (or ``args.product``): a PRODUCT's decision model, or a model file."""
@@ -42,7 +45,7 @@ def model_from(args: argparse.Namespace, product_only: bool = False):
         return api.decision_model(argument, args.technical, rewards_from(args), args.discount, args.base_part,
                                   limits_from(args))
     return api.load_model(argument, args.technical, rewards_from(args), args.discount, args.base_part,
-                          limits_from(args))
+                          limits_from(args), getattr(args, "lumped", False))
 
 
 def policy_from(args: argparse.Namespace, model):
@@ -177,6 +180,7 @@ def add_commands(commands) -> None:
     pomdp.add_argument("--max-file", type=gibibytes, default=FILE_LIMIT / 2 ** 30, metavar="GIB",
                        help=f"refuse to write a file estimated larger than this, or than the free disk space "
                             f"(default {FILE_LIMIT / 2 ** 30:g} GiB)")
+    pomdp.add_argument("--lumped", action="store_true", help=LUMPED_HELP)
     add_decision_options(pomdp)
     pomdp.set_defaults(run=_pomdp)
 
@@ -193,6 +197,9 @@ def add_commands(commands) -> None:
                        help="builtin (default) or sarsop (APPL's pomdpsol, when it is on PATH)")
     solve.add_argument("--json", action="store_true", help="print lower_bound, upper_bound, alpha_vectors, seconds")
     solve.add_argument("--quiet", action="store_true", help="no progress line")
+    solve.add_argument("--lumped", action="store_true",
+                       help=LUMPED_HELP + "; the policy's vectors are over the classes (its model attribute "
+                            "ends in :lumped)")
     add_decision_options(solve)
     solve.set_defaults(run=_solve)
 

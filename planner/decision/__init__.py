@@ -3,6 +3,7 @@
 - the *model*: a discrete :class:`POMDP` in sparse tables (``pomdp``), built from a plan by
   :func:`intention_model` (an :class:`IntentionModel`: the plan, its intention graph and the tables) or read from POMDPX / Cassandra files (``io``);
   the same model without enumerating intentions: :func:`factored_model` (``factored_model``, paper Sec. V);
+  its POMDP over classes, exactly equivalent and far smaller: :func:`lumped_model` (``lumped_model``);
 - the *solver*: ``solver.solve(model) -> SolveResult`` (``solvers``);
 - the *policy*: ``policy.action(belief)`` and ``policy.value(belief)`` (``policy``);
 - the *belief updater*: ``initialize`` and ``update(belief, action, observation)`` (``belief``;
@@ -14,11 +15,12 @@ from .belief import DiscreteUpdater, UnexplainedObservation
 from .factored_model import FactoredBelief, FactoredIntentionModel, factored_model
 from .factored_updater import FactoredUpdater, to_flat
 from .intention_model import WAIT, IntentionModel, Rewards, intention_model, intention_pomdp
+from .lumped_model import LumpedModel, lumped_model, lumped_pomdp
 from .policy import AlphaVectorPolicy, PolicyError, read_policy, write_policy
 from .pomdp import POMDP, ModelError
 from .solvers import PointBasedSolver, SolveResult
 
 __all__ = ["DiscreteUpdater", "UnexplainedObservation", "FactoredBelief", "FactoredIntentionModel", "FactoredUpdater",
-           "factored_model", "to_flat", "WAIT", "IntentionModel", "Rewards", "intention_model", "intention_pomdp",
+           "factored_model", "to_flat", "LumpedModel", "lumped_model", "lumped_pomdp", "WAIT", "IntentionModel", "Rewards", "intention_model", "intention_pomdp",
            "AlphaVectorPolicy", "PolicyError", "read_policy", "write_policy", "POMDP", "ModelError",
            "PointBasedSolver", "SolveResult"]

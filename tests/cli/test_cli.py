@@ -101,3 +101,28 @@ def test_unknown_product_is_a_clear_error():
     result = subprocess.run([sys.executable, "-m", "planner", "stats", "pencil"], capture_output=True, text=True)
     assert result.returncode == 1
     assert "pencil: no such file, and no embedded example of that name (embedded: pen)" in result.stderr
+
+
+def test_lumped_model_written_and_solved(capsys, tmp_path):
+    from lxml import etree
+
+    from planner import api
+    from planner.decision import read_policy
+    from planner.decision.io.pomdpx import read_pomdpx
+
+    model = tmp_path / "pen.pomdpx"
+    code, out, _ = run(capsys, "pomdp", "pen", "--no-technical", "--lumped", "-o", str(model))
+    assert code == 0 and "33 states, 22 actions, 12 observations" in out   # 32 state edges + the finished product
+    lumped = api.lumped_model("pen", technical=False)
+    read = read_pomdpx(model)
+    assert read.n_states == 33 and read.name == lumped.name == lumped.pomdp.name
+    # The precision stops the solver at once (no clock): the gap at the initial belief is below 10 already.
+    policy = tmp_path / "pen.policy"
+    code, out, _ = run(capsys, "solve", "pen", "--no-technical", "--lumped", "--precision", "10", "--json",
+                       "-o", str(policy))
+    assert code == 0 and json.loads(out)["upper_bound"] - json.loads(out)["lower_bound"] <= 10
+    assert etree.parse(str(policy)).getroot().get("model").endswith(":lumped")
+    assert read_policy(policy, lumped.pomdp).alphas.shape[1] == 33
+    # --lumped on a model file is refused with the way forward.
+    code, _, err = run(capsys, "solve", str(model), "--lumped", "-o", str(tmp_path / "x.policy"))
+    assert code == 1 and "aplan pomdp PRODUCT --lumped" in err and not (tmp_path / "x.policy").exists()

@@ -23,10 +23,12 @@ the number of states a predicted belief covers (all S for small models, multipli
 """
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
 import scipy.sparse as sp
 
-from .tables import Tables
+from .tables import BLOCK, Tables, best_products
 
 __all__ = ["BeliefSet", "policy_successors", "sweep"]
 
@@ -62,7 +64,9 @@ class BeliefSet:
         """Add beliefs (n, S) with reach weights (n,); a belief already present keeps the larger weight."""
         keys = np.round(beliefs / self.resolution).astype(np.int64)
         for belief, key, weight in zip(beliefs, keys, weights):
-            token = key.tobytes()
+            # A 128-bit digest of the rounded belief, not the S x 8 bytes themselves: the index would
+            # otherwise hold as many bytes as the beliefs (a collision has probability about n^2 / 2^129).
+            token = hashlib.blake2b(key.tobytes(), digest_size=16).digest()
             row = self._index.get(token)
             if row is not None:
                 self._weight[row] = max(self._weight[row], weight)
@@ -87,13 +91,16 @@ def policy_successors(m: Tables, beliefs: np.ndarray, actions: np.ndarray, weigh
     """The successors of ``beliefs`` (n, S), each after its own action (n,), for every observation of
     probability above ``floor``: the new beliefs (k, S) and their reach weights ``gamma * weight * P(z)``."""
     out, out_w = [], []
+    block = max(1, BLOCK // (m.Z * m.S))  # beliefs per product: (block, Z, S) joint probabilities at most
     for a in np.unique(actions):
-        rows = np.flatnonzero(actions == a)
-        joint = m.step(beliefs[rows], int(a))[:, None, :] * m.OZ[a][None]   # (n_a, Z, S)
-        pz = joint.sum(axis=2)
-        r, z = np.nonzero(pz > floor)
-        out.append(joint[r, z] / pz[r, z][:, None])
-        out_w.append(m.gamma * weights[rows][r] * pz[r, z])
+        todo = np.flatnonzero(actions == a)
+        for first in range(0, todo.size, block):
+            rows = todo[first:first + block]
+            joint = m.step(beliefs[rows], int(a))[:, None, :] * m.OZ[a][None]   # (n_a, Z, S)
+            pz = joint.sum(axis=2)
+            r, z = np.nonzero(pz > floor)
+            out.append(joint[r, z] / pz[r, z][:, None])
+            out_w.append(m.gamma * weights[rows][r] * pz[r, z])
     if not out:
         return np.zeros((0, m.S)), np.zeros(0)
     return np.concatenate(out), np.concatenate(out_w)
@@ -108,29 +115,33 @@ def sweep(m: Tables, beliefs: np.ndarray, alphas: np.ndarray, q_upper: np.ndarra
     of those beliefs, and how many (belief, action) pairs were backed up.
     """
     N, K = len(beliefs), len(alphas)
-    current = (beliefs @ alphas.T).max(axis=1)
+    current = best_products(beliefs, alphas)[0]
     candidates = beliefs @ q_upper.T >= current[:, None] - tolerance           # (N, A)
     best_q = np.full(N, -np.inf)
     best_a = np.zeros(N, dtype=np.int64)
     best_choice = np.zeros((N, m.Z), dtype=np.int64)
     projections: dict[int, np.ndarray] = {}
+    block = max(1, BLOCK // (m.Z * K))  # beliefs per product: (block, Z, K) values at most
     for a in range(m.A):
-        rows = np.flatnonzero(candidates[:, a])
-        if not rows.size:
+        todo = np.flatnonzero(candidates[:, a])
+        if not todo.size:
             continue
         # (b T_a) . (O_z,a * alpha_k) for every observation z and vector k at once; built once per table.
         table = int(m.observation_table[a])
         if table not in projections:
             projections[table] = (m.OZ[a][:, :, None] * alphas.T[None]).transpose(1, 0, 2).reshape(m.S, m.Z * K)
-        stepped = m.step(beliefs[rows], a)
-        if m.S > SPARSE_STATES:  # beliefs have small supports: multiply only their non-zero entries
-            stepped = sp.csr_matrix(stepped)
-        values = np.asarray(stepped @ projections[table]).reshape(len(rows), m.Z, K)
-        q = beliefs[rows] @ m.R[a] + m.gamma * values.max(axis=2).sum(axis=1)
-        better = q > best_q[rows]
-        rows, q = rows[better], q[better]
-        best_q[rows], best_a[rows] = q, a
-        best_choice[rows] = values[better].argmax(axis=2)
+        for first in range(0, todo.size, block):
+            rows = todo[first:first + block]
+            stepped = m.step(beliefs[rows], a)
+            if m.S > SPARSE_STATES:  # beliefs have small supports: multiply only their non-zero entries
+                stepped = sp.csr_matrix(stepped)
+            values = np.asarray(stepped @ projections[table]).reshape(len(rows), m.Z, K)
+            choice = values.argmax(axis=2)                                          # (n, Z)
+            q = beliefs[rows] @ m.R[a] + m.gamma * np.take_along_axis(values, choice[:, :, None], 2).sum(axis=(1, 2))
+            better = q > best_q[rows]
+            rows = rows[better]
+            best_q[rows], best_a[rows] = q[better], a
+            best_choice[rows] = choice[better]
     improved = best_q > current + tolerance
     # Beliefs that pick the same action and the same vector for every observation share their new vector.
     keys = np.unique(np.column_stack([best_a, best_choice])[improved], axis=0)

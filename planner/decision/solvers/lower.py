@@ -13,7 +13,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from ..policy import AlphaVectorPolicy
-from .tables import Rows, Tables, blind_lower_bound
+from .tables import Rows, Tables, best_products, blind_lower_bound
 
 __all__ = ["LowerBound"]
 
@@ -43,9 +43,7 @@ class LowerBound:
 
     def at(self, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The bound at the beliefs ``B`` (m, S) and the index of the best vector at each. Cost: O(m n S)."""
-        values = B @ self._rows.rows.T
-        best = values.argmax(axis=1)
-        return values[np.arange(len(B)), best], best
+        return best_products(B, self._rows.rows)
 
     def value(self, b: np.ndarray) -> float:
         """The bound at one belief ``b`` (S,). Cost: O(n S)."""

@@ -90,14 +90,14 @@ class PointBasedSolver:
     informed_sweeps: int = 1000
     prune_points_at: int = 512
     max_depth: int = 300
-    gap_fraction: float = 0.5
+    gap_fraction: float = 0.9
     lower_trial_every: int = 2
     theta: float = 1e-3
     theta_factor: float = 3.0
     sweeps_per_round: int = 3
     chunk: int = 4096
     belief_memory: int = 50_000_000
-    min_share: float = 0.2
+    min_share: float = 0.35
     rate_horizon: float = 1e9
     seed: int = 0
     blas_threads: int | None = None

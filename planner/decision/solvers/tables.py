@@ -10,9 +10,27 @@ import scipy.sparse.linalg as spla
 
 from ..pomdp import POMDP
 
-__all__ = ["Rows", "Tables", "blind_lower_bound", "mdp_upper_bound", "fast_informed_bound"]
+__all__ = ["BLOCK", "best_products", "Rows", "Tables", "blind_lower_bound", "mdp_upper_bound", "moving_rows", "fast_informed_bound"]
 
 DENSE_LIMIT = 20_000_000  # A * S * S entries up to which transitions may be kept dense
+# Numbers per temporary array in the solver's batched products (16 MB): larger batches are cut into blocks, so
+# peak memory stays bounded and the allocator reuses the blocks instead of faulting in fresh pages each time.
+BLOCK = 2_000_000
+
+
+def best_products(B: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For each row b of ``B`` (m, S): ``max_k V[k] . b`` and its ``k``, over ``V`` (n, S), computed
+    ``BLOCK`` products at a time. Cost: O(m n S) time, O(BLOCK) extra memory."""
+    values, best = np.empty(len(B)), np.empty(len(B), dtype=np.int64)
+    cols = np.flatnonzero((B != 0).any(axis=0))
+    if 4 * len(cols) < 3 * B.shape[1] and len(B) >= 8:  # beliefs with small supports: only their columns
+        B, V = B[:, cols], V[:, cols]
+    step = max(1, BLOCK // max(1, len(V)))
+    for first in range(0, len(B), step):
+        products = B[first:first + step] @ V.T
+        best[first:first + step] = products.argmax(axis=1)
+        values[first:first + step] = products[np.arange(len(products)), best[first:first + step]]
+    return values, best
 
 
 class Rows:
@@ -69,7 +87,8 @@ class Tables:
             self.TD = np.stack([t.toarray() for t in model.transition])
             self._by_origin = np.ascontiguousarray(self.TD.transpose(1, 0, 2)).reshape(self.S, self.A * self.S)
         else:
-            self.stacked_t = sp.vstack([t.T for t in model.transition]).tocsr()   # (A*S, S): rows "to"
+            self.T_to = [t.T.tocsr() for t in self.T]                         # rows "to", for step
+            self.stacked_t = sp.vstack(self.T_to).tocsr()                      # (A*S, S): rows "to"
             self.block = sp.block_diag(self.T, format="csr")                   # (A*S, A*S)
         self.OZ = np.stack([o.toarray().T for o in model.observation])
         # Actions whose observation tables are the same object share one index (the intention POMDP's do).
@@ -86,7 +105,7 @@ class Tables:
 
     def step(self, B: np.ndarray, a: int) -> np.ndarray:
         """(n, S): the next-state distributions of the beliefs ``B`` (n, S) after action ``a``."""
-        return B @ self.TD[a] if self.dense else np.asarray((self.T[a].T @ B.T).T)
+        return B @ self.TD[a] if self.dense else np.asarray((self.T_to[a] @ B.T).T)
 
     def expect(self, W: np.ndarray) -> np.ndarray:
         """(A, S): for each action a, sum_s' T(s'|s,a) W[a, s']."""
@@ -98,14 +117,18 @@ class Tables:
         """(n, S): for each row w of ``W`` (n, S), sum_s' T(s'|s,a) w[s']."""
         return W @ self.TD[a].T if self.dense else np.asarray((self.T[a] @ W.T).T)
 
-    def successors(self, b: np.ndarray):
-        """Non-zero (action, observation) pairs after ``b``: their indices, probabilities and beliefs."""
-        predicted = self.predict(b)                                      # (A, S)
-        joint = self.OZ * predicted[:, None, :]                          # (A, Z, S)
+    def successors(self, b: np.ndarray, actions: np.ndarray | None = None):
+        """Non-zero (action, observation) pairs after ``b`` under ``actions`` (sorted; default: all): their
+        action and observation indices, probabilities and beliefs."""
+        if actions is None or len(actions) == self.A:
+            predicted, actions = self.predict(b), np.arange(self.A)              # (A, S)
+        else:
+            predicted = np.stack([self.step(b[None], int(a))[0] for a in actions])
+        joint = self.OZ[actions] * predicted[:, None, :]                 # (A', Z, S)
         pz = joint.sum(axis=2)
         a_idx, z_idx = np.nonzero(pz > 1e-15)
         probs = pz[a_idx, z_idx]
-        return a_idx, z_idx, probs, joint[a_idx, z_idx] / probs[:, None]
+        return actions[a_idx], z_idx, probs, joint[a_idx, z_idx] / probs[:, None]
 
 
 def blind_lower_bound(m: Tables) -> np.ndarray:
@@ -117,10 +140,10 @@ def blind_lower_bound(m: Tables) -> np.ndarray:
 def mdp_upper_bound(m: Tables, tolerance: float = 1e-6, max_sweeps: int = 100_000) -> np.ndarray:
     """Q (A, S) of the fully observable MDP, Q(s,a) = R(s,a) + gamma sum_s' T(s'|s,a) max_a' Q(s',a'): an
     upper bound on the POMDP's Q. Value iteration from R_max / (1 - gamma), which only decreases, so it can
-    stop at any sweep. Cost per sweep: O(nnz(T))."""
+    stop at any sweep. Cost per sweep: O(nnz(T)) (one product with all the tables at once)."""
     V = np.full(m.S, np.abs(m.R).max() / (1 - m.gamma))
     for _ in range(max_sweeps):
-        Q = m.R + m.gamma * np.stack([m.T[a] @ V for a in range(m.A)])
+        Q = m.R + m.gamma * m.expect(np.broadcast_to(V, (m.A, m.S)))
         new = Q.max(axis=0)
         if np.abs(new - V).max() < tolerance:
             break
@@ -128,27 +151,51 @@ def mdp_upper_bound(m: Tables, tolerance: float = 1e-6, max_sweeps: int = 100_00
     return Q
 
 
+def moving_rows(table: sp.csr_matrix) -> np.ndarray:
+    """The rows of a transition table that are not "stay where you are" (a single 1 on the diagonal)."""
+    table = table.tocsr()
+    count = np.diff(table.indptr)
+    single = count == 1
+    at = table.indptr[:-1][single]
+    stays = np.zeros(table.shape[0], dtype=bool)
+    stays[np.flatnonzero(single)] = (table.indices[at] == np.flatnonzero(single)) & (table.data[at] == 1.0)
+    return np.flatnonzero(~stays)
+
+
 def fast_informed_bound(m: Tables, tolerance: float = 1e-3, max_sweeps: int = 100_000,
                         deadline: float | None = None, chunk: int = 4_000_000) -> np.ndarray:
     """Q (A, S): Q(s,a) = R(s,a) + gamma sum_z max_a' sum_s' T(s'|s,a) O(z|s',a) Q(s',a') (Hauskrecht 2000).
 
     Iterated from the MDP bound (:func:`mdp_upper_bound`), which the operator can only lower: it is
-    monotone and below the MDP's, so every iterate is an upper bound too, and the iteration can stop early: when a sweep changes no entry by more than
-    ``tolerance``, after ``max_sweeps`` sweeps, or at ``deadline`` (a ``time.perf_counter()`` value).
-    Cost per sweep: O(A nnz(T) Z A) in products of T_a with (S, Z x A) blocks of at most ``chunk`` numbers.
+    monotone and below the MDP's, so every iterate is an upper bound too, and the iteration can stop early:
+    when a sweep changes no entry by more than ``tolerance``, after ``max_sweeps`` sweeps, or at ``deadline``
+    (a ``time.perf_counter()`` value). Where action ``a`` leaves state ``s`` as it is, the sum is
+    ``sum_z O(z|s,a) max_a' Q(s,a')``, with no product; the (S', z x A') blocks of ``O_z Q`` (at most ``chunk``
+    numbers) are built once per observation table, not per action (the intention models' robot actions
+    move only the intentions whose next step they perform, and every action shares one table).
+    Cost per sweep: O(Z A (S + sum_a nnz(T_a rows that move))).
     """
     Q = mdp_upper_bound(m)
     step = max(1, chunk // max(1, m.S * m.A))  # observations per block
+    moving = [moving_rows(t) for t in m.T]
+    moved = [m.T[a][moving[a]] for a in range(m.A)]
+    tables = {int(t): np.flatnonzero(m.observation_table == t) for t in np.unique(m.observation_table)}
+    emitted = {t: m.OZ[t].sum(axis=0) for t in tables}                        # sum_z O(z | s), about 1
     for _ in range(max_sweeps):
-        new = np.empty_like(Q)
-        for a in range(m.A):
-            total = np.zeros(m.S)
+        corner = Q.max(axis=0)
+        total = np.empty_like(Q)
+        for t, actions in tables.items():
+            total[actions] = emitted[t] * corner
+            sums = {int(a): np.zeros(len(moving[a])) for a in actions if moving[a].size}
             for first in range(0, m.Z, step):
-                emit = m.OZ[a][first:first + step]                             # (z, S')
-                block = (emit.T[:, :, None] * Q.T[:, None, :]).reshape(m.S, -1)  # (S', z * A')
-                reached = m.T[a] @ block                                        # (S, z * A')
-                total += reached.reshape(m.S, len(emit), m.A).max(axis=2).sum(axis=1)
-            new[a] = m.R[a] + m.gamma * total
+                emit = m.OZ[t][first:first + step]                                  # (z, S')
+                block = (emit.T[:, :, None] * Q.T[:, None, :]).reshape(m.S, -1)     # (S', z * A')
+                for a, acc in sums.items():
+                    reached = moved[a] @ block                                      # (moving, z * A')
+                    acc += reached.reshape(len(acc), len(emit), m.A).max(axis=2).sum(axis=1)
+            for a, acc in sums.items():
+                total[a, moving[a]] = acc
+        new = m.R + m.gamma * total
         done = np.abs(new - Q).max() < tolerance
         Q = new
         if done or (deadline is not None and time.perf_counter() > deadline):

@@ -26,7 +26,7 @@ from .lower import LowerBound
 from .tables import Tables
 from .upper import UpperBound
 
-__all__ = ["Successors", "successors", "q_upper", "q_lower", "backup", "descend", "trial"]
+__all__ = ["Successors", "candidate_actions", "successors", "q_upper", "q_lower", "backup", "descend", "trial"]
 
 Bounds = tuple[float, int, float]  # (lower bound, index of its best vector, upper bound) at one belief
 
@@ -56,10 +56,20 @@ class Step:
     known: Bounds
 
 
-def successors(m: Tables, b: np.ndarray, lower: LowerBound, upper: UpperBound) -> Successors:
-    """The successors of ``b`` under every action and observation, with both bounds at each.
-    Cost: O(A (nnz(T) + S Z)) for the beliefs and O((K + N) S d) for the bounds at the d distinct ones."""
-    a_idx, z_idx, probs, nxt = m.successors(b)
+def candidate_actions(m: Tables, b: np.ndarray, upper: UpperBound, low: float) -> np.ndarray:
+    """The actions whose informed upper bound at ``b`` reaches ``low`` (a lower bound on V*(b)), sorted: the
+    others have Q*(b, a) <= Q^(b, a) < low <= V*(b), so they are never optimal at ``b``, and the best of the
+    candidates' upper bounds is still an upper bound on V*(b). Cost: O(A S)."""
+    q = upper.Q @ b
+    return np.flatnonzero(q >= min(low, q.max()) - 1e-9)
+
+
+def successors(m: Tables, b: np.ndarray, lower: LowerBound, upper: UpperBound,
+               low: float | None = None) -> Successors:
+    """The successors of ``b`` under every action and observation (with ``low``, a lower bound on V*(b):
+    under the :func:`candidate_actions` only), with both bounds at each. Cost: O(A (nnz(T) + S Z)) for the
+    beliefs and O((K + N) S d) for the bounds at the d distinct ones."""
+    a_idx, z_idx, probs, nxt = m.successors(b, None if low is None else candidate_actions(m, b, upper, low))
     # Many actions leave most intentions as they are: bound each distinct successor belief once.
     _, first, back = np.unique(nxt @ upper.fingerprint, return_index=True, return_inverse=True)
     distinct = nxt[first]
@@ -70,30 +80,39 @@ def successors(m: Tables, b: np.ndarray, lower: LowerBound, upper: UpperBound) -
     return Successors(a_idx, z_idx, probs, nxt, lo[back], best[back], upper.at(distinct)[back])
 
 
-def q_upper(m: Tables, b: np.ndarray, s: Successors) -> np.ndarray:
-    """(A,): ``R_a . b + gamma sum_z P(z | b, a) V^(b_az)``, an upper bound on Q(b, a). Cost: O(A S + M)."""
+def _q(m: Tables, b: np.ndarray, s: Successors, values: np.ndarray) -> np.ndarray:
     q = m.R @ b
-    q += np.bincount(s.action, m.gamma * s.probability * s.high, minlength=m.A)
+    q += np.bincount(s.action, m.gamma * s.probability * values, minlength=m.A)
+    q[np.bincount(s.action, minlength=m.A) == 0] = -np.inf  # actions left out (candidate_actions)
     return q
+
+
+def q_upper(m: Tables, b: np.ndarray, s: Successors) -> np.ndarray:
+    """(A,): ``R_a . b + gamma sum_z P(z | b, a) V^(b_az)``, an upper bound on Q(b, a); -inf for the actions
+    whose successors were left out. Cost: O(A S + M)."""
+    return _q(m, b, s, s.high)
 
 
 def q_lower(m: Tables, b: np.ndarray, s: Successors) -> np.ndarray:
     """(A,): the same with the lower bound at the successors. Cost: O(A S + M)."""
-    q = m.R @ b
-    q += np.bincount(s.action, m.gamma * s.probability * s.low, minlength=m.A)
-    return q
+    return _q(m, b, s, s.low)
 
 
-def backup_vectors(m: Tables, s: Successors, vectors: np.ndarray) -> np.ndarray:
-    """(A, S): for each action, ``R_a + gamma sum_z T_a diag(O_z,a) alpha_{best(a, z)}``, the backed-up
-    alpha vector (``vectors``: the lower bound's). Cost: O(M S + A nnz(T))."""
+def backup_vectors(m: Tables, s: Successors, vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(A', S) and (A',): for each action with successors in ``s``, ``R_a + gamma sum_z T_a diag(O_z,a)
+    alpha_{best(a, z)}``, the backed-up alpha vector (``vectors``: the lower bound's), and the actions.
+    Cost: O(M S + A nnz(T))."""
     chosen = vectors[s.best]                                        # (M, S): best vector per successor
     weighted = m.OZ[s.action, s.observation] * chosen               # (M, S')
     per_action = np.zeros((m.A, m.S))
     # The action indices are sorted (successors come action by action): sum each action's block at once.
     present, starts = np.unique(s.action, return_index=True)
     per_action[present] = np.add.reduceat(weighted, starts, axis=0)
-    return m.R + m.gamma * m.expect(per_action)
+    if len(present) == m.A:
+        return m.R + m.gamma * m.expect(per_action), present
+    # Only the actions with successors (candidate_actions).
+    out = np.stack([m.R[a] + m.gamma * m.expect_one(int(a), per_action[a][None])[0] for a in present])
+    return out, present
 
 
 def backup(m: Tables, b: np.ndarray, s: Successors, known: Bounds, lower: LowerBound,
@@ -101,11 +120,11 @@ def backup(m: Tables, b: np.ndarray, s: Successors, known: Bounds, lower: LowerB
     """Back up both bounds at ``b`` from its successors ``s``; ``known``: the bounds at ``b`` (module
     docstring). Returns the new ones. Cost: O(M S + A nnz(T))."""
     low, best_vector, high = known
-    vectors = backup_vectors(m, s, lower.vectors)
-    a = int(np.argmax(vectors @ b))
-    if vectors[a] @ b > low + 1e-12:
-        low, best_vector = float(vectors[a] @ b), lower.n
-        lower.add(vectors[a], a)
+    vectors, actions = backup_vectors(m, s, lower.vectors)
+    k = int(np.argmax(vectors @ b))
+    if vectors[k] @ b > low + 1e-12:
+        low, best_vector = float(vectors[k] @ b), lower.n
+        lower.add(vectors[k], int(actions[k]))
     value = float(q_upper(m, b, s).max())
     if value < high - 1e-12:
         high = value
@@ -121,7 +140,7 @@ def descend(m: Tables, b0: np.ndarray, lower: LowerBound, upper: UpperBound, eps
     b, depth, known = b0, 0, (low, int(best_vector), upper.value(b0))
     path: list[Step] = []
     while depth < max_depth:
-        s = successors(m, b, lower, upper)
+        s = successors(m, b, lower, upper, known[0])
         path.append(Step(b, s, None, known))
         if known[2] - known[0] <= epsilon * m.gamma ** (-depth):
             break

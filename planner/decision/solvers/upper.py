@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .tables import Rows
+from .tables import BLOCK, Rows
 
 __all__ = ["UpperBound"]
 
@@ -52,18 +52,25 @@ class UpperBound:
         bound = np.minimum((B @ self.Q.T).max(axis=1), base)
         if not self.points.n:
             return bound
-        inside = self.points.support @ (B <= 0).T.astype(np.float32) == 0  # supp(point) within supp(b)
+        # supp(point) within supp(b): counted over the columns some belief covers (a point reaching outside
+        # them is inside none), so the product is only as wide as the beliefs' supports.
+        cols = np.flatnonzero((B > 0).any(axis=0))
+        support = self.points.support
+        covered = support[:, cols] @ (B[:, cols] > 0).T.astype(np.float32)
+        inside = covered == support.sum(axis=1, dtype=np.float32)[:, None]
         if allowed is not None:
             inside &= allowed
         i_idx, b_idx = np.nonzero(inside)
         if i_idx.size:
             # Sawtooth: the largest lambda with b - lambda b_i >= 0 is 1 / max_s b_i(s) / b(s).
-            cols = np.flatnonzero((B > 0).any(axis=0))
             Bc = B[:, cols]
             inverse = np.divide(1.0, Bc, out=np.zeros_like(Bc), where=Bc > 0)
-            ratio = 1.0 / (self.points.rows[i_idx][:, cols] * inverse[b_idx]).max(axis=1)
             best_gain = np.zeros(len(B))
-            np.minimum.at(best_gain, b_idx, self.excess[i_idx] * ratio)
+            block = max(1, BLOCK // max(1, len(cols)))  # (point, belief) pairs per product
+            for first in range(0, i_idx.size, block):
+                ii, bb = i_idx[first:first + block], b_idx[first:first + block]
+                ratio = 1.0 / (self.points.rows[np.ix_(ii, cols)] * inverse[bb]).max(axis=1)
+                np.minimum.at(best_gain, bb, self.excess[ii] * ratio)
             bound = np.minimum(bound, base + best_gain)
         return bound
 

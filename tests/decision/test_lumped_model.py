@@ -1,0 +1,137 @@
+"""The lumped POMDP over classes against the factored model (its tables, belief by belief) and against the flat
+model of Alg. 3 (flat beliefs summed per class, exact finite-horizon values, the solver's bounds)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner import chain_product, complete_product, make_plan
+from planner.decision import FactoredBelief, PointBasedSolver, factored_model, intention_model
+from planner.decision.lumped_model import LUMPED_SUFFIX, advance_matrix, lumped_pomdp
+
+TOLERANCE = 1e-12
+
+
+@pytest.fixture(scope="module", params=["pen-no-technical", "pen-technical", "chain-5", "complete-4"])
+def models(request, pen):
+    product, technical = {"pen-no-technical": (pen, False), "pen-technical": (pen, True),
+                          "chain-5": (chain_product(5), None), "complete-4": (complete_product(4), None)}[request.param]
+    plan = make_plan(product, technical)
+    fact = factored_model(plan)
+    return plan, fact, lumped_pomdp(fact)
+
+
+def _random_beliefs(n, rng, count=20):
+    for _ in range(count):
+        classes = np.sort(rng.choice(n, size=int(rng.integers(1, n + 1)), replace=False))
+        mass = rng.random(classes.size) + 1e-3
+        yield FactoredBelief(classes, mass / mass.sum())
+
+
+def test_tables_equal_the_factored_model(models):
+    _, fact, lumped = models
+    n = fact.n_classes
+    assert lumped.n_states == n == fact.plan.states.n_edges + 1
+    assert lumped.actions == fact.actions and lumped.observations == fact.observations
+    assert lumped.name.endswith(LUMPED_SUFFIX)
+    assert np.array_equal(lumped.initial, fact.initial_belief().dense(n))
+    every = np.arange(n)
+    for z in range(lumped.n_observations):
+        for a in range(lumped.n_actions):
+            assert np.abs(lumped.observation[a][:, z].toarray().ravel()
+                          - fact.observation_likelihood(z)).max() <= TOLERANCE
+    for a in range(lumped.n_actions):
+        assert np.array_equal(lumped.reward[a], fact.rewards_of(every, a))
+    for belief in _random_beliefs(n, np.random.default_rng(1)):
+        dense = belief.dense(n)
+        for a in range(lumped.n_actions):
+            predicted = lumped.transition[a].T @ dense
+            assert np.abs(predicted - fact.predict(belief, a).dense(n)).max() <= TOLERANCE
+        assert np.abs(lumped.reward @ dense - fact.expected_rewards(belief)).max() <= 1e-9
+
+
+def test_advance_matrix_is_stochastic_and_counts_paths(models):
+    plan, fact, _ = models
+    advance = advance_matrix(fact)
+    assert np.allclose(np.asarray(advance.sum(axis=1)).ravel(), 1.0)
+    # One step from the initial state, repeated to the end: every full sequence reaches the finished product.
+    belief = fact.initial_belief().dense(fact.n_classes)
+    for _ in range(len(plan.product.parts) - 1):
+        belief = advance.T @ belief
+    assert belief[fact.final_class] == pytest.approx(1.0)
+
+
+def _class_of(flat_model, fact) -> np.ndarray:
+    step = flat_model.graph.step_edge
+    return np.where(step >= 0, step, fact.final_class)
+
+
+def _lump(flat_belief, class_of, n):
+    return np.bincount(class_of, weights=flat_belief, minlength=n)
+
+
+def test_flat_beliefs_lump_to_lumped_beliefs(pen):
+    """Random histories on the flat pen model: the flat belief summed per class equals the lumped belief, with the
+    same observation probabilities and expected rewards, at every step."""
+    plan = make_plan(pen, False)
+    flat_model, fact = intention_model(plan), factored_model(plan)
+    flat, lumped = flat_model.pomdp, lumped_pomdp(fact)
+    class_of = _class_of(flat_model, fact)
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        b, c = flat.initial.copy(), lumped.initial.copy()
+        for _ in range(12):
+            assert np.abs(_lump(b, class_of, lumped.n_states) - c).max() <= 1e-12
+            assert np.abs(flat.reward @ b - lumped.reward @ c).max() <= 1e-9
+            a = int(rng.integers(flat.n_actions))
+            pb = flat.transition[a].T @ b
+            pc = lumped.transition[a].T @ c
+            zb = flat.observation[a].T @ pb
+            zc = lumped.observation[a].T @ pc
+            assert np.abs(zb - zc).max() <= 1e-12
+            z = int(rng.choice(flat.n_observations, p=zb / zb.sum()))
+            b = pb * flat.observation[a][:, z].toarray().ravel() / zb[z]
+            c = pc * lumped.observation[a][:, z].toarray().ravel() / zc[z]
+
+
+def _horizon_value(model, depth: int) -> float:
+    """The optimal value of ``depth`` decisions at the initial belief, by exact expectimax over every action and
+    observation (beliefs kept unnormalised: the value is linear in them)."""
+    T = [t.toarray() for t in model.transition]
+    O = [o.toarray() for o in model.observation]
+    R = model.reward
+
+    def value(B, d):  # B (n, S) unnormalised beliefs -> (n,) values
+        if d == 1:
+            return (B @ R.T).max(axis=1)
+        q = np.empty((len(B), model.n_actions))
+        for a in range(model.n_actions):
+            nxt = (B @ T[a])[:, None, :] * O[a].T[None]               # (n, Z, S)
+            q[:, a] = B @ R[a] + model.discount * value(nxt.reshape(-1, model.n_states), d - 1).reshape(
+                len(B), -1).sum(axis=1)
+        return q.max(axis=1)
+    return float(value(model.initial[None], depth)[0])
+
+
+@pytest.mark.parametrize("technical", [True, False])
+def test_finite_horizon_values_equal_the_flat_model(pen, technical):
+    plan = make_plan(pen, technical)
+    flat, lumped = intention_model(plan).pomdp, lumped_pomdp(factored_model(plan))
+    for depth in (1, 2, 3):
+        assert _horizon_value(lumped, depth) == pytest.approx(_horizon_value(flat, depth), abs=1e-9)
+
+
+def test_solver_bounds_agree_with_the_flat_model(pen):
+    """Both models solved by the same amount of work: the certified intervals of V*(b0) overlap, and are narrow."""
+    plan = make_plan(pen, True)
+    flat, lumped = intention_model(plan).pomdp, lumped_pomdp(factored_model(plan))
+    solver = PointBasedSolver(time_limit=None, max_iterations=200, precision=1e-4)
+    a, b = solver.solve(flat), solver.solve(lumped)
+    assert a.gap < 0.1 and b.gap < 0.1
+    assert max(a.lower_bound, b.lower_bound) <= min(a.upper_bound, b.upper_bound) + 1e-9
+
+
+def test_sizes(pen):
+    # Classes are the state edges plus the finished product (pen: 32 + 1; chain of 7: 192 + 1).
+    assert lumped_pomdp(factored_model(make_plan(pen, False))).n_states == 33
+    assert lumped_pomdp(factored_model(make_plan(chain_product(7)))).n_states == 193
