@@ -399,7 +399,9 @@ def _simulate_factored(model: FactoredIntentionModel, policy, sequences, every, 
 def evaluate(model: Model | FactoredIntentionModel, policy, episodes: int, seed: int = 0,
              max_steps: int = 100) -> tuple[float, float]:
     """The mean discounted return over ``episodes`` simulated episodes and its 95 % confidence half-width;
-    episodes of an intention model end at the finished product."""
+    episodes of an intention model (flat, factored or lumped) end at the finished product."""
+    if isinstance(model, LumpedModel):  # its policies are over classes: the factored filter runs them
+        model = model.factored
     if isinstance(model, FactoredIntentionModel):
         mean, half, _ = evaluate_factored(model, policy, episodes, seed, max_steps)
         return mean, half

@@ -109,3 +109,20 @@ def test_bad_decision_time(pen_factored, bad):
         OnlinePlanner(pen_factored, decision_time=bad)
     with pytest.raises(PlannerError, match="expansions must be a positive integer"):
         OnlinePlanner(pen_factored, expansions=0)
+
+
+def test_an_offline_policy_is_the_lower_bound_it_starts_from(pen):
+    """With the lumped model's policy as its lower bound, the planner's bound at the initial belief is at least
+    that policy's value there (and still below the flat model's upper bound): it only improves on it."""
+    from planner.decision import lumped_model
+
+    lumped = lumped_model(make_plan(pen))
+    result = PointBasedSolver(max_iterations=100, time_limit=None, precision=1e-3, seed=0).solve(lumped.pomdp)
+    start = lumped.factored.initial_belief()
+    offline = result.policy.value(start)
+    assert offline == pytest.approx(result.policy.value(lumped.pomdp.initial))
+    planner = OnlinePlanner(lumped.factored, expansions=20, lower=result.policy)
+    report = planner.search(start)
+    assert offline - 1e-9 <= report.lower <= result.upper_bound + 1e-9
+    with pytest.raises(PlannerError, match="needs a policy over the model's 33 classes"):
+        OnlinePlanner(lumped.factored, lower=type(result.policy)(np.zeros((1, 69)), np.array([0])))
