@@ -42,7 +42,7 @@ from .decision.io.pomdpx import read_pomdpx, write_pomdpx
 from .decision.io.size import model_file_bytes
 from .decision.lumped_model import LumpedModel
 from .decision.lumped_model import lumped_model as build_lumped_model
-from .decision.online import OnlinePlanner
+from .decision.online import OnlinePlanner, revealed_state_values
 from .decision.policy import AlphaVectorPolicy, PolicyError, read_policy
 from .decision.pomdp import POMDP
 from .decision.simulate import Episode, evaluate_policy, simulate_episode
@@ -339,7 +339,10 @@ def solve(model: Model, time_limit: float = SOLVE_TIME_LIMIT, precision: float =
     if engine != "builtin":
         raise PlannerError(f"unknown solver engine {engine!r}; use one of {', '.join(SOLVER_ENGINES)}")
     solver = PointBasedSolver(time_limit=time_limit, precision=precision, max_iterations=iterations)
-    return solver.solve(tables(model), progress)
+    upper = None
+    if isinstance(model, LumpedModel):  # the classes' "states revealed" bound starts the informed bound far lower
+        upper = revealed_state_values(model.factored).q_matrix(model.factored)
+    return solver.solve(tables(model), progress, upper)
 
 
 def policy_for(model: Model, policy: str | os.PathLike | None = None,

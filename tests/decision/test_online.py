@@ -126,3 +126,23 @@ def test_an_offline_policy_is_the_lower_bound_it_starts_from(pen):
     assert offline - 1e-9 <= report.lower <= result.upper_bound + 1e-9
     with pytest.raises(PlannerError, match="needs a policy over the model's 33 classes"):
         OnlinePlanner(lumped.factored, lower=type(result.policy)(np.zeros((1, 69)), np.array([0])))
+
+
+def test_revealed_state_bound_is_an_upper_bound_below_qmdp(pen):
+    """The "states revealed" bound lies between QMDP and the value: at every class it is at most QMDP's, and at
+    least what the lumped model's lower-bound alpha vectors guarantee at that class (a lower bound on the value
+    there), and at the initial belief at least the solver's lower bound."""
+    from planner.decision import lumped_model
+    from planner.decision.online import revealed_state_values
+
+    for product in (pen, chain_product(6)):
+        lumped = lumped_model(make_plan(product))
+        qmdp, revealed = class_values(lumped.factored), revealed_state_values(lumped.factored)
+        assert np.all(revealed.value <= qmdp.value + 1e-9)
+        result = PointBasedSolver(max_iterations=150, time_limit=None, precision=1e-3, seed=0).solve(lumped.pomdp)
+        assert np.all(result.policy.alphas.max(axis=0) <= revealed.value + 1e-9)
+        start = lumped.factored.initial_belief()
+        assert result.lower_bound <= revealed.q_values(lumped.factored, start).max() + 1e-9
+        matrix = revealed.q_matrix(lumped.factored)
+        assert np.allclose((matrix @ start.dense(lumped.factored.n_classes)),
+                           revealed.q_values(lumped.factored, start))

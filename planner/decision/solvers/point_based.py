@@ -102,18 +102,23 @@ class PointBasedSolver:
     seed: int = 0
     blas_threads: int | None = None
 
-    def solve(self, model: POMDP, progress: Callable[[float, float, float], None] | None = None) -> SolveResult:
-        """Solve ``model``; ``progress(seconds, lower, upper)`` is called after each step."""
+    def solve(self, model: POMDP, progress: Callable[[float, float, float], None] | None = None,
+              upper: np.ndarray | None = None) -> SolveResult:
+        """Solve ``model``; ``progress(seconds, lower, upper)`` is called after each step; ``upper``: a known
+        upper bound on Q* (actions x states) to start the informed bound from (e.g. the lumped model's
+        :func:`~planner.decision.online.revealed_state_values`)."""
         start = time.perf_counter()
         m = Tables(model)
+        if upper is not None and np.shape(upper) != (m.A, m.S):
+            raise ValueError(f"the starting upper bound is {np.shape(upper)}, the model needs {(m.A, m.S)}")
         with limited_blas(blas_threads(m, self.blas_threads)):
-            return self._solve(m, np.asarray(model.initial, dtype=float), start, progress)
+            return self._solve(m, np.asarray(model.initial, dtype=float), start, progress, upper)
 
-    def _solve(self, m: Tables, b0: np.ndarray, start: float, progress) -> SolveResult:
+    def _solve(self, m: Tables, b0: np.ndarray, start: float, progress, start_upper=None) -> SolveResult:
         limit = math.inf if self.time_limit is None else self.time_limit
         # Any iterate of the fast informed bound is an upper bound: with a clock, it gets a quarter of it.
         deadline = start + limit / 4 if math.isfinite(limit) else None
-        Q = fast_informed_bound(m, self.informed_tolerance, self.informed_sweeps, deadline)
+        Q = fast_informed_bound(m, self.informed_tolerance, self.informed_sweeps, deadline, start=start_upper)
         lower, upper = LowerBound.blind(m), UpperBound(Q, np.random.default_rng(self.seed).random(m.S))
         beliefs = BeliefSet(m.S)
         beliefs.add(b0[None], np.ones(1))

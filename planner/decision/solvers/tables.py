@@ -163,11 +163,13 @@ def moving_rows(table: sp.csr_matrix) -> np.ndarray:
 
 
 def fast_informed_bound(m: Tables, tolerance: float = 1e-3, max_sweeps: int = 100_000,
-                        deadline: float | None = None, chunk: int = 4_000_000) -> np.ndarray:
+                        deadline: float | None = None, chunk: int = 4_000_000,
+                        start: np.ndarray | None = None) -> np.ndarray:
     """Q (A, S): Q(s,a) = R(s,a) + gamma sum_z max_a' sum_s' T(s'|s,a) O(z|s',a) Q(s',a') (Hauskrecht 2000).
 
-    Iterated from the MDP bound (:func:`mdp_upper_bound`), which the operator can only lower: it is
-    monotone and below the MDP's, so every iterate is an upper bound too, and the iteration can stop early:
+    Iterated from the MDP bound (:func:`mdp_upper_bound`), or from its minimum with ``start`` (any upper bound
+    on Q*), which the operator can only lower: it is monotone and maps an upper bound on Q* to one (it relaxes
+    the Bellman operator), so every iterate is an upper bound too, and the iteration can stop early:
     when a sweep changes no entry by more than ``tolerance``, after ``max_sweeps`` sweeps, or at ``deadline``
     (a ``time.perf_counter()`` value). Where action ``a`` leaves state ``s`` as it is, the sum is
     ``sum_z O(z|s,a) max_a' Q(s,a')``, with no product; the (S', z x A') blocks of ``O_z Q`` (at most ``chunk``
@@ -176,6 +178,8 @@ def fast_informed_bound(m: Tables, tolerance: float = 1e-3, max_sweeps: int = 10
     Cost per sweep: O(Z A (S + sum_a nnz(T_a rows that move))).
     """
     Q = mdp_upper_bound(m)
+    if start is not None:  # another upper bound (A, S): the operator keeps any upper bound one
+        Q = np.minimum(Q, start)
     step = max(1, chunk // max(1, m.S * m.A))  # observations per block
     moving = [moving_rows(t) for t in m.T]
     moved = [m.T[a][moving[a]] for a in range(m.A)]
@@ -196,6 +200,8 @@ def fast_informed_bound(m: Tables, tolerance: float = 1e-3, max_sweeps: int = 10
             for a, acc in sums.items():
                 total[a, moving[a]] = acc
         new = m.R + m.gamma * total
+        if start is not None:  # the minimum of two upper bounds is one; the operator may not be below start
+            new = np.minimum(new, start)
         done = np.abs(new - Q).max() < tolerance
         Q = new
         if done or (deadline is not None and time.perf_counter() > deadline):
