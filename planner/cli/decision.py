@@ -11,6 +11,7 @@ import numpy as np
 
 from .. import api
 from ..decision.intention_model import IntentionModel
+from ..decision.online import OnlinePlanner
 from ..decision.policy import write_policy
 from ..defaults import CONFIDENCE, FILE_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
 from ..errors import PlannerError
@@ -163,6 +164,9 @@ def _print_factored(model, episodes, args: argparse.Namespace) -> int:
 
 def _evaluate(args: argparse.Namespace) -> int:
     model, policy = decision_maker_from(args)
+    if isinstance(policy, OnlinePlanner) and policy.decision_time is not None:
+        log.info("the online planner takes up to %g s per decision: %d episodes can take minutes (progress below); "
+                 "--expansions N bounds the work per decision instead", policy.decision_time, args.episodes)
     mean, half = api.evaluate(model, policy, args.episodes, args.seed, args.max_steps)
     if args.json:
         print(json.dumps({"mean_return": mean, "ci95": half, "episodes": args.episodes}))

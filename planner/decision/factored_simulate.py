@@ -6,12 +6,14 @@ factored_model`), played along the sequence's edges by position, so an episode n
 """
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..assembly.guards import Progress
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .factored_updater import FactoredUpdater
 
@@ -19,6 +21,8 @@ __all__ = ["FactoredStep", "FactoredEpisode", "simulate_factored_episode", "eval
            "true_intention_probability"]
 
 OPERATORS = ("turns", "model")
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -100,8 +104,12 @@ def evaluate_factored(model: FactoredIntentionModel, policy, episodes: int, seed
     """Mean discounted return over ``episodes`` episodes (each sequence drawn from the initial belief) and the
     half-width of its 95 % confidence interval (normal approximation)."""
     rng = np.random.default_rng(seed)
-    returns = [simulate_factored_episode(model, policy, model.sample_sequence(rng), rng, max_steps).discounted_return
-               for _ in range(episodes)]
+    progress = Progress(log, after=5.0, every=10.0)
+    returns = []
+    for k in range(episodes):
+        returns.append(simulate_factored_episode(model, policy, model.sample_sequence(rng), rng,
+                                                 max_steps).discounted_return)
+        progress.report("evaluate: %d of %d episodes, mean return so far %.4f", k + 1, episodes, np.mean(returns))
     mean = float(np.mean(returns))
     half = 1.96 * float(np.std(returns, ddof=1)) / math.sqrt(episodes) if episodes > 1 else float("nan")
     return mean, half, returns
