@@ -210,15 +210,15 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
     intentions = count_intentions(plan.states, base_part=base_part)
     vectors = read_policy(policy) if policy else None
     if vectors is not None:
-        lumped = factored_model(plan, rewards, discount, base_part)
+        classes = plan.states.n_edges + 1  # the factored model's classes: one per state edge, and finished
         length = vectors.alphas.shape[1]
-        if length not in (intentions, lumped.n_classes):
+        if length not in (intentions, classes):
             raise PolicyError(f"{policy}: vectors of length {length:,}, but this product's model has {intentions:,} "
-                              f"intentions (flat) and {lumped.n_classes:,} classes (lumped): the policy belongs to "
+                              f"intentions (flat) and {classes:,} classes (lumped): the policy belongs to "
                               "another model (check the product, --technical and --base-part)")
-        if length == lumped.n_classes and length != intentions:
-            if vectors.actions.size and not 0 <= vectors.actions.min() <= vectors.actions.max() < len(lumped.actions):
-                raise PolicyError(f"{policy}: actions out of range; the model has {len(lumped.actions)} actions")
+        if length == classes and length != intentions:
+            lumped = factored_model(plan, rewards, discount, base_part)
+            vectors.check_sizes(lumped.n_classes, len(lumped.actions), str(policy))
             return lumped, vectors, None
     # Past the limits this raises, with the estimate and the options (--planner online among them).
     model = intention_model(plan, rewards, discount, limit=limit, base_part=base_part, max_bytes=limits.memory)

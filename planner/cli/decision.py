@@ -121,10 +121,7 @@ def _simulate(args: argparse.Namespace) -> int:
                               "discounted_return": round(episode.discounted_return, 6)}))
             continue
         print(f"sequence {episode.start}: " + " ; ".join(operations))
-        print(f"  {'step':>4}  {'robot action':<44} {'observation':<28} {'p(true)':>7}  operator ops")
-        for k, step in enumerate(episode.steps, start=1):
-            print(f"  {k:>4}  {model.actions[step.action]:<44} {model.observations[step.observation]:<28} "
-                  f"{step.p_true:7.3f}  {step.operator_operations}")
+        _print_steps(model, episode.steps)
         print(f"  belief on the true intention first above {CONFIDENCE:g} after "
               f"{episode.first_confident(CONFIDENCE)} operator operation(s); discounted return "
               f"{episode.discounted_return:.3f}")
@@ -133,6 +130,14 @@ def _simulate(args: argparse.Namespace) -> int:
         if not args.json:
             print("wrote " + ", ".join(written))
     return 0
+
+
+def _print_steps(model, steps) -> None:
+    """The per-step table of an episode (flat or factored): action, observation, belief on the truth."""
+    print(f"  {'step':>4}  {'robot action':<44} {'observation':<28} {'p(true)':>7}  operator ops")
+    for k, step in enumerate(steps, start=1):
+        print(f"  {k:>4}  {model.actions[step.action]:<44} {model.observations[step.observation]:<28} "
+              f"{step.p_true:7.3f}  {step.operator_operations}")
 
 
 def _print_factored(model, episodes, args: argparse.Namespace) -> int:
@@ -151,10 +156,7 @@ def _print_factored(model, episodes, args: argparse.Namespace) -> int:
                               "decision_seconds_max": round(max(times), 6) if times else None}))
             continue
         print("sequence: " + " ; ".join(operations))
-        print(f"  {'step':>4}  {'robot action':<44} {'observation':<28} {'p(true)':>7}  operator ops")
-        for k, step in enumerate(episode.steps, start=1):
-            print(f"  {k:>4}  {model.actions[step.action]:<44} {model.observations[step.observation]:<28} "
-                  f"{step.p_true:7.3f}  {step.operator_operations}")
+        _print_steps(model, episode.steps)
         print(f"  belief on the true intention first above {CONFIDENCE:g} after "
               f"{episode.first_confident(CONFIDENCE)} operator operation(s); discounted return "
               f"{episode.discounted_return:.3f}; decision time median {1000 * float(np.median(times)):.1f} ms, "

@@ -185,35 +185,10 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
 def observation_split(model: FactoredIntentionModel, predicted: FactoredBelief
                       ) -> list[tuple[int, float, FactoredBelief]]:
     """The observations ``predicted`` can emit, each with its probability and the posterior belief:
-    ``(z, P(z), b_z)``, the blank observation first. Cost: O(k x Z') for k classes and Z' observations."""
-    classes, mass = predicted.classes, predicted.mass
-    Z = len(model.plan.observations)
-    states, inverse = np.unique(model.class_source[classes], return_inverse=True)
-    state_mass = np.bincount(inverse, weights=mass, minlength=states.size)
-    weight = model.emit_weight[states]
-    lo = np.searchsorted(model.emit_keys, states.astype(np.int64) * Z)
-    hi = np.searchsorted(model.emit_keys, (states.astype(np.int64) + 1) * Z)
-    count = hi - lo
-    owner = np.repeat(np.arange(states.size), count)
-    ends = np.cumsum(count)
-    keys = model.emit_keys[np.repeat(lo - ends + count, count) + np.arange(int(ends[-1]) if ends.size else 0)]
-    seen = keys - states[owner].astype(np.int64) * Z
-    out = []
-    blank = 0.25 * weight
-    p_blank = float(state_mass @ blank)
-    if p_blank > 0:
-        out.append((0, p_blank, _posterior(classes, mass * blank[inverse])))
-    if seen.size:
-        probability = np.bincount(seen, weights=state_mass[owner] * weight[owner], minlength=Z)
-        order = np.argsort(seen, kind="stable")
-        seen, owner = seen[order], owner[order]
-        starts = np.flatnonzero(np.r_[True, seen[1:] != seen[:-1]])
-        for first, last in zip(starts, np.r_[starts[1:], seen.size]):
-            z = int(seen[first])
-            likelihood = np.zeros(states.size)
-            likelihood[owner[first:last]] = weight[owner[first:last]]
-            out.append((z, float(probability[z]), _posterior(classes, mass * likelihood[inverse])))
-    return out
+    ``(z, P(z), b_z)``, the blank observation first (what the search's :class:`_Split` makes, all at once).
+    Cost: O(k x Z') for k classes and Z' observations."""
+    split = _Split(model, predicted)
+    return [(z, p, split.posterior(z)) for z, p, _ in split.branches]
 
 
 def _posterior(classes: np.ndarray, weighted: np.ndarray) -> FactoredBelief:
@@ -226,12 +201,13 @@ class _Split:
     """One action's predicted belief split by observation; each child's posterior is made when the search first
     enters it (most children are never entered). Cost: O(k log k) to build, O(k) per posterior."""
 
-    def __init__(self, model: FactoredIntentionModel, predicted: FactoredBelief, value: np.ndarray):
+    def __init__(self, model: FactoredIntentionModel, predicted: FactoredBelief, value: np.ndarray | None = None):
         self.classes, self.mass = predicted.classes, predicted.mass
         Z = len(model.plan.observations)
         states, self.inverse = np.unique(model.class_source[self.classes], return_inverse=True)
         state_mass = np.bincount(self.inverse, weights=self.mass, minlength=states.size)
-        state_value = np.bincount(self.inverse, weights=self.mass * value[self.classes], minlength=states.size)
+        class_value = self.mass * value[self.classes] if value is not None else np.zeros(self.mass.size)
+        state_value = np.bincount(self.inverse, weights=class_value, minlength=states.size)
         self.weight = model.emit_weight[states]
         lo = np.searchsorted(model.emit_keys, states.astype(np.int64) * Z)
         count = np.searchsorted(model.emit_keys, (states.astype(np.int64) + 1) * Z) - lo
@@ -246,7 +222,7 @@ class _Split:
         upper = np.bincount(self.seen, weights=state_value[self.owner] * w, minlength=Z)
         probability[0] = float(state_mass @ (0.25 * self.weight))
         upper[0] = float(state_value @ (0.25 * self.weight))
-        #: (z, P(z), an upper bound on the posterior's value: sum_c b_z(c) V(c))
+        #: (z, P(z), an upper bound on the posterior's value: sum_c b_z(c) V(c); 0 without ``value``)
         self.branches = [(int(z), float(probability[z]), float(upper[z] / probability[z]))
                          for z in np.flatnonzero(probability > 0)]
 
@@ -315,10 +291,8 @@ class OnlinePlanner:
         if lower is not None and lower.alphas.shape[1] != model.n_classes:
             raise PlannerError(f"the online planner's lower bound has vectors of length {lower.alphas.shape[1]:,}; "
                                f"it needs a policy over the model's {model.n_classes:,} classes (aplan solve --lumped)")
-        if lower is not None and lower.actions.size and not 0 <= lower.actions.min() <= lower.actions.max() < len(
-                model.action_operations):
-            raise PlannerError(f"the online planner's lower bound names actions out of range; the model has "
-                               f"{len(model.action_operations)} actions")
+        if lower is not None:
+            lower.check_sizes(model.n_classes, len(model.action_operations), "the online planner's lower bound")
         self.lower = lower
         r, g = model.rewards, model.discount
         self._after_now = g * r.wait / (1 - g)  # then wait for ever

@@ -49,12 +49,16 @@ class AlphaVectorPolicy:
 
     def check(self, model: POMDP, source: str = "policy") -> None:
         """Raise :class:`PolicyError` unless the vectors have the model's length and valid actions."""
-        if self.alphas.ndim != 2 or self.alphas.shape[1] != model.n_states:
+        self.check_sizes(model.n_states, model.n_actions, source)
+
+    def check_sizes(self, n_states: int, n_actions: int, source: str = "policy") -> None:
+        """:meth:`check` against sizes alone (a model whose tables are not built, e.g. the factored one)."""
+        if self.alphas.ndim != 2 or self.alphas.shape[1] != n_states:
             raise PolicyError(f"{source}: vectors of length {self.alphas.shape[-1]}, but the model has "
-                              f"{model.n_states} states")
-        if self.actions.size and (self.actions.min() < 0 or self.actions.max() >= model.n_actions):
+                              f"{n_states} states")
+        if self.actions.size and (self.actions.min() < 0 or self.actions.max() >= n_actions):
             raise PolicyError(f"{source}: action {int(self.actions.max())} out of range; the model has "
-                              f"{model.n_actions} actions")
+                              f"{n_actions} actions")
 
 
 def policy_text(policy: AlphaVectorPolicy, model_name: str = "aplan") -> str:
