@@ -4,13 +4,12 @@ to the planner (statistics, decision model, solve job, simulation); in the GUI, 
 from __future__ import annotations
 
 import json
-import os
 import re
 import shutil
 import subprocess
 
 import pytest
-from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
+from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared, run_freecad_gui
 from integration.freecad_tools import freecad_result
 
 from planner import api, product_to_dict
@@ -189,29 +188,13 @@ QtCore.QTimer.singleShot(1500, guarded(start))
 
 @pytest.mark.freecad
 def test_base_part_field_in_the_task_panel(tmp_path):
-    require_freecadcmd()
-    freecad, xvfb = shutil.which("freecad"), shutil.which("xvfb-run")
-    if freecad is None or xvfb is None:
-        if os.environ.get("APLAN_REQUIRE_FREECAD") == "1":
-            pytest.fail("APLAN_REQUIRE_FREECAD=1 but the FreeCAD GUI or xvfb-run is missing; install freecad and xvfb")
-        pytest.skip("the FreeCAD GUI (freecad) or xvfb-run is not installed")
-    home = tmp_path / "home"
-    mod = home / ".local" / "share" / "FreeCAD" / "Mod"
-    mod.mkdir(parents=True)
-    (mod / "APLAN").symlink_to(REPO, target_is_directory=True)
     copy = tmp_path / "pen.FCStd"
     shutil.copy(require_shared(PEN), copy)
     ARTIFACTS.mkdir(exist_ok=True)
     out = tmp_path / "result.json"
     script = tmp_path / "gui_base_part.py"
     script.write_text(GUI.format(out=str(out), copy=str(copy), artifacts=str(ARTIFACTS), diagrams=_pen_diagrams()))
-    env = {**{k: v for k, v in os.environ.items() if k not in ("DISPLAY", "APLAN_PYTHON")}, "HOME": str(home),
-           "QTWEBENGINE_CHROMIUM_FLAGS": "--no-sandbox --disable-gpu", "LANG": "C.UTF-8"}
-    done = subprocess.run([xvfb, "-a", "-s", "-screen 0 1280x800x24", freecad, str(script)], capture_output=True,
-                          text=True, timeout=300, env=env, stdin=subprocess.DEVNULL, check=False)
-    assert out.is_file(), f"the GUI test wrote no result:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
-    data = json.loads(out.read_text())
-    assert "error" not in data, data.get("error")
+    data = run_freecad_gui(tmp_path, script, out)
     assert data["choices"][:2] == ["", "auto"] and "body_001" in data["choices"]
     assert data["bad_accepted"] is False and data["bad_stored"] == ""
     assert data["accepted"] is True and data["stored"] == "auto"
