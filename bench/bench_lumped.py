@@ -21,8 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner import chain_product, complete_product, count_intentions, make_plan, resolve_product  # noqa: E402
 from planner.decision import intention_pomdp  # noqa: E402
-from planner.decision.lumped_model import lumped_model  # noqa: E402
-from planner.decision.online import revealed_state_values  # noqa: E402
+from planner.decision.lumped_model import lumped_model, solver_bounds  # noqa: E402
 from planner.decision.solvers import PointBasedSolver  # noqa: E402
 
 PRODUCTS = ["complete:5", "chain:7", "complete:6", "chain:9"]
@@ -42,10 +41,10 @@ def one(name: str, time_limit: float, flat: bool) -> dict:
     start = time.perf_counter()
     lumped = None if flat else lumped_model(plan)
     pomdp = intention_pomdp(plan) if flat else lumped.pomdp
-    # As api.solve does: a lumped model's informed bound starts from the "states revealed" bound.
-    upper = None if flat else revealed_state_values(lumped.factored).q_matrix(lumped.factored)
+    # As api.solve does: a lumped model's upper bound starts from the "states revealed" bounds.
+    upper, groups = (None, None) if flat else solver_bounds(lumped.factored)
     built = time.perf_counter() - start
-    result = PointBasedSolver(time_limit=time_limit, precision=1e-4).solve(pomdp, upper=upper)
+    result = PointBasedSolver(time_limit=time_limit, precision=1e-4).solve(pomdp, upper=upper, groups=groups)
     marks = [t for t in MARKS if t <= time_limit]
     at = [[(lo, up) for s, lo, up in result.history if s <= t] for t in marks]
     reached = next((s for s, lo, up in result.history if up - lo <= GAP), None)

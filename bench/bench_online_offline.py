@@ -22,7 +22,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner import api, chain_product, complete_product, make_plan, resolve_product  # noqa: E402
 from planner.decision.factored_simulate import evaluate_factored  # noqa: E402
-from planner.decision.online import OnlinePlanner, revealed_state_values  # noqa: E402
+from planner.decision.lumped_model import solver_bounds  # noqa: E402
+from planner.decision.online import OnlinePlanner  # noqa: E402
 from planner.decision.solvers import PointBasedSolver  # noqa: E402
 
 PRODUCTS = {"pen": 2000, "chain:7": 500, "complete:6": 500, "chain:9": 300}
@@ -39,8 +40,8 @@ def _one(name: str, episodes: int, solve_time: float, expansions: int, seed: int
     lumped = api.lumped_model(make_plan(_product(name)))
     precision = 0.01 if name == "pen" else 1e-3
     limit = 2 * solve_time if name == "pen" else solve_time
-    upper = revealed_state_values(lumped.factored).q_matrix(lumped.factored)  # as api.solve starts it
-    result = PointBasedSolver(time_limit=limit, precision=precision).solve(lumped.pomdp, upper=upper)
+    upper, groups = solver_bounds(lumped.factored)  # as api.solve starts it
+    result = PointBasedSolver(time_limit=limit, precision=precision).solve(lumped.pomdp, upper=upper, groups=groups)
     started = time.perf_counter()
     offline = evaluate_factored(lumped.factored, result.policy, episodes, seed)
     offline_s = time.perf_counter() - started

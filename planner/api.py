@@ -40,9 +40,9 @@ from .decision.intention_model import IntentionModel, Rewards, flat_model_fits, 
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
 from .decision.io.size import model_file_bytes
-from .decision.lumped_model import LumpedModel
+from .decision.lumped_model import LumpedModel, solver_bounds
 from .decision.lumped_model import lumped_model as build_lumped_model
-from .decision.online import OnlinePlanner, revealed_state_values
+from .decision.online import OnlinePlanner
 from .decision.policy import AlphaVectorPolicy, PolicyError, read_policy
 from .decision.pomdp import POMDP
 from .decision.simulate import Episode, evaluate_policy, simulate_episode
@@ -339,10 +339,10 @@ def solve(model: Model, time_limit: float = SOLVE_TIME_LIMIT, precision: float =
     if engine != "builtin":
         raise PlannerError(f"unknown solver engine {engine!r}; use one of {', '.join(SOLVER_ENGINES)}")
     solver = PointBasedSolver(time_limit=time_limit, precision=precision, max_iterations=iterations)
-    upper = None
-    if isinstance(model, LumpedModel):  # the classes' "states revealed" bound starts the informed bound far lower
-        upper = revealed_state_values(model.factored).q_matrix(model.factored)
-    return solver.solve(tables(model), progress, upper)
+    upper = groups = None
+    if isinstance(model, LumpedModel):  # "states revealed" bounds start the upper bound far lower
+        upper, groups = solver_bounds(model.factored)
+    return solver.solve(tables(model), progress, upper, groups)
 
 
 def policy_for(model: Model, policy: str | os.PathLike | None = None,

@@ -43,9 +43,12 @@ from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
 from .factored_model import FactoredIntentionModel, factored_model
 from .intention_model import Rewards
+from .online import revealed_state_values
 from .pomdp import POMDP
+from .solvers.upper import CornerGroups
 
-__all__ = ["LumpedModel", "lumped_model", "lumped_pomdp", "class_names", "advance_matrix", "LUMPED_SUFFIX"]
+__all__ = ["LumpedModel", "lumped_model", "lumped_pomdp", "class_names", "advance_matrix", "solver_bounds",
+           "LUMPED_SUFFIX"]
 
 LUMPED_SUFFIX = ":lumped"  # appended to the model's name: a policy file's ``model`` attribute tells it apart
 
@@ -143,3 +146,25 @@ def lumped_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DIS
     :func:`factored_model` plus :func:`lumped_pomdp`."""
     factored = factored_model(plan, rewards, discount, base_part)
     return LumpedModel(factored, lumped_pomdp(factored))
+
+
+def solver_bounds(model: FactoredIntentionModel) -> tuple[np.ndarray, CornerGroups | None]:
+    """What a point-based solver starts the lumped POMDP's upper bound from: the Q-values (A, classes) of
+    :func:`~planner.decision.online.revealed_state_values` (the robot knows the class now and every later
+    assembly state), and one corner group per assembly state with two or more classes out of it: the belief
+    that spreads over them by ``class_fraction`` (every belief the model reaches holds such a spread, save
+    for the classes a wrong robot action ruled out) with the value for a robot that knows the state but not
+    the next step (None when no state has two classes). Groups come in the states' order, the final level first, so that one pass of backups
+    carries values from the end of the assembly to its start. Cost: O(S + E) after the bound's backward pass.
+    """
+    values = revealed_state_values(model)
+    start = model.state_class_start
+    count = np.diff(start)
+    states = np.flatnonzero(count >= 2)        # in index order: level by level from the final state
+    if not states.size:
+        return values.q_matrix(model), None
+    member = np.concatenate([model.state_classes[start[s]:start[s + 1]] for s in states])
+    first = np.concatenate([[0], np.cumsum(count[states])[:-1]]).astype(np.int64)
+    groups = CornerGroups(member.astype(np.int64), model.class_fraction[member].astype(float), first,
+                          np.asarray(values.state)[states].astype(float))
+    return values.q_matrix(model), groups

@@ -55,6 +55,7 @@ class ClassValues:
     wait: np.ndarray
     match: np.ndarray
     wrong: np.ndarray
+    state: np.ndarray | None = None  # per assembly state, where known: the value when the robot knows the state
 
     def q_values(self, model: FactoredIntentionModel, belief: FactoredBelief) -> np.ndarray:
         """``sum_c b(c) Q(c, a)`` for every action (an upper bound on each action's value). Cost: O(k + A)."""
@@ -177,9 +178,9 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
         value[classes], match[classes] = v, m
         wait[classes] = r.wait + g * (v + revealed[target]) / 2
         wrong[classes] = r.wrong + g * v
-    for array in (value, wait, match, wrong):
+    for array in (value, wait, match, wrong, revealed):
         array.flags.writeable = False
-    return ClassValues(value, wait, match, wrong)
+    return ClassValues(value, wait, match, wrong, revealed)
 
 
 def observation_split(model: FactoredIntentionModel, predicted: FactoredBelief

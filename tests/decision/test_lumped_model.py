@@ -135,3 +135,40 @@ def test_sizes(pen):
     # Classes are the state edges plus the finished product (pen: 32 + 1; chain of 7: 192 + 1).
     assert lumped_pomdp(factored_model(make_plan(pen, False))).n_states == 33
     assert lumped_pomdp(factored_model(make_plan(chain_product(7)))).n_states == 193
+
+
+def test_solver_bounds_groups_spread_over_each_state(models):
+    """One group per assembly state with two or more classes out of it: those classes, by their fractions
+    (summing to 1), with the "state known" value, which is at most the classes' own bound averaged."""
+    from planner.decision.lumped_model import solver_bounds
+
+    plan, fact, lumped = models
+    Q, groups = solver_bounds(fact)
+    assert Q.shape == (lumped.n_actions, lumped.n_states)
+    counts = np.diff(fact.state_class_start)
+    assert groups.n == int(np.sum(counts >= 2)) and len(np.unique(groups.member)) == len(groups.member)
+    sums = np.add.reduceat(groups.weight, groups.start)
+    assert np.allclose(sums, 1.0, atol=1e-12)
+    assert np.all(groups.beliefs(lumped.n_states) @ Q.max(axis=0) >= groups.value - 1e-9)
+    assert set(fact.class_source[groups.member].tolist()) == set(np.flatnonzero(counts >= 2).tolist())
+
+
+@pytest.mark.parametrize("name", ["pen-technical", "chain-5"])
+def test_corner_groups_keep_the_solver_bounds_valid_and_tighter(pen, name):
+    """The lumped model solved with and without the groups, by the same number of trials: both certified
+    intervals contain V*(b0) (they overlap, and overlap the flat model's on the pen), and the groups'
+    upper bound is the lower one."""
+    from planner.decision.lumped_model import solver_bounds
+
+    product, technical = (pen, True) if name == "pen-technical" else (chain_product(5), None)
+    plan = make_plan(product, technical)
+    fact = factored_model(plan)
+    lumped = lumped_pomdp(fact)
+    solver = PointBasedSolver(time_limit=None, max_iterations=60, precision=1e-6)
+    Q, groups = solver_bounds(fact)
+    plain, grouped = solver.solve(lumped, upper=Q), solver.solve(lumped, upper=Q, groups=groups)
+    assert max(plain.lower_bound, grouped.lower_bound) <= min(plain.upper_bound, grouped.upper_bound) + 1e-9
+    assert grouped.upper_bound < plain.upper_bound
+    if name == "pen-technical":
+        flat = solver.solve(intention_model(plan).pomdp)
+        assert max(flat.lower_bound, grouped.lower_bound) <= min(flat.upper_bound, grouped.upper_bound) + 1e-9

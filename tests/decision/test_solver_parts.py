@@ -252,3 +252,82 @@ def test_limited_blas_limits_inside_the_block_only():
         assert all(pool["num_threads"] == 1 for pool in threadpoolctl.threadpool_info()
                    if pool["user_api"] == "blas")
     assert [pool["num_threads"] for pool in threadpoolctl.threadpool_info() if pool["user_api"] == "blas"] == before
+
+
+def _groups(rng, S, sizes):
+    """Corner groups over disjoint random state sets of the given sizes, random weights (values set later)."""
+    states = rng.permutation(S)
+    member, weight, start, first = [], [], [], 0
+    for size in sizes:
+        start.append(len(member))
+        member += states[first:first + size].tolist()
+        w = rng.random(size) + 0.1
+        weight += (w / w.sum()).tolist()
+        first += size
+    return np.array(member), np.array(weight), np.array(start)
+
+
+def _convex_bound(upper: UpperBound, b: np.ndarray) -> float:
+    """The tightest bound convexity gives from the corners, the group beliefs and the points (an LP over
+    the ways of writing ``b`` as a non-negative combination of them): ``upper.at`` is never below it."""
+    from scipy.optimize import linprog
+
+    S = len(b)
+    columns = np.vstack([np.eye(S), upper.group_beliefs, upper.points.rows]).T
+    costs = np.concatenate([upper.corner, upper.group_value, upper.points.rows @ upper.corner + upper.excess])
+    result = linprog(costs, A_eq=columns, b_eq=b, bounds=(0, None), method="highs")
+    assert result.status == 0
+    return float(result.fun)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_corner_groups_bound_a_convex_function_and_never_claim_more_than_convexity(seed):
+    """Upper bounds of a convex V (max of random alpha vectors) at the corners, the group beliefs and the
+    points: the bound with groups stays above V, never goes below the LP of convexity, and is at most the
+    bound without groups."""
+    from planner.decision.solvers.upper import CornerGroups
+
+    rng = np.random.default_rng(seed)
+    S = 8
+    alphas = rng.random((5, S)) * 10
+
+    def V(B):
+        return (np.atleast_2d(B) @ alphas.T).max(axis=1)
+
+    member, weight, start = _groups(rng, S, (3, 2, 2))
+    plain = UpperBound(np.tile(V(np.eye(S)) + rng.random(S) * 4 + 1, (2, 1)), rng.random(S))
+    Q = np.tile(plain.corner + 50, (2, 1))            # the informed bound never binds here
+    beliefs = CornerGroups(member, weight, start, np.zeros(3)).beliefs(S)
+    groups = CornerGroups(member, weight, start, V(beliefs) + rng.random(3) * 0.5)
+    grouped, plain = UpperBound(Q, plain.fingerprint, groups), UpperBound(Q, plain.fingerprint)
+    for b in np.vstack([_random_beliefs(rng, 30, S), 0.6 * beliefs[0] + 0.4 * beliefs[1]]):
+        v = float(V(b)[0]) + rng.random() * 0.5
+        grouped.update(b, v)
+        plain.update(b, v)
+    B = np.vstack([_random_beliefs(rng, 80, S), beliefs, 0.3 * beliefs[0] + 0.7 * beliefs[2],
+                   0.5 * beliefs[0] + 0.25 * beliefs[1] + 0.25 * np.eye(S)[member[5]]])
+    bound = grouped.at(B)
+    assert np.all(bound >= V(B) - 1e-9)
+    assert np.all(bound >= [_convex_bound(grouped, b) - 1e-9 for b in B])
+    assert np.all(bound <= plain.at(B) + 1e-12)
+    # A mixture of group beliefs is bounded by the mixture of their values (closed form).
+    mix = 0.3 * beliefs[0] + 0.7 * beliefs[2]
+    assert grouped.value(mix) <= 0.3 * grouped.group_value[0] + 0.7 * grouped.group_value[2] + 1e-12
+
+
+def test_corner_groups_with_a_point_inside_a_group():
+    """A point at a group's belief with a value below the group's: at an even mixture with another group the
+    bound is half of each (the sawtooth term is exact when the point holds a multiple of the group)."""
+    from planner.decision.solvers.upper import CornerGroups
+
+    groups = CornerGroups(np.array([0, 1, 2, 3]), np.array([0.5, 0.5, 0.25, 0.75]), np.array([0, 2]),
+                          np.array([4.0, 6.0]))
+    upper = UpperBound(np.full((2, 4), 10.0), np.array([0.1, 0.2, 0.3, 0.4]), groups)
+    first, second = upper.group_beliefs
+    assert upper.value(0.5 * first + 0.5 * second) == pytest.approx(5.0)
+    upper.update(first, 2.0)
+    assert upper.value(0.5 * first + 0.5 * second) == pytest.approx(4.0)
+    assert upper.lower_group(1, 3.0) and not upper.lower_group(1, 3.5)
+    assert upper.value(0.5 * first + 0.5 * second) == pytest.approx(2.5)
+    with pytest.raises(ValueError, match="disjoint"):
+        CornerGroups(np.array([0, 0]), np.array([1.0, 1.0]), np.array([0, 1]), np.zeros(2))

@@ -33,8 +33,8 @@ from .scheduler import WorkSharing
 from .sweeps import sweep_rounds
 from .tables import Tables, fast_informed_bound
 from .threads import blas_threads, limited_blas
-from .trials import trial
-from .upper import UpperBound
+from .trials import backup_groups, trial
+from .upper import CornerGroups, UpperBound
 
 __all__ = ["PointBasedSolver", "SolveResult"]
 
@@ -89,6 +89,8 @@ class PointBasedSolver:
     informed_tolerance: float = 1e-3
     informed_sweeps: int = 1000
     prune_points_at: int = 512
+    group_passes: int = 100
+    group_every: int = 20
     max_depth: int = 300
     gap_fraction: float = 0.9
     lower_trial_every: int = 2
@@ -103,23 +105,25 @@ class PointBasedSolver:
     blas_threads: int | None = None
 
     def solve(self, model: POMDP, progress: Callable[[float, float, float], None] | None = None,
-              upper: np.ndarray | None = None) -> SolveResult:
+              upper: np.ndarray | None = None, groups: CornerGroups | None = None) -> SolveResult:
         """Solve ``model``; ``progress(seconds, lower, upper)`` is called after each step; ``upper``: a known
-        upper bound on Q* (actions x states) to start the informed bound from (e.g. the lumped model's
-        :func:`~planner.decision.online.revealed_state_values`)."""
+        upper bound on Q* (actions x states) to start the informed bound from, ``groups``: corner groups of
+        the upper bound (the lumped model's :func:`~planner.decision.lumped_model.solver_bounds` gives both)."""
         start = time.perf_counter()
         m = Tables(model)
         if upper is not None and np.shape(upper) != (m.A, m.S):
             raise ValueError(f"the starting upper bound is {np.shape(upper)}, the model needs {(m.A, m.S)}")
         with limited_blas(blas_threads(m, self.blas_threads)):
-            return self._solve(m, np.asarray(model.initial, dtype=float), start, progress, upper)
+            return self._solve(m, np.asarray(model.initial, dtype=float), start, progress, upper, groups)
 
-    def _solve(self, m: Tables, b0: np.ndarray, start: float, progress, start_upper=None) -> SolveResult:
+    def _solve(self, m: Tables, b0: np.ndarray, start: float, progress, start_upper=None,
+               groups: CornerGroups | None = None) -> SolveResult:
         limit = math.inf if self.time_limit is None else self.time_limit
         # Any iterate of the fast informed bound is an upper bound: with a clock, it gets a quarter of it.
         deadline = start + limit / 4 if math.isfinite(limit) else None
         Q = fast_informed_bound(m, self.informed_tolerance, self.informed_sweeps, deadline, start=start_upper)
-        lower, upper = LowerBound.blind(m), UpperBound(Q, np.random.default_rng(self.seed).random(m.S))
+        lower = LowerBound.blind(m)
+        upper = UpperBound(Q, np.random.default_rng(self.seed).random(m.S), groups)
         beliefs = BeliefSet(m.S)
         beliefs.add(b0[None], np.ones(1))
         sweeps = sweep_rounds(m, lower, beliefs, Q, self.theta, self.theta_factor, self.sweeps_per_round,
@@ -128,6 +132,14 @@ class PointBasedSolver:
         iterations, pruned_at = 0, 0  # pruned_at: upper-bound points after the last pruning
         lb, ub = lower.value(b0), upper.value(b0)
         history = [(time.perf_counter() - start, lb, ub)]
+        for _ in range(self.group_passes if groups is not None else 0):
+            if ub - lb <= self.precision or time.perf_counter() - start >= limit:
+                break
+            backup_groups(m, lower, upper)
+            before, (lb, ub) = ub, (lower.value(b0), upper.value(b0))
+            history.append((time.perf_counter() - start, lb, ub))
+            if before - ub < self.informed_tolerance:
+                break
         while (ub - lb > self.precision and time.perf_counter() - start < limit
                and (self.max_iterations is None or iterations < self.max_iterations)):
             process = sharing.choose()
@@ -139,6 +151,8 @@ class PointBasedSolver:
                 epsilon = max(self.precision, self.gap_fraction * (ub - lb))
                 work = trial(m, b0, lower, upper, beliefs, epsilon, iterations % self.lower_trial_every == 0,
                              self.max_depth)
+                if groups is not None and iterations % self.group_every == 0:
+                    work += backup_groups(m, lower, upper)
                 if upper.n >= max(self.prune_points_at, 2 * pruned_at):
                     upper.prune()
                     pruned_at = upper.n

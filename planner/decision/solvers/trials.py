@@ -26,7 +26,8 @@ from .lower import LowerBound
 from .tables import Tables
 from .upper import UpperBound
 
-__all__ = ["Successors", "candidate_actions", "successors", "q_upper", "q_lower", "backup", "descend", "trial"]
+__all__ = ["Successors", "candidate_actions", "successors", "q_upper", "q_lower", "backup", "backup_groups", "descend",
+           "trial"]
 
 Bounds = tuple[float, int, float]  # (lower bound, index of its best vector, upper bound) at one belief
 
@@ -116,9 +117,10 @@ def backup_vectors(m: Tables, s: Successors, vectors: np.ndarray) -> tuple[np.nd
 
 
 def backup(m: Tables, b: np.ndarray, s: Successors, known: Bounds, lower: LowerBound,
-           upper: UpperBound) -> Bounds:
+           upper: UpperBound, store: bool = True) -> Bounds:
     """Back up both bounds at ``b`` from its successors ``s``; ``known``: the bounds at ``b`` (module
-    docstring). Returns the new ones. Cost: O(M S + A nnz(T))."""
+    docstring). Returns the new ones; ``store=False`` keeps the upper value out of the points (the caller
+    keeps it). Cost: O(M S + A nnz(T))."""
     low, best_vector, high = known
     vectors, actions = backup_vectors(m, s, lower.vectors)
     k = int(np.argmax(vectors @ b))
@@ -128,7 +130,8 @@ def backup(m: Tables, b: np.ndarray, s: Successors, known: Bounds, lower: LowerB
     value = float(q_upper(m, b, s).max())
     if value < high - 1e-12:
         high = value
-        upper.update(b, value)
+        if store:
+            upper.update(b, value)
     return low, best_vector, high
 
 
@@ -183,3 +186,21 @@ def trial(m: Tables, b0: np.ndarray, lower: LowerBound, upper: UpperBound, belie
     # 6 digits, so that a model written with rounded numbers costs the same).
     distinct = sum(len(np.unique(np.round(step.successors.beliefs @ upper.fingerprint, 6))) for step in path)
     return float(len(path) * m.A * m.Z * m.S + distinct * m.S * (lower.n + upper.n))
+
+
+def backup_groups(m: Tables, lower: LowerBound, upper: UpperBound) -> float:
+    """Back up both bounds at every corner group's belief (:class:`~.upper.CornerGroups`), in the groups'
+    order (put the ones nearer the end first, so one pass carries values back); an upper value that is lower
+    than the group's replaces it. Returns the work, counted as :func:`trial` counts it. Cost: one
+    :func:`successors` and one :func:`backup` per group."""
+    if upper.groups is None:
+        return 0.0
+    work = 0.0
+    for g, b in enumerate(upper.group_beliefs):
+        low, best = (float(v[0]) for v in lower.at(b[None]))
+        s = successors(m, b, lower, upper, low)
+        high = float(upper.group_value[g])
+        low, _, value = backup(m, b, s, (low, int(best), np.inf), lower, upper, store=False)
+        upper.lower_group(g, min(value, high))
+        work += m.A * m.Z * m.S + len(s.action) * m.S * (lower.n + upper.n)
+    return work

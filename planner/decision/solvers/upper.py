@@ -10,30 +10,88 @@ belief ``b`` (Hauskrecht 2000; Smith & Simmons 2005)::
 where ``lambda_i(b)`` is the largest ``lambda`` with ``b - lambda b_i >= 0`` (zero unless the support of
 ``b_i`` lies within that of ``b``). Both terms are upper bounds by convexity of ``V*``.
 
+*Corner groups* tighten the corner interpolation where the reachable beliefs never come near a corner (the
+lumped model: a belief always spreads over the classes out of a state by fixed fractions). A group ``g`` is a
+belief ``B_g`` with a known bound ``u_g >= V*(B_g)``; groups have disjoint supports. With ``alpha_g(b) =
+min_{s in supp B_g} b(s) / B_g(s)`` (how much of ``B_g`` fits under ``b``) and ``D_g = max(0, c . B_g - u_g)``
+(how far ``u_g`` lies below the corners), convexity gives ``V*(b) <= c . b - sum_g alpha_g(b) D_g`` (write
+``b`` as ``sum_g alpha_g B_g`` plus a non-negative rest on the corners). A point then bounds ``b`` by
+``lambda v_i + base(b - lambda b_i)``; since ``alpha_g(b - lambda b_i) >= alpha_g(b) - lambda beta_g(b_i)``
+with ``beta_g(b_i) = max_{s in supp B_g} b_i(s) / B_g(s)``, the sawtooth term becomes::
+
+    base(b) + min_i ( lambda_i(b) e_i + sum_g min(alpha_g(b), lambda_i(b) beta_g(b_i)) D_g )
+
+(exact when ``b_i`` holds a multiple of ``B_g``). Backing up ``B_g`` lowers ``u_g`` (:meth:`UpperBound.lower_group`).
+
 Points are keyed by a *fingerprint* (a random projection ``b . f``), so backing up a belief that is already
 stored lowers its value instead of adding a second point. :meth:`UpperBound.prune` drops the points that the
 others already bound as tightly at their own belief (HSVI2): dropping them never loosens the bound.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .tables import BLOCK, Rows
 
-__all__ = ["UpperBound"]
+__all__ = ["CornerGroups", "UpperBound"]
+
+
+@dataclass(frozen=True)
+class CornerGroups:
+    """Beliefs with disjoint supports and an upper bound at each (module docstring): group ``g`` holds the
+    states ``member[start[g]:start[g+1]]`` with probabilities ``weight`` (summing to 1 per group), bounded
+    by ``value[g]``."""
+
+    member: np.ndarray
+    weight: np.ndarray
+    start: np.ndarray
+    value: np.ndarray
+
+    def __post_init__(self) -> None:
+        if len(np.unique(self.member)) != len(self.member):
+            raise ValueError("corner groups must have disjoint supports")
+        if not np.all(self.weight > 0) or not np.all(np.isfinite(self.value)):
+            raise ValueError("corner groups need positive weights and finite values")
+
+    @property
+    def n(self) -> int:
+        return len(self.start)
+
+    def beliefs(self, n_states: int) -> np.ndarray:
+        """(G, S): the group beliefs ``B_g``."""
+        out = np.zeros((self.n, n_states))
+        rows = np.repeat(np.arange(self.n), np.diff(np.append(self.start, len(self.member))))
+        out[rows, self.member] = self.weight
+        return out
+
+    def fit(self, B: np.ndarray) -> np.ndarray:
+        """(m, G): ``alpha_g(b)`` for the beliefs ``B`` (m, S). Cost: O(m S)."""
+        return np.minimum.reduceat(B[:, self.member] / self.weight, self.start, axis=1)
+
+    def reach(self, B: np.ndarray) -> np.ndarray:
+        """(m, G): ``beta_g(b)`` for the beliefs ``B`` (m, S). Cost: O(m S)."""
+        return np.maximum.reduceat(B[:, self.member] / self.weight, self.start, axis=1)
 
 
 class UpperBound:
-    """The informed bound ``Q`` (A, S) with sawtooth points; ``fingerprint`` (S,): random weights that key
-    beliefs (module docstring)."""
+    """The informed bound ``Q`` (A, S) with sawtooth points and optional corner ``groups``; ``fingerprint``
+    (S,): random weights that key beliefs (module docstring)."""
 
-    def __init__(self, Q: np.ndarray, fingerprint: np.ndarray):
+    def __init__(self, Q: np.ndarray, fingerprint: np.ndarray, groups: CornerGroups | None = None):
         self.Q = Q
         self.corner = Q.max(axis=0)
         self.fingerprint = fingerprint
         self.points = Rows(Q.shape[1])
         self._excess = np.zeros(64)
         self._key: dict[float, int] = {}   # fingerprint -> row of points
+        self.groups = groups
+        if groups is not None:
+            self.group_beliefs = groups.beliefs(Q.shape[1])
+            self.group_value = np.minimum(groups.value, self.group_beliefs @ self.corner)
+            self._drop = self.group_beliefs @ self.corner - self.group_value
+            self._reach = Rows(groups.n)   # beta_g(b_i) of the points
 
     @property
     def n(self) -> int:
@@ -49,6 +107,10 @@ class UpperBound:
         """The bound at the beliefs ``B`` (m, S); ``allowed`` (n, m): which points may serve which belief
         (default: all). Cost: O(m S (A + n)) (the sawtooth only over the pairs whose supports nest)."""
         base = B @ self.corner
+        fit = None
+        if self.groups is not None:
+            fit = self.groups.fit(B)
+            base = base - fit @ self._drop
         bound = np.minimum((B @ self.Q.T).max(axis=1), base)
         if not self.points.n:
             return bound
@@ -66,11 +128,15 @@ class UpperBound:
             Bc = B[:, cols]
             inverse = np.divide(1.0, Bc, out=np.zeros_like(Bc), where=Bc > 0)
             best_gain = np.zeros(len(B))
-            block = max(1, BLOCK // max(1, len(cols)))  # (point, belief) pairs per product
+            width = max(len(cols), 0 if fit is None else fit.shape[1], 1)
+            block = max(1, BLOCK // width)  # (point, belief) pairs per product
             for first in range(0, i_idx.size, block):
                 ii, bb = i_idx[first:first + block], b_idx[first:first + block]
                 ratio = 1.0 / (self.points.rows[np.ix_(ii, cols)] * inverse[bb]).max(axis=1)
-                np.minimum.at(best_gain, bb, self.excess[ii] * ratio)
+                gain = self.excess[ii] * ratio
+                if fit is not None:  # what the groups still cover once lambda b_i is taken out
+                    gain += np.minimum(fit[bb], ratio[:, None] * self._reach.rows[ii]) @ self._drop
+                np.minimum.at(best_gain, bb, gain)
             bound = np.minimum(bound, base + best_gain)
         return bound
 
@@ -92,6 +158,17 @@ class UpperBound:
             self._excess = np.concatenate([self._excess, np.zeros_like(self._excess)])
         self._excess[self.points.n] = excess
         self.points.append(b)
+        if self.groups is not None:
+            self._reach.append(self.groups.reach(b[None])[0])
+
+    def lower_group(self, g: int, value: float) -> bool:
+        """Lower group ``g``'s bound to ``value`` (an upper bound at its belief, e.g. a backup); whether it
+        moved. Cost: O(1)."""
+        if value >= self.group_value[g] - 1e-12:
+            return False
+        self.group_value[g] = value
+        self._drop[g] = float(self.group_beliefs[g] @ self.corner) - value
+        return True
 
     def prune(self, chunk: int = 64) -> None:
         """Drop the points that the others (and the informed bound) already bound as tightly at their own
@@ -107,5 +184,7 @@ class UpperBound:
             keep[query] &= self.at(B, others) > B @ self.corner + self.excess[query] + 1e-12
         excess = self.excess[keep]
         self.points.keep(keep)
+        if self.groups is not None:
+            self._reach.keep(keep)
         self._excess[:len(excess)] = excess
         self._key = {float(b @ self.fingerprint): i for i, b in enumerate(self.points.rows)}
