@@ -13,6 +13,7 @@ __all__ = [
     "UnknownProductError",
     "DisconnectedProductError",
     "NotDisassemblableError",
+    "InterlockedPartsError",
     "LimitExceededError",
     "MemoryLimitError",
     "FileLimitError",
@@ -64,6 +65,15 @@ class NotDisassemblableError(PlannerError):
             "the product cannot be disassembled: subassembly {" + ", ".join(stuck) + "} has no feasible split "
             f"({detail}). Check the obstruction relations and technical constraints of these parts."
         )
+
+
+class InterlockedPartsError(NotDisassemblableError):
+    """Some parts block each other along every direction (:mod:`planner.assembly.feasibility`): found
+    before any enumeration."""
+
+    def __init__(self, stuck: list[str], detail: str):
+        self.stuck = stuck
+        PlannerError.__init__(self, f"the product cannot be disassembled: {detail}.")
 
 
 class LimitExceededError(PlannerError):

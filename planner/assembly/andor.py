@@ -26,9 +26,10 @@ from dataclasses import dataclass, field
 from typing import Iterable
 
 from ..defaults import CUTS_PER_SUBASSEMBLY, SUBASSEMBLY_LIMIT
-from ..errors import DisconnectedProductError, LimitExceededError, NotDisassemblableError
+from ..errors import DisconnectedProductError, InterlockedPartsError, LimitExceededError, NotDisassemblableError
 from ..product import Product
 from .bitsets import bit_indices, components, connected_subsets, lowest_bit, mask_of
+from .feasibility import interlock_message, interlocked_pairs
 from .guards import OPTIONS, Progress, fewer_parts_hint
 
 __all__ = ["Operation", "AndOrGraph", "and_or_graph", "liaison_adjacency"]
@@ -122,7 +123,9 @@ def and_or_graph(product: Product, technical: bool | None = None, limit: int = S
     Raises
     ------
     DisconnectedProductError : the connection diagram is not connected (the groups are named).
-    NotDisassemblableError : the complete product has no feasible split (the reasons are given).
+    NotDisassemblableError : the complete product has no feasible split (the reasons are given);
+        :class:`~planner.errors.InterlockedPartsError` when two parts block each other along every direction
+        (:func:`~planner.assembly.feasibility.interlocked_pairs`: found before any enumeration).
     LimitExceededError : more connected part sets or cuts than the limit allows (the count reached, or a
         lower bound computed before any enumeration; the product's fastener-like parts and the options that
         help are given).
@@ -141,6 +144,11 @@ def and_or_graph(product: Product, technical: bool | None = None, limit: int = S
     groups = components(adjacency, full)
     if len(groups) > 1:
         raise DisconnectedProductError([[parts[i] for i in bit_indices(g)] for g in groups])
+
+    interlocked = interlocked_pairs(product)  # a proof in O(n^2 D), before the exponential search
+    if interlocked:
+        stuck = sorted({p for pair in interlocked for p in (pair.first, pair.second)}, key=index.get)
+        raise InterlockedPartsError(stuck, interlock_message(interlocked))
 
     constraints = [(mask_of(index[p] for p in c.parts), 1 << index[c.requires])
                    for c in product.technical_constraints if c.active]

@@ -15,6 +15,8 @@ from planner import (
     plan_statistics,
 )
 from planner.product import AXIS_DIRECTIONS, Direction, TechnicalConstraint
+from planner.assembly.feasibility import InterlockedPair, interlocked_pairs
+from planner.errors import InterlockedPartsError
 
 
 def test_no_duplicate_hyperarcs_for_equal_halves():
@@ -38,15 +40,33 @@ def test_disconnected_liaison_graph_names_the_groups():
 
 
 def test_stuck_product_names_the_subassembly():
-    parts = tuple(Part(p) for p in ("peg", "hole", "lid"))
+    # Along +X: a hits b, b hits c, c hits a. No two parts block each other, yet {a, b, c} has no split.
+    parts = tuple(Part(p) for p in ("a", "b", "c", "lid"))
     x = Direction("+X", AXIS_DIRECTIONS["+X"])
-    blocked = Obstruction(x, (("peg", "hole"), ("hole", "peg"), ("lid", "hole"), ("hole", "lid")))
-    product = Product(parts, (("peg", "hole"), ("hole", "lid")), obstructions=(blocked,))
+    cyclic = Obstruction(x, (("a", "b"), ("b", "c"), ("c", "a")))
+    product = Product(parts, (("a", "b"), ("b", "c"), ("a", "c"), ("c", "lid")), obstructions=(cyclic,))
     with pytest.raises(NotDisassemblableError) as info:
         and_or_graph(product)
+    assert not isinstance(info.value, InterlockedPartsError)
+    assert info.value.stuck == ["a", "b", "c", "lid"]
+    assert ("subassembly {a, b, c, lid} has no feasible split (3 cut(s) blocked in every direction, e.g. {a} from "
+            "{b, c, lid}; 1 cut(s) with a side that cannot be assembled itself, e.g. {a, b, c})") in str(info.value)
+
+
+def test_interlocked_parts_are_found_before_any_enumeration():
+    """Two parts that block each other along every direction: a proof, named with the directions tried."""
+    parts = tuple(Part(p) for p in ("peg", "hole", "lid", "cap"))
+    x, z = Direction("+X", AXIS_DIRECTIONS["+X"]), Direction("+Z", AXIS_DIRECTIONS["+Z"])
+    along_x = Obstruction(x, (("peg", "hole"), ("hole", "peg"), ("lid", "hole"), ("hole", "lid")))
+    along_z = Obstruction(z, (("peg", "hole"), ("hole", "peg"), ("lid", "hole")))
+    product = Product(parts, (("peg", "hole"), ("hole", "lid"), ("lid", "cap")), obstructions=(along_x, along_z))
+    assert interlocked_pairs(product) == [InterlockedPair("peg", "hole", ("+X", "+Z"))]
+    with pytest.raises(InterlockedPartsError) as info:
+        and_or_graph(product, limit=1)   # refused by the proof, not by the enumeration's limit
     assert info.value.stuck == ["peg", "hole"]
-    assert ("subassembly {peg, hole} has no feasible split (1 cut(s) blocked in every direction, e.g. {peg} from "
-            "{hole}; it is needed by {peg, hole, lid})") in str(info.value)
+    assert ("1 pair(s) of parts block each other along every direction tried (+/-X, +/-Z), so no disassembly can "
+            "separate them: peg and hole.") in str(info.value)
+    assert interlocked_pairs(Product(parts[:2], (("peg", "hole"),))) == []   # no diagrams: nothing blocks
 
 
 def test_stuck_by_technical_constraint():
