@@ -156,7 +156,7 @@ def _export_command(subparsers) -> None:
 
     def run(args: argparse.Namespace) -> int:
         given = {k: getattr(args, k) for k in ("contact", "interference", "depth") if getattr(args, k) is not None}
-        product = export_bundle(args.model, args.output, args.engine, {**given, "resolution": args.resolution},
+        product = export_bundle(args.model, args.output, args.engine, {**given, "resolution": args.resolution, "directions": args.directions},
                                 dict(args.group),
                                 args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
                                 args.freecadcmd, args.force, args.redetect)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 __all__ = [
     "PRODUCT_FORMAT", "PRODUCT_VERSION", "PRODUCT_FILE",
-    "CONTACT_TOLERANCE", "INTERFERENCE_VOLUME", "BLOCKING_DEPTH", "RASTER_RESOLUTION",
+    "CONTACT_TOLERANCE", "INTERFERENCE_VOLUME", "BLOCKING_DEPTH", "RASTER_RESOLUTION", "CANDIDATE_DIRECTIONS",
     "LINEAR_DEFLECTION", "ANGULAR_DEFLECTION",
     "INTENTION_LIMIT", "SUBASSEMBLY_LIMIT", "CUTS_PER_SUBASSEMBLY", "MEMORY_LIMIT", "FILE_LIMIT", "DISCOUNT",
     "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
@@ -24,6 +24,7 @@ CONTACT_TOLERANCE = 0.1      # surfaces closer than this touch
 INTERFERENCE_VOLUME = 1.0    # overlaps above this volume are reported as interferences
 BLOCKING_DEPTH = 0.1         # overlaps shallower than this along the motion do not block
 RASTER_RESOLUTION = 2048     # mesh engine: pixels across the product for the projection test
+CANDIDATE_DIRECTIONS = 6     # mesh engine: motion directions besides the axes, from the parts' faces and axes
 
 # Tessellation of CAD parts into the bundle's meshes (FreeCAD's MeshPart, on export).
 LINEAR_DEFLECTION = 0.05     # the largest distance between mesh and surface

@@ -73,11 +73,24 @@ def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
                        help=f"overlaps shallower than this along the motion do not block (default {d.depth:g})")
     group.add_argument("--resolution", type=int, default=d.resolution, metavar="N",
                        help=f"mesh engine: pixels across the product for the projection test (default {d.resolution})")
+    group.add_argument("--directions", type=_direction_count, default=d.directions, metavar="N",
+                       help="mesh engine: motion directions besides the axes to find on the parts' faces and axes "
+                            f"and test like the axes, 0 to 64 (default {d.directions}; 0: the axes only)")
+
+
+def _direction_count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a whole number from 0 to 64, got {text!r}") from None
+    if not 0 <= value <= 64:
+        raise argparse.ArgumentTypeError(f"must be a whole number from 0 to 64, got {value}")
+    return value
 
 
 def tolerances_from(args: argparse.Namespace) -> Tolerances:
     return Tolerances(contact=args.contact, interference=args.interference, depth=args.depth,
-                      resolution=args.resolution)
+                      resolution=args.resolution, directions=args.directions)
 
 
 def positive_seconds(text: str) -> float:

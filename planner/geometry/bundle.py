@@ -76,7 +76,8 @@ def analyze_product(product: Product, engine: str = "mesh", tolerances: Toleranc
 
 
 def apply_report(product: Product, report: GeometryReport) -> Product:
-    """A copy of ``product`` with the report's contacts and +X/+Y/+Z obstruction diagrams, and the analysis
+    """A copy of ``product`` with the report's contacts and obstruction diagrams (+X/+Y/+Z, then any other
+    direction the engine tested, with its vector in ``report.directions``), and the analysis
     recorded under ``geometry.analysis`` (``diagrams: "engine"``: found by a geometry engine). Technical
     constraints and designer tags are kept."""
     if set(report.parts) != set(product.part_ids):
@@ -84,6 +85,8 @@ def apply_report(product: Product, report: GeometryReport) -> Product:
                             f"parts {sorted(product.part_ids)}")
     obstructions = tuple(Obstruction(Direction(axis, AXIS_DIRECTIONS[axis]), tuple(report.obstructions[axis]))
                          for axis in AXES)
+    obstructions += tuple(Obstruction(Direction(name, tuple(report.directions[name])), tuple(pairs))
+                          for name, pairs in report.obstructions.items() if name not in AXES)
     summary = report.as_dict()
     analysis = {"diagrams": "engine", "engine": report.engine, "tolerances": summary["tolerances"],
                 "interferences": summary["interferences"], "warnings": summary["warnings"],

@@ -22,6 +22,14 @@ whatever its thickness along the motion. Lines within ``Tolerances.grazing`` pix
 ignored, so surfaces that only slide along each other (a peg in its hole, with slivers from tessellating the
 two cylinders differently) do not block; an overlap narrower than that is not seen.
 
+Besides the axes, up to ``Tolerances.directions`` *candidate directions* found on the parts' geometry are
+tested the same way, in a frame turned so that the direction is its third axis (a wheel leaves along its
+axle, a part on an inclined face along the face's normal): per part, the normal of every planar patch that
+holds at least a tenth of its area, and the axis of a part whose normals turn around one line (a pin, a
+wheel, a screw: the eigenvector of the smallest eigenvalue of the area-weighted scatter ``sum a n n^T`` of
+its facet normals, when the two others are close). Directions within 2 degrees of an axis or of one already
+kept are merged; the ones backed by the most area come first (:func:`candidate_directions`).
+
 Broad phase: pairs whose bounding boxes are farther apart than the contact tolerance, or whose projections
 do not overlap, are never tested.
 """
@@ -34,11 +42,16 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import GeometryError
+from ..product import Direction
 from .tolerances import Tolerances
 
-__all__ = ["Tolerances", "GeometryReport", "PartMesh", "GeometryError", "analyze_meshes", "AXES"]
+__all__ = ["Tolerances", "GeometryReport", "PartMesh", "GeometryError", "analyze_meshes", "candidate_directions",
+           "AXES"]
 
 AXES = ("+X", "+Y", "+Z")
+_AXIS_VECTORS = np.eye(3)
+_MERGE_ANGLE = np.radians(2.0)   # directions closer than this are one
+_PATCH_SHARE = 0.1               # a planar patch proposes its normal when it holds this share of its part's area
 
 
 @dataclass(frozen=True)
@@ -57,7 +70,9 @@ class PartMesh:
 
 @dataclass(frozen=True)
 class GeometryReport:
-    """What an engine found: contacts, interferences (a, b, volume) and obstructions per positive axis."""
+    """What an engine found: contacts, interferences (a, b, volume) and obstructions per direction (the
+    positive axes, named ``+X`` ..., and any other direction by its name, with its unit vector in
+    ``directions``)."""
 
     engine: str
     parts: tuple[str, ...]
@@ -67,12 +82,14 @@ class GeometryReport:
     tolerances: dict = field(default_factory=dict)
     warnings: tuple[str, ...] = ()
     seconds: float = 0.0
+    directions: dict[str, tuple[float, float, float]] = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         return {"engine": self.engine, "parts": len(self.parts), "contacts": [list(c) for c in self.contacts],
                 "interferences": [{"parts": [a, b], "volume": round(v, 6)} for a, b, v in self.interferences],
                 "obstructions": {d: [list(p) for p in pairs] for d, pairs in self.obstructions.items()},
-                "tolerances": self.tolerances, "warnings": list(self.warnings), "seconds": round(self.seconds, 3)}
+                "tolerances": self.tolerances, "warnings": list(self.warnings), "seconds": round(self.seconds, 3),
+                **({"directions": {k: list(v) for k, v in self.directions.items()}} if self.directions else {})}
 
 
 # ------------------------------------------------------------------------------------------- contacts
@@ -221,42 +238,118 @@ def _window(first: _DepthMap, second: _DepthMap):
     return cut(first), cut(second)
 
 
+def _frame(direction: np.ndarray) -> np.ndarray:
+    """(3, 3): rows e1, e2, d, an orthonormal frame whose third axis is the unit ``direction``."""
+    helper = _AXIS_VECTORS[int(np.argmin(np.abs(direction)))]
+    e1 = np.cross(direction, helper)
+    e1 /= np.linalg.norm(e1)
+    return np.stack([e1, np.cross(direction, e1), direction])
+
+
+def _facet_normals(part: PartMesh) -> tuple[np.ndarray, np.ndarray]:
+    """Unit normals (f, 3) and areas (f,) of the facets with an area."""
+    t = part.triangles
+    cross = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    double = np.linalg.norm(cross, axis=1)
+    keep = double > 0
+    return cross[keep] / double[keep, None], double[keep] / 2
+
+
+def _canonical(v: np.ndarray) -> np.ndarray:
+    """``v`` or ``-v``, whichever has its largest component positive (a direction and its reverse are one)."""
+    return v if v[int(np.argmax(np.abs(v)))] > 0 else -v
+
+
+def candidate_directions(parts: list[PartMesh], limit: int) -> list[np.ndarray]:
+    """At most ``limit`` unit directions besides the axes that parts of ``parts`` may leave along (module
+    docstring), the best backed first; each stands for itself and its reverse, and names its vector with
+    components below 1e-9 set to zero. Cost: O(facets)."""
+    proposals: list[tuple[float, np.ndarray]] = []   # (area behind it, direction)
+    for part in parts:
+        normals, areas = _facet_normals(part)
+        total = float(areas.sum())
+        if total <= 0:
+            continue
+        # Planar patches: facets whose normals agree to about a degree, a face and the face opposite as one.
+        flip = np.sign(normals[np.arange(len(normals)), np.argmax(np.abs(normals), axis=1)])
+        normals = normals * flip[:, None]
+        keys, inverse = np.unique(np.round(normals * 60).astype(np.int64), axis=0, return_inverse=True)
+        inverse = inverse.reshape(-1)
+        patch_area = np.bincount(inverse, weights=areas, minlength=len(keys))
+        for k in np.flatnonzero(patch_area >= _PATCH_SHARE * total):
+            mean = (normals[inverse == k] * areas[inverse == k, None]).sum(axis=0)
+            proposals.append((float(patch_area[k]), mean / np.linalg.norm(mean)))
+        # A part turned around one line: its normals' scatter is flat along that line.
+        scatter = (normals * areas[:, None]).T @ normals / total
+        values, vectors = np.linalg.eigh(scatter)
+        if values[0] < 0.5 * values[1] and values[1] > 0.7 * values[2]:
+            proposals.append((total * (1 - values[0]), vectors[:, 0]))
+    kept: list[np.ndarray] = []
+    for _, direction in sorted(proposals, key=lambda p: -p[0]):
+        if len(kept) >= limit:
+            break
+        direction = np.where(np.abs(direction) < 1e-9, 0.0, direction)
+        direction = _canonical(direction / np.linalg.norm(direction)) + 0.0
+        near = np.vstack([_AXIS_VECTORS] + kept) @ direction
+        if np.all(np.abs(near) < np.cos(_MERGE_ANGLE)):
+            kept.append(direction)
+    return kept
+
+
+def _blocking_pairs(parts, triangles, lo, hi, axis, origin3, pixel, tol: Tolerances) -> list[tuple[str, str]]:
+    """The pairs ``(x, y)`` with x, moving along ``+axis`` of the frame ``triangles`` are given in, hitting y."""
+    u, v = _PLANE[axis]
+    origin = origin3[[u, v]]
+    maps = [_rasterise(t, axis, origin, pixel, tol.grazing) for t in triangles]
+    pairs = []
+    margin = 2 * tol.grazing * pixel
+    for i in range(len(parts)):
+        for j in range(i + 1, len(parts)):
+            # Broad phase: the projections' boxes must overlap by more than the grazing band.
+            if (min(hi[i, u], hi[j, u]) - max(lo[i, u], lo[j, u]) <= margin or
+                    min(hi[i, v], hi[j, v]) - max(lo[i, v], lo[j, v]) <= margin):
+                continue
+            cut = _window(maps[i], maps[j])
+            if cut is None:
+                continue
+            a, b = maps[i], maps[j]
+            both = a.inner[cut[0]] & b.inner[cut[1]]
+            if not both.any():
+                continue
+            amin, amax = a.zmin[cut[0]][both], a.zmax[cut[0]][both]
+            bmin, bmax = b.zmin[cut[1]][both], b.zmax[cut[1]][both]
+            if np.any(bmax > amin + tol.depth):
+                pairs.append((parts[i].id, parts[j].id))  # i moving along +axis hits j
+            if np.any(amax > bmin + tol.depth):
+                pairs.append((parts[j].id, parts[i].id))
+    return pairs
+
+
 def _obstructions(parts, lo, hi, tol: Tolerances):
+    """Obstruction pairs per direction (the axes, then the candidate directions), the directions' vectors
+    (candidates only) and the pixel size."""
     extent = float((hi.max(axis=0) - lo.min(axis=0)).max())
     pixel = extent / tol.resolution if extent > 0 else 1.0
-    origin3 = lo.min(axis=0)
+    triangles = [p.triangles for p in parts]
     result: dict[str, list[tuple[str, str]]] = {}
     for axis, name in enumerate(AXES):
-        u, v = _PLANE[axis]
-        origin = origin3[[u, v]]
-        maps = [_rasterise(p.triangles, axis, origin, pixel, tol.grazing) for p in parts]
-        pairs = []
-        for i in range(len(parts)):
-            for j in range(i + 1, len(parts)):
-                # Broad phase: the projections' boxes must overlap by more than the grazing band.
-                margin = 2 * tol.grazing * pixel
-                if (min(hi[i, u], hi[j, u]) - max(lo[i, u], lo[j, u]) <= margin or
-                        min(hi[i, v], hi[j, v]) - max(lo[i, v], lo[j, v]) <= margin):
-                    continue
-                cut = _window(maps[i], maps[j])
-                if cut is None:
-                    continue
-                a, b = maps[i], maps[j]
-                both = a.inner[cut[0]] & b.inner[cut[1]]
-                if not both.any():
-                    continue
-                amin, amax = a.zmin[cut[0]][both], a.zmax[cut[0]][both]
-                bmin, bmax = b.zmin[cut[1]][both], b.zmax[cut[1]][both]
-                if np.any(bmax > amin + tol.depth):
-                    pairs.append((parts[i].id, parts[j].id))  # i moving along +axis hits j
-                if np.any(amax > bmin + tol.depth):
-                    pairs.append((parts[j].id, parts[i].id))
-        result[name] = pairs
-    return result, pixel
+        result[name] = _blocking_pairs(parts, triangles, lo, hi, axis, lo.min(axis=0), pixel, tol)
+    vectors: dict[str, tuple[float, float, float]] = {}
+    for direction in candidate_directions(parts, tol.directions):
+        frame = _frame(direction)
+        turned = [t @ frame.T for t in triangles]
+        tlo = np.array([t.reshape(-1, 3).min(axis=0) for t in turned])
+        thi = np.array([t.reshape(-1, 3).max(axis=0) for t in turned])
+        vector = tuple(float(c) for c in direction)
+        name = Direction.from_vector(vector).name
+        vectors[name] = vector
+        result[name] = _blocking_pairs(parts, turned, tlo, thi, 2, tlo.min(axis=0), pixel, tol)
+    return result, vectors, pixel
 
 
 def analyze_meshes(parts: list[PartMesh], tolerances: Tolerances = Tolerances()) -> GeometryReport:
-    """Contacts, interferences and the +X, +Y, +Z obstruction diagrams of closed part meshes.
+    """Contacts, interferences and the obstruction diagrams (+X, +Y, +Z and the candidate directions) of closed
+    part meshes.
 
     Raises :class:`GeometryError` naming the part when a mesh is not closed or encloses no volume.
     Cost: contacts O(pairs near each other x mesh size); obstructions O(pixels covered + triangles) per
@@ -270,12 +363,13 @@ def analyze_meshes(parts: list[PartMesh], tolerances: Tolerances = Tolerances())
     lo = np.array([p.vertices.min(axis=0) for p in parts])
     hi = np.array([p.vertices.max(axis=0) for p in parts])
     contacts, interferences = _contacts(parts, solids, lo, hi, tolerances)
-    obstructions, pixel = _obstructions(parts, lo, hi, tolerances)
+    obstructions, directions, pixel = _obstructions(parts, lo, hi, tolerances)
     for a, b, volume in interferences:
         warnings.append(f"parts {a!r} and {b!r} interpenetrate by {volume:.4g} cubic units "
                         f"(more than the interference tolerance {tolerances.interference:g})")
     used = {"contact": tolerances.contact, "interference": tolerances.interference, "depth": tolerances.depth,
-            "resolution": tolerances.resolution, "grazing": tolerances.grazing, "pixel": pixel}
+            "resolution": tolerances.resolution, "grazing": tolerances.grazing, "pixel": pixel,
+            "directions": tolerances.directions}
     return GeometryReport("mesh", tuple(p.id for p in parts), tuple(contacts), tuple(interferences),
                           {k: tuple(v) for k, v in obstructions.items()}, used, tuple(warnings),
-                          time.perf_counter() - start)
+                          time.perf_counter() - start, directions)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..defaults import BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, RASTER_RESOLUTION
+from ..defaults import BLOCKING_DEPTH, CANDIDATE_DIRECTIONS, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, RASTER_RESOLUTION
 from ..errors import GeometryError
 
 __all__ = ["Tolerances"]
@@ -19,6 +19,8 @@ class Tolerances:
     ``depth``: along the motion, overlaps shallower than this do not block (modelling interferences).
     ``resolution``: pixels across the largest dimension of the product for the projection test.
     ``grazing``: pixels next to a part's outline that are ignored (at least 1).
+    ``directions``: at most this many motion directions besides the axes, found on the parts' geometry and
+    tested like the axes (0: the axes only).
     """
 
     contact: float = CONTACT_TOLERANCE
@@ -26,6 +28,7 @@ class Tolerances:
     depth: float = BLOCKING_DEPTH
     resolution: int = RASTER_RESOLUTION
     grazing: int = 1
+    directions: int = CANDIDATE_DIRECTIONS
 
     def __post_init__(self) -> None:
         for name in ("contact", "interference", "depth"):
@@ -33,5 +36,7 @@ class Tolerances:
                 raise GeometryError(f"tolerance {name} must be >= 0, got {getattr(self, name)!r}")
         if self.resolution < 16:
             raise GeometryError(f"resolution must be at least 16 pixels, got {self.resolution}")
+        if not (isinstance(self.directions, int) and 0 <= self.directions <= 64):
+            raise GeometryError(f"directions must be a whole number from 0 to 64, got {self.directions!r}")
         if self.grazing < 1:
             raise GeometryError(f"grazing must be at least 1 pixel, got {self.grazing}")
