@@ -51,6 +51,7 @@ __all__ = ["Tolerances", "GeometryReport", "PartMesh", "GeometryError", "analyze
 AXES = ("+X", "+Y", "+Z")
 _AXIS_VECTORS = np.eye(3)
 _MERGE_ANGLE = np.radians(2.0)   # directions closer than this are one
+_STEP_SLOPE = 4.0                # a depth change of more than this many pixels between neighbours is a step
 _PATCH_SHARE = 0.1               # a planar patch proposes its normal when it holds this share of its part's area
 
 
@@ -155,7 +156,8 @@ class _DepthMap:
     inner: np.ndarray  # covered and not within `grazing` pixels of the outline
 
 
-def _rasterise(triangles: np.ndarray, axis: int, origin: np.ndarray, pixel: float, grazing: int) -> _DepthMap:
+def _rasterise(triangles: np.ndarray, axis: int, origin: np.ndarray, pixel: float, grazing: int,
+               jump: float = np.inf) -> _DepthMap:
     u, v = _PLANE[axis]
     uv = (triangles[:, :, [u, v]] - origin) / pixel  # (m, 3, 2) in pixels
     depth = triangles[:, :, axis]
@@ -204,7 +206,26 @@ def _rasterise(triangles: np.ndarray, axis: int, origin: np.ndarray, pixel: floa
     np.maximum.at(zmax, index, z)
     zmin, zmax = zmin.reshape(height, width), zmax.reshape(height, width)
     inner = _erode(zmax >= zmin, grazing)
+    if np.isfinite(jump):
+        inner &= ~_near_steps(zmin, zmax, inner, jump, grazing)
     return _DepthMap(i0, j0, zmin, zmax, inner)
+
+
+def _near_steps(zmin: np.ndarray, zmax: np.ndarray, inner: np.ndarray, jump: float, grazing: int) -> np.ndarray:
+    """The pixels within ``grazing`` of a *step*: a pixel whose first or last depth differs from a
+    neighbour's by more than ``jump``. A step inside a part's outline is the rim of a bore or a stub seen
+    end on (a wheel's blind bore on its axle): two coaxial surfaces tessellated differently leave the same
+    slivers there as at an outline, so the same band is ignored."""
+    step = np.zeros(zmin.shape, dtype=bool)
+    for z in (zmin, zmax):
+        finite = np.where(inner, z, np.nan)
+        for dj, di in ((0, 1), (1, 0), (1, 1), (1, -1)):
+            a = finite[max(dj, 0):, max(di, 0):finite.shape[1] + min(di, 0)]
+            b = finite[:finite.shape[0] - dj, max(-di, 0):finite.shape[1] - max(di, 0)]
+            big = np.abs(a - b) > jump                  # NaN compares False: outline pixels are already out
+            step[max(dj, 0):, max(di, 0):finite.shape[1] + min(di, 0)] |= big
+            step[:finite.shape[0] - dj, max(-di, 0):finite.shape[1] - max(di, 0)] |= big
+    return ndimage.binary_dilation(step, structure=_SQUARE, iterations=grazing)
 
 
 def _ranks(counts: np.ndarray) -> np.ndarray:
@@ -263,7 +284,7 @@ def _canonical(v: np.ndarray) -> np.ndarray:
 def candidate_directions(parts: list[PartMesh], limit: int) -> list[np.ndarray]:
     """At most ``limit`` unit directions besides the axes that parts of ``parts`` may leave along (module
     docstring), the best backed first; each stands for itself and its reverse, and names its vector with
-    components below 1e-9 set to zero. Cost: O(facets)."""
+    components below 1e-6 set to zero. Cost: O(facets)."""
     proposals: list[tuple[float, np.ndarray]] = []   # (area behind it, direction)
     for part in parts:
         normals, areas = _facet_normals(part)
@@ -288,7 +309,7 @@ def candidate_directions(parts: list[PartMesh], limit: int) -> list[np.ndarray]:
     for _, direction in sorted(proposals, key=lambda p: -p[0]):
         if len(kept) >= limit:
             break
-        direction = np.where(np.abs(direction) < 1e-9, 0.0, direction)
+        direction = np.where(np.abs(direction) < 1e-6, 0.0, direction)
         direction = _canonical(direction / np.linalg.norm(direction)) + 0.0
         near = np.vstack([_AXIS_VECTORS] + kept) @ direction
         if np.all(np.abs(near) < np.cos(_MERGE_ANGLE)):
@@ -300,7 +321,7 @@ def _blocking_pairs(parts, triangles, lo, hi, axis, origin3, pixel, tol: Toleran
     """The pairs ``(x, y)`` with x, moving along ``+axis`` of the frame ``triangles`` are given in, hitting y."""
     u, v = _PLANE[axis]
     origin = origin3[[u, v]]
-    maps = [_rasterise(t, axis, origin, pixel, tol.grazing) for t in triangles]
+    maps = [_rasterise(t, axis, origin, pixel, tol.grazing, max(tol.depth, _STEP_SLOPE * pixel)) for t in triangles]
     pairs = []
     margin = 2 * tol.grazing * pixel
     for i in range(len(parts)):
