@@ -155,14 +155,20 @@ def _export_command(subparsers) -> None:
     parser.set_defaults(contact=None, interference=None, depth=None)
 
     def run(args: argparse.Namespace) -> int:
-        given = {k: getattr(args, k) for k in ("contact", "interference", "depth") if getattr(args, k) is not None}
+        from planner.cli.geometry import contact_choice
+
+        given = {k: getattr(args, k) for k in ("contact", "interference", "depth", "contact_ceiling")
+                 if getattr(args, k) is not None}
         product = export_bundle(args.model, args.output, args.engine, {**given, "resolution": args.resolution},
                                 dict(args.group),
                                 args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
                                 args.freecadcmd, args.force, args.redetect)
         source = product.geometry.get("analysis", {}).get("diagrams", "none detected")
         print(f"{args.output}: {len(product.parts)} parts, {len(product.contacts)} contacts (diagrams: {source})")
-        if source.startswith("stored") and (args.engine or given):
+        choice = contact_choice(product.geometry.get("analysis", {}))
+        if choice:
+            print(f"  {choice}")
+        if source.startswith("stored") and (args.engine or set(given) - {"contact_ceiling"}):
             print("  warning: --engine and the tolerances were not applied: the diagrams stored in the document "
                   "were used; add --redetect to detect them again")
         for warning in product.geometry.get("warnings", []) + product.geometry.get("analysis", {}).get("warnings", []):
