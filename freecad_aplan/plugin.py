@@ -86,10 +86,12 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
     return load_bundle(bundle)
 
 
-def _load_model(path: Path) -> Product:
-    """PRODUCT given as a CAD model: export it to a temporary bundle and analyse its meshes."""
+def _load_model(path: Path, tolerances: Tolerances | None = None) -> Product:
+    """PRODUCT given as a CAD model: export it to a temporary bundle and analyse its meshes (with
+    ``tolerances`` when given, e.g. ``contact="auto"``)."""
     with tempfile.TemporaryDirectory(prefix="aplan-") as folder:
-        return export_bundle(path, Path(folder) / "bundle")
+        return export_bundle(path, Path(folder) / "bundle", tolerances=tolerances,
+                             redetect=tolerances is not None)
 
 
 def _occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:

@@ -68,31 +68,40 @@ PLANNERS = ("offline", "online")
 Model = IntentionModel | LumpedModel | POMDP
 
 
-def resolve_product(argument: str | os.PathLike) -> Product:
+def resolve_product(argument: str | os.PathLike, tolerances=None) -> Product:
     """Load PRODUCT: a product file, a bundle folder, a CAD file a plugin reads (``.FCStd``, STEP: through
     FreeCAD), or the name of an embedded example (``pen``).
 
     A bundle whose geometry has not been analysed yet is analysed in memory with the mesh engine.
+    ``tolerances`` (a :class:`~planner.geometry.Tolerances`, e.g. ``contact="auto"``): the geometry is analysed
+    with them, in memory, even when the file holds an analysis (a CAD model is exported with them); the
+    product's parts need meshes then.
     """
     from .geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, is_analysed
     from .plugins import registry
+
+    def analysed(product: Product) -> Product:
+        if tolerances is None and is_analysed(product):
+            return product
+        return apply_report(product, analyze_product(product, "mesh", *(() if tolerances is None else (tolerances,))))
 
     path = Path(argument)
     if path.is_dir():
         if not (path / PRODUCT_FILE).is_file():
             raise UnknownProductError(f"{argument}: is a folder without {PRODUCT_FILE}, so not a product bundle")
-        product = load_product(path / PRODUCT_FILE)
-        return product if is_analysed(product) else apply_report(product, analyze_product(product))
+        return analysed(load_product(path / PRODUCT_FILE))
     if path.is_file():
         loader = registry().loaders.get(path.suffix.lower())
         if loader is not None:
-            return loader(path)
+            return loader(path) if tolerances is None else loader(path, tolerances=tolerances)
         if path.suffix.lower() in (".fcstd", ".step", ".stp"):
             raise UnknownProductError(f"{argument}: reading {path.suffix} files needs APLAN's FreeCAD side "
                                       "(install the project with `pip install -e .` and FreeCAD)")
-        return load_product(path)
+        product = load_product(path)
+        return product if tolerances is None else analysed(product)
     if str(argument) in EXAMPLES:
-        return load_product(example_path(str(argument)))
+        product = load_product(example_path(str(argument)))
+        return product if tolerances is None else analysed(product)
     raise UnknownProductError(
         f"{argument}: no such file, and no embedded example of that name (embedded: {', '.join(EXAMPLES)})")
 

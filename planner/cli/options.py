@@ -13,13 +13,13 @@ from ..defaults import (
     POLICY_TIME_LIMIT,
     SUBASSEMBLY_LIMIT,
 )
-from ..errors import LimitExceededError
+from ..errors import LimitExceededError, PlannerError
 from ..geometry.mesh_engine import Tolerances
 from ..geometry.tolerances import AUTO
 from ..product.examples import EXAMPLES
 
 __all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_base_part", "add_decision_options", "rewards_from",
-           "add_tolerance_options", "tolerances_from", "contact_tolerance", "positive_length", "add_policy_options", "add_episode_options", "positive_seconds",
+           "add_tolerance_options", "tolerances_from", "add_contact_options", "contact_tolerances_from", "contact_tolerance", "positive_length", "add_policy_options", "add_episode_options", "positive_seconds",
            "online_budget", "add_size_options", "limits_from", "offer_options", "advice", "gibibytes"]
 
 PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or STEP file (read through "
@@ -110,6 +110,27 @@ def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
                        help=f"overlaps shallower than this along the motion do not block (default {d.depth:g})")
     group.add_argument("--resolution", type=int, default=d.resolution, metavar="N",
                        help=f"mesh engine: pixels across the product for the projection test (default {d.resolution})")
+
+
+def add_contact_options(parser) -> None:
+    """``--contact T|auto`` and ``--contact-ceiling T`` for commands taking a PRODUCT: its geometry is analysed
+    again with them, in memory (the parts need meshes: a bundle, a CAD model)."""
+    group = parser.add_argument_group("geometry (a bundle or CAD model, analysed again in memory)")
+    group.add_argument("--contact", type=contact_tolerance, default=None, metavar="T",
+                       help="analyse the geometry with this contact tolerance (model units) or auto (the smallest "
+                            "that connects the product, below --contact-ceiling); default: the product's analysis")
+    group.add_argument("--contact-ceiling", type=positive_length, default=None, metavar="T",
+                       help=f"--contact auto refuses to go above this (default {100 * CONTACT_CEILING_FRACTION:g} "
+                            "%% of the diagonal of the product's bounding box)")
+
+
+def contact_tolerances_from(args: argparse.Namespace) -> Tolerances | None:
+    """The tolerances of :func:`add_contact_options` (None: keep the product's analysis)."""
+    if args.contact is None:
+        if args.contact_ceiling is not None:
+            raise PlannerError("--contact-ceiling only applies with --contact auto")
+        return None
+    return Tolerances(contact=args.contact, contact_ceiling=args.contact_ceiling)
 
 
 def tolerances_from(args: argparse.Namespace) -> Tolerances:

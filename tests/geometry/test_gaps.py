@@ -241,3 +241,18 @@ def test_without_meshes_the_groups_alone_are_named():
     with pytest.raises(DisconnectedProductError, match=r"2 groups: \{a\} \| \{b\}\. Add the missing") as error:
         api.plan_of(product)
     assert error.value.gaps is None
+
+
+def test_stats_analyses_again_with_contact_auto(tmp_path):
+    bundle = make_bundle(tmp_path / "b", PEG)
+    assert aplan("analyze", str(bundle)).returncode == 0
+    before = (bundle / "product.json").read_bytes()  # base apart from {peg, lid} at 0.1
+    done = aplan("stats", str(bundle), "--contact", "auto")
+    assert done.returncode == 0, done.stderr
+    assert "contact tolerance auto: 0.124 (ceiling 0.168), joining 1 gap(s): base/peg 0.1234" in done.stdout
+    assert " sequences " in done.stdout and done.stdout.split(" sequences ")[1].split()[0] == "2"
+    assert (bundle / "product.json").read_bytes() == before  # analysed in memory only
+    refused = aplan("stats", str(bundle), "--contact", "auto", "--contact-ceiling", "0.1")
+    assert refused.returncode == 1 and "above the ceiling of 0.1" in refused.stderr
+    alone = aplan("stats", str(bundle), "--contact-ceiling", "1")
+    assert alone.returncode == 1 and "--contact-ceiling only applies with --contact auto" in alone.stderr
