@@ -36,6 +36,9 @@ PARTIAL = 3
 
 def _stats(args: argparse.Namespace) -> int:
     product = api.resolve_product(args.product, contact_tolerances_from(args))
+    if args.contact is not None:  # analysed again here: say what the analysis found, as aplan analyze does
+        for warning in product.geometry.get("analysis", {}).get("warnings", []):
+            log.warning("%s", warning)
     plan, stats = api.plan_statistics_of(product, args.technical, args.base_part, limits_from(args), partial=True)
     refused = stats.refused
     reason = f"{refused} {advice(refused, args)}".strip() if refused else None

@@ -6,7 +6,8 @@ Definitions
   overlap (a press fit, or a small modelling interference such as the pen's button, which overlaps the
   body by about 0.06 mm^3). Overlaps of more than ``Tolerances.interference`` in volume and more than
   ``Tolerances.contact`` in mean thickness (twice the volume over the surface area) are reported as
-  *interferences*; thinner ones are slivers between surfaces tessellated differently.
+  *interferences*; thinner ones are slivers between surfaces tessellated differently (the thickness
+  threshold stays at the default contact tolerance when a larger one is given).
 - Part ``x`` is *blocked* by part ``y`` along ``d`` when ``x``, moved along ``d`` without limit, would
   collide with ``y``: some point of ``y`` lies ahead (along ``d``) of some point of ``x`` on a common line
   parallel to ``d``. The relation along ``-d`` is the one along ``d`` reversed.
@@ -156,9 +157,10 @@ def _contacts(parts, solids, lo, hi, tol: Tolerances):
             if gap == 0:
                 common = solids[i] ^ solids[j]
                 volume = common.volume()
-                # Mean thickness of the overlap: slivers between surfaces tessellated differently are thin.
+                # Mean thickness of the overlap: slivers between surfaces tessellated differently are thin (as
+                # thin at any contact tolerance: a tolerance raised to bridge clearances hides no interference).
                 thickness = 2 * volume / common.surface_area() if volume > 0 else 0.0
-                if volume > tol.interference and thickness > tol.contact:
+                if volume > tol.interference and thickness > min(tol.contact, CONTACT_TOLERANCE):
                     interferences.append((parts[i].id, parts[j].id, float(volume)))
     return contacts, interferences
 

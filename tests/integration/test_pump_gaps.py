@@ -84,6 +84,8 @@ def test_pump_contact_auto(pump):
     auto = report.tolerances["contact_auto"]
     assert (auto["chosen"], auto["ceiling"], len(auto["gaps_joined"])) == (30.6, 40, 7)
     assert len(connection_groups(report.parts, report.contacts)) == 1
+    # The 12 interferences found at 0.1 mm are still reported at 30.6 mm.
+    assert len(report.interferences) == len(product.geometry["analysis"]["interferences"]) == 12
     every = list(itertools.combinations(product.part_ids, 2))
     within = {frozenset(p) for p, d in part_gaps(meshes, every).items() if d <= 30.6}
     assert {frozenset(c) for c in report.contacts} == within | {frozenset(c) for c in product.contacts}
