@@ -42,7 +42,9 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
     product then says ``"stored in the document"`` (``", edited"`` after edits). Otherwise ``engine``
     detects them (``"engine"``; ``geometry.warnings`` says why stored diagrams were not used):
     ``engine=None`` and ``tolerances=None`` take the analysis' engine and tolerances (else mesh and the
-    defaults); ``tolerances`` as a dict sets only the fields it names.
+    defaults); ``tolerances`` as a dict sets only the fields it names (``contact`` may be ``"auto"``, capped by
+    ``contact_ceiling``: :func:`planner.geometry.clearances.analyze_with_clearances`; above the cap nothing is
+    written).
 
     The bundle is built in a temporary folder beside it and renamed into place at the end, so a failure
     leaves no partial bundle (and an existing one untouched). Returns the bundle's product.
