@@ -106,3 +106,43 @@ def test_pump_plan_error_from_api(pump):
     with pytest.raises(DisconnectedProductError) as error:
         api.plan_of(product)
     assert error.value.tolerance == 30.6 and len(error.value.gaps) == 8
+
+
+TWO_BOXES = """
+import FreeCAD
+doc = FreeCAD.newDocument("gap")
+for name, x in (("Left", 0), ("Right", 10.5)):
+    box = doc.addObject("Part::Box", name)
+    box.Length = box.Width = box.Height = 10
+    box.Placement.Base = FreeCAD.Vector(x, 0, 0)
+doc.recompute()
+doc.saveAs({path!r})
+print("APLAN-RESULT {{}}")
+"""
+
+
+@pytest.mark.freecad
+def test_export_freecad_contact_auto(tmp_path):
+    """Two 10 mm cubes 0.5 mm apart: auto needs 0.501, above the default ceiling (1 % of the 24.9 mm
+    diagonal): refused, no bundle; with --contact-ceiling 1 the bundle records the choice."""
+    import subprocess
+
+    from integration.freecad_tools import freecad_result
+
+    freecadcmd = require_freecadcmd()
+    script = tmp_path / "make.py"
+    script.write_text(TWO_BOXES.format(path=str(tmp_path / "gap.FCStd")))
+    freecad_result(subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=120,
+                                  check=False))
+    model = str(tmp_path / "gap.FCStd")
+    refused = aplan("export-freecad", model, "-o", str(tmp_path / "b"), "--contact", "auto", check=False)
+    assert refused.returncode == 1 and "Traceback" not in refused.stderr
+    assert "tolerance of 0.501 to be connected, above the ceiling of 0.249" in refused.stderr
+    assert "0.5 between Left and Right" in refused.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["gap.FCStd", "make.py"]  # nothing written
+    done = aplan("export-freecad", model, "-o", str(tmp_path / "b"), "--contact", "auto", "--contact-ceiling", "1")
+    assert "contact tolerance auto: 0.501 (ceiling 1), joining 1 gap(s): Left/Right 0.5" in done.stdout
+    product = load_product(bundle_product_path(tmp_path / "b"))
+    assert product.contacts == (("Left", "Right"),)
+    assert product.geometry["analysis"]["tolerances"]["contact_auto"] == {
+        "chosen": 0.501, "ceiling": 1.0, "default": 0.1, "gaps_joined": [["Left", "Right", 0.5]]}
