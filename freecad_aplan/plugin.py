@@ -42,7 +42,9 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
     product then says ``"stored in the document"`` (``", edited"`` after edits). Otherwise ``engine``
     detects them (``"engine"``; ``geometry.warnings`` says why stored diagrams were not used):
     ``engine=None`` and ``tolerances=None`` take the analysis' engine and tolerances (else mesh and the
-    defaults); ``tolerances`` as a dict sets only the fields it names.
+    defaults); ``tolerances`` as a dict sets only the fields it names (``contact`` may be ``"auto"``, capped by
+    ``contact_ceiling``: :func:`planner.geometry.clearances.analyze_with_clearances`; above the cap nothing is
+    written).
 
     The bundle is built in a temporary folder beside it and renamed into place at the end, so a failure
     leaves no partial bundle (and an existing one untouched). Returns the bundle's product.
@@ -86,10 +88,12 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
     return load_bundle(bundle)
 
 
-def _load_model(path: Path) -> Product:
-    """PRODUCT given as a CAD model: export it to a temporary bundle and analyse its meshes."""
+def _load_model(path: Path, tolerances: Tolerances | None = None) -> Product:
+    """PRODUCT given as a CAD model: export it to a temporary bundle and analyse its meshes (with
+    ``tolerances`` when given, e.g. ``contact="auto"``)."""
     with tempfile.TemporaryDirectory(prefix="aplan-") as folder:
-        return export_bundle(path, Path(folder) / "bundle")
+        return export_bundle(path, Path(folder) / "bundle", tolerances=tolerances,
+                             redetect=tolerances is not None)
 
 
 def _occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
@@ -155,14 +159,20 @@ def _export_command(subparsers) -> None:
     parser.set_defaults(contact=None, interference=None, depth=None)
 
     def run(args: argparse.Namespace) -> int:
-        given = {k: getattr(args, k) for k in ("contact", "interference", "depth") if getattr(args, k) is not None}
+        from planner.cli.geometry import contact_choice
+
+        given = {k: getattr(args, k) for k in ("contact", "interference", "depth", "contact_ceiling")
+                 if getattr(args, k) is not None}
         product = export_bundle(args.model, args.output, args.engine, {**given, "resolution": args.resolution, "directions": args.directions},
                                 dict(args.group),
                                 args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
                                 args.freecadcmd, args.force, args.redetect)
         source = product.geometry.get("analysis", {}).get("diagrams", "none detected")
         print(f"{args.output}: {len(product.parts)} parts, {len(product.contacts)} contacts (diagrams: {source})")
-        if source.startswith("stored") and (args.engine or given):
+        choice = contact_choice(product.geometry.get("analysis", {}))
+        if choice:
+            print(f"  {choice}")
+        if source.startswith("stored") and (args.engine or set(given) - {"contact_ceiling"}):
             print("  warning: --engine and the tolerances were not applied: the diagrams stored in the document "
                   "were used; add --redetect to detect them again")
         for warning in product.geometry.get("warnings", []) + product.geometry.get("analysis", {}).get("warnings", []):

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import os
 import shutil
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Sequence
 
@@ -49,11 +50,11 @@ from .decision.simulate import Episode, evaluate_policy, simulate_episode
 from .decision.solvers import PointBasedSolver, SolveResult
 from .defaults import (DECISION_TIME, DISCOUNT, FILE_LIMIT, INTENTION_LIMIT, ONLINE_EXPANSIONS, POLICY_TIME_LIMIT,
                        SOLVE_PRECISION, SOLVE_TIME_LIMIT)
-from .errors import FileLimitError, MemoryLimitError, PlannerError, UnknownProductError, gib
+from .errors import DisconnectedProductError, FileLimitError, MemoryLimitError, PlannerError, UnknownProductError, gib
 from .product import Product, load_product
 from .product.examples import EXAMPLES, example_path
 
-__all__ = ["resolve_product", "plan_of", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
+__all__ = ["resolve_product", "plan_of", "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
            "policy_for", "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner",
            "choose_planner", "decision_maker"]
@@ -67,41 +68,88 @@ PLANNERS = ("offline", "online")
 Model = IntentionModel | LumpedModel | POMDP
 
 
-def resolve_product(argument: str | os.PathLike) -> Product:
+def resolve_product(argument: str | os.PathLike, tolerances=None) -> Product:
     """Load PRODUCT: a product file, a bundle folder, a CAD file a plugin reads (``.FCStd``, STEP: through
     FreeCAD), or the name of an embedded example (``pen``).
 
     A bundle whose geometry has not been analysed yet is analysed in memory with the mesh engine.
+    ``tolerances`` (a :class:`~planner.geometry.Tolerances`, e.g. ``contact="auto"``): the geometry is analysed
+    with them, in memory, even when the file holds an analysis (a CAD model is exported with them); the
+    product's parts need meshes then.
     """
     from .geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, is_analysed
     from .plugins import registry
+
+    def analysed(product: Product) -> Product:
+        if tolerances is None and is_analysed(product):
+            return product
+        return apply_report(product, analyze_product(product, "mesh", *(() if tolerances is None else (tolerances,))))
 
     path = Path(argument)
     if path.is_dir():
         if not (path / PRODUCT_FILE).is_file():
             raise UnknownProductError(f"{argument}: is a folder without {PRODUCT_FILE}, so not a product bundle")
-        product = load_product(path / PRODUCT_FILE)
-        return product if is_analysed(product) else apply_report(product, analyze_product(product))
+        return analysed(load_product(path / PRODUCT_FILE))
     if path.is_file():
         loader = registry().loaders.get(path.suffix.lower())
         if loader is not None:
-            return loader(path)
+            return loader(path) if tolerances is None else loader(path, tolerances=tolerances)
         if path.suffix.lower() in (".fcstd", ".step", ".stp"):
             raise UnknownProductError(f"{argument}: reading {path.suffix} files needs APLAN's FreeCAD side "
                                       "(install the project with `pip install -e .` and FreeCAD)")
-        return load_product(path)
+        product = load_product(path)
+        return product if tolerances is None else analysed(product)
     if str(argument) in EXAMPLES:
-        return load_product(example_path(str(argument)))
+        product = load_product(example_path(str(argument)))
+        return product if tolerances is None else analysed(product)
     raise UnknownProductError(
         f"{argument}: no such file, and no embedded example of that name (embedded: {', '.join(EXAMPLES)})")
+
+
+def explain_disconnected(product: Product, error: DisconnectedProductError) -> DisconnectedProductError:
+    """``error`` with the gaps between its groups: those the product's analysis recorded
+    (``geometry.analysis.gaps``), else measured on the part meshes when the product has them; ``error`` itself
+    when neither can say."""
+    from .geometry.bundle import load_part_meshes
+    from .geometry.clearances import explain_groups
+    from .geometry.gaps import contact_tolerance_for
+
+    if error.gaps is not None:
+        return error
+    report = explain_groups(error.groups, product.geometry.get("analysis", {}).get("gaps"))
+    if report is None and product.parts and all(p.mesh for p in product.parts):
+        try:
+            report = explain_groups(error.groups, None, load_part_meshes(product))
+        except PlannerError:  # unreadable meshes: the error without gaps is still right
+            return error
+    if report is None:
+        return error
+    gaps = [(g.a, g.b, g.distance, contact_tolerance_for(g.distance)) if g is not None else None
+            for g in report.nearest]
+    return DisconnectedProductError(error.groups, gaps, contact_tolerance_for(report.bottleneck), product.units)
+
+
+@contextmanager
+def _gaps_explained(product: Product):
+    """Re-raise a :class:`DisconnectedProductError` with the gaps between its groups (:func:`explain_disconnected`)."""
+    try:
+        yield
+    except DisconnectedProductError as error:
+        explained = explain_disconnected(product, error)
+        if explained is error:
+            raise
+        raise explained from None
 
 
 def plan_of(product: str | os.PathLike | Product, technical: bool | None = None,
             limits: SizeLimits = SizeLimits()) -> Plan:
     """The plan (AND/OR graph, assembly states, tags) of a product or PRODUCT argument; ``technical``:
     ``True``/``False`` switches every technical constraint on/off, ``None`` keeps the file's; ``limits``: the
-    size limits the plan is built within (past them: :class:`~planner.errors.LimitExceededError`)."""
-    return make_plan(product if isinstance(product, Product) else resolve_product(product), technical, limits)
+    size limits the plan is built within (past them: :class:`~planner.errors.LimitExceededError`). A product
+    that falls apart is refused with the gaps between its groups (:func:`explain_disconnected`)."""
+    product = product if isinstance(product, Product) else resolve_product(product)
+    with _gaps_explained(product):
+        return make_plan(product, technical, limits)
 
 
 AUTO_BASE_PART = "auto"
@@ -130,7 +178,8 @@ def plan_statistics_of(product: str | os.PathLike | Product | Plan, technical: b
         return plan, plan_statistics(plan, base_part_of(plan, base_part))
     product = product if isinstance(product, Product) else resolve_product(product)
     base = most_connected_part(product) if base_part == AUTO_BASE_PART else base_part
-    return statistics_within(product, technical, base, limits)
+    with _gaps_explained(product):
+        return statistics_within(product, technical, base, limits)
 
 
 def decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,

@@ -19,6 +19,7 @@ __all__ = [
     "FileLimitError",
     "gib",
     "GeometryError",
+    "ContactCeilingError",
 ]
 
 
@@ -45,15 +46,42 @@ class UnknownProductError(PlannerError):
 
 
 class DisconnectedProductError(PlannerError):
-    """The connection diagram (liaison graph) of a product falls apart into separate groups."""
+    """The connection diagram (liaison graph) of a product falls apart into separate groups.
 
-    def __init__(self, groups: list[list[str]]):
+    ``gaps`` (when the part meshes were measured), one per group in the order of ``groups``: the group's
+    nearest gap as ``(its part, the other group's part, distance, contact tolerance that joins them)``, or
+    None; ``tolerance``: the contact tolerance that joins every group; ``units``: the model's length unit.
+    """
+
+    def __init__(self, groups: list[list[str]], gaps: Sequence[tuple[str, str, float, float] | None] | None = None,
+                 tolerance: float | None = None, units: str = ""):
         self.groups = groups
+        self.gaps = list(gaps) if gaps is not None else None
+        self.tolerance = tolerance
         shown = " | ".join("{" + ", ".join(g) + "}" for g in groups)
-        super().__init__(
-            f"the connection diagram is not connected: it falls apart into {len(groups)} groups: {shown}. "
-            "Add the missing contacts between the groups, or exclude the parts that do not belong to the product."
-        )
+        message = f"the connection diagram is not connected: it falls apart into {len(groups)} groups: {shown}."
+        if self.gaps:
+            unit = f" {units}" if units else ""
+            lines = []
+            for k, (group, gap) in enumerate(zip(groups, self.gaps), 1):
+                name = "{" + ", ".join(group) + "}" if len(group) <= 3 else \
+                    "{" + ", ".join(group[:3]) + f", ... ({len(group)} parts)" + "}"
+                if gap is None:
+                    lines.append(f"group {k} {name}: no gap measured")
+                    continue
+                part, other, distance, joins = gap
+                lines.append(f"group {k} {name}: {distance:.4g}{unit} between {part} and {other} "
+                             f"(--contact {joins:g} joins them)")
+            message += "\nThe nearest gaps between the groups (part meshes):\n  " + "\n  ".join(lines) + "\n"
+            if tolerance is not None:
+                message += (f"--contact {tolerance:g} joins every group (--contact auto chooses the smallest "
+                            "tolerance that does, below a ceiling).")
+            message += (" Raise the contact tolerance (aplan analyze or export-freecad --contact), add the missing "
+                        "contacts between the groups, or exclude the parts that do not belong to the product.")
+        else:
+            message += (" Add the missing contacts between the groups, or exclude the parts that do not belong to "
+                        "the product.")
+        super().__init__(message)
 
 
 class NotDisassemblableError(PlannerError):
@@ -136,3 +164,14 @@ def gib(size: int) -> str:
 class GeometryError(PlannerError):
     """A part's geometry cannot be analysed (a mesh that is not closed, no volume, an unreadable file), or a
     geometry engine was given bad tolerances."""
+
+
+class ContactCeilingError(GeometryError):
+    """``--contact auto`` would need a contact tolerance above its ceiling: the parts are apart by design, or
+    do not belong to the product. ``gap`` is the gap that needs it, between ``parts``; ``ceiling`` the ceiling."""
+
+    def __init__(self, message: str, gap: float, parts: tuple[str, str], ceiling: float):
+        self.gap = gap
+        self.parts = parts
+        self.ceiling = ceiling
+        super().__init__(message)

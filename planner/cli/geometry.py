@@ -10,9 +10,23 @@ from ..geometry.bundle import PRODUCT_FILE, analyze_product, apply_report
 from ..product import load_product, save_product
 from .options import add_tolerance_options, tolerances_from
 
-__all__ = ["add_commands"]
+__all__ = ["add_commands", "contact_choice"]
 
 log = logging.getLogger(__name__)
+
+
+def contact_choice(analysis: dict) -> str | None:
+    """One line on the contact tolerance ``--contact auto`` chose (from ``geometry.analysis``), or None."""
+    auto = analysis.get("tolerances", {}).get("contact_auto")
+    if not auto:
+        return None
+    joined = auto.get("gaps_joined", [])
+    if not joined:
+        return (f"contact tolerance auto: {auto['chosen']:g} (the default: the product is connected; ceiling "
+                f"{auto['ceiling']:.3g})")
+    shown = ", ".join(f"{a}/{b} {gap:.4g}" for a, b, gap in joined)
+    return (f"contact tolerance auto: {auto['chosen']:g} (ceiling {auto['ceiling']:.3g}), joining "
+            f"{len(joined)} gap(s): {shown}")
 
 
 def _analyze(args: argparse.Namespace) -> int:
@@ -30,6 +44,12 @@ def _analyze(args: argparse.Namespace) -> int:
         print(f"  interference {a} / {b}: {volume:.4g} cubic units")
     for axis, pairs in report.obstructions.items():
         print(f"  obstructions {axis}: {len(pairs)} pairs")
+    choice = contact_choice(report.as_dict())
+    if choice:
+        print(f"  {choice}")
+    if report.gaps:
+        print(f"  the contacts fall apart into {len(report.gaps['groups'])} groups; joined by --contact "
+              f"{report.gaps['tolerance']:g} (aplan stats names the gaps)")
     for warning in report.warnings:
         log.warning("%s", warning)
     return 0

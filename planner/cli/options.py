@@ -5,13 +5,21 @@ import argparse
 
 from ..assembly.guards import SizeLimits, default_memory_budget
 from ..decision.intention_model import Rewards
-from ..defaults import CUTS_PER_SUBASSEMBLY, DECISION_TIME, DISCOUNT, POLICY_TIME_LIMIT, SUBASSEMBLY_LIMIT
-from ..errors import LimitExceededError
+from ..defaults import (
+    CONTACT_CEILING_FRACTION,
+    CUTS_PER_SUBASSEMBLY,
+    DECISION_TIME,
+    DISCOUNT,
+    POLICY_TIME_LIMIT,
+    SUBASSEMBLY_LIMIT,
+)
+from ..errors import LimitExceededError, PlannerError
 from ..geometry.mesh_engine import Tolerances
+from ..geometry.tolerances import AUTO
 from ..product.examples import EXAMPLES
 
 __all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_base_part", "add_decision_options", "rewards_from",
-           "add_tolerance_options", "tolerances_from", "add_policy_options", "add_episode_options", "positive_seconds",
+           "add_tolerance_options", "tolerances_from", "add_contact_options", "contact_tolerances_from", "contact_tolerance", "positive_length", "add_policy_options", "add_episode_options", "positive_seconds",
            "online_budget", "add_size_options", "limits_from", "offer_options", "advice", "gibibytes"]
 
 PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or STEP file (read through "
@@ -61,12 +69,41 @@ def rewards_from(args: argparse.Namespace) -> Rewards:
     return Rewards(args.reward_unfavorable, args.reward_favorable, args.reward_wrong, args.reward_wait)
 
 
+def contact_tolerance(text: str) -> float | str:
+    """A contact tolerance: a number >= 0, or ``auto`` (an argparse type)."""
+    if text.strip().lower() == AUTO:
+        return AUTO
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a length or {AUTO!r}, got {text!r}") from None
+    if not 0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a finite length >= 0, got {text}")
+    return value
+
+
+def positive_length(text: str) -> float:
+    """A finite length above 0 (an argparse type)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a length, got {text!r}") from None
+    if not 0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a finite length above 0, got {text}")
+    return value
+
+
 def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
     """The geometry engines' tolerances as options (shared by analyze and export-freecad)."""
     d = Tolerances()
     group = parser.add_argument_group("geometry tolerances (model units)")
-    group.add_argument("--contact", type=float, default=d.contact, metavar="T",
-                       help=f"surfaces closer than this touch (default {d.contact:g})")
+    group.add_argument("--contact", type=contact_tolerance, default=d.contact, metavar="T",
+                       help=f"surfaces closer than this touch (default {d.contact:g}); auto: the smallest tolerance "
+                            f"that connects the product (from the gaps between the part meshes, at least "
+                            f"{d.contact:g}, at most --contact-ceiling), recorded in the product file")
+    group.add_argument("--contact-ceiling", type=positive_length, default=None, metavar="T",
+                       help=f"--contact auto refuses to go above this, naming the gap (default "
+                            f"{100 * CONTACT_CEILING_FRACTION:g} %% of the diagonal of the product's bounding box)")
     group.add_argument("--interference", type=float, default=d.interference, metavar="V",
                        help=f"report overlaps above this volume (default {d.interference:g})")
     group.add_argument("--depth", type=float, default=d.depth, metavar="T",
@@ -88,9 +125,31 @@ def _direction_count(text: str) -> int:
     return value
 
 
+def add_contact_options(parser) -> None:
+    """``--contact T|auto`` and ``--contact-ceiling T`` for commands taking a PRODUCT: its geometry is analysed
+    again with them, in memory (the parts need meshes: a bundle, a CAD model)."""
+    group = parser.add_argument_group("geometry (a bundle or CAD model, analysed again in memory)")
+    group.add_argument("--contact", type=contact_tolerance, default=None, metavar="T",
+                       help="analyse the geometry with this contact tolerance (model units) or auto (the smallest "
+                            "that connects the product, below --contact-ceiling); default: the product's analysis")
+    group.add_argument("--contact-ceiling", type=positive_length, default=None, metavar="T",
+                       help=f"--contact auto refuses to go above this (default {100 * CONTACT_CEILING_FRACTION:g} "
+                            "%% of the diagonal of the product's bounding box)")
+
+
+def contact_tolerances_from(args: argparse.Namespace) -> Tolerances | None:
+    """The tolerances of :func:`add_contact_options` (None: keep the product's analysis)."""
+    if args.contact is None:
+        if args.contact_ceiling is not None:
+            raise PlannerError("--contact-ceiling only applies with --contact auto")
+        return None
+    return Tolerances(contact=args.contact, contact_ceiling=args.contact_ceiling)
+
+
 def tolerances_from(args: argparse.Namespace) -> Tolerances:
     return Tolerances(contact=args.contact, interference=args.interference, depth=args.depth,
-                      resolution=args.resolution, directions=args.directions)
+                      resolution=args.resolution, directions=args.directions,
+                      contact_ceiling=args.contact_ceiling)
 
 
 def positive_seconds(text: str) -> float:

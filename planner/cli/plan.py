@@ -12,7 +12,18 @@ from ..assembly.stats import STAT_KEYS
 from ..files import write_atomic
 from ..product import product_to_dict
 from ..product.synthetic import SYNTHETIC
-from .options import PRODUCT_HELP, add_base_part, add_size_options, add_technical, advice, limits_from, positive
+from .geometry import contact_choice
+from .options import (
+    PRODUCT_HELP,
+    add_base_part,
+    add_contact_options,
+    add_size_options,
+    add_technical,
+    advice,
+    contact_tolerances_from,
+    limits_from,
+    positive,
+)
 
 __all__ = ["add_commands"]
 
@@ -24,7 +35,10 @@ PARTIAL = 3
 
 
 def _stats(args: argparse.Namespace) -> int:
-    product = api.resolve_product(args.product)
+    product = api.resolve_product(args.product, contact_tolerances_from(args))
+    if args.contact is not None:  # analysed again here: say what the analysis found, as aplan analyze does
+        for warning in product.geometry.get("analysis", {}).get("warnings", []):
+            log.warning("%s", warning)
     plan, stats = api.plan_statistics_of(product, args.technical, args.base_part, limits_from(args), partial=True)
     refused = stats.refused
     reason = f"{refused} {advice(refused, args)}".strip() if refused else None
@@ -35,6 +49,9 @@ def _stats(args: argparse.Namespace) -> int:
         print(json.dumps(data))
         return PARTIAL if refused else 0
     print(f"{product.name or str(args.product)} ({product.source})")
+    choice = contact_choice(product.geometry.get("analysis", {})) if args.contact is not None else None
+    if choice:
+        print(f"  {choice}")
     values = stats.as_dict()
     for key in STAT_KEYS:
         value = values[key]
@@ -93,6 +110,7 @@ def add_commands(commands) -> None:
     add_technical(stats)
     add_base_part(stats)
     add_size_options(stats)
+    add_contact_options(stats)
     stats.set_defaults(run=_stats)
 
     intentions = commands.add_parser("intentions", help="enumerate operator intentions (paths of assembly states)")

@@ -14,6 +14,7 @@ import numpy as np
 from ..defaults import PRODUCT_FILE
 from ..errors import GeometryError
 from ..product import AXIS_DIRECTIONS, Direction, Obstruction, Product, load_product
+from .clearances import analyze_with_clearances
 from .mesh_engine import AXES, GeometryReport, PartMesh, analyze_meshes
 from .tolerances import Tolerances
 
@@ -66,20 +67,26 @@ ENGINES: dict[str, Callable[[Product, Tolerances], GeometryReport]] = {"mesh": _
 
 
 def analyze_product(product: Product, engine: str = "mesh", tolerances: Tolerances = Tolerances()) -> GeometryReport:
-    """Run a geometry engine on the product's meshes (``mesh``) or B-reps (``occt``, from the FreeCAD side)."""
+    """Run a geometry engine on the product's meshes (``mesh``) or B-reps (``occt``, from the FreeCAD side).
+
+    ``tolerances.contact`` may be ``"auto"``; the gaps between the groups are recorded when the contacts fall
+    apart, and a tolerance that makes too much touch is warned about
+    (:func:`~planner.geometry.clearances.analyze_with_clearances`)."""
     from ..plugins import registry
 
     engines = {**ENGINES, **registry().engines}
     if engine not in engines:
         raise GeometryError(f"unknown geometry engine {engine!r}; available: {', '.join(sorted(engines))}")
-    return engines[engine](product, tolerances)
+    return analyze_with_clearances(lambda chosen: engines[engine](product, chosen), tolerances,
+                                   lambda: load_part_meshes(product))
 
 
 def apply_report(product: Product, report: GeometryReport) -> Product:
     """A copy of ``product`` with the report's contacts and obstruction diagrams (+X/+Y/+Z, then any other
-    direction the engine tested, with its vector in ``report.directions``), and the analysis
-    recorded under ``geometry.analysis`` (``diagrams: "engine"``: found by a geometry engine). Technical
-    constraints and designer tags are kept."""
+    direction the engine tested, with its vector in ``report.directions``), and the analysis recorded under
+    ``geometry.analysis`` (``diagrams: "engine"``: found by a geometry engine; ``tolerances`` with
+    ``contact_auto`` when the contact tolerance was chosen; ``gaps`` when the contacts fall apart).
+    Technical constraints and designer tags are kept."""
     if set(report.parts) != set(product.part_ids):
         raise GeometryError(f"{product.source}: the analysed parts {sorted(report.parts)} are not the product's "
                             f"parts {sorted(product.part_ids)}")
@@ -90,7 +97,7 @@ def apply_report(product: Product, report: GeometryReport) -> Product:
     summary = report.as_dict()
     analysis = {"diagrams": "engine", "engine": report.engine, "tolerances": summary["tolerances"],
                 "interferences": summary["interferences"], "warnings": summary["warnings"],
-                "seconds": summary["seconds"]}
+                "seconds": summary["seconds"], **({"gaps": report.gaps} if report.gaps is not None else {})}
     geometry = {**product.geometry, "analysis": analysis}
     return replace(product, contacts=tuple(report.contacts), obstructions=obstructions, geometry=geometry)
 

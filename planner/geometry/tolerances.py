@@ -8,14 +8,19 @@ from dataclasses import dataclass
 from ..defaults import BLOCKING_DEPTH, CANDIDATE_DIRECTIONS, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, RASTER_RESOLUTION
 from ..errors import GeometryError
 
-__all__ = ["Tolerances"]
+__all__ = ["AUTO", "Tolerances"]
+
+AUTO = "auto"  # Tolerances.contact: the smallest tolerance that connects the product (geometry.auto_contact)
 
 
 @dataclass(frozen=True)
 class Tolerances:
     """Tolerances of the geometry analysis, in model units (lengths) and cubic units (volumes).
 
-    ``contact``: surfaces closer than this touch. ``interference``: overlap volumes above this are reported.
+    ``contact``: surfaces closer than this touch; ``"auto"``: the default, raised to the smallest tolerance that
+    connects the product, up to ``contact_ceiling`` (None: a fraction of the product's size,
+    :func:`planner.geometry.auto_contact.default_ceiling`); engines take a number, resolved by
+    :func:`planner.geometry.analyze_product`. ``interference``: overlap volumes above this are reported.
     ``depth``: along the motion, overlaps shallower than this do not block (modelling interferences).
     ``resolution``: pixels across the largest dimension of the product for the projection test.
     ``grazing``: pixels next to a part's outline that are ignored (at least 1).
@@ -23,15 +28,25 @@ class Tolerances:
     tested like the axes (0: the axes only).
     """
 
-    contact: float = CONTACT_TOLERANCE
+    contact: float | str = CONTACT_TOLERANCE
     interference: float = INTERFERENCE_VOLUME
     depth: float = BLOCKING_DEPTH
     resolution: int = RASTER_RESOLUTION
     grazing: int = 1
     directions: int = CANDIDATE_DIRECTIONS
+    contact_ceiling: float | None = None
+
+    @property
+    def auto(self) -> bool:
+        """True when the contact tolerance is to be chosen (``contact="auto"``)."""
+        return self.contact == AUTO
 
     def __post_init__(self) -> None:
-        for name in ("contact", "interference", "depth"):
+        if isinstance(self.contact, str) and not self.auto:
+            raise GeometryError(f"tolerance contact must be a number or {AUTO!r}, got {self.contact!r}")
+        if self.contact_ceiling is not None and not self.contact_ceiling > 0:
+            raise GeometryError(f"the contact ceiling must be > 0, got {self.contact_ceiling!r}")
+        for name in ("contact", "interference", "depth") if not self.auto else ("interference", "depth"):
             if not getattr(self, name) >= 0:
                 raise GeometryError(f"tolerance {name} must be >= 0, got {getattr(self, name)!r}")
         if self.resolution < 16:
