@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import sys
 
 from .. import api
@@ -12,7 +13,11 @@ from ..assembly.stats import STAT_KEYS
 from ..files import write_atomic
 from ..product import product_to_dict
 from ..product.synthetic import SYNTHETIC
-from .options import PRODUCT_HELP, add_base_part, add_size_options, add_technical, advice, limits_from, positive
+from ..assembly.guards import SizeLimits
+from ..assembly.stats import PlanStatistics
+from ..defaults import SUBASSEMBLY_LIMIT
+from .options import (PRODUCT_HELP, add_base_part, add_hierarchy, add_size_options, add_technical, advice, limits_from,
+                      positive)
 
 __all__ = ["add_commands"]
 
@@ -23,8 +28,17 @@ log = logging.getLogger(__name__)
 PARTIAL = 3
 
 
+# The figures a hierarchy adds up over its levels (sequences multiply: each workstation picks its own).
+_LEVEL_KEYS = ("parts", "subassemblies", "operations", "states", "state_edges", "intentions", "sequences")
+# The flat plan is only counted for comparison: within these limits (a few seconds), else refused.
+_FLAT_LIMITS = SizeLimits(SUBASSEMBLY_LIMIT, 2 ** 30)
+
+
 def _stats(args: argparse.Namespace) -> int:
     product = api.resolve_product(args.product)
+    if args.level is None and len(api.levels_of(product, args.subassemblies, args.max_components)) > 1:
+        return _level_stats(args, product)
+    product = api.level_product(product, args.subassemblies, args.level, args.max_components)
     plan, stats = api.plan_statistics_of(product, args.technical, args.base_part, limits_from(args), partial=True)
     refused = stats.refused
     reason = f"{refused} {advice(refused, args)}".strip() if refused else None
@@ -33,7 +47,7 @@ def _stats(args: argparse.Namespace) -> int:
         if refused:
             data["not_computed"] = {"figures": list(stats.not_computed), "reason": reason}
         print(json.dumps(data))
-        return PARTIAL if refused else 0
+        return 1 if failed else PARTIAL if refused else 0
     print(f"{product.name or str(args.product)} ({product.source})")
     values = stats.as_dict()
     for key in STAT_KEYS:
@@ -53,9 +67,67 @@ def _stats(args: argparse.Namespace) -> int:
     return 0
 
 
+def _level_stats(args: argparse.Namespace, product) -> int:
+    """``aplan stats`` of a product planned as several workstations: each level, the total, and flat."""
+    limits = limits_from(args)
+    flat_limits = SizeLimits(min(limits.subassemblies, _FLAT_LIMITS.subassemblies),
+                             min(limits.memory, _FLAT_LIMITS.memory))
+    levels, flat = api.hierarchy_statistics_of(product, args.technical, limits, args.subassemblies,
+                                               args.max_components, flat_limits)
+    failed = [(level.id, error) for level, error in levels if not isinstance(error, PlanStatistics)]
+    levels = [(level, stats if isinstance(stats, PlanStatistics) else None) for level, stats in levels]
+    figures = {level.id: stats.as_dict() if stats else {key: None for key in STAT_KEYS} for level, stats in levels}
+    total: dict[str, int | None] = {}
+    for key in _LEVEL_KEYS:
+        values = [figures[level.id][key] for level, _ in levels]
+        if any(v is None for v in values):
+            total[key] = None
+        elif key == "sequences":
+            total[key] = math.prod(values)
+        elif key == "parts":
+            total[key] = len(product.parts)
+        else:
+            total[key] = sum(values)
+    refused = [(level.id, stats.refused) for level, stats in levels if stats and stats.refused]
+    flat_dict = flat.as_dict() if isinstance(flat, PlanStatistics) else None
+    flat_reason = (str(flat.refused) if isinstance(flat, PlanStatistics) and flat.refused else
+                   None if isinstance(flat, PlanStatistics) else str(flat))
+    if args.json:
+        print(json.dumps({"levels": [{"level": level.id, "members": list(level.members), **figures[level.id],
+                                      **({"not_computed": str(stats.refused)} if stats and stats.refused else {}),
+                                      **({"error": str(dict(failed)[level.id])} if level.id in dict(failed) else {})}
+                                     for level, stats in levels],
+                          "total": total, "flat": flat_dict, **({"flat_not_computed": flat_reason}
+                                                                 if flat_reason else {})}))
+        return 1 if failed else PARTIAL if refused else 0
+    print(f"{product.name or str(args.product)} ({product.source}): {len(product.parts)} parts in {len(levels)} "
+          f"levels (workstations), planned bottom-up")
+    shown = lambda v: "-" if v is None else f"{v:,}"  # noqa: E731
+    header = f"  {'level':<12}{'members':>8}" + "".join(f"{k:>14}" for k in _LEVEL_KEYS[1:])
+    print(header)
+    for level, _ in levels:
+        d = figures[level.id]
+        print(f"  {level.id:<12}{len(level.members):>8}" + "".join(f"{shown(d[k]):>14}" for k in _LEVEL_KEYS[1:]))
+    print(f"  {'total':<12}{total['parts']:>8}" + "".join(f"{shown(total[k]):>14}" for k in _LEVEL_KEYS[1:]))
+    if flat_dict is not None:
+        print(f"  {'flat':<12}{flat_dict['parts']:>8}" + "".join(f"{shown(flat_dict[k]):>14}" for k in _LEVEL_KEYS[1:]))
+    print("  (total: the levels' sums; sequences: their product, each workstation following its own; parts: the "
+          "product's)")
+    for level, stats in levels:
+        print(f"  {level.id}: {', '.join(level.members)}")
+    if flat_reason:
+        print(f"  flat: not counted: {flat_reason}")
+    for name, error in refused:
+        print(f"  {name}: not computed: {error} {advice(error, args)}".rstrip())
+    for name, error in failed:
+        print(f"aplan: error: level {name}: {error}", file=sys.stderr)
+    return 1 if failed else PARTIAL if refused else 0
+
+
 def _intentions(args: argparse.Namespace) -> int:
     limits = limits_from(args)
-    plan = api.plan_of(args.product, args.technical, limits)
+    product = api.level_product(args.product, args.subassemblies, args.level, args.max_components)
+    plan = api.plan_of(product, args.technical, limits)
     graph = intention_graph(plan.states, limit=args.limit, base_part=api.base_part_of(plan, args.base_part),
                             max_bytes=limits.memory)
     for i in (graph.full_sequences() if args.full else range(graph.n_intentions)):
@@ -92,6 +164,7 @@ def add_commands(commands) -> None:
                             "not_computed: the figures and the reason)")
     add_technical(stats)
     add_base_part(stats)
+    add_hierarchy(stats)
     add_size_options(stats)
     stats.set_defaults(run=_stats)
 
@@ -103,6 +176,7 @@ def add_commands(commands) -> None:
     intentions.add_argument("--json", action="store_true", help="one JSON object per line")
     add_technical(intentions)
     add_base_part(intentions)
+    add_hierarchy(intentions)
     add_size_options(intentions)
     intentions.set_defaults(run=_intentions)
 
