@@ -3,7 +3,7 @@ operations; here they are simply removed), subassemblies proposed from the conne
 of each level.
 
     .venv/bin/aplan export-freecad ../shared/models/toy_truck/asm_cement_mixer_truck.FCStd -o /tmp/sa-truck
-    timeout 600 prlimit --as=8000000000 .venv/bin/python bench/bench_subassemblies.py /tmp/sa-truck [--fix-pins]
+    timeout 600 prlimit --as=8000000000 .venv/bin/python bench/bench_subassemblies.py /tmp/sa-truck [--fix-pins] [--save FILE]
 
 ``--fix-pins`` drops the obstruction pairs that tessellation slivers invent between each tire's axle pin
 and the chassis bore it sits in (see bench/README.md): the tire then leaves its bore along -X or +X.
@@ -16,7 +16,7 @@ from dataclasses import replace
 
 from planner import api
 from planner.assembly.hierarchy import level_statistics, product_levels, propose_subassemblies
-from planner.product import Obstruction, Product
+from planner.product import Obstruction, Product, save_product
 
 
 def without(product: Product, prefix: str) -> Product:
@@ -62,6 +62,8 @@ def main() -> None:
                 _RIGHT.add(tire)
         product = free_pins(product)
     print(f"{len(product.parts)} parts, {len(product.contacts)} contacts")
+    if "--save" in sys.argv:  # the product without screws, for aplan stats FILE --subassemblies auto
+        save_product(product, sys.argv[sys.argv.index("--save") + 1])
     start = time.perf_counter()
     groups = propose_subassemblies(product)
     print(f"proposed in {time.perf_counter() - start:.2f} s:")

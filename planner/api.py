@@ -58,7 +58,7 @@ from .product.examples import EXAMPLES, example_path
 __all__ = ["resolve_product", "plan_of", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
            "policy_for", "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner",
-           "choose_planner", "decision_maker", "levels_of", "level_product", "hierarchy_statistics_of"]
+           "choose_planner", "decision_maker", "arranged", "levels_of", "level_product", "hierarchy_statistics_of"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
 FILE_OPTION = ("--max-file", "--max-file GIB raises the file size budget")
@@ -104,6 +104,14 @@ def plan_of(product: str | os.PathLike | Product, technical: bool | None = None,
     ``True``/``False`` switches every technical constraint on/off, ``None`` keeps the file's; ``limits``: the
     size limits the plan is built within (past them: :class:`~planner.errors.LimitExceededError`)."""
     return make_plan(product if isinstance(product, Product) else resolve_product(product), technical, limits)
+
+
+def arranged(product: str | os.PathLike | Product, subassemblies: str = "designer", max_components: int = 8) -> Product:
+    """The product with the subassemblies ``subassemblies`` asks for
+    (:func:`~planner.assembly.hierarchy.with_subassemblies`): ``designer`` the file's, ``auto`` proposed when the
+    file has none (at most ``max_components`` members each), ``none`` none."""
+    product = product if isinstance(product, Product) else resolve_product(product)
+    return with_subassemblies(product, subassemblies, max_components)
 
 
 def levels_of(product: str | os.PathLike | Product, subassemblies: str = "designer",

@@ -30,7 +30,7 @@ from ..product import Markers, Obstruction, OperationTag, Part, Product, Subasse
 from .andor import and_or_graph
 
 __all__ = ["TOP", "Level", "product_levels", "propose_subassemblies", "with_subassemblies", "SUBASSEMBLY_MODES",
-           "level_statistics", "select_level"]
+           "level_statistics", "select_level", "check_level_constraints", "ConstraintViolationError"]
 
 log = logging.getLogger(__name__)
 
@@ -165,7 +165,8 @@ def with_subassemblies(product: Product, mode: str = "designer", max_components:
     if mode == "none":
         return replace(product, subassemblies=()) if product.subassemblies else product
     if mode == "auto" and not product.subassemblies:
-        return replace(product, subassemblies=propose_subassemblies(product, max_components))
+        proposed = propose_subassemblies(product, max_components)
+        return replace(product, subassemblies=proposed) if proposed else product
     return product
 
 
@@ -178,8 +179,9 @@ def propose_subassemblies(product: Product, max_components: int = 8) -> tuple[Su
     a subassembly, one member of the next round; rounds repeat until at most ``max_components`` members are
     left, which form the top level. A group is kept only if it can be built on its own (its level has a
     feasible AND/OR graph, :func:`~planner.assembly.and_or_graph`); a group that cannot is merged with the
-    neighbouring group it shares most contacts with when their union fits and can be built, else it is left
-    as it is and a warning names its stuck parts (its level's plan will then fail with the same reason).
+    neighbouring group it shares most contacts with whose union can be built, allowing the union up to 1.5 x
+    ``max_components`` members (the agglomeration already merged every pair that fits), else it is left as it
+    is and a warning names its stuck parts (its level's plan will then fail with the same reason).
 
     Returns the subassemblies (``source="proposed"``, ids ``sa1``, ``sa2``, ... unless a part has that id),
     inner ones first; () when the product has at most ``max_components`` parts.
@@ -249,13 +251,14 @@ def _agglomerate(product: Product, cap: int) -> list[list[str]]:
     return [groups[rep] for rep in sorted(groups, key=ids.index)]
 
 
-def _stuck_parts(product: Product, members: list[str]) -> NotDisassemblableError | None:
+def _stuck_parts(product: Product, members: list[str]) -> PlannerError | None:
     """The reason the group of ``members`` cannot be built on its own, or None when it can."""
     probe = replace(product, subassemblies=(Subassembly("_probe", tuple(members)),))
     level = next(level for level in product_levels(probe) if level.id == "_probe")
     try:
+        check_level_constraints(product, level)
         and_or_graph(level.product, limit=SUBASSEMBLY_LIMIT)
-    except NotDisassemblableError as error:
+    except (NotDisassemblableError, ConstraintViolationError) as error:
         return error
     except LimitExceededError:
         return None  # not decided cheaply: the level's own plan will say
@@ -264,7 +267,8 @@ def _stuck_parts(product: Product, members: list[str]) -> NotDisassemblableError
 
 def _repair(product: Product, rep: str, groups: dict[str, list[str]], links: dict[frozenset[str], int], cap: int,
             merge) -> None:
-    """Merge the group ``rep`` with a neighbour when it cannot be built alone, else warn naming its stuck parts."""
+    """Merge the group ``rep`` with a neighbour when it cannot be built alone (the union within 1.5 ``cap``), else
+    warn naming its stuck parts."""
     error = _stuck_parts(product, groups[rep])
     if error is None:
         return
@@ -272,10 +276,27 @@ def _repair(product: Product, rep: str, groups: dict[str, list[str]], links: dic
                         reverse=True)
     for _, other in neighbours:
         union = groups[rep] + groups[other]
-        if len(union) <= cap and _stuck_parts(product, union) is None:
+        if len(union) <= cap + cap // 2 and _stuck_parts(product, union) is None:
             merge(rep, other)
             return
     log.warning("proposed subassembly {%s} cannot be built on its own: %s", ", ".join(groups[rep]), error)
+
+
+class ConstraintViolationError(PlannerError):
+    """A subassembly holds the parts of an active technical constraint without the part they require."""
+
+
+def check_level_constraints(product: Product, level: Level) -> None:
+    """Raise :class:`ConstraintViolationError` when ``level``, once built, holds every part ``R1`` of an active
+    technical constraint of ``product`` but not ``R2``: no plan inside the level can respect it (the level's
+    own product drops such a constraint, as ``R2`` is not one of its members). Cost: O(constraints x parts)."""
+    for c in product.technical_constraints:
+        if c.active and c.parts <= level.parts and c.requires not in level.parts and len(level.parts) > 1:
+            raise ConstraintViolationError(
+                f"subassembly {level.id} ({', '.join(sorted(level.parts))}) holds {', '.join(sorted(c.parts))} "
+                f"without {c.requires}, which a technical constraint requires with them"
+                f"{' (' + c.reason + ')' if c.reason else ''}; add {c.requires} to it or take "
+                f"{', '.join(sorted(c.parts))} apart")
 
 
 def level_statistics(product: Product, technical: bool | None = None, limits=None) -> list[tuple[Level, object]]:
@@ -288,8 +309,10 @@ def level_statistics(product: Product, technical: bool | None = None, limits=Non
 
     limits = limits or SizeLimits()
     found: list[tuple[Level, object]] = []
+    product = product.with_technical(technical)
     for level in product_levels(product):
         try:
+            check_level_constraints(product, level)
             found.append((level, statistics_within(level.product, technical, None, limits)[1]))
         except LimitExceededError:
             raise
@@ -300,15 +323,18 @@ def level_statistics(product: Product, technical: bool | None = None, limits=Non
 
 def select_level(product: Product, level: str | None) -> Level:
     """The level named ``level`` (a subassembly id, or :data:`TOP`); None: the only level of a product planned
-    flat. A product of several levels without ``level`` is a :class:`PlannerError` listing them."""
+    flat. A product of several levels without ``level`` is a :class:`PlannerError` listing them; a level that
+    breaks a technical constraint is a :class:`ConstraintViolationError`."""
     levels = product_levels(product)
     if level is None:
         if len(levels) == 1:
+            check_level_constraints(product, levels[0])
             return levels[0]
         raise PlannerError(f"the product is planned as {len(levels)} subassemblies (workstations): "
                            f"{', '.join(lv.id for lv in levels)}; pick one with --level ID, or plan it flat "
                            "with --subassemblies none")
     for candidate in levels:
         if candidate.id == level:
+            check_level_constraints(product, candidate)
             return candidate
     raise PlannerError(f"--level {level}: no such subassembly; the levels are {', '.join(lv.id for lv in levels)}")

@@ -49,10 +49,11 @@ def product_argument(args: argparse.Namespace):
 def levels_from(args: argparse.Namespace) -> list:
     """The levels ``(id, product)`` a simulation or session runs through: the one ``--level`` names, else every
     level bottom-up (one, the product itself, when it is planned flat)."""
-    product = api.resolve_product(getattr(args, "model", None) or args.product)
-    if args.level is not None:
-        return [(args.level, api.level_product(product, args.subassemblies, args.level, args.max_components))]
-    return [(level.id, level.product) for level in api.levels_of(product, args.subassemblies, args.max_components)]
+    product = api.arranged(getattr(args, "model", None) or args.product, args.subassemblies, args.max_components)
+    ids = [args.level] if args.level is not None else [level.id for level in api.levels_of(product)]
+    if len(ids) == 1 and args.level is None:
+        return [(ids[0], api.level_product(product))]
+    return [(level, api.level_product(product, "designer", level)) for level in ids]
 
 
 def model_from(args: argparse.Namespace, product_only: bool = False):

@@ -8,14 +8,13 @@ import math
 import sys
 
 from .. import api
+from ..assembly.guards import SizeLimits
 from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, intention_graph
-from ..assembly.stats import STAT_KEYS
+from ..assembly.stats import STAT_KEYS, PlanStatistics
+from ..defaults import SUBASSEMBLY_LIMIT
 from ..files import write_atomic
 from ..product import product_to_dict
 from ..product.synthetic import SYNTHETIC
-from ..assembly.guards import SizeLimits
-from ..assembly.stats import PlanStatistics
-from ..defaults import SUBASSEMBLY_LIMIT
 from .options import (PRODUCT_HELP, add_base_part, add_hierarchy, add_size_options, add_technical, advice, limits_from,
                       positive)
 
@@ -35,10 +34,11 @@ _FLAT_LIMITS = SizeLimits(SUBASSEMBLY_LIMIT, 2 ** 30)
 
 
 def _stats(args: argparse.Namespace) -> int:
-    product = api.resolve_product(args.product)
-    if args.level is None and len(api.levels_of(product, args.subassemblies, args.max_components)) > 1:
+    # Subassemblies proposed once (--subassemblies auto), then the product's own.
+    product = api.arranged(api.resolve_product(args.product), args.subassemblies, args.max_components)
+    if args.level is None and len(api.levels_of(product)) > 1:
         return _level_stats(args, product)
-    product = api.level_product(product, args.subassemblies, args.level, args.max_components)
+    product = api.level_product(product, "designer", args.level)
     plan, stats = api.plan_statistics_of(product, args.technical, args.base_part, limits_from(args), partial=True)
     refused = stats.refused
     reason = f"{refused} {advice(refused, args)}".strip() if refused else None
@@ -47,7 +47,7 @@ def _stats(args: argparse.Namespace) -> int:
         if refused:
             data["not_computed"] = {"figures": list(stats.not_computed), "reason": reason}
         print(json.dumps(data))
-        return 1 if failed else PARTIAL if refused else 0
+        return PARTIAL if refused else 0
     print(f"{product.name or str(args.product)} ({product.source})")
     values = stats.as_dict()
     for key in STAT_KEYS:
@@ -72,20 +72,19 @@ def _level_stats(args: argparse.Namespace, product) -> int:
     limits = limits_from(args)
     flat_limits = SizeLimits(min(limits.subassemblies, _FLAT_LIMITS.subassemblies),
                              min(limits.memory, _FLAT_LIMITS.memory))
-    levels, flat = api.hierarchy_statistics_of(product, args.technical, limits, args.subassemblies,
-                                               args.max_components, flat_limits)
+    levels, flat = api.hierarchy_statistics_of(product, args.technical, limits, flat_limits=flat_limits)
     failed = [(level.id, error) for level, error in levels if not isinstance(error, PlanStatistics)]
     levels = [(level, stats if isinstance(stats, PlanStatistics) else None) for level, stats in levels]
     figures = {level.id: stats.as_dict() if stats else {key: None for key in STAT_KEYS} for level, stats in levels}
     total: dict[str, int | None] = {}
     for key in _LEVEL_KEYS:
         values = [figures[level.id][key] for level, _ in levels]
-        if any(v is None for v in values):
+        if key == "parts":
+            total[key] = len(product.parts)
+        elif any(v is None for v in values):
             total[key] = None
         elif key == "sequences":
             total[key] = math.prod(values)
-        elif key == "parts":
-            total[key] = len(product.parts)
         else:
             total[key] = sum(values)
     refused = [(level.id, stats.refused) for level, stats in levels if stats and stats.refused]
@@ -103,16 +102,21 @@ def _level_stats(args: argparse.Namespace, product) -> int:
     print(f"{product.name or str(args.product)} ({product.source}): {len(product.parts)} parts in {len(levels)} "
           f"levels (workstations), planned bottom-up")
     shown = lambda v: "-" if v is None else f"{v:,}"  # noqa: E731
-    header = f"  {'level':<12}{'members':>8}" + "".join(f"{k:>14}" for k in _LEVEL_KEYS[1:])
-    print(header)
+    names = {"parts": "members", "subassemblies": "and_or_nodes", "operations": "and_arcs"}
+    print(f"  {'level':<8}" + "".join(f"{names.get(k, k):>13}" for k in _LEVEL_KEYS[:1]) + f"{'built':>7}"
+          + "".join(f"{names.get(k, k):>13}" for k in _LEVEL_KEYS[1:]))
+    built = {level.id: sum(m not in product.part_ids for m in level.members) for level, _ in levels}
     for level, _ in levels:
         d = figures[level.id]
-        print(f"  {level.id:<12}{len(level.members):>8}" + "".join(f"{shown(d[k]):>14}" for k in _LEVEL_KEYS[1:]))
-    print(f"  {'total':<12}{total['parts']:>8}" + "".join(f"{shown(total[k]):>14}" for k in _LEVEL_KEYS[1:]))
+        print(f"  {level.id:<8}{len(level.members):>13}{built[level.id]:>7}"
+              + "".join(f"{shown(d[k]):>13}" for k in _LEVEL_KEYS[1:]))
+    print(f"  {'total':<8}{total['parts']:>13}{sum(built.values()):>7}"
+          + "".join(f"{shown(total[k]):>13}" for k in _LEVEL_KEYS[1:]))
     if flat_dict is not None:
-        print(f"  {'flat':<12}{flat_dict['parts']:>8}" + "".join(f"{shown(flat_dict[k]):>14}" for k in _LEVEL_KEYS[1:]))
-    print("  (total: the levels' sums; sequences: their product, each workstation following its own; parts: the "
-          "product's)")
+        print(f"  {'flat':<8}{flat_dict['parts']:>13}{0:>7}" + "".join(f"{shown(flat_dict[k]):>13}"
+                                                                      for k in _LEVEL_KEYS[1:]))
+    print("  (built: members that are subassemblies built at another workstation; total: the sums over the levels, "
+          "but parts: the product's, sequences: the product of the levels', each workstation following its own)")
     for level, stats in levels:
         print(f"  {level.id}: {', '.join(level.members)}")
     if flat_reason:
