@@ -151,10 +151,22 @@ def _level_product(product: Product, level: str, members: tuple[str, ...], owner
     if product.markers is not None:
         keep = member_set | {t.id for t in product.tools}
         ids = tuple((name, m) for name, m in product.markers.ids if name in keep)
+        ids += tuple((m, marker) for m, marker in _subassembly_markers(product).items() if m in member_set)
         markers = Markers(ids, product.markers.dictionary)
     name = product.name if level == TOP else f"{product.name or 'product'} / {label or level}"
     return Product(level_parts, tuple(contacts.values()), tuple(obstructions), tuple(constraints), product.tools,
                    tuple(operations), product.defaults, markers, (), name, product.units, source=product.source)
+
+
+def _subassembly_markers(product: Product) -> dict[str, int]:
+    """A marker for each subassembly (a built one lies in the tray as one part): the free marker ids of the
+    product's dictionary after its own, in file order; those beyond the dictionary get none (the session then
+    names them)."""
+    from ..product import MARKER_DICTIONARIES
+
+    taken = {marker for _, marker in product.markers.ids}
+    free = (k for k in range(MARKER_DICTIONARIES.get(product.markers.dictionary, 0)) if k not in taken)
+    return {group.id: marker for group, marker in zip(product.subassemblies, free)}
 
 
 def with_subassemblies(product: Product, mode: str = "designer", max_components: int = 8) -> Product:

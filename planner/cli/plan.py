@@ -12,6 +12,7 @@ from ..assembly.guards import SizeLimits
 from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, intention_graph
 from ..assembly.stats import STAT_KEYS, PlanStatistics
 from ..defaults import SUBASSEMBLY_LIMIT
+from ..errors import PlannerError
 from ..files import write_atomic
 from ..product import product_to_dict
 from ..product.synthetic import SYNTHETIC
@@ -37,6 +38,8 @@ def _stats(args: argparse.Namespace) -> int:
     # Subassemblies proposed once (--subassemblies auto), then the product's own.
     product = api.arranged(api.resolve_product(args.product), args.subassemblies, args.max_components)
     if args.level is None and len(api.levels_of(product)) > 1:
+        if args.base_part:
+            raise PlannerError("--base-part picks the first part of one workstation's sequences: add --level ID")
         return _level_stats(args, product)
     product = api.level_product(product, "designer", args.level)
     plan, stats = api.plan_statistics_of(product, args.technical, args.base_part, limits_from(args), partial=True)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import re
 from dataclasses import replace
 from math import comb, factorial
 
@@ -12,8 +13,9 @@ from planner.assembly import statistics_within
 from planner.assembly.hierarchy import (TOP, ConstraintViolationError, level_statistics, product_levels,
                                        propose_subassemblies, select_level, with_subassemblies)
 from planner.errors import PlannerError, ProductFormatError
-from planner.product import (Direction, Obstruction, OperationTag, Part, Product, Subassembly, TechnicalConstraint,
-                             load_product, product_from_dict, product_to_dict, save_product)
+from planner.product import (Direction, Markers, Obstruction, OperationTag, Part, Product, Subassembly,
+                             TechnicalConstraint, Tool, load_product, product_from_dict, product_to_dict,
+                             save_product)
 from planner.product.synthetic import chain_product, complete_product
 
 
@@ -147,7 +149,7 @@ def test_bad_trees_name_the_parts(groups, location, fragment):
     doc["subassemblies"] = groups
     with pytest.raises(ProductFormatError, match=location) as info:
         product_from_dict(doc, "x.json")
-    assert __import__("re").search(fragment, str(info.value)), str(info.value)
+    assert re.search(fragment, str(info.value)), str(info.value)
 
 
 def test_a_cycle_above_a_subassembly_is_found_from_its_members():
@@ -227,8 +229,17 @@ def test_a_subassembly_that_breaks_a_technical_constraint_is_named():
                       technical_constraints=(TechnicalConstraint(frozenset({"p09", "p10"}), "p08"),))
     with pytest.raises(ConstraintViolationError, match="subassembly A .* holds p09, p10 without p08"):
         select_level(product, "A")
-    found = dict((level.id, stats) for level, stats in level_statistics(product))
+    found = {level.id: stats for level, stats in level_statistics(product)}
     assert isinstance(found["A"], ConstraintViolationError) and found[TOP].sequences is not None
     # Switched off, it binds nothing.
-    assert not isinstance(dict((lv.id, st) for lv, st in level_statistics(product, technical=False))["A"],
+    assert not isinstance({lv.id: st for lv, st in level_statistics(product, technical=False)}["A"],
                           PlannerError)
+
+
+def test_built_subassemblies_get_free_markers():
+    product = replace(two_chains(), markers=Markers(tuple((p, k) for k, p in enumerate(("a1", "a2", "a3", "b1",
+                                                                                       "b2", "b3"))) + (("t", 7),)),
+                      tools=(Tool("t"),))
+    inner, _, top = product_levels(product)
+    assert dict(inner.product.markers.ids) == {"a1": 0, "a2": 1, "a3": 2, "t": 7}
+    assert dict(top.product.markers.ids) == {"A": 6, "B": 8, "t": 7}  # 6 and 8: the first ids no one has

@@ -64,6 +64,10 @@ def test_one_level_and_flat(capsys, chains):
     assert code == 0 and {k: json.loads(out)[k] for k in _chain(3)} == _chain(3)
     code, out, _ = run(capsys, "stats", chains, "--subassemblies", "none", "--json")
     assert code == 0 and {k: json.loads(out)[k] for k in _chain(6)} == _chain(6)
+    code, _, err = run(capsys, "stats", chains, "--base-part")
+    assert code == 1 and "add --level ID" in err
+    code, out, _ = run(capsys, "stats", chains, "--level", "A", "--base-part", "a1", "--json")
+    assert code == 0 and json.loads(out)["sequences"] == 1  # a chain of 3 starting from its end: a1 + a2 first
     code, _, err = run(capsys, "stats", chains, "--level", "C")
     assert code == 1 and "--level C: no such subassembly; the levels are A, B, top" in err
 
