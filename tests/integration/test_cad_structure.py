@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import json
 import subprocess
+from dataclasses import replace
 
 import pytest
-from conftest import REPO, require_freecadcmd
+from conftest import REPO, SHARED, require_freecadcmd, require_shared
 
 from integration.freecad_tools import aplan, freecad_result
+from planner.api import resolve_product
+from planner.assembly.hierarchy import level_statistics, propose_subassemblies
+from planner.product import Obstruction
 
 STRUCTURED = """
 import json, os, sys
@@ -58,3 +62,39 @@ def test_app_part_containers_become_subassemblies(tmp_path):
     assert flat["sequences"] == 24 and "levels" not in flat
     top = json.loads(aplan("stats", str(tmp_path / "b"), "--level", "top", "--json").stdout)
     assert top["parts"] == 3 and top["sequences"] == 2
+
+
+def _without_screws(product):
+    """The product without its wood screws (item 1 of issue 13 folds them into operations instead)."""
+    ids = {p.id for p in product.parts if not p.id.startswith("wood_screw")}
+    return replace(product, parts=tuple(p for p in product.parts if p.id in ids),
+                   contacts=tuple(c for c in product.contacts if set(c) <= ids),
+                   obstructions=tuple(Obstruction(o.direction, tuple(b for b in o.blocks if set(b) <= ids))
+                                      for o in product.obstructions))
+
+
+@pytest.mark.freecad
+def test_truck_workstations(tmp_path):
+    """The truck without its 39 screws (22 parts, 36 contacts) has no structure in its document (A2plus: a flat
+    list of parts); the proposal cuts it into workstations of at most 8 members from the connection diagram,
+    and the cabin's workstation is counted in seconds (the flat product is refused by the size guard)."""
+    require_freecadcmd()
+    path = require_shared(SHARED / "models" / "toy_truck" / "asm_cement_mixer_truck.FCStd")
+    aplan("export-freecad", str(path), "-o", str(tmp_path / "b"))
+    exported = resolve_product(tmp_path / "b")  # analysed by the export (the mesh engine)
+    assert exported.subassemblies == ()
+    product = _without_screws(exported)
+    assert (len(product.parts), len(product.contacts)) == (22, 36)
+    groups = propose_subassemblies(product, 8)
+    assert [set(g.parts) for g in groups] == [
+        {"chassis_001", "cabin_door_001", "cabin_door_002", "cabin_back_001", "cabin_hood_001", "cabin_bumper_001",
+         "wheel_arch_001", "wheel_arch_002"},
+        {"cabin_roof_001", "cabin_flashlight_001"},
+        {"drum_support_bottom_001", "drum_support_side_001", "drum_support_side_002", "drum_support_back_001",
+         "drum_support_front_001", "drum_001"},
+        {"tire_001", "tire_002", "tire_003", "tire_004", "tire_005", "tire_006", "sa1", "sa2"}]
+    figures = {level.id: stats for level, stats in level_statistics(replace(product, subassemblies=groups))}
+    assert list(figures) == ["sa3", "sa1", "sa2", "sa4", "top"]
+    cabin = figures["sa1"]
+    assert (cabin.subassemblies, cabin.operations, cabin.states, cabin.state_edges, cabin.intentions,
+            cabin.sequences) == (186, 1280, 1048, 5511, 437579, 164270)
