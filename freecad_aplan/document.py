@@ -249,7 +249,9 @@ def document_subassemblies(document, components: list[Component], taken: set[str
 
     Definition: a container (``App::Part``, or a group) is a subassembly whose members are the components
     directly in it (a component is where its first object is) and the containers below it that hold a
-    component. A container with one member is skipped (its member counts in its place), and so is a single
+    component. An object split into several components (``split_solids``: an A2plus sub-assembly import, a
+    link to another document's assembly, a STEP product read as one object) is a subassembly of them, in the
+    object's container. A container with one member is skipped (its member counts in its place), and so is a single
     outermost container holding every component (the whole product). Ids are the containers' labels, made
     unique against the component ids and ``taken``. Cost: O(objects + components x depth).
     """
@@ -269,9 +271,18 @@ def document_subassemblies(document, components: list[Component], taken: set[str
         if member not in members[container.Name]:
             members[container.Name].append(member)
 
+    sources: dict[str, int] = {}
+    for component in components:
+        if component.objects:
+            sources[component.objects[0]] = sources.get(component.objects[0], 0) + 1
     for component in components:
         first = document.getObject(component.objects[0]) if component.objects else None
         container = parents.get(first.Name) if first is not None else None
+        if first is not None and sources[first.Name] > 1:  # its solids, split: a subassembly of its own
+            split = _Split("\1" + first.Name, first.Label)
+            if container is not None:
+                parents[split.Name] = container
+            container = split
         if container is not None:
             place(component.id, container)
     if not members:
@@ -303,6 +314,14 @@ def document_subassemblies(document, components: list[Component], taken: set[str
             continue
         found.append({"id": names[container.Name], "parts": inner, "label": container.Label, "source": "designer"})
     return found
+
+
+@dataclass(frozen=True)
+class _Split:
+    """Stands for an object split into several components, as a container of them."""
+
+    Name: str
+    Label: str
 
 
 def _held(name: str, members: dict[str, list[str]]) -> set[str]:

@@ -1,5 +1,6 @@
 """A FreeCAD document's structure becomes the product's subassemblies (issue 13, item 2): App::Part containers
-nesting Part::Box parts, built in real FreeCAD, exported, then planned one workstation at a time."""
+nesting Part::Box parts and an object of two solids split into parts, built in real FreeCAD, exported, then
+planned one workstation at a time; the truck's proposed workstations."""
 from __future__ import annotations
 
 import json
@@ -17,7 +18,7 @@ from planner.product import Obstruction
 STRUCTURED = """
 import json, os, sys
 sys.path.insert(0, {repo!r})
-import FreeCAD
+import FreeCAD, Part
 doc = FreeCAD.newDocument("asm"); doc.saveAs({path!r})
 def box(name, x, container=None):
     b = doc.addObject("Part::Box", name); b.Length = b.Width = b.Height = 10; b.Placement.Base = FreeCAD.Vector(x, 0, 0)
@@ -30,9 +31,12 @@ wheel = doc.addObject("App::Part", "Wheel"); frame.addObject(wheel)
 lonely = doc.addObject("App::Part", "Lonely")
 spare = doc.addObject("App::DocumentObjectGroup", "Spare")  # an empty group: no subassembly
 box("A", 0, wheel); box("B", 10, wheel); box("C", 20, frame); box("D", 30, lonely); box("E", 40)
+# One object holding two solids (as an A2plus sub-assembly import does): split, a subassembly of its own.
+pair = doc.addObject("Part::Feature", "Pair")
+pair.Shape = Part.makeCompound([Part.makeBox(10, 10, 10, FreeCAD.Vector(x, 0, 0)) for x in (50, 60)])
 doc.recompute(); doc.save()
 from freecad_aplan.document import document_subassemblies, read_components
-result = read_components(doc)
+result = read_components(doc, split_solids=True)
 print("APLAN-RESULT " + json.dumps(document_subassemblies(doc, result.components)))
 """
 
@@ -46,22 +50,25 @@ def test_app_part_containers_become_subassemblies(tmp_path):
     done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300, check=False)
     assert freecad_result(done) == [
         {"id": "Wheel", "parts": ["A", "B"], "label": "Wheel", "source": "designer"},
-        {"id": "Frame", "parts": ["Wheel", "C"], "label": "Frame", "source": "designer"}]
-    # Exported and planned: Wheel (a chain of 2), Frame (Wheel - C), top (Frame - D - E, a chain of 3).
-    aplan("export-freecad", str(model), "-o", str(tmp_path / "b"))
+        {"id": "Frame", "parts": ["Wheel", "C"], "label": "Frame", "source": "designer"},
+        {"id": "Pair", "parts": ["Pair_001", "Pair_002"], "label": "Pair", "source": "designer"}]
+    # Exported and planned: Wheel (a chain of 2), Frame (Wheel - C), Pair (a chain of 2), top (Frame - D - E -
+    # Pair, a chain of 4).
+    aplan("export-freecad", str(model), "-o", str(tmp_path / "b"), "--split-solids")
     product = json.loads((tmp_path / "b" / "product.json").read_text())
-    assert [g["id"] for g in product["subassemblies"]] == ["Wheel", "Frame"]
+    assert [g["id"] for g in product["subassemblies"]] == ["Wheel", "Frame", "Pair"]
     data = json.loads(aplan("stats", str(tmp_path / "b"), "--json").stdout)
     assert [(level["level"], level["members"]) for level in data["levels"]] == [
-        ("Wheel", ["A", "B"]), ("Frame", ["Wheel", "C"]), ("top", ["D", "E", "Frame"])]
+        ("Wheel", ["A", "B"]), ("Frame", ["Wheel", "C"]), ("Pair", ["Pair_001", "Pair_002"]),
+        ("top", ["D", "E", "Frame", "Pair"])]
     assert [(level["subassemblies"], level["operations"], level["sequences"]) for level in data["levels"]] == [
-        (3, 1, 1), (3, 1, 1), (6, 4, 2)]  # chains of 2, 2 and 3: n(n+1)/2, C(n+1, 3), (n-1)!
-    assert data["flat"]["sequences"] == 24  # a chain of 5 planned flat: 4!
+        (3, 1, 1), (3, 1, 1), (3, 1, 1), (10, 10, 6)]  # chains of 2, 2, 2 and 4: n(n+1)/2, C(n+1, 3), (n-1)!
+    assert data["flat"]["sequences"] == 720  # a chain of 7 planned flat: 6!
     # --subassemblies none plans it flat; --level picks one workstation.
     flat = json.loads(aplan("stats", str(tmp_path / "b"), "--subassemblies", "none", "--json").stdout)
-    assert flat["sequences"] == 24 and "levels" not in flat
+    assert flat["sequences"] == 720 and "levels" not in flat
     top = json.loads(aplan("stats", str(tmp_path / "b"), "--level", "top", "--json").stdout)
-    assert top["parts"] == 3 and top["sequences"] == 2
+    assert top["parts"] == 4 and top["sequences"] == 6
 
 
 def _without_screws(product):
