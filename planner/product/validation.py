@@ -203,6 +203,8 @@ def _check_subassemblies(product: "Product", parts: dict[str, int], tools: dict[
                         f"duplicate subassembly id {group.id!r} (also subassemblies[{ids[group.id]}])")
         if group.id in parts or group.id in tools:
             raise _fail(product, location, f"subassembly id {group.id!r} is also a part or tool id; rename it")
+        if group.id == "top":
+            raise _fail(product, location, "'top' names the top level (what no subassembly holds); rename it")
         ids[group.id] = i
     owner: dict[str, str] = {}
     for i, group in enumerate(product.subassemblies):

@@ -143,6 +143,7 @@ def test_round_trip(tmp_path):
     ([{"id": "A", "parts": ["a1", "a2"]}, {"id": "A", "parts": ["b1", "b2"]}], r"subassemblies\[1\]\.id",
      "duplicate subassembly id 'A'"),
     ([{"id": "A", "parts": ["a1"]}], r"subassemblies\[0\]\.parts", "at least 2 items|two or more"),
+    ([{"id": "top", "parts": ["a1", "a2"]}], r"subassemblies\[0\]\.id", "'top' names the top level"),
 ])
 def test_bad_trees_name_the_parts(groups, location, fragment):
     doc = product_to_dict(replace(two_chains(), subassemblies=()))
