@@ -10,7 +10,8 @@ Runs inside FreeCAD (the GUI, or FreeCADCmd through ``freecad_aplan.batch``). A 
 When the document holds an APLAN analysis (:mod:`freecad_aplan.intent`), its designer intent applies:
 its groups and exclusions choose the components, and its technical constraints, tools and operation tags
 go into ``product.json``. So do its stored connection and obstruction diagrams (as the designer edited
-them), when they cover exactly the exported components; ``geometry.analysis.diagrams`` then says
+them), when they cover exactly the exported components; its structure (``App::Part`` containers, groups)
+becomes the product's ``subassemblies`` (:func:`~freecad_aplan.document.document_subassemblies`); ``geometry.analysis.diagrams`` then says
 ``"stored in the document"`` (``", edited"`` after edits), and a geometry engine need not run. The document is never modified: shapes are copies, and documents this module
 opened are closed again.
 """
@@ -28,7 +29,7 @@ from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION, PRODUCT_FILE
 from planner.errors import GeometryError
 from planner.files import write_atomic
 
-from .document import open_model, read_components
+from .document import document_subassemblies, open_model, read_components
 
 if TYPE_CHECKING:
     from .intent import Intent
@@ -175,6 +176,11 @@ def export_document(document, folder: str, source: str, groups=None, exclude=Non
             result.warnings.append(f"the diagrams stored in {analysis.Label!r} were not used: {reason}; contacts "
                                    "and obstructions are detected again (run APLAN > Detect contacts and "
                                    "obstructions to store new ones)")
+    if "subassemblies" not in extra:  # the document's structure (App::Part containers, groups)
+        tools = {t["id"] for t in extra.get("tools", [])}
+        structure = document_subassemblies(document, result.components, tools)
+        if structure:
+            extra["subassemblies"] = structure
     extra["x-freecad-objects"] = {c.id: list(c.objects) for c in result.components}
     product = export_components(result.components, folder, source, result.warnings, linear_deflection,
                                 angular_deflection, extra, recorded)

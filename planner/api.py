@@ -26,12 +26,14 @@ from __future__ import annotations
 import os
 import shutil
 from contextlib import contextmanager
+from dataclasses import replace
 from pathlib import Path
 from typing import Callable, Sequence
 
 import numpy as np
 
 from .assembly.guards import OPTIONS, SizeLimits, memory_options
+from .assembly.hierarchy import Level, level_statistics, product_levels, select_level, with_subassemblies
 from .assembly.intentions import base_part_first_edges, count_intentions, most_connected_part
 from .assembly.plan import Plan, make_plan
 from .assembly.stats import PlanStatistics, plan_statistics, statistics_within
@@ -57,7 +59,7 @@ from .product.examples import EXAMPLES, example_path
 __all__ = ["resolve_product", "plan_of", "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
            "policy_for", "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner",
-           "choose_planner", "decision_maker"]
+           "choose_planner", "decision_maker", "arranged", "levels_of", "level_product", "hierarchy_statistics_of"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
 FILE_OPTION = ("--max-file", "--max-file GIB raises the file size budget")
@@ -150,6 +152,50 @@ def plan_of(product: str | os.PathLike | Product, technical: bool | None = None,
     product = product if isinstance(product, Product) else resolve_product(product)
     with _gaps_explained(product):
         return make_plan(product, technical, limits)
+
+
+def arranged(product: str | os.PathLike | Product, subassemblies: str = "designer", max_components: int = 8) -> Product:
+    """The product with the subassemblies ``subassemblies`` asks for
+    (:func:`~planner.assembly.hierarchy.with_subassemblies`): ``designer`` the file's, ``auto`` proposed when the
+    file has none (at most ``max_components`` members each), ``none`` none."""
+    product = product if isinstance(product, Product) else resolve_product(product)
+    return with_subassemblies(product, subassemblies, max_components)
+
+
+def levels_of(product: str | os.PathLike | Product, subassemblies: str = "designer",
+              max_components: int = 8) -> list[Level]:
+    """The workstations of a product, bottom-up (:func:`~planner.assembly.hierarchy.product_levels`) with its
+    subassemblies as ``subassemblies`` asks: ``designer`` (the file's), ``auto`` (proposed when the file has
+    none, at most ``max_components`` members each) or ``none`` (one level: the product flat)."""
+    product = product if isinstance(product, Product) else resolve_product(product)
+    return product_levels(with_subassemblies(product, subassemblies, max_components))
+
+
+def level_product(product: str | os.PathLike | Product, subassemblies: str = "designer", level: str | None = None,
+                  max_components: int = 8) -> Product:
+    """The product one workstation plans: level ``level`` (a subassembly id or ``top``), or the product itself
+    when it is planned flat; several levels without ``level`` is a :class:`PlannerError` naming them."""
+    product = product if isinstance(product, Product) else resolve_product(product)
+    return select_level(with_subassemblies(product, subassemblies, max_components), level).product
+
+
+def hierarchy_statistics_of(product: str | os.PathLike | Product, technical: bool | None = None,
+                            limits: SizeLimits = SizeLimits(), subassemblies: str = "designer",
+                            max_components: int = 8, flat_limits: SizeLimits | None = None):
+    """The figures of every level (``[(Level, PlanStatistics)]``, bottom-up) and of the product planned flat:
+    a :class:`PlanStatistics` within ``flat_limits`` (default ``limits``), or the :class:`PlannerError` that
+    stopped it (not connected, not disassemblable); None when the product is one level."""
+    product = product if isinstance(product, Product) else resolve_product(product)
+    arranged = with_subassemblies(product, subassemblies, max_components)
+    levels = level_statistics(arranged, technical, limits)
+    if len(levels) == 1:
+        return levels, None
+    flat = replace(product, subassemblies=())
+    try:
+        _, flat_stats = statistics_within(flat, technical, None, flat_limits or limits)
+    except PlannerError as error:
+        return levels, error
+    return levels, flat_stats
 
 
 AUTO_BASE_PART = "auto"

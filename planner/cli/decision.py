@@ -27,7 +27,7 @@ from .options import (
     rewards_from,
 )
 
-__all__ = ["add_commands", "model_from", "policy_from", "decision_maker_from"]
+__all__ = ["add_commands", "model_from", "policy_from", "decision_maker_from", "product_argument", "levels_from"]
 
 log = logging.getLogger(__name__)
 
@@ -35,9 +35,31 @@ LUMPED_HELP = ("when MODEL is a product: the model over the factored model's cla
                "finished product) instead of intentions, with the same value and far fewer states")
 
 
+def product_argument(args: argparse.Namespace):
+    """MODEL or PRODUCT of ``args``: a model file's name as it is, else the product of the workstation that
+    ``--subassemblies`` and ``--level`` pick (:func:`planner.api.level_product`)."""
+    argument = getattr(args, "model", None) or args.product
+    if api._model_file_kind(argument):
+        if getattr(args, "level", None):
+            raise PlannerError(f"{argument}: --level picks a subassembly of a PRODUCT; a model file is one model")
+        return argument
+    return api.level_product(argument, args.subassemblies, args.level, args.max_components)
+
+
+def levels_from(args: argparse.Namespace) -> list:
+    """The levels ``(id, product)`` a simulation or session runs through: the one ``--level`` names, else every
+    level bottom-up (one, the product itself, when it is planned flat)."""
+    product = api.arranged(getattr(args, "model", None) or args.product, args.subassemblies, args.max_components)
+    ids = [args.level] if args.level is not None else [level.id for level in api.levels_of(product)]
+    if len(ids) == 1 and args.level is None:
+        return [(ids[0], api.level_product(product))]
+    return [(level, api.level_product(product, "designer", level)) for level in ids]
+
+
 def model_from(args: argparse.Namespace, product_only: bool = False):
     """The model of ``args.model`` (or ``args.product``): a PRODUCT's decision model, or a model file."""
-    argument = getattr(args, "model", None) or args.product
+    raw = getattr(args, "model", None) or args.product
+    argument = raw if product_only and str(raw).lower().endswith(api.MODEL_SUFFIXES) else product_argument(args)
     if product_only:
         if str(argument).lower().endswith(api.MODEL_SUFFIXES):
             extra = "; --base-part, too, applies to products only" if args.base_part else ""
@@ -58,11 +80,12 @@ def policy_from(args: argparse.Namespace, model):
     return policy
 
 
-def decision_maker_from(args: argparse.Namespace):
-    """The model and policy of ``args`` (:func:`planner.api.decision_maker`), logging what was chosen."""
-    argument = getattr(args, "model", None) or args.product
+def decision_maker_from(args: argparse.Namespace, product=None):
+    """The model and policy of ``args`` (:func:`planner.api.decision_maker`), logging what was chosen;
+    ``product``: this one (a level) instead of the one ``args`` names."""
+    argument = product if product is not None else product_argument(args)
     decision_time, expansions = online_budget(args)
-    if api._model_file_kind(argument):
+    if not isinstance(argument, api.Product) and api._model_file_kind(argument):
         if args.planner == "online":
             raise PlannerError(f"{argument}: the online planner needs a PRODUCT (its factored model), not a model file")
         model = model_from(args)
@@ -104,11 +127,22 @@ def _solve(args: argparse.Namespace) -> int:
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from ..decision.simulate import plot_beliefs
-
     if api._model_file_kind(args.model):
         raise PlannerError("simulate needs a PRODUCT (the intention graph names the sequences), not a model file")
-    model, policy = decision_maker_from(args)
+    levels = levels_from(args)
+    for k, (level, product) in enumerate(levels, start=1):
+        if len(levels) > 1 and not args.json:
+            print(f"level {level} ({k} of {len(levels)}): {', '.join(product.part_ids)}")
+        if args.plot and len(levels) > 1:
+            raise PlannerError("--plot draws one product's beliefs: pick one subassembly with --level ID")
+        _simulate_level(args, product)
+    return 0
+
+
+def _simulate_level(args: argparse.Namespace, product) -> int:
+    from ..decision.simulate import plot_beliefs
+
+    model, policy = decision_maker_from(args, product)
     episodes = api.simulate(model, policy, args.sequence, args.all, args.random, args.seed, args.max_steps,
                             args.operator)
     if not isinstance(model, IntentionModel):

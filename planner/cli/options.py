@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 
 from ..assembly.guards import SizeLimits, default_memory_budget
+from ..assembly.hierarchy import SUBASSEMBLY_MODES
 from ..decision.intention_model import Rewards
 from ..defaults import (
     CONTACT_CEILING_FRACTION,
@@ -18,8 +19,9 @@ from ..geometry.mesh_engine import Tolerances
 from ..geometry.tolerances import AUTO
 from ..product.examples import EXAMPLES
 
-__all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_base_part", "add_decision_options", "rewards_from",
-           "add_tolerance_options", "tolerances_from", "add_contact_options", "contact_tolerances_from", "contact_tolerance", "positive_length", "add_policy_options", "add_episode_options", "positive_seconds",
+__all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_base_part", "add_hierarchy", "add_decision_options",
+           "rewards_from", "add_tolerance_options", "tolerances_from", "add_contact_options", "contact_tolerances_from",
+           "contact_tolerance", "positive_length", "add_policy_options", "add_episode_options", "positive_seconds",
            "online_budget", "add_size_options", "limits_from", "offer_options", "advice", "gibibytes"]
 
 PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or STEP file (read through "
@@ -47,6 +49,20 @@ def add_base_part(parser) -> None:
                              "and their intentions; without PART: the most connected part (paper Sec. V)")
 
 
+def add_hierarchy(parser, level: bool = True) -> None:
+    """``--subassemblies {designer,auto,none}``, ``--max-components N`` and (with ``level``) ``--level ID``."""
+    parser.add_argument("--subassemblies", choices=SUBASSEMBLY_MODES, default="designer",
+                        help="designer (default): plan each subassembly of the product file as a workstation of "
+                             "its own (flat when it has none); auto: the same, proposing subassemblies when it has "
+                             "none; none: plan the whole product flat")
+    parser.add_argument("--max-components", type=positive, default=8, metavar="N",
+                        help="--subassemblies auto: at most N members per proposed subassembly (default 8)")
+    if level:
+        parser.add_argument("--level", metavar="ID",
+                            help="plan one subassembly (one workstation; 'top' for the top level): its members "
+                                 "are its parts, a built subassembly is one part")
+
+
 def add_decision_options(parser: argparse.ArgumentParser) -> None:
     """The decision model's options (when MODEL is a product): technical constraints, base part, discount,
     rewards."""
@@ -62,6 +78,7 @@ def add_decision_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--reward-wrong", type=float, default=d.wrong, metavar="R",
                        help=f"robot does another operation: its eagerness (default {d.wrong:g})")
     group.add_argument("--reward-wait", type=float, default=d.wait, metavar="R", help=f"wait (default {d.wait:g})")
+    add_hierarchy(group)
     add_size_options(parser)
 
 

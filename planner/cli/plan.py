@@ -4,11 +4,15 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import sys
 
 from .. import api
+from ..assembly.guards import SizeLimits
 from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, intention_graph
-from ..assembly.stats import STAT_KEYS
+from ..assembly.stats import STAT_KEYS, PlanStatistics
+from ..defaults import SUBASSEMBLY_LIMIT
+from ..errors import PlannerError
 from ..files import write_atomic
 from ..product import product_to_dict
 from ..product.synthetic import SYNTHETIC
@@ -17,6 +21,7 @@ from .options import (
     PRODUCT_HELP,
     add_base_part,
     add_contact_options,
+    add_hierarchy,
     add_size_options,
     add_technical,
     advice,
@@ -34,11 +39,24 @@ log = logging.getLogger(__name__)
 PARTIAL = 3
 
 
+# The figures a hierarchy adds up over its levels (sequences multiply: each workstation picks its own).
+_LEVEL_KEYS = ("parts", "subassemblies", "operations", "states", "state_edges", "intentions", "sequences")
+# The flat plan is only counted for comparison: within these limits (a few seconds), else refused.
+_FLAT_LIMITS = SizeLimits(SUBASSEMBLY_LIMIT, 2 ** 30)
+
+
 def _stats(args: argparse.Namespace) -> int:
     product = api.resolve_product(args.product, contact_tolerances_from(args))
     if args.contact is not None:  # analysed again here: say what the analysis found, as aplan analyze does
         for warning in product.geometry.get("analysis", {}).get("warnings", []):
             log.warning("%s", warning)
+    # Subassemblies proposed once (--subassemblies auto), then the product's own.
+    product = api.arranged(product, args.subassemblies, args.max_components)
+    if args.level is None and len(api.levels_of(product)) > 1:
+        if args.base_part:
+            raise PlannerError("--base-part picks the first part of one workstation's sequences: add --level ID")
+        return _level_stats(args, product)
+    product = api.level_product(product, "designer", args.level)
     plan, stats = api.plan_statistics_of(product, args.technical, args.base_part, limits_from(args), partial=True)
     refused = stats.refused
     reason = f"{refused} {advice(refused, args)}".strip() if refused else None
@@ -70,9 +88,71 @@ def _stats(args: argparse.Namespace) -> int:
     return 0
 
 
+def _level_stats(args: argparse.Namespace, product) -> int:
+    """``aplan stats`` of a product planned as several workstations: each level, the total, and flat."""
+    limits = limits_from(args)
+    flat_limits = SizeLimits(min(limits.subassemblies, _FLAT_LIMITS.subassemblies),
+                             min(limits.memory, _FLAT_LIMITS.memory))
+    levels, flat = api.hierarchy_statistics_of(product, args.technical, limits, flat_limits=flat_limits)
+    failed = [(level.id, error) for level, error in levels if not isinstance(error, PlanStatistics)]
+    levels = [(level, stats if isinstance(stats, PlanStatistics) else None) for level, stats in levels]
+    figures = {level.id: stats.as_dict() if stats else {key: None for key in STAT_KEYS} for level, stats in levels}
+    total: dict[str, int | None] = {}
+    for key in _LEVEL_KEYS:
+        values = [figures[level.id][key] for level, _ in levels]
+        if key == "parts":
+            total[key] = len(product.parts)
+        elif any(v is None for v in values):
+            total[key] = None
+        elif key == "sequences":
+            total[key] = math.prod(values)
+        else:
+            total[key] = sum(values)
+    refused = [(level.id, stats.refused) for level, stats in levels if stats and stats.refused]
+    flat_dict = flat.as_dict() if isinstance(flat, PlanStatistics) else None
+    flat_reason = (str(flat.refused) if isinstance(flat, PlanStatistics) and flat.refused else
+                   None if isinstance(flat, PlanStatistics) else str(flat))
+    if args.json:
+        print(json.dumps({"levels": [{"level": level.id, "members": list(level.members), **figures[level.id],
+                                      **({"not_computed": str(stats.refused)} if stats and stats.refused else {}),
+                                      **({"error": str(dict(failed)[level.id])} if level.id in dict(failed) else {})}
+                                     for level, stats in levels],
+                          "total": total, "flat": flat_dict, **({"flat_not_computed": flat_reason}
+                                                                 if flat_reason else {})}))
+        return 1 if failed else PARTIAL if refused else 0
+    print(f"{product.name or str(args.product)} ({product.source}): {len(product.parts)} parts in {len(levels)} "
+          f"levels (workstations), planned bottom-up")
+    shown = lambda v: "-" if v is None else f"{v:,}"  # noqa: E731
+    names = {"parts": "members", "subassemblies": "and_or_nodes", "operations": "and_arcs"}
+    print(f"  {'level':<8}" + "".join(f"{names.get(k, k):>13}" for k in _LEVEL_KEYS[:1]) + f"{'built':>7}"
+          + "".join(f"{names.get(k, k):>13}" for k in _LEVEL_KEYS[1:]))
+    built = {level.id: sum(m not in product.part_ids for m in level.members) for level, _ in levels}
+    for level, _ in levels:
+        d = figures[level.id]
+        print(f"  {level.id:<8}{len(level.members):>13}{built[level.id]:>7}"
+              + "".join(f"{shown(d[k]):>13}" for k in _LEVEL_KEYS[1:]))
+    print(f"  {'total':<8}{total['parts']:>13}{sum(built.values()):>7}"
+          + "".join(f"{shown(total[k]):>13}" for k in _LEVEL_KEYS[1:]))
+    if flat_dict is not None:
+        print(f"  {'flat':<8}{flat_dict['parts']:>13}{0:>7}" + "".join(f"{shown(flat_dict[k]):>13}"
+                                                                      for k in _LEVEL_KEYS[1:]))
+    print("  (built: members that are subassemblies built at another workstation; total: the sums over the levels, "
+          "but parts: the product's, sequences: the product of the levels', each workstation following its own)")
+    for level, stats in levels:
+        print(f"  {level.id}: {', '.join(level.members)}")
+    if flat_reason:
+        print(f"  flat: not counted: {flat_reason}")
+    for name, error in refused:
+        print(f"  {name}: not computed: {error} {advice(error, args)}".rstrip())
+    for name, error in failed:
+        print(f"aplan: error: level {name}: {error}", file=sys.stderr)
+    return 1 if failed else PARTIAL if refused else 0
+
+
 def _intentions(args: argparse.Namespace) -> int:
     limits = limits_from(args)
-    plan = api.plan_of(args.product, args.technical, limits)
+    product = api.level_product(args.product, args.subassemblies, args.level, args.max_components)
+    plan = api.plan_of(product, args.technical, limits)
     graph = intention_graph(plan.states, limit=args.limit, base_part=api.base_part_of(plan, args.base_part),
                             max_bytes=limits.memory)
     for i in (graph.full_sequences() if args.full else range(graph.n_intentions)):
@@ -109,6 +189,7 @@ def add_commands(commands) -> None:
                             "not_computed: the figures and the reason)")
     add_technical(stats)
     add_base_part(stats)
+    add_hierarchy(stats)
     add_size_options(stats)
     add_contact_options(stats)
     stats.set_defaults(run=_stats)
@@ -121,6 +202,7 @@ def add_commands(commands) -> None:
     intentions.add_argument("--json", action="store_true", help="one JSON object per line")
     add_technical(intentions)
     add_base_part(intentions)
+    add_hierarchy(intentions)
     add_size_options(intentions)
     intentions.set_defaults(run=_intentions)
 

@@ -13,7 +13,7 @@ from ..decision.intention_model import IntentionModel
 from ..decision.policy import AlphaVectorPolicy
 from ..errors import PlannerError
 from ..product import DEFAULT_MARKER_DICTIONARY
-from .decision import decision_maker_from, model_from
+from .decision import decision_maker_from, levels_from, model_from
 from .options import PRODUCT_HELP, add_decision_options, add_policy_options, online_budget, positive
 
 __all__ = ["add_commands"]
@@ -60,17 +60,33 @@ def _demo_operations(model, k: int) -> list[int]:
 
 
 def _session(args: argparse.Namespace) -> int:
+    """One session per level (workstation), bottom-up; with several, each has its own log (``LOG`` with the
+    level's id before the suffix), whose start event records the level."""
+    if args.demo is not None and args.robot is not None:
+        raise PlannerError("--demo simulates the robot too; leave out --robot")
+    if api._model_file_kind(args.product):
+        model_from(args, product_only=True)  # the error that says a session needs a product
+    levels = levels_from(args)
+    log_path = args.log or f"session-{time.strftime('%Y%m%d-%H%M%S')}.jsonl"
+    status = 0
+    for k, (level, product) in enumerate(levels, start=1):
+        path = log_path if len(levels) == 1 else str(Path(log_path).with_suffix("")) + f"-{level}.jsonl"
+        if len(levels) > 1:
+            print(f"level {level} ({k} of {len(levels)}): {', '.join(product.part_ids)}")
+        status = _session_level(args, product, path, level if args.level or len(levels) > 1 else None)
+        if status:
+            return status
+    return status
+
+
+def _session_level(args: argparse.Namespace, product, log_path: str, level: str | None) -> int:
     from ..runtime.console import ConsoleRobot, KeyboardSource
     from ..runtime.log import EventLog
     from ..runtime.scripted import ScriptedRobot
     from ..runtime.session import run_session
     from ..runtime.vision import MarkerDetector, VisionSource, marker_map
 
-    if args.demo is not None and args.robot is not None:
-        raise PlannerError("--demo simulates the robot too; leave out --robot")
-    if api._model_file_kind(args.product):
-        model_from(args, product_only=True)  # the error that says a session needs a product
-    model, policy = decision_maker_from(args)
+    model, policy = decision_maker_from(args, product)
     plan = model.plan
     stream, robot = None, ConsoleRobot() if args.robot in (None, "console") else ScriptedRobot()
     if not args.keyboard:  # open the frames first: a camera or file that cannot be read stops before any log
@@ -92,7 +108,6 @@ def _session(args: argparse.Namespace) -> int:
         print(("\r\033[K" if interactive else "") + line, end="" if interactive else "\n", file=sys.stderr,
               flush=True)
 
-    log_path = args.log or f"session-{time.strftime('%Y%m%d-%H%M%S')}.jsonl"
     events = EventLog(log_path, on_event=show)
     if args.keyboard:
         source = KeyboardSource(plan.product)
@@ -109,7 +124,7 @@ def _session(args: argparse.Namespace) -> int:
                 "technical": args.technical, "base_part": model.base_part, "discount": args.discount,
                 "rewards": vars(model.rewards), "robot": args.robot, "source": _source_name(args),
                 "debounce": args.debounce, "quiet_frames": args.quiet_frames,
-                "robot_own_tools": args.robot_own_tools}
+                "robot_own_tools": args.robot_own_tools, "level": level}
     try:
         result = run_session(model, policy, source, robot, events, status, args.max_steps, settings=settings)
     finally:

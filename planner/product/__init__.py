@@ -10,12 +10,13 @@ from ..files import write_atomic
 from .constants import AXIS_DIRECTIONS, DEFAULT_MARKER_DICTIONARY, FORMAT, MARKER_DICTIONARIES, UNITS, VERSION
 from .examples import EXAMPLES, example_path, resources_dir
 from .io import load_product, loads_product, product_from_dict, product_to_dict, save_product
-from .model import Direction, Markers, Obstruction, OperationTag, Part, Product, TagDefaults, TechnicalConstraint, Tool
+from .model import (Direction, Markers, Obstruction, OperationTag, Part, Product, Subassembly, TagDefaults,
+                    TechnicalConstraint, Tool)
 from .synthetic import SYNTHETIC, chain_product, complete_product
 
 __all__ = ["EXAMPLES", "example_path", "resources_dir",
            "AXIS_DIRECTIONS", "DEFAULT_MARKER_DICTIONARY", "FORMAT", "MARKER_DICTIONARIES", "UNITS", "VERSION",
-           "Direction", "Markers", "Obstruction", "OperationTag", "Part", "Product", "TagDefaults",
+           "Direction", "Markers", "Obstruction", "OperationTag", "Part", "Product", "Subassembly", "TagDefaults",
            "TechnicalConstraint", "Tool", "load_product", "loads_product", "product_from_dict", "product_to_dict",
            "save_product", "write_atomic",
            "SYNTHETIC", "chain_product", "complete_product"]

@@ -17,7 +17,8 @@ from typing import Any
 from ..errors import ProductFormatError
 from ..files import write_atomic
 from .constants import AXIS_DIRECTIONS, DEFAULT_MARKER_DICTIONARY, FORMAT, UNIT_TOLERANCE, VERSION
-from .model import Direction, Markers, Obstruction, OperationTag, Part, Product, TagDefaults, TechnicalConstraint, Tool
+from .model import (Direction, Markers, Obstruction, OperationTag, Part, Product, Subassembly, TagDefaults,
+                    TechnicalConstraint, Tool)
 from .schema import check_document
 
 __all__ = ["product_from_dict", "product_to_dict", "loads_product", "load_product", "save_product"]
@@ -43,6 +44,8 @@ def product_from_dict(data: Any, source: str = "<memory>") -> Product:
         defaults=TagDefaults(unfavorable=defaults.get("unfavorable", "single-part-rule"),
                              robot=defaults.get("robot", True), tool=defaults.get("tool")),
         markers=_markers(data["markers"]) if "markers" in data else None,
+        subassemblies=tuple(Subassembly(item["id"], tuple(item["parts"]), item.get("label", ""),
+                                        item.get("source", "designer")) for item in data.get("subassemblies", [])),
         name=data.get("name", ""), units=data.get("units", "mm"),
         geometry=dict(data.get("geometry", {})),
         extensions={k: v for k, v in data.items() if k.startswith("x-")},
@@ -118,6 +121,9 @@ def product_to_dict(product: Product) -> dict:
         doc["defaults"] = {"unfavorable": d.unfavorable, "robot": d.robot, **({"tool": d.tool} if d.tool else {})}
     if product.markers is not None:
         doc["markers"] = {"dictionary": product.markers.dictionary, "ids": dict(product.markers.ids)}
+    if product.subassemblies:
+        doc["subassemblies"] = [{"id": g.id, "parts": list(g.parts), **({"label": g.label} if g.label else {}),
+                                 "source": g.source} for g in product.subassemblies]
     if product.geometry:
         doc["geometry"] = dict(product.geometry)
     doc.update(product.extensions)

@@ -10,7 +10,9 @@ A *product* holds:
 - technical constraints ``(R1, R2)``: a subassembly ``S`` of two or more parts is infeasible when
   ``R1 <= S`` and ``R2 not in S`` (a constraint can be kept in the file but switched off: ``active``);
 - designer tags on operations: unfavorable to humans, robot-capable, the tool the operation needs, plus
-  product-wide defaults for operations that carry no tag.
+  product-wide defaults for operations that carry no tag;
+- subassemblies: a tree of named groups of parts (and of other subassemblies), each built at a workstation
+  of its own and then handled as one part (:mod:`planner.assembly.hierarchy`).
 
 Constructing a :class:`Product` checks it (:mod:`planner.product.validation`). Its JSON file format is in
 :mod:`planner.product.io` and ``docs/product-format.md``.
@@ -24,7 +26,7 @@ from .constants import AXIS_DIRECTIONS, DEFAULT_MARKER_DICTIONARY, UNIT_TOLERANC
 from .validation import check_product
 
 __all__ = ["Part", "Direction", "Obstruction", "TechnicalConstraint", "Tool", "OperationTag", "TagDefaults",
-           "Markers", "Product"]
+           "Markers", "Subassembly", "Product"]
 
 
 @dataclass(frozen=True)
@@ -135,6 +137,19 @@ class Markers:
 
 
 @dataclass(frozen=True)
+class Subassembly:
+    """A subassembly the designer (``source="designer"``) or the planner (``"proposed"``) names: ``parts``
+    holds part ids and ids of other subassemblies, its direct members. It is built on its own, then joins the
+    level above as one part. The subassemblies of a product form a forest: each part or subassembly is a
+    member of at most one, and none contains itself."""
+
+    id: str
+    parts: tuple[str, ...]
+    label: str = ""
+    source: str = "designer"
+
+
+@dataclass(frozen=True)
 class Product:
     """A product: parts, connection diagram, obstruction diagrams, technical constraints and designer tags.
 
@@ -150,6 +165,7 @@ class Product:
     operations: tuple[OperationTag, ...] = ()
     defaults: TagDefaults = TagDefaults()
     markers: Markers | None = None
+    subassemblies: tuple[Subassembly, ...] = ()
     name: str = ""
     units: str = "mm"
     geometry: Mapping[str, Any] = field(default_factory=dict, compare=False)

@@ -33,6 +33,7 @@ def check_product(product: "Product") -> None:
     _check_defaults(product, tools)
     if product.markers is not None:
         _check_markers(product, set(parts) | set(tools))
+    _check_subassemblies(product, parts, tools)
 
 
 def _fail(product: "Product", location: str, problem: str) -> ProductFormatError:
@@ -187,3 +188,43 @@ def _check_markers(product: "Product", items: set[str]) -> None:
             raise _fail(product, location, f"marker {marker} is used twice: by {owner[marker]!r} and by {name!r}; "
                         "give every part and tool its own marker")
         owner[marker] = name
+
+
+def _check_subassemblies(product: "Product", parts: dict[str, int], tools: dict[str, int]) -> None:
+    """A forest: ids new (not a part, tool or other subassembly), members known, each member in at most one
+    subassembly, no subassembly inside itself, at least two members each."""
+    ids: dict[str, int] = {}
+    for i, group in enumerate(product.subassemblies):
+        location = f"subassemblies[{i}].id"
+        if not isinstance(group.id, str) or not group.id.strip():
+            raise _fail(product, location, "a subassembly id must be a non-empty string")
+        if group.id in ids:
+            raise _fail(product, location,
+                        f"duplicate subassembly id {group.id!r} (also subassemblies[{ids[group.id]}])")
+        if group.id in parts or group.id in tools:
+            raise _fail(product, location, f"subassembly id {group.id!r} is also a part or tool id; rename it")
+        if group.id == "top":
+            raise _fail(product, location, "'top' names the top level (what no subassembly holds); rename it")
+        ids[group.id] = i
+    owner: dict[str, str] = {}
+    for i, group in enumerate(product.subassemblies):
+        if len(group.parts) < 2:
+            raise _fail(product, f"subassemblies[{i}].parts",
+                        f"subassembly {group.id!r} has {len(group.parts)} member(s); a subassembly needs two or more")
+        for j, member in enumerate(group.parts):
+            location = f"subassemblies[{i}].parts[{j}]"
+            if member not in parts and member not in ids:
+                raise _fail(product, location, f"{member!r} is neither a part nor a subassembly id"
+                                               f"{suggest(member, list(parts) + list(ids))}")
+            if member in owner:
+                raise _fail(product, location, f"{member!r} is in two subassemblies: {owner[member]!r} and "
+                                               f"{group.id!r}; a part or subassembly belongs to one at most")
+            owner[member] = group.id
+    for i, group in enumerate(product.subassemblies):
+        seen, current = [group.id], owner.get(group.id)
+        while current is not None and current not in seen[1:]:  # a cycle above this one is found from its members
+            if current == group.id:
+                raise _fail(product, f"subassemblies[{i}]", "the subassemblies contain each other in a cycle: "
+                                                            + " in ".join(seen + [group.id]) + "; break the cycle")
+            seen.append(current)
+            current = owner.get(current)
