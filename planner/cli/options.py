@@ -10,7 +10,8 @@ from ..errors import LimitExceededError
 from ..geometry.mesh_engine import Tolerances
 from ..product.examples import EXAMPLES
 
-__all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_base_part", "add_decision_options", "rewards_from",
+__all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_base_part", "add_fasteners", "product_from",
+           "add_decision_options", "rewards_from",
            "add_tolerance_options", "tolerances_from", "add_policy_options", "add_episode_options", "positive_seconds",
            "online_budget", "add_size_options", "limits_from", "offer_options", "advice", "gibibytes"]
 
@@ -39,6 +40,24 @@ def add_base_part(parser) -> None:
                              "and their intentions; without PART: the most connected part (paper Sec. V)")
 
 
+def add_fasteners(parser) -> None:
+    """``--fasteners {tagged,auto,none}``: the fastener groups a plan folds into the operations that install them."""
+    parser.add_argument("--fasteners", choices=("tagged", "auto", "none"), default="tagged",
+                        help="fold fasteners into the operations that install them: tagged (default): the groups of "
+                             "the product's 'fasteners' section; auto: those and the planner's proposals (names "
+                             "such as screw, bolt, nut; small parts joining two others: see aplan fasteners); "
+                             "none: plan every part")
+
+
+def product_from(args: argparse.Namespace, argument):
+    """PRODUCT resolved with ``--fasteners`` (a Product); a model file's name stays as it is."""
+    from .. import api
+
+    if str(argument).lower().endswith(api.MODEL_SUFFIXES):
+        return argument
+    return api.resolve_product(argument, getattr(args, "fasteners", "tagged"))
+
+
 def add_decision_options(parser: argparse.ArgumentParser) -> None:
     """The decision model's options (when MODEL is a product): technical constraints, base part, discount,
     rewards."""
@@ -46,6 +65,7 @@ def add_decision_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("decision model (when MODEL is a product)")
     add_technical(group)
     add_base_part(group)
+    add_fasteners(group)
     group.add_argument("--discount", type=float, default=DISCOUNT, help=f"discount factor (default {DISCOUNT:g})")
     group.add_argument("--reward-unfavorable", type=float, default=d.unfavorable, metavar="R",
                        help=f"robot does the next step, unfavorable to humans (default {d.unfavorable:g})")

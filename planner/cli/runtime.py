@@ -95,7 +95,7 @@ def _session(args: argparse.Namespace) -> int:
     log_path = args.log or f"session-{time.strftime('%Y%m%d-%H%M%S')}.jsonl"
     events = EventLog(log_path, on_event=show)
     if args.keyboard:
-        source = KeyboardSource(plan.product)
+        source = KeyboardSource(plan.designed or plan.product)  # the fasteners are picked too
     else:
         close_without_tool = any(o.parts and o.tool is None for o in plan.observations)
         source = VisionSource((), markers, detector, args.debounce, args.quiet_frames, close_without_tool,

@@ -10,7 +10,9 @@ A *product* holds:
 - technical constraints ``(R1, R2)``: a subassembly ``S`` of two or more parts is infeasible when
   ``R1 <= S`` and ``R2 not in S`` (a constraint can be kept in the file but switched off: ``active``);
 - designer tags on operations: unfavorable to humans, robot-capable, the tool the operation needs, plus
-  product-wide defaults for operations that carry no tag.
+  product-wide defaults for operations that carry no tag;
+- fastener groups: parts (screws, nuts, washers, ...) that are installed by the operation that joins their
+  hosts, with the tool they need, rather than planned as parts (:mod:`planner.product.fasteners`).
 
 Constructing a :class:`Product` checks it (:mod:`planner.product.validation`). Its JSON file format is in
 :mod:`planner.product.io` and ``docs/product-format.md``.
@@ -24,7 +26,7 @@ from .constants import AXIS_DIRECTIONS, DEFAULT_MARKER_DICTIONARY, UNIT_TOLERANC
 from .validation import check_product
 
 __all__ = ["Part", "Direction", "Obstruction", "TechnicalConstraint", "Tool", "OperationTag", "TagDefaults",
-           "Markers", "Product"]
+           "Markers", "FastenerGroup", "Product"]
 
 
 @dataclass(frozen=True)
@@ -135,6 +137,22 @@ class Markers:
 
 
 @dataclass(frozen=True)
+class FastenerGroup:
+    """Fasteners installed together (say the four screws of one wheel): ``parts`` are part ids of the product,
+    ``hosts`` the parts they join (empty: the parts the fasteners touch that are not fasteners themselves),
+    ``tool`` the tool the installing operation needs. ``source``: ``designer`` (from the file or the
+    workbench's tags) or ``proposed`` (by :func:`planner.product.fastener_proposals.propose_fasteners`, which
+    says why in ``reason``)."""
+
+    id: str
+    parts: tuple[str, ...]
+    hosts: frozenset[str] = frozenset()
+    tool: str | None = None
+    source: str = "designer"
+    reason: str = ""
+
+
+@dataclass(frozen=True)
 class Product:
     """A product: parts, connection diagram, obstruction diagrams, technical constraints and designer tags.
 
@@ -150,6 +168,7 @@ class Product:
     operations: tuple[OperationTag, ...] = ()
     defaults: TagDefaults = TagDefaults()
     markers: Markers | None = None
+    fasteners: tuple[FastenerGroup, ...] = ()
     name: str = ""
     units: str = "mm"
     geometry: Mapping[str, Any] = field(default_factory=dict, compare=False)
@@ -162,6 +181,11 @@ class Product:
     @property
     def part_ids(self) -> tuple[str, ...]:
         return tuple(p.id for p in self.parts)
+
+    @property
+    def fastener_parts(self) -> frozenset[str]:
+        """The parts listed in a fastener group."""
+        return frozenset(p for group in self.fasteners for p in group.parts)
 
     def with_technical(self, technical: bool | None) -> "Product":
         """A copy with every technical constraint switched on (True) or off (False); None keeps the file's."""
