@@ -74,8 +74,9 @@ def _session(args: argparse.Namespace) -> int:
     plan = model.plan
     stream, robot = None, ConsoleRobot() if args.robot in (None, "console") else ScriptedRobot()
     if not args.keyboard:  # open the frames first: a camera or file that cannot be read stops before any log
-        markers = marker_map(plan.product)
-        if plan.product.markers is None:
+        designed = plan.designed or plan.product  # with its fasteners: the operator picks them from the tray too
+        markers = marker_map(designed)
+        if designed.markers is None:
             log.info("note: the product has no 'markers': parts then tools are markers 0, 1, ... in file order "
                      "(see aplan markers)")
         detector = MarkerDetector(markers.dictionary)
