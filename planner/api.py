@@ -169,7 +169,7 @@ def plan_statistics_of(product: str | os.PathLike | Product | Plan, technical: b
         plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
         return plan, plan_statistics(plan, base_part_of(plan, base_part))
     product = product if isinstance(product, Product) else resolve_product(product)
-    base = most_connected_part(product) if base_part == AUTO_BASE_PART else base_part
+    base = most_connected_part(fold(product).product) if base_part == AUTO_BASE_PART else base_part
     return statistics_within(product, technical, base, limits)
 
 
