@@ -192,16 +192,14 @@ def observation_table(andor: AndOrGraph, tags: OperationTags, groups: tuple[Fast
 
 def _fastener_codes(count: int, groups: tuple[FastenerGroup, ...],
                     installs: tuple[np.ndarray, ...]) -> tuple[np.ndarray, list[tuple[str, ...]]]:
-    """Per operation, the number of the set of fastener parts it installs, and those sets (0: none)."""
-    members: dict[int, list[int]] = {}
+    """Per operation, the number of the set of fastener parts it installs, and those sets (by number).
+
+    Each operation's groups are a bitmask (bit ``k``: group ``k``), numbered by one sort. Cost: O(operations
+    log operations) in numpy."""
+    bits = np.zeros(count, dtype=np.int64 if len(installs) < 63 else object)
     for k, operations in enumerate(installs):
-        for j in operations.tolist():
-            members.setdefault(j, []).append(k)
-    sets: dict[tuple[int, ...], int] = {(): 0}
-    codes = np.zeros(count, dtype=np.int64)
-    for j, installed in members.items():
-        codes[j] = sets.setdefault(tuple(installed), len(sets))
-    names = [()] * len(sets)
-    for key, code in sets.items():
-        names[code] = tuple(p for k in key for p in groups[k].parts)
-    return codes, names
+        bits[operations] |= 1 << k
+    distinct, codes = np.unique(bits, return_inverse=True)
+    names = [tuple(p for k, group in enumerate(groups) if (int(b) >> k) & 1 for p in group.parts)
+             for b in distinct.tolist()]
+    return np.asarray(codes, dtype=np.int64).reshape(-1), names

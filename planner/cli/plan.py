@@ -5,7 +5,10 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import sys
+from dataclasses import replace
+from pathlib import Path
 
 from .. import api
 from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, intention_graph
@@ -116,11 +119,24 @@ def _fasteners(args: argparse.Namespace) -> int:
             print(f"  not proposed: {part}: {reason}")
     if args.output:
         accepted = api.accept_fasteners(product)
-        save_product(accepted, args.output)
+        save_product(_relocated(accepted, args.output), args.output)
         if not args.json:
             print(f"{args.output}: {len(accepted.fasteners)} fastener groups "
                   f"({len(accepted.fasteners) - len(product.fasteners)} proposals accepted)")
     return 0
+
+
+def _relocated(product, output: str):
+    """``product`` with its mesh and B-rep paths relative to ``output``'s folder instead of its own file's."""
+    source = Path(product.source)
+    here, there = source.resolve().parent, Path(output).resolve().parent
+    if not source.is_file() or here == there:
+        return product
+
+    def moved(path: str | None) -> str | None:
+        return path if path is None or os.path.isabs(path) else os.path.relpath(here / path, there)
+
+    return replace(product, parts=tuple(replace(p, mesh=moved(p.mesh), brep=moved(p.brep)) for p in product.parts))
 
 
 def _group_json(group) -> dict:
@@ -174,8 +190,8 @@ def add_commands(commands) -> None:
                     "proposes for its other parts: by name (screw, bolt, nut, washer, pin, rivet, clip) or by "
                     "geometry (a small part joining two parts each ten times its volume), fasteners with the same "
                     "hosts in one group, each with the reason. With -o, write the product with the proposals "
-                    "accepted; plans fold them (--fasteners tagged, the default). Mesh paths in the product "
-                    "stay relative: write it beside the product file (a bundle's product.json, say).")
+                    "accepted; plans fold them (--fasteners tagged, the default). Mesh paths are rewritten relative to "
+                    "the new file.")
     fasteners.add_argument("product", metavar="PRODUCT", help=PRODUCT_HELP)
     fasteners.add_argument("-o", "--output", metavar="FILE",
                            help="write the product file with the proposed groups accepted (atomically)")

@@ -5,9 +5,10 @@ from dataclasses import replace
 
 import pytest
 
-from planner import intention_graph, make_plan, plan_statistics, resolve_product
+from planner import and_or_graph, intention_graph, make_plan, plan_statistics, resolve_product
 from planner.assembly.stats import statistics_within
-from planner.product import FastenerGroup, OperationTag, Part, Product, Tool, with_fastener_mode
+from planner.assembly.tags import fastener_installs
+from planner.product import FastenerGroup, OperationTag, Part, Product, Tool, fold, with_fastener_mode
 from planner.product.synthetic import chain_product, fastened_product
 
 
@@ -115,3 +116,27 @@ def test_the_pen_is_unchanged(pen):
         for technical in (False, True):
             stats = plan_statistics(make_plan(resolve_product(pen, mode), technical))
             assert stats.as_dict() == PEN_FIGURES[technical] and stats.fasteners == ()
+
+
+def test_many_parts_and_many_groups():
+    """Past 62 parts or groups the bitmasks are Python integers: a chain of 64 parts and a screw joining the
+    last two is installed by the 63 splits of an interval [p_i, p_64] between p63 and p64; 70 groups on one
+    joint are installed by its one operation, all 70 screws seen."""
+    chain = chain_product(64)
+    last, before = chain.part_ids[-1], chain.part_ids[-2]
+    product = Product(chain.parts + (Part("screw"),), chain.contacts + ((before, "screw"), (last, "screw")),
+                      fasteners=(FastenerGroup("g", ("screw",)),))
+    folding = fold(product)
+    andor = and_or_graph(folding.product)
+    (installs,) = fastener_installs(andor, folding.groups)
+    assert len(installs) == 63
+    for j in installs.tolist():  # p63 in one input, p64 in the other
+        first, second = andor.inputs(j)
+        assert {before, last} <= first | second and (before in first) != (last in first)
+    screws = tuple(f"s{k:02d}" for k in range(70))
+    product = Product((Part("a"), Part("b")) + tuple(Part(s) for s in screws),
+                      (("a", "b"),) + tuple((p, s) for s in screws for p in ("a", "b")),
+                      fasteners=tuple(FastenerGroup(s, (s,)) for s in screws))
+    plan = make_plan(product)
+    assert len(plan.andor.operations) == 1 and len(plan.installs) == 70
+    assert plan.observations[plan.operation_observation[0]].parts == ("a", "b") + screws

@@ -121,6 +121,8 @@ def test_a_session_picks_the_fasteners_and_replays(capsys, tmp_path):
     start = json.loads(log.read_text().splitlines()[0])
     # the product before folding, with the accepted proposal: the replay folds the same groups
     assert [g["id"] for g in start["product"]["fasteners"]] == ["screws", "fasteners_p2+p3"]
+    instructions = [json.loads(line).get("instruction", "") for line in log.read_text().splitlines()]
+    assert "join {p1, p2} with {p3} fastened by bolt_1" in instructions  # the robot installs the bolt
     code, out, err = run(capsys, "replay", log)
     assert code == 0 and "beliefs reproduced at all" in out
 
@@ -128,3 +130,18 @@ def test_a_session_picks_the_fasteners_and_replays(capsys, tmp_path):
 def test_save_keeps_older_files_unchanged(tmp_path):
     save_product(chain_product(3), tmp_path / "c.json")
     assert "fasteners" not in json.loads((tmp_path / "c.json").read_text())
+
+
+def test_accepted_product_elsewhere_keeps_its_meshes(capsys, tmp_path):
+    doc = json.loads(_screwed(tmp_path).read_text())
+    doc["parts"][0]["mesh"] = "meshes/p1.stl"
+    source = tmp_path / "bundle" / "product.json"
+    source.parent.mkdir()
+    source.write_text(json.dumps(doc))
+    out = tmp_path / "elsewhere" / "accepted.json"
+    out.parent.mkdir()
+    code, _, _ = run(capsys, "fasteners", source, "-o", out)
+    assert code == 0 and load_product(out).parts[0].mesh == "../bundle/meshes/p1.stl"
+    code, _, _ = run(capsys, "fasteners", source, "-o", source)  # in place: the paths stay
+    assert code == 0 and load_product(source).parts[0].mesh == "meshes/p1.stl"
+    assert [g.id for g in load_product(source).fasteners] == ["screws", "fasteners_p2+p3"]
