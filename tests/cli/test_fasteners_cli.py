@@ -4,6 +4,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from real_models import real_bundles  # noqa: F401  (a fixture)
 
 from planner import load_product, product_to_dict, save_product
 from planner.cli import main
@@ -145,3 +146,14 @@ def test_accepted_product_elsewhere_keeps_its_meshes(capsys, tmp_path):
     code, _, _ = run(capsys, "fasteners", source, "-o", source)  # in place: the paths stay
     assert code == 0 and load_product(source).parts[0].mesh == "meshes/p1.stl"
     assert [g.id for g in load_product(source).fasteners] == ["screws", "fasteners_p2+p3"]
+
+
+@pytest.mark.freecad
+def test_the_truck_with_its_screws_folded(capsys, real_bundles):  # noqa: F811
+    code, out, _ = run(capsys, "stats", real_bundles["toy_truck"], "--fasteners", "auto")
+    # 61 parts, 38 screws folded in 22 groups (wood_screw_004 joins one part only); the 23 parts left are still
+    # past the AND/OR limit in one level
+    assert out.splitlines()[1].split() == ["parts", "23"]
+    assert "fasteners folded: 38 parts in 22 groups" in out
+    assert "fasteners_cabin_door_001+cabin_hood_001: 2 parts joining cabin_door_001, cabin_hood_001" in out
+    assert code == 3 and "at least 1,000,001 connected part sets" in out
