@@ -11,7 +11,6 @@ from planner.assembly.tags import fastener_installs
 from planner.product import FastenerGroup, OperationTag, Part, Product, Tool, fold, with_fastener_mode
 from planner.product.synthetic import chain_product, fastened_product
 
-
 # The pen's figures (tests/assembly/test_plan.py): folding must not change them.
 PEN_FIGURES = {
     False: dict(parts=6, contacts=5, complexity=1.67, subassemblies=18, operations=21, actions=22, states=18,

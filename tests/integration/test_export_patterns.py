@@ -6,6 +6,7 @@ import json
 
 import pytest
 from conftest import SHARED, require_freecadcmd, require_shared
+
 from integration.freecad_tools import aplan
 
 TRUCK = SHARED / "models" / "toy_truck" / "asm_cement_mixer_truck.FCStd"
