@@ -18,6 +18,7 @@ are never changed.
 from __future__ import annotations
 
 import contextlib
+import fnmatch
 import os
 from dataclasses import dataclass, field
 from typing import Iterator
@@ -27,7 +28,8 @@ import Part
 
 from planner.errors import PlannerError
 
-__all__ = ["Component", "ReadResult", "open_model", "read_components", "document_subassemblies", "DocumentError"]
+__all__ = ["Component", "ReadResult", "open_model", "read_components", "document_subassemblies", "matching",
+           "DocumentError"]
 
 _IMPORT_PREFERENCES = "User parameter:BaseApp/Preferences/Mod/Import"
 
@@ -150,25 +152,26 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
     """The components of ``document``: one per part object, or one per group of ``groups``.
 
     ``groups`` maps a component name to the labels (or names) of the objects it fuses; ``exclude`` lists
-    labels (or names) to leave out (fasteners to be treated later, say). With ``split_solids``, an object
+    labels (or names) to leave out (fasteners to be treated later, say). Both take shell-style patterns
+    (``wood_screw*``, ``bolt_00[1-4]``; :func:`fnmatch.fnmatchcase`). With ``split_solids``, an object
     holding several solids (a STEP file exported as one product) gives one part per solid. Raises
-    :class:`DocumentError` when a group or exclusion names no object, or when nothing with a solid is left.
+    :class:`DocumentError` when a group or exclusion matches no object, when an object matches two groups, or
+    when nothing with a solid is left.
     """
     groups = groups or {}
-    exclude = set(exclude or ())
     warnings: list[str] = []
     objects = list(document.Objects)
     linked_hidden = {o.LinkedObject.Name for o in objects
                      if o.isDerivedFrom("App::Link") and o.LinkedObject is not None
                      and o.LinkedObject.Document == document and not o.LinkedObject.Visibility}
-    group_of = _group_of(document, objects, groups, exclude)
+    excluded, group_of = _selection(document, objects, groups, exclude or ())
 
     singles: list[Component] = []
     grouped: dict[str, list[tuple[object, "Part.Shape"]]] = {g: [] for g in groups}
     for obj in objects:
         if not (obj.isDerivedFrom("Part::Feature") or obj.isDerivedFrom("App::Link")):
             continue
-        if obj.Label in exclude or obj.Name in exclude:
+        if obj.Name in excluded:
             continue
         if any(_is_consumer(user) for user in obj.InList) or obj.Name in linked_hidden:
             continue
@@ -180,7 +183,7 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
         if shape.Volume <= 0:
             warnings.append(f"{obj.Label}: its solid has no volume ({shape.Volume:g}); skipped")
             continue
-        group = group_of.get(obj.Label) or group_of.get(obj.Name)
+        group = group_of.get(obj.Name)
         if group is not None:
             grouped[group].append((obj, shape))
         elif len(shape.Solids) > 1 and split_solids:
@@ -205,18 +208,40 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
     return ReadResult(components, warnings, document)
 
 
-def _group_of(document, objects: list, groups: dict[str, list[str]], exclude: set[str]) -> dict[str, str]:
-    """Object label or name -> its group; :class:`DocumentError` when a group or exclusion names no object."""
-    known = {o.Label for o in objects} | {o.Name for o in objects}
-    for name in sorted(exclude - known):
-        raise DocumentError(f"{document.FileName or document.Name}: exclude names no object {name!r}")
+def matching(objects: list, pattern: str) -> list:
+    """The objects whose label or name is ``pattern``, or else matches it as a shell-style pattern
+    (``wood_screw*``: :func:`fnmatch.fnmatchcase`, case-sensitive as labels are)."""
+    exact = [o for o in objects if pattern in (o.Label, o.Name)]
+    if exact:
+        return exact
+    return [o for o in objects if fnmatch.fnmatchcase(o.Label, pattern) or fnmatch.fnmatchcase(o.Name, pattern)]
+
+
+def _selection(document, objects: list, groups: dict[str, list[str]],
+               exclude: list[str]) -> tuple[set[str], dict[str, str]]:
+    """The names of the objects ``exclude`` matches, and object name -> its group; :class:`DocumentError` when
+    a pattern matches no object or an object matches two groups."""
+    where = document.FileName or document.Name
+    excluded: set[str] = set()
+    for pattern in exclude:
+        found = matching(objects, pattern)
+        if not found:
+            raise DocumentError(f"{where}: exclude {pattern!r} matches no object (labels or names; patterns such "
+                                "as 'wood_screw*' are shell-style)")
+        excluded.update(o.Name for o in found)
     group_of: dict[str, str] = {}
     for group, members in groups.items():
         for member in members:
-            if member not in known:
-                raise DocumentError(f"{document.FileName or document.Name}: group {group!r} names no object {member!r}")
-            group_of[member] = group
-    return group_of
+            found = matching(objects, member)
+            if not found:
+                raise DocumentError(f"{where}: group {group!r}: {member!r} matches no object (labels or names; "
+                                    "patterns such as 'bolt_*' are shell-style)")
+            for obj in found:
+                if group_of.get(obj.Name, group) != group:
+                    raise DocumentError(f"{where}: {obj.Label!r} is in groups {group_of[obj.Name]!r} and {group!r} "
+                                        f"({member!r}); put it in one group")
+                group_of[obj.Name] = group
+    return excluded, group_of
 
 
 def _unique_ids(components: list[Component], warnings: list[str]) -> None:

@@ -65,7 +65,8 @@ class Intent:
 # property name, FreeCAD type, property group, tooltip; in the order of Intent's fields
 _PROPERTIES = (
     ("Groups", "App::PropertyStringList", "Components", "NAME=Object1,Object2: these objects form one component"),
-    ("Excluded", "App::PropertyStringList", "Components", "objects left out of the product (internal names)"),
+    ("Excluded", "App::PropertyStringList", "Components",
+     "objects left out of the product (internal names, labels or shell-style patterns such as wood_screw*)"),
     ("SplitSolids", "App::PropertyBool", "Components", "one part per solid of an object holding several solids"),
     ("TechnicalConstraints", "App::PropertyStringList", "Designer intent",
      'one JSON object per constraint: {"parts": [...], "requires": "part", "active": true}'),

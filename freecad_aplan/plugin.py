@@ -142,9 +142,12 @@ def _export_command(subparsers) -> None:
                         help="detect contacts and obstructions again even when the document's APLAN analysis "
                              "stores diagrams (possibly edited by the designer) that fit the components")
     parser.add_argument("--group", action="append", type=_parse_group, default=[], metavar="NAME=A,B,...",
-                        help="make one component NAME of the objects (labels) A, B, ... (repeatable)")
+                        help="make one component NAME of the objects A, B, ... (labels, or shell-style patterns "
+                             "such as 'bolt_*'; repeatable)")
     parser.add_argument("--exclude", action="append", default=[], metavar="LABEL",
-                        help="leave this object out, e.g. a fastener (repeatable)")
+                        help="leave out the objects with this label, or matching this shell-style pattern "
+                             "('wood_screw*': quote it), e.g. fasteners (repeatable); a pattern that matches no "
+                             "object is an error")
     parser.add_argument("--split-solids", action="store_true",
                         help="one part per solid of objects holding several solids (STEP files of one product)")
     parser.add_argument("--linear-deflection", type=float, metavar="D",

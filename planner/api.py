@@ -4,7 +4,9 @@ workbench, batch jobs, user scripts) does with a product, in one place.
 Front ends only parse their input and show results; the steps of the method live here, each a plain function:
 
 1. :func:`resolve_product`: a PRODUCT argument (a product file, a bundle folder, a CAD file read through
-   a plugin, or an embedded example) -> :class:`~planner.product.Product`;
+   a plugin, or an embedded example) -> :class:`~planner.product.Product`, with the fastener groups to fold
+   (``tagged``, ``auto``, ``none``); :func:`fastener_report`, :func:`accept_fasteners`: the designer's and
+   the proposed fastener groups;
 2. :func:`plan_statistics_of`: the plan of a product and its figures (``aplan stats``); :func:`base_part_of`:
    the base part every sequence starts from (paper Sec. V), ``"auto"`` for the most connected part;
 3. :func:`decision_model` / :func:`lumped_model` / :func:`load_model` / :func:`save_model`: the decision model
@@ -50,13 +52,31 @@ from .decision.policy import AlphaVectorPolicy, PolicyError, read_policy
 from .decision.pomdp import POMDP
 from .decision.simulate import Episode, evaluate_policy, simulate_episode
 from .decision.solvers import PointBasedSolver, SolveResult
-from .defaults import (DECISION_TIME, DISCOUNT, FILE_LIMIT, INTENTION_LIMIT, ONLINE_EXPANSIONS, POLICY_TIME_LIMIT,
-                       SOLVE_PRECISION, SOLVE_TIME_LIMIT)
+from .defaults import (
+    DECISION_TIME,
+    DISCOUNT,
+    FILE_LIMIT,
+    INTENTION_LIMIT,
+    ONLINE_EXPANSIONS,
+    POLICY_TIME_LIMIT,
+    SOLVE_PRECISION,
+    SOLVE_TIME_LIMIT,
+)
 from .errors import DisconnectedProductError, FileLimitError, MemoryLimitError, PlannerError, UnknownProductError, gib
-from .product import Product, load_product
+from .product import (
+    FASTENER_MODES,
+    FastenerGroup,
+    FastenerProposals,
+    Product,
+    fastener_proposals,
+    fold,
+    load_product,
+    with_fastener_mode,
+)
 from .product.examples import EXAMPLES, example_path
 
-__all__ = ["resolve_product", "plan_of", "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
+__all__ = ["resolve_product", "fastener_report", "accept_fasteners", "FASTENER_MODES", "plan_of",
+           "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
            "policy_for", "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner",
            "choose_planner", "decision_maker", "arranged", "levels_of", "level_product", "hierarchy_statistics_of"]
@@ -70,7 +90,7 @@ PLANNERS = ("offline", "online")
 Model = IntentionModel | LumpedModel | POMDP
 
 
-def resolve_product(argument: str | os.PathLike, tolerances=None) -> Product:
+def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fasteners: str = "tagged") -> Product:
     """Load PRODUCT: a product file, a bundle folder, a CAD file a plugin reads (``.FCStd``, STEP: through
     FreeCAD), or the name of an embedded example (``pen``).
 
@@ -78,7 +98,27 @@ def resolve_product(argument: str | os.PathLike, tolerances=None) -> Product:
     ``tolerances`` (a :class:`~planner.geometry.Tolerances`, e.g. ``contact="auto"``): the geometry is analysed
     with them, in memory, even when the file holds an analysis (a CAD model is exported with them); the
     product's parts need meshes then.
+    ``fasteners``: the fastener groups plans fold: ``tagged`` the product's own (its ``fasteners`` section),
+    ``auto`` those and the planner's proposals (:func:`~planner.product.propose_fasteners`), ``none`` none.
     """
+    if fasteners not in FASTENER_MODES:
+        raise PlannerError(f"unknown fastener mode {fasteners!r}; use one of {', '.join(FASTENER_MODES)}")
+    product = argument if isinstance(argument, Product) else _load(argument, tolerances)
+    proposals = fastener_proposals(product).groups if fasteners == "auto" else ()
+    return with_fastener_mode(product, fasteners, proposals)
+
+
+def fastener_report(product: Product) -> tuple[tuple[FastenerGroup, ...], FastenerProposals]:
+    """The product's own fastener groups (hosts resolved) and the planner's proposals for its other parts."""
+    return fold(product).groups, fastener_proposals(product)
+
+
+def accept_fasteners(product: Product) -> Product:
+    """``product`` with the proposed fastener groups added to its ``fasteners`` section."""
+    return resolve_product(product, fasteners="auto")
+
+
+def _load(argument: str | os.PathLike, tolerances=None) -> Product:
     from .geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, is_analysed
     from .plugins import registry
 
@@ -223,7 +263,7 @@ def plan_statistics_of(product: str | os.PathLike | Product | Plan, technical: b
         plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
         return plan, plan_statistics(plan, base_part_of(plan, base_part))
     product = product if isinstance(product, Product) else resolve_product(product)
-    base = most_connected_part(product) if base_part == AUTO_BASE_PART else base_part
+    base = most_connected_part(fold(product).product) if base_part == AUTO_BASE_PART else base_part
     with _gaps_explained(product):
         return statistics_within(product, technical, base, limits)
 
@@ -341,14 +381,14 @@ def _model_file_kind(path: str | os.PathLike) -> str | None:
     return next((s for s in MODEL_SUFFIXES if name.endswith(s)), None)
 
 
-def load_model(argument: str | os.PathLike, technical: bool | None = None, rewards: Rewards = Rewards(),
+def load_model(argument: str | os.PathLike | Product, technical: bool | None = None, rewards: Rewards = Rewards(),
                discount: float = DISCOUNT, base_part: str | None = None, limits: SizeLimits = SizeLimits(),
                lumped: bool = False) -> Model:
     """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`), else a PRODUCT
     (its :class:`IntentionModel`, or with ``lumped`` its :class:`LumpedModel`; ``technical``, ``rewards``,
     ``discount``, ``base_part`` and ``limits`` apply to it only: a base part with a model file is a
     :class:`PlannerError`, since the file's intentions are fixed)."""
-    kind = _model_file_kind(argument)
+    kind = None if isinstance(argument, Product) else _model_file_kind(argument)
     if kind is not None and base_part:
         raise PlannerError(f"{argument}: a base part applies to products only, and this is a model file whose "
                            "intentions are fixed; leave out the base part (--base-part), or give the PRODUCT")

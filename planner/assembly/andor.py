@@ -224,7 +224,7 @@ def _too_many(product: Product, noun: str, count: int, limit: int, where: str = 
         "AND/OR graph", count, limit,
         f"The reverse cut-set algorithm enumerates every connected set of parts{where}, and each part that "
         f"joins two others can double them. {fewer_parts_hint(product)}",
-        [OPTIONS[k] for k in ("subassemblies", "exclude", "group")], noun=noun, at_least=True)
+        [OPTIONS[k] for k in ("subassemblies", "fasteners", "exclude", "group")], noun=noun, at_least=True)
 
 
 def _reachable(splits: dict[int, list[tuple[int, int]]], full: int) -> set[int]:

@@ -59,6 +59,8 @@ OPTIONS = {
                       "--max-subassemblies N raises the AND/OR graph's limit (time and memory grow with it)"),
     "memory": ("--max-memory", "--max-memory GIB raises the memory budget (if the machine has the memory)"),
     "intentions": ("--limit", "--limit N raises the intention limit"),
+    "fasteners": ("--fasteners", "--fasteners auto folds the fasteners the planner proposes into the operations "
+                                 "that install them (aplan fasteners PRODUCT lists them)"),
     "exclude": ("--exclude", "--exclude LABEL leaves a part (a fastener) out"),
     "group": ("--group", "--group NAME=A,B makes one part of several (a fastener and a part it holds)"),
     "base_part": ("--base-part", "--base-part [PART] keeps only the sequences that start from the base part"),
@@ -96,7 +98,8 @@ def fewer_parts_hint(product: Product) -> str:
         found.append(f"{len(two)} part(s) have exactly two contacts ({_names(two)})")
     seen = ("; ".join(found) + ". ") if found else ""
     return (f"The product has {len(product.parts)} parts and {len(product.contacts)} contacts; {seen}Plan with "
-            "fewer parts: leave the fasteners out, or group each with a part it holds, or plan one subassembly "
+            "fewer parts: fold the fasteners into the operations that install them, or leave them out, or group "
+            "each with a part it holds, or plan one subassembly "
             "(one workstation) at a time.")
 
 

@@ -12,6 +12,10 @@ Definitions
   along ``d``. Technical constraints and operation tags whose parts all lie in the level are kept, mapped
   onto its members; a constraint that a member already settles (``R2`` built into a member with some of
   ``R1``) is dropped, as it was checked where that member was built.
+- Fasteners (:mod:`planner.product.fasteners`) are no members: the levels are those of the product without
+  them, and each fastener group is installed at the lowest level that holds all its hosts, joining the
+  members that hold them (a screw between the cabin and the chassis is driven where the cabin joins the
+  chassis, not inside either).
 - A level is planned with the flat planner (:func:`~planner.assembly.make_plan`), independently of the others;
   the levels are listed bottom-up, so the inner subassemblies are built first.
 
@@ -26,7 +30,7 @@ from dataclasses import dataclass, replace
 
 from ..defaults import SUBASSEMBLY_LIMIT
 from ..errors import LimitExceededError, NotDisassemblableError, PlannerError
-from ..product import Markers, Obstruction, OperationTag, Part, Product, Subassembly, TechnicalConstraint
+from ..product import Markers, Obstruction, OperationTag, Part, Product, Subassembly, TechnicalConstraint, fold
 from .andor import and_or_graph
 
 __all__ = ["TOP", "Level", "product_levels", "propose_subassemblies", "with_subassemblies", "SUBASSEMBLY_MODES",
@@ -86,6 +90,8 @@ def product_levels(product: Product) -> list[Level]:
     """
     if not product.subassemblies:
         return [Level(TOP, product, frozenset(product.part_ids))]
+    if product.fasteners:
+        return _with_fasteners(product)
     owners = _owners(product)
     groups = _bottom_up(product)
     by_id = {g.id: g for g in groups}
@@ -100,6 +106,39 @@ def product_levels(product: Product) -> list[Level]:
         top_product = _level_product(product, TOP, top, owners, by_id, parts_of, "")
         levels.append(Level(TOP, top_product, frozenset(product.part_ids)))
     return levels
+
+
+def _with_fasteners(product: Product) -> list[Level]:
+    """The levels of ``product`` without its fastener parts (they are no members, even where the designer's
+    subassemblies list them), each fastener group added to the lowest level that holds all its hosts, its
+    hosts mapped onto that level's members. Cost: that of the levels plus O(fastener parts x levels)."""
+    folding = fold(product)
+    gone = product.fastener_parts
+    structure = tuple(replace(g, parts=tuple(m for m in g.parts if m not in gone)) for g in product.subassemblies)
+    levels = product_levels(replace(folding.product, subassemblies=structure))
+    holds = {level.id: level.parts for level in levels}
+    parts = {p.id: p for p in product.parts}
+    markers = dict(product.markers.ids) if product.markers is not None else {}
+    placed: set[str] = set()
+    out = []
+    for level in levels:
+        here = [g for g in folding.groups if g.id not in placed and g.hosts <= level.parts]
+        if not here:
+            out.append(level)
+            continue
+        placed.update(g.id for g in here)
+        member_of = {p: m for m in level.members for p in holds.get(m, frozenset((m,)))}
+        groups = tuple(replace(g, hosts=frozenset(member_of[h] for h in g.hosts)) for g in here)
+        added = tuple(parts[p] for g in groups for p in g.parts)
+        touching = tuple((p, h) for g in groups for p in g.parts for h in sorted(g.hosts))
+        level_product = level.product
+        if level_product.markers is not None:
+            ids = level_product.markers.ids + tuple((p.id, markers[p.id]) for p in added if p.id in markers)
+            level_product = replace(level_product, markers=Markers(ids, level_product.markers.dictionary))
+        level_product = replace(level_product, parts=level_product.parts + added,
+                                contacts=level_product.contacts + touching, fasteners=groups)
+        out.append(Level(level.id, level_product, level.parts | frozenset(p.id for p in added)))
+    return out
 
 
 def _level_product(product: Product, level: str, members: tuple[str, ...], owners: dict[str, str],
@@ -155,7 +194,7 @@ def _level_product(product: Product, level: str, members: tuple[str, ...], owner
         markers = Markers(ids, product.markers.dictionary)
     name = product.name if level == TOP else f"{product.name or 'product'} / {label or level}"
     return Product(level_parts, tuple(contacts.values()), tuple(obstructions), tuple(constraints), product.tools,
-                   tuple(operations), product.defaults, markers, (), name, product.units, source=product.source)
+                   tuple(operations), product.defaults, markers, name=name, units=product.units, source=product.source)
 
 
 def _subassembly_markers(product: Product) -> dict[str, int]:
@@ -195,8 +234,12 @@ def propose_subassemblies(product: Product, max_components: int = 8) -> tuple[Su
     ``max_components`` members (the agglomeration already merged every pair that fits), else it is left as it
     is and a warning names its stuck parts (its level's plan will then fail with the same reason).
 
+    Fasteners are left out of the groups (the connection diagram is that of the folded product, its fasteners'
+    hosts joined: :func:`~planner.product.fold`); :func:`product_levels` installs each group where its hosts
+    come together.
+
     Returns the subassemblies (``source="proposed"``, ids ``sa1``, ``sa2``, ... unless a part has that id),
-    inner ones first; () when the product has at most ``max_components`` parts.
+    inner ones first; () when the product, fasteners left out, has at most ``max_components`` parts.
 
     Cost: O(rounds x n^3) for the agglomeration of n members per round, plus one AND/OR graph of at most
     ``max_components`` members per group (at most 2^max_components connected sets each).
@@ -205,6 +248,7 @@ def propose_subassemblies(product: Product, max_components: int = 8) -> tuple[Su
         raise PlannerError(f"a subassembly holds two or more members; max_components must be at least 2, got "
                            f"{max_components}")
     used = set(product.part_ids) | {t.id for t in product.tools}
+    product = fold(product).product   # fasteners are installed between members, never members themselves
     counter = iter(range(1, 10 ** 9))
     found: list[Subassembly] = []
     current = product

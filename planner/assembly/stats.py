@@ -5,13 +5,13 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from ..errors import LimitExceededError, PlannerError
-from ..product import Product
+from ..product import FastenerGroup, Product, fold
 from .andor import and_or_graph
 from .guards import SizeLimits
 from .intentions import count_intentions, count_sequences, paths_to_final
 from .plan import Plan
 from .states import assembly_state_graph
-from .tags import observation_table, operation_tags
+from .tags import fastener_installs, observation_table, operation_tags
 
 __all__ = ["STAT_KEYS", "PlanStatistics", "plan_statistics", "statistics_within"]
 
@@ -28,6 +28,8 @@ class PlanStatistics:
     ``sequences`` counts full assembly sequences, those whose first operation joins ``base_part`` if set;
     ``intentions`` then counts the intentions of those sequences only (paper Sec. V).
     ``states`` and ``sequences`` together are the size of the factored view of paper Sec. V.
+    ``fasteners``: the fastener groups folded (their parts are not counted in ``parts``), ``installs`` the
+    number of operations that install each (None when the AND/OR graph was not built).
     Figures that could not be computed within the size limits are None, and ``refused`` says why.
     """
 
@@ -44,6 +46,13 @@ class PlanStatistics:
     sequences: int | None
     base_part: str | None = None
     refused: LimitExceededError | None = field(default=None, compare=False)
+    fasteners: tuple[FastenerGroup, ...] = field(default=(), compare=False)
+    installs: tuple[int, ...] | None = field(default=None, compare=False)
+
+    @property
+    def folded_parts(self) -> int:
+        """The fastener parts folded into operations (not counted in ``parts``)."""
+        return sum(len(group.parts) for group in self.fasteners)
 
     @property
     def not_computed(self) -> tuple[str, ...]:
@@ -74,6 +83,8 @@ def plan_statistics(plan: Plan, base_part: str | None = None) -> PlanStatistics:
         observations=len(plan.observations),
         sequences=count_sequences(plan.states, base_part, paths),
         base_part=base_part,
+        fasteners=plan.fasteners,
+        installs=tuple(len(operations) for operations in plan.installs) if plan.fasteners else None,
     )
 
 
@@ -81,6 +92,7 @@ def statistics_within(product: Product, technical: bool | None = None, base_part
                       limits: SizeLimits = SizeLimits()) -> tuple[Plan | None, PlanStatistics]:
     """The plan of ``product`` and its figures, as far as ``limits`` allow.
 
+    Fastener groups are folded first (:mod:`planner.product.fasteners`): the figures count the parts left.
     The plan is built stage by stage as :func:`~planner.assembly.make_plan` builds it: parts, contacts and
     complexity always; then the AND/OR graph (subassemblies, operations, actions, observations), the
     assembly state graph (states, state edges) and the counts (intentions, sequences). When a stage passes
@@ -89,7 +101,8 @@ def statistics_within(product: Product, technical: bool | None = None, base_part
     Other errors (a product that is not connected, not disassemblable, a base part that is not a part)
     are raised. Cost: that of the stages computed.
     """
-    product = product.with_technical(technical)
+    folding = fold(product.with_technical(technical))
+    product, groups = folding.product, folding.groups
     if base_part is not None and base_part not in product.part_ids:
         raise PlannerError(f"base part {base_part!r} is not a part of the product; parts: "
                            f"{', '.join(product.part_ids)}")
@@ -97,13 +110,14 @@ def statistics_within(product: Product, technical: bool | None = None, base_part
     figures = {"parts": n, "contacts": len(product.contacts), "complexity": round(2 * len(product.contacts) / n, 2)}
     try:
         andor = and_or_graph(product, limit=limits.subassemblies)
-        tags = operation_tags(andor, product)
-        observations, operation_observation = observation_table(andor, tags)
+        installs = fastener_installs(andor, groups)
+        tags = operation_tags(andor, product, groups, installs)
+        observations, operation_observation = observation_table(andor, tags, groups, installs)
         figures.update(subassemblies=len(andor.subassemblies), operations=len(andor.operations),
                        actions=int(tags.robot.sum()) + 1, observations=len(observations))
         states = assembly_state_graph(andor, limits.memory)
     except LimitExceededError as refused:
         return None, PlanStatistics(**{key: figures.get(key) for key in STAT_KEYS}, base_part=base_part,
-                                    refused=refused)
-    plan = Plan(product, andor, states, tags, observations, operation_observation)
+                                    refused=refused, fasteners=groups)
+    plan = Plan(product, andor, states, tags, observations, operation_observation, groups, installs, folding.original)
     return plan, plan_statistics(plan, base_part)

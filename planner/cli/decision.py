@@ -24,6 +24,7 @@ from .options import (
     limits_from,
     online_budget,
     positive,
+    product_from,
     rewards_from,
 )
 
@@ -65,10 +66,10 @@ def model_from(args: argparse.Namespace, product_only: bool = False):
             extra = "; --base-part, too, applies to products only" if args.base_part else ""
             raise PlannerError(f"{argument}: a model file, but this command needs a PRODUCT (its plan names what the "
                                f"operator and the robot do){extra}")
-        return api.decision_model(argument, args.technical, rewards_from(args), args.discount, args.base_part,
-                                  limits_from(args))
-    return api.load_model(argument, args.technical, rewards_from(args), args.discount, args.base_part,
-                          limits_from(args), getattr(args, "lumped", False))
+        return api.decision_model(product_from(args, argument), args.technical, rewards_from(args), args.discount,
+                                  args.base_part, limits_from(args))
+    return api.load_model(product_from(args, argument), args.technical, rewards_from(args), args.discount,
+                          args.base_part, limits_from(args), getattr(args, "lumped", False))
 
 
 def policy_from(args: argparse.Namespace, model):
@@ -90,8 +91,8 @@ def decision_maker_from(args: argparse.Namespace, product=None):
             raise PlannerError(f"{argument}: the online planner needs a PRODUCT (its factored model), not a model file")
         model = model_from(args)
         return model, policy_from(args, model)
-    model, policy, note = api.decision_maker(argument, args.planner, args.policy, args.technical, rewards_from(args),
-                                             args.discount, decision_time, expansions, args.time_limit,
+    model, policy, note = api.decision_maker(product_from(args, argument), args.planner, args.policy, args.technical,
+                                             rewards_from(args), args.discount, decision_time, expansions, args.time_limit,
                                              base_part=args.base_part, limits=limits_from(args))
     if note:
         log.info("%s", note)

@@ -19,9 +19,10 @@ from ..geometry.mesh_engine import Tolerances
 from ..geometry.tolerances import AUTO
 from ..product.examples import EXAMPLES
 
-__all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_base_part", "add_hierarchy", "add_decision_options",
-           "rewards_from", "add_tolerance_options", "tolerances_from", "add_contact_options", "contact_tolerances_from",
-           "contact_tolerance", "positive_length", "add_policy_options", "add_episode_options", "positive_seconds",
+__all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_base_part", "add_hierarchy", "add_fasteners",
+           "product_from", "add_decision_options", "rewards_from", "add_tolerance_options", "tolerances_from",
+           "add_contact_options", "contact_tolerances_from", "contact_tolerance", "positive_length",
+           "add_policy_options", "add_episode_options", "positive_seconds",
            "online_budget", "add_size_options", "limits_from", "offer_options", "advice", "gibibytes"]
 
 PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or STEP file (read through "
@@ -63,6 +64,24 @@ def add_hierarchy(parser, level: bool = True) -> None:
                                  "are its parts, a built subassembly is one part")
 
 
+def add_fasteners(parser) -> None:
+    """``--fasteners {tagged,auto,none}``: the fastener groups a plan folds into the operations that install them."""
+    parser.add_argument("--fasteners", choices=("tagged", "auto", "none"), default="tagged",
+                        help="fold fasteners into the operations that install them: tagged (default): the groups of "
+                             "the product's 'fasteners' section; auto: those and the planner's proposals (names "
+                             "such as screw, bolt, nut; small parts joining two others: see aplan fasteners); "
+                             "none: plan every part")
+
+
+def product_from(args: argparse.Namespace, argument):
+    """PRODUCT resolved with ``--fasteners`` (a Product); a model file's name stays as it is."""
+    from .. import api
+
+    if str(argument).lower().endswith(api.MODEL_SUFFIXES):
+        return argument
+    return api.resolve_product(argument, fasteners=getattr(args, "fasteners", "tagged"))
+
+
 def add_decision_options(parser: argparse.ArgumentParser) -> None:
     """The decision model's options (when MODEL is a product): technical constraints, base part, discount,
     rewards."""
@@ -70,6 +89,7 @@ def add_decision_options(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("decision model (when MODEL is a product)")
     add_technical(group)
     add_base_part(group)
+    add_fasteners(group)
     group.add_argument("--discount", type=float, default=DISCOUNT, help=f"discount factor (default {DISCOUNT:g})")
     group.add_argument("--reward-unfavorable", type=float, default=d.unfavorable, metavar="R",
                        help=f"robot does the next step, unfavorable to humans (default {d.unfavorable:g})")

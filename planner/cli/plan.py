@@ -1,11 +1,15 @@
-"""``aplan stats``, ``aplan intentions`` and ``aplan synth``: the plan of a product (the paper's Sec. III-B)."""
+"""``aplan stats``, ``aplan intentions``, ``aplan fasteners`` and ``aplan synth``: the plan of a product (the
+paper's Sec. III-B)."""
 from __future__ import annotations
 
 import argparse
 import json
 import logging
 import math
+import os
 import sys
+from dataclasses import replace
+from pathlib import Path
 
 from .. import api
 from ..assembly.guards import SizeLimits
@@ -14,13 +18,14 @@ from ..assembly.stats import STAT_KEYS, PlanStatistics
 from ..defaults import SUBASSEMBLY_LIMIT
 from ..errors import PlannerError
 from ..files import write_atomic
-from ..product import product_to_dict
+from ..product import product_to_dict, save_product
 from ..product.synthetic import SYNTHETIC
 from .geometry import contact_choice
 from .options import (
     PRODUCT_HELP,
     add_base_part,
     add_contact_options,
+    add_fasteners,
     add_hierarchy,
     add_size_options,
     add_technical,
@@ -28,6 +33,7 @@ from .options import (
     contact_tolerances_from,
     limits_from,
     positive,
+    product_from,
 )
 
 __all__ = ["add_commands"]
@@ -46,7 +52,7 @@ _FLAT_LIMITS = SizeLimits(SUBASSEMBLY_LIMIT, 2 ** 30)
 
 
 def _stats(args: argparse.Namespace) -> int:
-    product = api.resolve_product(args.product, contact_tolerances_from(args))
+    product = api.resolve_product(args.product, contact_tolerances_from(args), args.fasteners)
     if args.contact is not None:  # analysed again here: say what the analysis found, as aplan analyze does
         for warning in product.geometry.get("analysis", {}).get("warnings", []):
             log.warning("%s", warning)
@@ -64,6 +70,11 @@ def _stats(args: argparse.Namespace) -> int:
         data = stats.as_dict()
         if refused:
             data["not_computed"] = {"figures": list(stats.not_computed), "reason": reason}
+        if stats.fasteners:
+            data["fasteners"] = {"parts": stats.folded_parts, "groups": {
+                g.id: {"parts": list(g.parts), "hosts": sorted(g.hosts), "tool": g.tool,
+                       "install_operations": None if stats.installs is None else stats.installs[k]}
+                for k, g in enumerate(stats.fasteners)}}
         print(json.dumps(data))
         return PARTIAL if refused else 0
     print(f"{product.name or str(args.product)} ({product.source})")
@@ -75,6 +86,8 @@ def _stats(args: argparse.Namespace) -> int:
         value = values[key]
         shown = "not computed" if value is None else f"{value:.2f}" if isinstance(value, float) else f"{value:,}"
         print(f"  {key:<14}{shown:>22}")
+    if stats.fasteners:
+        _print_folded(stats)
     if refused:
         print(f"  not computed: {', '.join(stats.not_computed)}: {reason}")
         return PARTIAL
@@ -149,9 +162,19 @@ def _level_stats(args: argparse.Namespace, product) -> int:
     return 1 if failed else PARTIAL if refused else 0
 
 
+def _print_folded(stats) -> None:
+    print(f"  fasteners folded: {stats.folded_parts} parts in {len(stats.fasteners)} groups (not counted in parts)")
+    for k, group in enumerate(stats.fasteners):
+        count = "not computed" if stats.installs is None else f"{stats.installs[k]:,}"
+        tool = f", tool {group.tool}" if group.tool else ""
+        parts = f"{len(group.parts)} part{'' if len(group.parts) == 1 else 's'}"
+        hosts = ", ".join(sorted(group.hosts))
+        print(f"    {group.id}: {parts} joining {hosts}{tool}; installed by {count} operations")
+
+
 def _intentions(args: argparse.Namespace) -> int:
     limits = limits_from(args)
-    product = api.level_product(args.product, args.subassemblies, args.level, args.max_components)
+    product = api.level_product(product_from(args, args.product), args.subassemblies, args.level, args.max_components)
     plan = api.plan_of(product, args.technical, limits)
     graph = intention_graph(plan.states, limit=args.limit, base_part=api.base_part_of(plan, args.base_part),
                             max_bytes=limits.memory)
@@ -163,6 +186,51 @@ def _intentions(args: argparse.Namespace) -> int:
         else:
             print(f"{int(i)}: " + " -> ".join(states))
     return 0
+
+
+def _fasteners(args: argparse.Namespace) -> int:
+    product = api.resolve_product(args.product)
+    designed, proposals = api.fastener_report(product)
+    if args.json:
+        print(json.dumps({"designer": [_group_json(g) for g in designed],
+                          "proposed": [_group_json(g) for g in proposals.groups],
+                          "left_out": [{"part": p, "reason": r} for p, r in proposals.left_out]}))
+    else:
+        print(f"{product.name or str(args.product)} ({product.source}): {len(product.parts)} parts")
+        for title, groups in (("designer's fastener groups", designed), ("proposed fastener groups", proposals.groups)):
+            print(f"  {title}: {len(groups)} ({sum(len(g.parts) for g in groups)} parts)")
+            for group in groups:
+                tool = f"; tool {group.tool}" if group.tool else ""
+                print(f"    {group.id}: {', '.join(group.parts)}\n      joins {', '.join(sorted(group.hosts))}{tool}")
+                if group.reason:
+                    print(f"      why: {group.reason}")
+        for part, reason in proposals.left_out:
+            print(f"  not proposed: {part}: {reason}")
+    if args.output:
+        accepted = api.accept_fasteners(product)
+        save_product(_relocated(accepted, args.output), args.output)
+        if not args.json:
+            print(f"{args.output}: {len(accepted.fasteners)} fastener groups "
+                  f"({len(accepted.fasteners) - len(product.fasteners)} proposals accepted)")
+    return 0
+
+
+def _relocated(product, output: str):
+    """``product`` with its mesh and B-rep paths relative to ``output``'s folder instead of its own file's."""
+    source = Path(product.source)
+    here, there = source.resolve().parent, Path(output).resolve().parent
+    if not source.is_file() or here == there:
+        return product
+
+    def moved(path: str | None) -> str | None:
+        return path if path is None or os.path.isabs(path) else os.path.relpath(here / path, there)
+
+    return replace(product, parts=tuple(replace(p, mesh=moved(p.mesh), brep=moved(p.brep)) for p in product.parts))
+
+
+def _group_json(group) -> dict:
+    return {"id": group.id, "parts": list(group.parts), "hosts": sorted(group.hosts), "tool": group.tool,
+            "source": group.source, "reason": group.reason}
 
 
 def _synth(args: argparse.Namespace) -> int:
@@ -190,6 +258,7 @@ def add_commands(commands) -> None:
     add_technical(stats)
     add_base_part(stats)
     add_hierarchy(stats)
+    add_fasteners(stats)
     add_size_options(stats)
     add_contact_options(stats)
     stats.set_defaults(run=_stats)
@@ -203,8 +272,24 @@ def add_commands(commands) -> None:
     add_technical(intentions)
     add_base_part(intentions)
     add_hierarchy(intentions)
+    add_fasteners(intentions)
     add_size_options(intentions)
     intentions.set_defaults(run=_intentions)
+
+    fasteners = commands.add_parser(
+        "fasteners", help="list the fastener groups: the designer's and those the planner proposes",
+        description="List the product's fastener groups (its 'fasteners' section) and the groups the planner "
+                    "proposes for its other parts: by name (screw, bolt, nut, washer, pin, rivet, clip) or by "
+                    "geometry (a small part joining two parts each ten times its volume), fasteners with the same "
+                    "hosts in one group, each with the reason. With -o, write the product with the proposals "
+                    "accepted; plans fold them (--fasteners tagged, the default). Mesh paths are rewritten relative to "
+                    "the new file.")
+    fasteners.add_argument("product", metavar="PRODUCT", help=PRODUCT_HELP)
+    fasteners.add_argument("-o", "--output", metavar="FILE",
+                           help="write the product file with the proposed groups accepted (atomically)")
+    fasteners.add_argument("--json", action="store_true",
+                           help="print one JSON object: designer, proposed (groups), left_out (parts and why)")
+    fasteners.set_defaults(run=_fasteners)
 
     synth = commands.add_parser("synth", help="write a synthetic product of Table I",
                                 description="chain: weakly connected (each part touches the next); "

@@ -90,8 +90,9 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
     plan = model.plan
     stream, robot = None, ConsoleRobot() if args.robot in (None, "console") else ScriptedRobot()
     if not args.keyboard:  # open the frames first: a camera or file that cannot be read stops before any log
-        markers = marker_map(plan.product)
-        if plan.product.markers is None:
+        designed = plan.designed or plan.product  # with its fasteners: the operator picks them from the tray too
+        markers = marker_map(designed)
+        if designed.markers is None:
             log.info("note: the product has no 'markers': parts then tools are markers 0, 1, ... in file order "
                      "(see aplan markers)")
         detector = MarkerDetector(markers.dictionary)
@@ -110,7 +111,7 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
 
     events = EventLog(log_path, on_event=show)
     if args.keyboard:
-        source = KeyboardSource(plan.product)
+        source = KeyboardSource(plan.designed or plan.product)  # the fasteners are picked too
     else:
         close_without_tool = any(o.parts and o.tool is None for o in plan.observations)
         source = VisionSource((), markers, detector, args.debounce, args.quiet_frames, close_without_tool,

@@ -17,8 +17,19 @@ from typing import Any
 from ..errors import ProductFormatError
 from ..files import write_atomic
 from .constants import AXIS_DIRECTIONS, DEFAULT_MARKER_DICTIONARY, FORMAT, UNIT_TOLERANCE, VERSION
-from .model import (Direction, Markers, Obstruction, OperationTag, Part, Product, Subassembly, TagDefaults,
-                    TechnicalConstraint, Tool)
+from .model import (
+    Direction,
+    FastenerGroup,
+    Markers,
+    Obstruction,
+    OperationTag,
+    Part,
+    Product,
+    Subassembly,
+    TagDefaults,
+    TechnicalConstraint,
+    Tool,
+)
 from .schema import check_document
 
 __all__ = ["product_from_dict", "product_to_dict", "loads_product", "load_product", "save_product"]
@@ -46,6 +57,7 @@ def product_from_dict(data: Any, source: str = "<memory>") -> Product:
         markers=_markers(data["markers"]) if "markers" in data else None,
         subassemblies=tuple(Subassembly(item["id"], tuple(item["parts"]), item.get("label", ""),
                                         item.get("source", "designer")) for item in data.get("subassemblies", [])),
+        fasteners=tuple(_fastener(item) for item in data.get("fasteners", [])),
         name=data.get("name", ""), units=data.get("units", "mm"),
         geometry=dict(data.get("geometry", {})),
         extensions={k: v for k, v in data.items() if k.startswith("x-")},
@@ -93,6 +105,11 @@ def _operation(item: dict) -> OperationTag:
                         tool=item.get("tool"))
 
 
+def _fastener(item: dict) -> FastenerGroup:
+    return FastenerGroup(id=item["id"], parts=tuple(item["parts"]), hosts=frozenset(item.get("hosts", ())),
+                         tool=item.get("tool"), source=item.get("source", "designer"), reason=item.get("reason", ""))
+
+
 def _markers(item: dict) -> Markers:
     return Markers(tuple(item["ids"].items()), item.get("dictionary", DEFAULT_MARKER_DICTIONARY))
 
@@ -119,6 +136,8 @@ def product_to_dict(product: Product) -> dict:
     if product.defaults != TagDefaults():
         d = product.defaults
         doc["defaults"] = {"unfavorable": d.unfavorable, "robot": d.robot, **({"tool": d.tool} if d.tool else {})}
+    if product.fasteners:
+        doc["fasteners"] = [_fastener_dict(group) for group in product.fasteners]
     if product.markers is not None:
         doc["markers"] = {"dictionary": product.markers.dictionary, "ids": dict(product.markers.ids)}
     if product.subassemblies:
@@ -154,6 +173,19 @@ def _constraint_dict(constraint: TechnicalConstraint) -> dict:
 def _operation_dict(tag: OperationTag) -> dict:
     out: dict[str, Any] = {"inputs": [sorted(side) for side in tag.inputs]}
     out.update({k: getattr(tag, k) for k in ("unfavorable", "robot", "tool") if getattr(tag, k) is not None})
+    return out
+
+
+def _fastener_dict(group: FastenerGroup) -> dict:
+    out: dict[str, Any] = {"id": group.id, "parts": list(group.parts)}
+    if group.hosts:
+        out["hosts"] = sorted(group.hosts)
+    if group.tool is not None:
+        out["tool"] = group.tool
+    if group.source != "designer":
+        out["source"] = group.source
+    if group.reason:
+        out["reason"] = group.reason
     return out
 
 

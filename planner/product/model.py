@@ -13,6 +13,8 @@ A *product* holds:
   product-wide defaults for operations that carry no tag;
 - subassemblies: a tree of named groups of parts (and of other subassemblies), each built at a workstation
   of its own and then handled as one part (:mod:`planner.assembly.hierarchy`).
+- fastener groups: parts (screws, nuts, washers, ...) that are installed by the operation that joins their
+  hosts, with the tool they need, rather than planned as parts (:mod:`planner.product.fasteners`).
 
 Constructing a :class:`Product` checks it (:mod:`planner.product.validation`). Its JSON file format is in
 :mod:`planner.product.io` and ``docs/product-format.md``.
@@ -26,7 +28,7 @@ from .constants import AXIS_DIRECTIONS, DEFAULT_MARKER_DICTIONARY, UNIT_TOLERANC
 from .validation import check_product
 
 __all__ = ["Part", "Direction", "Obstruction", "TechnicalConstraint", "Tool", "OperationTag", "TagDefaults",
-           "Markers", "Subassembly", "Product"]
+           "Markers", "Subassembly", "FastenerGroup", "Product"]
 
 
 @dataclass(frozen=True)
@@ -150,6 +152,22 @@ class Subassembly:
 
 
 @dataclass(frozen=True)
+class FastenerGroup:
+    """Fasteners installed together (say the four screws of one wheel): ``parts`` are part ids of the product,
+    ``hosts`` the parts they join (empty: the parts the fasteners touch that are not fasteners themselves),
+    ``tool`` the tool the installing operation needs. ``source``: ``designer`` (from the file or the
+    workbench's tags) or ``proposed`` (by :func:`planner.product.fastener_proposals.propose_fasteners`, which
+    says why in ``reason``)."""
+
+    id: str
+    parts: tuple[str, ...]
+    hosts: frozenset[str] = frozenset()
+    tool: str | None = None
+    source: str = "designer"
+    reason: str = ""
+
+
+@dataclass(frozen=True)
 class Product:
     """A product: parts, connection diagram, obstruction diagrams, technical constraints and designer tags.
 
@@ -166,6 +184,7 @@ class Product:
     defaults: TagDefaults = TagDefaults()
     markers: Markers | None = None
     subassemblies: tuple[Subassembly, ...] = ()
+    fasteners: tuple[FastenerGroup, ...] = ()
     name: str = ""
     units: str = "mm"
     geometry: Mapping[str, Any] = field(default_factory=dict, compare=False)
@@ -178,6 +197,11 @@ class Product:
     @property
     def part_ids(self) -> tuple[str, ...]:
         return tuple(p.id for p in self.parts)
+
+    @property
+    def fastener_parts(self) -> frozenset[str]:
+        """The parts listed in a fastener group."""
+        return frozenset(p for group in self.fasteners for p in group.parts)
 
     def with_technical(self, technical: bool | None) -> "Product":
         """A copy with every technical constraint switched on (True) or off (False); None keeps the file's."""

@@ -19,7 +19,7 @@ from .messages import suggest
 if TYPE_CHECKING:
     from .model import Product
 
-__all__ = ["check_product"]
+__all__ = ["check_product", "fastener_hosts"]
 
 
 def check_product(product: "Product") -> None:
@@ -31,6 +31,7 @@ def check_product(product: "Product") -> None:
     tools = _check_tools(product, parts)
     _check_operations(product, parts, tools)
     _check_defaults(product, tools)
+    _check_fasteners(product, parts, tools)
     if product.markers is not None:
         _check_markers(product, set(parts) | set(tools))
     _check_subassemblies(product, parts, tools)
@@ -228,3 +229,53 @@ def _check_subassemblies(product: "Product", parts: dict[str, int], tools: dict[
                                                             + " in ".join(seen + [group.id]) + "; break the cycle")
             seen.append(current)
             current = owner.get(current)
+
+
+def fastener_hosts(product: "Product") -> tuple[frozenset[str], ...]:
+    """The hosts of each fastener group of ``product``: those the group lists, or else the parts its fasteners
+    touch that are in no fastener group (a fastener touching another group's fastener joins it to nothing).
+    Cost: O(contacts + fastener parts)."""
+    fastener_parts = product.fastener_parts
+    touching: dict[str, set[str]] = {}
+    for a, b in product.contacts:
+        if b not in fastener_parts:
+            touching.setdefault(a, set()).add(b)
+        if a not in fastener_parts:
+            touching.setdefault(b, set()).add(a)
+    return tuple(group.hosts or frozenset(h for p in group.parts for h in touching.get(p, ()))
+                 for group in product.fasteners)
+
+
+def _check_fasteners(product: "Product", parts: dict[str, int], tools: dict[str, int]) -> None:
+    """Fastener parts name parts, each in one group; hosts are parts and no fasteners; a group joins at least
+    two parts; its tool is declared."""
+    owner: dict[str, str] = {}
+    ids: set[str] = set()
+    for i, group in enumerate(product.fasteners):
+        location = f"fasteners[{i}]"
+        if not isinstance(group.id, str) or not group.id.strip():
+            raise _fail(product, f"{location}.id", "a fastener group id must be a non-empty string")
+        if group.id in ids:
+            raise _fail(product, f"{location}.id", f"duplicate fastener group id {group.id!r}")
+        ids.add(group.id)
+        if not group.parts:
+            raise _fail(product, f"{location}.parts", f"fastener group {group.id!r} lists no part")
+        for name in group.parts:
+            _known(product, parts, name, f"{location}.parts")
+            if name in owner:
+                raise _fail(product, f"{location}.parts", f"{name!r} is in fastener groups {owner[name]!r} and "
+                            f"{group.id!r}; a fastener belongs to one group only")
+            owner[name] = group.id
+        _known_tool(product, tools, group.tool, f"{location}.tool")
+    for i, group in enumerate(product.fasteners):
+        for name in sorted(group.hosts):
+            _known(product, parts, name, f"fasteners[{i}].hosts")
+            if name in owner:
+                raise _fail(product, f"fasteners[{i}].hosts", f"host {name!r} is a fastener (group {owner[name]!r}); "
+                            "hosts are the parts the fasteners join")
+    for i, (group, hosts) in enumerate(zip(product.fasteners, fastener_hosts(product))):
+        if len(hosts) < 2:
+            joined = f"only {sorted(hosts)[0]!r}" if hosts else "nothing"
+            raise _fail(product, f"fasteners[{i}]", f"fastener group {group.id!r} ({', '.join(group.parts)}) joins "
+                        f"{joined}: a fastener that joins nothing or only one part; list the parts it joins in "
+                        "'hosts', or add its missing contacts, or leave it out of the fasteners")

@@ -19,7 +19,8 @@ __all__ = ["Instruction", "RobotReport", "ObservationSource", "Robot", "instruct
 class Instruction:
     """What the robot is asked to do at one step: an operation (join ``inputs`` with ``tool``) or wait.
 
-    ``picks``: the inputs that are single parts, which the robot takes from the tray.
+    ``fasteners``: the fastener parts the operation installs (its folded fastener groups); ``picks``: the
+    inputs that are single parts and those fasteners, which the robot takes from the tray.
     """
 
     step: int
@@ -28,6 +29,7 @@ class Instruction:
     operation: int | None = None
     inputs: tuple[tuple[str, ...], tuple[str, ...]] | None = None
     tool: str | None = None
+    fasteners: tuple[str, ...] = ()
 
     @property
     def is_wait(self) -> bool:
@@ -35,14 +37,15 @@ class Instruction:
 
     @property
     def picks(self) -> tuple[str, ...]:
-        return tuple(sorted(side[0] for side in self.inputs or () if len(side) == 1))
+        return tuple(sorted([side[0] for side in self.inputs or () if len(side) == 1] + list(self.fasteners)))
 
     @property
     def text(self) -> str:
         if self.is_wait:
             return "wait (do nothing this step)"
         first, second = ("{" + ", ".join(side) + "}" for side in self.inputs)
-        return f"join {first} with {second}" + (f" using the {self.tool}" if self.tool else "")
+        fastened = f" fastened by {', '.join(self.fasteners)}" if self.fasteners else ""
+        return f"join {first} with {second}{fastened}" + (f" using the {self.tool}" if self.tool else "")
 
 
 @dataclass(frozen=True)
@@ -80,4 +83,6 @@ def instruction_for(model: IntentionModel, action: int, step: int) -> Instructio
         return Instruction(step, action, name)
     plan = model.plan
     first, second = (tuple(sorted(side)) for side in plan.andor.inputs(operation))
-    return Instruction(step, action, name, operation, (first, second), plan.tags.tool[operation])
+    fasteners = tuple(p for group, operations in zip(plan.fasteners, plan.installs)
+                      if bool((operations == operation).any()) for p in group.parts)
+    return Instruction(step, action, name, operation, (first, second), plan.tags.tool[operation], fasteners)

@@ -146,7 +146,8 @@ class _Run:
     def begin(self, settings: dict) -> None:
         model = self.model
         intentions = count_intentions(model.plan.states) if self.factored else model.pomdp.n_states
-        self.log.write("start", version=LOG_VERSION, product=product_to_dict(model.plan.product), settings=settings,
+        designed = model.plan.designed or model.plan.product  # before folding: replaying folds the same fasteners
+        self.log.write("start", version=LOG_VERSION, product=product_to_dict(designed), settings=settings,
                        n_intentions=intentions, belief_over="classes" if self.factored else "intentions",
                        actions=list(model.actions), observations=list(model.observations),
                        top=top_intentions(self.belief))

@@ -37,7 +37,7 @@ def test_connected_sets_limit_is_sharp():
     error = info.value
     assert (error.count, error.limit) == (count, count - 1)
     assert "8 part(s) look like fasteners by name (screw_1, screw_2" in str(error)
-    assert [option for option, _ in error.options] == ["--max-subassemblies", "--exclude", "--group"]
+    assert [option for option, _ in error.options] == ["--max-subassemblies", "--fasteners", "--exclude", "--group"]
 
 
 def test_cut_limit_is_sharp():

@@ -1,0 +1,131 @@
+"""Fastener groups the planner proposes for the designer to accept.
+
+Definition
+----------
+A part is a *candidate* fastener when
+
+- *name*: its id or label holds one of :data:`FASTENER_WORDS` as a word (``wood_screw_001``, ``HexBolt``,
+  ``M6 nut``; case-insensitive, a CamelCase word counts as one), or
+- *geometry*: its volume is at most the product's median part volume, and at least two of the parts it
+  touches are each :data:`HOST_VOLUME_RATIO` times its volume or more (a small part that joins two others).
+
+Candidates that touch one another form one fastener (a bolt, its nut and washer); its hosts are the
+non-candidate parts it touches. A fastener that joins fewer than two parts is not proposed (it is listed in
+:attr:`FastenerProposals.left_out` with the reason). Fasteners with the same hosts make one group (the four
+screws of one wheel), installed by one operation.
+
+Cost: O(parts log parts + contacts).
+"""
+from __future__ import annotations
+
+import re
+import statistics
+from dataclasses import dataclass
+
+from .model import FastenerGroup, Part, Product
+
+__all__ = ["FASTENER_WORDS", "HOST_VOLUME_RATIO", "FastenerProposals", "fastener_proposals", "propose_fasteners"]
+
+FASTENER_WORDS = ("screw", "bolt", "nut", "washer", "pin", "rivet", "clip")
+
+# A fastener is this many times smaller than each of two parts it joins (the truck's screws: 68 and more;
+# the pump's bolts: 300 and more; its diaphragm, clamped between two housings, is not a fastener).
+HOST_VOLUME_RATIO = 10.0
+
+_WORD = re.compile(r"(?<![a-z])(" + "|".join(FASTENER_WORDS) + r")(e?s)?(?![a-z])")
+
+
+@dataclass(frozen=True)
+class FastenerProposals:
+    """``groups``: the proposed groups (``source="proposed"``, ``reason`` says why); ``left_out``: candidates
+    not proposed, each with the reason."""
+
+    groups: tuple[FastenerGroup, ...]
+    left_out: tuple[tuple[str, str], ...]
+
+
+def _name_word(part: Part) -> str | None:
+    """The fastener word in the part's id or label, if any."""
+    for text in (part.id, part.label):
+        spaced = re.sub(r"([a-z])([A-Z])", r"\1 \2", text or "").lower()
+        found = _WORD.search(spaced)
+        if found:
+            return found.group(1)
+    return None
+
+
+def fastener_proposals(product: Product) -> FastenerProposals:
+    """The groups of :func:`propose_fasteners` and the candidates left out (see the module's definition).
+    Parts already in a fastener group of ``product`` are neither candidates nor hosts."""
+    tagged = product.fastener_parts
+    touching: dict[str, set[str]] = {p.id: set() for p in product.parts}
+    for a, b in product.contacts:
+        touching[a].add(b)
+        touching[b].add(a)
+    volumes = {p.id: p.volume for p in product.parts if p.volume is not None}
+    median = statistics.median(volumes.values()) if volumes else None
+    why: dict[str, str] = {}
+    for part in product.parts:
+        if part.id in tagged:
+            continue
+        word = _name_word(part)
+        if word:
+            why[part.id] = f"name ({word!r})"
+            continue
+        volume = volumes.get(part.id)
+        if volume is None or median is None or volume > median:
+            continue
+        big = sorted(n for n in touching[part.id] if n not in tagged
+                     and volumes.get(n, 0.0) >= HOST_VOLUME_RATIO * max(volume, 1e-12))
+        if len(big) >= 2:
+            ratio = min(volumes[n] for n in big) / max(volume, 1e-12)
+            why[part.id] = f"geometry (volume {volume:.4g}, at most the median {median:.4g}; joins {', '.join(big)}, " \
+                           f"each {ratio:.0f} times larger or more)"
+    fasteners, left_out = [], []
+    for members in _touching_groups(sorted(why, key=product.part_ids.index), touching):
+        hosts = frozenset(n for m in members for n in touching[m] if n not in why and n not in tagged)
+        if len(hosts) < 2:
+            joined = f"only {min(hosts)}" if hosts else "nothing"
+            left_out.extend((m, f"{why[m]}, but it joins {joined}: left as a part (check its contacts)")
+                            for m in members)
+        else:
+            fasteners.append((members, hosts))
+    return FastenerProposals(_grouped(fasteners, why), tuple(left_out))
+
+
+def propose_fasteners(product: Product) -> list[FastenerGroup]:
+    """Fastener groups proposed from names and geometry (``source="proposed"``; ``reason`` says why)."""
+    return list(fastener_proposals(product).groups)
+
+
+def _touching_groups(candidates: list[str], touching: dict[str, set[str]]) -> list[list[str]]:
+    """The candidates split into sets that touch one another (a bolt with its nut), in candidate order."""
+    chosen = set(candidates)
+    seen: set[str] = set()
+    out = []
+    for start in candidates:
+        if start in seen:
+            continue
+        members, stack = [], [start]
+        seen.add(start)
+        while stack:
+            part = stack.pop()
+            members.append(part)
+            for other in sorted(touching[part] & chosen - seen):
+                seen.add(other)
+                stack.append(other)
+        out.append(sorted(members, key=candidates.index))
+    return out
+
+
+def _grouped(fasteners: list[tuple[list[str], frozenset[str]]], why: dict[str, str]) -> tuple[FastenerGroup, ...]:
+    """One group per host set, named after the hosts, in the order of its first fastener."""
+    by_hosts: dict[frozenset[str], list[str]] = {}
+    for members, hosts in fasteners:
+        by_hosts.setdefault(hosts, []).extend(members)
+    groups = []
+    for hosts, parts in by_hosts.items():
+        alike = f" (and {len(parts) - 1} more)" if len(parts) > 1 else ""
+        groups.append(FastenerGroup(id="fasteners_" + "+".join(sorted(hosts)), parts=tuple(parts), hosts=hosts,
+                                    source="proposed", reason=f"{parts[0]}: {why[parts[0]]}{alike}"))
+    return tuple(groups)

@@ -1,0 +1,97 @@
+"""Fastener proposals (planner.product.fastener_proposals): names, geometry, grouping, and the real models
+against the fasteners counted by hand (fastener_ground_truth.json)."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from real_models import real_bundles  # noqa: F401  (a fixture)
+
+from planner import load_product, resolve_product
+from planner.product import FastenerGroup, Part, Product, fastener_proposals, propose_fasteners
+
+GROUND_TRUTH = json.loads((Path(__file__).with_name("fastener_ground_truth.json")).read_text())
+
+
+def _product(parts: dict[str, float | None], contacts: list[tuple[str, str]], labels: dict | None = None) -> Product:
+    labels = labels or {}
+    return Product(tuple(Part(p, labels.get(p, ""), volume=v) for p, v in parts.items()), tuple(contacts))
+
+
+@pytest.mark.parametrize("name, found", [
+    ("wood_screw_001", "screw"), ("HexBolt", "bolt"), ("M6 nut", "nut"), ("washers_2", "washer"),
+    ("dowelPin", "pin"), ("Rivet", "rivet"), ("spring_clip", "clip"),
+    ("spindle", None), ("walnut_panel", None), ("pinion", None), ("clipboard", None), ("nutshell", None)])
+def test_names(name, found):
+    product = _product({"a": None, "b": None, name: None}, [("a", "b"), ("a", name), ("b", name)])
+    groups = propose_fasteners(product)
+    if found is None:
+        assert groups == []
+    else:
+        (group,) = groups
+        assert group.parts == (name,) and group.hosts == {"a", "b"} and group.source == "proposed"
+        assert f"name ({found!r})" in group.reason
+
+
+def test_a_label_counts_too():
+    product = _product({"a": None, "b": None, "x1": None}, [("a", "b"), ("a", "x1"), ("b", "x1")], {"x1": "Screw M4"})
+    assert [g.parts for g in propose_fasteners(product)] == [("x1",)]
+
+
+def test_geometry_and_grouping_by_hosts():
+    volumes = {"plate": 1000.0, "frame": 800.0, "wheel": 500.0, "s1": 5.0, "s2": 5.0, "s3": 5.0, "s4": 5.0,
+               "t1": 5.0, "spacer": 300.0, "clamp": 60.0}
+    contacts = [("plate", "frame"), ("frame", "wheel"), ("plate", "spacer"), ("spacer", "wheel"),
+                ("clamp", "wheel"), ("clamp", "spacer")]
+    contacts += [(s, h) for s in ("s1", "s2", "s3", "s4") for h in ("frame", "wheel")]
+    contacts += [("t1", "plate"), ("t1", "frame")]
+    found = {g.id: g for g in propose_fasteners(_product(volumes, contacts))}
+    # four screws on one wheel are one group; the spacer is large and the clamp not ten times smaller than
+    # the spacer (300 < 10 x 60)
+    assert set(found) == {"fasteners_frame+wheel", "fasteners_frame+plate"}
+    assert found["fasteners_frame+wheel"].parts == ("s1", "s2", "s3", "s4")
+    assert found["fasteners_frame+wheel"].reason.startswith("s1: geometry (volume 5") and "(and 3 more)" in \
+        found["fasteners_frame+wheel"].reason
+    assert found["fasteners_frame+plate"].parts == ("t1",)
+
+
+def test_touching_fasteners_are_one_fastener_and_one_host_is_left_out():
+    volumes = {"a": 100.0, "b": 100.0, "bolt": 1.0, "nut": 1.0, "washer": 1.0, "lone_screw": 1.0}
+    contacts = [("a", "b"), ("bolt", "a"), ("bolt", "nut"), ("nut", "b"), ("washer", "nut"), ("lone_screw", "a")]
+    proposals = fastener_proposals(_product(volumes, contacts))
+    (group,) = proposals.groups
+    assert group.parts == ("bolt", "nut", "washer") and group.hosts == {"a", "b"}
+    assert proposals.left_out == (("lone_screw", "name ('screw'), but it joins only a: left as a part "
+                                                 "(check its contacts)"),)
+
+
+def test_tagged_parts_are_neither_proposed_nor_hosts():
+    product = _product({"a": None, "b": None, "screw": None, "nut": None},
+                       [("a", "b"), ("a", "screw"), ("b", "screw"), ("screw", "nut"), ("nut", "b"), ("nut", "a")])
+    tagged = Product(product.parts, product.contacts, fasteners=(FastenerGroup("s", ("screw",)),))
+    assert [g.parts for g in propose_fasteners(tagged)] == [("nut",)]
+
+
+def test_the_pen_has_no_fasteners():
+    assert fastener_proposals(resolve_product("pen")).groups == ()
+
+
+@pytest.mark.freecad
+@pytest.mark.parametrize("model", ["toy_truck", "diaphragm_pump"])
+def test_real_models_against_the_hand_count(real_bundles, model):  # noqa: F811
+    truth = GROUND_TRUTH[model]
+    product = load_product(real_bundles[model] / "product.json")
+    assert len(product.parts) == truth["parts"]
+    fasteners = set(truth["fasteners"])
+    assert fasteners <= set(product.part_ids)
+    proposals = fastener_proposals(product)
+    proposed = {p for group in proposals.groups for p in group.parts}
+    measured = truth["measured"]
+    assert len(proposed & fasteners) == measured["proposed_fasteners"]
+    assert len(proposed - fasteners) == measured["wrong_proposals"]
+    assert len(proposals.groups) == measured["groups"]
+    assert sorted(fasteners - proposed) == measured["missed"]
+    # every proposal is a valid group: accepted, the product still checks and folds
+    accepted = resolve_product(product, "auto")
+    assert len(accepted.fasteners) == measured["groups"]
