@@ -80,7 +80,7 @@ def real_models(folder: Path) -> None:
         proposals = fastener_proposals(product)
         proposed = {p for g in proposals.groups for p in g.parts}
         fasteners = set(truth["fasteners"])
-        folded = fold(api.resolve_product(product, "auto"))
+        folded = fold(api.resolve_product(product, fasteners="auto"))
         every, few = connected_sets(product), connected_sets(folded.product)
         code, seconds, peak, shown = stats_run(bundle)
         print(f"| {name} | {len(product.parts)} | {len(fasteners)} | {len(proposed & fasteners)} | "

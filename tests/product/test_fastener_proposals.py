@@ -93,5 +93,5 @@ def test_real_models_against_the_hand_count(real_bundles, model):  # noqa: F811
     assert len(proposals.groups) == measured["groups"]
     assert sorted(fasteners - proposed) == measured["missed"]
     # every proposal is a valid group: accepted, the product still checks and folds
-    accepted = resolve_product(product, "auto")
+    accepted = resolve_product(product, fasteners="auto")
     assert len(accepted.fasteners) == measured["groups"]
