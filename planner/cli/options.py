@@ -77,8 +77,8 @@ def product_from(args: argparse.Namespace, argument):
     """PRODUCT resolved with ``--fasteners`` (a Product); a model file's name stays as it is."""
     from .. import api
 
-    if str(argument).lower().endswith(api.MODEL_SUFFIXES):
-        return argument
+    if isinstance(argument, api.Product) or str(argument).lower().endswith(api.MODEL_SUFFIXES):
+        return argument   # a product already resolved (a level: its fasteners were chosen with the whole)
     return api.resolve_product(argument, fasteners=getattr(args, "fasteners", "tagged"))
 
 

@@ -137,18 +137,18 @@ def _level_stats(args: argparse.Namespace, product) -> int:
           f"levels (workstations), planned bottom-up")
     shown = lambda v: "-" if v is None else f"{v:,}"  # noqa: E731
     names = {"parts": "members", "subassemblies": "and_or_nodes", "operations": "and_arcs"}
-    print(f"  {'level':<8}" + "".join(f"{names.get(k, k):>13}" for k in _LEVEL_KEYS[:1]) + f"{'built':>7}"
-          + "".join(f"{names.get(k, k):>13}" for k in _LEVEL_KEYS[1:]))
     built = {level.id: sum(m not in product.part_ids for m in level.members) for level, _ in levels}
-    for level, _ in levels:
-        d = figures[level.id]
-        print(f"  {level.id:<8}{len(level.members):>13}{built[level.id]:>7}"
-              + "".join(f"{shown(d[k]):>13}" for k in _LEVEL_KEYS[1:]))
-    print(f"  {'total':<8}{total['parts']:>13}{sum(built.values()):>7}"
-          + "".join(f"{shown(total[k]):>13}" for k in _LEVEL_KEYS[1:]))
+    rows = [(level.id, len(level.members), built[level.id], figures[level.id]) for level, _ in levels]
+    rows.append(("total", total["parts"], sum(built.values()), total))
     if flat_dict is not None:
-        print(f"  {'flat':<8}{flat_dict['parts']:>13}{0:>7}" + "".join(f"{shown(flat_dict[k]):>13}"
-                                                                      for k in _LEVEL_KEYS[1:]))
+        rows.append(("flat", flat_dict["parts"], 0, flat_dict))
+    keys = _LEVEL_KEYS[1:]
+    # Each column as wide as its widest figure (a product of the levels' sequence counts can be long).
+    width = {k: 2 + max(len(names.get(k, k)), *(len(shown(d[k])) for *_, d in rows)) for k in keys}
+    first = max(8, *(len(str(name)) + 1 for name, *_ in rows))
+    print(f"  {'level':<{first}}{names['parts']:>9}{'built':>7}" + "".join(f"{names.get(k, k):>{width[k]}}" for k in keys))
+    for name, members, count, d in rows:
+        print(f"  {name:<{first}}{members:>9}{count:>7}" + "".join(f"{shown(d[k]):>{width[k]}}" for k in keys))
     print("  (built: members that are subassemblies built at another workstation; total: the sums over the levels, "
           "but parts: the product's, sequences: the product of the levels', each workstation following its own)")
     for level, stats in levels:

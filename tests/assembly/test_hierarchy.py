@@ -244,3 +244,51 @@ def test_built_subassemblies_get_free_markers():
     inner, _, top = product_levels(product)
     assert dict(inner.product.markers.ids) == {"a1": 0, "a2": 1, "a3": 2, "t": 7}
     assert dict(top.product.markers.ids) == {"A": 6, "B": 8, "t": 7}  # 6 and 8: the first ids no one has
+
+
+# -------------------------------------------------------------------------------------- with fasteners
+
+
+def test_a_screw_between_two_subassemblies_is_driven_where_they_join():
+    """Chains a1-a2-a3 and b1-b2-b3 held together only by the screw s (it touches a3 and b1): the chains are
+    planned without it (2 sequences each), and the top level joins A and B installing s, with the
+    screwdriver, in its one operation."""
+    from planner import make_plan
+    from planner.product import FastenerGroup, Tool
+
+    base = two_chains()
+    contacts = tuple(c for c in base.contacts if set(c) != {"a3", "b1"}) + (("s", "a3"), ("s", "b1"))
+    product = replace(base, parts=base.parts + (Part("s"),), contacts=contacts, tools=(Tool("screwdriver"),),
+                      fasteners=(FastenerGroup("screws", ("s",), tool="screwdriver"),))
+    levels = {level.id: level for level in product_levels(product)}
+    assert list(levels) == ["A", "B", TOP]
+    assert "s" not in levels["A"].members and "s" not in levels["B"].members
+    top = levels[TOP].product
+    assert sorted(top.part_ids) == ["A", "B", "s"]
+    assert [(g.id, sorted(g.hosts)) for g in top.fasteners] == [("screws", ["A", "B"])]
+    plan = make_plan(top)
+    # At the top level the built chains are single parts in the tray: the operator picks both, the screw and
+    # the screwdriver.
+    assert [str(o) for o in plan.observations if "s" in str(o)] == ["A+B+s+[screwdriver]"]
+    from planner import plan_statistics
+
+    figures = {level.id: plan_statistics(make_plan(level.product)) for level in product_levels(product)}
+    assert [(figures[k].subassemblies, figures[k].sequences) for k in ("A", "B", TOP)] == [(6, 2), (6, 2), (3, 1)]
+
+
+def test_proposed_subassemblies_leave_fasteners_out():
+    """A chain of 8 with a screw on every contact: the proposal groups the 8 parts only (the screws are no
+    members), and every screw is installed at the level where its two parts come together."""
+    from planner.product import FastenerGroup
+
+    chain = chain_product(8)
+    screws = tuple(Part(f"s{i}") for i in range(1, 8))
+    contacts = tuple(c for i, (a, b) in enumerate(chain.contacts) for c in ((f"s{i + 1}", a), (f"s{i + 1}", b)))
+    product = replace(chain, parts=chain.parts + screws, contacts=contacts,
+                      fasteners=tuple(FastenerGroup(f"g{i}", (f"s{i}",)) for i in range(1, 8)))
+    proposed = propose_subassemblies(product, 4)
+    members = {m for group in proposed for m in group.parts}
+    assert members and not members & {p.id for p in screws}
+    levels = product_levels(replace(product, subassemblies=proposed))
+    installed = [g.id for level in levels for g in level.product.fasteners]
+    assert sorted(installed) == [f"g{i}" for i in range(1, 8)]   # each screw once, somewhere
