@@ -7,8 +7,11 @@ Which objects are parts:
 - ``App::Link`` objects (also to other documents), with the link's placement;
 - objects inside ``App::Part`` containers, with the containers' placements.
 
-Objects that are inputs of another feature (boolean operands, the features inside a body, the profile of
-an extrusion) are skipped, as are hidden objects that an ``App::Link`` shows elsewhere. Objects with faces
+Objects whose shape another feature consumes (boolean operands, the features inside a body, the profile
+of an extrusion: a link property of the feature names them, :func:`consuming_properties`) are skipped, as
+are hidden objects that an ``App::Link`` shows elsewhere; those holding solids are named in one warning.
+Being in another object's InList is not enough: an Assembly4-style part attached to another (Attacher's
+``Support``/``AttachmentSupport``, or an expression on its placement) is a part. Objects with faces
 but no solid are reported and skipped. Shapes are always copies: the document's placements and geometry
 are never changed.
 """
@@ -24,7 +27,7 @@ import Part
 
 from planner.errors import PlannerError
 
-__all__ = ["Component", "ReadResult", "open_model", "read_components", "DocumentError"]
+__all__ = ["Component", "ReadResult", "open_model", "read_components", "consuming_properties", "DocumentError"]
 
 _IMPORT_PREFERENCES = "User parameter:BaseApp/Preferences/Mod/Import"
 
@@ -99,9 +102,49 @@ def _without_link_groups() -> Iterator[None]:
             group.RemBool("UseLinkGroup")
 
 
-def _is_consumer(obj) -> bool:
-    """True for objects that build their shape from other objects' shapes (booleans, bodies, extrusions)."""
-    return obj.isDerivedFrom("Part::Feature") and not obj.isDerivedFrom("App::Link")
+# Link properties that place an object relative to another (Attacher) without using its shape.
+_PLACING_PROPERTIES = frozenset({"Support", "AttachmentSupport", "MapPathParameter"})
+_LINK_TYPES = ("App::PropertyLink", "App::PropertyLinkList", "App::PropertyLinkSub", "App::PropertyLinkSubList")
+
+
+def _linked_objects(value) -> Iterator:
+    """The document objects in the value of a link property (link, list, (object, subs) or lists of those)."""
+    if value is None:
+        return
+    if hasattr(value, "TypeId"):
+        yield value
+    elif isinstance(value, (list, tuple)):
+        for item in value:
+            yield from _linked_objects(item)
+
+
+def consuming_properties(user, obj) -> list[str]:
+    """The link properties of ``user`` through which it builds its shape from ``obj``'s shape.
+
+    A feature consumes an object when one of its link properties (``Base``/``Tool`` of a boolean, ``Shapes``
+    of a multi-fuse, ``Base`` of an extrusion or a chamfer, the ``Group`` of a body, ...) names it. An
+    attachment (``Support``/``AttachmentSupport``, properties of the ``Attachment`` group) or an expression
+    only places ``user`` relative to ``obj``: Assembly4-style parts attached to each other are all parts.
+    Links (``App::Link``) do not consume what they show. Cost: one pass over ``user``'s properties.
+    """
+    if not obj.isDerivedFrom("Part::Feature") and not obj.isDerivedFrom("App::Link"):
+        return []
+    if not user.isDerivedFrom("Part::Feature") or user.isDerivedFrom("App::Link"):
+        return []
+    names = []
+    for name in user.PropertiesList:
+        if name in _PLACING_PROPERTIES:
+            continue
+        try:
+            if user.getGroupOfProperty(name) == "Attachment" or \
+                    not user.getTypeIdOfProperty(name).startswith(_LINK_TYPES):
+                continue
+            value = getattr(user, name)
+        except Exception:  # a property a Python feature failed to restore
+            continue
+        if any(linked is obj for linked in _linked_objects(value)):
+            names.append(name)
+    return names
 
 
 def _parent_placement(obj) -> "FreeCAD.Placement":
@@ -133,6 +176,14 @@ def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
     return compound, None
 
 
+def _holds_solid(obj) -> bool:
+    """True when ``obj``'s own shape holds a solid (sketches, datums and links are not named when left out)."""
+    try:
+        return bool(obj.Shape.Solids)
+    except Exception:  # objects without a shape, links
+        return obj.isDerivedFrom("App::Link")
+
+
 def _material(obj) -> str | None:
     value = getattr(obj, "Material", None)
     if isinstance(value, str) and value:
@@ -161,13 +212,18 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
     group_of = _group_of(document, objects, groups, exclude)
 
     singles: list[Component] = []
+    left_out: list[tuple[str, str]] = []
     grouped: dict[str, list[tuple[object, "Part.Shape"]]] = {g: [] for g in groups}
     for obj in objects:
         if not (obj.isDerivedFrom("Part::Feature") or obj.isDerivedFrom("App::Link")):
             continue
         if obj.Label in exclude or obj.Name in exclude:
             continue
-        if any(_is_consumer(user) for user in obj.InList) or obj.Name in linked_hidden:
+        users = {user.Name: user for user in obj.InList}.values()  # an object can be in an InList twice
+        consumers = [f"{user.Label}.{name}" for user in users for name in consuming_properties(user, obj)]
+        if consumers or obj.Name in linked_hidden:
+            if _holds_solid(obj):
+                left_out.append((obj.Label, ", ".join(consumers) if consumers else "shown by an App::Link"))
             continue
         shape, problem = _solids_of(obj)
         if problem:
@@ -190,6 +246,10 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
                                 "(use split_solids / --split-solids for one part per solid)")
             singles.append(Component(obj.Label, obj.Label, shape, [obj.Name], _material(obj)))
 
+    if left_out:
+        warnings.append("not parts of their own (inputs of another feature, or shown by a link): "
+                        + "; ".join(f"{label} (used by {users})" for label, users in left_out)
+                        + " (group or exclude objects to choose otherwise)")
     components = list(singles)
     for group, members in grouped.items():
         if not members:

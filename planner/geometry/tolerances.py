@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..defaults import BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, RASTER_RESOLUTION
+from ..defaults import BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, OCCT_PAIR_BUDGET, RASTER_RESOLUTION
 from ..errors import GeometryError
 
 __all__ = ["Tolerances"]
@@ -19,6 +19,7 @@ class Tolerances:
     ``depth``: along the motion, overlaps shallower than this do not block (modelling interferences).
     ``resolution``: pixels across the largest dimension of the product for the projection test.
     ``grazing``: pixels next to a part's outline that are ignored (at least 1).
+    ``pair_budget``: OCCT engine: seconds of work per pair of parts before the pair is reported undecided.
     """
 
     contact: float = CONTACT_TOLERANCE
@@ -26,9 +27,10 @@ class Tolerances:
     depth: float = BLOCKING_DEPTH
     resolution: int = RASTER_RESOLUTION
     grazing: int = 1
+    pair_budget: float = OCCT_PAIR_BUDGET
 
     def __post_init__(self) -> None:
-        for name in ("contact", "interference", "depth"):
+        for name in ("contact", "interference", "depth", "pair_budget"):
             if not getattr(self, name) >= 0:
                 raise GeometryError(f"tolerance {name} must be >= 0, got {getattr(self, name)!r}")
         if self.resolution < 16:

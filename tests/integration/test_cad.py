@@ -229,7 +229,10 @@ def test_document_object_types(tmp_path):
         "LinkedBox": [8.0, [0.0, 0.0, 30.0]],   # a link to another document, with the link's placement
     }
     assert data["warnings"] == ["Face: has 1 faces but no solid (an open or unsewn shell); skipped "
-                                "(make it a solid in FreeCAD to include it)"]
+                                "(make it a solid in FreeCAD to include it)",
+                                "not parts of their own (inputs of another feature, or shown by a link): Box (used "
+                                "by Body.Group, Body.Tip); CutBase (used by Cut.Base); CutTool (used by Cut.Tool) "
+                                "(group or exclude objects to choose otherwise)"]
 
 
 @pytest.mark.freecad
