@@ -12,7 +12,8 @@ of an extrusion: a link property of the feature names them, :func:`consuming_pro
 are hidden objects that an ``App::Link`` shows elsewhere; those holding solids are named in one warning.
 Being in another object's InList is not enough: an Assembly4-style part attached to another (Attacher's
 ``Support``/``AttachmentSupport``, or an expression on its placement) is a part. Objects with faces
-but no solid are reported and skipped. Shapes are always copies: the document's placements and geometry
+but no solid are read as the solids their shells bound when every shell is closed (with a warning), else
+reported and skipped. Shapes are always copies: the document's placements and geometry
 are never changed.
 """
 from __future__ import annotations
@@ -155,8 +156,29 @@ def _parent_placement(obj) -> "FreeCAD.Placement":
         return FreeCAD.Placement()
 
 
+def _closed_shell_solids(shape) -> list:
+    """The solids bounded by ``shape``'s shells when it has faces but no solid and every shell is closed
+    (STEP imports and meshes turned into shapes often come so); [] otherwise."""
+    shells = shape.Shells
+    if not shells or not all(shell.isClosed() for shell in shells):
+        return []
+    solids = []
+    for shell in shells:
+        try:
+            solid = Part.Solid(shell)
+        except Exception:  # OCCT refuses the shell
+            return []
+        if solid.Volume < 0:
+            solid = Part.Solid(shell.reversed())
+        if not solid.isValid() or not solid.Volume > 0:
+            return []
+        solids.append(solid)
+    return solids
+
+
 def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
-    """A copy of the object's solids in global coordinates, or (None, reason)."""
+    """A copy of the object's solids in global coordinates, or (None, reason); (shape, note) when the solids
+    were made from closed shells."""
     if obj.isDerivedFrom("App::Link"):
         shape = Part.getShape(obj, "", needSubElement=False, transform=True)
     else:
@@ -164,6 +186,11 @@ def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
     if shape is None or shape.isNull():
         return None, None
     solids = [s.copy() for s in shape.Solids]
+    note = None
+    if not solids:
+        solids = _closed_shell_solids(shape)
+        note = (f"has {len(shape.Faces)} faces in closed shells but no solid; read as the solid they bound "
+                "(make it a solid in FreeCAD to silence this)") if solids else None
     if not solids:
         if shape.Faces:
             return None, f"has {len(shape.Faces)} faces but no solid (an open or unsewn shell)"
@@ -173,7 +200,7 @@ def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
     parent = _parent_placement(obj)
     if not parent.isIdentity():
         compound.Placement = parent.multiply(compound.Placement)
-    return compound, None
+    return compound, note
 
 
 def _holds_solid(obj) -> bool:
@@ -226,8 +253,10 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
                 left_out.append((obj.Label, ", ".join(consumers) if consumers else "shown by an App::Link"))
             continue
         shape, problem = _solids_of(obj)
-        if problem:
+        if problem and shape is None:
             warnings.append(f"{obj.Label}: {problem}; skipped (make it a solid in FreeCAD to include it)")
+        elif problem:
+            warnings.append(f"{obj.Label}: {problem}")
         if shape is None:
             continue
         if shape.Volume <= 0:

@@ -52,7 +52,7 @@ def _file_name(part_id: str, used: set[str]) -> str:
 
 def _report_check(part_id: str, check, tolerance: float, warnings: list[str]) -> None:
     """A warning for a part whose first mesh was off (re-tessellated) or that no mesher got right."""
-    first = next((error for _, error in check.tried if error is not None), None)
+    first = next((error for _, error, _ in check.tried if error is not None), None)
     before = "no triangles" if first is None else f"{first:+.1%} in volume"
     if check.method == "exact":
         warnings.append(f"{part_id}: no tessellation is within {tolerance:.0%} of the B-rep (first mesh "
@@ -87,7 +87,7 @@ def export_components(components, folder: str, source: str, warnings: list[str],
         mesh, check = checked_mesh(component.shape, linear_deflection, angular_deflection, mesh_tolerance)
         if mesh is None:
             raise GeometryError(f"part {component.id!r}: tessellation produced no triangles (tried "
-                                f"{', '.join(method for method, _ in check.tried)})")
+                                f"{', '.join(method for method, _, _ in check.tried)})")
         checks[component.id] = check.as_dict()
         _report_check(component.id, check, mesh_tolerance, warnings)
         mesh.write(os.path.join(folder, "meshes", name + ".stl"))

@@ -44,8 +44,9 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     Time: OCCT works at most ``pair_budget`` seconds on a pair of parts (``budgets`` maps pairs of ids to
     other budgets, checked between booleans); a pair it cannot decide in time counts as touching and
     blocking, is listed under ``undecided`` and named in a warning, and the others go on. ``progress``
-    receives a line every few seconds. ``pairs`` counts the pairs decided by part boxes (``far``), by face
-    boxes (``far_faces``) and those measured exactly (``exact``). Raises :class:`BrepError` naming the part when
+    receives a line every few seconds. ``pairs`` counts the contact pairs decided by part boxes (``far``), by
+    face boxes (``far_faces``) and those measured exactly (``exact``), and the obstruction candidates (over
+    the three axes) by part boxes (``sweep_candidates``) and those left by face boxes (``sweep_exact``). Raises :class:`BrepError` naming the part when
     a shape holds no solid or no volume, :class:`~planner.errors.GeometryError` for a negative tolerance.
 
     >>> import FreeCAD, Part
@@ -92,7 +93,7 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     for i, j, volume in interferences:
         warnings.append(f"parts {ids[i]!r} and {ids[j]!r} interpenetrate by {volume:.4g} cubic units "
                         f"(more than the interference tolerance {interference:g})")
-    obstructions = find_obstructions(ids, shapes, boxes, overlap, contact, depth, fuzzies, warnings, clock)
+    obstructions = find_obstructions(ids, shapes, boxes, faces, overlap, contact, depth, fuzzies, warnings, clock)
     warnings.extend(clock.warnings())
     return {
         "engine": "occt", "parts": len(ids),

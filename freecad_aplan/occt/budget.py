@@ -9,16 +9,18 @@ import numpy as np
 
 from .solids import bounding_box
 
-__all__ = ["PairClock", "face_boxes", "face_gap"]
+__all__ = ["PairClock", "face_boxes", "face_gap", "sweep_meets"]
 
 
 class PairClock:
-    """Seconds of OCCT work spent per unordered pair of parts, against a budget, and progress reports.
+    """CPU seconds of OCCT work spent per unordered pair of parts, against a budget, and progress reports.
 
     A pair is *undecided* when its work would go beyond its budget (``budget``, or ``budgets[{a, b}]`` for
     the pair of ids ``a``, ``b``): the engine stops working on it, reports it and goes on with the others.
     OCCT's booleans cannot be interrupted, so the budget is checked between them: a pair may overrun by one
-    boolean. ``progress`` receives a line at most every ``every`` seconds (and the last of each phase).
+    boolean. CPU time of this process (OCCT's booleans run in it, on one core), so that a loaded machine
+    does not make pairs undecided; ``progress`` receives a line at most every ``every`` seconds of wall clock
+    (and the last of each phase).
     """
 
     def __init__(self, ids: list[str], budget: float, budgets: dict | None = None,
@@ -32,7 +34,7 @@ class PairClock:
                 self.budgets[min(a, b), max(a, b)] = float(seconds)
         self.spent: dict[tuple[int, int], float] = {}
         self.undecided: dict[tuple[int, int], list[str]] = {}
-        self.counts = {"far": 0, "far_faces": 0, "exact": 0}
+        self.counts = {"far": 0, "far_faces": 0, "exact": 0, "sweep_candidates": 0, "sweep_exact": 0}
         self._current: tuple[tuple[int, int], float] | None = None
         self._start = self._last = time.perf_counter()
 
@@ -44,16 +46,16 @@ class PairClock:
         key = self._key(i, j)
         spent = self.spent.get(key, 0.0)
         if self._current is not None and self._current[0] == key:
-            spent += time.perf_counter() - self._current[1]
+            spent += time.process_time() - self._current[1]
         return spent >= self.budgets.get(key, self.budget)
 
     def start(self, i: int, j: int) -> None:
-        self._current = (self._key(i, j), time.perf_counter())
+        self._current = (self._key(i, j), time.process_time())
 
     def stop(self) -> None:
         if self._current is not None:
             key, began = self._current
-            self.spent[key] = self.spent.get(key, 0.0) + time.perf_counter() - began
+            self.spent[key] = self.spent.get(key, 0.0) + time.process_time() - began
             self._current = None
 
     def give_up(self, i: int, j: int, what: str) -> None:
@@ -69,8 +71,8 @@ class PairClock:
                           f"{len(self.undecided)} pairs undecided)")
 
     def warnings(self) -> list[str]:
-        return [f"OCCT did not decide the {' and '.join(whats)} of {self.ids[i]!r} and {self.ids[j]!r} within "
-                f"the budget of {self.budgets.get((i, j), self.budget):g} s per pair (spent "
+        return [f"OCCT did not decide {', '.join(whats)} for {self.ids[i]!r} and {self.ids[j]!r} within the "
+                f"budget of {self.budgets.get((i, j), self.budget):g} CPU s per pair (spent "
                 f"{self.spent.get((i, j), 0.0):.1f} s); counted as touching and blocking: check this pair "
                 "(or raise --pair-budget)" for (i, j), whats in sorted(self.undecided.items())]
 
@@ -89,3 +91,21 @@ def face_gap(a: np.ndarray, b: np.ndarray) -> float:
     lo_b, hi_b = b[None, :, 0, :], b[None, :, 1, :]
     gaps = np.maximum(lo_b - hi_a, lo_a - hi_b).max(axis=2)
     return float(gaps.min())
+
+
+def sweep_meets(moving: np.ndarray, other: np.ndarray, axis: int, contact: float, depth: float) -> bool:
+    """False when the part of face boxes ``moving``, swept along +``axis`` without limit, clearly misses the
+    part of face boxes ``other``: no box of ``moving`` overlaps a box of ``other`` by more than ``contact``
+    across the axis with the ``other`` box reaching more than ``depth`` beyond its start.
+
+    Sound: a part's sweep is the union of its faces' sweeps (a point inside it lies ahead of one of its
+    faces), and a sweep that meets a part meets its boundary (from a point inside, go along the axis until
+    leaving the part). Cost O(len(moving) len(other))."""
+    if len(moving) == 0 or len(other) == 0:
+        return True
+    across = [k for k in range(3) if k != axis]
+    lo_m, hi_m = moving[:, None, 0, :], moving[:, None, 1, :]
+    lo_o, hi_o = other[None, :, 0, :], other[None, :, 1, :]
+    overlap = (np.minimum(hi_m, hi_o) - np.maximum(lo_m, lo_o))[..., across].min(axis=2) > contact
+    ahead = hi_o[..., axis] > lo_m[..., axis] + depth
+    return bool((overlap & ahead).any())

@@ -42,7 +42,7 @@ def find_contacts(ids, shapes, boxes, faces, points, contact: float, fuzzies, wa
                 continue
             clock.counts["exact"] += 1
             if clock.exhausted(i, j):
-                clock.give_up(i, j, "contact")
+                clock.give_up(i, j, "the contact")
                 pairs.append((i, j))
                 continue
             clock.start(i, j)
@@ -57,7 +57,7 @@ def find_contacts(ids, shapes, boxes, faces, points, contact: float, fuzzies, wa
             pairs.append((i, j))
             if distance <= contact * 1e-3:
                 if clock.exhausted(i, j):
-                    clock.give_up(i, j, "overlap")
+                    clock.give_up(i, j, "the overlap")
                     continue
                 common = common_solid(shapes[i], shapes[j], fuzzies,
                                       lambda i=i, j=j: holds_any(shapes[i], boxes[i], points(j), fuzzies[-1]))

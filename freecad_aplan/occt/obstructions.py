@@ -6,7 +6,7 @@ import FreeCAD
 
 from planner.product import AXIS_DIRECTIONS
 
-from .budget import PairClock
+from .budget import PairClock, sweep_meets
 from .prisms import sweep_prisms
 from .solids import common_volume
 
@@ -15,11 +15,12 @@ __all__ = ["AXES", "find_obstructions"]
 AXES = ("+X", "+Y", "+Z")
 
 
-def find_obstructions(ids, shapes, boxes, overlap, contact: float, depth: float, fuzzies,
+def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth: float, fuzzies,
                       warnings: list[str], clock: PairClock):
     """Per axis, the pairs (i, j): part i moving along the axis collides with part j.
 
-    Each candidate pair is worked on within ``clock``'s budget for its two parts (contacts included); a pair
+    Candidates are the pairs whose boxes meet along the sweep, then whose face boxes do
+    (:func:`~.budget.sweep_meets`). Each candidate pair is worked on within ``clock``'s budget for its two parts (contacts included); a pair
     out of time is counted as blocking and reported."""
     scene_hi = [max(b[1][k] for b in boxes) for k in range(3)]
     volume_tolerance = depth ** 3
@@ -33,6 +34,9 @@ def find_obstructions(ids, shapes, boxes, overlap, contact: float, depth: float,
             candidates = [j for j, (lo2, hi2) in enumerate(boxes) if j != i
                           and all(min(hi[k], hi2[k]) - max(lo[k], lo2[k]) > contact for k in across)
                           and hi2[axis] > lo[axis] + depth]
+            clock.counts["sweep_candidates"] += len(candidates)
+            candidates = [j for j in candidates if sweep_meets(faces[i], faces[j], axis, contact, depth)]
+            clock.counts["sweep_exact"] += len(candidates)
             if not candidates:
                 continue
             length = scene_hi[axis] - lo[axis] + 1.0
@@ -42,14 +46,14 @@ def find_obstructions(ids, shapes, boxes, overlap, contact: float, depth: float,
                                 f"{contact / 2:g} (no exact silhouette, or OCCT could not build their prism)")
             for j in candidates:
                 if clock.exhausted(i, j):
-                    clock.give_up(i, j, f"obstruction along {name}")
+                    clock.give_up(i, j, f"{ids[i]} moving along {name}")
                     pairs.append((i, j))
                     continue
                 clock.start(i, j)
                 verdict = _blocks(prisms, shapes[j], boxes[j], overlap.get((i, j)), axis, volume_tolerance,
                                   fuzzies, lambda i=i, j=j: clock.exhausted(i, j))
                 if verdict == "late":
-                    clock.give_up(i, j, f"obstruction along {name}")
+                    clock.give_up(i, j, f"{ids[i]} moving along {name}")
                     pairs.append((i, j))
                     continue
                 clock.stop()
