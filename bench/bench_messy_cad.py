@@ -93,7 +93,8 @@ def main() -> None:
     parser.add_argument("--occt", action="store_true", help="also time the OCCT engine on both models")
     parser.add_argument("--pair-budget", type=float, help="the OCCT engine's budget per pair (default: its own)")
     args = parser.parse_args()
-    print("| model | parts | off by > 1 % before | worst before | worst after | methods after | tessellation s before / after |")
+    print("| model | parts | off by > 1 % before | worst before | worst after | methods after "
+          "| tessellation s before / after |")
     print("|---|---:|---|---:|---:|---|---:|")
     details = []
     for name, model in CASES:

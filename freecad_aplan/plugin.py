@@ -160,7 +160,8 @@ def _export_command(subparsers) -> None:
 
     def run(args: argparse.Namespace) -> int:
         given = {k: getattr(args, k) for k in ("contact", "interference", "depth") if getattr(args, k) is not None}
-        product = export_bundle(args.model, args.output, args.engine, {**given, "resolution": args.resolution, "pair_budget": args.pair_budget},
+        product = export_bundle(args.model, args.output, args.engine,
+                                {**given, "resolution": args.resolution, "pair_budget": args.pair_budget},
                                 dict(args.group),
                                 args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
                                 args.freecadcmd, args.force, args.redetect)

@@ -46,7 +46,9 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     blocking, is listed under ``undecided`` and named in a warning, and the others go on. ``progress``
     receives a line every few seconds. ``pairs`` counts the contact pairs decided by part boxes (``far``), by
     face boxes (``far_faces``) and those measured exactly (``exact``), and the obstruction candidates (over
-    the three axes) by part boxes (``sweep_candidates``) and those left by face boxes (``sweep_exact``). Raises :class:`BrepError` naming the part when
+    the three axes) by part boxes (``sweep_candidates``) and those left by face boxes (``sweep_exact``).
+
+    Raises :class:`BrepError` naming the part when
     a shape holds no solid or no volume, :class:`~planner.errors.GeometryError` for a negative tolerance.
 
     >>> import FreeCAD, Part

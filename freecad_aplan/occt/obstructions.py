@@ -20,8 +20,8 @@ def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth:
     """Per axis, the pairs (i, j): part i moving along the axis collides with part j.
 
     Candidates are the pairs whose boxes meet along the sweep, then whose face boxes do
-    (:func:`~.budget.sweep_meets`). Each candidate pair is worked on within ``clock``'s budget for its two parts (contacts included); a pair
-    out of time is counted as blocking and reported."""
+    (:func:`~.budget.sweep_meets`). Each candidate pair is worked on within ``clock``'s budget for its two
+    parts (contacts included); a pair out of time is counted as blocking and reported."""
     scene_hi = [max(b[1][k] for b in boxes) for k in range(3)]
     volume_tolerance = depth ** 3
     result = {}

@@ -251,6 +251,27 @@ def test_occt_engine_through_the_command_line(pen_bundles, tmp_path):
         assert set(obstruction.blocks) == ground_truth(obstruction.direction.name), obstruction.direction.name
 
 
+@pytest.mark.freecad
+def test_occt_pair_budget_through_the_command_line(pen_bundles, tmp_path):
+    """--pair-budget 0: every pair OCCT would measure is reported undecided (counted as touching), with
+    progress on standard error; the pairs told apart by their boxes are still decided."""
+    import shutil
+
+    bundle = tmp_path / "b"
+    shutil.copytree(pen_bundles["simplified", "FCStd"], bundle)
+    done = aplan("analyze", str(bundle), "--engine", "occt", "--pair-budget", "0", "--json")
+    assert "occt: contacts 15/15" in done.stderr and "occt: obstructions +Z" in done.stderr
+    report = json.loads(done.stdout)
+    undecided = [w for w in report["warnings"] if w.startswith("OCCT did not decide")]
+    contacts = {frozenset(c) for c in report["contacts"]}
+    # The 5 liaisons and 5 more pairs whose face boxes come within the contact tolerance are undecided
+    # contacts; the other 5 pairs are apart by their boxes; pairs that only meet along a sweep are undecided
+    # obstructions.
+    assert LIAISONS <= contacts and len(contacts) == 10
+    assert len([w for w in undecided if w.startswith("OCCT did not decide the contact")]) == 10 < len(undecided)
+    assert all("within the budget of 0 CPU s per pair" in w for w in undecided)
+
+
 IMPORT_PREFERENCE = """
 import json, sys
 sys.path.insert(0, {repo!r})

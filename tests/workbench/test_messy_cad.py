@@ -53,7 +53,8 @@ out["ids"] = [c.id for c in result.components]
 out["check"] = product["geometry"]["mesh_check"]
 out["warnings"] = product["geometry"]["warnings"]
 import Mesh
-out["written"] = {p["id"]: Mesh.Mesh(os.path.join(TMP, "pins", p["mesh"])).Volume / p["volume"] - 1 for p in product["parts"]}
+out["written"] = {p["id"]: Mesh.Mesh(os.path.join(TMP, "pins", p["mesh"])).Volume / p["volume"] - 1
+                  for p in product["parts"]}
 _, strict = checked_mesh(pin.Shape, 0.05, 0.25, tolerance=1e-9, methods=("standard", "finer"))
 out["strict"] = strict.as_dict()
 
@@ -91,8 +92,8 @@ out["attached_warnings"] = product["geometry"]["warnings"]
 # 3. The exact engine's budget: a zero budget for one pair.
 def box(lo, hi):
     return Part.makeBox(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], V(*lo))
-parts = [("a", box((0, 0, 0), (10, 10, 10))), ("b", box((10, 0, 0), (20, 10, 10))), ("c", box((20, 0, 0), (30, 10, 10))),
-         ("far", box((100, 100, 100), (101, 101, 101)))]
+parts = [("a", box((0, 0, 0), (10, 10, 10))), ("b", box((10, 0, 0), (20, 10, 10))),
+         ("c", box((20, 0, 0), (30, 10, 10))), ("far", box((100, 100, 100), (101, 101, 101)))]
 lines = []
 out["budget"] = analyze_shapes(parts, budgets={("a", "b"): 0.0}, progress=lines.append)
 out["budget_free"] = analyze_shapes(parts)
