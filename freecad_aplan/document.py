@@ -119,6 +119,10 @@ def _linked_objects(value) -> Iterator:
             yield from _linked_objects(item)
 
 
+def _same(a, b) -> bool:
+    return a is b or (a.Name == b.Name and a.Document.Name == b.Document.Name)
+
+
 def consuming_properties(user, obj) -> list[str]:
     """The link properties of ``user`` through which it builds its shape from ``obj``'s shape.
 
@@ -143,7 +147,7 @@ def consuming_properties(user, obj) -> list[str]:
             value = getattr(user, name)
         except Exception:  # a property a Python feature failed to restore
             continue
-        if any(linked is obj for linked in _linked_objects(value)):
+        if any(_same(linked, obj) for linked in _linked_objects(value)):
             names.append(name)
     return names
 
@@ -204,7 +208,8 @@ def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
 
 
 def _holds_solid(obj) -> bool:
-    """True when ``obj``'s own shape holds a solid (sketches, datums and links are not named when left out)."""
+    """True when ``obj``'s own shape holds a solid, or ``obj`` is a link (sketches and datums are not named
+    when left out)."""
     try:
         return bool(obj.Shape.Solids)
     except Exception:  # objects without a shape, links
@@ -250,7 +255,8 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
         consumers = [f"{user.Label}.{name}" for user in users for name in consuming_properties(user, obj)]
         if consumers or obj.Name in linked_hidden:
             if _holds_solid(obj):
-                left_out.append((obj.Label, ", ".join(consumers) if consumers else "shown by an App::Link"))
+                why = f"used by {', '.join(consumers)}" if consumers else "shown by an App::Link"
+                left_out.append((obj.Label, why))
             continue
         shape, problem = _solids_of(obj)
         if problem and shape is None:
@@ -277,8 +283,8 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
 
     if left_out:
         warnings.append("not parts of their own (inputs of another feature, or shown by a link): "
-                        + "; ".join(f"{label} (used by {users})" for label, users in left_out)
-                        + " (group or exclude objects to choose otherwise)")
+                        + "; ".join(f"{label} ({why})" for label, why in left_out)
+                        + "; the features and links using them are the parts")
     components = list(singles)
     for group, members in grouped.items():
         if not members:
