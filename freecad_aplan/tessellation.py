@@ -1,7 +1,7 @@
 """Part meshes checked against their B-rep: tessellate, compare volume and area, re-tessellate when they differ.
 
 FreeCAD 0.20's default mesher (MeshPart's Standard, OCCT's BRepMesh) drops parts of faces now and then (seen
-on cone faces whose seam sits at u = +-pi, in a diaphragm pump's housing: 70 % of one cone's area missing).
+on cone faces whose seam sits at u = +-pi, in part 14_001 of a diaphragm pump: 70 % of one cone's area missing).
 The mesh is then open, or, after hole filling closes it, has the wrong volume (-30 % there), and the mesh
 engine invents interferences and misses contacts. So every mesh is compared with its exact shape:
 
@@ -12,7 +12,7 @@ engine invents interferences and misses contacts. So every mesh is compared with
   with a fifth of the linear and half the angular deflection), ``mefisto`` (MeshPart's Mefisto mesher,
   edges at most 1/32 of the part's diagonal), ``nurbs`` (Standard on ``Shape.toNurbs()``: every face as a
   B-spline, which BRepMesh meshes by another code path), ``netgen`` (when FreeCAD was built with it).
-  The order is by cost and by what worked: on the pump's housing, finer took 2 s (-29 %, the same faces
+  The order is by cost and by what worked: on that part, finer took 2 s (-29 %, the same faces
   missing), Mefisto 2.5 s (+0.56 %), toNurbs 26 s (-20 %, open; its B-splines also change the volume by 9 %);
 - when none passes, the closest mesh is kept and the part is marked ``exact``: only the OCCT engine's
   results are reliable for it.
