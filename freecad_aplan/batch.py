@@ -4,7 +4,8 @@ Actions: ``export`` (a model to a bundle folder with its stored designer intent 
 ``"redetect": true``, its stored diagrams, :func:`freecad_aplan.export.export_model`; the answer names the
 intent's engine and tolerances, and ``diagrams``: where the product's diagrams came from, or null when a
 geometry engine must still detect them) and
-``analyze-occt`` (the exact engine on a bundle's B-reps, :mod:`freecad_aplan.occt`). The job and its answer
+``analyze-occt`` (the exact engine on a bundle's B-reps, :mod:`freecad_aplan.occt`, with note lines of
+progress). The job and its answer
 follow :mod:`freecad_aplan.protocol`. Used by :mod:`freecad_aplan.runner`.
 
 Two more actions serve the workbench's background jobs (:mod:`freecad_aplan.workflow`), and also run in a
@@ -18,7 +19,7 @@ import traceback
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from freecad_aplan.protocol import decode_job, error_line, progress_line, result_line  # noqa: E402
+from freecad_aplan.protocol import decode_job, error_line, note_line, progress_line, result_line  # noqa: E402
 
 
 def _run(job: dict) -> dict:
@@ -34,7 +35,7 @@ def _run(job: dict) -> dict:
     if action == "analyze-occt":
         from freecad_aplan.occt import analyze_bundle_breps
 
-        return analyze_bundle_breps(**job)
+        return analyze_bundle_breps(**job, progress=lambda text: print(note_line(text), flush=True))
     if action == "analyze":
         from freecad_aplan.workflow import analyze_bundle
 

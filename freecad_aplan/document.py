@@ -10,9 +10,13 @@ Which objects are parts:
 The document's structure (``App::Part`` containers nesting parts, and groups) becomes the product's
 subassemblies (:func:`document_subassemblies`).
 
-Objects that are inputs of another feature (boolean operands, the features inside a body, the profile of
-an extrusion) are skipped, as are hidden objects that an ``App::Link`` shows elsewhere. Objects with faces
-but no solid are reported and skipped. Shapes are always copies: the document's placements and geometry
+Objects whose shape another feature consumes (boolean operands, the features inside a body, the profile
+of an extrusion: a link property of the feature names them, :func:`consuming_properties`) are skipped, as
+are hidden objects that an ``App::Link`` shows elsewhere; those holding solids are named in one warning.
+Being in another object's InList is not enough: an Assembly4-style part attached to another (Attacher's
+``Support``/``AttachmentSupport``, or an expression on its placement) is a part. Objects with faces
+but no solid are read as the solids their shells bound when every shell is closed (with a warning), else
+reported and skipped. Shapes are always copies: the document's placements and geometry
 are never changed.
 """
 from __future__ import annotations
@@ -29,7 +33,7 @@ import Part
 from planner.errors import PlannerError
 
 __all__ = ["Component", "ReadResult", "open_model", "read_components", "document_subassemblies", "matching",
-           "DocumentError"]
+           "consuming_properties", "DocumentError"]
 
 _IMPORT_PREFERENCES = "User parameter:BaseApp/Preferences/Mod/Import"
 
@@ -104,9 +108,53 @@ def _without_link_groups() -> Iterator[None]:
             group.RemBool("UseLinkGroup")
 
 
-def _is_consumer(obj) -> bool:
-    """True for objects that build their shape from other objects' shapes (booleans, bodies, extrusions)."""
-    return obj.isDerivedFrom("Part::Feature") and not obj.isDerivedFrom("App::Link")
+# Link properties that place an object relative to another (Attacher) without using its shape.
+_PLACING_PROPERTIES = frozenset({"Support", "AttachmentSupport", "MapPathParameter"})
+_LINK_TYPES = ("App::PropertyLink", "App::PropertyLinkList", "App::PropertyLinkSub", "App::PropertyLinkSubList")
+
+
+def _linked_objects(value) -> Iterator:
+    """The document objects in the value of a link property (link, list, (object, subs) or lists of those)."""
+    if value is None:
+        return
+    if hasattr(value, "TypeId"):
+        yield value
+    elif isinstance(value, (list, tuple)):
+        for item in value:
+            yield from _linked_objects(item)
+
+
+def _same(a, b) -> bool:
+    return a is b or (a.Name == b.Name and a.Document.Name == b.Document.Name)
+
+
+def consuming_properties(user, obj) -> list[str]:
+    """The link properties of ``user`` through which it builds its shape from ``obj``'s shape.
+
+    A feature consumes an object when one of its link properties (``Base``/``Tool`` of a boolean, ``Shapes``
+    of a multi-fuse, ``Base`` of an extrusion or a chamfer, the ``Group`` of a body, ...) names it. An
+    attachment (``Support``/``AttachmentSupport``, properties of the ``Attachment`` group) or an expression
+    only places ``user`` relative to ``obj``: Assembly4-style parts attached to each other are all parts.
+    Links (``App::Link``) do not consume what they show. Cost: one pass over ``user``'s properties.
+    """
+    if not obj.isDerivedFrom("Part::Feature") and not obj.isDerivedFrom("App::Link"):
+        return []
+    if not user.isDerivedFrom("Part::Feature") or user.isDerivedFrom("App::Link"):
+        return []
+    names = []
+    for name in user.PropertiesList:
+        if name in _PLACING_PROPERTIES:
+            continue
+        try:
+            if user.getGroupOfProperty(name) == "Attachment" or \
+                    not user.getTypeIdOfProperty(name).startswith(_LINK_TYPES):
+                continue
+            value = getattr(user, name)
+        except Exception:  # a property a Python feature failed to restore
+            continue
+        if any(_same(linked, obj) for linked in _linked_objects(value)):
+            names.append(name)
+    return names
 
 
 def _parent_placement(obj) -> "FreeCAD.Placement":
@@ -117,8 +165,29 @@ def _parent_placement(obj) -> "FreeCAD.Placement":
         return FreeCAD.Placement()
 
 
+def _closed_shell_solids(shape) -> list:
+    """The solids bounded by ``shape``'s shells when it has faces but no solid and every shell is closed
+    (STEP imports and meshes turned into shapes often come so); [] otherwise."""
+    shells = shape.Shells
+    if not shells or not all(shell.isClosed() for shell in shells):
+        return []
+    solids = []
+    for shell in shells:
+        try:
+            solid = Part.Solid(shell)
+        except Exception:  # OCCT refuses the shell
+            return []
+        if solid.Volume < 0:
+            solid = Part.Solid(shell.reversed())
+        if not solid.isValid() or not solid.Volume > 0:
+            return []
+        solids.append(solid)
+    return solids
+
+
 def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
-    """A copy of the object's solids in global coordinates, or (None, reason)."""
+    """A copy of the object's solids in global coordinates, or (None, reason); (shape, note) when the solids
+    were made from closed shells."""
     if obj.isDerivedFrom("App::Link"):
         shape = Part.getShape(obj, "", needSubElement=False, transform=True)
     else:
@@ -126,6 +195,11 @@ def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
     if shape is None or shape.isNull():
         return None, None
     solids = [s.copy() for s in shape.Solids]
+    note = None
+    if not solids:
+        solids = _closed_shell_solids(shape)
+        note = (f"has {len(shape.Faces)} faces in closed shells but no solid; read as the solid they bound "
+                "(make it a solid in FreeCAD to silence this)") if solids else None
     if not solids:
         if shape.Faces:
             return None, f"has {len(shape.Faces)} faces but no solid (an open or unsewn shell)"
@@ -135,7 +209,16 @@ def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
     parent = _parent_placement(obj)
     if not parent.isIdentity():
         compound.Placement = parent.multiply(compound.Placement)
-    return compound, None
+    return compound, note
+
+
+def _holds_solid(obj) -> bool:
+    """True when ``obj``'s own shape holds a solid, or ``obj`` is a link (sketches and datums are not named
+    when left out)."""
+    try:
+        return bool(obj.Shape.Solids)
+    except Exception:  # objects without a shape, links
+        return obj.isDerivedFrom("App::Link")
 
 
 def _material(obj) -> str | None:
@@ -167,17 +250,25 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
     excluded, group_of = _selection(document, objects, groups, exclude or ())
 
     singles: list[Component] = []
+    left_out: list[tuple[str, str]] = []
     grouped: dict[str, list[tuple[object, "Part.Shape"]]] = {g: [] for g in groups}
     for obj in objects:
         if not (obj.isDerivedFrom("Part::Feature") or obj.isDerivedFrom("App::Link")):
             continue
         if obj.Name in excluded:
             continue
-        if any(_is_consumer(user) for user in obj.InList) or obj.Name in linked_hidden:
+        users = {user.Name: user for user in obj.InList}.values()  # an object can be in an InList twice
+        consumers = [f"{user.Label}.{name}" for user in users for name in consuming_properties(user, obj)]
+        if consumers or obj.Name in linked_hidden:
+            if _holds_solid(obj):
+                why = f"used by {', '.join(consumers)}" if consumers else "shown by an App::Link"
+                left_out.append((obj.Label, why))
             continue
         shape, problem = _solids_of(obj)
-        if problem:
+        if problem and shape is None:
             warnings.append(f"{obj.Label}: {problem}; skipped (make it a solid in FreeCAD to include it)")
+        elif problem:
+            warnings.append(f"{obj.Label}: {problem}")
         if shape is None:
             continue
         if shape.Volume <= 0:
@@ -196,6 +287,10 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
                                 "(use split_solids / --split-solids for one part per solid)")
             singles.append(Component(obj.Label, obj.Label, shape, [obj.Name], _material(obj)))
 
+    if left_out:
+        warnings.append("not parts of their own (inputs of another feature, or shown by a link): "
+                        + "; ".join(f"{label} ({why})" for label, why in left_out)
+                        + "; the features and links using them are the parts")
     components = list(singles)
     for group, members in grouped.items():
         if not members:

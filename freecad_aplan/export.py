@@ -23,13 +23,13 @@ import re
 from typing import TYPE_CHECKING
 
 import FreeCAD
-import MeshPart
-
-from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION, PRODUCT_FILE, PRODUCT_FORMAT, PRODUCT_VERSION
+from planner.defaults import (ANGULAR_DEFLECTION, LINEAR_DEFLECTION, MESH_TOLERANCE, PRODUCT_FILE, PRODUCT_FORMAT,
+                               PRODUCT_VERSION)
 from planner.errors import GeometryError
 from planner.files import write_atomic
 
 from .document import document_subassemblies, open_model, read_components
+from .tessellation import checked_mesh
 
 if TYPE_CHECKING:
     from .intent import Intent
@@ -51,11 +51,29 @@ def _file_name(part_id: str, used: set[str]) -> str:
     return name
 
 
+def _report_check(part_id: str, check, tolerance: float, warnings: list[str]) -> None:
+    """A warning for a part whose first mesh was off (re-tessellated) or that no mesher got right."""
+    first = next((error for _, error, _ in check.tried if error is not None), None)
+    before = "no triangles" if first is None else f"{first:+.1%} in volume"
+    if check.method == "exact":
+        warnings.append(f"{part_id}: no tessellation is within {tolerance:.0%} of the B-rep (first mesh "
+                        f"{before}, best {check.volume_error:+.1%}{'' if check.closed else ', open'}); the mesh "
+                        "engine's contacts and obstructions for this part are unreliable: use --engine occt")
+    elif check.method != "standard":
+        warnings.append(f"{part_id}: the mesh differed from the B-rep ({before}); re-tessellated with "
+                        f"{check.method}: {check.volume_error:+.2%} in volume, {check.area_error:+.2%} in area")
+
+
 def export_components(components, folder: str, source: str, warnings: list[str],
                       linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
                       angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION, extra: dict | None = None,
-                      analysis: dict | None = None) -> dict:
+                      analysis: dict | None = None, mesh_tolerance: float = MESH_TOLERANCE) -> dict:
     """Write meshes, B-reps and ``product.json`` for ``components`` into ``folder`` (which must exist).
+
+    Each mesh is checked against its B-rep (:func:`~freecad_aplan.tessellation.checked_mesh`): re-tessellated
+    when its volume or area is off by more than ``mesh_tolerance``; ``geometry.mesh_check`` records per part
+    the errors and the method kept, and under ``exact`` the parts no mesher got right (only the OCCT engine
+    is reliable for them); ``geometry.warnings`` names every part that needed another method.
 
     ``extra``: more top-level keys of the product file (the designer intent's constraints and tags, stored
     diagrams); ``analysis``: the ``geometry.analysis`` record of where those diagrams came from.
@@ -64,20 +82,15 @@ def export_components(components, folder: str, source: str, warnings: list[str],
     os.makedirs(os.path.join(folder, "breps"), exist_ok=True)
     used: set[str] = set()
     parts = []
+    checks: dict[str, dict] = {}
     for component in components:
         name = _file_name(component.id, used)
-        mesh = MeshPart.meshFromShape(Shape=component.shape, LinearDeflection=linear_deflection,
-                                      AngularDeflection=angular_deflection, Relative=False)
-        if mesh.CountFacets == 0:
-            raise GeometryError(f"part {component.id!r}: tessellation produced no triangles")
-        if not mesh.isSolid():
-            # Points on face boundaries come once per face: merge them first.
-            mesh.removeDuplicatedPoints()
-        if not mesh.isSolid():
-            # OCCT's mesher can leave cracks where neighbouring faces are discretised differently.
-            mesh.fillupHoles(1000, 1)
-            warnings.append(f"{component.id}: the tessellation had cracks, filled "
-                            f"({'closed now' if mesh.isSolid() else 'still open'})")
+        mesh, check = checked_mesh(component.shape, linear_deflection, angular_deflection, mesh_tolerance)
+        if mesh is None:
+            raise GeometryError(f"part {component.id!r}: tessellation produced no triangles (tried "
+                                f"{', '.join(method for method, _, _ in check.tried)})")
+        checks[component.id] = check.as_dict()
+        _report_check(component.id, check, mesh_tolerance, warnings)
         mesh.write(os.path.join(folder, "meshes", name + ".stl"))
         component.shape.exportBrep(os.path.join(folder, "breps", name + ".brep"))
         part = {"id": component.id, "label": component.label, "mesh": f"meshes/{name}.stl",
@@ -91,6 +104,8 @@ def export_components(components, folder: str, source: str, warnings: list[str],
         "geometry": {"source": os.path.basename(source),
                      "tessellation": {"linear_deflection": linear_deflection,
                                       "angular_deflection": angular_deflection},
+                     "mesh_check": {"tolerance": mesh_tolerance, "parts": checks,
+                                    "exact": [i for i, c in checks.items() if c["method"] == "exact"]},
                      "warnings": warnings, **({"analysis": analysis} if analysis else {})},
         **(extra or {}),
     }

@@ -5,7 +5,8 @@
   they cover exactly the exported components, else (or with ``--redetect``) a geometry engine fills in
   contacts and obstruction diagrams; the bundle appears only when everything succeeded.
 - ``aplan stats MODEL.FCStd`` (and every command taking PRODUCT): the same export into a temporary folder.
-- ``aplan analyze --engine occt``: the exact engine, run in FreeCADCmd on the bundle's B-reps.
+- ``aplan analyze --engine occt``: the exact engine, run in FreeCADCmd on the bundle's B-reps (at most
+  ``--pair-budget`` seconds per pair of parts; its progress lines go to standard error).
 
 Nothing here imports FreeCAD: FreeCAD runs as a separate program (:mod:`freecad_aplan.runner`).
 """
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import shutil
+import sys
 import tempfile
 from pathlib import Path
 
@@ -100,7 +102,9 @@ def _occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
     if product.source == "<memory>":
         raise FreeCADError("the occt engine reads a bundle's B-rep files: give it a bundle folder")
     data = run_batch("analyze-occt", {"folder": str(Path(product.source).parent), "contact": tolerances.contact,
-                                      "interference": tolerances.interference, "depth": tolerances.depth})
+                                      "interference": tolerances.interference, "depth": tolerances.depth,
+                                      "pair_budget": tolerances.pair_budget},
+                     on_note=lambda text: print(text, file=sys.stderr, flush=True))
     return occt_report(product, data)
 
 
@@ -166,7 +170,9 @@ def _export_command(subparsers) -> None:
 
         given = {k: getattr(args, k) for k in ("contact", "interference", "depth", "contact_ceiling")
                  if getattr(args, k) is not None}
-        product = export_bundle(args.model, args.output, args.engine, {**given, "resolution": args.resolution, "directions": args.directions},
+        product = export_bundle(args.model, args.output, args.engine,
+                                {**given, "resolution": args.resolution, "directions": args.directions,
+                                 "pair_budget": args.pair_budget},
                                 dict(args.group),
                                 args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
                                 args.freecadcmd, args.force, args.redetect)

@@ -4,7 +4,8 @@
 - The script answers on standard output with one line ``APLAN-RESULT <json>`` or ``APLAN-ERROR <message>``
   (one line: newlines in the message become `` | ``), since FreeCADCmd's exit code is not reliable and
   FreeCAD prints its own lines around it. Before that, long jobs may print progress lines
-  ``APLAN-PROGRESS <seconds> <lower bound> <upper bound>``.
+  ``APLAN-PROGRESS <seconds> <lower bound> <upper bound>`` (the solver), or ``APLAN-NOTE <text>`` (any
+  other progress, one line of text for the user).
 
 The command line (:mod:`freecad_aplan.runner`), the workbench's background jobs
 (:mod:`freecad_aplan.gui.jobs`) and the script itself speak it through this module, which imports neither
@@ -18,14 +19,14 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 __all__ = ["BATCH_SCRIPT", "JOB_VARIABLE", "Answer", "encode_job", "decode_job", "result_line", "error_line",
-           "progress_line", "read_progress", "read_answer"]
+           "progress_line", "read_progress", "note_line", "read_note", "read_answer"]
 
 #: The script a job runs (in FreeCADCmd, or in a plain Python for the actions that need no FreeCAD).
 BATCH_SCRIPT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "batch.py")
 #: The environment variable that carries the job.
 JOB_VARIABLE = "APLAN_BATCH"
 
-_RESULT, _ERROR, _PROGRESS = "APLAN-RESULT ", "APLAN-ERROR ", "APLAN-PROGRESS "
+_RESULT, _ERROR, _PROGRESS, _NOTE = "APLAN-RESULT ", "APLAN-ERROR ", "APLAN-PROGRESS ", "APLAN-NOTE "
 
 
 @dataclass(frozen=True)
@@ -64,6 +65,15 @@ def read_progress(line: str) -> tuple[str, str, str] | None:
         return None
     fields = line.split()[1:]
     return (fields[0], fields[1], fields[2]) if len(fields) == 3 else None
+
+
+def note_line(text: str) -> str:
+    return _NOTE + text.replace("\n", " | ")
+
+
+def read_note(line: str) -> str | None:
+    """The text of a note line, else None."""
+    return line[len(_NOTE):].rstrip("\n") if line.startswith(_NOTE) else None
 
 
 def read_answer(output: str) -> Answer | None:

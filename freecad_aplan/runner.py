@@ -9,10 +9,12 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+import threading
+from typing import Callable
 
 from planner.errors import PlannerError
 
-from .protocol import BATCH_SCRIPT, JOB_VARIABLE, encode_job, read_answer
+from .protocol import BATCH_SCRIPT, JOB_VARIABLE, encode_job, read_answer, read_note
 
 __all__ = ["FreeCADError", "find_freecadcmd", "run_batch"]
 
@@ -39,13 +41,18 @@ def find_freecadcmd(explicit: str | None = None) -> str:
                        "or pass --freecadcmd PATH")
 
 
-def run_batch(action: str, arguments: dict, freecadcmd: str | None = None, timeout: float = 3600) -> dict:
-    """Run ``action`` of ``freecad_aplan.batch`` in FreeCADCmd and return its JSON result."""
+def run_batch(action: str, arguments: dict, freecadcmd: str | None = None, timeout: float = 3600,
+              on_note: Callable[[str], None] | None = None) -> dict:
+    """Run ``action`` of ``freecad_aplan.batch`` in FreeCADCmd and return its JSON result; ``on_note``
+    receives the job's note lines (progress for the user) as they come."""
     executable = find_freecadcmd(freecadcmd)
     env = {**os.environ, JOB_VARIABLE: encode_job({"action": action, **arguments})}
     try:
-        done = subprocess.run([executable, BATCH_SCRIPT], capture_output=True, text=True, env=env,
-                              timeout=timeout, stdin=subprocess.DEVNULL)
+        if on_note is None:
+            done = subprocess.run([executable, BATCH_SCRIPT], capture_output=True, text=True, env=env,
+                                  timeout=timeout, stdin=subprocess.DEVNULL)
+        else:
+            done = _run_streaming([executable, BATCH_SCRIPT], env, timeout, on_note)
     except subprocess.TimeoutExpired:
         raise FreeCADError(f"FreeCAD job {action!r} did not finish within {timeout:g} s") from None
     answer = read_answer(done.stdout)
@@ -55,3 +62,31 @@ def run_batch(action: str, arguments: dict, freecadcmd: str | None = None, timeo
         return answer.result
     tail = "\n".join((done.stdout + done.stderr).strip().splitlines()[-15:])
     raise FreeCADError(f"FreeCAD job {action!r} gave no result (exit code {done.returncode}); its last output:\n{tail}")
+
+
+def _run_streaming(command: list[str], env: dict, timeout: float, on_note: Callable[[str], None]):
+    """``subprocess.run`` with standard output (and error) read line by line, notes passed on at once; a
+    timer kills the job after ``timeout`` seconds (then :class:`subprocess.TimeoutExpired`)."""
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
+                               stdin=subprocess.DEVNULL)
+    killed = threading.Event()
+
+    def kill() -> None:
+        killed.set()
+        process.kill()
+
+    timer = threading.Timer(timeout, kill)
+    timer.start()
+    lines = []
+    try:
+        for line in process.stdout:
+            lines.append(line)
+            note = read_note(line)
+            if note is not None:
+                on_note(note)
+        process.wait()
+    finally:
+        timer.cancel()
+    if killed.is_set():
+        raise subprocess.TimeoutExpired(command, timeout)
+    return subprocess.CompletedProcess(command, process.returncode, "".join(lines), "")

@@ -5,13 +5,15 @@ from __future__ import annotations
 import json
 import os
 import time
+from typing import Callable
 
 import Part
 
-from planner.defaults import BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, PRODUCT_FILE
+from planner.defaults import BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, OCCT_PAIR_BUDGET, PRODUCT_FILE
 from planner.errors import GeometryError
 
 from ..document import DocumentError
+from .budget import PairClock, face_boxes
 from .contacts import find_contacts
 from .obstructions import find_obstructions
 from .solids import bounding_box, inner_points
@@ -24,7 +26,9 @@ class BrepError(DocumentError):
 
 
 def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTACT_TOLERANCE,
-                   interference: float = INTERFERENCE_VOLUME, depth: float = BLOCKING_DEPTH) -> dict:
+                   interference: float = INTERFERENCE_VOLUME, depth: float = BLOCKING_DEPTH,
+                   pair_budget: float = OCCT_PAIR_BUDGET, budgets: dict | None = None,
+                   progress: Callable[[str], None] | None = None) -> dict:
     """Contacts, interferences and the +X, +Y, +Z obstruction diagrams of exact part shapes.
 
     ``parts``: (id, shape) pairs, shapes holding solids in global coordinates (they are not modified).
@@ -35,7 +39,16 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     Tolerances: ``contact`` (model units) for contacts, and the grazing width of the obstruction broad
     phase; ``interference`` (cubic units) for reporting overlaps; ``depth`` (model units) for obstruction:
     ``y`` must reach more than ``depth`` beyond the start of ``x``, and ``x``'s sweep must take more than
-    ``depth ** 3`` of ``y`` outside what they already share. Raises :class:`BrepError` naming the part when
+    ``depth ** 3`` of ``y`` outside what they already share.
+
+    Time: OCCT works at most ``pair_budget`` seconds on a pair of parts (``budgets`` maps pairs of ids to
+    other budgets, checked between booleans); a pair it cannot decide in time counts as touching and
+    blocking, is listed under ``undecided`` and named in a warning, and the others go on. ``progress``
+    receives a line every few seconds. ``pairs`` counts the contact pairs decided by part boxes (``far``), by
+    face boxes (``far_faces``) and those measured exactly (``exact``), and the obstruction candidates (over
+    the three axes) by part boxes (``sweep_candidates``) and those left by face boxes (``sweep_exact``).
+
+    Raises :class:`BrepError` naming the part when
     a shape holds no solid or no volume, :class:`~planner.errors.GeometryError` for a negative tolerance.
 
     >>> import FreeCAD, Part
@@ -73,12 +86,17 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
             cache[j] = inner_points(shapes[j], min(contact, 0.01 * shapes[j].BoundBox.DiagonalLength))
         return cache[j]
 
-    contacts, overlap = find_contacts(ids, shapes, boxes, points, contact, fuzzies, warnings)
+    if not pair_budget >= 0:
+        raise GeometryError(f"pair_budget must be >= 0 seconds, got {pair_budget!r}")
+    clock = PairClock(ids, pair_budget, budgets, progress)
+    faces = [face_boxes(s) for s in shapes]
+    contacts, overlap = find_contacts(ids, shapes, boxes, faces, points, contact, fuzzies, warnings, clock)
     interferences = [(i, j, overlap[i, j][0]) for i, j in contacts if overlap.get((i, j), (0.0,))[0] > interference]
     for i, j, volume in interferences:
         warnings.append(f"parts {ids[i]!r} and {ids[j]!r} interpenetrate by {volume:.4g} cubic units "
                         f"(more than the interference tolerance {interference:g})")
-    obstructions = find_obstructions(ids, shapes, boxes, overlap, contact, depth, fuzzies, warnings)
+    obstructions = find_obstructions(ids, shapes, boxes, faces, overlap, contact, depth, fuzzies, warnings, clock)
+    warnings.extend(clock.warnings())
     return {
         "engine": "occt", "parts": len(ids),
         "contacts": [[ids[i], ids[j]] for i, j in contacts],
@@ -86,14 +104,16 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
         "obstructions": {name: [[ids[i], ids[j]] for i, j in pairs] for name, pairs in obstructions.items()},
         "tolerances": {"contact": contact, "interference": interference, "depth": depth,
                        "volume": depth ** 3},
-        "warnings": warnings, "seconds": round(time.perf_counter() - start, 3),
+        "undecided": [[ids[i], ids[j]] for i, j in sorted(clock.undecided)], "pairs": dict(clock.counts),
+        "pair_budget": pair_budget, "warnings": warnings, "seconds": round(time.perf_counter() - start, 3),
     }
 
 
-def analyze_bundle_breps(folder: str, **tolerances) -> dict:
+def analyze_bundle_breps(folder: str, budgets: list | None = None, **tolerances) -> dict:
     """:func:`analyze_shapes` on the B-reps of a bundle: ``folder/product.json`` and its ``breps/*.brep``.
 
-    ``tolerances``: ``contact``, ``interference``, ``depth`` as in :func:`analyze_shapes`.
+    ``tolerances``: ``contact``, ``interference``, ``depth``, ``pair_budget`` and ``progress`` as in
+    :func:`analyze_shapes`; ``budgets``: ``[[id, id, seconds], ...]`` (JSON has no tuple keys).
     Raises :class:`BrepError` naming the part and the file when a B-rep is missing or unreadable.
     Cost: reading the files, then that of :func:`analyze_shapes`.
     """
@@ -120,4 +140,5 @@ def analyze_bundle_breps(folder: str, **tolerances) -> dict:
         if shape.isNull():
             raise BrepError(f"part {part_id!r}: B-rep file {brep} holds no shape")
         parts.append((part_id, shape))
-    return analyze_shapes(parts, **tolerances)
+    pair_budgets = {(a, b): seconds for a, b, seconds in budgets or ()}
+    return analyze_shapes(parts, budgets=pair_budgets, **tolerances)

@@ -2,6 +2,7 @@
 parts in contact."""
 from __future__ import annotations
 
+from .budget import PairClock, face_gap
 from .solids import box_gap, common_solid, holds_any
 
 __all__ = ["find_contacts"]
@@ -14,26 +15,50 @@ def _nested(inner, outer) -> bool:
     return False
 
 
-def find_contacts(ids, shapes, boxes, points, contact: float, fuzzies, warnings: list[str]):
+def find_contacts(ids, shapes, boxes, faces, points, contact: float, fuzzies, warnings: list[str],
+                  clock: PairClock):
     """Contact pairs (i < j), and {(i, j) and (j, i): (volume, common solid)} for pairs that overlap.
 
-    ``points(j)``: points inside part j (to catch booleans that fail quietly)."""
+    Pairs are decided cheaply first: part boxes farther apart than ``contact``, then face boxes
+    (``faces[i]``, :func:`~.budget.face_boxes`) farther apart with neither part inside the other; only the
+    rest are measured (``distToShape``, then ``common``), within ``clock``'s budget per pair: a pair out of
+    time is counted as a contact without overlap and reported. ``points(j)``: points inside part j (to catch
+    booleans that fail quietly)."""
     pairs, overlap = [], {}
     n = len(shapes)
+    total, done = n * (n - 1) // 2, 0
     for i in range(n):
         for j in range(i + 1, n):
+            done += 1
+            clock.tick("contacts", done, total)
             gap = box_gap(boxes[i], boxes[j])
             if gap > contact:
+                clock.counts["far"] += 1
                 continue
-            distance = shapes[i].distToShape(shapes[j])[0]
+            apart = face_gap(faces[i], faces[j]) > contact  # the surfaces are
+            nested = apart and gap < 0 and (_nested(shapes[i], shapes[j]) or _nested(shapes[j], shapes[i]))
+            if apart and not nested:
+                clock.counts["far_faces"] += 1
+                continue
+            clock.counts["exact"] += 1
+            if clock.exhausted(i, j):
+                clock.give_up(i, j, "the contact")
+                pairs.append((i, j))
+                continue
+            clock.start(i, j)
+            distance = 0.0 if nested else shapes[i].distToShape(shapes[j])[0]
             if distance > contact:
                 # Apart, unless one lies inside the other (the surfaces never meet then).
                 if gap < 0 and (_nested(shapes[i], shapes[j]) or _nested(shapes[j], shapes[i])):
                     distance = 0.0
                 else:
+                    clock.stop()
                     continue
             pairs.append((i, j))
             if distance <= contact * 1e-3:
+                if clock.exhausted(i, j):
+                    clock.give_up(i, j, "the overlap")
+                    continue
                 common = common_solid(shapes[i], shapes[j], fuzzies,
                                       lambda i=i, j=j: holds_any(shapes[i], boxes[i], points(j), fuzzies[-1]))
                 if common is None:
@@ -41,4 +66,5 @@ def find_contacts(ids, shapes, boxes, points, contact: float, fuzzies, warnings:
                                     "counted as contact without overlap")
                 elif common.Volume > 0:
                     overlap[i, j] = overlap[j, i] = (common.Volume, common)
+            clock.stop()
     return pairs, overlap

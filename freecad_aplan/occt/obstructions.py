@@ -6,6 +6,7 @@ import FreeCAD
 
 from planner.product import AXIS_DIRECTIONS
 
+from .budget import PairClock, sweep_meets
 from .prisms import sweep_prisms
 from .solids import common_volume
 
@@ -14,9 +15,13 @@ __all__ = ["AXES", "find_obstructions"]
 AXES = ("+X", "+Y", "+Z")
 
 
-def find_obstructions(ids, shapes, boxes, overlap, contact: float, depth: float, fuzzies,
-                      warnings: list[str]):
-    """Per axis, the pairs (i, j): part i moving along the axis collides with part j."""
+def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth: float, fuzzies,
+                      warnings: list[str], clock: PairClock):
+    """Per axis, the pairs (i, j): part i moving along the axis collides with part j.
+
+    Candidates are the pairs whose boxes meet along the sweep, then whose face boxes do
+    (:func:`~.budget.sweep_meets`). Each candidate pair is worked on within ``clock``'s budget for its two
+    parts (contacts included); a pair out of time is counted as blocking and reported."""
     scene_hi = [max(b[1][k] for b in boxes) for k in range(3)]
     volume_tolerance = depth ** 3
     result = {}
@@ -25,9 +30,13 @@ def find_obstructions(ids, shapes, boxes, overlap, contact: float, depth: float,
         across = [k for k in range(3) if k != axis]
         pairs = []
         for i, (lo, hi) in enumerate(boxes):
+            clock.tick(f"obstructions {name}", i + 1, len(boxes))
             candidates = [j for j, (lo2, hi2) in enumerate(boxes) if j != i
                           and all(min(hi[k], hi2[k]) - max(lo[k], lo2[k]) > contact for k in across)
                           and hi2[axis] > lo[axis] + depth]
+            clock.counts["sweep_candidates"] += len(candidates)
+            candidates = [j for j in candidates if sweep_meets(faces[i], faces[j], axis, contact, depth)]
+            clock.counts["sweep_exact"] += len(candidates)
             if not candidates:
                 continue
             length = scene_hi[axis] - lo[axis] + 1.0
@@ -36,8 +45,18 @@ def find_obstructions(ids, shapes, boxes, overlap, contact: float, depth: float,
                 warnings.append(f"part {ids[i]!r}: {meshed} face piece(s) swept along {name} as triangles within "
                                 f"{contact / 2:g} (no exact silhouette, or OCCT could not build their prism)")
             for j in candidates:
+                if clock.exhausted(i, j):
+                    clock.give_up(i, j, f"{ids[i]} moving along {name}")
+                    pairs.append((i, j))
+                    continue
+                clock.start(i, j)
                 verdict = _blocks(prisms, shapes[j], boxes[j], overlap.get((i, j)), axis, volume_tolerance,
-                                  fuzzies)
+                                  fuzzies, lambda i=i, j=j: clock.exhausted(i, j))
+                if verdict == "late":
+                    clock.give_up(i, j, f"{ids[i]} moving along {name}")
+                    pairs.append((i, j))
+                    continue
+                clock.stop()
                 if verdict is None:
                     warnings.append(f"{name}: OCCT cannot tell whether {ids[i]!r} moving along {name} hits "
                                     f"{ids[j]!r}; assumed it does")
@@ -47,16 +66,19 @@ def find_obstructions(ids, shapes, boxes, overlap, contact: float, depth: float,
     return result
 
 
-def _blocks(prisms, other, other_box, shared, axis: int, volume_tolerance: float, fuzzies) -> bool | None:
+def _blocks(prisms, other, other_box, shared, axis: int, volume_tolerance: float, fuzzies,
+            late=lambda: False) -> bool | None | str:
     """True when one of the prisms takes more than ``volume_tolerance`` of ``other`` outside ``shared``
     (the (volume, solid) the moving part already shares with it); None when no prism decided because
-    booleans failed."""
+    booleans failed; ``"late"`` when ``late()`` said the time was up before a prism was tested."""
     lo, hi = other_box
     unsure = False
     for prism in prisms:
         plo, phi = prism.box
         if phi[axis] <= lo[axis] or any(min(phi[k], hi[k]) - max(plo[k], lo[k]) <= 0 for k in range(3) if k != axis):
             continue
+        if late():
+            return "late"
         verdict = _prism_blocks(prism, other, other_box, shared, axis, volume_tolerance, fuzzies)
         if verdict:
             return True

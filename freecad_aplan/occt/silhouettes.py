@@ -31,7 +31,12 @@ def _face_samples(face, samples: int = _SAMPLES):
 
 def facing(face, d) -> tuple[float, float]:
     """Smallest and largest ``normal . d`` over samples of ``face`` (outward normals); (-1, 1), as if it
-    folded, when no sample could be taken."""
+    folded, when no sample could be taken. A plane has one normal: no samples (most faces of real parts are
+    planes; sampling them took a fifth of the truck's analysis)."""
+    if isinstance(face.Surface, Part.Plane):
+        u0, u1, v0, v1 = face.ParameterRange
+        value = face.normalAt((u0 + u1) / 2, (v0 + v1) / 2).dot(d)
+        return value, value
     low, high = math.inf, -math.inf
     for u, v in _face_samples(face):
         try:

@@ -147,6 +147,9 @@ def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
                        help=f"overlaps shallower than this along the motion do not block (default {d.depth:g})")
     group.add_argument("--resolution", type=int, default=d.resolution, metavar="N",
                        help=f"mesh engine: pixels across the product for the projection test (default {d.resolution})")
+    group.add_argument("--pair-budget", type=float, default=d.pair_budget, metavar="S",
+                       help="occt engine: seconds of work per pair of parts; a pair not decided in time is reported "
+                            f"and counted as touching and blocking (default {d.pair_budget:g})")
     group.add_argument("--directions", type=_direction_count, default=d.directions, metavar="N",
                        help="mesh engine: motion directions besides the axes to find on the parts' faces and axes "
                             f"and test like the axes, 0 to 64 (default {d.directions}; 0: the axes only)")
@@ -186,7 +189,7 @@ def contact_tolerances_from(args: argparse.Namespace) -> Tolerances | None:
 def tolerances_from(args: argparse.Namespace) -> Tolerances:
     return Tolerances(contact=args.contact, interference=args.interference, depth=args.depth,
                       resolution=args.resolution, directions=args.directions,
-                      contact_ceiling=args.contact_ceiling)
+                      contact_ceiling=args.contact_ceiling, pair_budget=args.pair_budget)
 
 
 def positive_seconds(text: str) -> float:

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..defaults import BLOCKING_DEPTH, CANDIDATE_DIRECTIONS, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, RASTER_RESOLUTION
+from ..defaults import (BLOCKING_DEPTH, CANDIDATE_DIRECTIONS, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, OCCT_PAIR_BUDGET,
+                        RASTER_RESOLUTION)
 from ..errors import GeometryError
 
 __all__ = ["AUTO", "Tolerances"]
@@ -26,6 +27,7 @@ class Tolerances:
     ``grazing``: pixels next to a part's outline that are ignored (at least 1).
     ``directions``: at most this many motion directions besides the axes, found on the parts' geometry and
     tested like the axes (0: the axes only).
+    ``pair_budget``: OCCT engine: seconds of work per pair of parts before the pair is reported undecided.
     """
 
     contact: float | str = CONTACT_TOLERANCE
@@ -34,6 +36,7 @@ class Tolerances:
     resolution: int = RASTER_RESOLUTION
     grazing: int = 1
     directions: int = CANDIDATE_DIRECTIONS
+    pair_budget: float = OCCT_PAIR_BUDGET
     contact_ceiling: float | None = None
 
     @property
@@ -46,7 +49,7 @@ class Tolerances:
             raise GeometryError(f"tolerance contact must be a number or {AUTO!r}, got {self.contact!r}")
         if self.contact_ceiling is not None and not self.contact_ceiling > 0:
             raise GeometryError(f"the contact ceiling must be > 0, got {self.contact_ceiling!r}")
-        for name in ("contact", "interference", "depth") if not self.auto else ("interference", "depth"):
+        for name in (() if self.auto else ("contact",)) + ("interference", "depth", "pair_budget"):
             if not getattr(self, name) >= 0:
                 raise GeometryError(f"tolerance {name} must be >= 0, got {getattr(self, name)!r}")
         if self.resolution < 16:

@@ -1,5 +1,7 @@
-"""The diaphragm pump (../shared/models/diaphragm_pump: 51 solids, modelled with clearances, 8 groups at the
-default contact tolerance): the gaps named, checked against brute force, and --contact auto."""
+"""The diaphragm pump (../shared/models/diaphragm_pump) without its two closed shells 16_001 and 21_001 (read
+as solids since they are, they connect it; left out here with --exclude, as before they were read): 51
+solids, modelled with clearances, 8 groups at the default contact tolerance: the gaps named, checked against
+brute force, and --contact auto."""
 from __future__ import annotations
 
 import itertools
@@ -20,10 +22,10 @@ PUMP = SHARED / "models" / "diaphragm_pump" / "asm_diaphragm_pump.FCStd"
 
 @pytest.fixture(scope="session")
 def pump_bundle(tmp_path_factory):
-    """The pump exported once (default tolerances) for every test here."""
+    """The pump without its two shells, exported once (default tolerances) for every test here."""
     require_freecadcmd()
     bundle = tmp_path_factory.mktemp("pump") / "bundle"
-    aplan("export-freecad", str(require_shared(PUMP)), "-o", str(bundle))
+    aplan("export-freecad", str(require_shared(PUMP)), "-o", str(bundle), "--exclude", "16_001", "--exclude", "21_001")
     return bundle
 
 

@@ -1,0 +1,125 @@
+"""Messy real CAD (issue 13, item 4): each part's mesh against its B-rep before and after the mesh check, and
+the exact (OCCT) engine on the real models, with its per-pair budget (needs FreeCAD).
+
+Run: ``.venv/bin/python bench/bench_messy_cad.py [--parts] [--occt]`` (about a minute; with --occt, several).
+
+- *before*: the export's former tessellation (MeshPart Standard at the default deflections, duplicated
+  points merged, holes filled); *after*: :func:`freecad_aplan.tessellation.checked_mesh` (the same first,
+  other methods when the volume or area is off by more than 1 %). The volume error is
+  ``(mesh volume - B-rep volume) / B-rep volume``; ``--parts`` prints it for every part.
+- ``--occt``: ``aplan export-freecad MODEL --engine none``, then ``aplan analyze BUNDLE --engine occt``
+  timed (wall clock), with the pair counts and the undecided pairs of the engine's answer.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+MODELS = ROOT.parent / "shared" / "models"
+CASES = [("toy truck", MODELS / "toy_truck/asm_cement_mixer_truck.FCStd"),
+         ("diaphragm pump", MODELS / "diaphragm_pump/asm_diaphragm_pump.FCStd")]
+
+MESH_SCRIPT = r"""
+import json, os, sys, time
+sys.path.insert(0, os.environ["ROOT"])
+import MeshPart
+from freecad_aplan.document import open_model, read_components
+from freecad_aplan.tessellation import checked_mesh
+from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION
+rows, seconds = [], {"before": 0.0, "after": 0.0}
+for component in read_components(open_model(os.environ["MODEL"])).components:
+    shape, volume = component.shape, component.shape.Volume
+    start = time.perf_counter()
+    mesh = MeshPart.meshFromShape(Shape=shape, LinearDeflection=LINEAR_DEFLECTION,
+                                  AngularDeflection=ANGULAR_DEFLECTION, Relative=False)
+    if not mesh.isSolid():
+        mesh.removeDuplicatedPoints()
+    if not mesh.isSolid():
+        mesh.fillupHoles(1000, 1)
+    seconds["before"] += time.perf_counter() - start
+    before = (mesh.Volume - volume) / volume
+    start = time.perf_counter()
+    _, check = checked_mesh(shape.copy(), LINEAR_DEFLECTION, ANGULAR_DEFLECTION)
+    seconds["after"] += time.perf_counter() - start
+    rows.append([component.id, before, check.volume_error, check.method])
+print("APLAN-RESULT " + json.dumps({"rows": rows, "seconds": seconds}), flush=True)
+"""
+
+
+def _mesh_errors(model: Path) -> dict:
+    with tempfile.TemporaryDirectory() as folder:
+        script = Path(folder) / "mesh_errors.py"
+        script.write_text(MESH_SCRIPT)
+        done = subprocess.run(["freecadcmd", str(script)], capture_output=True, text=True, timeout=1800,
+                              env={**os.environ, "ROOT": str(ROOT), "MODEL": str(model)})
+    for line in done.stdout.splitlines():
+        if line.startswith("APLAN-RESULT "):
+            return json.loads(line.split(" ", 1)[1])
+    raise SystemExit(f"{model}: no result\n{done.stdout[-2000:]}\n{done.stderr[-2000:]}")
+
+
+def _occt(model: Path, budget: float | None) -> str:
+    aplan = [sys.executable, "-m", "planner"]
+    with tempfile.TemporaryDirectory() as folder:
+        bundle = Path(folder) / "bundle"
+        subprocess.run(aplan + ["export-freecad", str(model), "-o", str(bundle), "--engine", "none"], check=True,
+                       capture_output=True, timeout=1800)
+        extra = [] if budget is None else ["--pair-budget", str(budget)]
+        start = time.perf_counter()
+        done = subprocess.run(aplan + ["analyze", str(bundle), "--engine", "occt", "--json"] + extra,
+                              capture_output=True, text=True, timeout=3600, cwd=ROOT)
+        wall = time.perf_counter() - start
+        if done.returncode != 0:
+            return f"failed after {wall:.0f} s: {done.stderr.strip()[-300:]}"
+        report = json.loads(done.stdout)
+        undecided = [w for w in report["warnings"] if w.startswith("OCCT did not decide")]
+        shutil.rmtree(bundle, ignore_errors=True)
+    pairs = "/".join(str(len(report["obstructions"][a])) for a in ("+X", "+Y", "+Z"))
+    return (f"{wall:.0f} s wall, {len(report['contacts'])} contacts, obstructions {pairs}, "
+            f"{len(undecided)} pairs undecided")
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--parts", action="store_true", help="print the volume error of every part")
+    parser.add_argument("--occt", action="store_true", help="also time the OCCT engine on both models")
+    parser.add_argument("--pair-budget", type=float, help="the OCCT engine's budget per pair (default: its own)")
+    args = parser.parse_args()
+    print("| model | parts | off by > 1 % before | worst before | worst after | methods after "
+          "| tessellation s before / after |")
+    print("|---|---:|---|---:|---:|---|---:|")
+    details = []
+    for name, model in CASES:
+        result = _mesh_errors(model)
+        rows = result["rows"]
+        off = [f"{part} {before:+.1%}" for part, before, _, _ in rows if abs(before) > 0.01]
+        worst_before = max(rows, key=lambda r: abs(r[1]))
+        worst_after = max(rows, key=lambda r: abs(r[2]))
+        methods: dict[str, int] = {}
+        for row in rows:
+            methods[row[3]] = methods.get(row[3], 0) + 1
+        print(f"| {name} | {len(rows)} | {', '.join(off) or 'none'} | {worst_before[1]:+.2%} ({worst_before[0]}) | "
+              f"{worst_after[2]:+.2%} ({worst_after[0]}) | {', '.join(f'{m} {n}' for m, n in methods.items())} | "
+              f"{result['seconds']['before']:.1f} / {result['seconds']['after']:.1f} |")
+        details.append((name, rows))
+    if args.parts:
+        print("\n| model | part | volume error before | after | method |\n|---|---|---:|---:|---|")
+        for name, rows in details:
+            for part, before, after, method in rows:
+                print(f"| {name} | {part} | {before:+.3%} | {after:+.3%} | {method} |")
+    if args.occt:
+        print()
+        for name, model in CASES:
+            print(f"- {name}, OCCT engine: {_occt(model, args.pair_budget)}")
+
+
+if __name__ == "__main__":
+    main()

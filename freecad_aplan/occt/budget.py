@@ -1,0 +1,111 @@
+"""The exact engine's time budget per pair of parts, its progress lines, and the culling of pairs whose faces
+are clearly apart."""
+from __future__ import annotations
+
+import time
+from typing import Callable
+
+import numpy as np
+
+from .solids import bounding_box
+
+__all__ = ["PairClock", "face_boxes", "face_gap", "sweep_meets"]
+
+
+class PairClock:
+    """CPU seconds of OCCT work spent per unordered pair of parts, against a budget, and progress reports.
+
+    A pair is *undecided* when its work would go beyond its budget (``budget``, or ``budgets[{a, b}]`` for
+    the pair of ids ``a``, ``b``): the engine stops working on it, reports it and goes on with the others.
+    OCCT's booleans cannot be interrupted, so the budget is checked between them: a pair may overrun by one
+    boolean. CPU time of this process (OCCT's booleans run in it, on one core), so that a loaded machine
+    does not make pairs undecided; ``progress`` receives a line at most every ``every`` seconds of wall clock
+    (and the last of each phase).
+    """
+
+    def __init__(self, ids: list[str], budget: float, budgets: dict | None = None,
+                 progress: Callable[[str], None] | None = None, every: float = 5.0) -> None:
+        self.ids, self.budget, self.progress, self.every = ids, budget, progress, every
+        index = {part_id: k for k, part_id in enumerate(ids)}
+        self.budgets = {}
+        for pair, seconds in (budgets or {}).items():
+            a, b = (index.get(p) for p in pair)
+            if a is not None and b is not None:
+                self.budgets[min(a, b), max(a, b)] = float(seconds)
+        self.spent: dict[tuple[int, int], float] = {}
+        self.undecided: dict[tuple[int, int], list[str]] = {}
+        self.counts = {"far": 0, "far_faces": 0, "exact": 0, "sweep_candidates": 0, "sweep_exact": 0}
+        self._current: tuple[tuple[int, int], float] | None = None
+        self._start = self._last = time.perf_counter()
+
+    def _key(self, i: int, j: int) -> tuple[int, int]:
+        return (i, j) if i < j else (j, i)
+
+    def exhausted(self, i: int, j: int) -> bool:
+        """True when the pair (i, j) has used up its budget (its current work included)."""
+        key = self._key(i, j)
+        spent = self.spent.get(key, 0.0)
+        if self._current is not None and self._current[0] == key:
+            spent += time.process_time() - self._current[1]
+        return spent >= self.budgets.get(key, self.budget)
+
+    def start(self, i: int, j: int) -> None:
+        self._current = (self._key(i, j), time.process_time())
+
+    def stop(self) -> None:
+        if self._current is not None:
+            key, began = self._current
+            self.spent[key] = self.spent.get(key, 0.0) + time.process_time() - began
+            self._current = None
+
+    def give_up(self, i: int, j: int, what: str) -> None:
+        """Record that the pair's ``what`` (contact, obstruction along an axis) was not decided in time."""
+        self.stop()
+        self.undecided.setdefault(self._key(i, j), []).append(what)
+
+    def tick(self, phase: str, done: int, total: int) -> None:
+        now = time.perf_counter()
+        if self.progress is not None and (now - self._last >= self.every or done == total):
+            self._last = now
+            self.progress(f"occt: {phase} {done}/{total} ({now - self._start:.0f} s, "
+                          f"{len(self.undecided)} pairs undecided)")
+
+    def warnings(self) -> list[str]:
+        return [f"OCCT did not decide {', '.join(whats)} for {self.ids[i]!r} and {self.ids[j]!r} within the "
+                f"budget of {self.budgets.get((i, j), self.budget):g} CPU s per pair (spent "
+                f"{self.spent.get((i, j), 0.0):.1f} s); counted as touching and blocking: check this pair "
+                "(or raise --pair-budget)" for (i, j), whats in sorted(self.undecided.items())]
+
+
+def face_boxes(shape) -> np.ndarray:
+    """The bounding boxes of ``shape``'s faces, ``(n, 2, 3) float`` (min and max corners)."""
+    return np.array([bounding_box(face) for face in shape.Faces], dtype=float).reshape(-1, 2, 3)
+
+
+def face_gap(a: np.ndarray, b: np.ndarray) -> float:
+    """The smallest gap between a box of ``a`` and a box of ``b`` (face boxes, :func:`face_boxes`): a lower
+    bound of the distance between the two surfaces (<= 0 when two boxes overlap). Cost O(len(a) len(b))."""
+    if len(a) == 0 or len(b) == 0:
+        return 0.0
+    lo_a, hi_a = a[:, None, 0, :], a[:, None, 1, :]
+    lo_b, hi_b = b[None, :, 0, :], b[None, :, 1, :]
+    gaps = np.maximum(lo_b - hi_a, lo_a - hi_b).max(axis=2)
+    return float(gaps.min())
+
+
+def sweep_meets(moving: np.ndarray, other: np.ndarray, axis: int, contact: float, depth: float) -> bool:
+    """False when the part of face boxes ``moving``, swept along +``axis`` without limit, clearly misses the
+    part of face boxes ``other``: no box of ``moving`` overlaps a box of ``other`` by more than ``contact``
+    across the axis with the ``other`` box reaching more than ``depth`` beyond its start.
+
+    Sound: a part's sweep is the union of its faces' sweeps (a point inside it lies ahead of one of its
+    faces), and a sweep that meets a part meets its boundary (from a point inside, go along the axis until
+    leaving the part). Cost O(len(moving) len(other))."""
+    if len(moving) == 0 or len(other) == 0:
+        return True
+    across = [k for k in range(3) if k != axis]
+    lo_m, hi_m = moving[:, None, 0, :], moving[:, None, 1, :]
+    lo_o, hi_o = other[None, :, 0, :], other[None, :, 1, :]
+    overlap = (np.minimum(hi_m, hi_o) - np.maximum(lo_m, lo_o))[..., across].min(axis=2) > contact
+    ahead = hi_o[..., axis] > lo_m[..., axis] + depth
+    return bool((overlap & ahead).any())
