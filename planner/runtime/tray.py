@@ -77,8 +77,39 @@ def render_tray(layout: TrayLayout, in_tray: Iterable[str], blur: float = 0.0, n
     ``blur``: Gaussian sigma in pixels; ``noise``: standard deviation of additive Gaussian noise (grey
     levels, drawn from ``seed``); ``perspective``: each frame corner moves by up to this fraction of the frame
     size (a tilted camera, drawn from ``camera_seed``: the same for every frame of one camera); ``occluders``
-    are drawn over everything else.
+    are drawn over everything else. Cost: the scene without occluders is drawn, tilted and blurred once per
+    set of items in the tray (the last few are kept); then each frame costs its noise.
     """
+    import cv2
+
+    present = frozenset(in_tray) & frozenset(layout.slots)
+    key = (present, blur, perspective, camera_seed)
+    if occluders:
+        frame = _scene(layout, present, blur, perspective, occluders, camera_seed)
+    else:
+        cache = _SCENES.setdefault(id(layout), (layout, {}))
+        if cache[0] is not layout:   # another layout took a freed one's id
+            _SCENES[id(layout)] = cache = (layout, {})
+        scenes = cache[1]
+        if key not in scenes:
+            if len(scenes) >= 8:
+                scenes.pop(next(iter(scenes)))
+            scenes[key] = _scene(layout, present, blur, perspective, (), camera_seed)
+        frame = scenes[key].copy()
+    if noise > 0:
+        cv2.setRNGSeed(seed)
+        grain = np.empty(frame.shape[:2], np.int16)  # luminance noise: what survives the grey conversion
+        cv2.randn(grain, 0, noise)
+        frame = np.clip(frame.astype(np.int16) + grain[:, :, None], 0, 255).astype(np.uint8)
+    return frame
+
+
+_SCENES: dict[int, tuple] = {}  # id(layout) -> (layout, {(items, blur, tilt, camera): frame}): drawn scenes
+
+
+def _scene(layout: TrayLayout, present: frozenset, blur: float, perspective: float,
+           occluders: Sequence[Occluder], camera_seed: int) -> np.ndarray:
+    """The frame of :func:`render_tray` before its noise."""
     import cv2
 
     width, height = layout.size
@@ -90,7 +121,6 @@ def render_tray(layout: TrayLayout, in_tray: Iterable[str], blur: float = 0.0, n
     ys = [y for _, y in layout.slots.values()]
     cv2.rectangle(frame, (min(xs) - 2 * margin, min(ys) - 2 * margin), (max(xs) + px + 2 * margin,
                   max(ys) + px + 2 * margin), (150, 160, 165), -1)  # the tray
-    present = set(in_tray)
     for k, (name, (x, y)) in enumerate(layout.slots.items()):
         cv2.rectangle(frame, (x - margin // 2, y - margin // 2), (x + px + margin // 2, y + px + margin // 2),
                       (255, 255, 255), -1)
@@ -110,11 +140,6 @@ def render_tray(layout: TrayLayout, in_tray: Iterable[str], blur: float = 0.0, n
         frame = cv2.warpPerspective(frame, homography, (width, height), borderValue=(70, 90, 110))
     if blur > 0:
         frame = cv2.GaussianBlur(frame, (0, 0), blur)
-    if noise > 0:
-        cv2.setRNGSeed(seed)
-        grain = np.empty(frame.shape[:2], np.int16)  # luminance noise: what survives the grey conversion
-        cv2.randn(grain, 0, noise)
-        frame = np.clip(frame.astype(np.int16) + grain[:, :, None], 0, 255).astype(np.uint8)
     return frame
 
 
