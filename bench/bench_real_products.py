@@ -56,7 +56,7 @@ def run(name: str, folder: Path) -> list[tuple]:
         seconds, mib, status, output = _timed(command, 600)
         levels = len(re.findall(r"^level \S+ \(\d+ of \d+\)", output, re.M))
         assembled = len(re.findall(r"^assembled:", output, re.M))
-        last = next((line for line in reversed(output.splitlines()) if line.strip() and not line.startswith("TIME ")),
+        last = next((line for line in reversed(output.splitlines()) if line.strip() and not line.startswith(("TIME ", "Command exited"))),
                     "")
         rows.append((name, stage, status, seconds, mib, f"{assembled} of {levels} levels assembled" if levels
                      else last[:160]))
