@@ -14,7 +14,6 @@ One FreeCADCmd process builds the documents and runs everything (about 40 s):
 """
 from __future__ import annotations
 
-import json
 import subprocess
 
 import pytest
