@@ -32,6 +32,7 @@ from ..defaults import SUBASSEMBLY_LIMIT
 from ..errors import LimitExceededError, NotDisassemblableError, PlannerError
 from ..product import Markers, Obstruction, OperationTag, Part, Product, Subassembly, TechnicalConstraint, fold
 from .andor import and_or_graph
+from .feasibility import interlocked_pairs
 
 __all__ = ["TOP", "Level", "product_levels", "propose_subassemblies", "with_subassemblies", "SUBASSEMBLY_MODES",
            "level_statistics", "select_level", "check_level_constraints", "ConstraintViolationError"]
@@ -234,6 +235,9 @@ def propose_subassemblies(product: Product, max_components: int = 8) -> tuple[Su
     ``max_components`` members (the agglomeration already merged every pair that fits), else it is left as it
     is and a warning names its stuck parts (its level's plan will then fail with the same reason).
 
+    Two groups of one round that would block each other along every direction once built are merged into
+    one (:func:`_separable_groups`), so the level above can take its members apart.
+
     Fasteners are left out of the groups (the connection diagram is that of the folded product, its fasteners'
     hosts joined: :func:`~planner.product.fold`); :func:`product_levels` installs each group where its hosts
     come together.
@@ -256,6 +260,7 @@ def propose_subassemblies(product: Product, max_components: int = 8) -> tuple[Su
         groups = _agglomerate(current, max_components)
         if all(len(g) == 1 for g in groups):  # cannot happen on a connected diagram; never loop forever
             break
+        groups = _separable_groups(product, found, groups)
         added = []
         for group in groups:
             if len(group) < 2:
@@ -267,6 +272,28 @@ def propose_subassemblies(product: Product, max_components: int = 8) -> tuple[Su
         found.extend(added)
         current = product_levels(replace(product, subassemblies=tuple(found)))[-1].product
     return tuple(found)
+
+
+def _separable_groups(product: Product, found: list[Subassembly], groups: list[list[str]]) -> list[list[str]]:
+    """``groups`` (one round's members, grouped) with every two that the level above could never separate merged:
+    built, two groups that block each other along every direction (:func:`~planner.assembly.feasibility.
+    interlocked_pairs`) are one subassembly (a merged group may pass the size cap: a workstation too large is
+    better than a product that cannot be taken apart). Two single members that block each other stay as they
+    are: no grouping separates them (the level's plan names them). Cost: one level product and one O(n^2 D)
+    test per merge, at most one merge per group."""
+    groups = [list(g) for g in groups]
+    for _ in range(len(groups)):
+        names = {f"_group{k}": group for k, group in enumerate(groups) if len(group) > 1}
+        trial = tuple(found) + tuple(Subassembly(name, tuple(group)) for name, group in names.items())
+        above = product_levels(replace(product, subassemblies=trial))[-1].product
+        pair = next(((p.first, p.second) for p in interlocked_pairs(above)
+                     if p.first in names or p.second in names), None)
+        if pair is None or len(above.parts) <= 2:
+            break
+        union = names.get(pair[0], [pair[0]]) + names.get(pair[1], [pair[1]])
+        groups = [g for g in groups if g is not names.get(pair[0]) and g is not names.get(pair[1])
+                  and g != [pair[0]] and g != [pair[1]]] + [union]
+    return groups
 
 
 def _agglomerate(product: Product, cap: int) -> list[list[str]]:

@@ -9,6 +9,7 @@ from math import comb, factorial
 
 import pytest
 
+from planner import make_plan, plan_statistics
 from planner.assembly import statistics_within
 from planner.assembly.hierarchy import (TOP, ConstraintViolationError, level_statistics, product_levels,
                                        propose_subassemblies, select_level, with_subassemblies)
@@ -292,3 +293,20 @@ def test_proposed_subassemblies_leave_fasteners_out():
     levels = product_levels(replace(product, subassemblies=proposed))
     installed = [g.id for level in levels for g in level.product.fasteners]
     assert sorted(installed) == [f"g{i}" for i in range(1, 8)]   # each screw once, somewhere
+
+
+def test_groups_that_would_block_each_other_once_built_are_merged():
+    """A chain of 9, at most 3 members: the first round pairs {p1, p2}, {p3, p4}, {p5, p6} and takes {p7, p8,
+    p9}. Along +X (the only direction) p1 hits p3 and p4 hits p2: no two parts block each other, but built,
+    {p1, p2} and {p3, p4} would (each hits the other), so no level above could take them apart. They are
+    merged into one group of 4 (past the cap: a larger workstation rather than a product that cannot be
+    taken apart), and every level can be built."""
+    chain = chain_product(9)
+    along_x = Obstruction(Direction.from_vector((1.0, 0.0, 0.0)), (("p1", "p3"), ("p4", "p2")))
+    product = replace(chain, obstructions=(along_x,))
+    proposed = propose_subassemblies(product, 3)
+    assert ("p1", "p2", "p3", "p4") in [tuple(sorted(g.parts)) for g in proposed]
+    for level in product_levels(replace(product, subassemblies=proposed)):
+        assert plan_statistics(make_plan(level.product)).sequences >= 1
+    # Without the relations the first round keeps the pairs.
+    assert [("p1", "p2"), ("p3", "p4")] == [tuple(g.parts) for g in propose_subassemblies(chain, 3)][:2]
