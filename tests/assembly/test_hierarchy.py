@@ -11,12 +11,31 @@ import pytest
 
 from planner import make_plan, plan_statistics
 from planner.assembly import statistics_within
-from planner.assembly.hierarchy import (TOP, ConstraintViolationError, level_statistics, product_levels,
-                                       propose_subassemblies, select_level, with_subassemblies)
+from planner.assembly.hierarchy import (
+    TOP,
+    ConstraintViolationError,
+    level_statistics,
+    product_levels,
+    propose_subassemblies,
+    select_level,
+    with_subassemblies,
+)
 from planner.errors import PlannerError, ProductFormatError
-from planner.product import (Direction, Markers, Obstruction, OperationTag, Part, Product, Subassembly,
-                             TechnicalConstraint, Tool, load_product, product_from_dict, product_to_dict,
-                             save_product)
+from planner.product import (
+    Direction,
+    Markers,
+    Obstruction,
+    OperationTag,
+    Part,
+    Product,
+    Subassembly,
+    TechnicalConstraint,
+    Tool,
+    load_product,
+    product_from_dict,
+    product_to_dict,
+    save_product,
+)
 from planner.product.synthetic import chain_product, complete_product
 
 
