@@ -29,7 +29,7 @@ from ..defaults import CUTS_PER_SUBASSEMBLY, SUBASSEMBLY_LIMIT
 from ..errors import DisconnectedProductError, InterlockedPartsError, LimitExceededError, NotDisassemblableError
 from ..product import Product
 from .bitsets import bit_indices, components, connected_subsets, lowest_bit, mask_of
-from .feasibility import interlock_message, interlocked_pairs
+from .feasibility import interlock_message, interlocked_pairs, released_interlocks
 from .guards import OPTIONS, Progress, fewer_parts_hint
 
 __all__ = ["Operation", "AndOrGraph", "and_or_graph", "liaison_adjacency"]
@@ -148,7 +148,7 @@ def and_or_graph(product: Product, technical: bool | None = None, limit: int = S
     interlocked = interlocked_pairs(product)  # a proof in O(n^2 D), before the exponential search
     if interlocked:
         stuck = sorted({p for pair in interlocked for p in (pair.first, pair.second)}, key=index.get)
-        raise InterlockedPartsError(stuck, interlock_message(interlocked))
+        raise InterlockedPartsError(stuck, interlock_message(interlocked, released=released_interlocks(product)))
 
     constraints = [(mask_of(index[p] for p in c.parts), 1 << index[c.requires])
                    for c in product.technical_constraints if c.active]

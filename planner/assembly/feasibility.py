@@ -15,11 +15,11 @@ Cost: O(n^2 D) bit operations for n parts and D directions.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..product import Product
 
-__all__ = ["InterlockedPair", "interlocked_pairs", "interlock_message"]
+__all__ = ["InterlockedPair", "interlocked_pairs", "interlock_message", "released_interlocks"]
 
 
 @dataclass(frozen=True)
@@ -51,9 +51,29 @@ def interlocked_pairs(product: Product) -> list[InterlockedPair]:
             for i, mask in enumerate(both) for j in range(i + 1, len(parts)) if mask >> j & 1]
 
 
-def interlock_message(pairs: list[InterlockedPair], shown: int = 6) -> str:
+def released_interlocks(product: Product) -> list[InterlockedPair]:
+    """The pairs a designer's not-blocking mark released: interlocked with the obstruction pairs the marks took
+    out (``geometry.analysis.designer.released``, :mod:`planner.product.designer`) put back, and not
+    interlocked now. Cost: O(n^2 D + released)."""
+    released = product.geometry.get("analysis", {}).get("designer", {}).get("released", [])
+    if not released:
+        return []
+    back: dict[str, set[tuple[str, str]]] = {}
+    parts = set(product.part_ids)
+    for x, y, direction in released:
+        if x in parts and y in parts:  # a level or a folded product holds fewer parts
+            back.setdefault(direction, set()).add((x, y))
+    restored = replace(product, obstructions=tuple(
+        replace(o, blocks=o.blocks + tuple(sorted(back.get(o.direction.name, set()) - set(o.blocks))))
+        for o in product.obstructions))
+    now = {(p.first, p.second) for p in interlocked_pairs(product)}
+    return [p for p in interlocked_pairs(restored) if (p.first, p.second) not in now]
+
+
+def interlock_message(pairs: list[InterlockedPair], shown: int = 6, released: list[InterlockedPair] = ()) -> str:
     """The explanation for :class:`~planner.errors.NotDisassemblableError`: the pairs (the first ``shown``),
-    the directions tried, and what to check."""
+    the directions tried, what to check, and the pairs the designer's marks released (``released``:
+    :func:`released_interlocks`)."""
     if not pairs:
         return ""
     directions = ", ".join(f"+/-{d.lstrip('+-')}" if d[:1] in "+-" else f"{d} and its reverse"
@@ -64,4 +84,11 @@ def interlock_message(pairs: list[InterlockedPair], shown: int = 6) -> str:
             f"disassembly can separate them: {listed}{more}. Look for overlapping geometry between them (a press "
             "fit, a screw modelled through a part), add the direction a part really leaves along to the obstruction "
             "diagrams, remove a relation that does not block, fold fasteners into operations, or make one "
-            "component of each pair (--group)")
+            "component of each pair (--group)" + _released_note(released))
+
+
+def _released_note(released: list[InterlockedPair]) -> str:
+    if not released:
+        return ""
+    listed = "; ".join(f"{p.first} and {p.second}" for p in released)
+    return f" (the designer's not-blocking marks released {len(released)} other pair(s): {listed})"

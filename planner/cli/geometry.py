@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..geometry.bundle import PRODUCT_FILE, analyze_product, apply_report
 from ..product import load_product, save_product
+from ..product.designer import add_directions, designer_lines, mark_not_blocking
 from .options import add_tolerance_options, tolerances_from
 
 __all__ = ["add_commands", "contact_choice"]
@@ -33,8 +34,15 @@ def _analyze(args: argparse.Namespace) -> int:
     target = Path(args.product)
     path = target / PRODUCT_FILE if target.is_dir() else target
     product = load_product(path)
+    product, notes = add_directions(product, args.direction)
+    if args.not_blocking:  # checked (parts, direction) before the analysis runs
+        product, more = mark_not_blocking(product, args.not_blocking)
+        notes += more
     report = analyze_product(product, args.engine, tolerances_from(args))
-    save_product(apply_report(product, report), args.output or path)
+    analysed = apply_report(product, report)
+    save_product(analysed, args.output or path)
+    for note in notes:
+        log.warning("%s", note)
     if args.json:
         print(json.dumps(report.as_dict()))
         return 0
@@ -50,7 +58,9 @@ def _analyze(args: argparse.Namespace) -> int:
     if report.gaps:
         print(f"  the contacts fall apart into {len(report.gaps['groups'])} groups; joined by --contact "
               f"{report.gaps['tolerance']:g} (aplan stats names the gaps)")
-    for warning in report.warnings:
+    for line in designer_lines(analysed):
+        print(f"  {line}")
+    for warning in analysed.geometry["analysis"]["warnings"]:
         log.warning("%s", warning)
     return 0
 
@@ -65,4 +75,9 @@ def add_commands(commands) -> None:
     analyze.add_argument("--engine", default="mesh", help="mesh (default) or occt")
     analyze.add_argument("--json", action="store_true", help="print the analysis as JSON")
     add_tolerance_options(analyze)
+    analyze.add_argument("--not-blocking", nargs=3, action="append", default=[],
+                         metavar=("BLOCKED", "BLOCKING", "DIRECTION"),
+                         help="the designer's mark: part BLOCKED, moved along DIRECTION (+X ... -Z, or X,Y,Z), does "
+                              "not hit part BLOCKING, whatever the engine finds; recorded in the product "
+                              "(geometry.designer) and applied after every detection; repeatable")
     analyze.set_defaults(run=_analyze)

@@ -153,6 +153,20 @@ def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--directions", type=_direction_count, default=d.directions, metavar="N",
                        help="mesh engine: motion directions besides the axes to find on the parts' faces and axes "
                             f"and test like the axes, 0 to 64 (default {d.directions}; 0: the axes only)")
+    group.add_argument("--direction", action="append", type=designer_direction, default=[], metavar="X,Y,Z",
+                       help="a motion direction of the designer's, tested like the axes at this and every later "
+                            "detection (recorded in the product's geometry.designer; normalised; one along an "
+                            "axis or within 2 degrees of another is merged, with a note); repeatable")
+
+
+def designer_direction(text: str) -> tuple[float, float, float]:
+    """``X,Y,Z`` (or an axis name) as a unit vector (an argparse type)."""
+    from ..product.designer import parse_direction
+
+    try:
+        return parse_direction(text, "--direction")
+    except PlannerError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def _direction_count(text: str) -> int:

@@ -51,6 +51,18 @@ _LEVEL_KEYS = ("parts", "subassemblies", "operations", "states", "state_edges", 
 _FLAT_LIMITS = SizeLimits(SUBASSEMBLY_LIMIT, 2 ** 30)
 
 
+def _print_designer(product) -> None:
+    """The designer's directions and not-blocking marks, and the interlocked pairs the marks released."""
+    from ..assembly.feasibility import released_interlocks
+    from ..product.designer import designer_lines
+
+    for line in designer_lines(product):
+        print(f"  {line}")
+    for pair in released_interlocks(product):
+        print(f"  designer marks released the interlocked pair {pair.first} and {pair.second} (they blocked each "
+              "other along every direction tried)")
+
+
 def _stats(args: argparse.Namespace) -> int:
     product = api.resolve_product(args.product, contact_tolerances_from(args), args.fasteners)
     if args.contact is not None:  # analysed again here: say what the analysis found, as aplan analyze does
@@ -70,6 +82,9 @@ def _stats(args: argparse.Namespace) -> int:
         data = stats.as_dict()
         if refused:
             data["not_computed"] = {"figures": list(stats.not_computed), "reason": reason}
+        designer = product.geometry.get("designer")
+        if designer:
+            data["designer"] = {**designer, **product.geometry.get("analysis", {}).get("designer", {})}
         if stats.fasteners:
             data["fasteners"] = {"parts": stats.folded_parts, "groups": {
                 g.id: {"parts": list(g.parts), "hosts": sorted(g.hosts), "tool": g.tool,
@@ -88,6 +103,7 @@ def _stats(args: argparse.Namespace) -> int:
         print(f"  {key:<14}{shown:>22}")
     if stats.fasteners:
         _print_folded(stats)
+    _print_designer(product)
     if refused:
         print(f"  not computed: {', '.join(stats.not_computed)}: {reason}")
         return PARTIAL

@@ -14,6 +14,7 @@ import numpy as np
 from ..defaults import PRODUCT_FILE
 from ..errors import GeometryError
 from ..product import AXIS_DIRECTIONS, Direction, Obstruction, Product, load_product
+from ..product.designer import designer_geometry, release_marked
 from .clearances import analyze_with_clearances
 from .mesh_engine import AXES, GeometryReport, PartMesh, analyze_meshes
 from .tolerances import Tolerances
@@ -71,12 +72,16 @@ def analyze_product(product: Product, engine: str = "mesh", tolerances: Toleranc
 
     ``tolerances.contact`` may be ``"auto"``; the gaps between the groups are recorded when the contacts fall
     apart, and a tolerance that makes too much touch is warned about
-    (:func:`~planner.geometry.clearances.analyze_with_clearances`)."""
+    (:func:`~planner.geometry.clearances.analyze_with_clearances`). The product's designer directions
+    (``geometry.designer``) are tested besides the axes and the candidate directions (mesh engine)."""
     from ..plugins import registry
 
     engines = {**ENGINES, **registry().engines}
     if engine not in engines:
         raise GeometryError(f"unknown geometry engine {engine!r}; available: {', '.join(sorted(engines))}")
+    designer = designer_geometry(product).directions
+    if designer:  # the designer's directions (geometry.designer) are tested at every detection
+        tolerances = replace(tolerances, designer_directions=tuple(d.vector for d in designer))
     return analyze_with_clearances(lambda chosen: engines[engine](product, chosen), tolerances,
                                    lambda: load_part_meshes(product))
 
@@ -86,7 +91,9 @@ def apply_report(product: Product, report: GeometryReport) -> Product:
     direction the engine tested, with its vector in ``report.directions``), and the analysis recorded under
     ``geometry.analysis`` (``diagrams: "engine"``: found by a geometry engine; ``tolerances`` with
     ``contact_auto`` when the contact tolerance was chosen; ``gaps`` when the contacts fall apart).
-    Technical constraints and designer tags are kept."""
+    Technical constraints and designer tags are kept; the designer's not-blocking marks are applied
+    (:func:`planner.product.designer.release_marked`: the pairs they release are recorded under
+    ``geometry.analysis.designer``)."""
     if set(report.parts) != set(product.part_ids):
         raise GeometryError(f"{product.source}: the analysed parts {sorted(report.parts)} are not the product's "
                             f"parts {sorted(product.part_ids)}")
@@ -98,8 +105,16 @@ def apply_report(product: Product, report: GeometryReport) -> Product:
     analysis = {"diagrams": "engine", "engine": report.engine, "tolerances": summary["tolerances"],
                 "interferences": summary["interferences"], "warnings": summary["warnings"],
                 "seconds": summary["seconds"], **({"gaps": report.gaps} if report.gaps is not None else {})}
+    tested = {o.direction.name for o in obstructions}
+    untested = [d.name for d in designer_geometry(product).directions if d.name not in tested]
+    if untested:
+        analysis["warnings"] = summary["warnings"] + [
+            f"the {report.engine} engine does not test the designer directions {', '.join(untested)}; use the "
+            "mesh engine for them"]
     geometry = {**product.geometry, "analysis": analysis}
-    return replace(product, contacts=tuple(report.contacts), obstructions=obstructions, geometry=geometry)
+    # The designer's not-blocking marks, applied after every detection (they survive re-detection).
+    return release_marked(replace(product, contacts=tuple(report.contacts), obstructions=obstructions,
+                                  geometry=geometry))
 
 
 def load_bundle(folder: str | Path) -> Product:

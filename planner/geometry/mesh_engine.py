@@ -29,7 +29,8 @@ axle, a part on an inclined face along the face's normal): per part, the normal 
 holds at least a tenth of its area, and the axis of a part whose normals turn around one line (a pin, a
 wheel, a screw: the eigenvector of the smallest eigenvalue of the area-weighted scatter ``sum a n n^T`` of
 its facet normals, when the two others are close). Directions within 2 degrees of an axis or of one already
-kept are merged; the ones backed by the most area come first (:func:`candidate_directions`).
+kept are merged; the ones backed by the most area come first (:func:`candidate_directions`). The designer's
+directions (``Tolerances.designer_directions``) are tested first, always, and candidates along them merged.
 
 Broad phase: pairs whose bounding boxes are farther apart than the contact tolerance, or whose projections
 do not overlap, are never tested.
@@ -325,10 +326,10 @@ def _canonical(v: np.ndarray) -> np.ndarray:
     return v if v[int(np.argmax(np.abs(v)))] > 0 else -v
 
 
-def candidate_directions(parts: list[PartMesh], limit: int) -> list[np.ndarray]:
-    """At most ``limit`` unit directions besides the axes that parts of ``parts`` may leave along (module
-    docstring), the best backed first; each stands for itself and its reverse, and names its vector with
-    components below 1e-6 set to zero. Cost: O(facets)."""
+def candidate_directions(parts: list[PartMesh], limit: int, taken: list[np.ndarray] = ()) -> list[np.ndarray]:
+    """At most ``limit`` unit directions besides the axes (and the unit vectors ``taken``: the designer's) that
+    parts of ``parts`` may leave along (module docstring), the best backed first; each stands for itself and
+    its reverse, and names its vector with components below 1e-6 set to zero. Cost: O(facets)."""
     proposals: list[tuple[float, np.ndarray]] = []   # (area behind it, direction)
     for part in parts:
         normals, areas = _facet_normals(part)
@@ -355,7 +356,7 @@ def candidate_directions(parts: list[PartMesh], limit: int) -> list[np.ndarray]:
             break
         direction = np.where(np.abs(direction) < 1e-6, 0.0, direction)
         direction = _canonical(direction / np.linalg.norm(direction)) + 0.0
-        near = np.vstack([_AXIS_VECTORS] + kept) @ direction
+        near = np.vstack([_AXIS_VECTORS, *taken] + kept) @ direction
         if np.all(np.abs(near) < np.cos(_MERGE_ANGLE)):
             kept.append(direction)
     return kept
@@ -400,7 +401,8 @@ def _obstructions(parts, lo, hi, tol: Tolerances):
     for axis, name in enumerate(AXES):
         result[name] = _blocking_pairs(parts, triangles, lo, hi, axis, lo.min(axis=0), pixel, tol)
     vectors: dict[str, tuple[float, float, float]] = {}
-    for direction in candidate_directions(parts, tol.directions):
+    designer = [np.asarray(v, dtype=float) for v in tol.designer_directions]
+    for direction in designer + candidate_directions(parts, tol.directions, designer):
         frame = _frame(direction)
         turned = [t @ frame.T for t in triangles]
         tlo = np.array([t.reshape(-1, 3).min(axis=0) for t in turned])
@@ -434,7 +436,9 @@ def analyze_meshes(parts: list[PartMesh], tolerances: Tolerances = Tolerances())
                         f"(more than the interference tolerance {tolerances.interference:g})")
     used = {"contact": tolerances.contact, "interference": tolerances.interference, "depth": tolerances.depth,
             "resolution": tolerances.resolution, "grazing": tolerances.grazing, "pixel": pixel,
-            "directions": tolerances.directions}
+            "directions": tolerances.directions,
+            **({"designer_directions": [list(v) for v in tolerances.designer_directions]}
+               if tolerances.designer_directions else {})}
     return GeometryReport("mesh", tuple(p.id for p in parts), tuple(contacts), tuple(interferences),
                           {k: tuple(v) for k, v in obstructions.items()}, used, tuple(warnings),
                           time.perf_counter() - start, directions)

@@ -27,6 +27,8 @@ class Tolerances:
     ``grazing``: pixels next to a part's outline that are ignored (at least 1).
     ``directions``: at most this many motion directions besides the axes, found on the parts' geometry and
     tested like the axes (0: the axes only).
+    ``designer_directions``: unit vectors the designer added (``geometry.designer`` of the product,
+    :mod:`planner.product.designer`), tested like the axes besides the ``directions`` found on the geometry.
     ``pair_budget``: OCCT engine: seconds of work per pair of parts before the pair is reported undecided.
     """
 
@@ -38,6 +40,7 @@ class Tolerances:
     directions: int = CANDIDATE_DIRECTIONS
     pair_budget: float = OCCT_PAIR_BUDGET
     contact_ceiling: float | None = None
+    designer_directions: tuple[tuple[float, float, float], ...] = ()
 
     @property
     def auto(self) -> bool:
@@ -56,5 +59,8 @@ class Tolerances:
             raise GeometryError(f"resolution must be at least 16 pixels, got {self.resolution}")
         if not (isinstance(self.directions, int) and 0 <= self.directions <= 64):
             raise GeometryError(f"directions must be a whole number from 0 to 64, got {self.directions!r}")
+        for vector in self.designer_directions:
+            if len(vector) != 3 or abs(sum(c * c for c in vector) - 1) > 1e-6:
+                raise GeometryError(f"a designer direction must be a unit vector X,Y,Z, got {vector!r}")
         if self.grazing < 1:
             raise GeometryError(f"grazing must be at least 1 pixel, got {self.grazing}")

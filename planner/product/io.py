@@ -44,7 +44,7 @@ def product_from_dict(data: Any, source: str = "<memory>") -> Product:
     """
     check_document(data, source)
     defaults = data.get("defaults", {})
-    return Product(
+    product = Product(
         parts=tuple(_part(item) for item in data["parts"]),
         contacts=tuple((a, b) for a, b in data["contacts"]),
         obstructions=tuple(_obstruction(item, f"obstructions[{i}]", source)
@@ -63,6 +63,11 @@ def product_from_dict(data: Any, source: str = "<memory>") -> Product:
         extensions={k: v for k, v in data.items() if k.startswith("x-")},
         source=source,
     )
+    if "designer" in product.geometry:  # a file's marks name its parts (checked on construction: the rest)
+        from .designer import designer_geometry
+
+        designer_geometry(product)
+    return product
 
 
 def _number(value: Any) -> float | None:

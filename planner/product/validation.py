@@ -35,6 +35,10 @@ def check_product(product: "Product") -> None:
     if product.markers is not None:
         _check_markers(product, set(parts) | set(tools))
     _check_subassemblies(product, parts, tools)
+    if "designer" in product.geometry:  # the designer's directions and not-blocking marks
+        from .designer import designer_geometry
+
+        designer_geometry(product, check_parts=False)  # a level or a folded product holds fewer parts
 
 
 def _fail(product: "Product", location: str, problem: str) -> ProductFormatError:
