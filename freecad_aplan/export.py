@@ -67,7 +67,8 @@ def _report_check(part_id: str, check, tolerance: float, warnings: list[str]) ->
 def export_components(components, folder: str, source: str, warnings: list[str],
                       linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
                       angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION, extra: dict | None = None,
-                      analysis: dict | None = None, mesh_tolerance: float = MESH_TOLERANCE) -> dict:
+                      analysis: dict | None = None, mesh_tolerance: float = MESH_TOLERANCE,
+                      designer: dict | None = None) -> dict:
     """Write meshes, B-reps and ``product.json`` for ``components`` into ``folder`` (which must exist).
 
     Each mesh is checked against its B-rep (:func:`~freecad_aplan.tessellation.checked_mesh`): re-tessellated
@@ -76,7 +77,8 @@ def export_components(components, folder: str, source: str, warnings: list[str],
     is reliable for them); ``geometry.warnings`` names every part that needed another method.
 
     ``extra``: more top-level keys of the product file (the designer intent's constraints and tags, stored
-    diagrams); ``analysis``: the ``geometry.analysis`` record of where those diagrams came from.
+    diagrams); ``analysis``: the ``geometry.analysis`` record of where those diagrams came from; ``designer``:
+    the ``geometry.designer`` record (the designer's directions and not-blocking marks).
     """
     os.makedirs(os.path.join(folder, "meshes"), exist_ok=True)
     os.makedirs(os.path.join(folder, "breps"), exist_ok=True)
@@ -106,7 +108,8 @@ def export_components(components, folder: str, source: str, warnings: list[str],
                                       "angular_deflection": angular_deflection},
                      "mesh_check": {"tolerance": mesh_tolerance, "parts": checks,
                                     "exact": [i for i, c in checks.items() if c["method"] == "exact"]},
-                     "warnings": warnings, **({"analysis": analysis} if analysis else {})},
+                     "warnings": warnings, **({"analysis": analysis} if analysis else {}),
+                     **({"designer": designer} if designer else {})},
         **(extra or {}),
     }
     write_atomic(os.path.join(folder, PRODUCT_FILE), json.dumps(product, indent=1) + "\n")
@@ -160,7 +163,7 @@ def export_document(document, folder: str, source: str, groups=None, exclude=Non
     from planner.product import product_from_dict
 
     from .diagrams import stored_analysis
-    from .intent import find_analysis, product_intent, read_intent
+    from .intent import designer_record, find_analysis, product_intent, read_intent
 
     analysis = find_analysis(document)
     intent = read_intent(analysis) if analysis is not None else None
@@ -198,7 +201,8 @@ def export_document(document, folder: str, source: str, groups=None, exclude=Non
             extra["subassemblies"] = structure
     extra["x-freecad-objects"] = {c.id: list(c.objects) for c in result.components}
     product = export_components(result.components, folder, source, result.warnings, linear_deflection,
-                                angular_deflection, extra, recorded)
+                                angular_deflection, extra, recorded,
+                                designer=designer_record(intent) if intent is not None else None)
     return product, intent
 
 

@@ -15,6 +15,9 @@ top of the geometry (everything is saved in the ``.FCStd`` and restored on reope
 - ``Engine`` and the tolerances of the geometry engines (``ContactTolerance``, ``InterferenceVolume``,
   ``DepthTolerance``);
 - ``Diagrams``: the connection and obstruction diagrams the last detection found (product-format JSON);
+- ``DesignerDirections`` (``X,Y,Z`` per entry) and ``NotBlocking`` (one JSON mark per entry): the designer's
+  motion directions, tested like the axes, and relations marked not blocking, applied after every detection
+  (the product's ``geometry.designer``, :mod:`planner.product.designer`);
 - ``FormatVersion``: an analysis written by a newer APLAN is refused (:class:`IntentError`), never guessed.
 
 The functions here are shared by batch mode (:mod:`freecad_aplan.export`) and the GUI commands. Every
@@ -32,7 +35,7 @@ from planner.defaults import BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOL
 from .document import DocumentError
 
 __all__ = ["FORMAT_VERSION", "ENGINES", "BASE_PART_AUTO", "Intent", "IntentError", "AnalysisProxy", "create_analysis",
-           "find_analysis", "read_intent", "update_intent", "product_intent", "is_analysis"]
+           "find_analysis", "read_intent", "update_intent", "product_intent", "is_analysis", "designer_record"]
 
 FORMAT_VERSION = 1
 ENGINES = ("mesh", "occt")
@@ -60,6 +63,8 @@ class Intent:
     interference: float = INTERFERENCE_VOLUME
     depth: float = BLOCKING_DEPTH
     diagrams: dict = field(default_factory=dict)
+    directions: list[list[float]] = field(default_factory=list)
+    not_blocking: list[dict] = field(default_factory=list)
 
 
 # property name, FreeCAD type, property group, tooltip; in the order of Intent's fields
@@ -81,6 +86,11 @@ _PROPERTIES = (
     ("InterferenceVolume", "App::PropertyFloat", "Detection", "overlaps above this volume are reported (mm^3)"),
     ("DepthTolerance", "App::PropertyFloat", "Detection", "overlaps shallower than this do not block (mm)"),
     ("Diagrams", "App::PropertyString", "Detection", "connection and obstruction diagrams found by the last detection"),
+    ("DesignerDirections", "App::PropertyStringList", "Detection",
+     "motion directions X,Y,Z tested like the axes at every detection (added in the diagrams panel)"),
+    ("NotBlocking", "App::PropertyStringList", "Detection",
+     'relations the designer marked not blocking, one JSON object each: {"blocked": x, "blocking": y, '
+     '"direction": "+X" or [x, y, z]}; applied after every detection'),
 )
 
 
@@ -213,12 +223,20 @@ def read_intent(analysis) -> Intent:
         diagrams = json.loads(analysis.Diagrams) if analysis.Diagrams else {}
     except json.JSONDecodeError as exc:
         raise IntentError(f"{analysis.Label}.Diagrams: not valid JSON ({exc.msg}); run the detection again") from None
+    directions = []
+    for k, text in enumerate(getattr(analysis, "DesignerDirections", [])):
+        try:
+            directions.append([float(c) for c in text.split(",")])
+        except ValueError:
+            raise IntentError(f"{analysis.Label}.DesignerDirections[{k}]: expected X,Y,Z, got {text!r}") from None
+    not_blocking = _json_entries(analysis, "NotBlocking") if "NotBlocking" in analysis.PropertiesList else []
     return Intent(groups=groups, excluded=list(analysis.Excluded), split_solids=bool(analysis.SplitSolids),
                   technical_constraints=_json_entries(analysis, "TechnicalConstraints"), tools=list(analysis.Tools),
                   operations=_json_entries(analysis, "OperationTags"),
                   base_part=str(getattr(analysis, "BasePart", "")).strip(), engine=str(analysis.Engine),
                   contact=float(analysis.ContactTolerance), interference=float(analysis.InterferenceVolume),
-                  depth=float(analysis.DepthTolerance), diagrams=diagrams)
+                  depth=float(analysis.DepthTolerance), diagrams=diagrams, directions=directions,
+                  not_blocking=not_blocking)
 
 
 def _write(analysis, intent: Intent) -> None:
@@ -249,6 +267,8 @@ def _write(analysis, intent: Intent) -> None:
         "InterferenceVolume": float(intent.interference),
         "DepthTolerance": float(intent.depth),
         "Diagrams": json.dumps(intent.diagrams, sort_keys=True) if intent.diagrams else "",
+        "DesignerDirections": [",".join(f"{c:.9g}" for c in v) for v in intent.directions],
+        "NotBlocking": [json.dumps(m, sort_keys=True) for m in intent.not_blocking],
     }
     for name, value in values.items():
         if getattr(analysis, name) != value:  # unchanged properties stay untouched (no needless undo steps)
@@ -268,6 +288,13 @@ def update_intent(analysis, description: str, **changes) -> Intent:
     intent = replace(read_intent(analysis), **changes)
     _in_transaction(analysis.Document, f"APLAN: {description}", lambda: _write(analysis, intent))
     return intent
+
+
+def designer_record(intent: Intent) -> dict:
+    """The product's ``geometry.designer`` (:mod:`planner.product.designer`): the designer's directions and
+    not-blocking marks the analysis holds (empty when it holds none)."""
+    return {**({"directions": [list(v) for v in intent.directions]} if intent.directions else {}),
+            **({"not_blocking": [dict(m) for m in intent.not_blocking]} if intent.not_blocking else {})}
 
 
 def product_intent(intent: Intent) -> dict:

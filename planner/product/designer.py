@@ -252,10 +252,14 @@ def mark_not_blocking(product: "Product", marks: Iterable[tuple[str, str, Any]])
 
 
 def unmark_not_blocking(product: "Product", marks: Iterable[tuple[str, str, Any]]) -> "Product":
-    """``product`` without the designer marks ``marks`` (the relations they released are not restored here: a
-    detection finds them again). Raises :class:`~planner.errors.GeometryError` for a mark that is not there."""
+    """``product`` without the designer marks ``marks`` (as :func:`mark_not_blocking` takes them), the obstruction
+    pairs they released (``geometry.analysis.designer.released``) put back: what a detection finds again.
+    Raises :class:`~planner.errors.GeometryError` for a mark that is not there."""
+    from .model import Obstruction
+
     current = list(designer_geometry(product).not_blocking)
     directions = designer_geometry(product).directions
+    gone = []
     for blocked, blocking, direction in marks:
         value = parse_direction(direction) if isinstance(direction, str) else unit_vector(direction)
         known = _known_direction(value, directions)
@@ -263,8 +267,20 @@ def unmark_not_blocking(product: "Product", marks: Iterable[tuple[str, str, Any]
         index = next((k for k, m in enumerate(current) if target is not None and _same_mark(target, m)), None)
         if index is None:
             raise GeometryError(f"{blocked} not blocked by {blocking} along {direction}: no such designer mark")
-        del current[index]
-    return _with_raw(product, {**_raw(product), "not_blocking": [_mark_json(m) for m in current]})
+        gone.append(current.pop(index))
+    unmarked = _with_raw(product, {**_raw(product), "not_blocking": [_mark_json(m) for m in current]})
+    analysis = dict(product.geometry.get("analysis", {}))
+    record = dict(analysis.get(_KEY, {}))
+    released = [list(r) for r in record.get("released", [])]
+    back = [r for r in released if any(_releases(m, r) for m in gone)]
+    if not back:
+        return unmarked
+    obstructions = tuple(Obstruction(o.direction, o.blocks + tuple(
+        (x, y) for x, y, name in back if name == o.direction.name and (x, y) not in o.blocks))
+        for o in unmarked.obstructions)
+    record["released"] = [r for r in released if r not in back]
+    geometry = {**unmarked.geometry, "analysis": {**analysis, _KEY: record}}
+    return replace(unmarked, obstructions=obstructions, geometry=geometry)
 
 
 def release_marked(product: "Product") -> "Product":

@@ -119,10 +119,12 @@ def test_not_blocking_marks_release_pairs_and_survive_redetection(parts):
     assert sorted(map(tuple, again.geometry["analysis"]["designer"]["released"])) == [
         ("peg1", "block", "+Z"), ("peg2", "block", "+Z")]
     assert release_marked(again) == again   # idempotent
-    # Unmarked, a detection finds the relation again.
+    # Unmarked: the pair it released is back, as a detection finds it.
     fewer = unmark_not_blocking(again, [("block", "peg2", "-Z")])
+    assert fewer.obstructions == _analysed(fewer, parts).obstructions
+    assert fewer.geometry["analysis"]["designer"]["released"] == [["peg1", "block", "+Z"]]
     with pytest.raises(InterlockedPartsError, match="block and peg2"):
-        make_plan(_analysed(fewer, parts))
+        make_plan(fewer)
     with pytest.raises(GeometryError, match="no such designer mark"):
         unmark_not_blocking(fewer, [("peg2", "block", "+Z")])
 
