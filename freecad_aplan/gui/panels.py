@@ -5,6 +5,8 @@ Each panel edits a copy of the analysis' intent and writes it back on OK as one 
 """
 from __future__ import annotations
 
+import json
+
 import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
@@ -13,6 +15,11 @@ from ..diagrams import RELATION_KINDS, RelationError, describe_relation, edited_
 from ..intent import BASE_PART_AUTO, IntentError, read_intent, update_intent
 
 __all__ = ["DiagramsPanel", "IntentPanel", "PlanDialog", "ImageDialog", "relation_rows"]
+
+
+def _direction_name(direction) -> str:
+    """A direction as the diagrams table names it: ``+X``, or the vector as JSON."""
+    return direction if isinstance(direction, str) else json.dumps(direction)
 
 
 def _table(headers: list[str], name: str) -> QtGui.QTableWidget:
@@ -46,7 +53,13 @@ class DiagramsPanel:
     """The connection and obstruction diagrams as a table; selecting a row selects the two parts in the 3D
     view. "Remove" deletes the selected relations, "Add" adds a contact or an obstruction (checked at once:
     unknown component, a component related to itself, a duplicate); OK writes all of it as one undoable
-    transaction (:func:`freecad_aplan.workflow.edit_analysis_diagrams`), Cancel changes nothing."""
+    transaction (:func:`freecad_aplan.workflow.edit_analysis_diagrams`), Cancel changes nothing.
+
+    The designer's geometry is stored at once, one undo step each (Cancel does not take it back: Edit > Undo
+    does): "Mark not blocking" marks the selected obstructions not blocking (they leave the table and stay
+    out after every detection, :func:`freecad_aplan.workflow.mark_not_blocking`), "Unmark" takes marks of the
+    list back, and "Add direction" adds a motion direction ``X,Y,Z`` that every detection tests like the axes
+    (:func:`freecad_aplan.workflow.add_analysis_direction`)."""
 
     def __init__(self, analysis):
         self.analysis = analysis
@@ -88,10 +101,134 @@ class DiagramsPanel:
         layout.addWidget(QtGui.QLabel("Add a relation: contact a, b, or 'blocks +X' a, b (a blocked by b "
                                       "along +X)"))
         layout.addLayout(adding)
+        self._designer_widgets(layout)
         self.message = QtGui.QLabel("")
         self.message.setObjectName("AplanDiagramsMessage")
         self.message.setWordWrap(True)
         layout.addWidget(self.message)
+
+    def _designer_widgets(self, layout) -> None:
+        """"Mark not blocking", the list of marks with "Unmark", and the "Add a direction" field."""
+        mark = QtGui.QPushButton("Mark selected relations not blocking")
+        mark.setObjectName("AplanMarkNotBlocking")
+        mark.setToolTip("The selected obstructions do not block (a detection is wrong about them): stored at once "
+                        "and applied after every detection")
+        mark.clicked.connect(lambda: self.mark_selected())
+        layout.addWidget(mark)
+        layout.addWidget(QtGui.QLabel("Not blocking (designer marks, applied after every detection):"))
+        self.marks = QtGui.QListWidget()
+        self.marks.setObjectName("AplanNotBlockingList")
+        self.marks.setMaximumHeight(80)
+        layout.addWidget(self.marks)
+        unmark = QtGui.QPushButton("Unmark selected")
+        unmark.setObjectName("AplanUnmark")
+        unmark.clicked.connect(lambda: self.unmark_selected())
+        layout.addWidget(unmark)
+        row = QtGui.QHBoxLayout()
+        row.addWidget(QtGui.QLabel("Add a direction X,Y,Z:"))
+        self.direction = QtGui.QLineEdit()
+        self.direction.setObjectName("AplanDirectionField")
+        self.direction.setPlaceholderText("e.g. 0, -0.5, 0.866 (normalised)")
+        row.addWidget(self.direction)
+        add = QtGui.QPushButton("Add direction")
+        add.setObjectName("AplanAddDirection")
+        add.clicked.connect(lambda: self.add_direction())
+        row.addWidget(add)
+        layout.addLayout(row)
+        self.directions = QtGui.QLabel("")
+        self.directions.setObjectName("AplanDesignerDirections")
+        self.directions.setWordWrap(True)
+        layout.addWidget(self.directions)
+        self._show_designer()
+
+    def _show_designer(self) -> None:
+        intent = read_intent(self.analysis)
+        self.marks.clear()
+        for mark in intent.not_blocking:
+            self.marks.addItem(f"{mark['blocked']} not blocked by {mark['blocking']} along "
+                               f"{_direction_name(mark['direction'])}")
+        shown = "; ".join(", ".join(f"{c:g}" for c in v) for v in intent.directions) or "none"
+        self.directions.setText(f"Designer directions (tested like the axes at every detection): {shown}")
+
+    def _reload(self) -> None:
+        """The table and the designer lists again, from the analysis and the edits not stored yet."""
+        self.diagrams = read_intent(self.analysis).diagrams
+        try:
+            rows = relation_rows(edited_diagrams(self.diagrams, self.removed, self.added))
+        except RelationError:  # an edit not stored yet clashes with a mark taken back: drop the edits
+            self.removed, self.added = [], []
+            rows = relation_rows(self.diagrams)
+        self.table.setRowCount(0)
+        for relation in rows:
+            self._append_row(relation)
+        self._show_designer()
+
+    def _selected_relations(self) -> list[tuple[str, str, str]]:
+        rows = sorted(i.row() for i in self.table.selectionModel().selectedRows())
+        return [tuple(self.table.item(r, c).text() for c in range(3)) for r in rows]
+
+    def mark_selected(self) -> bool:
+        """Mark the selected obstructions not blocking (one undo step); say why not in the panel otherwise."""
+        from planner.errors import PlannerError
+
+        from ..workflow import mark_not_blocking
+
+        relations = self._selected_relations()
+        if not relations:
+            self._say("select the obstructions to mark not blocking first", error=True)
+            return False
+        pending = [r for r in relations if r in self.added]
+        if pending:
+            self._say(f"{describe_relation(pending[0])} is added in this panel, not stored yet: press OK first, "
+                      "or remove it", error=True)
+            return False
+        try:
+            notes = mark_not_blocking(self.analysis, relations)
+        except PlannerError as exc:
+            self._say(str(exc), error=True)
+            return False
+        self._reload()
+        what = describe_relation(relations[0]) if len(relations) == 1 else f"{len(relations)} relations"
+        self._say("; ".join([f"marked {what} not blocking (stored; Edit > Undo takes it back)"] + notes), error=False)
+        return True
+
+    def unmark_selected(self) -> bool:
+        """Take the selected marks back (one undo step): their relations return to the table."""
+        from planner.errors import PlannerError
+
+        from ..workflow import unmark_not_blocking
+
+        intent = read_intent(self.analysis)
+        chosen = [intent.not_blocking[i.row()] for i in self.marks.selectedIndexes()]
+        if not chosen:
+            self._say("select the marks to take back first", error=True)
+            return False
+        relations = [(f"blocks {_direction_name(m['direction'])}", m["blocked"], m["blocking"]) for m in chosen]
+        try:
+            unmark_not_blocking(self.analysis, relations)
+        except PlannerError as exc:
+            self._say(str(exc), error=True)
+            return False
+        self._reload()
+        self._say(f"took back {len(chosen)} mark(s); their relations block again", error=False)
+        return True
+
+    def add_direction(self, text: str | None = None) -> bool:
+        """Add the direction of the field (or ``text``) to the analysis (one undo step), or say why not."""
+        from planner.errors import PlannerError
+
+        from ..workflow import add_analysis_direction
+
+        text = (text if text is not None else self.direction.text()).strip()
+        try:
+            notes = add_analysis_direction(self.analysis, text)
+        except PlannerError as exc:
+            self._say(str(exc), error=True)
+            return False
+        self._show_designer()
+        self._say("; ".join(notes) if notes else f"added direction {text} (stored; detect again to test it)",
+                  error=False)
+        return not notes
 
     @staticmethod
     def _combo(name: str, items, editable: bool) -> QtGui.QComboBox:

@@ -84,7 +84,14 @@ def parse_direction(text: str, where: str = "direction") -> tuple[float, float, 
     name = text.strip().upper()
     if name.lstrip("+-") in ("X", "Y", "Z") and len(name) <= 2:
         return AXIS_DIRECTIONS[name if name[0] in "+-" else "+" + name]
-    return unit_vector([c for c in text.replace(";", ",").split(",") if c.strip()] or [text], where)
+    try:
+        values = [float(c) for c in text.replace(";", ",").split(",") if c.strip()]
+    except ValueError:
+        raise GeometryError(f"{where}: expected three numbers X,Y,Z or an axis (+X ... -Z), got {text!r}") from None
+    try:
+        return unit_vector(values, where)
+    except GeometryError as exc:  # the message names the text as typed
+        raise GeometryError(str(exc).replace(repr(values), repr(text))) from None
 
 
 def _direction(vector: Sequence[float]) -> "Direction":
