@@ -16,12 +16,14 @@ import argparse
 import shutil
 import sys
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 
 from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION
 from planner.geometry import GeometryReport, Tolerances
 from planner.geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
 from planner.product import Product, save_product
+from planner.product.designer import add_directions
 
 from .runner import FreeCADError, run_batch
 
@@ -35,7 +37,7 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
                   groups: dict[str, list[str]] | None = None, exclude: list[str] | None = None,
                   split_solids: bool = False, linear_deflection: float | None = None,
                   angular_deflection: float | None = None, freecadcmd: str | None = None,
-                  overwrite: bool = False, redetect: bool = False) -> Product:
+                  overwrite: bool = False, redetect: bool = False, directions=()) -> Product:
     """Export ``model`` into the bundle folder ``bundle`` and analyse it with ``engine`` (or ``"none"``).
 
     The document's APLAN analysis (designer intent) chooses the components and adds its constraints and tags.
@@ -47,6 +49,10 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
     defaults); ``tolerances`` as a dict sets only the fields it names (``contact`` may be ``"auto"``, capped by
     ``contact_ceiling``: :func:`planner.geometry.clearances.analyze_with_clearances`; above the cap nothing is
     written).
+
+    ``directions``: motion directions of the designer's (``X,Y,Z`` text or three numbers) added to the
+    product's ``geometry.designer`` (with those the document's analysis holds) and tested at this and every
+    later detection; they need a detection, so the diagrams are detected again (as with ``redetect``).
 
     The bundle is built in a temporary folder beside it and renamed into place at the end, so a failure
     leaves no partial bundle (and an existing one untouched). Returns the bundle's product.
@@ -70,11 +76,16 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
         answer = run_batch("export", arguments, freecadcmd)
         stored = answer.get("intent") or {}
         product = load_bundle(work)
+        if directions:
+            product, notes = add_directions(product, directions)
+            product = replace(product, geometry={**product.geometry,
+                                                 "warnings": list(product.geometry.get("warnings", [])) + notes})
+            save_product(product, work / PRODUCT_FILE)
         engine = engine or stored.get("engine", "mesh")
         if not isinstance(tolerances, Tolerances):
             chosen = {k: stored[k] for k in ("contact", "interference", "depth") if k in stored}
             tolerances = Tolerances(**{**chosen, **(tolerances or {})})
-        if engine != "none" and not answer.get("diagrams"):  # no stored diagrams in product.json: detect
+        if engine != "none" and (not answer.get("diagrams") or directions):  # no stored diagrams that fit: detect
             product = apply_report(product, analyze_product(product, engine, tolerances))
             save_product(product, work / PRODUCT_FILE)
         if bundle.exists():
@@ -175,7 +186,7 @@ def _export_command(subparsers) -> None:
                                  "pair_budget": args.pair_budget},
                                 dict(args.group),
                                 args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
-                                args.freecadcmd, args.force, args.redetect)
+                                args.freecadcmd, args.force, args.redetect, args.direction)
         source = product.geometry.get("analysis", {}).get("diagrams", "none detected")
         print(f"{args.output}: {len(product.parts)} parts, {len(product.contacts)} contacts (diagrams: {source})")
         choice = contact_choice(product.geometry.get("analysis", {}))

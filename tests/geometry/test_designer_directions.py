@@ -190,3 +190,24 @@ def test_the_direction_and_not_blocking_options(tmp_path):
     assert _aplan("analyze", str(folder), "--directions", "0").returncode == 0
     assert json.loads(_aplan("stats", str(folder), "--json").stdout)["sequences"] == math.factorial(k)
     assert load_product(folder / "product.json").geometry["designer"]["directions"]
+
+
+def test_stats_names_the_pairs_the_marks_released(tmp_path):
+    """Two parts that block each other along every axis (interlocked); marked not blocking along +X, the pair
+    is released: aplan stats plans it and says so."""
+    from planner.product import Direction, Obstruction, save_product
+
+    both = (("a", "b"), ("b", "a"))
+    product = Product((Part("a"), Part("b")), (("a", "b"),),
+                      tuple(Obstruction(Direction.from_vector(v), both) for v in ((1, 0, 0), (0, 1, 0), (0, 0, 1))),
+                      geometry={"analysis": {"engine": "by hand"}})
+    marked, _ = mark_not_blocking(product, [("a", "b", "+X"), ("b", "a", "+Y"), ("a", "b", "+Y")])
+    save_product(marked, tmp_path / "p.json")
+    done = _aplan("stats", str(tmp_path / "p.json"))
+    assert done.returncode == 0, done.stderr
+    assert "designer mark: a not blocked by b along +X (released)" in done.stdout
+    assert "designer marks released the interlocked pair a and b" in done.stdout
+    assert "obstruction pairs released by designer marks: 3" in done.stdout
+    with pytest.raises(InterlockedPartsError, match="a and b"):
+        make_plan(product)
+    assert _counts(marked) == (3, 1)

@@ -3,12 +3,13 @@ FreeCADCmd: a block with a peg in a slot inclined by 30 degrees. Each change is 
 keeps the marks (applied after the detection), and the document reopens with them."""
 from __future__ import annotations
 
+import json
 import math
 import subprocess
 
 import pytest
 from conftest import REPO, require_freecadcmd
-from integration.freecad_tools import freecad_result
+from integration.freecad_tools import aplan, freecad_result
 
 from planner import load_product
 
@@ -157,3 +158,15 @@ def test_directions_and_marks_in_the_workflow(tmp_path):
     assert "no such designer mark" in data["unmark_again"][1] and data["unmark_again"][2]
     assert data["reopened"] is True
     assert load_product(tmp_path / "second" / "product.json").geometry["designer"]["not_blocking"] == data["marks"]
+    # The saved document through aplan export-freecad: its analysis' direction and mark go into the product
+    # (geometry.designer), the detection (candidate directions off) tests the direction and applies the mark.
+    bundle = tmp_path / "bundle"
+    done = aplan("export-freecad", str(tmp_path / "wedge.FCStd"), "-o", str(bundle), "--directions", "0",
+                 "--resolution", "512", "--direction", "0,0,1")
+    assert "direction +Z merged with the axis +Z" in done.stdout
+    exported = load_product(bundle / "product.json")
+    assert exported.geometry["designer"]["directions"] == [pytest.approx(slot, abs=1e-6)]
+    assert exported.geometry["designer"]["not_blocking"] == data["marks"]
+    assert exported.geometry["analysis"]["designer"]["released"] == [[z[1], z[2], "+Z"]]
+    figures = json.loads(aplan("stats", str(bundle), "--json").stdout)
+    assert figures["sequences"] == 1 and figures["designer"]["released"] == [[z[1], z[2], "+Z"]]
