@@ -82,8 +82,9 @@ def interlock_message(pairs: list[InterlockedPair], shown: int = 6, released: li
     more = f" (and {len(pairs) - shown} more pairs)" if len(pairs) > shown else ""
     return (f"{len(pairs)} pair(s) of parts block each other along every direction tried ({directions}), so no "
             f"disassembly can separate them: {listed}{more}. Look for overlapping geometry between them (a press "
-            "fit, a screw modelled through a part), add the direction a part really leaves along to the obstruction "
-            "diagrams, remove a relation that does not block, fold fasteners into operations, or make one "
+            "fit, a screw modelled through a part), add the direction a part really leaves along (aplan analyze "
+            "--direction X,Y,Z, or the workbench's diagrams panel), mark a relation that does not block "
+            "(--not-blocking BLOCKED BLOCKING DIRECTION), fold fasteners into operations, or make one "
             "component of each pair (--group)" + _released_note(released))
 
 
