@@ -7,14 +7,14 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
 import trimesh
 
 from planner import make_plan, plan_statistics
+from planner.cli import main
 from planner.errors import GeometryError, InterlockedPartsError, ProductFormatError
 from planner.geometry import PartMesh, Tolerances, analyze_meshes
 from planner.geometry.bundle import apply_report
@@ -165,34 +165,50 @@ def _bundle(tmp_path):
     return folder
 
 
-def _aplan(*args):
-    if args[0] == "analyze":
-        args += ("--resolution", "512")   # the slots are 10 mm wide: 512 pixels across 58 mm are plenty
-    return subprocess.run([sys.executable, "-m", "planner", *args], capture_output=True, text=True, timeout=300)
+@dataclass
+class _Done:
+    returncode: int
+    stdout: str
+    stderr: str
 
 
-def test_the_direction_and_not_blocking_options(tmp_path):
+@pytest.fixture
+def aplan(capsys):
+    """``aplan ARGS`` in this process (``planner.cli.main``): exit status, standard output and error."""
+    def run(*args) -> _Done:
+        if args[0] == "analyze":
+            args += ("--resolution", "512")   # the slots are 10 mm wide: 512 pixels across 58 mm are plenty
+        try:
+            code = main(list(args))
+        except SystemExit as exc:   # argparse: a usage error
+            code = exc.code
+        captured = capsys.readouterr()
+        return _Done(code, captured.out, captured.err)
+    return run
+
+
+def test_the_direction_and_not_blocking_options(tmp_path, aplan):
     folder = _bundle(tmp_path)
-    bad = _aplan("analyze", str(folder), "--direction", "0,0,0")
+    bad = aplan("analyze", str(folder), "--direction", "0,0,0")
     assert bad.returncode == 2 and "zero vector" in bad.stderr
-    unknown = _aplan("analyze", str(folder), "--directions", "0", "--not-blocking", "peg1", "blok", "+Z")
+    unknown = aplan("analyze", str(folder), "--directions", "0", "--not-blocking", "peg1", "blok", "+Z")
     assert unknown.returncode == 1 and "'blok' is not a part id" in unknown.stderr
     assert "designer" not in json.loads((folder / "product.json").read_text()).get("geometry", {})  # nothing written
-    done = _aplan("analyze", str(folder), "--directions", "0", "--direction", "0,-1,1.7320508", "--direction", "0,0,2")
+    done = aplan("analyze", str(folder), "--directions", "0", "--direction", "0,-1,1.7320508", "--direction", "0,0,2")
     assert done.returncode == 0, done.stderr
     assert "merged with the axis +Z" in done.stderr and "designer directions (tested like the axes)" in done.stdout
-    stats = _aplan("stats", str(folder))
+    stats = aplan("stats", str(folder))
     assert stats.returncode == 0 and "designer directions (tested like the axes): [0, -0.5, 0.866025]" in stats.stdout
     k = len(PEGS)
-    figures = json.loads(_aplan("stats", str(folder), "--json").stdout)
+    figures = json.loads(aplan("stats", str(folder), "--json").stdout)
     assert (figures["subassemblies"], figures["sequences"]) == (2 ** k + k, math.factorial(k))
     # Detected again (no --direction now): the recorded direction is tested again.
-    assert _aplan("analyze", str(folder), "--directions", "0").returncode == 0
-    assert json.loads(_aplan("stats", str(folder), "--json").stdout)["sequences"] == math.factorial(k)
+    assert aplan("analyze", str(folder), "--directions", "0").returncode == 0
+    assert json.loads(aplan("stats", str(folder), "--json").stdout)["sequences"] == math.factorial(k)
     assert load_product(folder / "product.json").geometry["designer"]["directions"]
 
 
-def test_stats_names_the_pairs_the_marks_released(tmp_path):
+def test_stats_names_the_pairs_the_marks_released(tmp_path, aplan):
     """Two parts that block each other along every axis (interlocked); marked not blocking along +X, the pair
     is released: aplan stats plans it and says so."""
     from planner.product import Direction, Obstruction, save_product
@@ -203,7 +219,7 @@ def test_stats_names_the_pairs_the_marks_released(tmp_path):
                       geometry={"analysis": {"engine": "by hand"}})
     marked, _ = mark_not_blocking(product, [("a", "b", "+X"), ("b", "a", "+Y"), ("a", "b", "+Y")])
     save_product(marked, tmp_path / "p.json")
-    done = _aplan("stats", str(tmp_path / "p.json"))
+    done = aplan("stats", str(tmp_path / "p.json"))
     assert done.returncode == 0, done.stderr
     assert "designer mark: a not blocked by b along +X (released)" in done.stdout
     assert "designer marks released the interlocked pair a and b" in done.stdout
