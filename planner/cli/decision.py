@@ -274,7 +274,9 @@ def add_commands(commands) -> None:
 
     simulate = commands.add_parser("simulate", help="play an operator through assembly sequences against a policy",
                                    description="Per step: the robot's action, the observation, and the belief on "
-                                               "the true intention; optionally the Fig. 7 belief heat map.")
+                                               "the true intention; optionally the Fig. 7 belief heat map. The "
+                                               "observations are sampled from the model (missed detections and "
+                                               "observation noise), so some differ from the sequence's operations.")
     simulate.add_argument("model", metavar="PRODUCT", help=PRODUCT_HELP)
     add_policy_options(simulate)
     which = simulate.add_mutually_exclusive_group()
