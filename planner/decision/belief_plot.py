@@ -27,8 +27,8 @@ import numpy as np
 from ..errors import PlannerError
 from ..files import save_figure
 
-__all__ = ["BeliefTrace", "episode_trace", "state_trace", "step_outline", "action_marks", "observation_marks",
-           "top_rows", "short_action", "belief_figure", "plot_beliefs", "MIN_WIDTH_PX", "LOG_FLOOR", "MAX_ROWS"]
+__all__ = ["LOG_FLOOR", "MAX_ROWS", "MIN_WIDTH_PX", "BeliefTrace", "action_marks", "belief_figure", "episode_trace",
+           "observation_marks", "plot_beliefs", "short_action", "state_trace", "step_outline", "top_rows"]
 
 MIN_WIDTH_PX = 1300  # the PNG's width: a report's full text width at 150 dpi and more
 DPI = 100
