@@ -395,13 +395,15 @@ def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None
     turns with the robot, and write the belief plot ``stem.png``/``stem.svg``; returns the steps and the plot
     paths. ``base_part``: the model's, as the policy was solved for."""
     from planner import api
-    from planner.decision.simulate import plot_beliefs
+    from planner.decision.belief_plot import episode_trace, plot_beliefs
 
     model = api.decision_model(product, technical, base_part=base_part)
     policy, _ = api.policy_for(model, policy_path)
     episode, = api.simulate(model, policy, None if sequence is None else [sequence], seed=seed, operator="turns",
                             what="sequence")
-    written = plot_beliefs([episode], stem, [f"sequence {episode.start}"])
+    operations = " ; ".join(model.describe_operations(episode.start))
+    written = plot_beliefs([episode_trace(model, episode, f"sequence {episode.start}: {operations}")], stem,
+                           model.plan.product.name or model.name)
     return {"sequence": episode.start,
             "steps": [(model.actions[s.action], str(model.observations[s.observation]), round(s.p_true, 3))
                       for s in episode.steps],

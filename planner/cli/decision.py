@@ -10,6 +10,7 @@ import sys
 import numpy as np
 
 from .. import api
+from ..decision.belief_plot import episode_trace, plot_beliefs, state_trace
 from ..decision.intention_model import IntentionModel
 from ..decision.online import OnlinePlanner
 from ..decision.policy import write_policy
@@ -142,8 +143,6 @@ def _simulate(args: argparse.Namespace) -> int:
 
 
 def _simulate_level(args: argparse.Namespace, product) -> int:
-    from ..decision.simulate import plot_beliefs
-
     model, policy = decision_maker_from(args, product)
     episodes = api.simulate(model, policy, args.sequence, args.all, args.random, args.seed, args.max_steps,
                             args.operator)
@@ -161,11 +160,28 @@ def _simulate_level(args: argparse.Namespace, product) -> int:
         print(f"  belief on the true intention first above {CONFIDENCE:g} after "
               f"{episode.first_confident(CONFIDENCE)} operator operation(s); discounted return "
               f"{episode.discounted_return:.3f}")
+    if not args.json:
+        _say_sampled(model, episodes)
     if args.plot:
-        written = plot_beliefs(episodes, args.plot, [f"sequence {e.start}" for e in episodes])
-        if not args.json:
-            print("wrote " + ", ".join(written))
+        traces = [episode_trace(model, e, f"sequence {e.start}: " + " ; ".join(model.describe_operations(e.start)))
+                  for e in episodes]
+        _write_plot(args, traces, model.plan.product.name or model.name)
     return 0
+
+
+def _say_sampled(model, episodes) -> None:
+    """Say where the printed observations come from, when they are not just the sequence's operations."""
+    names = {model.observations[s.observation] for e in episodes for s in e.steps}
+    if names - {"blank"}:
+        print("  (observations are sampled from the model: the operator's picks of the parts and tools of its "
+              "next operation, with the model's missed detections (blank) and observation noise, so some "
+              "differ from the sequence's operations)")
+
+
+def _write_plot(args: argparse.Namespace, traces, title: str) -> None:
+    written = plot_beliefs(traces, args.plot, title)
+    if not args.json:
+        print("wrote " + ", ".join(written))
 
 
 def _print_steps(model, steps) -> None:
@@ -178,9 +194,7 @@ def _print_steps(model, steps) -> None:
 
 def _print_factored(model, episodes, args: argparse.Namespace) -> int:
     """Episodes on the factored model (online planner, or a policy over classes): the same report, sequences
-    named by their operations."""
-    if args.plot:
-        raise PlannerError("--plot draws beliefs over intentions: use it with --planner offline (the flat model)")
+    named by their operations; the plot shows the belief summed over assembly states."""
     for episode in episodes:
         operations = model.describe_operations(episode.path)
         times = [s.decision_seconds for s in episode.steps]
@@ -197,7 +211,20 @@ def _print_factored(model, episodes, args: argparse.Namespace) -> int:
               f"{episode.first_confident(CONFIDENCE)} operator operation(s); discounted return "
               f"{episode.discounted_return:.3f}; decision time median {1000 * float(np.median(times)):.1f} ms, "
               f"max {1000 * max(times):.1f} ms" if times else "  no step")
+    if not args.json:
+        _say_sampled(model, episodes)
+    if args.plot:
+        traces = [state_trace(model, e.beliefs, [_true_state(model, e.path, s) for s in [None] + e.steps],
+                              [s.action for s in e.steps], [s.observation for s in e.steps],
+                              "sequence: " + " ; ".join(model.describe_operations(e.path))) for e in episodes]
+        _write_plot(args, traces, model.plan.product.name or model.name)
     return 0
+
+
+def _true_state(model, path: list[int], step) -> int:
+    """The assembly state the operator is in after ``step`` (``None``: before the first) of a factored episode."""
+    position = 0 if step is None else step.position
+    return int(model.class_source[path[position]]) if position < len(path) else model.final_state
 
 
 def _evaluate(args: argparse.Namespace) -> int:
@@ -247,7 +274,9 @@ def add_commands(commands) -> None:
 
     simulate = commands.add_parser("simulate", help="play an operator through assembly sequences against a policy",
                                    description="Per step: the robot's action, the observation, and the belief on "
-                                               "the true intention; optionally the Fig. 7 belief heat map.")
+                                               "the true intention; optionally the Fig. 7 belief heat map. The "
+                                               "observations are sampled from the model (missed detections and "
+                                               "observation noise), so some differ from the sequence's operations.")
     simulate.add_argument("model", metavar="PRODUCT", help=PRODUCT_HELP)
     add_policy_options(simulate)
     which = simulate.add_mutually_exclusive_group()

@@ -146,15 +146,12 @@ def _current_step(events) -> int:
 def _replay(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from ..decision.simulate import Episode, Step, plot_beliefs
+    from ..decision.belief_plot import BeliefTrace, plot_beliefs, state_trace
     from ..runtime.log import replay, top_intentions
 
     done = replay(args.log)
     model = done.model
     factored = not isinstance(model, IntentionModel)
-    if factored and args.plot:
-        raise PlannerError(f"{args.log}: the session's beliefs are over classes (the factored model); --plot draws "
-                           "beliefs over intentions")
     steps = list(enumerate(zip(done.actions, done.observations, done.beliefs[1:]), start=1))
     if not args.json:
         print(f"{done.product.name or args.log}: {len(done.actions)} steps, "
@@ -169,11 +166,15 @@ def _replay(args: argparse.Namespace) -> int:
             top = " ".join(f"{'c' if factored else 'i'}{i} {p:.2f}" for i, p in best)
             print(f"  {k:>4}  {model.actions[a]:<44} {model.observations[z]:<28} {top}")
     if args.plot:
-        likely = [int(np.argmax(b)) for b in done.beliefs]
-        path = [Step(a, z, s, float(b[s]), 0, 0.0)
-                for a, z, s, b in zip(done.actions, done.observations, likely[1:], done.beliefs[1:])]
-        written = plot_beliefs([Episode(likely[0], path, done.beliefs)], args.plot, [Path(args.log).name],
-                               line_label="most probable intention")
+        title = f"session {Path(args.log).name}: {len(done.actions)} steps"
+        if factored:
+            trace = state_trace(model, done.beliefs, None, done.actions, done.observations, title)
+        else:
+            trace = BeliefTrace(np.stack(done.beliefs, axis=1), [int(np.argmax(b)) for b in done.beliefs],
+                                [model.actions[a] for a in done.actions],
+                                [str(model.observations[z]) for z in done.observations], title,
+                                line_label="most probable intention (a session does not know the true one)")
+        written = plot_beliefs([trace], args.plot, done.product.name or model.name)
         if not args.json:
             print("wrote " + ", ".join(written))
     if done.mismatches:

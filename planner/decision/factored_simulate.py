@@ -42,6 +42,7 @@ class FactoredEpisode:
     steps: list[FactoredStep] = field(default_factory=list)
     discounted_return: float = 0.0
     resets: int = 0                                    # unexplained observations (never with the model's world)
+    beliefs: list[FactoredBelief] = field(default_factory=list)  # before the first step, then after each (sparse)
 
     @property
     def finished(self) -> bool:
@@ -75,7 +76,7 @@ def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[
         raise ValueError(f"operator must be one of {OPERATORS}, got {operator!r}")
     updater = FactoredUpdater(model, on_reset=lambda event: None)
     belief = updater.initialize()
-    episode = FactoredEpisode(list(path))
+    episode = FactoredEpisode(list(path), beliefs=[belief])
     position, operations, discount = 0, 0, 1.0
     for _ in range(max_steps):
         if position >= len(path):
@@ -95,6 +96,7 @@ def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[
         position = nxt
         episode.steps.append(FactoredStep(action, z, position, true_intention_probability(model, belief, path, position),
                                           operations, reward, seconds))
+        episode.beliefs.append(belief)
     episode.resets = len(updater.events)
     return episode
 

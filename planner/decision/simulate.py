@@ -1,4 +1,4 @@
-"""Play an operator against a policy: episodes, the belief over time (Fig. 7), and evaluation.
+"""Play an operator against a policy: episodes and evaluation (their Fig. 7 plot: :mod:`.belief_plot`).
 
 The true intention evolves by the model's transitions (the operator's timing is random: it acts with
 probability 1/2 per step, as the model says) and emits observations by the model's observation table; the
@@ -14,12 +14,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..defaults import CONFIDENCE
-from ..files import save_figure
 from .belief import DiscreteUpdater
 from .policy import AlphaVectorPolicy
 from .pomdp import POMDP
 
-__all__ = ["Step", "Episode", "simulate_episode", "evaluate_policy", "plot_beliefs"]
+__all__ = ["Step", "Episode", "simulate_episode", "evaluate_policy"]
 
 
 @dataclass(frozen=True)
@@ -120,26 +119,3 @@ def evaluate_policy(model: POMDP, policy: AlphaVectorPolicy, episodes: int, seed
     mean = float(np.mean(returns))
     half = 1.96 * float(np.std(returns, ddof=1)) / math.sqrt(episodes) if episodes > 1 else float("nan")
     return mean, half, returns
-
-
-def plot_beliefs(episodes: list[Episode], path_stem: str, titles: list[str] | None = None,
-                 line_label: str = "true intention") -> list[str]:
-    """Fig. 7-style heat maps (belief over intentions per time step, darker = more probable) with each
-    episode's ``start`` and steps' ``state`` drawn as a line (the true intention; a replayed session, which
-    does not know it, draws the most probable one and says so in ``line_label``); writes ``path_stem.png``
-    and ``path_stem.svg`` (each atomically) and returns their paths."""
-    from matplotlib.figure import Figure  # no pyplot: its backend and figures are process-wide state
-
-    fig = Figure(figsize=(3.2 * len(episodes), 4.2))
-    axes = fig.subplots(1, len(episodes), squeeze=False)
-    for k, (episode, ax) in enumerate(zip(episodes, axes[0])):
-        grid = np.stack(episode.beliefs, axis=1)
-        ax.imshow(grid, aspect="auto", cmap="Greys", vmin=0, vmax=1, interpolation="nearest", origin="lower")
-        truth = [episode.start] + [s.state for s in episode.steps]
-        ax.plot(range(len(truth)), truth, color=f"C{k % 10}", linewidth=1.5, label=line_label)
-        ax.legend(loc="upper right", fontsize=7)
-        ax.set_xlabel("time step")
-        ax.set_ylabel("intention")
-        ax.set_title(titles[k] if titles else f"episode {k + 1}", fontsize=9)
-    fig.tight_layout()
-    return [save_figure(fig, path_stem + suffix, dpi=120) for suffix in (".png", ".svg")]

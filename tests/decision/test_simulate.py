@@ -11,7 +11,8 @@ from figure_support import pyplot_untouched
 
 from planner import make_plan
 from planner.decision import intention_model
-from planner.decision.simulate import evaluate_policy, plot_beliefs, simulate_episode
+from planner.decision.belief_plot import episode_trace, plot_beliefs
+from planner.decision.simulate import evaluate_policy, simulate_episode
 from planner.decision.solvers import PointBasedSolver
 
 
@@ -66,7 +67,8 @@ def test_plot_files(tmp_path, solved, decision, monkeypatch):
     episodes = [simulate_episode(model, result.policy, int(s), np.random.default_rng(2), successor=graph.successor,
                                  final=0) for s in graph.full_sequences()[:3]]
     with pyplot_untouched(monkeypatch):
-        written = plot_beliefs(episodes, str(tmp_path / "fig7"))
+        written = plot_beliefs([episode_trace(model, e, f"sequence {e.start}") for e in episodes],
+                               str(tmp_path / "fig7"), "pen")
     assert [p.rsplit(".", 1)[1] for p in written] == ["png", "svg"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fig7.png", "fig7.svg"]  # no temporary file left
     assert (tmp_path / "fig7.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

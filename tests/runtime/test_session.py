@@ -427,6 +427,9 @@ def test_online_session_on_the_factored_model_and_its_replay(tmp_path):
     again = replay(tmp_path / "online.jsonl")
     assert again.mismatches == [] and len(again.actions) == result.steps
     assert type(again.model).__name__ == "FactoredIntentionModel"
+    shown = _aplan("replay", tmp_path / "online.jsonl", "--plot", tmp_path / "online")  # over assembly states
+    assert shown.returncode == 0, shown.stderr
+    assert "most probable assembly state" in (tmp_path / "online.svg").read_text()
 
 
 def test_cli_demo_with_the_online_planner(tmp_path):
