@@ -15,6 +15,12 @@ top of the geometry (everything is saved in the ``.FCStd`` and restored on reope
 - ``Engine`` and the tolerances of the geometry engines (``ContactTolerance``, ``InterferenceVolume``,
   ``DepthTolerance``);
 - ``Diagrams``: the connection and obstruction diagrams the last detection found (product-format JSON);
+- ``Fasteners``: the designer's fastener tags, one JSON object per group, by internal object name
+  (``{"id": g, "objects": [...], "hosts": [...], "tool"?: t}``: the objects are installed together, joining the
+  hosts' components; :mod:`freecad_aplan.structure`);
+- ``Subassemblies``: the designer's subassembly tree, one product-format JSON object per subassembly over
+  component ids (``{"id": s, "parts": [...], "label"?: l}``); empty: the document's own structure
+  (``App::Part`` containers and groups) applies;
 - ``FormatVersion``: an analysis written by a newer APLAN is refused (:class:`IntentError`), never guessed.
 
 The functions here are shared by batch mode (:mod:`freecad_aplan.export`) and the GUI commands. Every
@@ -60,6 +66,8 @@ class Intent:
     interference: float = INTERFERENCE_VOLUME
     depth: float = BLOCKING_DEPTH
     diagrams: dict = field(default_factory=dict)
+    fasteners: list[dict] = field(default_factory=list)
+    subassemblies: list[dict] = field(default_factory=list)
 
 
 # property name, FreeCAD type, property group, tooltip; in the order of Intent's fields
@@ -81,6 +89,10 @@ _PROPERTIES = (
     ("InterferenceVolume", "App::PropertyFloat", "Detection", "overlaps above this volume are reported (mm^3)"),
     ("DepthTolerance", "App::PropertyFloat", "Detection", "overlaps shallower than this do not block (mm)"),
     ("Diagrams", "App::PropertyString", "Detection", "connection and obstruction diagrams found by the last detection"),
+    ("Fasteners", "App::PropertyStringList", "Structure",
+     'one JSON object per fastener group: {"id": g, "objects": [...], "hosts": [...], "tool": t} (internal names)'),
+    ("Subassemblies", "App::PropertyStringList", "Structure",
+     'one JSON object per subassembly: {"id": s, "parts": [component or subassembly ids]}; empty: the document\'s'),
 )
 
 
@@ -218,7 +230,10 @@ def read_intent(analysis) -> Intent:
                   operations=_json_entries(analysis, "OperationTags"),
                   base_part=str(getattr(analysis, "BasePart", "")).strip(), engine=str(analysis.Engine),
                   contact=float(analysis.ContactTolerance), interference=float(analysis.InterferenceVolume),
-                  depth=float(analysis.DepthTolerance), diagrams=diagrams)
+                  depth=float(analysis.DepthTolerance), diagrams=diagrams,
+                  fasteners=_json_entries(analysis, "Fasteners") if "Fasteners" in analysis.PropertiesList else [],
+                  subassemblies=(_json_entries(analysis, "Subassemblies")
+                                 if "Subassemblies" in analysis.PropertiesList else []))
 
 
 def _write(analysis, intent: Intent) -> None:
@@ -249,6 +264,8 @@ def _write(analysis, intent: Intent) -> None:
         "InterferenceVolume": float(intent.interference),
         "DepthTolerance": float(intent.depth),
         "Diagrams": json.dumps(intent.diagrams, sort_keys=True) if intent.diagrams else "",
+        "Fasteners": [json.dumps(g, sort_keys=True) for g in intent.fasteners],
+        "Subassemblies": [json.dumps(g, sort_keys=True) for g in intent.subassemblies],
     }
     for name, value in values.items():
         if getattr(analysis, name) != value:  # unchanged properties stay untouched (no needless undo steps)
