@@ -133,6 +133,7 @@ class SubassembliesPanel:
         self.form.setWindowTitle("APLAN: subassemblies")
         layout = QtGui.QVBoxLayout(self.form)
         self.source = QtGui.QLabel(f"from the {source}")
+        self.source.setWordWrap(True)
         layout.addWidget(self.source)
         self.tree = QtGui.QTreeWidget()
         self.tree.setObjectName("AplanSubassemblyTree")
@@ -172,7 +173,8 @@ class SubassembliesPanel:
 
         def add(parent, member: str, seen: frozenset) -> None:
             kind = "subassembly" if member in by_id else "fastener" if member in fasteners else "part"
-            item = QtGui.QTreeWidgetItem(parent, [member, kind])
+            label = by_id[member].get("label", "") if member in by_id else ""
+            item = QtGui.QTreeWidgetItem(parent, [member, f"{kind}: {label}" if label and label != member else kind])
             item.setData(0, QtCore.Qt.UserRole, member)
             if member in by_id and member not in seen:
                 for inner in by_id[member]["parts"]:
@@ -181,9 +183,14 @@ class SubassembliesPanel:
 
         top = QtGui.QTreeWidgetItem(self.tree, ["top", "top level"])
         top.setData(0, QtCore.Qt.UserRole, None)
-        for member in [p for p in self.components if p not in held] + [s["id"] for s in self.entries
-                                                                        if s["id"] not in held]:
+        # Fasteners are no members: each group is installed where its hosts come together (planner.assembly.hierarchy).
+        for member in [s["id"] for s in self.entries if s["id"] not in held] + [
+                p for p in self.components if p not in held and p not in fasteners]:
             add(top, member, frozenset())
+        self.tree.resizeColumnToContents(0)
+        if fasteners:
+            self.source.setText(self.source.text().split(";")[0] + f"; {len(fasteners)} fastener parts not shown: "
+                                "each group is installed where its hosts come together")
         top.setExpanded(True)
         self.target.clear()
         self.target.addItems(["top"] + [s["id"] for s in self.entries])
@@ -284,16 +291,20 @@ class LevelsDialog(QtGui.QDialog):
             table.insertRow(k)
             for column, text in enumerate(row):
                 table.setItem(k, column, _item(text))
-        layout.addWidget(table)
-        notes = [f"{row['level']}: {', '.join(row['members'])}" for row in report["levels"]]
+        table.resizeColumnsToContents()
+        layout.addWidget(table, 3)
+        folded = report.get("fasteners") or []
+        notes = ([f"fasteners folded: {sum(len(g['parts']) for g in folded)} parts in {len(folded)} groups"]
+                 if folded else [])
+        notes += [f"{row['level']}: {', '.join(row['members'])}" for row in report["levels"]]
         notes += [f"{row['level']}: {row.get('error') or row.get('not_computed')}" for row in report["levels"]
                   if row.get("error") or row.get("not_computed")]
         if report.get("flat_not_computed"):
             notes.append(f"flat: not counted: {report['flat_not_computed']}")
-        text = QtGui.QLabel("\n".join(notes))
+        text = QtGui.QPlainTextEdit("\n".join(notes))
         text.setObjectName("AplanLevelsNotes")
-        text.setWordWrap(True)
-        layout.addWidget(text)
+        text.setReadOnly(True)
+        layout.addWidget(text, 1)
         close = QtGui.QPushButton("Close")
         close.clicked.connect(self.close)
         layout.addWidget(close)
