@@ -187,11 +187,11 @@ class SubassembliesPanel:
         for member in [s["id"] for s in self.entries if s["id"] not in held] + [
                 p for p in self.components if p not in held and p not in fasteners]:
             add(top, member, frozenset())
-        self.tree.resizeColumnToContents(0)
         if fasteners:
             self.source.setText(self.source.text().split(";")[0] + f"; {len(fasteners)} fastener parts not shown: "
                                 "each group is installed where its hosts come together")
         top.setExpanded(True)
+        self.tree.resizeColumnToContents(0)
         self.target.clear()
         self.target.addItems(["top"] + [s["id"] for s in self.entries])
 
