@@ -92,7 +92,15 @@ doc.undo()
 steps = len(doc.UndoNames)
 out["document_structure"] = structure.document_structure(analysis)
 out["proposed_2"] = structure.proposed_structure(analysis, max_components=2)
-structure.set_subassemblies(analysis, [{{"id": "body", "parts": [B, L], "label": "body"}}])
+# The panel's edits, as plain data (checked when stored).
+body = [{{"id": "body", "parts": [B, L], "label": "body"}}]
+outer = structure.add_subassembly(body, "outer", ["body", S])
+out["edits"] = [outer, structure.move_member(outer, L, None), structure.delete_subassembly(outer, "body"),
+                refused(lambda: structure.add_subassembly(body, "body", [S])),
+                refused(lambda: structure.move_member(body, S, "nowhere"))]
+out["cycle_by_move"] = refused(lambda: structure.set_subassemblies(analysis,
+                                                                   structure.move_member(outer, "outer", "body")))
+structure.set_subassemblies(analysis, body)
 out["tree"] = [read_intent(analysis).subassemblies, doc.UndoNames[0], len(doc.UndoNames) - steps]
 out["current"] = structure.current_structure(analysis)
 # Export: the tags and the tree become the product's sections (source designer), with the stored diagrams.
@@ -147,6 +155,12 @@ def test_fastener_tags_and_subassembly_tree(tmp_path):
     assert "ghost" in data["unknown_member"]
     assert data["steps_after_bad_tree"] == 0
     assert data["document_structure"] == []  # no containers
+    outer, moved, deleted, duplicate, nowhere = data["edits"]
+    assert outer == [{"id": "body", "parts": [base, lid], "label": "body"},
+                     {"id": "outer", "parts": ["body", side], "label": "outer"}]
+    assert moved[0]["parts"] == [base] and deleted == [{"id": "outer", "parts": [base, lid, side], "label": "outer"}]
+    assert "use a new, non-empty name" in duplicate and "no subassembly 'nowhere'" in nowhere
+    assert "cycle" in data["cycle_by_move"]
     # Max 2 members per workstation: the planner's own proposal, as --subassemblies auto would plan it.
     assert data["proposed_2"] and all(len(s["parts"]) <= 2 for s in data["proposed_2"])
     tree, undo_name, steps = data["tree"]
