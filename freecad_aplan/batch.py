@@ -11,8 +11,9 @@ follow :mod:`freecad_aplan.protocol`. Used by :mod:`freecad_aplan.runner`.
 Three more actions serve the workbench's background jobs (:mod:`freecad_aplan.workflow`), and also run in a
 plain Python that has the planner's dependencies (no FreeCAD needed): ``analyze`` (a geometry engine on a
 bundle, written into its ``product.json``), ``level-stats`` (the per-level figures of ``aplan stats`` for a
-product of several workstations, with a note line per level) and ``solve`` (the point-based solver on a product file, written
-as a ``.policy``, with progress lines).
+product of several workstations, with a note line per level) and ``solve`` (the point-based solver on a product
+file, written as a ``.policy``, with progress lines). ``export`` with ``"notes": true`` prints a note line per
+part tessellated (the workbench's background detection).
 """
 import os
 import sys

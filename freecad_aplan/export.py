@@ -9,11 +9,14 @@ Runs inside FreeCAD (the GUI, or FreeCADCmd through ``freecad_aplan.batch``). A 
 
 When the document holds an APLAN analysis (:mod:`freecad_aplan.intent`), its designer intent applies:
 its groups and exclusions choose the components, and its technical constraints, tools and operation tags
-go into ``product.json``, and so do its fastener tags and subassembly tree (:mod:`freecad_aplan.structure`).
-So do its stored connection and obstruction diagrams (as the designer edited
-them), when they cover exactly the exported components; its structure (``App::Part`` containers, groups)
-becomes the product's ``subassemblies`` (:func:`~freecad_aplan.document.document_subassemblies`); ``geometry.analysis.diagrams`` then says
-``"stored in the document"`` (``", edited"`` after edits), and a geometry engine need not run. The document is never modified: shapes are copies, and documents this module
+go into ``product.json``, and so do its fastener tags and subassembly tree (:mod:`freecad_aplan.structure`,
+as the ``fasteners`` and ``subassemblies`` sections with source "designer"). So do its stored connection and
+obstruction diagrams (as the designer edited them), when they cover exactly the exported components;
+``geometry.analysis.diagrams`` then says ``"stored in the document"`` (``", edited"`` after edits), and a
+geometry engine need not run. Without a tree in the analysis, the document's structure (``App::Part``
+containers, groups) becomes the product's ``subassemblies``
+(:func:`~freecad_aplan.document.document_subassemblies`). The document is never modified: shapes are copies,
+and documents this module
 opened are closed again.
 """
 from __future__ import annotations

@@ -26,8 +26,8 @@ from .intent import Intent, IntentError, read_intent, update_intent
 
 __all__ = ["component_objects", "fastener_entries", "subassembly_entries", "structure_entries", "tag_fasteners",
            "untag_fasteners", "fastener_report", "accept_fastener_proposals", "proposed_structure",
-           "document_structure", "current_structure", "check_structure", "set_subassemblies", "move_member", "add_subassembly",
-           "delete_subassembly"]
+           "document_structure", "current_structure", "check_structure", "set_subassemblies", "move_member",
+           "add_subassembly", "delete_subassembly"]
 
 
 def component_objects(intent: Intent) -> dict[str, list[str]]:
@@ -56,13 +56,14 @@ def fastener_entries(intent: Intent, objects: dict[str, list[str]]) -> list[dict
     for group in intent.fasteners:
         where = f"fastener group {group.get('id')!r}"
         parts, hosts = [], []
-        for role, names, into in (("fastener", group.get("objects", []), parts), ("host", group.get("hosts", []), hosts)):
+        roles = (("fastener", group.get("objects", []), parts), ("host", group.get("hosts", []), hosts))
+        for role, names, into in roles:
             for name in names:
                 component = owner.get(name)
                 if component is None:
                     raise IntentError(f"{where}: the {role} object {name!r} is not a component of the product (left "
                                       "out or missing); tag it again, or untag the group")
-                if role == "fastener" and sorted(objects[component]) != sorted(set(group["objects"]) & set(objects[component])):
+                if role == "fastener" and not set(objects[component]) <= set(group["objects"]):
                     raise IntentError(f"{where}: {name!r} is grouped with other objects into the component "
                                       f"{component!r}; ungroup it to tag it as a fastener")
                 if component not in into:

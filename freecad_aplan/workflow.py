@@ -40,7 +40,8 @@ from planner.errors import PlannerError
 from . import ADDON_DIR
 from .protocol import BATCH_SCRIPT
 
-__all__ = ["require_analysis", "export_for_detection", "detection_copy", "worker_command", "analyze_bundle", "store_detection",
+__all__ = ["require_analysis", "export_for_detection", "detection_copy", "worker_command", "analyze_bundle",
+           "store_detection",
            "edit_analysis_diagrams", "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report",
            "has_levels", "level_statistics_report",
            "export_analysis_bundle", "export_decision_model",
@@ -218,8 +219,8 @@ def analysis_product(analysis, name: str = ""):
         raise IntentError(f"{analysis.Label}: no contacts and obstructions yet; run APLAN > Detect contacts "
                           "and obstructions first")
     labels, volumes = diagrams.get("labels", {}), diagrams.get("volumes", {})
-    parts = [{"id": p, **({"label": labels[p]} if p in labels else {}), **({"volume": volumes[p]} if p in volumes else {})}
-             for p in diagrams["parts"]]
+    parts = [{"id": p, **({"label": labels[p]} if p in labels else {}),
+              **({"volume": volumes[p]} if p in volumes else {})} for p in diagrams["parts"]]
     data = {"format": PRODUCT_FORMAT, "version": PRODUCT_VERSION, "name": name or analysis.Document.Label,
             "parts": parts, "contacts": diagrams["contacts"], "obstructions": diagrams["obstructions"],
             **product_intent(intent), **structure_entries(intent, component_objects(intent))}

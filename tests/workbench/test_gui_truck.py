@@ -86,7 +86,14 @@ def wait_detection():
     panel = state().panel
     table = FreeCADGui.getMainWindow().findChild(QtGui.QTableWidget, "AplanFastenersTable")
     result["fastener_rows"] = [[table.item(r, c).text() for c in range(1, 4)] for r in range(table.rowCount())]
+    # Bad input in the panel: wood_screw_004 touches one part only; tagging it is refused with a message.
     steps = len(doc.UndoNames)
+    FreeCADGui.Selection.clearSelection()
+    FreeCADGui.Selection.addSelection(doc.Name, "b_wood_screw_001_003")
+    FreeCADGui.getMainWindow().findChild(QtGui.QPushButton, "AplanTagFasteners").click()
+    result["tag_one_part"] = [FreeCADGui.getMainWindow().findChild(QtGui.QLabel, "AplanFastenersMessage").text(),
+                              len(doc.UndoNames) - steps]
+    FreeCADGui.Selection.clearSelection()
     result["fastener_accepted"] = panel.accept()
     intent = read_intent(analysis)
     result["tagged"] = [len(intent.fasteners), doc.UndoNames[0], len(doc.UndoNames) - steps]
@@ -99,6 +106,14 @@ def wait_detection():
     result["tree_top"] = sorted(top.child(k).text(0) for k in range(top.childCount()))
     result["tree_kinds"] = sorted({{top.child(k).text(1).split(":")[0] for k in range(top.childCount())}})
     steps = len(doc.UndoNames)
+    # Bad input: a subassembly of two parts that do not touch (a tire and the drum); OK refuses it, naming them.
+    good = [dict(s) for s in panel.entries]
+    loose = ("tire_001", "drum_001")
+    panel.entries = [dict(s, parts=[m for m in s["parts"] if m not in loose]) for s in good] + [
+        {{"id": "loose", "parts": list(loose)}}]
+    message = FreeCADGui.getMainWindow().findChild(QtGui.QLabel, "AplanSubassembliesMessage")
+    result["tree_bad"] = [panel.accept(), message.text(), len(doc.UndoNames) - steps]
+    panel.entries = good
     result["tree_accepted"] = panel.accept()
     result["tree"] = [read_intent(analysis).subassemblies, doc.UndoNames[0], len(doc.UndoNames) - steps]
     # Statistics per level, in the background.
@@ -170,12 +185,18 @@ def test_truck_structure_in_the_workbench(tmp_path, real_bundles):  # noqa: F811
     proposals = json.loads(aplan("fasteners", str(real_bundles["toy_truck"]), "--json").stdout)["proposed"]
     expected = sorted([g["id"], ", ".join(g["parts"]), ", ".join(g["hosts"])] for g in proposals)
     assert sorted(data["fastener_rows"]) == expected and len(expected) == 22
+    message, steps = data["tag_one_part"]
+    assert message.startswith("the fasteners wood_screw_004 join only ") and "joins nothing or only one part" in message
+    assert steps == 0
     assert data["fastener_accepted"] is True
     assert data["tagged"] == [22, "APLAN: accept 22 proposed fastener groups", 1]
     designer = json.loads(aplan("fasteners", str(bundle), "--json").stdout)
     assert sorted([g["id"], ", ".join(g["parts"]), ", ".join(g["hosts"])] for g in designer["designer"]) == expected
     assert designer["proposed"] == [] and all(g["source"] == "designer" for g in designer["designer"])
     # The subassembly tree: the planner's proposal (as --subassemblies auto), stored in one undo step.
+    accepted, message, steps = data["tree_bad"]
+    assert accepted is False and steps == 0
+    assert "subassembly loose cannot be built on its own" in message and "nothing was changed" in message
     assert data["tree_accepted"] is True
     tree, undo_name, steps = data["tree"]
     assert (undo_name, steps) == ("APLAN: edit subassemblies", 1) and len(tree) >= 2
