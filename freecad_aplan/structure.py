@@ -178,13 +178,19 @@ def fastener_report(analysis):
     return api.fastener_report(_product(analysis))
 
 
-def accept_fastener_proposals(analysis, ids: list[str] | None = None, keep: list[str] | None = None) -> Intent:
+def accept_fastener_proposals(analysis, ids: list[str] | None = None, keep: list[str] | None = None,
+                              tools: dict[str, str] | None = None, kept_tools: dict[str, str] | None = None) -> Intent:
     """Add the planner's proposed groups ``ids`` (default: all) to the tags, as designer groups with the
-    proposals' hosts, keeping the tagged groups ``keep`` (default: all); one undo step. Raises
-    :class:`IntentError` for an id that is not proposed."""
+    proposals' hosts, keeping the tagged groups ``keep`` (default: all); one undo step. ``tools`` (proposal id ->
+    tool) and ``kept_tools`` (tagged group id -> tool; empty: none) set the tool each group is installed with;
+    new tools join the analysis' ``Tools``. Raises :class:`IntentError` for an id that is not proposed."""
     intent = _detected(analysis)
-    if keep is not None:
-        intent = replace(intent, fasteners=[g for g in intent.fasteners if g["id"] in keep])
+    kept = [dict(g) for g in intent.fasteners if keep is None or g["id"] in keep]
+    for group in kept:
+        tool = (kept_tools or {}).get(group["id"], group.get("tool") or "").strip()
+        group.pop("tool", None)
+        if tool:
+            group["tool"] = tool
     _, proposals = fastener_report(analysis)
     chosen = [g for g in proposals.groups if ids is None or g.id in ids]
     missing = sorted(set(ids or ()) - {g.id for g in chosen})
@@ -192,20 +198,24 @@ def accept_fastener_proposals(analysis, ids: list[str] | None = None, keep: list
         raise IntentError(f"not proposed: {', '.join(missing)}; proposed: "
                           f"{', '.join(g.id for g in proposals.groups) or 'none'}")
     objects = component_objects(intent)
-    taken = {g["id"] for g in intent.fasteners}
+    taken = {g["id"] for g in kept}
     added = []
     for group in chosen:
         entry = {"id": group.id if group.id not in taken else _group_id(sorted(group.hosts), taken),
                  "objects": [o for p in group.parts for o in objects[p]],
                  "hosts": [objects[h][0] for h in sorted(group.hosts)]}
-        if group.tool:
-            entry["tool"] = group.tool
+        tool = ((tools or {}).get(group.id) or group.tool or "").strip()
+        if tool:
+            entry["tool"] = tool
         taken.add(entry["id"])
         added.append(entry)
-    if not added and keep is None:
+    fasteners = kept + added
+    if fasteners == intent.fasteners:
         return intent
-    return update_intent(analysis, f"accept {len(added)} proposed fastener groups",
-                         fasteners=list(intent.fasteners) + added)
+    new_tools = list(intent.tools) + [t for t in dict.fromkeys(g["tool"] for g in fasteners if g.get("tool"))
+                                      if t not in intent.tools]
+    return update_intent(analysis, f"accept {len(added)} proposed fastener groups" if added else "edit fasteners",
+                         fasteners=fasteners, tools=new_tools)
 
 
 def proposed_structure(analysis, max_components: int = 8) -> list[dict]:

@@ -35,7 +35,8 @@ def _selected_names(analysis) -> list[str]:
 
 class FastenersPanel:
     """The designer's fastener groups and the planner's proposals (the call behind ``aplan fasteners``) in one
-    table: a ticked row is kept (tagged) or accepted (proposed) on OK, in one undo step. "Tag selected"
+    table: a ticked row is kept (tagged) or accepted (proposed) on OK, with the tool typed in its row, in one
+    undo step. "Tag selected"
     makes the selected objects one group (with the tool typed beside it) and "Untag selected" takes them out,
     each at once and undoable."""
 
@@ -76,7 +77,7 @@ class FastenersPanel:
                 for column, text in enumerate((group.id, ", ".join(group.parts), ", ".join(sorted(group.hosts)),
                                                group.tool or "", source if source == "designer" else group.reason),
                                               start=1):
-                    self.table.setItem(k, column, _item(text))
+                    self.table.setItem(k, column, _item(text, editable=column == 4))  # the tool can be typed in
                 self.rows.append((source, group.id))
         self.summary.setText(f"{len(tagged)} tagged groups; {len(proposals.groups)} proposed by the planner "
                              f"({sum(len(g.parts) for g in proposals.groups)} parts); untick a proposal to reject it"
@@ -101,12 +102,14 @@ class FastenersPanel:
         self.refresh()
 
     def accept(self) -> bool:
-        keep = [g for (source, g), k in zip(self.rows, range(self.table.rowCount()))
-                if source == "designer" and _checked(self.table.item(k, 0))]
-        accepted = [g for (source, g), k in zip(self.rows, range(self.table.rowCount()))
-                    if source == "proposed" and _checked(self.table.item(k, 0))]
+        rows = [(source, g, _checked(self.table.item(k, 0)), self.table.item(k, 4).text().strip())
+                for k, (source, g) in enumerate(self.rows)]
+        keep = [g for source, g, use, _ in rows if source == "designer" and use]
+        accepted = [g for source, g, use, _ in rows if source == "proposed" and use]
+        tools = {g: tool for source, g, use, tool in rows if source == "proposed" and use and tool}
+        kept_tools = {g: tool for source, g, use, tool in rows if source == "designer" and use}
         try:
-            structure.accept_fastener_proposals(self.analysis, accepted, keep)
+            structure.accept_fastener_proposals(self.analysis, accepted, keep, tools, kept_tools)
         except IntentError as exc:
             self.message.setText(str(exc))
             return False

@@ -70,6 +70,10 @@ out["left_out"] = [list(x) for x in proposals.left_out]
 steps = len(doc.UndoNames)
 intent = structure.accept_fastener_proposals(analysis)
 out["accepted"] = [intent.fasteners, len(doc.UndoNames) - steps]
+first = read_intent(analysis).fasteners[0]["id"]
+intent = structure.accept_fastener_proposals(analysis, [], kept_tools={{first: "hex key"}})
+out["retooled"] = [[g.get("tool") for g in intent.fasteners], intent.tools, doc.UndoNames[0]]
+doc.undo()
 out["untag_none"] = refused(lambda: structure.untag_fasteners(analysis, ["Side"]))
 structure.untag_fasteners(analysis, ["Screw1"])
 out["untagged"] = [g["objects"] for g in read_intent(analysis).fasteners]
@@ -144,6 +148,7 @@ def test_fastener_tags_and_subassembly_tree(tmp_path):
     accepted, steps = data["accepted"]
     assert [g["objects"] for g in accepted] == [["Screw1"], ["Screw2"]] and steps == 1
     assert accepted[1]["id"] != accepted[0]["id"]
+    assert data["retooled"] == [["hex key", None], ["screwdriver", "hex key"], "APLAN: edit fasteners"]
     assert "is tagged as a fastener" in data["untag_none"]
     assert data["untagged"] == [["Screw2"]] and data["untag_undone"] == [["Screw1"], ["Screw2"]]
     # Bad trees: refused with the reason and the parts, nothing stored.
