@@ -94,6 +94,8 @@ def wait_detection():
     result["tag_one_part"] = [FreeCADGui.getMainWindow().findChild(QtGui.QLabel, "AplanFastenersMessage").text(),
                               len(doc.UndoNames) - steps]
     FreeCADGui.Selection.clearSelection()
+    for r in range(table.rowCount()):  # wood screws: a screwdriver, typed in each row
+        table.item(r, 4).setText("screwdriver")
     result["fastener_accepted"] = panel.accept()
     intent = read_intent(analysis)
     result["tagged"] = [len(intent.fasteners), doc.UndoNames[0], len(doc.UndoNames) - steps]
@@ -193,6 +195,7 @@ def test_truck_structure_in_the_workbench(tmp_path, real_bundles):  # noqa: F811
     designer = json.loads(aplan("fasteners", str(bundle), "--json").stdout)
     assert sorted([g["id"], ", ".join(g["parts"]), ", ".join(g["hosts"])] for g in designer["designer"]) == expected
     assert designer["proposed"] == [] and all(g["source"] == "designer" for g in designer["designer"])
+    assert {g["tool"] for g in designer["designer"]} == {"screwdriver"}
     # The subassembly tree: the planner's proposal (as --subassemblies auto), stored in one undo step.
     accepted, message, steps = data["tree_bad"]
     assert accepted is False and steps == 0
