@@ -107,6 +107,29 @@ def wait_detection():
     top = tree.topLevelItem(0)
     result["tree_top"] = sorted(top.child(k).text(0) for k in range(top.childCount()))
     result["tree_kinds"] = sorted({{top.child(k).text(1).split(":")[0] for k in range(top.childCount())}})
+    # The panel's own edits: delete sa2 (its members go up), a new one of the roof and its lamp, the lamp moved
+    # to the top level; then the planner's proposal again.
+    window = FreeCADGui.getMainWindow()
+
+    def select(*names):
+        tree.clearSelection()
+        for name in names:
+            tree.findItems(name, QtCore.Qt.MatchExactly | QtCore.Qt.MatchRecursive, 0)[0].setSelected(True)
+
+    select("sa2")
+    window.findChild(QtGui.QPushButton, "AplanDeleteSubassembly").click()
+    edits = [sorted(s["id"] for s in panel.entries)]
+    select("cabin_roof_001", "cabin_flashlight_001")
+    window.findChild(QtGui.QLineEdit, "AplanSubassemblyName").setText("roof")
+    window.findChild(QtGui.QPushButton, "AplanNewSubassembly").click()
+    edits.append([s["parts"] for s in panel.entries if s["id"] == "roof"])
+    select("cabin_flashlight_001")
+    target = window.findChild(QtGui.QComboBox, "AplanMoveTarget")
+    target.setCurrentIndex(target.findText("sa1"))
+    window.findChild(QtGui.QPushButton, "AplanMoveMember").click()
+    edits.append([[s["id"], s["parts"]] for s in panel.entries if "cabin_flashlight_001" in s["parts"]])
+    result["tree_edits"] = edits
+    panel.propose()
     steps = len(doc.UndoNames)
     # Bad input: a subassembly of two parts that do not touch (a tire and the drum); OK refuses it, naming them.
     good = [dict(s) for s in panel.entries]
@@ -197,6 +220,10 @@ def test_truck_structure_in_the_workbench(tmp_path, real_bundles):  # noqa: F811
     assert designer["proposed"] == [] and all(g["source"] == "designer" for g in designer["designer"])
     assert {g["tool"] for g in designer["designer"]} == {"screwdriver"}
     # The subassembly tree: the planner's proposal (as --subassemblies auto), stored in one undo step.
+    deleted, roof, moved = data["tree_edits"]
+    assert "sa2" not in deleted and len(deleted) == len(data["tree"][0]) - 1
+    assert roof == [["cabin_roof_001", "cabin_flashlight_001"]]
+    assert moved[0][0] == "sa1" and moved[0][1][-1] == "cabin_flashlight_001" and len(moved) == 1
     accepted, message, steps = data["tree_bad"]
     assert accepted is False and steps == 0
     assert "subassembly loose cannot be built on its own" in message and "nothing was changed" in message
