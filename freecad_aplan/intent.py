@@ -92,7 +92,7 @@ _PROPERTIES = (
     ("Fasteners", "App::PropertyStringList", "Structure",
      'one JSON object per fastener group: {"id": g, "objects": [...], "hosts": [...], "tool": t} (internal names)'),
     ("Subassemblies", "App::PropertyStringList", "Structure",
-     'one JSON object per subassembly: {"id": s, "parts": [component or subassembly ids]}; empty: the document\'s'),
+     'one JSON object per subassembly: {"id": s, "parts": [component or subassembly ids]}; empty: the document\'s own'),
 )
 
 
