@@ -8,10 +8,12 @@ geometry engine must still detect them) and
 progress). The job and its answer
 follow :mod:`freecad_aplan.protocol`. Used by :mod:`freecad_aplan.runner`.
 
-Two more actions serve the workbench's background jobs (:mod:`freecad_aplan.workflow`), and also run in a
+Three more actions serve the workbench's background jobs (:mod:`freecad_aplan.workflow`), and also run in a
 plain Python that has the planner's dependencies (no FreeCAD needed): ``analyze`` (a geometry engine on a
-bundle, written into its ``product.json``) and ``solve`` (the point-based solver on a product file, written
-as a ``.policy``, with progress lines).
+bundle, written into its ``product.json``), ``level-stats`` (the per-level figures of ``aplan stats`` for a
+product of several workstations, with a note line per level) and ``solve`` (the point-based solver on a product
+file, written as a ``.policy``, with progress lines). ``export`` with ``"notes": true`` prints a note line per
+part tessellated (the workbench's background detection).
 """
 import os
 import sys
@@ -27,7 +29,9 @@ def _run(job: dict) -> dict:
     if action == "export":
         from freecad_aplan.export import export_model
 
-        product, intent = export_model(**job)
+        notes = job.pop("notes", False)  # the workbench's background detection shows them as progress
+        product, intent = export_model(**job, progress=(lambda text: print(note_line(text), flush=True))
+                                       if notes else None)
         stored = None if intent is None else {"engine": intent.engine, "contact": intent.contact,
                                               "interference": intent.interference, "depth": intent.depth}
         return {"parts": len(product["parts"]), "warnings": product["geometry"]["warnings"], "intent": stored,
@@ -40,6 +44,10 @@ def _run(job: dict) -> dict:
         from freecad_aplan.workflow import analyze_bundle
 
         return analyze_bundle(**job)
+    if action == "level-stats":
+        from freecad_aplan.workflow import level_statistics_report
+
+        return level_statistics_report(**job, progress=lambda text: print(note_line(text), flush=True))
     if action == "solve":
         from freecad_aplan.workflow import solve_product
 

@@ -9,10 +9,14 @@ Runs inside FreeCAD (the GUI, or FreeCADCmd through ``freecad_aplan.batch``). A 
 
 When the document holds an APLAN analysis (:mod:`freecad_aplan.intent`), its designer intent applies:
 its groups and exclusions choose the components, and its technical constraints, tools and operation tags
-go into ``product.json``. So do its stored connection and obstruction diagrams (as the designer edited
-them), when they cover exactly the exported components; its structure (``App::Part`` containers, groups)
-becomes the product's ``subassemblies`` (:func:`~freecad_aplan.document.document_subassemblies`); ``geometry.analysis.diagrams`` then says
-``"stored in the document"`` (``", edited"`` after edits), and a geometry engine need not run. The document is never modified: shapes are copies, and documents this module
+go into ``product.json``, and so do its fastener tags and subassembly tree (:mod:`freecad_aplan.structure`,
+as the ``fasteners`` and ``subassemblies`` sections with source "designer"). So do its stored connection and
+obstruction diagrams (as the designer edited them), when they cover exactly the exported components;
+``geometry.analysis.diagrams`` then says ``"stored in the document"`` (``", edited"`` after edits), and a
+geometry engine need not run. Without a tree in the analysis, the document's structure (``App::Part``
+containers, groups) becomes the product's ``subassemblies``
+(:func:`~freecad_aplan.document.document_subassemblies`). The document is never modified: shapes are copies,
+and documents this module
 opened are closed again.
 """
 from __future__ import annotations
@@ -68,7 +72,7 @@ def export_components(components, folder: str, source: str, warnings: list[str],
                       linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
                       angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION, extra: dict | None = None,
                       analysis: dict | None = None, mesh_tolerance: float = MESH_TOLERANCE,
-                      designer: dict | None = None) -> dict:
+                      designer: dict | None = None, progress=None) -> dict:
     """Write meshes, B-reps and ``product.json`` for ``components`` into ``folder`` (which must exist).
 
     Each mesh is checked against its B-rep (:func:`~freecad_aplan.tessellation.checked_mesh`): re-tessellated
@@ -78,14 +82,17 @@ def export_components(components, folder: str, source: str, warnings: list[str],
 
     ``extra``: more top-level keys of the product file (the designer intent's constraints and tags, stored
     diagrams); ``analysis``: the ``geometry.analysis`` record of where those diagrams came from; ``designer``:
-    the ``geometry.designer`` record (the designer's directions and not-blocking marks).
+    the ``geometry.designer`` record (the designer's directions and not-blocking marks);
+    ``progress(text)``, when given, is told each part before it is tessellated.
     """
     os.makedirs(os.path.join(folder, "meshes"), exist_ok=True)
     os.makedirs(os.path.join(folder, "breps"), exist_ok=True)
     used: set[str] = set()
     parts = []
     checks: dict[str, dict] = {}
-    for component in components:
+    for k, component in enumerate(components):
+        if progress is not None:
+            progress(f"tessellating part {k + 1} of {len(components)}: {component.id}")
         name = _file_name(component.id, used)
         mesh, check = checked_mesh(component.shape, linear_deflection, angular_deflection, mesh_tolerance)
         if mesh is None:
@@ -149,7 +156,7 @@ def _stored_diagrams(intent, components, extra: dict) -> tuple[dict | None, str 
 def export_document(document, folder: str, source: str, groups=None, exclude=None, split_solids: bool = False,
                     linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
                     angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION,
-                    redetect: bool = False) -> tuple[dict, "Intent | None"]:
+                    redetect: bool = False, progress=None) -> tuple[dict, "Intent | None"]:
     """Export an open ``document`` with its stored designer intent into ``folder``.
 
     ``groups``, ``exclude`` and ``split_solids`` add to what the document's APLAN analysis says. The
@@ -173,6 +180,10 @@ def export_document(document, folder: str, source: str, groups=None, exclude=Non
         split_solids = split_solids or intent.split_solids
     result = read_components(document, groups, exclude, split_solids)
     extra = product_intent(intent) if intent is not None else {}
+    if intent is not None:  # the designer's fastener tags and subassembly tree (freecad_aplan.structure)
+        from .structure import structure_entries
+
+        extra.update(structure_entries(intent, {c.id: list(c.objects) for c in result.components}))
     ids = {c.id for c in result.components}
     if extra:
         try:  # check the intent against the components before writing anything
@@ -202,21 +213,21 @@ def export_document(document, folder: str, source: str, groups=None, exclude=Non
     extra["x-freecad-objects"] = {c.id: list(c.objects) for c in result.components}
     product = export_components(result.components, folder, source, result.warnings, linear_deflection,
                                 angular_deflection, extra, recorded,
-                                designer=designer_record(intent) if intent is not None else None)
+                                designer=designer_record(intent) if intent is not None else None, progress=progress)
     return product, intent
 
 
 def export_model(model: str, folder: str, groups=None, exclude=None, split_solids: bool = False,
                  linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
                  angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION,
-                 redetect: bool = False) -> tuple[dict, "Intent | None"]:
+                 redetect: bool = False, progress=None) -> tuple[dict, "Intent | None"]:
     """Open ``model`` (.FCStd or STEP) and export it with its stored intent into ``folder`` (see
     :func:`export_document`); returns the product and the intent."""
     already_open = {d.FileName for d in FreeCAD.listDocuments().values()}
     document = open_model(model)
     try:
         return export_document(document, folder, model, groups, exclude, split_solids, linear_deflection,
-                               angular_deflection, redetect)
+                               angular_deflection, redetect, progress)
     finally:
         if document.FileName not in already_open or not document.FileName:
             FreeCAD.closeDocument(document.Name)

@@ -18,6 +18,12 @@ top of the geometry (everything is saved in the ``.FCStd`` and restored on reope
 - ``DesignerDirections`` (``X,Y,Z`` per entry) and ``NotBlocking`` (one JSON mark per entry): the designer's
   motion directions, tested like the axes, and relations marked not blocking, applied after every detection
   (the product's ``geometry.designer``, :mod:`planner.product.designer`);
+- ``Fasteners``: the designer's fastener tags, one JSON object per group, by internal object name
+  (``{"id": g, "objects": [...], "hosts": [...], "tool"?: t}``: the objects are installed together, joining the
+  hosts' components; :mod:`freecad_aplan.structure`);
+- ``Subassemblies``: the designer's subassembly tree, one product-format JSON object per subassembly over
+  component ids (``{"id": s, "parts": [...], "label"?: l}``); empty: the document's own structure
+  (``App::Part`` containers and groups) applies;
 - ``FormatVersion``: an analysis written by a newer APLAN is refused (:class:`IntentError`), never guessed.
 
 The functions here are shared by batch mode (:mod:`freecad_aplan.export`) and the GUI commands. Every
@@ -65,6 +71,8 @@ class Intent:
     diagrams: dict = field(default_factory=dict)
     directions: list[list[float]] = field(default_factory=list)
     not_blocking: list[dict] = field(default_factory=list)
+    fasteners: list[dict] = field(default_factory=list)
+    subassemblies: list[dict] = field(default_factory=list)
 
 
 # property name, FreeCAD type, property group, tooltip; in the order of Intent's fields
@@ -91,6 +99,10 @@ _PROPERTIES = (
     ("NotBlocking", "App::PropertyStringList", "Detection",
      'relations the designer marked not blocking, one JSON object each: {"blocked": x, "blocking": y, '
      '"direction": "+X" or [x, y, z]}; applied after every detection'),
+    ("Fasteners", "App::PropertyStringList", "Structure",
+     'one JSON object per fastener group: {"id": g, "objects": [...], "hosts": [...], "tool": t} (internal names)'),
+    ("Subassemblies", "App::PropertyStringList", "Structure",
+     'one JSON object per subassembly: {"id": s, "parts": [component or subassembly ids]}; empty: the document\'s own'),
 )
 
 
@@ -236,7 +248,10 @@ def read_intent(analysis) -> Intent:
                   base_part=str(getattr(analysis, "BasePart", "")).strip(), engine=str(analysis.Engine),
                   contact=float(analysis.ContactTolerance), interference=float(analysis.InterferenceVolume),
                   depth=float(analysis.DepthTolerance), diagrams=diagrams, directions=directions,
-                  not_blocking=not_blocking)
+                  not_blocking=not_blocking,
+                  fasteners=_json_entries(analysis, "Fasteners") if "Fasteners" in analysis.PropertiesList else [],
+                  subassemblies=(_json_entries(analysis, "Subassemblies")
+                                 if "Subassemblies" in analysis.PropertiesList else []))
 
 
 def _write(analysis, intent: Intent) -> None:
@@ -269,6 +284,8 @@ def _write(analysis, intent: Intent) -> None:
         "Diagrams": json.dumps(intent.diagrams, sort_keys=True) if intent.diagrams else "",
         "DesignerDirections": [",".join(f"{c:.9g}" for c in v) for v in intent.directions],
         "NotBlocking": [json.dumps(m, sort_keys=True) for m in intent.not_blocking],
+        "Fasteners": [json.dumps(g, sort_keys=True) for g in intent.fasteners],
+        "Subassemblies": [json.dumps(g, sort_keys=True) for g in intent.subassemblies],
     }
     for name, value in values.items():
         if getattr(analysis, name) != value:  # unchanged properties stay untouched (no needless undo steps)

@@ -7,7 +7,9 @@ From an open document with an APLAN analysis (:mod:`freecad_aplan.intent`):
    it; :func:`store_detection` keeps the connection and obstruction diagrams in the analysis;
 2. :func:`analysis_product` is the product the planner sees: those diagrams plus the designer intent;
    :func:`analysis_base_part` the base part the decision model starts from (the analysis' ``BasePart``);
-3. :func:`plan_report` gives the statistics (the figures of ``aplan stats``) and the graph pictures;
+3. :func:`plan_report` gives the statistics (the figures of ``aplan stats``) and the graph pictures; for a
+   product of several workstations (:func:`has_levels`), :func:`level_statistics_report` (a background job)
+   the figures per level;
 4. :func:`export_analysis_bundle`, :func:`export_decision_model`, :func:`solve_product` (a background job)
    and :func:`simulate_sequence` write the bundle, the POMDPX/``.pomdp`` model, the policy and the belief plot.
 
@@ -38,9 +40,10 @@ from planner.errors import PlannerError
 from . import ADDON_DIR
 from .protocol import BATCH_SCRIPT
 
-__all__ = ["require_analysis", "export_for_detection", "worker_command", "analyze_bundle", "store_detection",
-           "edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking", "unmark_not_blocking",
-           "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report",
+__all__ = ["require_analysis", "export_for_detection", "detection_copy", "worker_command", "analyze_bundle",
+           "store_detection", "edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking",
+           "unmark_not_blocking", "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report",
+           "has_levels", "level_statistics_report",
            "export_analysis_bundle", "export_decision_model",
            "solve_product", "simulate_sequence", "BATCH_SCRIPT"]
 
@@ -70,6 +73,30 @@ def export_for_detection(document, folder: str) -> dict:
     return product
 
 
+def detection_copy(document, folder: str) -> tuple[str, int]:
+    """Check the document's components (quick: no tessellation; an error such as a document without solids is
+    raised here, before any job starts) and save a copy of the document into ``folder`` for a background export
+    (FreeCADCmd: ``batch.py export``; the document itself is neither saved nor changed). Returns the copy's
+    path and the number of components."""
+    import re
+
+    from .document import read_components
+    from .intent import find_analysis, read_intent
+
+    analysis = find_analysis(document)
+    intent = read_intent(analysis) if analysis is not None else None
+    result = read_components(document, intent.groups if intent else None, intent.excluded if intent else None,
+                             intent.split_solids if intent else False)
+    if intent is not None:  # the structure must fit the components before the long export starts
+        from .structure import structure_entries
+
+        structure_entries(intent, {c.id: list(c.objects) for c in result.components})
+    name = re.sub(r"[^A-Za-z0-9._-]+", "_", document.Label).strip("._") or "model"
+    path = os.path.join(folder, name + ".FCStd")
+    document.saveCopy(path)
+    return path, len(result.components)
+
+
 def _mesh_python() -> str | None:
     """The Python that runs the mesh engine: ``$APLAN_PYTHON``, else the addon's own ``.venv`` (made by
     ``scripts/setup.sh``), else None (then FreeCADCmd, when FreeCAD's Python has trimesh and manifold3d)."""
@@ -81,7 +108,8 @@ def _mesh_python() -> str | None:
 
 
 def worker_command(action: str, engine: str | None = None) -> list[str]:
-    """The program and arguments of a background job running ``batch.py`` (``action``: analyze, solve).
+    """The program and arguments of a background job running ``batch.py`` (``action``: export, analyze,
+    level-stats, solve).
 
     The occt engine and the solver run in FreeCADCmd; the mesh engine needs trimesh and manifold3d, so it
     runs in :func:`_mesh_python`, else in FreeCADCmd when FreeCAD's Python has them. Raises
@@ -91,6 +119,8 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
 
     from .runner import FreeCADError, find_freecadcmd
 
+    if action == "level-stats" and _mesh_python() is not None:  # the planner alone: no FreeCAD to start
+        return [_mesh_python(), BATCH_SCRIPT]
     if action == "analyze" and engine == "mesh":
         python = _mesh_python()
         if python is not None:
@@ -137,6 +167,9 @@ def store_detection(analysis, folder: str):
     raw = json.loads((Path(folder) / PRODUCT_FILE).read_text(encoding="utf-8"))
     data = product_to_dict(load_bundle(folder))
     diagrams = {"parts": [p["id"] for p in data["parts"]], "objects": raw.get("x-freecad-objects", {}),
+                # labels and volumes: the planner's fastener proposals look at them (freecad_aplan.structure)
+                "labels": {p["id"]: p["label"] for p in data["parts"] if p.get("label")},
+                "volumes": {p["id"]: p["volume"] for p in data["parts"] if p.get("volume") is not None},
                 "contacts": data["contacts"], "obstructions": data["obstructions"],
                 "analysis": data.get("geometry", {}).get("analysis", {})}
     return update_intent(analysis, "detect contacts and obstructions", diagrams=diagrams)
@@ -283,15 +316,19 @@ def analysis_product(analysis, name: str = ""):
     from planner.product import product_from_dict
 
     from .intent import IntentError, designer_record, product_intent, read_intent
+    from .structure import component_objects, structure_entries
 
     intent = read_intent(analysis)
     diagrams = intent.diagrams
     if not diagrams.get("parts"):
         raise IntentError(f"{analysis.Label}: no contacts and obstructions yet; run APLAN > Detect contacts "
                           "and obstructions first")
+    labels, volumes = diagrams.get("labels", {}), diagrams.get("volumes", {})
+    parts = [{"id": p, **({"label": labels[p]} if p in labels else {}),
+              **({"volume": volumes[p]} if p in volumes else {})} for p in diagrams["parts"]]
     data = {"format": PRODUCT_FORMAT, "version": PRODUCT_VERSION, "name": name or analysis.Document.Label,
-            "parts": [{"id": p} for p in diagrams["parts"]], "contacts": diagrams["contacts"],
-            "obstructions": diagrams["obstructions"], **product_intent(intent)}
+            "parts": parts, "contacts": diagrams["contacts"], "obstructions": diagrams["obstructions"],
+            **product_intent(intent), **structure_entries(intent, component_objects(intent))}
     record, released = designer_record(intent), diagrams.get("analysis", {}).get("designer")
     if record or released:  # the designer's directions and marks, and what the marks released (aplan stats)
         data["geometry"] = {**({"designer": record} if record else {}),
@@ -324,6 +361,28 @@ def plan_report(product, folder: str | None = None, technical: bool | None = Non
 
         images = draw_plan(plan, folder)
     return plan, statistics, images
+
+
+def has_levels(product) -> bool:
+    """True when ``product`` is planned as several workstations (its ``subassemblies``, with the designer's mode)."""
+    from planner import api
+
+    return len(api.levels_of(product)) > 1
+
+
+def level_statistics_report(product: str, technical: bool | None = None, progress=None) -> dict:
+    """The per-level figures of the product file ``product`` (a background job): those ``aplan stats --json``
+    prints for a product of several workstations (:func:`planner.api.level_report`), plus ``fasteners``: the
+    folded groups (id, parts, hosts, tool). ``progress(text)`` is told each level as it starts."""
+    from planner import api
+    from planner.product import fold
+
+    loaded = api.resolve_product(product)
+    report = api.level_report(loaded, technical, progress=progress)
+    report["fasteners"] = [{"id": g.id, "parts": list(g.parts), "hosts": sorted(g.hosts), "tool": g.tool}
+                           for g in fold(loaded).groups]
+    report["name"] = loaded.name
+    return report
 
 
 def export_analysis_bundle(document, analysis, bundle: str) -> None:

@@ -35,10 +35,17 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .assembly.guards import OPTIONS, SizeLimits, memory_options
-from .assembly.hierarchy import Level, level_statistics, product_levels, select_level, with_subassemblies
+from .assembly.hierarchy import (
+    Level,
+    level_statistics,
+    product_levels,
+    propose_subassemblies,
+    select_level,
+    with_subassemblies,
+)
 from .assembly.intentions import base_part_first_edges, count_intentions, most_connected_part
 from .assembly.plan import Plan, make_plan
-from .assembly.stats import PlanStatistics, plan_statistics, statistics_within
+from .assembly.stats import STAT_KEYS, PlanStatistics, plan_statistics, statistics_within
 from .decision.factored_model import FactoredIntentionModel, factored_model
 from .decision.factored_simulate import FactoredEpisode, evaluate_factored, simulate_factored_episode
 from .decision.intention_model import IntentionModel, Rewards, flat_model_fits, intention_model
@@ -61,6 +68,7 @@ from .defaults import (
     POLICY_TIME_LIMIT,
     SOLVE_PRECISION,
     SOLVE_TIME_LIMIT,
+    SUBASSEMBLY_LIMIT,
 )
 from .errors import DisconnectedProductError, FileLimitError, MemoryLimitError, PlannerError, UnknownProductError, gib
 from .product import (
@@ -68,6 +76,7 @@ from .product import (
     FastenerGroup,
     FastenerProposals,
     Product,
+    Subassembly,
     fastener_proposals,
     fold,
     load_product,
@@ -76,6 +85,7 @@ from .product import (
 from .product.examples import EXAMPLES, example_path
 
 __all__ = ["resolve_product", "fastener_report", "accept_fasteners", "FASTENER_MODES", "plan_of",
+           "proposed_subassemblies", "structure_problems", "level_report", "LEVEL_KEYS",
            "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
            "policy_for", "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner",
@@ -221,21 +231,96 @@ def level_product(product: str | os.PathLike | Product, subassemblies: str = "de
 
 def hierarchy_statistics_of(product: str | os.PathLike | Product, technical: bool | None = None,
                             limits: SizeLimits = SizeLimits(), subassemblies: str = "designer",
-                            max_components: int = 8, flat_limits: SizeLimits | None = None):
+                            max_components: int = 8, flat_limits: SizeLimits | None = None,
+                            progress: Callable[[str], None] | None = None):
     """The figures of every level (``[(Level, PlanStatistics)]``, bottom-up) and of the product planned flat:
     a :class:`PlanStatistics` within ``flat_limits`` (default ``limits``), or the :class:`PlannerError` that
     stopped it (not connected, not disassemblable); None when the product is one level."""
     product = product if isinstance(product, Product) else resolve_product(product)
     arranged = with_subassemblies(product, subassemblies, max_components)
-    levels = level_statistics(arranged, technical, limits)
+    levels = level_statistics(arranged, technical, limits, progress)
     if len(levels) == 1:
         return levels, None
+    if progress is not None:
+        progress("the product planned flat, for comparison")
     flat = replace(product, subassemblies=())
     try:
         _, flat_stats = statistics_within(flat, technical, None, flat_limits or limits)
     except PlannerError as error:
         return levels, error
     return levels, flat_stats
+
+
+# The figures a hierarchy adds up over its levels (sequences multiply: each workstation picks its own).
+LEVEL_KEYS = ("parts", "subassemblies", "operations", "states", "state_edges", "intentions", "sequences")
+
+
+def proposed_subassemblies(product: Product, max_components: int = 8) -> tuple[Subassembly, ...]:
+    """The planner's subassembly tree for ``product``, ignoring any it already has
+    (:func:`~planner.assembly.hierarchy.propose_subassemblies`: what ``--subassemblies auto`` plans with)."""
+    return propose_subassemblies(replace(product, subassemblies=()), max_components)
+
+
+def structure_problems(product: Product, limit: int = 100_000) -> list[tuple[str, str]]:
+    """``(level id, reason)`` for every level of ``product`` that cannot be built on its own: a technical
+    constraint it breaks, members that do not touch, or stuck members (named by the planner's error).
+
+    Each level's AND/OR graph is tried within ``limit`` connected part sets; a level past it is not judged
+    here (its plan will say). Cost: at most ``limit`` connected sets per level, plus O(levels x relations).
+    """
+    from .assembly.andor import and_or_graph
+    from .assembly.hierarchy import check_level_constraints
+    from .errors import LimitExceededError
+
+    problems = []
+    for level in product_levels(product):
+        try:
+            check_level_constraints(product, level)
+            and_or_graph(level.product, limit=limit)
+        except LimitExceededError:
+            continue
+        except PlannerError as error:
+            problems.append((level.id, str(error)))
+    return problems
+
+
+def level_report(product: Product, technical: bool | None = None, limits: SizeLimits = SizeLimits(),
+                 flat_limits: SizeLimits | None = None, progress: Callable[[str], None] | None = None) -> dict:
+    """The figures ``aplan stats --json`` prints for a product of several levels: ``levels`` (each level's id,
+    members, figures and, when it was refused or failed, ``not_computed`` or ``error``), ``total`` (sums over
+    the levels; parts: the product's; sequences: the product of the levels') and ``flat`` (the product planned
+    flat within ``flat_limits``, else None and ``flat_not_computed``). ``progress(text)`` is told each level as
+    it is done. Cost: the levels' plans plus the flat plan within its limits."""
+    flat_limits = flat_limits or SizeLimits(min(limits.subassemblies, SUBASSEMBLY_LIMIT), min(limits.memory, 2 ** 30))
+    levels, flat = hierarchy_statistics_of(product, technical, limits, flat_limits=flat_limits, progress=progress)
+    rows = []
+    for level, stats in levels:
+        row = {"level": level.id, "members": list(level.members)}
+        if isinstance(stats, PlanStatistics):
+            row.update(stats.as_dict())
+            if stats.refused:
+                row["not_computed"] = str(stats.refused)
+        else:
+            row.update({key: None for key in STAT_KEYS})
+            row["error"] = str(stats)
+        rows.append(row)
+    total: dict[str, int | None] = {}
+    for key in LEVEL_KEYS:
+        values = [row[key] for row in rows]
+        if key == "parts":
+            total[key] = len(product.parts)
+        elif any(v is None for v in values):
+            total[key] = None
+        elif key == "sequences":
+            total[key] = int(np.prod(values, dtype=object))
+        else:
+            total[key] = sum(values)
+    out = {"levels": rows, "total": total, "flat": flat.as_dict() if isinstance(flat, PlanStatistics) else None}
+    reason = (str(flat.refused) if isinstance(flat, PlanStatistics) and flat.refused else
+              None if isinstance(flat, PlanStatistics) or flat is None else str(flat))
+    if reason:
+        out["flat_not_computed"] = reason
+    return out
 
 
 AUTO_BASE_PART = "auto"

@@ -136,3 +136,63 @@ def test_lumped_model(tmp_path):
     assert api.load_model(tmp_path / "pen.pomdp").n_states == lumped.pomdp.n_states
     with pytest.raises(PlannerError, match="--lumped builds the lumped model of a PRODUCT"):
         api.load_model(tmp_path / "pen.pomdp", lumped=True)
+
+
+# ------------------------------------------------------------------- levels (the workbench's statistics and tree)
+
+def _two_chains(a: int, b: int):
+    """A chain a1..aA and a chain b1..bB joined by the contact aA-b1, each a subassembly."""
+    from planner.product import Part, Product, Subassembly
+
+    parts = tuple(Part(f"a{i}") for i in range(1, a + 1)) + tuple(Part(f"b{i}") for i in range(1, b + 1))
+    contacts = tuple((f"a{i}", f"a{i + 1}") for i in range(1, a)) + tuple((f"b{i}", f"b{i + 1}") for i in range(1, b))
+    groups = (Subassembly("A", tuple(f"a{i}" for i in range(1, a + 1))),
+              Subassembly("B", tuple(f"b{i}" for i in range(1, b + 1))))
+    return Product(parts, contacts + ((f"a{a}", "b1"),), subassemblies=groups, name="two chains")
+
+
+def _chain_intentions(n: int) -> int:
+    return sum(math.comb(n - 1, j) * math.factorial(j) for j in range(n))
+
+
+def test_level_report_counts_each_level_by_the_chain_formulas_and_matches_aplan_stats(tmp_path):
+    import json
+
+    from integration.freecad_tools import aplan
+
+    product = _two_chains(3, 4)
+    seen: list[str] = []
+    report = api.level_report(product, progress=seen.append)
+    assert [row["level"] for row in report["levels"]] == ["A", "B", "top"]
+    assert [row["intentions"] for row in report["levels"]] == [_chain_intentions(n) for n in (3, 4, 2)]
+    assert [row["sequences"] for row in report["levels"]] == [math.factorial(n - 1) for n in (3, 4, 2)]
+    assert report["total"]["parts"] == 7 and report["total"]["sequences"] == 2 * 6 * 1
+    assert report["total"]["intentions"] == sum(_chain_intentions(n) for n in (3, 4, 2))
+    assert report["flat"]["intentions"] == _chain_intentions(7)  # flat, the same product is a chain of 7
+    assert seen == ["level 1 of 3: A (3 members)", "level 2 of 3: B (4 members)", "level 3 of 3: top (2 members)",
+                    "the product planned flat, for comparison"]
+    save_product(product, tmp_path / "two.json")
+    assert json.loads(aplan("stats", str(tmp_path / "two.json"), "--json").stdout) == report
+
+
+def test_structure_problems_name_the_level_that_cannot_be_built():
+    from dataclasses import replace
+
+    from planner.product import Subassembly
+
+    product = _two_chains(3, 3)
+    assert api.structure_problems(product) == []
+    apart = replace(product, subassemblies=(Subassembly("X", ("a1", "b2")),))
+    (level, reason), = api.structure_problems(apart)
+    assert level == "X" and "a1" in reason and "b2" in reason
+
+
+def test_proposed_subassemblies_ignore_the_products_own():
+    from planner.product.synthetic import chain_product
+
+    chain = chain_product(12)
+    proposed = api.proposed_subassemblies(chain, max_components=4)
+    assert proposed and all(len(s.parts) <= 4 for s in proposed)
+    from dataclasses import replace
+
+    assert api.proposed_subassemblies(replace(chain, subassemblies=proposed), max_components=4) == proposed

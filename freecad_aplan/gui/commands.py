@@ -188,28 +188,37 @@ class Detect(_Command):
         intent = read_intent(analysis)
         command = workflow.worker_command("analyze", intent.engine)
         folder = tempfile.mkdtemp(prefix="aplan-detect-")
-        try:
-            product = workflow.export_for_detection(document, folder)
+        try:  # quick checks here (no solids, a bad intent); the export itself runs in the background too
+            copy, count = workflow.detection_copy(document, folder)
         except BaseException:
             shutil.rmtree(folder, ignore_errors=True)
             raise
-        for warning in product["geometry"]["warnings"]:
-            _message(f"warning: {warning}", error=False)
-
-        def done(result):
-            try:
-                _guarded(lambda: self._store(analysis, folder, result))
-            finally:
-                shutil.rmtree(folder, ignore_errors=True)
+        bundle = os.path.join(folder, "bundle")
+        os.mkdir(bundle)
+        parent = FreeCADGui.getMainWindow()
 
         def failed(message):
             shutil.rmtree(folder, ignore_errors=True)
             _message(message)
 
-        job = {"action": "analyze", "folder": folder, "engine": intent.engine, "contact": intent.contact,
-               "interference": intent.interference, "depth": intent.depth}
-        BackgroundJob(f"Detecting contacts and obstructions of {len(product['parts'])} parts ({intent.engine} engine)",
-                      command, job, done, failed, self.state.jobs, FreeCADGui.getMainWindow()).start()
+        def exported(result):
+            for warning in result["warnings"]:
+                _message(f"warning: {warning}", error=False)
+
+            def done(found):
+                try:
+                    _guarded(lambda: self._store(analysis, bundle, found))
+                finally:
+                    shutil.rmtree(folder, ignore_errors=True)
+
+            job = {"action": "analyze", "folder": bundle, "engine": intent.engine, "contact": intent.contact,
+                   "interference": intent.interference, "depth": intent.depth}
+            BackgroundJob(f"Detecting contacts and obstructions of {result['parts']} parts ({intent.engine} engine)",
+                          command, job, done, failed, self.state.jobs, parent).start()
+
+        job = {"action": "export", "model": copy, "folder": bundle, "redetect": True, "notes": True}
+        BackgroundJob(f"Tessellating {count} components for the detection", workflow.worker_command("export"), job,
+                      exported, failed, self.state.jobs, parent).start()
 
     @staticmethod
     def _store(analysis, folder, result):
@@ -254,13 +263,17 @@ class Intent(_Command):
 
 class Plan(_Command):
     name, menu = "Aplan_Plan", "Generate plan and statistics"
-    tooltip = "Build the AND/OR, state and intention graphs; show the statistics (as aplan stats) and pictures"
+    tooltip = ("Build the AND/OR, state and intention graphs; show the statistics (as aplan stats) and pictures; "
+               "for a product of several subassemblies, the figures per workstation (in the background)")
 
     def run(self):
         from .panels import PlanDialog
 
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
+        if workflow.has_levels(product):
+            self._levels(product)
+            return
         folder = tempfile.mkdtemp(prefix="aplan-plan-")
         _, statistics, images = workflow.plan_report(product, folder, base_part=workflow.analysis_base_part(analysis))
         figures = statistics.as_dict()
@@ -271,6 +284,60 @@ class Plan(_Command):
                  error=False)
         self.state.plan_dialog = PlanDialog(product.name, figures, images, FreeCADGui.getMainWindow())
         self.state.plan_dialog.show()
+
+    def _levels(self, product):
+        """The figures of every workstation, the total and flat, computed in a background job."""
+        from planner.product import save_product
+
+        from .jobs import BackgroundJob
+        from .structure import LevelsDialog
+
+        folder = tempfile.mkdtemp(prefix="aplan-levels-")
+        path = os.path.join(folder, PRODUCT_FILE)
+        save_product(product, path)
+
+        def done(report):
+            shutil.rmtree(folder, ignore_errors=True)
+            self.state.plan = {"levels": report}
+            total = report["total"]
+            _message(f"{len(report['levels'])} workstations: " + ", ".join(
+                f"{k} {'-' if v is None else format(v, ',')}" for k, v in total.items()), error=False)
+            self.state.plan_dialog = LevelsDialog(product.name, report, FreeCADGui.getMainWindow())
+            self.state.plan_dialog.show()
+
+        def failed(message):
+            shutil.rmtree(folder, ignore_errors=True)
+            _message(message)
+
+        BackgroundJob(f"Planning {len(product.subassemblies)} subassemblies and the top level",
+                      workflow.worker_command("level-stats"), {"action": "level-stats", "product": path}, done,
+                      failed, self.state.jobs, FreeCADGui.getMainWindow()).start()
+
+
+class Fasteners(_Command):
+    name, menu = "Aplan_Fasteners", "Fasteners"
+    tooltip = ("Tag the selected objects as fasteners (with their tool), untag them, or accept the planner's "
+               "proposals (small parts joining two others, names such as screw or bolt)")
+
+    def run(self):
+        from .structure import FastenersPanel
+
+        analysis = workflow.require_analysis(_document())
+        workflow.analysis_product(analysis)  # a clear message when nothing was detected yet
+        _show_panel(self.state, FastenersPanel(analysis))
+
+
+class Subassemblies(_Command):
+    name, menu = "Aplan_Subassemblies", "Subassembly tree"
+    tooltip = ("Show and edit the product's subassemblies (workstations): the document's structure or the "
+               "planner's proposal; checked by the planner, stored in the analysis")
+
+    def run(self):
+        from .structure import SubassembliesPanel
+
+        analysis = workflow.require_analysis(_document())
+        workflow.analysis_product(analysis)
+        _show_panel(self.state, SubassembliesPanel(analysis))
 
 
 def _save_path(title: str, filters: str, suffix: str) -> str | None:
@@ -372,8 +439,8 @@ class Simulate(_Command):
         self.state.belief_dialog.show()
 
 
-COMMANDS = (CreateAnalysis, GroupComponent, ExcludeParts, Detect, Diagrams, Intent, Plan, ExportBundle,
-            ExportModel, Solve, Simulate)
+COMMANDS = (CreateAnalysis, GroupComponent, ExcludeParts, Detect, Diagrams, Intent, Fasteners, Subassemblies, Plan,
+            ExportBundle, ExportModel, Solve, Simulate)
 
 
 def register(state: WorkbenchState) -> list[str]:

@@ -10,7 +10,7 @@ import time
 
 from PySide import QtCore, QtGui
 
-from ..protocol import JOB_VARIABLE, encode_job, read_answer, read_progress
+from ..protocol import JOB_VARIABLE, encode_job, read_answer, read_note, read_progress
 
 __all__ = ["BackgroundJob"]
 
@@ -75,6 +75,9 @@ class BackgroundJob(QtCore.QObject):
             progress = read_progress(line)
             if progress is not None:
                 self.progress_text = f"  (bounds {progress[1]} .. {progress[2]})"
+            note = read_note(line)
+            if note is not None:  # any other job's progress: the last note line
+                self.progress_text = f"\n{note}"
 
     def _close(self) -> None:
         self.timer.stop()

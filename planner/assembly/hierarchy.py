@@ -382,18 +382,22 @@ def check_level_constraints(product: Product, level: Level) -> None:
                 f"{', '.join(sorted(c.parts))} apart")
 
 
-def level_statistics(product: Product, technical: bool | None = None, limits=None) -> list[tuple[Level, object]]:
+def level_statistics(product: Product, technical: bool | None = None, limits=None,
+                     progress=None) -> list[tuple[Level, object]]:
     """Each level of ``product`` (bottom-up) with its figures (:func:`~planner.assembly.statistics_within`: a
     level past the size limits has the figures it reached and ``refused``), or the :class:`PlannerError` that
-    stops its plan (a level that cannot be built on its own: the stuck parts are named). Cost: the sum of the
-    levels' plans."""
+    stops its plan (a level that cannot be built on its own: the stuck parts are named). ``progress(text)``,
+    when given, is told each level before it is planned. Cost: the sum of the levels' plans."""
     from .guards import SizeLimits
     from .stats import statistics_within
 
     limits = limits or SizeLimits()
     found: list[tuple[Level, object]] = []
     product = product.with_technical(technical)
-    for level in product_levels(product):
+    levels = product_levels(product)
+    for k, level in enumerate(levels):
+        if progress is not None:
+            progress(f"level {k + 1} of {len(levels)}: {level.id} ({len(level.members)} members)")
         try:
             check_level_constraints(product, level)
             found.append((level, statistics_within(level.product, technical, None, limits)[1]))
