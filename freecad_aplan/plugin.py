@@ -19,6 +19,7 @@ import tempfile
 from pathlib import Path
 
 from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION
+from planner.files import make_folder_beside
 from planner.geometry import GeometryReport, Tolerances
 from planner.geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
 from planner.product import Product, save_product
@@ -59,7 +60,7 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
     if bundle.exists() and not overwrite:
         raise FreeCADError(f"{bundle} already exists; choose another folder or overwrite it (--force)")
     bundle.parent.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".{bundle.name}.", suffix=".partial", dir=bundle.parent))
+    work = make_folder_beside(bundle)  # 0o777 less the umask, as the bundle folder should end up
     try:
         arguments = {"model": str(model), "folder": str(work), "groups": groups or {}, "exclude": exclude or [],
                      "split_solids": split_solids, "redetect": redetect}

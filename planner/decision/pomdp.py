@@ -13,6 +13,7 @@ Tables, for ``S`` states, ``A`` actions and ``Z`` observations:
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,9 +22,12 @@ import scipy.sparse as sp
 from ..defaults import DISCOUNT
 from ..errors import PlannerError
 
-__all__ = ["POMDP", "ModelError", "PROBABILITY_TOLERANCE"]
+__all__ = ["POMDP", "PROBABILITY_TOLERANCE", "ModelError"]
 
-PROBABILITY_TOLERANCE = 1e-6
+PROBABILITY_TOLERANCE = 1e-6  # a row or the initial belief may sum to 1 within this (APPL's own files: 1.0000008)
+_NOTE_ABOVE = 1e-9  # initial beliefs further than this from 1 are normalised with a note, closer ones silently
+
+log = logging.getLogger(__name__)
 
 
 class ModelError(PlannerError):
@@ -46,6 +50,13 @@ class POMDP:
 
     def __post_init__(self) -> None:
         self.check()
+        total = float(self.initial.sum())
+        if total != 1.0:  # within the tolerance (check): samplers such as numpy's choice need a sum of 1
+            if abs(total - 1) > _NOTE_ABOVE:
+                log.info("%s: the initial belief sums to %.9g, within %g of 1: normalised", self.name, total,
+                         PROBABILITY_TOLERANCE)
+            positive = np.clip(self.initial, 0, None)
+            object.__setattr__(self, "initial", positive / positive.sum())
 
     @property
     def n_states(self) -> int:
