@@ -50,9 +50,7 @@ def run_batch(action: str, arguments: dict, freecadcmd: str | None = None, timeo
     env = {**os.environ, JOB_VARIABLE: encode_job({"action": action, **arguments})}
     try:
         if on_note is None:
-            # run() kills the child on any exception, an interrupt included; child_options: also if we are killed
-            done = subprocess.run([executable, BATCH_SCRIPT], capture_output=True, text=True, env=env,
-                                  timeout=timeout, stdin=subprocess.DEVNULL, **child_options())
+            done = _run_captured([executable, BATCH_SCRIPT], env, timeout)
         else:
             done = _run_streaming([executable, BATCH_SCRIPT], env, timeout, on_note)
     except subprocess.TimeoutExpired:
@@ -64,6 +62,21 @@ def run_batch(action: str, arguments: dict, freecadcmd: str | None = None, timeo
         return answer.result
     tail = "\n".join((done.stdout + done.stderr).strip().splitlines()[-15:])
     raise FreeCADError(f"FreeCAD job {action!r} gave no result (exit code {done.returncode}); its last output:\n{tail}")
+
+
+def _run_captured(command: list[str], env: dict, timeout: float) -> subprocess.CompletedProcess:
+    """``subprocess.run`` with output captured, whose child never outlives it: killed and reaped on a timeout
+    or an interrupt (``run`` does not wait for it after Ctrl-C), and killed by the kernel if this process is
+    (:func:`planner.interrupts.child_options`)."""
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                               stdin=subprocess.DEVNULL, **child_options())
+    try:
+        out, err = process.communicate(timeout=timeout)
+    except BaseException:
+        process.kill()
+        process.communicate()
+        raise
+    return subprocess.CompletedProcess(command, process.returncode, out, err)
 
 
 def _run_streaming(command: list[str], env: dict, timeout: float, on_note: Callable[[str], None]):
