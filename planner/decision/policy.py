@@ -66,9 +66,10 @@ def policy_text(policy: AlphaVectorPolicy, model_name: str = "aplan") -> str:
     vectors = etree.SubElement(root, "AlphaVector", vectorLength=str(policy.alphas.shape[1]), numObsValue="1",
                                numVectors=str(policy.alphas.shape[0]))
     for alpha, action in zip(policy.alphas, policy.actions):
-        # APPL's reader needs the space before </Vector> (without it, it drops every second vector)
+        # APPL's reader needs the space before </Vector> (without it, it drops every second vector); one
+        # %-format per vector: 3.5 times faster than a join (13 million numbers for a 9-part chain)
         etree.SubElement(vectors, "Vector", action=str(int(action)), obsValue="0").text = \
-            " ".join(f"{v:.12g}" for v in alpha) + " "
+            ("%.12g " * alpha.size) % tuple(alpha.tolist())
     body = etree.tostring(root, pretty_print=True, encoding="unicode")
     return '<?xml version="1.0" encoding="ISO-8859-1"?>\n' + body  # APPL warns about a single-quoted one
 
