@@ -25,7 +25,8 @@ from ..errors import PlannerError
 __all__ = ["POMDP", "PROBABILITY_TOLERANCE", "ModelError"]
 
 PROBABILITY_TOLERANCE = 1e-6  # a row or the initial belief may sum to 1 within this (APPL's own files: 1.0000008)
-_NOTE_ABOVE = 1e-9  # initial beliefs further than this from 1 are normalised with a note, closer ones silently
+_ROUNDING = 1e-12  # initial beliefs closer than this to 1 are left as they are (float rounding: files round-trip)
+_NOTE_ABOVE = 1e-9  # further than this from 1, they are normalised with a note; between the two, silently
 
 log = logging.getLogger(__name__)
 
@@ -51,7 +52,7 @@ class POMDP:
     def __post_init__(self) -> None:
         self.check()
         total = float(self.initial.sum())
-        if total != 1.0:  # within the tolerance (check): samplers such as numpy's choice need a sum of 1
+        if abs(total - 1) > _ROUNDING:  # within the tolerance (check); numpy's sampler needs 1 within 1.5e-8
             if abs(total - 1) > _NOTE_ABOVE:
                 log.info("%s: the initial belief sums to %.9g, within %g of 1: normalised", self.name, total,
                          PROBABILITY_TOLERANCE)

@@ -9,6 +9,7 @@ intention first exceeds a threshold (the paper saw 2, 2 and 4 in its three runs)
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -142,4 +143,12 @@ def plot_beliefs(episodes: list[Episode], path_stem: str, titles: list[str] | No
         ax.set_ylabel("intention")
         ax.set_title(titles[k] if titles else f"episode {k + 1}", fontsize=9)
     fig.tight_layout()
-    return [save_figure(fig, path_stem + suffix, dpi=120) for suffix in (".png", ".svg")]
+    written: list[str] = []
+    try:
+        for suffix in (".png", ".svg"):
+            written.append(save_figure(fig, path_stem + suffix, dpi=120))
+    except BaseException:  # both pictures or neither (a full disk, an interrupt between them)
+        for path in written:
+            os.unlink(path)
+        raise
+    return written

@@ -20,11 +20,11 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
 
 from planner.cli import main
 from planner.decision.policy import read_policy
 from planner.files import FAULT_DISK_FULL
-from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
 
 PEN_FCSTD = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
 
@@ -70,6 +70,8 @@ OUTPUT_CASES = {
                                     "the disk is full"),
     "belief plots on a full disk": (["simulate", "pen", "--planner", "offline", "--policy", "{tmp}/p.policy",
                                      "--plot", "b"], {FAULT_DISK_FULL: "1000"}, "the disk is full"),
+    "second belief plot on a full disk": (["simulate", "pen", "--planner", "offline", "--policy", "{tmp}/p.policy",
+                                           "--plot", "b"], {FAULT_DISK_FULL: "21000"}, "b.svg"),
 }
 
 
