@@ -198,6 +198,27 @@ def test_damaged_document_is_an_error_naming_each_object(kind, command, damaged,
     assert "--skip-damaged" in err and _tree(tmp_path) == set()
 
 
+def test_truncation_anywhere_names_exactly_the_lost_objects(tmp_path):
+    """Brute force over cut points: the objects named are those whose shape member does not end before the cut
+    (computed from the intact archive's directory); a cut inside Document.xml is an error of its own."""
+    from freecad_aplan.archive import DamagedDocumentError, document_damage
+
+    source = require_shared(PEN_FCSTD).read_bytes()
+    archive = zipfile.ZipFile(io.BytesIO(source))
+    files = _shape_files(archive.read("Document.xml"))
+    ends = {info.filename: info.header_offset + 30 + len(info.filename) + len(info.extra) + info.compress_size
+            for info in archive.infolist()}
+    path = tmp_path / "cut.FCStd"
+    for cut in range(0, len(source), 211):
+        path.write_bytes(source[:cut])
+        if ends["Document.xml"] > cut:
+            with pytest.raises(DamagedDocumentError, match="Document.xml|not a zip archive"):
+                document_damage(path)
+            continue
+        named = {d.label for d in document_damage(path)}
+        assert named == {label for label, member in files.items() if ends[member] > cut}, cut
+
+
 def test_the_intact_document_has_no_damage():
     from freecad_aplan.archive import document_damage
 
