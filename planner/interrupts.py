@@ -75,7 +75,7 @@ def deferred_interrupts() -> Iterator[Callable[[], int]]:
         yield lambda: 0
         return
     chosen = (signal.SIGINT, *_TERMINATING[:1])
-    previous = {s: signal.getsignal(s) for s in chosen}
+    previous = {s: signal.getsignal(s) or signal.SIG_DFL for s in chosen}  # None: set outside Python
 
     def defer(signum, frame) -> None:
         received.append(signum)
