@@ -35,6 +35,11 @@ _LABEL = re.compile(rb'<Property\s+name="Label"[^>]*>\s*<String\s+value="([^"]*)
 _FILE = re.compile(rb'\sfile="([^"]+)"')
 
 
+# what the zip and zlib modules raise on damaged data (a flipped bit can make a member look encrypted: RuntimeError)
+_UNREADABLE = (zipfile.BadZipFile, zlib.error, EOFError, ValueError, NotImplementedError, RuntimeError,
+               struct.error, KeyError, UnicodeDecodeError)
+
+
 class DamagedDocumentError(PlannerError):
     """A FreeCAD document is damaged: objects (or the whole document) cannot be read."""
 
@@ -57,14 +62,14 @@ def _members(data: bytes) -> tuple[dict[str, bool], bool]:
     directory is missing (truncated: members found by scanning the local headers, as FreeCAD does)."""
     try:
         archive = zipfile.ZipFile(BytesIO(data))
-    except zipfile.BadZipFile:
+    except _UNREADABLE:
         return _scan(data), True
     intact = {}
     for info in archive.infolist():
         try:
             archive.read(info)
             intact[info.filename] = True
-        except (zipfile.BadZipFile, zlib.error, EOFError, ValueError, NotImplementedError):
+        except _UNREADABLE:
             intact[info.filename] = False
     return intact, False
 
@@ -124,8 +129,12 @@ def document_damage(path: str | Path) -> list[Damage]:
         found = "is not a zip archive" if not intact else "has no readable Document.xml"
         raise DamagedDocumentError(f"{path}: the file {found}: it is not a FreeCAD document, or it is damaged "
                                    "beyond repair; open a backup (FreeCAD keeps NAME.FCBak) or export it again")
-    with zipfile.ZipFile(BytesIO(data)) if not truncated else _Scanned(data) as archive:
-        text = archive.read("Document.xml")
+    try:
+        with zipfile.ZipFile(BytesIO(data)) if not truncated else _Scanned(data) as archive:
+            text = archive.read("Document.xml")
+    except _UNREADABLE:
+        raise DamagedDocumentError(f"{path}: its Document.xml cannot be read: the document is damaged beyond "
+                                   "repair; open a backup (FreeCAD keeps NAME.FCBak) or export it again") from None
     error_at, error = len(text), ""
     try:
         etree.fromstring(text, etree.XMLParser(resolve_entities=False, no_network=True, huge_tree=False))
@@ -133,28 +142,29 @@ def document_damage(path: str | Path) -> list[Damage]:
         line = exc.position[0] if exc.position else 1
         error_at = sum(len(row) + 1 for row in text.split(b"\n")[:max(0, line - 1)])
         error = f"the XML error at line {line} of Document.xml ({exc.msg.split(', line')[0]})"
-    blocks = {m.group(1).decode(): m.start() for m in _DATA.finditer(text)}
+    blocks = {m.group(1).decode("utf-8", "replace"): m.start() for m in _DATA.finditer(text)}
     starts = sorted(blocks.values()) + [len(text)]
     damage: list[Damage] = []
     for match in _DECLARED.finditer(text):
-        name = match.group(1).decode()
+        name = match.group(1).decode("utf-8", "replace")
         if name in blocks and match.start() >= blocks[name]:
             continue  # the object's data block itself, not its declaration
         declared = _TYPE.search(match.group(0))
-        if name in {d.name for d in damage} or not (declared and _EXPORTED.match(declared.group(1).decode())):
+        kind = declared.group(1).decode("utf-8", "replace") if declared else ""
+        if name in {d.name for d in damage} or not _EXPORTED.match(kind):
             continue
         start = blocks.get(name)
         end = starts[starts.index(start) + 1] if start is not None else len(text)
         block = text[start:end] if start is not None else b""
         label_found = _LABEL.search(block)
-        label = label_found.group(1).decode() if label_found else name
+        label = label_found.group(1).decode("utf-8", "replace") if label_found else name
         if start is None or end > error_at and error:
             why = "its data is missing from Document.xml" if not error else f"its data comes after {error}"
             error = error and "that error"  # said once
             damage.append(Damage(name, label, why))
             continue
         for file_match in _FILE.finditer(block):
-            member = file_match.group(1).decode()
+            member = file_match.group(1).decode("utf-8", "replace")
             if member not in intact:
                 why = "the archive is truncated" if truncated else "the archive lacks it"
                 damage.append(Damage(name, label, f"its file {member} is missing ({why})"))
