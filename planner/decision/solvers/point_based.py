@@ -87,9 +87,10 @@ class PointBasedSolver:
     (``SolveResult.interrupted`` says which signal; a second one interrupts at once); they are deferred to
     the end of the step under way (:func:`planner.interrupts.deferred_interrupts`), so the bounds stay
     consistent. Otherwise an interrupt propagates.
-    ``clock``: the time source of ``time_limit`` (tests inject a counter). The limit covers the whole solve,
-    the bounds' set-up included: the upper bound's value iterations get a quarter of it and stop inside
-    a sweep.
+    ``clock``: the time source of ``time_limit`` (tests inject a counter). The limit covers the whole solve
+    but building the tables, the bounds' set-up included: the blind policies get an eighth of it (the rest of
+    the actions then the floor ``min R / (1 - gamma)``), the upper bound's value iterations a quarter (they
+    stop inside a sweep), and a trial stops descending at the limit.
     """
 
     time_limit: float | None = 60.0
