@@ -11,6 +11,7 @@ Cost: one pass over the archive (decompressing every member once) and one parse 
 """
 from __future__ import annotations
 
+import bisect
 import re
 import struct
 import zipfile
@@ -154,7 +155,7 @@ def document_damage(path: str | Path) -> list[Damage]:
         if name in {d.name for d in damage} or not _EXPORTED.match(kind):
             continue
         start = blocks.get(name)
-        end = starts[starts.index(start) + 1] if start is not None else len(text)
+        end = starts[bisect.bisect_right(starts, start)] if start is not None else len(text)
         block = text[start:end] if start is not None else b""
         label_found = _LABEL.search(block)
         label = label_found.group(1).decode("utf-8", "replace") if label_found else name
@@ -166,7 +167,7 @@ def document_damage(path: str | Path) -> list[Damage]:
         for file_match in _FILE.finditer(block):
             member = file_match.group(1).decode("utf-8", "replace")
             if member not in intact:
-                why = "the archive is truncated" if truncated else "the archive lacks it"
+                why = "the archive is truncated or its directory damaged" if truncated else "the archive lacks it"
                 damage.append(Damage(name, label, f"its file {member} is missing ({why})"))
                 break
             if not intact[member]:
