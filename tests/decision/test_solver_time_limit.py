@@ -84,3 +84,19 @@ def test_a_deep_trial_stops_at_the_limit(slow_pen):
     assert len(deep) > 10  # with a discount near 1 a trial goes deep
     stopped = descend(m, b0, lower, upper, epsilon=1e-3, max_depth=50, stop=lambda: True)
     assert len(stopped) == 1  # the first step (its own bounds at b0), then no further
+
+
+def test_large_model_successors_are_the_same(slow_pen, monkeypatch):
+    """Past SUCCESSOR_BLOCK numbers, the successors are computed per action (no (A, Z, S) product): the same
+    pairs, probabilities and beliefs as the one-product path."""
+    import planner.decision.solvers.tables as tables
+
+    m = Tables(slow_pen)
+    b = np.asarray(slow_pen.initial, dtype=float)
+    for actions in (None, np.array([0, 3, 7])):
+        whole = m.successors(b, actions)
+        monkeypatch.setattr(tables, "SUCCESSOR_BLOCK", 0)
+        blocked = m.successors(b, actions)
+        monkeypatch.undo()
+        assert [np.array_equal(x, y) for x, y in zip(whole[:2], blocked[:2])] == [True, True]
+        assert np.allclose(whole[2], blocked[2], rtol=1e-12) and np.allclose(whole[3], blocked[3], rtol=1e-12)

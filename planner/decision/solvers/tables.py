@@ -13,6 +13,7 @@ from ..pomdp import POMDP
 
 __all__ = ["BLOCK", "best_products", "Rows", "Tables", "blind_lower_bound", "mdp_upper_bound", "moving_rows", "fast_informed_bound"]
 
+SUCCESSOR_BLOCK = 10_000_000  # numbers of the (actions, observations, states) product built at once, at most
 DENSE_LIMIT = 20_000_000  # A * S * S entries up to which transitions may be kept dense
 # Numbers per temporary array in the solver's batched products (16 MB): larger batches are cut into blocks, so
 # peak memory stays bounded and the allocator reuses the blocks instead of faulting in fresh pages each time.
@@ -129,6 +130,12 @@ class Tables:
             predicted, actions = self.predict(b), np.arange(self.A)              # (A, S)
         else:
             predicted = np.stack([self.step(b[None], int(a))[0] for a in actions])
+        if len(actions) * self.Z * self.S > SUCCESSOR_BLOCK:  # large: never the whole (A', Z, S) product
+            pz = np.stack([self.OZ[a] @ predicted[i] for i, a in enumerate(actions)])  # (A', Z)
+            a_idx, z_idx = np.nonzero(pz > 1e-15)
+            probs = pz[a_idx, z_idx]
+            beliefs = self.OZ[actions[a_idx], z_idx] * predicted[a_idx] / probs[:, None]
+            return actions[a_idx], z_idx, probs, beliefs
         joint = self.OZ[actions] * predicted[:, None, :]                 # (A', Z, S)
         pz = joint.sum(axis=2)
         a_idx, z_idx = np.nonzero(pz > 1e-15)
