@@ -13,6 +13,7 @@ Nothing here imports FreeCAD: FreeCAD runs as a separate program (:mod:`freecad_
 from __future__ import annotations
 
 import argparse
+import logging
 import shutil
 import sys
 import tempfile
@@ -20,16 +21,20 @@ from dataclasses import replace
 from pathlib import Path
 
 from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION
+from planner.files import make_folder_beside
 from planner.geometry import GeometryReport, Tolerances
 from planner.geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
 from planner.product import Product, save_product
 from planner.product.designer import add_directions
 
+from .archive import check_document
 from .runner import FreeCADError, run_batch
 
 __all__ = ["register", "export_bundle", "occt_report"]
 
 MODEL_SUFFIXES = (".fcstd", ".step", ".stp")
+
+log = logging.getLogger(__name__)
 
 
 def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = None,
@@ -37,7 +42,7 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
                   groups: dict[str, list[str]] | None = None, exclude: list[str] | None = None,
                   split_solids: bool = False, linear_deflection: float | None = None,
                   angular_deflection: float | None = None, freecadcmd: str | None = None,
-                  overwrite: bool = False, redetect: bool = False, directions=()) -> Product:
+                  overwrite: bool = False, redetect: bool = False, directions=(), skip_damaged: bool = False) -> Product:
     """Export ``model`` into the bundle folder ``bundle`` and analyse it with ``engine`` (or ``"none"``).
 
     The document's APLAN analysis (designer intent) chooses the components and adds its constraints and tags.
@@ -54,8 +59,12 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
     product's ``geometry.designer`` (with those the document's analysis holds) and tested at this and every
     later detection; they need a detection, so the diagrams are detected again (as with ``redetect``).
 
-    The bundle is built in a temporary folder beside it and renamed into place at the end, so a failure
-    leaves no partial bundle (and an existing one untouched). Returns the bundle's product.
+    A damaged ``.FCStd`` (a truncated archive, a corrupt Document.xml: :mod:`freecad_aplan.archive`) is an
+    error naming each object that cannot be read, before FreeCAD runs; with ``skip_damaged``, a warning naming
+    them, and the rest is exported.
+
+    The bundle is built in a temporary folder beside it and renamed into place at the end, so a failure or an
+    interrupt leaves no partial bundle (and an existing one untouched). Returns the bundle's product.
     """
     model, bundle = Path(model).resolve(), Path(bundle).resolve()
     if not model.is_file():
@@ -64,8 +73,10 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
         raise FreeCADError(f"{model}: unsupported model type {model.suffix!r}; use .FCStd, .step or .stp")
     if bundle.exists() and not overwrite:
         raise FreeCADError(f"{bundle} already exists; choose another folder or overwrite it (--force)")
+    for warning in check_document(model, skip_damaged):
+        log.warning("%s", warning)
     bundle.parent.mkdir(parents=True, exist_ok=True)
-    work = Path(tempfile.mkdtemp(prefix=f".{bundle.name}.", suffix=".partial", dir=bundle.parent))
+    work = make_folder_beside(bundle)  # 0o777 less the umask, as the bundle folder should end up
     try:
         arguments = {"model": str(model), "folder": str(work), "groups": groups or {}, "exclude": exclude or [],
                      "split_solids": split_solids, "redetect": redetect}
@@ -172,6 +183,9 @@ def _export_command(subparsers) -> None:
                         help=f"tessellation: largest angle between facet normals, radians (default {ANGULAR_DEFLECTION:g})")
     parser.add_argument("--freecadcmd", metavar="PATH", help="the FreeCADCmd executable (default: from PATH)")
     parser.add_argument("--force", action="store_true", help="replace BUNDLE if it exists")
+    parser.add_argument("--skip-damaged", action="store_true",
+                        help="export a damaged .FCStd (truncated, or with a corrupt Document.xml) without the "
+                             "objects that cannot be read, naming them in a warning (default: an error)")
     add_tolerance_options(parser)
     # Tolerances not given on the command line come from the document's APLAN analysis.
     parser.set_defaults(contact=None, interference=None, depth=None)
@@ -186,7 +200,7 @@ def _export_command(subparsers) -> None:
                                  "pair_budget": args.pair_budget},
                                 dict(args.group),
                                 args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
-                                args.freecadcmd, args.force, args.redetect, args.direction)
+                                args.freecadcmd, args.force, args.redetect, args.direction, args.skip_damaged)
         source = product.geometry.get("analysis", {}).get("diagrams", "none detected")
         print(f"{args.output}: {len(product.parts)} parts, {len(product.contacts)} contacts (diagrams: {source})")
         choice = contact_choice(product.geometry.get("analysis", {}))

@@ -13,6 +13,7 @@ import threading
 from typing import Callable
 
 from planner.errors import PlannerError
+from planner.interrupts import child_options
 
 from .protocol import BATCH_SCRIPT, JOB_VARIABLE, encode_job, read_answer, read_note
 
@@ -49,8 +50,7 @@ def run_batch(action: str, arguments: dict, freecadcmd: str | None = None, timeo
     env = {**os.environ, JOB_VARIABLE: encode_job({"action": action, **arguments})}
     try:
         if on_note is None:
-            done = subprocess.run([executable, BATCH_SCRIPT], capture_output=True, text=True, env=env,
-                                  timeout=timeout, stdin=subprocess.DEVNULL)
+            done = _run_captured([executable, BATCH_SCRIPT], env, timeout)
         else:
             done = _run_streaming([executable, BATCH_SCRIPT], env, timeout, on_note)
     except subprocess.TimeoutExpired:
@@ -64,11 +64,26 @@ def run_batch(action: str, arguments: dict, freecadcmd: str | None = None, timeo
     raise FreeCADError(f"FreeCAD job {action!r} gave no result (exit code {done.returncode}); its last output:\n{tail}")
 
 
+def _run_captured(command: list[str], env: dict, timeout: float) -> subprocess.CompletedProcess:
+    """``subprocess.run`` with output captured, whose child never outlives it: killed and reaped on a timeout
+    or an interrupt (``run`` does not wait for it after Ctrl-C), and killed by the kernel if this process is
+    (:func:`planner.interrupts.child_options`)."""
+    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                               stdin=subprocess.DEVNULL, **child_options())
+    try:
+        out, err = process.communicate(timeout=timeout)
+    except BaseException:
+        process.kill()
+        process.communicate()
+        raise
+    return subprocess.CompletedProcess(command, process.returncode, out, err)
+
+
 def _run_streaming(command: list[str], env: dict, timeout: float, on_note: Callable[[str], None]):
     """``subprocess.run`` with standard output (and error) read line by line, notes passed on at once; a
     timer kills the job after ``timeout`` seconds (then :class:`subprocess.TimeoutExpired`)."""
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
-                               stdin=subprocess.DEVNULL)
+                               stdin=subprocess.DEVNULL, **child_options())
     killed = threading.Event()
 
     def kill() -> None:
@@ -85,8 +100,13 @@ def _run_streaming(command: list[str], env: dict, timeout: float, on_note: Calla
             if note is not None:
                 on_note(note)
         process.wait()
+    except BaseException:  # an interrupt (Ctrl-C, SIGTERM): the child must not outlive the command
+        process.kill()
+        process.wait()
+        raise
     finally:
         timer.cancel()
+        process.stdout.close()
     if killed.is_set():
         raise subprocess.TimeoutExpired(command, timeout)
     return subprocess.CompletedProcess(command, process.returncode, "".join(lines), "")

@@ -21,7 +21,6 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import tempfile
 from pathlib import Path
 
 from planner.defaults import (
@@ -36,6 +35,7 @@ from planner.defaults import (
     WORKBENCH_SOLVE_TIME_LIMIT,
 )
 from planner.errors import PlannerError
+from planner.files import make_folder_beside
 
 from . import ADDON_DIR
 from .protocol import BATCH_SCRIPT
@@ -395,7 +395,7 @@ def export_analysis_bundle(document, analysis, bundle: str) -> None:
 
     product = analysis_product(analysis)
     bundle = os.path.abspath(bundle)
-    work = tempfile.mkdtemp(prefix=f".{os.path.basename(bundle)}.", suffix=".partial", dir=os.path.dirname(bundle))
+    work = str(make_folder_beside(bundle))  # 0o777 less the umask (mkdtemp's 0o700 would stay on the bundle)
     try:
         export_for_detection(document, work)
         exported = load_bundle(work)

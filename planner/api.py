@@ -547,22 +547,24 @@ def save_model(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMI
 
 def solve(model: Model, time_limit: float = SOLVE_TIME_LIMIT, precision: float = SOLVE_PRECISION,
           engine: str = "builtin", progress: Callable[[float, float, float], None] | None = None,
-          iterations: int | None = None) -> SolveResult:
+          iterations: int | None = None, keep_on_interrupt: bool = False) -> SolveResult:
     """Solve ``model`` offline: ``engine`` ``builtin`` (:class:`PointBasedSolver`, ``progress(seconds,
     lower, upper)`` after each step) or ``sarsop`` (APPL's ``pomdpsol``, when it is on PATH). The solver
-    stops at ``time_limit`` seconds, at a gap of ``precision``, or after ``iterations`` trials (builtin only:
-    a fixed amount of work gives the same policy on any machine)."""
+    stops at ``time_limit`` seconds (its set-up included), at a gap of ``precision``, or after ``iterations``
+    trials (builtin only: a fixed amount of work gives the same policy on any machine). ``keep_on_interrupt``
+    (builtin only): Ctrl-C or SIGTERM stops it with the policy so far (``SolveResult.interrupted``)."""
     if engine == "sarsop":
         from .decision.solvers.sarsop import solve_with_sarsop
 
         return solve_with_sarsop(tables(model), time_limit, precision)
     if engine != "builtin":
         raise PlannerError(f"unknown solver engine {engine!r}; use one of {', '.join(SOLVER_ENGINES)}")
-    solver = PointBasedSolver(time_limit=time_limit, precision=precision, max_iterations=iterations)
-    upper = groups = None
+    solver = PointBasedSolver(time_limit=time_limit, precision=precision, max_iterations=iterations,
+                              keep_on_interrupt=keep_on_interrupt)
+    started, upper, groups = solver.clock(), None, None  # the time limit counts the bounds' set-up too
     if isinstance(model, LumpedModel):  # "states revealed" bounds start the upper bound far lower
         upper, groups = solver_bounds(model.factored)
-    return solver.solve(tables(model), progress, upper, groups)
+    return solver.solve(tables(model), progress, upper, groups, started=started)
 
 
 def policy_for(model: Model, policy: str | os.PathLike | None = None,

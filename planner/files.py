@@ -1,7 +1,13 @@
 """Writing files safely: every output goes through a temporary file in its folder, then is renamed into place,
-so a failure (a full disk, an interrupt) never leaves a partial file behind."""
+so a failure (a full disk, an interrupt) never leaves a partial file behind; the operating system's refusals
+(no such folder, no permission, a full disk) become :class:`OutputError`s that say what to do.
+
+Fault injection (tests): with ``APLAN_FAULT_DISK_FULL=N`` in the environment, every file written here fails
+with ``ENOSPC`` once ``N`` bytes are written, as on a full disk (a small full tmpfs needs root).
+"""
 from __future__ import annotations
 
+import errno
 import os
 import secrets
 from collections.abc import Iterator
@@ -9,7 +15,52 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import BinaryIO
 
-__all__ = ["write_atomic", "open_atomic", "save_figure"]
+from .errors import PlannerError
+
+__all__ = [
+    "FAULT_DISK_FULL",
+    "OutputError",
+    "check_output",
+    "make_folder_beside",
+    "open_atomic",
+    "save_figure",
+    "write_atomic",
+]
+
+FAULT_DISK_FULL = "APLAN_FAULT_DISK_FULL"
+
+
+class OutputError(PlannerError):
+    """An output cannot be written: its folder is missing or read-only, or the disk is full."""
+
+
+def _explain(path: Path, exc: OSError) -> OutputError:
+    """The :class:`OutputError` for the operating system's refusal ``exc`` to write ``path``."""
+    fixes = {errno.ENOENT: f"create the folder {str(path.parent)!r} first, or choose another output",
+             errno.ENOTDIR: f"{str(path.parent)!r} is not a folder: choose another output",
+             errno.EACCES: f"the folder {str(path.parent)!r} is not writable: choose another output or change "
+                           "its permissions",
+             errno.EROFS: "the file system is read-only: choose another output",
+             errno.ENOSPC: "the disk is full: free some space or write to another disk",
+             errno.EDQUOT: "the disk quota is exhausted: free some space or write elsewhere"}
+    fixes[errno.EPERM] = fixes[errno.EACCES]
+    fix = fixes.get(exc.errno, "choose another output")
+    return OutputError(f"{path}: cannot write it ({exc.strerror or exc}); {fix}. Nothing was written")
+
+
+def check_output(path: str | os.PathLike) -> None:
+    """Raise :class:`OutputError` unless ``path``'s folder exists, is a folder and is writable: checked before
+    any work starts, so a long computation never ends in an output it cannot write."""
+    path = Path(path)
+    folder = path.parent
+    if not folder.exists():
+        raise _explain(path, FileNotFoundError(errno.ENOENT, os.strerror(errno.ENOENT)))
+    if not folder.is_dir():
+        raise _explain(path, NotADirectoryError(errno.ENOTDIR, os.strerror(errno.ENOTDIR)))
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise _explain(path, PermissionError(errno.EACCES, os.strerror(errno.EACCES)))
+    if path.is_dir():
+        raise OutputError(f"{path}: a folder, but the output is a file: choose a file name")
 
 _ATTEMPTS = 100  # random names tried before giving up (a clash is already unlikely at the first)
 
@@ -37,14 +88,37 @@ def open_atomic(path: str | os.PathLike) -> Iterator[BinaryIO]:
     ends without an error, removed otherwise (so no partial file is ever at ``path``). The file gets the
     permissions of any new file: ``0o666`` less the umask."""
     path = Path(path)
-    fd, tmp = _create_temporary(path)
+    try:
+        fd, tmp = _create_temporary(path)
+    except OSError as exc:
+        raise _explain(path, exc) from None
     try:
         with open(fd, "wb") as handle:
-            yield handle
+            yield _FullDisk(handle, int(os.environ[FAULT_DISK_FULL])) if os.environ.get(FAULT_DISK_FULL) else handle
         os.replace(tmp, path)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise _explain(path, exc) from None
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+
+
+class _FullDisk:
+    """A binary handle that fails with ``ENOSPC`` once ``room`` bytes are written (fault injection)."""
+
+    def __init__(self, handle: BinaryIO, room: int):
+        self._handle, self._room = handle, room
+
+    def write(self, data) -> int:
+        size = memoryview(data).nbytes
+        if size > self._room:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        self._room -= size
+        return self._handle.write(data)
+
+    def __getattr__(self, name: str):
+        return getattr(self._handle, name)
 
 
 def write_atomic(path: str | os.PathLike, text: str) -> None:
@@ -60,3 +134,20 @@ def save_figure(figure, path: str | os.PathLike, **options) -> str:
     with open_atomic(path) as handle:
         figure.savefig(handle, format=path.suffix[1:].lower() or None, **options)
     return str(path)
+
+
+def make_folder_beside(path: str | os.PathLike, suffix: str = ".partial") -> Path:
+    """A new, empty, hidden folder beside ``path`` (``.NAME.RANDOM.partial``) to build it in, then rename into
+    place. Made with mode ``0o777`` less the umask, as any new folder (``mkdtemp``'s are private, ``0o700``, and
+    a renamed bundle would stay so)."""
+    path = Path(path)
+    for _ in range(_ATTEMPTS):
+        folder = path.parent / f".{path.name}.{secrets.token_hex(6)}{suffix}"
+        try:
+            folder.mkdir(0o777)
+            return folder
+        except FileExistsError:
+            continue
+        except OSError as exc:
+            raise _explain(path, exc) from None
+    raise FileExistsError(f"{path.parent}: cannot create a folder for {path.name} ({_ATTEMPTS} names taken)")

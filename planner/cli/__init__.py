@@ -6,17 +6,22 @@ Each module only parses arguments and prints; the work is done by :mod:`planner.
 (notes, warnings) go through :mod:`logging` to standard error; results go to standard output.
 Exit status: 0 on success, 1 when the input is bad (the message says what, where and how to fix it) or
 what it would build exceeds a size limit (the message gives the estimate and the options that help), 2 on
-a usage error, 3 when ``aplan stats`` printed only some figures (the others would exceed a size limit).
-Nothing is written when a command fails.
+a usage error, 3 when ``aplan stats`` printed only some figures (the others would exceed a size limit),
+128 + N when signal N ended it (130: Ctrl-C, 143: SIGTERM). Nothing is written when a command fails or is
+interrupted (output folders are checked before any work), except by ``aplan solve``, which writes the best
+policy so far on an interrupt and says so.
 """
 from __future__ import annotations
 
 import argparse
 import logging
+import signal
 import sys
 from typing import Sequence
 
 from ..errors import LimitExceededError, PlannerError
+from ..files import check_output
+from ..interrupts import exit_status, signal_number, signals_as_interrupts
 from ..plugins import registry
 from . import decision, geometry, plan, runtime
 from .options import add_tolerance_options, advice, offer_options, tolerances_from
@@ -63,16 +68,37 @@ def _restore_logging(handler: logging.Handler) -> None:
         logger.propagate = True
 
 
+def _check_outputs(args: argparse.Namespace) -> None:
+    """Every output file's folder exists and is writable, checked before any work (:func:`check_output`);
+    ``--plot STEM`` writes STEM.png and STEM.svg. (A bundle folder, export-freecad's, gets its parents made.)"""
+    if args.command == "export-freecad":
+        return
+    for name, suffix in (("output", ""), ("plot", ".png"), ("log", "")):
+        value = getattr(args, name, None)
+        if isinstance(value, str) and value and value != "-":
+            check_output(value + suffix)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     handler = _configure_logging()  # undone at the end: main() also runs inside tests and other programs
     try:
-        return args.run(args)
+        with signals_as_interrupts():  # SIGTERM too unwinds: temporary files go, children are killed
+            _check_outputs(args)
+            return args.run(args)
     except PlannerError as exc:
         helps = advice(exc, args) if isinstance(exc, LimitExceededError) else ""
         print(f"aplan: error: {exc}" + (f" {helps}" if helps else ""), file=sys.stderr)
         return 1
     except BrokenPipeError:  # e.g. `aplan intentions pen | head`
         return 0
+    except OSError as exc:  # one no check foresaw (a file vanished, a device failed): a message, no traceback
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"aplan: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP: what was unfinished was removed
+        print(f"aplan: interrupted ({signal.Signals(signal_number(exc)).name}): nothing was written",
+              file=sys.stderr)
+        return exit_status(signal_number(exc))
     finally:
         _restore_logging(handler)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import signal
 import sys
 
 import numpy as np
@@ -16,6 +17,7 @@ from ..decision.online import OnlinePlanner
 from ..decision.policy import write_policy
 from ..defaults import CONFIDENCE, FILE_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
 from ..errors import PlannerError
+from ..interrupts import exit_status
 from .options import (
     PRODUCT_HELP,
     add_decision_options,
@@ -117,10 +119,15 @@ def _solve(args: argparse.Namespace) -> int:
         print(f"\r  {seconds:7.1f} s  lower {lower:.6f}  upper {upper:.6f}  gap {upper - lower:.6f}",
               end="", file=sys.stderr, flush=True)
 
-    result = api.solve(model, args.time_limit, args.precision, args.engine, progress if show else None)
+    result = api.solve(model, args.time_limit, args.precision, args.engine, progress if show else None,
+                       keep_on_interrupt=True)
     if show:
         print(file=sys.stderr)
     write_policy(result.policy, args.output, api.tables(model).name)
+    if result.interrupted:  # an anytime solver keeps its work: the policy so far is a valid one
+        log.info("interrupted (%s): wrote the best policy so far to %s (lower bound %.6f, upper bound %.6f)",
+                 signal.Signals(result.interrupted).name, args.output, result.lower_bound, result.upper_bound)
+        return exit_status(result.interrupted)
     if args.json:
         print(json.dumps(result.as_dict()))
     else:

@@ -19,6 +19,7 @@ Cost: linear in rows x columns (one image per panel) plus the marks.
 from __future__ import annotations
 
 import math
+import os
 import textwrap
 from dataclasses import dataclass
 
@@ -249,9 +250,17 @@ def belief_figure(traces: list[BeliefTrace], title: str = ""):
 
 
 def plot_beliefs(traces: list[BeliefTrace], path_stem: str, title: str = "") -> list[str]:
-    """:func:`belief_figure` written to ``path_stem.png`` and ``path_stem.svg``, each atomically; returns
-    their paths."""
+    """:func:`belief_figure` written to ``path_stem.png`` and ``path_stem.svg``, each atomically, both or
+    neither (a full disk or an interrupt between them removes the first); returns their paths."""
     if not traces:
         raise PlannerError("no episode to plot: play at least one sequence")
     fig = belief_figure(traces, title)
-    return [save_figure(fig, path_stem + suffix, dpi=DPI) for suffix in (".png", ".svg")]
+    written: list[str] = []
+    try:
+        for suffix in (".png", ".svg"):
+            written.append(save_figure(fig, path_stem + suffix, dpi=DPI))
+    except BaseException:
+        for path in written:
+            os.unlink(path)
+        raise
+    return written

@@ -13,11 +13,11 @@ import numpy as np
 from lxml import etree
 
 from ..errors import PlannerError
-from ..files import write_atomic
+from ..files import open_atomic
 from .io.pomdpx import safe_parser
 from .pomdp import POMDP
 
-__all__ = ["AlphaVectorPolicy", "PolicyError", "read_policy", "write_policy", "policy_text"]
+__all__ = ["AlphaVectorPolicy", "PolicyError", "policy_text", "read_policy", "write_policy"]
 
 
 class PolicyError(PlannerError):
@@ -66,14 +66,18 @@ def policy_text(policy: AlphaVectorPolicy, model_name: str = "aplan") -> str:
     vectors = etree.SubElement(root, "AlphaVector", vectorLength=str(policy.alphas.shape[1]), numObsValue="1",
                                numVectors=str(policy.alphas.shape[0]))
     for alpha, action in zip(policy.alphas, policy.actions):
+        # APPL's reader needs the space before </Vector> (without it, it drops every second vector); one
+        # %-format per vector: 3.5 times faster than a join (13 million numbers for a 9-part chain)
         etree.SubElement(vectors, "Vector", action=str(int(action)), obsValue="0").text = \
-            " ".join(f"{v:.12g}" for v in alpha)
-    return etree.tostring(root, pretty_print=True, xml_declaration=True, encoding="ISO-8859-1").decode("latin-1")
+            ("%.12g " * alpha.size) % tuple(alpha.tolist())
+    body = etree.tostring(root, pretty_print=True, encoding="unicode")
+    return '<?xml version="1.0" encoding="ISO-8859-1"?>\n' + body  # APPL warns about a single-quoted one
 
 
 def write_policy(policy: AlphaVectorPolicy, path: str | Path, model_name: str = "aplan") -> None:
     """Write a SARSOP-style ``.policy`` file (atomically)."""
-    write_atomic(path, policy_text(policy, model_name))
+    with open_atomic(path) as handle:  # the declared encoding; other characters as XML references
+        handle.write(policy_text(policy, model_name).encode("latin-1", "xmlcharrefreplace"))
 
 
 def read_policy(path: str | Path, model: POMDP | None = None) -> AlphaVectorPolicy:

@@ -13,6 +13,7 @@ Tables, for ``S`` states, ``A`` actions and ``Z`` observations:
 """
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,9 +22,13 @@ import scipy.sparse as sp
 from ..defaults import DISCOUNT
 from ..errors import PlannerError
 
-__all__ = ["POMDP", "ModelError", "PROBABILITY_TOLERANCE"]
+__all__ = ["POMDP", "PROBABILITY_TOLERANCE", "ModelError"]
 
-PROBABILITY_TOLERANCE = 1e-6
+PROBABILITY_TOLERANCE = 1e-6  # a row or the initial belief may sum to 1 within this (APPL's own files: 1.0000008)
+_ROUNDING = 1e-12  # initial beliefs closer than this to 1 are left as they are (float rounding: files round-trip)
+_NOTE_ABOVE = 1e-9  # further than this from 1, they are normalised with a note; between the two, silently
+
+log = logging.getLogger(__name__)
 
 
 class ModelError(PlannerError):
@@ -46,6 +51,13 @@ class POMDP:
 
     def __post_init__(self) -> None:
         self.check()
+        total = float(self.initial.sum())
+        if abs(total - 1) > _ROUNDING:  # within the tolerance (check); numpy's sampler needs 1 within 1.5e-8
+            if abs(total - 1) > _NOTE_ABOVE:
+                log.info("%s: the initial belief sums to %.9g, within %g of 1: normalised", self.name, total,
+                         PROBABILITY_TOLERANCE)
+            positive = np.clip(self.initial, 0, None)
+            object.__setattr__(self, "initial", positive / positive.sum())
 
     @property
     def n_states(self) -> int:

@@ -256,9 +256,11 @@ def write_marker_sheet(product: Product, path: str | Path, marker_mm: float = 40
     else:
         from matplotlib.backends.backend_pdf import PdfPages
 
-        with open_atomic(path) as handle, PdfPages(handle) as pdf:
+        with open_atomic(path) as handle:
+            pdf = PdfPages(handle)  # closed only on success: closing after a write error hides the error
             for page in pages:
                 pdf.savefig(page)
+            pdf.close()
     return len(markers.items)
 
 

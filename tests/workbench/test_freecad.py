@@ -60,6 +60,7 @@ def test_planner_runs_in_freecad_from_the_mod_folder(tmp_path):
         "pen.json: obstructions[0].direction: unknown direction '+W'; use +X, -X, +Y, -Y, +Z, -Z or a unit vector "
         "[x, y, z]",
         "pen.json: units: unknown unit 'furlong'; use one of mm, cm, m, in"]
-    assert data["errors"] == {"freecad_aplan.diagrams.RelationError": True, "freecad_aplan.document.DocumentError": True,
+    assert data["errors"] == {"freecad_aplan.archive.DamagedDocumentError": True,
+                              "freecad_aplan.diagrams.RelationError": True, "freecad_aplan.document.DocumentError": True,
                               "freecad_aplan.intent.IntentError": True, "freecad_aplan.occt.analyze.BrepError": True,
                               "freecad_aplan.runner.FreeCADError": True}

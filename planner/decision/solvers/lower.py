@@ -28,9 +28,12 @@ class LowerBound:
         self.fixed = len(vectors) if fixed is None else fixed
 
     @classmethod
-    def blind(cls, m: Tables) -> LowerBound:
-        """The blind policies' vectors, one per action (``A`` linear solves of size S)."""
-        return cls(blind_lower_bound(m), range(m.A))
+    def blind(cls, m: Tables, deadline: float | None = None, clock=None) -> LowerBound:
+        """The blind policies' vectors, one per action (``A`` linear solves of size S; past ``deadline``, a
+        ``clock()`` value, the constant floor: :func:`~planner.decision.solvers.tables.blind_lower_bound`)."""
+        if deadline is None:
+            return cls(blind_lower_bound(m), range(m.A))
+        return cls(blind_lower_bound(m, deadline, clock), range(m.A))
 
     @property
     def n(self) -> int:

@@ -20,11 +20,12 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
 
+from ...interrupts import deferred_interrupts
 from ..policy import AlphaVectorPolicy
 from ..pomdp import POMDP
 from .belief_set import BeliefSet
@@ -49,6 +50,7 @@ class SolveResult:
     seconds: float
     iterations: int
     history: list = field(default_factory=list)  # (seconds, lower, upper) after each trial or sweep
+    interrupted: int = 0  # the signal (SIGINT: Ctrl-C) that stopped the solver early, 0 when none did
 
     @property
     def gap(self) -> float:
@@ -81,6 +83,14 @@ class PointBasedSolver:
     ``min_share`` of it.
     Threads: ``blas_threads``, the BLAS threads during the solve (None: chosen from the model's size,
     unless OMP_NUM_THREADS or the like is set; :mod:`.threads`).
+    Interrupts: with ``keep_on_interrupt``, SIGINT (Ctrl-C) or SIGTERM ends the solve with the policy so far
+    (``SolveResult.interrupted`` says which signal; a second one interrupts at once); they are deferred to
+    the end of the step under way (:func:`planner.interrupts.deferred_interrupts`), so the bounds stay
+    consistent. Otherwise an interrupt propagates.
+    ``clock``: the time source of ``time_limit`` (tests inject a counter). The limit covers the whole solve
+    but building the tables, the bounds' set-up included: the blind policies get an eighth of it (the rest of
+    the actions then the floor ``min R / (1 - gamma)``), the upper bound's value iterations a quarter (they
+    stop inside a sweep), and a trial stops descending at the limit.
     """
 
     time_limit: float | None = 60.0
@@ -103,13 +113,17 @@ class PointBasedSolver:
     rate_horizon: float = 1e9
     seed: int = 0
     blas_threads: int | None = None
+    keep_on_interrupt: bool = False
+    clock: Callable[[], float] = field(default=time.perf_counter, repr=False, compare=False)
 
     def solve(self, model: POMDP, progress: Callable[[float, float, float], None] | None = None,
-              upper: np.ndarray | None = None, groups: CornerGroups | None = None) -> SolveResult:
+              upper: np.ndarray | None = None, groups: CornerGroups | None = None,
+              started: float | None = None) -> SolveResult:
         """Solve ``model``; ``progress(seconds, lower, upper)`` is called after each step; ``upper``: a known
         upper bound on Q* (actions x states) to start the informed bound from, ``groups``: corner groups of
-        the upper bound (the lumped model's :func:`~planner.decision.lumped_model.solver_bounds` gives both)."""
-        start = time.perf_counter()
+        the upper bound (the lumped model's :func:`~planner.decision.lumped_model.solver_bounds` gives both);
+        ``started``: the ``clock()`` value the time limit counts from (default: now), e.g. before building them."""
+        start = self.clock() if started is None else started
         m = Tables(model)
         if upper is not None and np.shape(upper) != (m.A, m.S):
             raise ValueError(f"the starting upper bound is {np.shape(upper)}, the model needs {(m.A, m.S)}")
@@ -118,11 +132,24 @@ class PointBasedSolver:
 
     def _solve(self, m: Tables, b0: np.ndarray, start: float, progress, start_upper=None,
                groups: CornerGroups | None = None) -> SolveResult:
+        if not self.keep_on_interrupt:
+            return self._improve(m, b0, start, progress, start_upper, groups, self.clock)
+        with deferred_interrupts() as pending:
+            # An interrupt makes the clock run out: every stopping rule, in the set-up too, then holds at once.
+            result = self._improve(m, b0, start, progress, start_upper, groups,
+                                   lambda: math.inf if pending() else self.clock())
+            return replace(result, seconds=self.clock() - start, interrupted=pending())
+
+    def _improve(self, m: Tables, b0: np.ndarray, start: float, progress, start_upper, groups,
+                 clock: Callable[[], float]) -> SolveResult:
+        """Set up both bounds, then trials and sweeps until a stopping rule holds (class docstring)."""
         limit = math.inf if self.time_limit is None else self.time_limit
-        # Any iterate of the fast informed bound is an upper bound: with a clock, it gets a quarter of it.
-        deadline = start + limit / 4 if math.isfinite(limit) else None
-        Q = fast_informed_bound(m, self.informed_tolerance, self.informed_sweeps, deadline, start=start_upper)
-        lower = LowerBound.blind(m)
+        # The set-up gets a quarter of the limit: the blind policies an eighth (then constant floors), the
+        # informed bound the rest (any of its iterates is an upper bound).
+        deadline = start + limit / 4 if math.isfinite(limit) else math.inf
+        lower = LowerBound.blind(m, start + limit / 8 if math.isfinite(limit) else math.inf, clock)
+        Q = fast_informed_bound(m, self.informed_tolerance, self.informed_sweeps, deadline, start=start_upper,
+                                clock=clock)
         upper = UpperBound(Q, np.random.default_rng(self.seed).random(m.S), groups)
         beliefs = BeliefSet(m.S)
         beliefs.add(b0[None], np.ones(1))
@@ -131,16 +158,16 @@ class PointBasedSolver:
         sharing = WorkSharing(self.min_share, self.rate_horizon)
         iterations, pruned_at = 0, 0  # pruned_at: upper-bound points after the last pruning
         lb, ub = lower.value(b0), upper.value(b0)
-        history = [(time.perf_counter() - start, lb, ub)]
+        history = [(self.clock() - start, lb, ub)]
         for _ in range(self.group_passes if groups is not None else 0):
-            if ub - lb <= self.precision or time.perf_counter() - start >= limit:
+            if ub - lb <= self.precision or clock() - start >= limit:
                 break
             backup_groups(m, lower, upper)
             before, (lb, ub) = ub, (lower.value(b0), upper.value(b0))
-            history.append((time.perf_counter() - start, lb, ub))
+            history.append((self.clock() - start, lb, ub))
             if before - ub < self.informed_tolerance:
                 break
-        while (ub - lb > self.precision and time.perf_counter() - start < limit
+        while (ub - lb > self.precision and clock() - start < limit
                and (self.max_iterations is None or iterations < self.max_iterations)):
             process = sharing.choose()
             if process == "sweeps":
@@ -150,7 +177,7 @@ class PointBasedSolver:
                 # Trials aim at a fraction of the current gap, so early trials stay shallow (HSVI's epsilon).
                 epsilon = max(self.precision, self.gap_fraction * (ub - lb))
                 work = trial(m, b0, lower, upper, beliefs, epsilon, iterations % self.lower_trial_every == 0,
-                             self.max_depth)
+                             self.max_depth, stop=lambda: clock() - start >= limit)
                 if groups is not None and iterations % self.group_every == 0:
                     work += backup_groups(m, lower, upper)
                 if upper.n >= max(self.prune_points_at, 2 * pruned_at):
@@ -159,7 +186,7 @@ class PointBasedSolver:
             gap = ub - lb
             lb, ub = lower.value(b0), upper.value(b0)
             sharing.record(process, gap - (ub - lb), work)
-            history.append((time.perf_counter() - start, lb, ub))
+            history.append((self.clock() - start, lb, ub))
             if progress is not None:
                 progress(*history[-1])
-        return SolveResult(lower.policy(), lb, ub, time.perf_counter() - start, iterations, history)
+        return SolveResult(lower.policy(), lb, ub, self.clock() - start, iterations, history)

@@ -3,6 +3,7 @@ the two initial bounds (blind policies below, the fast informed bound above)."""
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 import numpy as np
 import scipy.sparse as sp
@@ -12,6 +13,7 @@ from ..pomdp import POMDP
 
 __all__ = ["BLOCK", "best_products", "Rows", "Tables", "blind_lower_bound", "mdp_upper_bound", "moving_rows", "fast_informed_bound"]
 
+SUCCESSOR_BLOCK = 10_000_000  # numbers of the (actions, observations, states) product built at once, at most
 DENSE_LIMIT = 20_000_000  # A * S * S entries up to which transitions may be kept dense
 # Numbers per temporary array in the solver's batched products (16 MB): larger batches are cut into blocks, so
 # peak memory stays bounded and the allocator reuses the blocks instead of faulting in fresh pages each time.
@@ -90,10 +92,14 @@ class Tables:
             self.T_to = [t.T.tocsr() for t in self.T]                         # rows "to", for step
             self.stacked_t = sp.vstack(self.T_to).tocsr()                      # (A*S, S): rows "to"
             self.block = sp.block_diag(self.T, format="csr")                   # (A*S, A*S)
-        self.OZ = np.stack([o.toarray().T for o in model.observation])
         # Actions whose observation tables are the same object share one index (the intention POMDP's do).
         first: dict[int, int] = {}
         self.observation_table = np.array([first.setdefault(id(o), a) for a, o in enumerate(model.observation)])
+        dense = {a: model.observation[a].toarray().T for a in first.values()}  # each distinct table once
+        if len(dense) == 1:  # one table for every action: a read-only view, not A copies (A x Z x S numbers)
+            self.OZ = np.broadcast_to(next(iter(dense.values())), (self.A, self.Z, self.S))
+        else:
+            self.OZ = np.stack([dense[int(t)] for t in self.observation_table])
         self.R = np.asarray(model.reward, dtype=float)
         self.gamma = model.discount
 
@@ -124,6 +130,12 @@ class Tables:
             predicted, actions = self.predict(b), np.arange(self.A)              # (A, S)
         else:
             predicted = np.stack([self.step(b[None], int(a))[0] for a in actions])
+        if len(actions) * self.Z * self.S > SUCCESSOR_BLOCK:  # large: never the whole (A', Z, S) product
+            pz = np.stack([self.OZ[a] @ predicted[i] for i, a in enumerate(actions)])  # (A', Z)
+            a_idx, z_idx = np.nonzero(pz > 1e-15)
+            probs = pz[a_idx, z_idx]
+            beliefs = self.OZ[actions[a_idx], z_idx] * predicted[a_idx] / probs[:, None]
+            return actions[a_idx], z_idx, probs, beliefs
         joint = self.OZ[actions] * predicted[:, None, :]                 # (A', Z, S)
         pz = joint.sum(axis=2)
         a_idx, z_idx = np.nonzero(pz > 1e-15)
@@ -131,21 +143,34 @@ class Tables:
         return actions[a_idx], z_idx, probs, joint[a_idx, z_idx] / probs[:, None]
 
 
-def blind_lower_bound(m: Tables) -> np.ndarray:
-    """(A, S): for each action, the value of repeating it forever: (I - gamma T_a) alpha = R_a."""
+def blind_lower_bound(m: Tables, deadline: float | None = None,
+                      clock: Callable[[], float] = time.perf_counter) -> np.ndarray:
+    """(A, S): for each action, the value of repeating it forever: (I - gamma T_a) alpha = R_a. Once ``clock()``
+    passes ``deadline``, the remaining actions get the value every policy reaches, ``min R / (1 - gamma)``
+    (a lower bound too). Cost: one sparse solve of size S per action (seconds each past 100,000 states)."""
     identity = sp.identity(m.S, format="csc")
-    return np.array([spla.spsolve((identity - m.gamma * m.T[a]).tocsc(), m.R[a]) for a in range(m.A)])
+    floor = float(m.R.min()) / (1 - m.gamma)
+    rows = []
+    for a in range(m.A):
+        if deadline is not None and clock() >= deadline:
+            rows.append(np.full(m.S, floor))
+        else:
+            rows.append(spla.spsolve((identity - m.gamma * m.T[a]).tocsc(), m.R[a]))
+    return np.array(rows)
 
 
-def mdp_upper_bound(m: Tables, tolerance: float = 1e-6, max_sweeps: int = 100_000) -> np.ndarray:
+def mdp_upper_bound(m: Tables, tolerance: float = 1e-6, max_sweeps: int = 100_000, deadline: float | None = None,
+                    clock: Callable[[], float] = time.perf_counter) -> np.ndarray:
     """Q (A, S) of the fully observable MDP, Q(s,a) = R(s,a) + gamma sum_s' T(s'|s,a) max_a' Q(s',a'): an
     upper bound on the POMDP's Q. Value iteration from R_max / (1 - gamma), which only decreases, so it can
-    stop at any sweep. Cost per sweep: O(nnz(T)) (one product with all the tables at once)."""
+    stop at any sweep: at ``tolerance``, after ``max_sweeps`` sweeps, or once ``clock()`` passes ``deadline``
+    (with a discount near 1 it converges slowly: 1 - gamma = 1e-5 needs over 100,000 sweeps).
+    Cost per sweep: O(nnz(T)) (one product with all the tables at once)."""
     V = np.full(m.S, np.abs(m.R).max() / (1 - m.gamma))
     for _ in range(max_sweeps):
         Q = m.R + m.gamma * m.expect(np.broadcast_to(V, (m.A, m.S)))
         new = Q.max(axis=0)
-        if np.abs(new - V).max() < tolerance:
+        if np.abs(new - V).max() < tolerance or (deadline is not None and clock() >= deadline):
             break
         V = new
     return Q
@@ -164,20 +189,21 @@ def moving_rows(table: sp.csr_matrix) -> np.ndarray:
 
 def fast_informed_bound(m: Tables, tolerance: float = 1e-3, max_sweeps: int = 100_000,
                         deadline: float | None = None, chunk: int = 4_000_000,
-                        start: np.ndarray | None = None) -> np.ndarray:
+                        start: np.ndarray | None = None, clock: Callable[[], float] = time.perf_counter) -> np.ndarray:
     """Q (A, S): Q(s,a) = R(s,a) + gamma sum_z max_a' sum_s' T(s'|s,a) O(z|s',a) Q(s',a') (Hauskrecht 2000).
 
     Iterated from the MDP bound (:func:`mdp_upper_bound`), or from its minimum with ``start`` (any upper bound
     on Q*), which the operator can only lower: it is monotone and maps an upper bound on Q* to one (it relaxes
     the Bellman operator), so every iterate is an upper bound too, and the iteration can stop early:
     when a sweep changes no entry by more than ``tolerance``, after ``max_sweeps`` sweeps, or at ``deadline``
-    (a ``time.perf_counter()`` value). Where action ``a`` leaves state ``s`` as it is, the sum is
-    ``sum_z O(z|s,a) max_a' Q(s,a')``, with no product; the (S', z x A') blocks of ``O_z Q`` (at most ``chunk``
+    (a ``clock()`` value; checked after each block of observations too, and then the unfinished sweep is
+    dropped: the iterate before it is the bound; the MDP bound it starts from stops there as well). Where
+    action ``a`` leaves state ``s`` as it is, the sum is ``sum_z O(z|s,a) max_a' Q(s,a')``, with no product; the (S', z x A') blocks of ``O_z Q`` (at most ``chunk``
     numbers) are built once per observation table, not per action (the intention models' robot actions
     move only the intentions whose next step they perform, and every action shares one table).
     Cost per sweep: O(Z A (S + sum_a nnz(T_a rows that move))).
     """
-    Q = mdp_upper_bound(m)
+    Q = mdp_upper_bound(m, deadline=deadline, clock=clock)
     if start is not None:  # another upper bound (A, S): the operator keeps any upper bound one
         Q = np.minimum(Q, start)
     step = max(1, chunk // max(1, m.S * m.A))  # observations per block
@@ -197,6 +223,8 @@ def fast_informed_bound(m: Tables, tolerance: float = 1e-3, max_sweeps: int = 10
                 for a, acc in sums.items():
                     reached = moved[a] @ block                                      # (moving, z * A')
                     acc += reached.reshape(len(acc), len(emit), m.A).max(axis=2).sum(axis=1)
+                    if deadline is not None and clock() >= deadline:
+                        return Q  # the sweep is unfinished: the last full iterate is the bound
             for a, acc in sums.items():
                 total[a, moving[a]] = acc
         new = m.R + m.gamma * total
@@ -204,6 +232,6 @@ def fast_informed_bound(m: Tables, tolerance: float = 1e-3, max_sweeps: int = 10
             new = np.minimum(new, start)
         done = np.abs(new - Q).max() < tolerance
         Q = new
-        if done or (deadline is not None and time.perf_counter() > deadline):
+        if done or (deadline is not None and clock() >= deadline):
             break
     return Q

@@ -17,6 +17,7 @@ O(A (nnz(T) + S Z) + (K + N) S M) for K alpha vectors, N upper-bound points and 
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -136,13 +137,14 @@ def backup(m: Tables, b: np.ndarray, s: Successors, known: Bounds, lower: LowerB
 
 
 def descend(m: Tables, b0: np.ndarray, lower: LowerBound, upper: UpperBound, epsilon: float,
-            follow_lower: bool = False, max_depth: int = 300) -> list[Step]:
-    """The path of one trial from ``b0`` (module docstring), at most ``max_depth`` steps down.
-    Cost: one :func:`successors` per step."""
+            follow_lower: bool = False, max_depth: int = 300, stop: Callable[[], bool] | None = None) -> list[Step]:
+    """The path of one trial from ``b0`` (module docstring), at most ``max_depth`` steps down, and none once
+    ``stop()`` is true (the solver's time limit: a deep trial can take seconds). Cost: one :func:`successors`
+    per step."""
     low, best_vector = (float(v[0]) for v in lower.at(b0[None]))
     b, depth, known = b0, 0, (low, int(best_vector), upper.value(b0))
     path: list[Step] = []
-    while depth < max_depth:
+    while depth < max_depth and not (depth and stop is not None and stop()):
         s = successors(m, b, lower, upper, known[0])
         path.append(Step(b, s, None, known))
         if known[2] - known[0] <= epsilon * m.gamma ** (-depth):
@@ -162,11 +164,13 @@ def descend(m: Tables, b0: np.ndarray, lower: LowerBound, upper: UpperBound, eps
 
 
 def trial(m: Tables, b0: np.ndarray, lower: LowerBound, upper: UpperBound, beliefs: BeliefSet | None,
-          epsilon: float, follow_lower: bool = False, max_depth: int = 300) -> float:
+          epsilon: float, follow_lower: bool = False, max_depth: int = 300,
+          stop: Callable[[], bool] | None = None) -> float:
     """One trial from ``b0``: :func:`descend`, then :func:`backup` at each belief of the path, deepest
     first. The beliefs it reached join ``beliefs`` (the sweeps back them up from then on) with their reach
-    weight ``gamma^t P(path)``. Returns its work in estimated multiply-adds (module docstring)."""
-    path = descend(m, b0, lower, upper, epsilon, follow_lower, max_depth)
+    weight ``gamma^t P(path)``; ``stop``: :func:`descend`'s. Returns its work in estimated multiply-adds (module
+    docstring)."""
+    path = descend(m, b0, lower, upper, epsilon, follow_lower, max_depth, stop)
     child = None
     for step in reversed(path):
         if step.next is not None and child is not None:

@@ -1,0 +1,110 @@
+"""Interrupts in one place: SIGINT (Ctrl-C), SIGTERM and SIGHUP end a command cleanly.
+
+- :func:`signals_as_interrupts`: SIGTERM and SIGHUP raise :class:`Interrupted` (a ``KeyboardInterrupt``, as
+  SIGINT does), so every ``finally`` and ``except BaseException`` runs on the way out: temporary files and
+  folders are removed (:mod:`planner.files`), child processes are killed (:func:`child_options` and the
+  callers' ``kill`` on the way out), partial outputs never appear.
+- :func:`deferred_interrupts`: in an anytime computation (the solver), SIGINT and SIGTERM only set a flag
+  that the computation checks between steps, so it can stop with a consistent result and keep it; a second
+  signal interrupts at once.
+- :func:`exit_status`: ``128 + signal``, the shell's convention (130 for Ctrl-C, 143 for SIGTERM).
+
+Handlers can only be installed in the main thread; elsewhere (a GUI's worker thread) these do nothing.
+"""
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+
+__all__ = ["Interrupted", "child_options", "deferred_interrupts", "exit_status", "signal_number",
+           "signals_as_interrupts"]
+
+_TERMINATING = tuple(s for s in (getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None)) if s)
+
+
+class Interrupted(KeyboardInterrupt):
+    """A terminating signal (``signum``) raised like Ctrl-C's ``KeyboardInterrupt``."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+def signal_number(exc: BaseException) -> int:
+    """The signal behind an interrupt: ``exc.signum`` for :class:`Interrupted`, else SIGINT."""
+    return int(getattr(exc, "signum", signal.SIGINT))
+
+
+def exit_status(signum: int) -> int:
+    """The exit status of a command ended by signal ``signum``: ``128 + signum``."""
+    return 128 + int(signum)
+
+
+def _main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
+
+
+@contextmanager
+def signals_as_interrupts() -> Iterator[None]:
+    """Within the block, SIGTERM and SIGHUP raise :class:`Interrupted`; the previous handlers come back after."""
+    if not _main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame) -> None:
+        raise Interrupted(signum)
+
+    previous = {s: signal.signal(s, interrupt) for s in _TERMINATING}
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+@contextmanager
+def deferred_interrupts() -> Iterator[Callable[[], int]]:
+    """Within the block, the first SIGINT or SIGTERM sets a flag instead of interrupting, and puts the
+    previous handlers back (so a second one interrupts at once). Yields ``pending()``: the signal received,
+    0 while none was. Outside the main thread, ``pending()`` stays 0 and nothing is deferred."""
+    received: list[int] = []
+    if not _main_thread():
+        yield lambda: 0
+        return
+    chosen = (signal.SIGINT, *_TERMINATING[:1])
+    previous = {s: signal.getsignal(s) or signal.SIG_DFL for s in chosen}  # None: set outside Python
+
+    def defer(signum, frame) -> None:
+        received.append(signum)
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+    for s in chosen:
+        signal.signal(s, defer)
+    try:
+        yield lambda: received[0] if received else 0
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+def child_options() -> dict:
+    """Keyword arguments for :class:`subprocess.Popen` so the child dies with this process, even when it is
+    killed outright (SIGKILL): on Linux the child asks the kernel for SIGKILL when its parent exits
+    (``PR_SET_PDEATHSIG``). Elsewhere nothing; the callers kill their children on an interrupt anyway."""
+    if not sys.platform.startswith("linux"):
+        return {}
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+    except OSError:
+        return {}
+
+    def die_with_parent() -> None:  # runs in the child, between fork and exec
+        libc.prctl(1, int(signal.SIGKILL))  # 1: PR_SET_PDEATHSIG
+
+    return {"preexec_fn": die_with_parent}

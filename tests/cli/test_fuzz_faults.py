@@ -1,0 +1,380 @@
+"""Faults around the commands (issue 14, items 2-4): output folders that are missing or read-only, a full disk,
+damaged FreeCAD documents, and interrupts. Each named case runs the real command line (``planner.cli.main``,
+or ``python -m planner`` where a signal is sent) and asserts exit status 1 or 2, a one-line message naming
+the file and the fix, no traceback, and nothing left behind.
+
+A full disk is simulated with the fault-injection seam of :mod:`planner.files` (``APLAN_FAULT_DISK_FULL=N``:
+every write fails with ENOSPC after N bytes), since a small full tmpfs needs root. A read-only folder cannot
+refuse root, so under root the write permission check is monkeypatched. Interrupt tests wait for events
+(a progress line, a temporary folder, a child process), never for a time.
+"""
+from __future__ import annotations
+
+import io
+import os
+import signal
+import subprocess
+import sys
+import time
+import zipfile
+from pathlib import Path
+
+import pytest
+from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
+
+from planner.cli import main
+from planner.decision.policy import read_policy
+from planner.files import FAULT_DISK_FULL
+
+PEN_FCSTD = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
+
+
+def _tree(folder: Path) -> set[str]:
+    return {str(p.relative_to(folder)) for p in folder.rglob("*")}
+
+
+def _run(capsys, args: list[str]) -> tuple[int, str, str]:
+    try:
+        code = main(args)
+    except SystemExit as exc:  # argparse: usage errors
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _assert_clean_failure(code: int, err: str, expected: str, codes=(1, 2)) -> None:
+    assert code in codes, err
+    assert "Traceback" not in err
+    lines = [line for line in err.splitlines() if line.startswith("aplan: error:")]
+    assert len(lines) == 1 and expected in lines[0], err
+
+
+# name: (arguments, environment, the fragment the message must hold); {tmp}: the test's folder
+OUTPUT_CASES = {
+    "pomdp into a missing folder": (["pomdp", "pen", "-o", "nodir/m.pomdpx"], {}, "create the folder"),
+    "markers into a missing folder": (["markers", "pen", "-o", "nodir/s.pdf"], {}, "create the folder"),
+    "solve into a missing folder": (["solve", "pen", "-o", "nodir/p.policy", "--quiet"], {}, "create the folder"),
+    "synth into a missing folder": (["synth", "chain", "4", "-o", "nodir/c.json"], {}, "create the folder"),
+    "simulate plots into a missing folder": (["simulate", "pen", "--plot", "nodir/b"], {}, "create the folder"),
+    "output is a folder": (["pomdp", "pen", "-o", "afolder"], {}, "a folder, but the output is a file"),
+    "output under a file": (["pomdp", "pen", "-o", "afile/m.pomdpx"], {}, "is not a folder"),
+    "pomdpx on a full disk": (["pomdp", "pen", "-o", "m.pomdpx"], {FAULT_DISK_FULL: "4096"}, "the disk is full"),
+    ".pomdp on a full disk": (["pomdp", "pen", "-o", "m.pomdp"], {FAULT_DISK_FULL: "4096"}, "the disk is full"),
+    "policy on a full disk": (["solve", "pen", "-o", "p.policy", "--quiet", "--time-limit", "0.3"],
+                              {FAULT_DISK_FULL: "4096"}, "the disk is full"),
+    "marker sheet (pdf) on a full disk": (["markers", "pen", "-o", "s.pdf"], {FAULT_DISK_FULL: "1000"},
+                                          "the disk is full"),
+    "marker sheet (png) on a full disk": (["markers", "pen", "-o", "s.png"], {FAULT_DISK_FULL: "1000"},
+                                          "the disk is full"),
+    "product file on a full disk": (["synth", "chain", "4", "-o", "c.json"], {FAULT_DISK_FULL: "100"},
+                                    "the disk is full"),
+    "belief plots on a full disk": (["simulate", "pen", "--planner", "offline", "--policy", "{tmp}/p.policy",
+                                     "--plot", "b"], {FAULT_DISK_FULL: "1000"}, "the disk is full"),
+    "second belief plot on a full disk": (["simulate", "pen", "--planner", "offline", "--policy", "{tmp}/p.policy",
+                                           "--plot", "b"], {FAULT_DISK_FULL: "21000"}, "b.svg"),
+}
+
+
+@pytest.fixture(scope="module")
+def pen_policy(tmp_path_factory) -> Path:
+    """A small policy for the pen (a few solver steps), for commands that need one."""
+    folder = tmp_path_factory.mktemp("policy")
+    assert main(["solve", "pen", "-o", str(folder / "p.policy"), "--quiet", "--time-limit", "0.3"]) == 0
+    return folder / "p.policy"
+
+
+@pytest.mark.parametrize("name", list(OUTPUT_CASES))
+def test_output_faults(name, tmp_path, monkeypatch, capsys, pen_policy):
+    arguments, env, expected = OUTPUT_CASES[name]
+    (tmp_path / "afolder").mkdir()
+    (tmp_path / "afile").write_text("x")
+    (tmp_path / "p.policy").write_bytes(pen_policy.read_bytes())
+    monkeypatch.chdir(tmp_path)
+    for key, value in env.items():
+        monkeypatch.setenv(key, value)
+    before = _tree(tmp_path)
+    code, _, err = _run(capsys, [a.replace("{tmp}", str(tmp_path)) for a in arguments])
+    _assert_clean_failure(code, err, expected)
+    assert _tree(tmp_path) == before, "a file was left behind"
+
+
+def test_read_only_folder(tmp_path, monkeypatch, capsys):
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    if os.geteuid() == 0:  # root writes anywhere: refuse as a read-only folder would
+        real = os.access
+        monkeypatch.setattr("planner.files.os.access",
+                            lambda p, mode, **kw: False if Path(p) == folder else real(p, mode, **kw))
+    else:
+        folder.chmod(0o555)
+    code, _, err = _run(capsys, ["pomdp", "pen", "-o", str(folder / "m.pomdpx")])
+    _assert_clean_failure(code, err, "is not writable")
+    assert _tree(folder) == set()
+
+
+def test_refusal_while_writing(tmp_path, monkeypatch, capsys):
+    """The folder was fine when checked, then refuses the file (permissions changed meanwhile)."""
+    def refuse(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr("planner.files.os.open", refuse)
+    code, _, err = _run(capsys, ["pomdp", "pen", "-o", str(tmp_path / "m.pomdpx")])
+    _assert_clean_failure(code, err, "Permission denied")
+    assert _tree(tmp_path) == set()
+
+
+def test_outputs_respect_the_umask(tmp_path):
+    from planner.files import make_folder_beside, write_atomic
+
+    old = os.umask(0o022)
+    try:
+        write_atomic(tmp_path / "a.txt", "a")
+        folder = make_folder_beside(tmp_path / "bundle")
+        os.umask(0o077)
+        write_atomic(tmp_path / "b.txt", "b")
+        private = make_folder_beside(tmp_path / "other")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644
+    assert folder.stat().st_mode & 0o777 == 0o755 and folder.name.startswith(".bundle.")
+    assert (tmp_path / "b.txt").stat().st_mode & 0o777 == 0o600
+    assert private.stat().st_mode & 0o777 == 0o700
+
+
+# --- damaged FreeCAD documents -------------------------------------------------------------------------------
+
+def _shape_files(document: bytes) -> dict[str, str]:
+    """Object label -> its shape member, read from Document.xml with a plain XML parser (the ground truth)."""
+    from lxml import etree
+
+    root = etree.fromstring(document)
+    out = {}
+    for obj in root.iter("Object"):
+        label = obj.find("Properties/Property[@name='Label']/String")
+        part = obj.find("Properties/Property[@name='Shape']/Part")
+        if label is not None and part is not None and part.get("file"):
+            out[label.get("value")] = part.get("file")
+    return out
+
+
+@pytest.fixture(scope="module")
+def damaged(tmp_path_factory):
+    """A truncated copy of the pen's assembly and one with a corrupt Document.xml, with the labels each loses:
+    truncated, the objects whose shape member does not end before the cut; corrupt, the part objects whose
+    data in Document.xml starts after the damage."""
+    source = require_shared(PEN_FCSTD).read_bytes()
+    folder = tmp_path_factory.mktemp("damaged")
+    archive = zipfile.ZipFile(io.BytesIO(source))
+    document = archive.read("Document.xml")
+    files = _shape_files(document)
+    assert len(files) == 6  # the pen's six parts
+    cut = 10_000
+    ends = {info.filename: info.header_offset + 30 + len(info.filename) + len(info.extra) + info.compress_size
+            for info in archive.infolist()}
+    assert ends["Document.xml"] < cut
+    truncated = folder / "truncated.FCStd"
+    truncated.write_bytes(source[:cut])
+    lost_truncated = {label for label, member in files.items() if ends[member] > cut}
+    middle = len(document) // 2
+    corrupt_xml = document[:middle] + b"<<&&" + document[middle + 4:]
+    corrupt = folder / "corrupt.FCStd"
+    with zipfile.ZipFile(corrupt, "w", zipfile.ZIP_DEFLATED) as out:
+        for info in archive.infolist():
+            out.writestr(info, corrupt_xml if info.filename == "Document.xml" else archive.read(info))
+    lost_corrupt = {label for label in files if document.index(f'<String value="{label}"/>'.encode()) > middle}
+    assert lost_truncated and lost_corrupt and len(lost_truncated) < 6 and len(lost_corrupt) < 6
+    return {"truncated": (truncated, lost_truncated), "corrupt": (corrupt, lost_corrupt)}
+
+
+@pytest.mark.parametrize("kind", ["truncated", "corrupt"])
+@pytest.mark.parametrize("command", ["export-freecad", "stats"])
+def test_damaged_document_is_an_error_naming_each_object(kind, command, damaged, tmp_path, capsys):
+    path, lost = damaged[kind]
+    arguments = [command, str(path)] + (["-o", str(tmp_path / "bundle")] if command == "export-freecad" else [])
+    code, out, err = _run(capsys, arguments)
+    _assert_clean_failure(code, err, "the document is damaged")
+    named = {label for label in _shape_files(zipfile.ZipFile(PEN_FCSTD).read("Document.xml")) if label in err}
+    assert named == lost
+    assert "--skip-damaged" in err and _tree(tmp_path) == set()
+
+
+def test_truncation_anywhere_names_exactly_the_lost_objects(tmp_path):
+    """Brute force over cut points: the objects named are those whose shape member does not end before the cut
+    (computed from the intact archive's directory); a cut inside Document.xml is an error of its own."""
+    from freecad_aplan.archive import DamagedDocumentError, document_damage
+
+    source = require_shared(PEN_FCSTD).read_bytes()
+    archive = zipfile.ZipFile(io.BytesIO(source))
+    files = _shape_files(archive.read("Document.xml"))
+    ends = {info.filename: info.header_offset + 30 + len(info.filename) + len(info.extra) + info.compress_size
+            for info in archive.infolist()}
+    path = tmp_path / "cut.FCStd"
+    for cut in range(0, len(source), 211):
+        path.write_bytes(source[:cut])
+        if ends["Document.xml"] > cut:
+            with pytest.raises(DamagedDocumentError, match="Document.xml|not a zip archive"):
+                document_damage(path)
+            continue
+        named = {d.label for d in document_damage(path)}
+        assert named == {label for label, member in files.items() if ends[member] > cut}, cut
+
+
+def test_the_intact_document_has_no_damage():
+    from freecad_aplan.archive import document_damage
+
+    assert document_damage(require_shared(PEN_FCSTD)) == []
+
+
+def test_skip_damaged_exports_the_rest_with_a_warning(damaged, tmp_path):
+    require_freecadcmd()
+    path, lost = damaged["truncated"]
+    done = subprocess.run([sys.executable, "-m", "planner", "export-freecad", str(path), "-o", str(tmp_path / "b"),
+                           "--skip-damaged", "--engine", "none"], capture_output=True, text=True, timeout=300,
+                          cwd=REPO)
+    assert done.returncode == 0, done.stderr
+    warning = [line for line in done.stderr.splitlines() if "left out" in line]
+    assert len(warning) == 1 and all(label in warning[0] for label in lost)
+    exported = {p.stem for p in (tmp_path / "b" / "meshes").glob("*.stl")}
+    assert len(exported) == 6 - len(lost) and not exported & lost
+    assert (tmp_path / "b").stat().st_mode & 0o777 == 0o777 & ~_umask()
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+# --- interrupts ----------------------------------------------------------------------------------------------
+
+def _wait_for(condition, what: str, polls: int = 1200):
+    """Poll ``condition`` every 0.1 s, at most ``polls`` times (a bound on work, not a timing assertion)."""
+    for _ in range(polls):
+        value = condition()
+        if value:
+            return value
+        time.sleep(0.1)
+    pytest.fail(f"never happened: {what}")
+
+
+def _children(pid: int) -> list[int]:
+    found = subprocess.run(["pgrep", "-P", str(pid)], capture_output=True, text=True).stdout.split()
+    return [int(p) for p in found]
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/status") as handle:
+            return "\nState:\tZ" not in handle.read()  # a zombie is dead, waiting for a reaper
+    except FileNotFoundError:
+        return False
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_interrupted_solve_keeps_the_best_policy(signum, tmp_path):
+    target = tmp_path / "p.policy"
+    process = subprocess.Popen([sys.executable, "-m", "planner", "solve", "pen", "-o", str(target),
+                                "--time-limit", "600", "--precision", "0"], cwd=REPO, stderr=subprocess.PIPE,
+                               stdout=subprocess.PIPE)
+    seen = b""
+    while b"lower" not in seen:  # the first progress line: the solver is under way
+        chunk = process.stderr.read1(256)
+        assert chunk, "the solver ended before it was interrupted"
+        seen += chunk
+    process.send_signal(signum)
+    out, err = process.communicate(timeout=120)
+    message = (seen + err).decode()
+    assert process.returncode == 128 + signum, message
+    assert "Traceback" not in message and "wrote the best policy so far" in message
+    assert _tree(tmp_path) == {"p.policy"}  # renamed into place, no temporary file
+    from planner import api
+
+    policy = read_policy(target, api.tables(api.load_model("pen")))
+    assert policy.alphas.shape[0] >= 22  # at least the blind policies, one per action
+
+
+def test_deferred_interrupt_in_process():
+    """The solver's own contract: an interrupt after the k-th step ends it with the policy so far; without
+    keep_on_interrupt it propagates. Work-bounded: the interrupt comes from the progress callback."""
+    from planner import api
+    from planner.decision.solvers.point_based import PointBasedSolver
+
+    model = api.tables(api.load_model("pen"))
+    steps = []
+
+    def progress(*_):
+        steps.append(1)
+        if len(steps) == 5:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    result = PointBasedSolver(time_limit=None, precision=0, keep_on_interrupt=True).solve(model, progress)
+    assert result.interrupted == signal.SIGINT and len(steps) == 5
+    result.policy.check(model)
+    steps.clear()
+    with pytest.raises(KeyboardInterrupt):
+        PointBasedSolver(time_limit=None, precision=0).solve(model, progress)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_interrupted_stats_of_a_document_kills_freecad_and_cleans_up(signum, tmp_path):
+    require_freecadcmd()
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    model = tmp_path / "pen.FCStd"
+    model.write_bytes(require_shared(PEN_FCSTD).read_bytes())
+    process = subprocess.Popen([sys.executable, "-m", "planner", "stats", str(model)], cwd=REPO,
+                               env={**os.environ, "TMPDIR": str(temporary)}, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.PIPE)
+    child = _wait_for(lambda: _children(process.pid), "FreeCADCmd started")[0]
+    _wait_for(lambda: list(temporary.iterdir()), "the temporary bundle folder made")
+    process.send_signal(signum)
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == 128 + signum, err.decode()
+    assert "Traceback" not in err.decode()
+    assert list(temporary.iterdir()) == []
+    assert not _alive(child)
+
+
+def test_sigterm_on_export_removes_the_partial_bundle(tmp_path):
+    require_freecadcmd()
+    model = tmp_path / "pen.FCStd"
+    model.write_bytes(require_shared(PEN_FCSTD).read_bytes())
+    process = subprocess.Popen([sys.executable, "-m", "planner", "export-freecad", str(model), "-o",
+                                str(tmp_path / "bundle")], cwd=REPO, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.PIPE)
+    _wait_for(lambda: [p for p in tmp_path.iterdir() if p.name.endswith(".partial")], "the partial bundle made")
+    child = _wait_for(lambda: _children(process.pid), "FreeCADCmd started")[0]
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == 128 + signal.SIGTERM and "Traceback" not in err.decode()
+    assert _tree(tmp_path) == {"pen.FCStd"}
+    assert not _alive(child)
+
+
+def test_random_damage_is_named_or_harmless(tmp_path):
+    """Property: bytes overwritten anywhere in the archive, and maybe a truncation, give a list of damaged
+    objects or a DamagedDocumentError, never another exception (hypothesis draws the places, the bytes and the
+    cut; before this test, a flipped byte could raise NotImplementedError or RuntimeError from zipfile)."""
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    from freecad_aplan.archive import DamagedDocumentError, document_damage
+
+    source = require_shared(PEN_FCSTD).read_bytes()
+    path = tmp_path / "hit.FCStd"
+
+    @settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck))
+    @given(st.lists(st.tuples(st.integers(0, len(source) - 1), st.binary(min_size=1, max_size=8)), min_size=1,
+                    max_size=4), st.one_of(st.none(), st.integers(0, len(source))))
+    def damage(hits, cut):
+        data = bytearray(source)
+        for at, junk in hits:
+            data[at:at + len(junk)] = junk
+        path.write_bytes(bytes(data[:cut]))
+        try:
+            found = document_damage(path)
+        except DamagedDocumentError:
+            return
+        assert all(d.name and d.problem for d in found)
+
+    damage()

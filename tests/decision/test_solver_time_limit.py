@@ -1,0 +1,102 @@
+"""The solver's time limit is a limit (issue 14, item 9): it covers the upper bound's set-up and is checked
+inside long steps. Tested with an injected clock (a counter), so by work, never by the machine's speed."""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from planner import api
+from planner.decision.solvers.lower import LowerBound
+from planner.decision.solvers.point_based import PointBasedSolver
+from planner.decision.solvers.tables import Tables, fast_informed_bound, mdp_upper_bound
+from planner.decision.solvers.trials import descend
+from planner.decision.solvers.upper import UpperBound
+
+
+@pytest.fixture(scope="module")
+def slow_pen():
+    """The pen with a discount of 0.99999: value iteration needs over 100,000 sweeps to converge."""
+    return api.tables(api.load_model("pen", discount=0.99999))
+
+
+class Counter:
+    """A clock that advances one unit per reading."""
+
+    def __init__(self):
+        self.readings = itertools.count()
+
+    def __call__(self) -> float:
+        return float(next(self.readings))
+
+
+def _counting_expect(monkeypatch) -> list:
+    calls = []
+    original = Tables.expect
+
+    def expect(self, W):
+        calls.append(1)
+        return original(self, W)
+
+    monkeypatch.setattr(Tables, "expect", expect)
+    return calls
+
+
+def test_mdp_bound_stops_at_the_deadline(slow_pen, monkeypatch):
+    calls = _counting_expect(monkeypatch)
+    m = Tables(slow_pen)
+    clock = Counter()
+    Q = mdp_upper_bound(m, deadline=10, clock=clock)
+    assert len(calls) == 11  # one sweep per reading, readings 0..10
+    calls.clear()
+    full = mdp_upper_bound(m, max_sweeps=200)
+    assert len(calls) == 200  # without a deadline it would go on (to 100,000 sweeps)
+    assert np.all(Q >= full - 1e-9)  # an earlier iterate, and a larger (still valid) upper bound
+
+
+def test_informed_bound_drops_an_unfinished_sweep(slow_pen):
+    m = Tables(slow_pen)
+    mdp = mdp_upper_bound(m, max_sweeps=2)
+    # Readings 0 and 1: two MDP sweeps, the second reaching the deadline; reading 2, inside the first informed
+    # sweep, is past it: that sweep is dropped and the MDP bound kept.
+    Q = fast_informed_bound(m, deadline=1, clock=Counter())
+    assert np.array_equal(Q, mdp)
+
+
+def test_solver_time_limit_covers_the_set_up(slow_pen, monkeypatch):
+    calls = _counting_expect(monkeypatch)
+    limit = 40
+    result = PointBasedSolver(time_limit=limit, clock=Counter()).solve(slow_pen)
+    # A quarter of the limit (10 readings) for the set-up's value iteration, then a few steps; without the
+    # limit on the set-up, value iteration alone would make 100,000 products.
+    assert len(calls) < 100
+    assert result.lower_bound <= result.upper_bound
+    assert result.seconds <= limit + 20  # readings after the limit: bookkeeping only, no further step
+
+
+def test_a_deep_trial_stops_at_the_limit(slow_pen):
+    m = Tables(slow_pen)
+    b0 = np.asarray(slow_pen.initial, dtype=float)
+    lower = LowerBound.blind(m)
+    upper = UpperBound(mdp_upper_bound(m, max_sweeps=3), np.random.default_rng(0).random(m.S))
+    deep = descend(m, b0, lower, upper, epsilon=1e-3, max_depth=50)
+    assert len(deep) > 10  # with a discount near 1 a trial goes deep
+    stopped = descend(m, b0, lower, upper, epsilon=1e-3, max_depth=50, stop=lambda: True)
+    assert len(stopped) == 1  # the first step (its own bounds at b0), then no further
+
+
+def test_large_model_successors_are_the_same(slow_pen, monkeypatch):
+    """Past SUCCESSOR_BLOCK numbers, the successors are computed per action (no (A, Z, S) product): the same
+    pairs, probabilities and beliefs as the one-product path."""
+    import planner.decision.solvers.tables as tables
+
+    m = Tables(slow_pen)
+    b = np.asarray(slow_pen.initial, dtype=float)
+    for actions in (None, np.array([0, 3, 7])):
+        whole = m.successors(b, actions)
+        monkeypatch.setattr(tables, "SUCCESSOR_BLOCK", 0)
+        blocked = m.successors(b, actions)
+        monkeypatch.undo()
+        assert [np.array_equal(x, y) for x, y in zip(whole[:2], blocked[:2])] == [True, True]
+        assert np.allclose(whole[2], blocked[2], rtol=1e-12) and np.allclose(whole[3], blocked[3], rtol=1e-12)
