@@ -71,7 +71,7 @@ OUTPUT_CASES = {
     "belief plots on a full disk": (["simulate", "pen", "--planner", "offline", "--policy", "{tmp}/p.policy",
                                      "--plot", "b"], {FAULT_DISK_FULL: "1000"}, "the disk is full"),
     "second belief plot on a full disk": (["simulate", "pen", "--planner", "offline", "--policy", "{tmp}/p.policy",
-                                           "--plot", "b"], {FAULT_DISK_FULL: "21000"}, "b.svg"),
+                                           "--plot", "b"], {FAULT_DISK_FULL: "{between}"}, "b.svg"),
 }
 
 
@@ -83,9 +83,21 @@ def pen_policy(tmp_path_factory) -> Path:
     return folder / "p.policy"
 
 
+@pytest.fixture(scope="module")
+def plot_sizes(pen_policy) -> tuple[int, int]:
+    """The sizes of the pen's belief plots (PNG, SVG) with ``pen_policy``, written on a disk with room."""
+    folder = pen_policy.parent
+    assert main(["simulate", "pen", "--planner", "offline", "--policy", str(pen_policy), "--plot",
+                 str(folder / "b")]) == 0
+    return (folder / "b.png").stat().st_size, (folder / "b.svg").stat().st_size
+
+
 @pytest.mark.parametrize("name", list(OUTPUT_CASES))
-def test_output_faults(name, tmp_path, monkeypatch, capsys, pen_policy):
+def test_output_faults(name, tmp_path, monkeypatch, capsys, pen_policy, plot_sizes):
     arguments, env, expected = OUTPUT_CASES[name]
+    png, svg = plot_sizes
+    assert png < svg, "the second-plot case needs the SVG (written second) larger than the PNG"
+    env = {key: value.replace("{between}", str((png + svg) // 2)) for key, value in env.items()}
     (tmp_path / "afolder").mkdir()
     (tmp_path / "afile").write_text("x")
     (tmp_path / "p.policy").write_bytes(pen_policy.read_bytes())
