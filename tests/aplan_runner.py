@@ -1,7 +1,7 @@
 """``aplan`` run inside the test process: the command line's ``main`` with its arguments, standard input and
 output, and exit status, without the second or so a new interpreter spends importing the planner (the suite
 runs ``aplan`` about a hundred times). ``main`` is made to run in-process (it undoes its logging set-up);
-the end-to-end tests of ``python -m planner`` (tests/integration, tests/workbench) still start a process."""
+FreeCAD still runs in a process of its own, and tests/cli/test_cli.py starts ``python -m planner`` itself."""
 from __future__ import annotations
 
 import contextlib
