@@ -5,10 +5,9 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
-import sys
 
 import pytest
+from aplan_runner import run_aplan
 
 from planner import make_plan
 from planner.cli import main
@@ -27,8 +26,7 @@ def run(capsys, *args):
 
 
 def _aplan(*args, stdin=""):
-    return subprocess.run([sys.executable, "-m", "planner", *map(str, args)], input=stdin, capture_output=True,
-                          text=True, check=False)
+    return run_aplan(*args, stdin=stdin)
 
 
 def _joins(part: str, operation: str) -> bool:

@@ -3,16 +3,15 @@ default without a policy, by itself when the flat model would not fit, and clear
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import pytest
+from aplan_runner import run_aplan
 
 from planner import chain_product, save_product
 
 
 def _aplan(*args):
-    return subprocess.run([sys.executable, "-m", "planner", *map(str, args)], capture_output=True, text=True)
+    return run_aplan(*args)
 
 
 @pytest.fixture(scope="module")

@@ -3,11 +3,10 @@ from __future__ import annotations
 
 import json
 import logging
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from aplan_runner import run_aplan
 from conftest import PEN_MODELS, require_shared
 
 from planner import make_plan
@@ -151,11 +150,9 @@ def test_probabilities_must_sum_to_one(tmp_path):
 
 def test_cli_pomdp_and_solve(tmp_path):
     model = tmp_path / "pen.pomdpx"
-    done = subprocess.run([sys.executable, "-m", "planner", "pomdp", "pen", "--technical", "-o", str(model)],
-                          capture_output=True, text=True)
+    done = run_aplan("pomdp", "pen", "--technical", "-o", model)
     assert done.returncode == 0 and "39 states, 18 actions, 10 observations" in done.stdout
-    done = subprocess.run([sys.executable, "-m", "planner", "solve", str(model), "-o", str(tmp_path / "p.policy"),
-                           "--time-limit", "2", "--json"], capture_output=True, text=True)
+    done = run_aplan("solve", model, "-o", tmp_path / "p.policy", "--time-limit", "2", "--json")
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout)
     assert {"lower_bound", "upper_bound", "alpha_vectors", "seconds"} <= set(result)

@@ -2,11 +2,10 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
+from aplan_runner import run_aplan
 from figure_support import pyplot_untouched
 
 from planner import make_plan
@@ -77,7 +76,7 @@ def test_plot_files(tmp_path, solved, decision, monkeypatch):
 
 def test_cli_simulate_and_evaluate(tmp_path):
     policy = tmp_path / "p.policy"
-    run = lambda *a: subprocess.run([sys.executable, "-m", "planner", *a], capture_output=True, text=True)  # noqa
+    run = run_aplan
     assert run("solve", "pen", "--technical", "-o", str(policy), "--time-limit", "3", "--quiet").returncode == 0
     done = run("simulate", "pen", "--technical", "--policy", str(policy), "--all", "--json")
     lines = [json.loads(l) for l in done.stdout.splitlines()]

@@ -2,10 +2,9 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 
 import trimesh
+from aplan_runner import run_aplan
 
 from planner import load_product, resolve_product
 
@@ -28,7 +27,7 @@ def make_bundle(folder):
 
 
 def aplan(*args):
-    return subprocess.run([sys.executable, "-m", "planner", *args], capture_output=True, text=True, timeout=300)
+    return run_aplan(*args)
 
 
 def test_analyze_fills_in_the_diagrams(tmp_path):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from aplan_runner import run_aplan
 
 from planner import make_plan, plan_statistics
 from planner.errors import InterlockedPartsError
@@ -80,8 +81,6 @@ def test_a_peg_in_an_inclined_slot_leaves_along_the_slot():
 
 def test_the_directions_option_is_checked_and_recorded(tmp_path):
     import json
-    import subprocess
-    import sys
 
     folder = tmp_path / "b"
     (folder / "meshes").mkdir(parents=True)
@@ -92,7 +91,7 @@ def test_the_directions_option_is_checked_and_recorded(tmp_path):
         "parts": [{"id": "block", "mesh": "meshes/block.stl"}, {"id": "peg", "mesh": "meshes/peg.stl"}]}))
 
     def aplan(*args):
-        return subprocess.run([sys.executable, "-m", "planner", *args], capture_output=True, text=True, timeout=300)
+        return run_aplan(*args)
 
     bad = aplan("analyze", str(folder), "--directions", "65")
     assert bad.returncode == 2 and "must be a whole number from 0 to 64, got 65" in bad.stderr

@@ -5,12 +5,11 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 import trimesh
+from aplan_runner import run_aplan
 
 from planner import api, load_product
 from planner.errors import ContactCeilingError, DisconnectedProductError, GeometryError
@@ -119,10 +118,9 @@ PEG = {"base": ((0, 0, 0), (10, 10, 2)), "peg": ((4, 4, 2.1234), (6, 6, 8)), "li
 
 
 def aplan(*args):
-    """``aplan`` in a subprocess; ``analyze`` with a coarse raster (the obstructions do not matter here)."""
+    """``aplan`` (in this process); ``analyze`` with a coarse raster (the obstructions do not matter here)."""
     extra = ["--resolution", "64"] if args[0] == "analyze" else []
-    return subprocess.run([sys.executable, "-m", "planner", *args, *extra], capture_output=True, text=True, check=False,
-                          timeout=300)
+    return run_aplan(*args, *extra)
 
 
 def test_auto_chooses_the_smallest_tolerance_that_connects_and_records_it(tmp_path):

@@ -1,11 +1,12 @@
-"""Helpers of the tests that run FreeCAD or the command line: the pen's liaisons, ``aplan`` in a subprocess,
+"""Helpers of the tests that run FreeCAD or the command line: the pen's liaisons, ``aplan`` (run in this process),
 and the answer of a FreeCADCmd script."""
 from __future__ import annotations
 
 import json
 import re
 import subprocess
-import sys
+
+from aplan_runner import run_aplan
 
 __all__ = ["LIAISONS", "aplan", "freecad_result"]
 
@@ -22,8 +23,9 @@ def freecad_result(done: subprocess.CompletedProcess) -> dict:
 
 
 def aplan(*args: str, check: bool = True) -> subprocess.CompletedProcess:
-    """Run the command line ``aplan ARGS`` (``python -m planner``); fails the test when it fails, if ``check``."""
-    done = subprocess.run([sys.executable, "-m", "planner", *args], capture_output=True, text=True, timeout=600)
+    """Run the command line ``aplan ARGS`` (its ``main``, in this process: FreeCAD still runs in its own, as it
+    does from ``python -m planner``); fails the test when it fails, if ``check``."""
+    done = run_aplan(*args)
     if check and done.returncode != 0:
         raise AssertionError(f"aplan {' '.join(args)} failed ({done.returncode}):\n{done.stdout}\n{done.stderr}")
     return done

@@ -6,7 +6,8 @@ import json
 import subprocess
 
 import pytest
-from conftest import PEN_MODELS, REPO, SHARED, require_freecadcmd, require_shared
+from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
+from real_models import real_bundle, real_export_output
 
 from integration.freecad_tools import LIAISONS, aplan, freecad_result
 from planner import load_product
@@ -115,13 +116,13 @@ def test_group_and_exclude_from_the_command_line(tmp_path):
 
 @pytest.mark.freecad
 @pytest.mark.parametrize("model, parts, contacts, interferences, shells, planned", [
-    ("toy_truck/asm_cement_mixer_truck.FCStd", 61, 113, 0, {},
+    ("toy_truck", 61, 113, 0, {},
      (3, "AND/OR graph: at least 2,131,194 connected part sets")),
-    ("diaphragm_pump/asm_diaphragm_pump.FCStd", 53, 87, 18, {"16_001": 110, "21_001": 54},
+    ("diaphragm_pump", 53, 87, 18, {"16_001": 110, "21_001": 54},
      (1, "block each other along every direction tried (+/-X, +/-Y, +/-Z), so no disassembly can separate them: "
          "1_001 and 8_002; 1_001 and 8_007; 21_001 and 26_001.")),
 ])
-def test_truck_and_pump(tmp_path, model, parts, contacts, interferences, shells, planned):
+def test_truck_and_pump(model, parts, contacts, interferences, shells, planned):
     """Parts from SOURCE.txt (61 and 51 solids), and the pump's two closed shells without a solid (16_001,
     21_001) read as the solids they bound, named in a warning: 53 parts. The contacts and interference
     counts are this engine's own figures, printed for the record (the OCCT engine finds the same 87 contacts
@@ -131,12 +132,11 @@ def test_truck_and_pump(tmp_path, model, parts, contacts, interferences, shells,
     naming the screws (no two of its parts block each other in every direction: its tires leave their axles
     outwards). The pump, now connected (with the two shells it no longer falls apart), has three pairs of
     parts that block each other along every axis: two screws (8_002, 8_007) in the body 1_001, and the shell
-    21_001 with 26_001, which it overlaps by 1,434 mm^3 (one of its interferences)."""
-    require_freecadcmd()
-    path = require_shared(SHARED / "models" / model)
-    out = aplan("export-freecad", str(path), "-o", str(tmp_path / "b")).stdout
-    print(out)
-    product = load_product(tmp_path / "b" / "product.json")
+    21_001 with 26_001, which it overlaps by 1,434 mm^3 (one of its interferences). The bundles are those of
+    ``real_models`` (exported once per session with the default settings)."""
+    bundle = real_bundle(model)
+    print(real_export_output(model))
+    product = load_product(bundle / "product.json")
     found = product.geometry["analysis"]["interferences"]
     print(f"{model}: {len(product.parts)} parts, {len(product.contacts)} contacts, {len(found)} interferences")
     assert (len(product.parts), len(product.contacts), len(found)) == (parts, contacts, interferences)
@@ -145,7 +145,7 @@ def test_truck_and_pump(tmp_path, model, parts, contacts, interferences, shells,
             "a solid in FreeCAD to silence this)" in product.geometry["warnings"]
     for item in found:
         assert item["volume"] > 1.0
-    stats = aplan("stats", str(tmp_path / "b"), "--json", check=False)
+    stats = aplan("stats", str(bundle), "--json", check=False)
     status, message = planned
     assert stats.returncode == status and message in (stats.stdout + stats.stderr)
     if status == 3:

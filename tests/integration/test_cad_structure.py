@@ -8,7 +8,8 @@ import subprocess
 from dataclasses import replace
 
 import pytest
-from conftest import REPO, SHARED, require_freecadcmd, require_shared
+from conftest import REPO, require_freecadcmd
+from real_models import real_bundle
 
 from integration.freecad_tools import aplan, freecad_result
 from planner.api import resolve_product
@@ -81,14 +82,11 @@ def _without_screws(product):
 
 
 @pytest.mark.freecad
-def test_truck_workstations(tmp_path):
+def test_truck_workstations():
     """The truck without its 39 screws (22 parts, 36 contacts) has no structure in its document (A2plus: a flat
     list of parts); the proposal cuts it into workstations of at most 8 members from the connection diagram,
     and the cabin's workstation is counted in seconds (the flat product is refused by the size guard)."""
-    require_freecadcmd()
-    path = require_shared(SHARED / "models" / "toy_truck" / "asm_cement_mixer_truck.FCStd")
-    aplan("export-freecad", str(path), "-o", str(tmp_path / "b"))
-    exported = resolve_product(tmp_path / "b")  # analysed by the export (the mesh engine)
+    exported = resolve_product(real_bundle("toy_truck"))  # analysed by the export (the mesh engine)
     assert exported.subassemblies == ()
     product = _without_screws(exported)
     assert (len(product.parts), len(product.contacts)) == (22, 36)

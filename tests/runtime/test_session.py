@@ -7,6 +7,7 @@ import logging
 
 import numpy as np
 import pytest
+from aplan_runner import run_aplan
 
 from planner import BLANK, Observation, make_plan
 from planner.decision import intention_model
@@ -253,11 +254,7 @@ def test_log_is_never_overwritten_and_replay_checks(setup, tmp_path):
 
 
 def _aplan(*args, stdin=""):
-    import subprocess
-    import sys
-
-    return subprocess.run([sys.executable, "-m", "planner", *map(str, args)], input=stdin, capture_output=True,
-                          text=True)
+    return run_aplan(*args, stdin=stdin)
 
 
 @pytest.fixture(scope="module")
