@@ -19,7 +19,7 @@ from typing import Sequence
 from ..errors import LimitExceededError, PlannerError
 from ..plugins import registry
 from . import decision, geometry, plan, runtime
-from .options import add_tolerance_options, advice, offer_options, tolerances_from
+from .options import add_tolerance_options, advice, check_outputs, offer_options, tolerances_from
 
 __all__ = ["main", "build_parser", "add_tolerance_options", "tolerances_from"]
 
@@ -67,6 +67,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     handler = _configure_logging()  # undone at the end: main() also runs inside tests and other programs
     try:
+        check_outputs(args)  # the overwrite rule and writable folders, before any work
         return args.run(args)
     except PlannerError as exc:
         helps = advice(exc, args) if isinstance(exc, LimitExceededError) else ""

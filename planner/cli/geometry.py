@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..geometry.bundle import PRODUCT_FILE, analyze_product, apply_report
 from ..product import load_product, save_product
-from .options import add_tolerance_options, tolerances_from
+from .options import add_force, add_tolerance_options, tolerances_from
 
 __all__ = ["add_commands", "contact_choice"]
 
@@ -65,4 +65,5 @@ def add_commands(commands) -> None:
     analyze.add_argument("--engine", default="mesh", help="mesh (default) or occt")
     analyze.add_argument("--json", action="store_true", help="print the analysis as JSON")
     add_tolerance_options(analyze)
+    add_force(analyze)
     analyze.set_defaults(run=_analyze)

@@ -51,7 +51,10 @@ def load_part_meshes(product: Product) -> list[PartMesh]:
         try:
             mesh = trimesh.load(path, force="mesh")
         except Exception as exc:  # trimesh raises many types for corrupt files
-            raise GeometryError(f"{product.source}: part {part.id!r}: cannot read mesh {path}: {exc}") from None
+            # an unreadable header sends trimesh looking for optional modules (charset_normalizer): not the cause
+            why = "not a mesh file it can read (a damaged header?)" if isinstance(exc, ImportError) else exc
+            raise GeometryError(f"{product.source}: part {part.id!r}: cannot read mesh {path}: {why}; re-export "
+                                "the part (STL, OBJ, PLY)") from None
         if len(mesh.faces) == 0:
             raise GeometryError(f"{product.source}: part {part.id!r}: mesh {path} has no triangles")
         meshes.append(PartMesh(part.id, np.asarray(mesh.vertices, dtype=np.float64),
@@ -60,7 +63,13 @@ def load_part_meshes(product: Product) -> list[PartMesh]:
 
 
 def _mesh_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
-    return analyze_meshes(load_part_meshes(product), tolerances)
+    meshes = load_part_meshes(product)
+    try:
+        return analyze_meshes(meshes, tolerances)
+    except GeometryError as exc:  # the engine names the part; the user needs the file too
+        if type(exc) is not GeometryError or str(exc).startswith(str(product.source)):
+            raise
+        raise GeometryError(f"{product.source}: {exc}") from None
 
 
 ENGINES: dict[str, Callable[[Product, Tolerances], GeometryReport]] = {"mesh": _mesh_engine}

@@ -24,8 +24,10 @@ from xml.sax.saxutils import escape
 import numpy as np
 from lxml import etree
 
+from ...defaults import DECLARED_LIMIT, INPUT_FILE_LIMIT
 from ...errors import PlannerError
 from ...files import open_atomic
+from ...validation import CappedReader, InputLimitError
 from ..pomdp import POMDP, ModelError
 from .sparse_tables import SparseTable, split_rows
 
@@ -55,7 +57,13 @@ def _values(source, var, prefix):
     count = var.find("NumValues")
     if count is None or not (count.text or "").strip().isdigit():
         raise _fail(source, var, f"<{var.tag}> needs <NumValues> or <ValueEnum>")
-    return [f"{prefix}{i}" for i in range(int(count.text))]
+    number = int(count.text)
+    if number == 0:
+        raise _fail(source, count, f"<{var.tag}> declares 0 values; a model needs at least one")
+    if number > DECLARED_LIMIT:
+        raise _fail(source, count, f"<{var.tag}> declares {number:,} values, more than the limit of "
+                                   f"{DECLARED_LIMIT:,}")
+    return [f"{prefix}{i}" for i in range(number)]
 
 
 class _Section:
@@ -134,7 +142,8 @@ def _is_number(text: str) -> bool:
 
 def _open(path, source):
     try:
-        return gzip.open(path) if source.endswith(".gz") else open(path, "rb")
+        return CappedReader(gzip.open(path) if source.endswith(".gz") else open(path, "rb"), INPUT_FILE_LIMIT,
+                            source)
     except OSError as exc:
         raise PomdpxError(f"{source}: cannot read the file: {exc}") from None
 
@@ -153,6 +162,8 @@ def read_pomdpx(path: str | Path) -> POMDP:
             return _read(stream, source)
     except (OSError, EOFError) as exc:
         raise PomdpxError(f"{source}: cannot read the file: {exc}") from None
+    except InputLimitError as exc:
+        raise PomdpxError(str(exc)) from None
     except etree.XMLSyntaxError as exc:
         raise PomdpxError(f"{source}: line {exc.lineno}: malformed XML: {exc.msg}") from None
 
@@ -178,7 +189,10 @@ def _read(stream, source: str) -> POMDP:
                 if parameter is not None and parameter.tag == "Parameter":
                     section = _start_section(source, parameter, names, roles, found)
             if section is not None:
-                section.entry(element)
+                try:
+                    section.entry(element)
+                except InputLimitError as exc:
+                    raise _fail(source, element, str(exc)) from None
                 element.clear()
                 while element.getprevious() is not None:  # drop the entries read so far
                     del parameter[0]
