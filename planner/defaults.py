@@ -87,11 +87,13 @@ JSON_DEPTH_LIMIT = 100
 # Model files (.pomdp, POMDPX, .policy, gzip decompressed): bytes read at most (--max-file on the commands
 # that read models). The largest models the project writes take well under this.
 INPUT_FILE_LIMIT = 4 * 2 ** 30
-# A model file's table entries may spread over at most this many cells in all ('*', uniform, rows, identities:
-# about 150 bytes each while the table is built, 3 GiB at the limit); counted as the entries are read, so a
-# 'T: * : * : *' over 1,000,000 states is refused at once instead of asking for TiB. One-cell entries are
-# not counted (their memory is the file's).
-SPREAD_CELL_LIMIT = 20_000_000
+# A model file's table entries may spread over at most this many cells per table ('*', uniform, rows,
+# identities: about 150 bytes and 2 us each while the table is built: 0.75 GiB and 10 s at the limit), and a
+# reward depending on the next state or observation is evaluated over at most this many combinations per
+# action; counted before anything is allocated, so 'T: * : * : *' over 3,000 states (9,000,000 cells per
+# action) or over 1,000,000 states is refused at once instead of hanging or asking for TiB. One-cell entries
+# are not counted (their memory is the file's).
+SPREAD_CELL_LIMIT = 5_000_000
 # The states, actions or observations a model file may declare (a name each: about 60 bytes per value before
 # any table); ten times the intention limit.
 DECLARED_LIMIT = 10_000_000

@@ -88,7 +88,8 @@ def check_count(count: int, limit: int, what: str, where: str, option: str = "")
         raise InputLimitError(f"{where}: {count:,} {what}, more than the limit of {limit:,}{fix}")
 
 
-def check_output(path: str | os.PathLike, force: bool = False, option: str = "-o", replaceable: bool = True) -> Path:
+def check_output(path: str | os.PathLike, force: bool = False, option: str = "-o", replaceable: bool = True,
+                 noun: str = "file") -> Path:
     """The output ``path``, checked before any work starts: its folder exists and is writable, it is not a
     folder, and it does not exist unless ``force`` (the overwrite rule: an existing output is replaced only
     with ``--force``, and then atomically). Raises :class:`InputError` / :class:`OutputExistsError`."""
@@ -104,7 +105,7 @@ def check_output(path: str | os.PathLike, force: bool = False, option: str = "-o
     if path.exists() and not (force and replaceable):
         how = "pass --force to replace it, or choose another path" if replaceable else \
             "it is never replaced; choose another path"
-        raise OutputExistsError(f"{option} {path}: the file exists; {how}")
+        raise OutputExistsError(f"{option} {path}: the {noun} exists already; {how}")
     return path
 
 

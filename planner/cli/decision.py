@@ -26,7 +26,6 @@ from .options import (
     limits_from,
     number,
     online_budget,
-    positive,
     positive_seconds,
     product_from,
     rewards_from,
@@ -261,7 +260,8 @@ def add_commands(commands) -> None:
                        help="full sequences by intention number (aplan intentions PRODUCT --full); on the factored "
                             "model (--planner online) by rank, from 0")
     which.add_argument("--all", action="store_true", help="every full sequence")
-    which.add_argument("--random", type=positive, metavar="N", help="N sequences drawn at random")
+    which.add_argument("--random", type=number(1, EPISODE_LIMIT, integer=True), metavar="N",
+                       help=f"N sequences drawn at random (at most {EPISODE_LIMIT:,})")
     simulate.add_argument("--plot", metavar="STEM", help="write STEM.png and STEM.svg (belief heat maps)")
     simulate.add_argument("--operator", choices=("model", "turns"), default="model",
                           help="model (default): the operator acts with the model's probability (1/2 per step); "

@@ -101,7 +101,7 @@ def _session(args: argparse.Namespace) -> int:
     if api._model_file_kind(args.product):
         model_from(args, product_only=True)  # the error that says a session needs a product
     if args.log:
-        check_output(args.log, option="--log", replaceable=False)  # before any work: logs are never replaced
+        check_output(args.log, option="--log", replaceable=False, noun="log")  # before any work; never replaced
     levels = levels_from(args)
     log_path = args.log or f"session-{time.strftime('%Y%m%d-%H%M%S')}.jsonl"
     status = 0

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...defaults import DECLARED_LIMIT
+from ...defaults import DECLARED_LIMIT, SPREAD_CELL_LIMIT
 from ...errors import PlannerError
 from ...files import open_atomic
 from ...validation import InputLimitError
@@ -232,7 +232,10 @@ def _read(lines, source: str) -> POMDP:
         raise CassandraError(f"{source}: no discount")
     initial = _initial_belief(st, names, header["start"])
     transition, observation = split_rows(tables["T"]), split_rows(tables["O"])
-    reward = header["sign"] * expected_reward(transition, observation, tables["R"])
+    try:
+        reward = header["sign"] * expected_reward(transition, observation, tables["R"])
+    except InputLimitError as exc:
+        raise CassandraError(f"{source}: {exc}") from None
     try:
         return POMDP(tuple(names["states"]), tuple(names["actions"]), tuple(names["observations"]),
                      transition, observation, reward, initial, header["discount"], name=Path(source).stem)
@@ -255,6 +258,11 @@ def expected_reward(transition, observation, table: SparseTable) -> np.ndarray:
         total = int(counts.sum())
         if not total:
             continue
+        if total > SPREAD_CELL_LIMIT:  # the temporaries below hold about 60 bytes per combination
+            raise InputLimitError(f"the reward of action {a} would be evaluated over {total:,} (state, next state, "
+                                  f"observation) combinations with non-zero probability, more than the limit of "
+                                  f"{SPREAD_CELL_LIMIT:,}; give rewards as R: a : s : * : * (they do not depend on "
+                                  "the next state or the observation), or make the tables sparser")
         # every (s, s', z) with T(s' | s, a) O(z | s', a) > 0: each T entry repeated over its observation row
         position = np.repeat(o.indptr[coo.col] - (np.cumsum(counts) - counts), counts) + np.arange(total)
         s, s2 = np.repeat(coo.row, counts).astype(np.int64), np.repeat(coo.col, counts).astype(np.int64)

@@ -18,7 +18,8 @@ import numpy as np
 from ...errors import PlannerError
 from ...product import DEFAULT_MARKER_DICTIONARY, MARKER_DICTIONARIES, Markers, Product
 
-__all__ = ["VisionError", "MarkerMap", "default_markers", "dictionary_size", "marker_map", "MarkerDetector", "detections"]
+__all__ = ["VisionError", "MarkerMap", "default_markers", "dictionary_size", "marker_map",
+           "MarkerDetector", "detections"]
 
 
 class VisionError(PlannerError):
