@@ -178,6 +178,9 @@ def _gaps_explained(product: Product):
         yield
     except DisconnectedProductError as error:
         explained = explain_disconnected(product, error)
+        if not explained.source and product.source and product.source != "<memory>":  # name the file
+            explained = DisconnectedProductError(explained.groups, explained.gaps, explained.tolerance,
+                                                 explained.units, product.source)
         if explained is error:
             raise
         raise explained from None

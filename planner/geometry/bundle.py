@@ -49,7 +49,7 @@ def load_part_meshes(product: Product) -> list[PartMesh]:
         if not path.is_file():
             raise GeometryError(f"{product.source}: part {part.id!r}: mesh file {path} does not exist")
         try:
-            mesh = trimesh.load(path, force="mesh")
+            mesh = trimesh.load(path, force="mesh", process=False)  # processing would drop NaN vertices silently
         except Exception as exc:  # trimesh raises many types for corrupt files
             # an unreadable header sends trimesh looking for optional modules (charset_normalizer): not the cause
             why = "not a mesh file it can read (a damaged header?)" if isinstance(exc, ImportError) else exc
@@ -57,6 +57,10 @@ def load_part_meshes(product: Product) -> list[PartMesh]:
                                 "the part (STL, OBJ, PLY)") from None
         if len(mesh.faces) == 0:
             raise GeometryError(f"{product.source}: part {part.id!r}: mesh {path} has no triangles")
+        if not np.isfinite(np.asarray(mesh.vertices)).all():
+            raise GeometryError(f"{product.source}: part {part.id!r}: mesh {path} has coordinates that are not "
+                                "finite numbers (NaN or infinity); re-export the part")
+        mesh.process()  # merge the vertices the facets share, as trimesh.load does by default
         meshes.append(PartMesh(part.id, np.asarray(mesh.vertices, dtype=np.float64),
                                np.asarray(mesh.faces, dtype=np.int64)))
     return meshes

@@ -184,6 +184,40 @@ def _existing(*names: str):
     return make
 
 
+def _bundle(damage: str):
+    """A bundle of three boxes (base, peg, lid) with the peg's mesh damaged: ``nan`` (a NaN coordinate),
+    ``far`` (moved 1e9 units away), ``header`` (an STL whose header is cut and followed by junk)."""
+    def make(work: Path) -> None:
+        import trimesh
+
+        (work / "b" / "meshes").mkdir(parents=True)
+        boxes = {"base": ((0, 0, 0), (10, 10, 2)), "peg": ((4, 4, 2), (6, 6, 8)), "lid": ((0, 0, 8), (10, 10, 9))}
+        for name, (lo, hi) in boxes.items():
+            center = [(a + b) / 2 for a, b in zip(lo, hi)]
+            mesh = trimesh.creation.box(extents=[b - a for a, b in zip(lo, hi)],
+                                        transform=trimesh.transformations.translation_matrix(center))
+            if name == "peg" and damage == "far":
+                mesh.apply_translation([1e9, 0, 0])
+            mesh.export(work / "b" / "meshes" / f"{name}.stl")
+        peg = work / "b" / "meshes" / "peg.stl"
+        if damage == "nan":
+            text = trimesh.exchange.stl.export_stl_ascii(trimesh.load(peg))
+            at = text.index("vertex ") + len("vertex ")
+            peg.write_text(text[:at] + "nan " + text[at:].split(" ", 1)[1])
+        elif damage == "header":
+            peg.write_bytes(b"solid " + peg.read_bytes()[6:40] + b"\xff\xfe" * 10)
+        (work / "b" / "product.json").write_text(json.dumps(
+            {"format": "aplan-product", "version": 1, "units": "mm", "contacts": [],
+             "parts": [{"id": n, "mesh": f"meshes/{n}.stl"} for n in boxes]}))
+    return make
+
+
+def _disconnected(work: Path) -> None:
+    data = _pen(work)
+    data["contacts"] = data["contacts"][:2]
+    (work / "apart.json").write_text(json.dumps(data))
+
+
 CASES = [
     # item 1: numbers: NaN, infinity and ranges, for options and for numbers read from files
     ("1 --reward-wrong nan", None, ["pomdp", "pen", "-o", "m.pomdpx", "--reward-wrong", "nan"], 2, ["--reward-wrong"]),
@@ -264,6 +298,14 @@ CASES = [
     ("7 bad source: no log left", _write("images/a.png", b"not an image"),
      ["session", "pen", "--images", "images", "--log", "s.jsonl", "--robot", "auto", "--expansions", "2"], 1,
      ["a.png"]),
+    ("7 NaN mesh not called 'not closed'", _bundle("nan"), ["analyze", "b", "-o", "a.json"], 1,
+     ["b/product.json", "peg.stl", "not finite"]),
+    ("7 distant mesh not called 'not closed'", _bundle("far"), ["analyze", "b", "-o", "a.json"], 1,
+     ["b/product.json", "'peg'", "from the origin"]),
+    ("7 bad STL header", _bundle("header"), ["analyze", "b", "-o", "a.json"], 1,
+     ["b/product.json", "peg.stl", "cannot read mesh"]),
+    ("7 disconnected product names the file", _disconnected, ["stats", "apart.json"], 1,
+     ["apart.json", "not connected"]),
     # item 8: the overwrite rule (an existing output needs --force) and output folders checked first
     ("8 solve onto an existing file", _existing("p.policy"), ["solve", "pen", "-o", "p.policy"], 1,
      ["p.policy", "--force"]),
