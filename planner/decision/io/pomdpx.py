@@ -172,6 +172,10 @@ _SECTIONS = {"InitialStateBelief": "CondProb", "StateTransitionFunction": "CondP
              "RewardFunction": "Func"}
 
 
+_ENTRY_PARTS = ("Entry", "Instance", "ProbTable", "ValueTable")
+_ELEMENT_LIMIT = 100_000  # elements other than entries: each is kept until the end of the file
+
+
 def _read(stream, source: str) -> POMDP:
     root = variable = None
     names = {}  # variable name -> its values
@@ -179,8 +183,14 @@ def _read(stream, source: str) -> POMDP:
     found: dict[str, _Section] = {}
     section = section_of = None  # the table being read, and its <Parameter>
     text = {}  # texts of the top-level elements
+    structural = 0  # elements kept in memory: all but the entries (and their children), which are dropped
     for _, element in etree.iterparse(stream, events=("end",), **_SAFE):
         tag = element.tag
+        if tag not in _ENTRY_PARTS:
+            structural += 1
+            if structural > _ELEMENT_LIMIT:
+                raise _fail(source, element, f"more than {_ELEMENT_LIMIT:,} elements besides the tables' <Entry>s; "
+                                             "not a POMDPX file the planner reads (a flat model has a few dozen)")
         if tag == "Entry":
             parameter = element.getparent()
             if parameter is not section_of:  # the first entry of a table: its <Var> and <Parent> are read
