@@ -6,8 +6,10 @@ Each module only parses arguments and prints; the work is done by :mod:`planner.
 (notes, warnings) go through :mod:`logging` to standard error; results go to standard output.
 Exit status: 0 on success, 1 when the input is bad (the message says what, where and how to fix it) or
 what it would build exceeds a size limit (the message gives the estimate and the options that help), 2 on
-a usage error, 3 when ``aplan stats`` printed only some figures (the others would exceed a size limit).
-Nothing is written when a command fails.
+a usage error (a numeric option that is not finite or out of range names the option), 3 when ``aplan stats``
+printed only some figures (the others would exceed a size limit). Nothing is written when a command fails.
+The overwrite rule: outputs are checked before any work (:func:`.options.check_outputs`): their folder must
+exist, and an existing output is replaced only with ``--force`` (atomically).
 """
 from __future__ import annotations
 
