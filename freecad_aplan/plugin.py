@@ -20,7 +20,7 @@ import tempfile
 from dataclasses import replace
 from pathlib import Path
 
-from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION
+from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION, LINEAR_DEFLECTION_MIN
 from planner.files import make_folder_beside
 from planner.geometry import GeometryReport, Tolerances
 from planner.geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
@@ -149,6 +149,7 @@ def _parse_group(text: str) -> tuple[str, list[str]]:
 
 def _export_command(subparsers) -> None:
     from planner.cli import add_tolerance_options
+    from planner.cli.options import number
 
     parser = subparsers.add_parser(
         "export-freecad", help="export a FreeCAD document or STEP file as a product bundle (runs FreeCADCmd)",
@@ -176,11 +177,12 @@ def _export_command(subparsers) -> None:
                              "object is an error")
     parser.add_argument("--split-solids", action="store_true",
                         help="one part per solid of objects holding several solids (STEP files of one product)")
-    parser.add_argument("--linear-deflection", type=float, metavar="D",
-                        help="tessellation: largest distance between mesh and surface, model units "
-                             f"(default {LINEAR_DEFLECTION:g})")
-    parser.add_argument("--angular-deflection", type=float, metavar="A",
-                        help=f"tessellation: largest angle between facet normals, radians (default {ANGULAR_DEFLECTION:g})")
+    parser.add_argument("--linear-deflection", type=number(LINEAR_DEFLECTION_MIN), metavar="D",
+                        help="tessellation: largest distance between mesh and surface, model units, at least "
+                             f"{LINEAR_DEFLECTION_MIN:g} (default {LINEAR_DEFLECTION:g})")
+    parser.add_argument("--angular-deflection", type=number(0.01, 3.14), metavar="A",
+                        help="tessellation: largest angle between facet normals, radians, 0.01 to 3.14 (default "
+                             f"{ANGULAR_DEFLECTION:g})")
     parser.add_argument("--freecadcmd", metavar="PATH", help="the FreeCADCmd executable (default: from PATH)")
     parser.add_argument("--force", action="store_true", help="replace BUNDLE if it exists")
     parser.add_argument("--skip-damaged", action="store_true",

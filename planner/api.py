@@ -188,6 +188,9 @@ def _gaps_explained(product: Product):
         yield
     except DisconnectedProductError as error:
         explained = explain_disconnected(product, error)
+        if not explained.source and product.source and product.source != "<memory>":  # name the file
+            explained = DisconnectedProductError(explained.groups, explained.gaps, explained.tolerance,
+                                                 explained.units, product.source)
         if explained is error:
             raise
         raise explained from None
@@ -202,6 +205,16 @@ def plan_of(product: str | os.PathLike | Product, technical: bool | None = None,
     product = product if isinstance(product, Product) else resolve_product(product)
     with _gaps_explained(product):
         return make_plan(product, technical, limits)
+
+
+def _decidable(plan: Plan) -> Plan:
+    """``plan`` if a decision model can be built on it: at least one assembly operation (two parts), else a
+    :class:`PlannerError` saying so (a model of nothing to do would have no action to choose)."""
+    if len(plan.product.parts) < 2:
+        raise PlannerError(f"{plan.product.source or plan.product.name or 'the product'}: "
+                           f"{len(plan.product.parts)} part, so nothing to assemble: a decision model needs a "
+                           "product of at least two parts (aplan stats still describes it)")
+    return plan
 
 
 def arranged(product: str | os.PathLike | Product, subassemblies: str = "designer", max_components: int = 8) -> Product:
@@ -360,7 +373,7 @@ def decision_model(product: str | os.PathLike | Product | Plan, technical: bool 
     that start from it (``"auto"``: the most connected part, :func:`base_part_of`); refused, with the estimate,
     past ``limits`` (the plan's, and the flat model's memory:
     :func:`~planner.decision.intention_model.flat_model_bytes`)."""
-    plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
+    plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
     return intention_model(plan, rewards, discount, base_part=base_part_of(plan, base_part), max_bytes=limits.memory)
 
 
@@ -368,7 +381,7 @@ def factored_decision_model(product: str | os.PathLike | Product | Plan, technic
                             rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                             base_part: str | None = None, limits: SizeLimits = SizeLimits()) -> FactoredIntentionModel:
     """The same decision model without enumerating intentions (paper Sec. V): beliefs over classes."""
-    plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
+    plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
     return factored_model(plan, rewards, discount, base_part_of(plan, base_part))
 
 
@@ -420,7 +433,7 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
 
     ``base_part``: only the sequences that start from it (``"auto"``: the most connected part).
     """
-    plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
+    plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
     base_part = base_part_of(plan, base_part)
     choice, note = choose_planner(plan, planner, policy, limit, base_part, limits)
     if choice == "online":
@@ -457,7 +470,7 @@ def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | 
     """The decision model of Alg. 3 lumped onto the factored model's classes (state edges and the finished
     product; :mod:`~planner.decision.lumped_model`): the same value as the flat model, far fewer states.
     ``.factored`` filters beliefs over classes, ``.pomdp`` (named ``<product>:lumped``) is what solvers take."""
-    plan = product if isinstance(product, Plan) else plan_of(product, technical, limits)
+    plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
     return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part))
 
 

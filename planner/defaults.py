@@ -13,6 +13,8 @@ __all__ = [
     "INTENTION_LIMIT", "SUBASSEMBLY_LIMIT", "CUTS_PER_SUBASSEMBLY", "MEMORY_LIMIT", "FILE_LIMIT", "DISCOUNT",
     "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
     "CONFIDENCE", "DECISION_TIME", "ONLINE_EXPANSIONS", "ONLINE_DEPTH",
+    "JSON_DEPTH_LIMIT", "INPUT_FILE_LIMIT", "SPREAD_CELL_LIMIT", "DECLARED_LIMIT", "RESOLUTION_LIMIT", "EPISODE_LIMIT",
+    "LINEAR_DEFLECTION_MIN",
 ]
 
 # The product file (docs/product-format.md): its "format" and "version" keys, and its name in a bundle.
@@ -77,3 +79,26 @@ ONLINE_DEPTH = 8                   # the deepest belief the search expands
 
 # The belief on the true intention above which the robot counts as confident (paper's Fig. 7 discussion).
 CONFIDENCE = 0.9
+
+# Input limits (planner/validation.py): what a file may declare or hold before it is refused, with the option
+# that raises the limit where a user may need more. JSON (products, session logs) nested deeper than this is
+# refused (a product is at most a few levels deep; Python's parser would fail at about 1,000).
+JSON_DEPTH_LIMIT = 100
+# Model files (.pomdp, POMDPX, .policy, gzip decompressed): bytes read at most (--max-file on the commands
+# that read models). The largest models the project writes take well under this.
+INPUT_FILE_LIMIT = 4 * 2 ** 30
+# A model file's table entries may spread over at most this many cells per table ('*', uniform, rows,
+# identities: about 150 bytes and 2 us each while the table is built: 0.75 GiB and 10 s at the limit), and a
+# reward depending on the next state or observation is evaluated over at most this many combinations per
+# action; counted before anything is allocated, so 'T: * : * : *' over 3,000 states (9,000,000 cells per
+# action) or over 1,000,000 states is refused at once instead of hanging or asking for TiB. One-cell entries
+# are not counted (their memory is the file's).
+SPREAD_CELL_LIMIT = 5_000_000
+# The states, actions or observations a model file may declare (a name each: about 60 bytes per value before
+# any table); ten times the intention limit.
+DECLARED_LIMIT = 10_000_000
+# Numeric options whose size is memory or time: the mesh engine's raster (RESOLUTION_LIMIT^2 pixels per
+# view: 16,384 -> 2 GiB of depth buffer), episodes of aplan evaluate, the finest tessellation.
+RESOLUTION_LIMIT = 16_384
+EPISODE_LIMIT = 10_000_000
+LINEAR_DEFLECTION_MIN = 1e-4  # finer tessellations run FreeCADCmd out of memory

@@ -54,12 +54,15 @@ class DisconnectedProductError(PlannerError):
     """
 
     def __init__(self, groups: list[list[str]], gaps: Sequence[tuple[str, str, float, float] | None] | None = None,
-                 tolerance: float | None = None, units: str = ""):
+                 tolerance: float | None = None, units: str = "", source: str = ""):
         self.groups = groups
         self.gaps = list(gaps) if gaps is not None else None
         self.tolerance = tolerance
+        self.units = units
+        self.source = source  # the product file, named first when known
         shown = " | ".join("{" + ", ".join(g) + "}" for g in groups)
-        message = f"the connection diagram is not connected: it falls apart into {len(groups)} groups: {shown}."
+        message = (f"{source}: " if source else "") + \
+            f"the connection diagram is not connected: it falls apart into {len(groups)} groups: {shown}."
         if self.gaps:
             unit = f" {units}" if units else ""
             lines = []

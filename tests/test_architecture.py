@@ -13,7 +13,7 @@ FORBIDDEN = {"FreeCAD", "FreeCADGui", "Part", "Mesh", "PySide", "PySide2", "PySi
 
 # Each part of the planner may import its own level and those below it, never one above.
 LAYERS = {
-    "errors": 0, "defaults": 0, "files": 0, "plugins": 0, "interrupts": 0,
+    "errors": 0, "defaults": 0, "files": 0, "plugins": 0, "interrupts": 0, "validation": 0,
     "product": 1,
     "geometry": 2,
     "assembly": 3,

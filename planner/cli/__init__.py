@@ -9,7 +9,10 @@ what it would build exceeds a size limit (the message gives the estimate and the
 a usage error, 3 when ``aplan stats`` printed only some figures (the others would exceed a size limit),
 128 + N when signal N ended it (130: Ctrl-C, 143: SIGTERM). Nothing is written when a command fails or is
 interrupted (output folders are checked before any work), except by ``aplan solve``, which writes the best
-policy so far on an interrupt and says so.
+policy so far on an interrupt and says so. A numeric option that is not finite or out of range is a usage
+error naming the option. The overwrite rule: outputs are checked before any work
+(:func:`.options.check_outputs`): their folder must exist and be writable, and an existing output is
+replaced only with ``--force`` (atomically).
 """
 from __future__ import annotations
 
@@ -20,11 +23,10 @@ import sys
 from typing import Sequence
 
 from ..errors import LimitExceededError, PlannerError
-from ..files import check_output
 from ..interrupts import exit_status, signal_number, signals_as_interrupts
 from ..plugins import registry
 from . import decision, geometry, plan, runtime
-from .options import add_tolerance_options, advice, offer_options, tolerances_from
+from .options import add_tolerance_options, advice, check_outputs, offer_options, tolerances_from
 
 __all__ = ["main", "build_parser", "add_tolerance_options", "tolerances_from"]
 
@@ -68,23 +70,12 @@ def _restore_logging(handler: logging.Handler) -> None:
         logger.propagate = True
 
 
-def _check_outputs(args: argparse.Namespace) -> None:
-    """Every output file's folder exists and is writable, checked before any work (:func:`check_output`);
-    ``--plot STEM`` writes STEM.png and STEM.svg. (A bundle folder, export-freecad's, gets its parents made.)"""
-    if args.command == "export-freecad":
-        return
-    for name, suffix in (("output", ""), ("plot", ".png"), ("log", "")):
-        value = getattr(args, name, None)
-        if isinstance(value, str) and value and value != "-":
-            check_output(value + suffix)
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     handler = _configure_logging()  # undone at the end: main() also runs inside tests and other programs
     try:
         with signals_as_interrupts():  # SIGTERM too unwinds: temporary files go, children are killed
-            _check_outputs(args)
+            check_outputs(args)  # the overwrite rule and writable folders, before any work
             return args.run(args)
     except PlannerError as exc:
         helps = advice(exc, args) if isinstance(exc, LimitExceededError) else ""

@@ -15,18 +15,21 @@ from ..decision.belief_plot import episode_trace, plot_beliefs, state_trace
 from ..decision.intention_model import IntentionModel
 from ..decision.online import OnlinePlanner
 from ..decision.policy import write_policy
-from ..defaults import CONFIDENCE, FILE_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
+from ..defaults import CONFIDENCE, EPISODE_LIMIT, FILE_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
 from ..errors import PlannerError
 from ..interrupts import exit_status
 from .options import (
     PRODUCT_HELP,
     add_decision_options,
     add_episode_options,
+    add_force,
     add_policy_options,
     gibibytes,
+    index,
     limits_from,
+    number,
     online_budget,
-    positive,
+    positive_seconds,
     product_from,
     rewards_from,
 )
@@ -258,6 +261,7 @@ def add_commands(commands) -> None:
                             f"(default {FILE_LIMIT / 2 ** 30:g} GiB)")
     pomdp.add_argument("--lumped", action="store_true", help=LUMPED_HELP)
     add_decision_options(pomdp)
+    add_force(pomdp)
     pomdp.set_defaults(run=_pomdp)
 
     solve = commands.add_parser("solve", help="solve a POMDP offline into a policy (certified bounds)",
@@ -265,9 +269,9 @@ def add_commands(commands) -> None:
                                             "the time limit or when upper - lower <= precision at the initial belief.")
     solve.add_argument("model", metavar="MODEL", help="a .pomdpx or .pomdp file, or a PRODUCT")
     solve.add_argument("-o", "--output", required=True, metavar="POLICY", help="the policy file (SARSOP's .policy XML)")
-    solve.add_argument("--time-limit", type=float, default=SOLVE_TIME_LIMIT, metavar="S",
+    solve.add_argument("--time-limit", type=positive_seconds, default=SOLVE_TIME_LIMIT, metavar="S",
                        help=f"seconds (default {SOLVE_TIME_LIMIT:g})")
-    solve.add_argument("--precision", type=float, default=SOLVE_PRECISION, metavar="E",
+    solve.add_argument("--precision", type=number(0), default=SOLVE_PRECISION, metavar="E",
                        help=f"target gap (default {SOLVE_PRECISION:g})")
     solve.add_argument("--engine", choices=api.SOLVER_ENGINES, default="builtin",
                        help="builtin (default) or sarsop (APPL's pomdpsol, when it is on PATH)")
@@ -277,6 +281,7 @@ def add_commands(commands) -> None:
                        help=LUMPED_HELP + "; the policy's vectors are over the classes (its model attribute "
                             "ends in :lumped)")
     add_decision_options(solve)
+    add_force(solve)
     solve.set_defaults(run=_solve)
 
     simulate = commands.add_parser("simulate", help="play an operator through assembly sequences against a policy",
@@ -287,11 +292,12 @@ def add_commands(commands) -> None:
     simulate.add_argument("model", metavar="PRODUCT", help=PRODUCT_HELP)
     add_policy_options(simulate)
     which = simulate.add_mutually_exclusive_group()
-    which.add_argument("--sequence", type=int, nargs="+", metavar="K",
+    which.add_argument("--sequence", type=index, nargs="+", metavar="K",
                        help="full sequences by intention number (aplan intentions PRODUCT --full); on the factored "
                             "model (--planner online) by rank, from 0")
     which.add_argument("--all", action="store_true", help="every full sequence")
-    which.add_argument("--random", type=positive, metavar="N", help="N sequences drawn at random")
+    which.add_argument("--random", type=number(1, EPISODE_LIMIT, integer=True), metavar="N",
+                       help=f"N sequences drawn at random (at most {EPISODE_LIMIT:,})")
     simulate.add_argument("--plot", metavar="STEM", help="write STEM.png and STEM.svg (belief heat maps)")
     simulate.add_argument("--operator", choices=("model", "turns"), default="model",
                           help="model (default): the operator acts with the model's probability (1/2 per step); "
@@ -300,12 +306,14 @@ def add_commands(commands) -> None:
     simulate.add_argument("--json", action="store_true",
                           help="one JSON line per episode: sequence, confident_after_operations, discounted_return")
     add_episode_options(simulate)
+    add_force(simulate, outputs=(), stems=("plot",))
     simulate.set_defaults(run=_simulate)
 
     evaluate = commands.add_parser("evaluate", help="mean discounted return of a policy over simulated episodes")
     evaluate.add_argument("model", metavar="MODEL", help="a PRODUCT, or a .pomdpx/.pomdp file")
     add_policy_options(evaluate)
-    evaluate.add_argument("--episodes", type=positive, default=1000)
+    evaluate.add_argument("--episodes", type=number(1, EPISODE_LIMIT, integer=True), default=1000,
+                          help=f"episodes to simulate, 1 to {EPISODE_LIMIT:,} (default 1000)")
     evaluate.add_argument("--json", action="store_true", help="print mean_return, ci95 and episodes")
     add_episode_options(evaluate)
     evaluate.set_defaults(run=_evaluate)

@@ -9,7 +9,7 @@ from pathlib import Path
 from ..geometry.bundle import PRODUCT_FILE, analyze_product, apply_report
 from ..product import load_product, save_product
 from ..product.designer import add_directions, designer_lines, mark_not_blocking
-from .options import add_tolerance_options, tolerances_from
+from .options import add_force, add_tolerance_options, tolerances_from
 
 __all__ = ["add_commands", "contact_choice"]
 
@@ -80,4 +80,5 @@ def add_commands(commands) -> None:
                          help="the designer's mark: part BLOCKED, moved along DIRECTION (+X ... -Z, or X,Y,Z), does "
                               "not hit part BLOCKING, whatever the engine finds; recorded in the product "
                               "(geometry.designer) and applied after every detection; repeatable")
+    add_force(analyze)
     analyze.set_defaults(run=_analyze)

@@ -12,14 +12,18 @@ from ..defaults import (
     DECISION_TIME,
     DISCOUNT,
     POLICY_TIME_LIMIT,
+    RESOLUTION_LIMIT,
     SUBASSEMBLY_LIMIT,
 )
 from ..errors import LimitExceededError, PlannerError
+from ..files import check_output as check_writable
 from ..geometry.mesh_engine import Tolerances
 from ..geometry.tolerances import AUTO
 from ..product.examples import EXAMPLES
+from ..validation import InputError, check_number, check_output
 
-__all__ = ["PRODUCT_HELP", "positive", "add_technical", "add_base_part", "add_hierarchy", "add_fasteners",
+__all__ = ["PRODUCT_HELP", "number", "finite", "positive", "whole", "index", "add_force", "check_outputs",
+           "add_technical", "add_base_part", "add_hierarchy", "add_fasteners",
            "product_from", "add_decision_options", "rewards_from", "add_tolerance_options", "tolerances_from",
            "add_contact_options", "contact_tolerances_from", "contact_tolerance", "positive_length",
            "add_policy_options", "add_episode_options", "positive_seconds",
@@ -29,12 +33,56 @@ PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or
                 f"FreeCAD), or an embedded example ({', '.join(EXAMPLES)})")
 
 
-def positive(text: str) -> int:
-    """An integer of at least 1 (an argparse type)."""
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
+def number(low: float | None = None, high: float | None = None, low_open: bool = False, high_open: bool = False,
+           integer: bool = False):
+    """An argparse type: a finite number in the range (:func:`planner.validation.check_number`); out of range,
+    NaN or infinite is a usage error naming the option (exit status 2)."""
+    def parse(text: str):
+        try:
+            return check_number(text, "value", low, high, low_open, high_open, integer)
+        except InputError as exc:
+            raise argparse.ArgumentTypeError(str(exc).removeprefix("value: ")) from None
+    parse.__name__ = "whole number" if integer else "number"  # argparse names the type in its messages
+    return parse
+
+
+finite = number()                                  # any finite number (rewards)
+positive = number(1, integer=True)                  # a whole number of at least 1
+whole = number(integer=True)                        # any whole number (seeds)
+index = number(0, integer=True)                     # a whole number of at least 0 (cameras, sequences)
+
+
+def add_force(parser, outputs: tuple[str, ...] = ("output",), stems: tuple[str, ...] = ()) -> None:
+    """``--force`` and the outputs :func:`check_outputs` checks before the command starts: the options
+    ``outputs`` (a file each) and ``stems`` (``STEM.png`` and ``STEM.svg``), by their ``dest``. The overwrite
+    rule: an existing output is replaced only with ``--force`` (atomically); without it the command stops
+    before any work, naming the file (:func:`planner.validation.check_output`)."""
+    parser.add_argument("--force", action="store_true", help="replace the output if it exists (without it, an "
+                                                             "existing output is an error and nothing is done)")
+    parser.set_defaults(outputs=outputs, output_stems=stems)
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """Check every output of ``args`` (:func:`add_force`) before any work: its folder exists and is writable,
+    and it does not exist unless ``--force``. Raises :class:`~planner.validation.InputError`."""
+    force = getattr(args, "force", False)
+    outputs, stems = getattr(args, "outputs", ()), getattr(args, "output_stems", ())
+    for dest in outputs:
+        if getattr(args, dest, None):
+            check_output(getattr(args, dest), force, "--" + dest.replace("_", "-"))
+    for dest in stems:
+        stem = getattr(args, dest, None)
+        if stem:
+            for suffix in (".png", ".svg"):
+                check_output(f"{stem}{suffix}", force, "--" + dest.replace("_", "-"))
+    # Outputs of commands without --force (a session's --log, appended to by design): their folders at least.
+    # export-freecad makes its bundle's parent folders itself.
+    if getattr(args, "command", None) == "export-freecad":
+        return
+    for dest, suffix in (("output", ""), ("plot", ".png"), ("log", "")):
+        value = getattr(args, dest, None)
+        if dest not in outputs and dest not in stems and isinstance(value, str) and value and value != "-":
+            check_writable(value + suffix)
 
 
 def add_technical(parser) -> None:
@@ -90,14 +138,15 @@ def add_decision_options(parser: argparse.ArgumentParser) -> None:
     add_technical(group)
     add_base_part(group)
     add_fasteners(group)
-    group.add_argument("--discount", type=float, default=DISCOUNT, help=f"discount factor (default {DISCOUNT:g})")
-    group.add_argument("--reward-unfavorable", type=float, default=d.unfavorable, metavar="R",
+    group.add_argument("--discount", type=number(0, 1, high_open=True), default=DISCOUNT,
+                       help=f"discount factor, from 0 to below 1 (default {DISCOUNT:g})")
+    group.add_argument("--reward-unfavorable", type=finite, default=d.unfavorable, metavar="R",
                        help=f"robot does the next step, unfavorable to humans (default {d.unfavorable:g})")
-    group.add_argument("--reward-favorable", type=float, default=d.favorable, metavar="R",
+    group.add_argument("--reward-favorable", type=finite, default=d.favorable, metavar="R",
                        help=f"robot does the next step, fine for humans (default {d.favorable:g})")
-    group.add_argument("--reward-wrong", type=float, default=d.wrong, metavar="R",
+    group.add_argument("--reward-wrong", type=finite, default=d.wrong, metavar="R",
                        help=f"robot does another operation: its eagerness (default {d.wrong:g})")
-    group.add_argument("--reward-wait", type=float, default=d.wait, metavar="R", help=f"wait (default {d.wait:g})")
+    group.add_argument("--reward-wait", type=finite, default=d.wait, metavar="R", help=f"wait (default {d.wait:g})")
     add_hierarchy(group)
     add_size_options(parser)
 
@@ -141,13 +190,14 @@ def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--contact-ceiling", type=positive_length, default=None, metavar="T",
                        help=f"--contact auto refuses to go above this, naming the gap (default "
                             f"{100 * CONTACT_CEILING_FRACTION:g} %% of the diagonal of the product's bounding box)")
-    group.add_argument("--interference", type=float, default=d.interference, metavar="V",
+    group.add_argument("--interference", type=number(0), default=d.interference, metavar="V",
                        help=f"report overlaps above this volume (default {d.interference:g})")
-    group.add_argument("--depth", type=float, default=d.depth, metavar="T",
+    group.add_argument("--depth", type=number(0), default=d.depth, metavar="T",
                        help=f"overlaps shallower than this along the motion do not block (default {d.depth:g})")
-    group.add_argument("--resolution", type=int, default=d.resolution, metavar="N",
-                       help=f"mesh engine: pixels across the product for the projection test (default {d.resolution})")
-    group.add_argument("--pair-budget", type=float, default=d.pair_budget, metavar="S",
+    group.add_argument("--resolution", type=number(16, RESOLUTION_LIMIT, integer=True), default=d.resolution,
+                       metavar="N", help=f"mesh engine: pixels across the product for the projection test, 16 to "
+                                         f"{RESOLUTION_LIMIT:,} (default {d.resolution})")
+    group.add_argument("--pair-budget", type=number(0, low_open=True), default=d.pair_budget, metavar="S",
                        help="occt engine: seconds of work per pair of parts; a pair not decided in time is reported "
                             f"and counted as touching and blocking (default {d.pair_budget:g})")
     group.add_argument("--directions", type=_direction_count, default=d.directions, metavar="N",
@@ -248,17 +298,12 @@ def online_budget(args: argparse.Namespace) -> tuple[float | None, int | None]:
 
 def add_episode_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by simulate and evaluate."""
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=whole, default=0)
     parser.add_argument("--max-steps", type=positive, default=100)
     add_decision_options(parser)
 
 
-def gibibytes(text: str) -> float:
-    """A positive number of GiB (an argparse type)."""
-    value = float(text)
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be a positive number of GiB, got {text}")
-    return value
+gibibytes = number(0, 2 ** 20, low_open=True)  # a positive, finite number of GiB (at most 1 PiB)
 
 
 def add_size_options(parser) -> None:

@@ -26,6 +26,7 @@ from .options import (
     add_base_part,
     add_contact_options,
     add_fasteners,
+    add_force,
     add_hierarchy,
     add_size_options,
     add_technical,
@@ -305,6 +306,7 @@ def add_commands(commands) -> None:
                            help="write the product file with the proposed groups accepted (atomically)")
     fasteners.add_argument("--json", action="store_true",
                            help="print one JSON object: designer, proposed (groups), left_out (parts and why)")
+    add_force(fasteners)
     fasteners.set_defaults(run=_fasteners)
 
     synth = commands.add_parser("synth", help="write a synthetic product of Table I",
@@ -313,4 +315,5 @@ def add_commands(commands) -> None:
     synth.add_argument("kind", choices=sorted(SYNTHETIC))
     synth.add_argument("parts", type=positive, metavar="N", help="number of parts")
     synth.add_argument("-o", "--output", metavar="FILE", help="write here (default: standard output)")
+    add_force(synth)
     synth.set_defaults(run=_synth)

@@ -13,8 +13,18 @@ from ..decision.intention_model import IntentionModel
 from ..decision.policy import AlphaVectorPolicy
 from ..errors import PlannerError
 from ..product import DEFAULT_MARKER_DICTIONARY
+from ..validation import check_output
 from .decision import decision_maker_from, levels_from, model_from
-from .options import PRODUCT_HELP, add_decision_options, add_policy_options, online_budget, positive
+from .options import (
+    PRODUCT_HELP,
+    add_decision_options,
+    add_force,
+    add_policy_options,
+    index,
+    number,
+    online_budget,
+    positive,
+)
 
 __all__ = ["add_commands"]
 
@@ -46,7 +56,31 @@ def _open_stream(args: argparse.Namespace, model: IntentionModel, markers, detec
         cell = SimulatedCell(tray_layout(markers), operator, camera, settle=args.quiet_frames + 5)
         return detections(cell, detector), ScriptedRobot(on_perform=cell.robot)
     frames = video_frames(args.video) if args.video is not None else image_frames(args.images)
-    return detections(frames, detector), None
+    return _Primed(detections(frames, detector)), None
+
+
+class _Primed:
+    """An iterator whose first item is taken at once: a source whose first frame cannot be read fails before
+    the session starts and its log exists (the README's promise); ``close`` closes the source."""
+
+    def __init__(self, stream):
+        self.stream = stream
+        self.first = [next(stream, None)]  # None: no frame at all (the session ends at once, as before)
+
+    def __iter__(self):
+        return self
+
+    def __next__(self):
+        if self.first:
+            item = self.first.pop()
+            if item is not None:
+                return item
+        return next(self.stream)
+
+    def close(self) -> None:
+        close = getattr(self.stream, "close", None)
+        if close is not None:
+            close()
 
 
 def _demo_operations(model, k: int) -> list[int]:
@@ -66,6 +100,8 @@ def _session(args: argparse.Namespace) -> int:
         raise PlannerError("--demo simulates the robot too; leave out --robot")
     if api._model_file_kind(args.product):
         model_from(args, product_only=True)  # the error that says a session needs a product
+    if args.log:
+        check_output(args.log, option="--log", replaceable=False, noun="log")  # before any work; never replaced
     levels = levels_from(args)
     log_path = args.log or f"session-{time.strftime('%Y%m%d-%H%M%S')}.jsonl"
     status = 0
@@ -207,11 +243,11 @@ def _add_session(commands) -> None:
     session.add_argument("product", metavar="PRODUCT", help=PRODUCT_HELP)
     add_policy_options(session)
     source = session.add_mutually_exclusive_group(required=True)
-    source.add_argument("--camera", type=int, metavar="N", help="camera index (OpenCV: /dev/videoN)")
+    source.add_argument("--camera", type=index, metavar="N", help="camera index (OpenCV: /dev/videoN)")
     source.add_argument("--video", metavar="FILE", help="a video file of the tray")
     source.add_argument("--images", metavar="DIR", help="a folder of images of the tray, in file-name order")
     source.add_argument("--keyboard", action="store_true", help="type the operator's picks (no camera)")
-    source.add_argument("--demo", type=int, metavar="K",
+    source.add_argument("--demo", type=index, metavar="K",
                         help="a simulated cell: an operator following full sequence K (aplan intentions PRODUCT "
                              "--full; by rank from 0 with the online planner) and a robot, on a rendered tray seen "
                              "through the vision pipeline")
@@ -242,6 +278,7 @@ def add_commands(commands) -> None:
     replay_cmd.add_argument("log", metavar="LOG", help="a session log (.jsonl)")
     replay_cmd.add_argument("--plot", metavar="STEM", help="write STEM.png and STEM.svg (belief heat map)")
     replay_cmd.add_argument("--json", action="store_true", help="one JSON line per step")
+    add_force(replay_cmd, outputs=(), stems=("plot",))
     replay_cmd.set_defaults(run=_replay)
 
     markers = commands.add_parser("markers", help="print the tray's markers with part and tool names",
@@ -249,5 +286,7 @@ def add_commands(commands) -> None:
                                               "on A4 pages (PDF, or PNG: the first page).")
     markers.add_argument("product", metavar="PRODUCT", help=PRODUCT_HELP)
     markers.add_argument("-o", "--output", required=True, metavar="FILE", help="sheet.pdf or sheet.png")
-    markers.add_argument("--size", type=float, default=40.0, metavar="MM", help="marker width in mm (default 40)")
+    markers.add_argument("--size", type=number(5, 180), default=40.0, metavar="MM",
+                         help="marker width in mm, 5 to 180 (an A4 page; default 40)")
+    add_force(markers)
     markers.set_defaults(run=_markers)

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
+from ..defaults import DECLARED_LIMIT, INPUT_FILE_LIMIT, MEMORY_LIMIT
 from ..errors import PlannerError
 from ..files import open_atomic
 from .io.pomdpx import safe_parser
@@ -57,8 +58,9 @@ class AlphaVectorPolicy:
             raise PolicyError(f"{source}: vectors of length {self.alphas.shape[-1]}, but the model has "
                               f"{n_states} states")
         if self.actions.size and (self.actions.min() < 0 or self.actions.max() >= n_actions):
-            raise PolicyError(f"{source}: action {int(self.actions.max())} out of range; the model has "
-                              f"{n_actions} actions")
+            bad = int(self.actions.min()) if self.actions.min() < 0 else int(self.actions.max())
+            raise PolicyError(f"{source}: action {bad} out of range; the model has {n_actions} actions, "
+                              f"numbered 0 to {n_actions - 1}")
 
 
 def policy_text(policy: AlphaVectorPolicy, model_name: str = "aplan") -> str:
@@ -84,6 +86,9 @@ def read_policy(path: str | Path, model: POMDP | None = None) -> AlphaVectorPoli
     """Read a SARSOP ``.policy`` file; with ``model``, check that it fits."""
     source = str(path)
     try:
+        if Path(path).stat().st_size > INPUT_FILE_LIMIT:
+            raise PolicyError(f"{source}: {Path(path).stat().st_size:,} bytes, more than the limit of "
+                              f"{INPUT_FILE_LIMIT:,} for a policy file")
         root = etree.fromstring(Path(path).read_bytes(), safe_parser())
     except OSError as exc:
         raise PolicyError(f"{source}: cannot read the file: {exc}") from None
@@ -96,23 +101,26 @@ def read_policy(path: str | Path, model: POMDP | None = None) -> AlphaVectorPoli
         length = int(block.get("vectorLength"))
     except (TypeError, ValueError):
         raise PolicyError(f"{source}: line {block.sourceline}: <AlphaVector> needs an integer vectorLength") from None
+    if not 1 <= length <= DECLARED_LIMIT:
+        raise PolicyError(f"{source}: line {block.sourceline}: vectorLength {length:,}: must be from 1 to "
+                          f"{DECLARED_LIMIT:,} (the model's states)")
     alphas, actions = [], []
     for element in block:
-        try:
-            action = int(element.get("action"))
-            if element.tag == "Vector":
-                values = np.array([float(x) for x in (element.text or "").split()])
-            elif element.tag == "SparseVector":
-                values = np.zeros(length)
-                for entry in element.findall("Entry"):
-                    index, value = (entry.text or "").split()
-                    values[int(index)] = float(value)
-            else:
-                continue
-        except (TypeError, ValueError, IndexError):
-            raise PolicyError(f"{source}: line {element.sourceline}: malformed <{element.tag}>") from None
+        if element.tag not in ("Vector", "SparseVector"):
+            continue
+        if (len(alphas) + 1) * length > MEMORY_LIMIT // 8:
+            raise PolicyError(f"{source}: line {element.sourceline}: more than {len(alphas):,} vectors of "
+                              f"{length:,} values, more than {MEMORY_LIMIT // 2 ** 30} GiB")
+        values = _vector(element, length, source)
         if values.size != length:
             raise PolicyError(f"{source}: line {element.sourceline}: {values.size} values, vectorLength is {length}")
+        try:
+            action = int(element.get("action"))
+        except (TypeError, ValueError):
+            raise PolicyError(f"{source}: line {element.sourceline}: <{element.tag}> needs an integer action, got "
+                              f"{element.get('action')!r}") from None
+        if action < 0:
+            raise PolicyError(f"{source}: line {element.sourceline}: action {action}: actions are numbered from 0")
         alphas.append(values)
         actions.append(action)
     if not alphas:
@@ -121,3 +129,27 @@ def read_policy(path: str | Path, model: POMDP | None = None) -> AlphaVectorPoli
     if model is not None:
         policy.check(model, source)
     return policy
+
+
+def _vector(element, length: int, source: str) -> np.ndarray:
+    """The values of a ``<Vector>`` (dense) or ``<SparseVector>`` (``<Entry>index value</Entry>``, indices from
+    0 to ``length - 1``); every value finite, else :class:`PolicyError` naming the line. O(length)."""
+    where = f"{source}: line {element.sourceline}"
+    try:
+        if element.tag == "Vector":
+            values = np.array([float(x) for x in (element.text or "").split()])
+        else:
+            values = np.zeros(length)
+            for entry in element.findall("Entry"):
+                index, value = (entry.text or "").split()
+                if not 0 <= int(index) < length:
+                    raise PolicyError(f"{where}: <Entry> index {int(index)}: must be from 0 to {length - 1} "
+                                      "(vectorLength - 1)")
+                values[int(index)] = float(value)
+    except (TypeError, ValueError, OverflowError):
+        raise PolicyError(f"{where}: malformed <{element.tag}>: expected numbers "
+                          f"{'(index value per <Entry>)' if element.tag == 'SparseVector' else ''}") from None
+    if not np.isfinite(values).all():
+        raise PolicyError(f"{where}: <{element.tag}> holds a value that is not a finite number "
+                          f"({values[~np.isfinite(values)][0]}); a policy's values must be finite")
+    return values

@@ -84,6 +84,7 @@ class POMDP:
             raise ModelError(f"initial belief has {self.initial.shape[0]} entries, expected {S}")
         if not 0 <= self.discount < 1:
             raise ModelError(f"discount must be in [0, 1), got {self.discount}")
+        self._check_finite()
         for kind, tables, width, names in (("transition", self.transition, S, self.states),
                                            ("observation", self.observation, Z, self.observations)):
             for a, table in enumerate(tables):
@@ -91,7 +92,12 @@ class POMDP:
                     raise ModelError(f"{kind} table of action {self.actions[a]!r} has shape {table.shape}, "
                                      f"expected ({S}, {width})")
                 if table.nnz and table.data.min() < -tolerance:
-                    raise ModelError(f"{kind} table of action {self.actions[a]!r} has negative probabilities")
+                    coo = table.tocoo()
+                    k = int(np.argmin(coo.data))
+                    row = "from state" if kind == "transition" else "in state"
+                    raise ModelError(f"{kind} table of action {self.actions[a]!r} has a negative probability, "
+                                     f"{coo.data[k]:.9g} {row} {self.states[coo.row[k]]!r} (column "
+                                     f"{names[coo.col[k]]!r})")
                 sums = np.asarray(table.sum(axis=1)).ravel()
                 bad = np.flatnonzero(np.abs(sums - 1) > tolerance)
                 if bad.size:
@@ -99,8 +105,23 @@ class POMDP:
                     row = "from state" if kind == "transition" else "in state"
                     raise ModelError(f"{kind} probabilities of action {self.actions[a]!r} {row} {self.states[s]!r} "
                                      f"sum to {sums[s]:.9g}, not 1 ({bad.size} such rows)")
+        if self.initial.size and self.initial.min() < -tolerance:
+            s = int(np.argmin(self.initial))
+            raise ModelError(f"initial belief has a negative probability, {self.initial[s]:.9g} on state "
+                             f"{self.states[s]!r}")
         if abs(self.initial.sum() - 1) > tolerance or self.initial.min() < -tolerance:
             raise ModelError(f"initial belief sums to {self.initial.sum():.9g}, not 1")
+
+    def _check_finite(self) -> None:
+        """Raise :class:`ModelError` naming the first table holding a NaN or an infinity. O(nnz + A S)."""
+        tables = [("initial belief", self.initial), ("reward table", self.reward)]
+        tables += [(f"transition table of action {a!r}", t.data) for a, t in zip(self.actions, self.transition)]
+        tables += [(f"observation table of action {a!r}", o.data) for a, o in zip(self.actions, self.observation)]
+        for what, values in tables:
+            bad = np.flatnonzero(~np.isfinite(np.asarray(values, dtype=float).ravel()))
+            if bad.size:
+                raise ModelError(f"the {what} holds {bad.size} value(s) that are not finite numbers (such as "
+                                 f"{np.asarray(values).ravel()[bad[0]]}); every number must be finite")
 
     def dense(self) -> tuple[np.ndarray, np.ndarray]:
         """Dense (A, S, S) transition and (A, S, Z) observation arrays (for small models and tests)."""

@@ -50,18 +50,31 @@ def load_part_meshes(product: Product) -> list[PartMesh]:
         if not path.is_file():
             raise GeometryError(f"{product.source}: part {part.id!r}: mesh file {path} does not exist")
         try:
-            mesh = trimesh.load(path, force="mesh")
+            mesh = trimesh.load(path, force="mesh", process=False)  # processing would drop NaN vertices silently
         except Exception as exc:  # trimesh raises many types for corrupt files
-            raise GeometryError(f"{product.source}: part {part.id!r}: cannot read mesh {path}: {exc}") from None
+            # an unreadable header sends trimesh looking for optional modules (charset_normalizer): not the cause
+            why = "not a mesh file it can read (a damaged header?)" if isinstance(exc, ImportError) else exc
+            raise GeometryError(f"{product.source}: part {part.id!r}: cannot read mesh {path}: {why}; re-export "
+                                "the part (STL, OBJ, PLY)") from None
         if len(mesh.faces) == 0:
             raise GeometryError(f"{product.source}: part {part.id!r}: mesh {path} has no triangles")
+        if not np.isfinite(np.asarray(mesh.vertices)).all():
+            raise GeometryError(f"{product.source}: part {part.id!r}: mesh {path} has coordinates that are not "
+                                "finite numbers (NaN or infinity); re-export the part")
+        mesh.process()  # merge the vertices the facets share, as trimesh.load does by default
         meshes.append(PartMesh(part.id, np.asarray(mesh.vertices, dtype=np.float64),
                                np.asarray(mesh.faces, dtype=np.int64)))
     return meshes
 
 
 def _mesh_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
-    return analyze_meshes(load_part_meshes(product), tolerances)
+    meshes = load_part_meshes(product)
+    try:
+        return analyze_meshes(meshes, tolerances)
+    except GeometryError as exc:  # the engine names the part; the user needs the file too
+        if type(exc) is not GeometryError or str(exc).startswith(str(product.source)):
+            raise
+        raise GeometryError(f"{product.source}: {exc}") from None
 
 
 ENGINES: dict[str, Callable[[Product, Tolerances], GeometryReport]] = {"mesh": _mesh_engine}

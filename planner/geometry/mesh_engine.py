@@ -101,9 +101,21 @@ class GeometryReport:
 # ------------------------------------------------------------------------------------------- contacts
 
 
+# Coordinates farther from the origin than this lose their millimetres in the engines' single precision.
+_FARTHEST = 1e7
+
+
 def _manifold(part: PartMesh):
     import manifold3d
 
+    if not np.isfinite(part.vertices).all():
+        raise GeometryError(f"part {part.id!r}: its mesh has coordinates that are not finite numbers (NaN or "
+                            "infinity); re-export it from the CAD model")
+    farthest = float(np.abs(part.vertices).max()) if part.vertices.size else 0.0
+    if farthest > _FARTHEST:
+        raise GeometryError(f"part {part.id!r}: its mesh reaches {farthest:.3g} model units from the origin, beyond "
+                            f"{_FARTHEST:g} where single precision loses the tolerances; move the product near the "
+                            "origin or check its units")
     mesh = manifold3d.Mesh(vert_properties=np.ascontiguousarray(part.vertices, dtype=np.float32),
                            tri_verts=np.ascontiguousarray(part.faces, dtype=np.uint32))
     solid = manifold3d.Manifold(mesh)

@@ -16,6 +16,7 @@ from typing import Any
 
 from ..errors import ProductFormatError
 from ..files import write_atomic
+from ..validation import InputError, json_loads
 from .constants import AXIS_DIRECTIONS, DEFAULT_MARKER_DICTIONARY, FORMAT, UNIT_TOLERANCE, VERSION
 from .model import (
     Direction,
@@ -200,10 +201,12 @@ def _fastener_dict(group: FastenerGroup) -> dict:
 def loads_product(text: str, source: str = "<memory>") -> Product:
     """Parse the text of a product file; a JSON syntax error names the line and column."""
     try:
-        data = json.loads(text)
+        data = json_loads(text, source)
     except json.JSONDecodeError as exc:
         raise ProductFormatError(source, f"line {exc.lineno} column {exc.colno}",
                                  f"malformed JSON: {exc.msg}") from None
+    except InputError as exc:  # too deep, a number that is not finite or far too long
+        raise ProductFormatError(source, "", str(exc).removeprefix(f"{source}: ")) from None
     return product_from_dict(data, source)
 
 

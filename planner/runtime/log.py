@@ -34,8 +34,10 @@ from ..decision.belief import DiscreteUpdater
 from ..decision.factored_model import FactoredBelief, FactoredIntentionModel, factored_model
 from ..decision.factored_updater import FactoredUpdater
 from ..decision.intention_model import IntentionModel, intention_model
+from ..defaults import INPUT_FILE_LIMIT
 from ..errors import PlannerError
 from ..product import Product, product_from_dict
+from ..validation import InputError, json_loads
 
 __all__ = ["LOG_VERSION", "SessionError", "EventLog", "top_intentions", "belief_at", "updater_for", "Replay", "read_log", "replay"]
 
@@ -124,19 +126,26 @@ def read_log(path: str | os.PathLike) -> list[dict]:
     short (the one being written when the session died) is dropped. Raises :class:`SessionError`."""
     path = Path(path)
     try:
+        if path.stat().st_size > INPUT_FILE_LIMIT:
+            raise SessionError(f"{path}: {path.stat().st_size:,} bytes, more than the limit of "
+                               f"{INPUT_FILE_LIMIT:,} for a session log")
         lines = path.read_text(encoding="utf-8").splitlines()
     except OSError as exc:
         raise SessionError(f"{path}: cannot read the log: {exc}") from None
+    except UnicodeDecodeError:
+        raise SessionError(f"{path}: not a session log (not UTF-8 text: a binary file?)") from None
     events = []
     for number, line in enumerate(lines, start=1):
         if not line.strip():
             continue
         try:
-            event = json.loads(line)
+            event = json_loads(line, f"{path}: line {number}")
         except json.JSONDecodeError as exc:
             if number == len(lines):  # the line being written when the session died
                 break
             raise SessionError(f"{path}: line {number}: not JSON ({exc.msg}); the log is damaged") from None
+        except InputError as exc:  # nested too deep, a number that is not finite
+            raise SessionError(f"{exc}; the log is damaged") from None
         if not isinstance(event, dict) or "event" not in event:
             raise SessionError(f"{path}: line {number}: not a session event")
         events.append(event)
@@ -153,8 +162,14 @@ def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel | Factor
     beliefs were over classes), checked against the logged names."""
     from ..assembly.plan import make_plan
 
+    if not isinstance(start.get("product"), dict):
+        raise SessionError(f"{path}: the start event has no 'product' (an object); the log is damaged or was not "
+                           "written by aplan session")
     product = product_from_dict(start["product"], f"{path} (start event)")
-    base_part = (start.get("settings") or {}).get("base_part")  # the part resolved at the start, never "auto"
+    settings = start.get("settings") if isinstance(start.get("settings"), dict) else {}
+    base_part = settings.get("base_part")  # the part resolved at the start, never "auto"
+    if base_part is not None and not isinstance(base_part, str):
+        raise SessionError(f"{path}: the start event's base part {base_part!r} is not a part name; the log is damaged")
     plan = make_plan(product)
     model = (factored_model(plan, base_part=base_part) if start.get("belief_over") == "classes"
              else intention_model(plan, base_part=base_part))
@@ -192,21 +207,34 @@ def replay(path: str | os.PathLike, tolerance: float = 1e-6) -> Replay:
     pending: dict[int, int] = {}  # step -> the action logged for it
     for number, event in enumerate(events[1:], start=2):
         kind = event["event"]
+        if done.end is not None:
+            raise SessionError(f"{path}: event {number} ({kind!r}) comes after the 'end' event; the log is damaged")
         try:
             if kind == "action":
-                pending[event["step"]] = int(event["action"])
+                pending[event["step"]] = _in_range(int(event["action"]), model.actions, "action")
             elif kind == "observation" and event.get("index") is not None:
-                action, observation = pending[event["step"]], int(event["index"])
+                action = pending[event["step"]]
+                observation = _in_range(int(event["index"]), model.observations, "observation")
                 belief = updater.update(belief, action, observation)
                 done.actions.append(action)
                 done.observations.append(observation)
                 done.beliefs.append(belief)
             elif kind == "belief":
-                if any(abs(belief_at(belief, int(i)) - float(p)) > tolerance for i, p in event["top"]):
-                    done.mismatches.append(event["step"])
+                if any(not abs(belief_at(belief, int(i)) - float(p)) <= tolerance for i, p in event["top"]):
+                    done.mismatches.append(event["step"])  # a NaN is a mismatch too
             elif kind == "end":
-                done.end = event
-        except (KeyError, TypeError, ValueError, IndexError) as exc:
-            raise SessionError(f"{path}: event {number} ({kind!r}): malformed or out of order ({exc!r}); "
+                done.end = {"reason": str(event.get("reason", "")), "message": str(event.get("message", "")),
+                            **{k: v for k, v in event.items() if k not in ("reason", "message")}}
+        except (KeyError, TypeError, ValueError, IndexError, OverflowError) as exc:
+            detail = str(exc) if type(exc) is ValueError and "out of range" in str(exc) else repr(exc)
+            raise SessionError(f"{path}: event {number} ({kind!r}): malformed or out of order ({detail}); "
                                "the log is damaged") from None
     return done
+
+
+def _in_range(index: int, names, what: str) -> int:
+    """``index`` if it numbers one of ``names`` (from 0), else a ``ValueError`` (a damaged log): a negative
+    index would otherwise wrap around to the last names."""
+    if not 0 <= index < len(names):
+        raise ValueError(f"{what} {index} out of range: the model has {len(names)} {what}s, numbered from 0")
+    return index

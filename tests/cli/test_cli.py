@@ -93,7 +93,7 @@ def test_failed_synth_writes_nothing(tmp_path):
     target = tmp_path / "out.json"
     result = subprocess.run([sys.executable, "-m", "planner", "synth", "chain", "0", "-o", str(target)],
                             capture_output=True, text=True)
-    assert result.returncode == 2 and "must be at least 1" in result.stderr
+    assert result.returncode == 2 and "must be a whole number at least 1, got 0" in result.stderr
     assert list(tmp_path.iterdir()) == []
 
 

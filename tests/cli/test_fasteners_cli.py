@@ -143,7 +143,9 @@ def test_accepted_product_elsewhere_keeps_its_meshes(capsys, tmp_path):
     out.parent.mkdir()
     code, _, _ = run(capsys, "fasteners", source, "-o", out)
     assert code == 0 and load_product(out).parts[0].mesh == "../bundle/meshes/p1.stl"
-    code, _, _ = run(capsys, "fasteners", source, "-o", source)  # in place: the paths stay
+    code, _, err = run(capsys, "fasteners", source, "-o", source)  # an existing output needs --force
+    assert code == 1 and "--force" in err
+    code, _, _ = run(capsys, "fasteners", source, "-o", source, "--force")  # in place: the paths stay
     assert code == 0 and load_product(source).parts[0].mesh == "meshes/p1.stl"
     assert [g.id for g in load_product(source).fasteners] == ["screws", "fasteners_p2+p3"]
 

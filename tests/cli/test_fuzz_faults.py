@@ -60,7 +60,7 @@ OUTPUT_CASES = {
     "output under a file": (["pomdp", "pen", "-o", "afile/m.pomdpx"], {}, "is not a folder"),
     "pomdpx on a full disk": (["pomdp", "pen", "-o", "m.pomdpx"], {FAULT_DISK_FULL: "4096"}, "the disk is full"),
     ".pomdp on a full disk": (["pomdp", "pen", "-o", "m.pomdp"], {FAULT_DISK_FULL: "4096"}, "the disk is full"),
-    "policy on a full disk": (["solve", "pen", "-o", "p.policy", "--quiet", "--time-limit", "0.3"],
+    "policy on a full disk": (["solve", "pen", "-o", "p.policy", "--force", "--quiet", "--time-limit", "0.3"],
                               {FAULT_DISK_FULL: "4096"}, "the disk is full"),
     "marker sheet (pdf) on a full disk": (["markers", "pen", "-o", "s.pdf"], {FAULT_DISK_FULL: "1000"},
                                           "the disk is full"),

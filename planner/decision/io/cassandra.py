@@ -19,8 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ...defaults import DECLARED_LIMIT, SPREAD_CELL_LIMIT
 from ...errors import PlannerError
 from ...files import open_atomic
+from ...validation import InputLimitError
 from ..pomdp import POMDP, ModelError
 from .sparse_tables import SparseTable, split_rows
 
@@ -136,11 +138,18 @@ def _declaration(st: _Stream, key: str, names: dict[str, list[str]], header: dic
         tok = st.take()
         if tok.isdigit():
             prefix = {"states": "s", "actions": "a", "observations": "o"}[key]
-            names[key] = [f"{prefix}{k}" for k in range(int(tok))]
+            count = int(tok)
+            if count == 0:
+                raise st.fail(f"{key}: 0; a model needs at least one")
+            if count > DECLARED_LIMIT:
+                raise st.fail(f"{key}: {count:,}, more than the limit of {DECLARED_LIMIT:,} declared values")
+            names[key] = [f"{prefix}{k}" for k in range(count)]
         else:
             items = [tok]
             while not _names_end(st, _KEYS + ("T", "O", "R")):
                 items.append(st.take())
+                if len(items) > DECLARED_LIMIT:
+                    raise st.fail(f"{key}: more than the limit of {DECLARED_LIMIT:,} declared values")
             names[key] = items
 
 
@@ -158,6 +167,9 @@ def _initial_belief(st: _Stream, names: dict[str, list[str]], spec) -> np.ndarra
     chosen = {_index(st, names["states"], x) for x in spec[1]}
     if spec[0] == "exclude":
         chosen = set(range(S)) - chosen
+    if not chosen:
+        raise CassandraError(f"{st.source}: start {spec[0]}: leaves no state to start from; list at least one "
+                             f"state{' to include' if spec[0] == 'include' else ' that is not excluded'}")
     initial[sorted(chosen)] = 1.0 / len(chosen)
     return initial
 
@@ -186,8 +198,11 @@ def _read(lines, source: str) -> POMDP:
             item = st.raw_line()
             if item is None:
                 break
-            if _one_line_entry(st, item, names, positions, tables):
-                continue
+            try:
+                if _one_line_entry(st, item, names, positions, tables):
+                    continue
+            except InputLimitError as exc:
+                raise st.fail(str(exc)) from None
             st.push(item)
         if st.peek() is None:
             break
@@ -196,7 +211,8 @@ def _read(lines, source: str) -> POMDP:
             _declaration(st, key, names, header)
             if all(k in names for k in ("states", "actions", "observations")) and tables is None:
                 S, A, Z = (len(names[k]) for k in ("states", "actions", "observations"))
-                tables = {"T": SparseTable((A, S, S)), "O": SparseTable((A, S, Z)), "R": SparseTable((A, S, S, Z))}
+                tables = {"T": SparseTable((A, S, S)), "O": SparseTable((A, S, Z)),
+                          "R": SparseTable((A, S, S, Z), cell_limit=None)}  # looked up only, never spread
                 positions = {k: {} for k in ("states", "actions", "observations")}
                 for k, table in positions.items():
                     for i, n in enumerate(names[k]):
@@ -204,7 +220,10 @@ def _read(lines, source: str) -> POMDP:
         elif key in ("T", "O", "R"):
             if tables is None:
                 raise st.fail(f"{key} entry before states, actions and observations are declared")
-            _entry(st, key, names, positions, tables[key])
+            try:
+                _entry(st, key, names, positions, tables[key])
+            except InputLimitError as exc:
+                raise st.fail(str(exc)) from None
         else:
             raise st.fail(f"unexpected {key!r}")
     if tables is None:
@@ -213,7 +232,10 @@ def _read(lines, source: str) -> POMDP:
         raise CassandraError(f"{source}: no discount")
     initial = _initial_belief(st, names, header["start"])
     transition, observation = split_rows(tables["T"]), split_rows(tables["O"])
-    reward = header["sign"] * expected_reward(transition, observation, tables["R"])
+    try:
+        reward = header["sign"] * expected_reward(transition, observation, tables["R"])
+    except InputLimitError as exc:
+        raise CassandraError(f"{source}: {exc}") from None
     try:
         return POMDP(tuple(names["states"]), tuple(names["actions"]), tuple(names["observations"]),
                      transition, observation, reward, initial, header["discount"], name=Path(source).stem)
@@ -236,6 +258,11 @@ def expected_reward(transition, observation, table: SparseTable) -> np.ndarray:
         total = int(counts.sum())
         if not total:
             continue
+        if total > SPREAD_CELL_LIMIT:  # the temporaries below hold about 60 bytes per combination
+            raise InputLimitError(f"the reward of action {a} would be evaluated over {total:,} (state, next state, "
+                                  f"observation) combinations with non-zero probability, more than the limit of "
+                                  f"{SPREAD_CELL_LIMIT:,}; give rewards as R: a : s : * : * (they do not depend on "
+                                  "the next state or the observation), or make the tables sparser")
         # every (s, s', z) with T(s' | s, a) O(z | s', a) > 0: each T entry repeated over its observation row
         position = np.repeat(o.indptr[coo.col] - (np.cumsum(counts) - counts), counts) + np.arange(total)
         s, s2 = np.repeat(coo.row, counts).astype(np.int64), np.repeat(coo.col, counts).astype(np.int64)

@@ -24,8 +24,10 @@ from xml.sax.saxutils import escape
 import numpy as np
 from lxml import etree
 
+from ...defaults import DECLARED_LIMIT, INPUT_FILE_LIMIT
 from ...errors import PlannerError
 from ...files import open_atomic
+from ...validation import CappedReader, InputLimitError
 from ..pomdp import POMDP, ModelError
 from .sparse_tables import SparseTable, split_rows
 
@@ -55,7 +57,13 @@ def _values(source, var, prefix):
     count = var.find("NumValues")
     if count is None or not (count.text or "").strip().isdigit():
         raise _fail(source, var, f"<{var.tag}> needs <NumValues> or <ValueEnum>")
-    return [f"{prefix}{i}" for i in range(int(count.text))]
+    number = int(count.text)
+    if number == 0:
+        raise _fail(source, count, f"<{var.tag}> declares 0 values; a model needs at least one")
+    if number > DECLARED_LIMIT:
+        raise _fail(source, count, f"<{var.tag}> declares {number:,} values, more than the limit of "
+                                   f"{DECLARED_LIMIT:,}")
+    return [f"{prefix}{i}" for i in range(number)]
 
 
 class _Section:
@@ -134,7 +142,8 @@ def _is_number(text: str) -> bool:
 
 def _open(path, source):
     try:
-        return gzip.open(path) if source.endswith(".gz") else open(path, "rb")
+        return CappedReader(gzip.open(path) if source.endswith(".gz") else open(path, "rb"), INPUT_FILE_LIMIT,
+                            source)
     except OSError as exc:
         raise PomdpxError(f"{source}: cannot read the file: {exc}") from None
 
@@ -153,12 +162,18 @@ def read_pomdpx(path: str | Path) -> POMDP:
             return _read(stream, source)
     except (OSError, EOFError) as exc:
         raise PomdpxError(f"{source}: cannot read the file: {exc}") from None
+    except InputLimitError as exc:
+        raise PomdpxError(str(exc)) from None
     except etree.XMLSyntaxError as exc:
         raise PomdpxError(f"{source}: line {exc.lineno}: malformed XML: {exc.msg}") from None
 
 
 _SECTIONS = {"InitialStateBelief": "CondProb", "StateTransitionFunction": "CondProb", "ObsFunction": "CondProb",
              "RewardFunction": "Func"}
+
+
+_ENTRY_PARTS = ("Entry", "Instance", "ProbTable", "ValueTable")
+_ELEMENT_LIMIT = 100_000  # elements other than entries: each is kept until the end of the file
 
 
 def _read(stream, source: str) -> POMDP:
@@ -168,8 +183,14 @@ def _read(stream, source: str) -> POMDP:
     found: dict[str, _Section] = {}
     section = section_of = None  # the table being read, and its <Parameter>
     text = {}  # texts of the top-level elements
+    structural = 0  # elements kept in memory: all but the entries (and their children), which are dropped
     for _, element in etree.iterparse(stream, events=("end",), **_SAFE):
         tag = element.tag
+        if tag not in _ENTRY_PARTS:
+            structural += 1
+            if structural > _ELEMENT_LIMIT:
+                raise _fail(source, element, f"more than {_ELEMENT_LIMIT:,} elements besides the tables' <Entry>s; "
+                                             "not a POMDPX file the planner reads (a flat model has a few dozen)")
         if tag == "Entry":
             parameter = element.getparent()
             if parameter is not section_of:  # the first entry of a table: its <Var> and <Parent> are read
@@ -178,7 +199,10 @@ def _read(stream, source: str) -> POMDP:
                 if parameter is not None and parameter.tag == "Parameter":
                     section = _start_section(source, parameter, names, roles, found)
             if section is not None:
-                section.entry(element)
+                try:
+                    section.entry(element)
+                except InputLimitError as exc:
+                    raise _fail(source, element, str(exc)) from None
                 element.clear()
                 while element.getprevious() is not None:  # drop the entries read so far
                     del parameter[0]

@@ -19,6 +19,9 @@ from array import array
 import numpy as np
 import scipy.sparse as sp
 
+from ...defaults import SPREAD_CELL_LIMIT
+from ...validation import InputLimitError
+
 __all__ = ["SparseTable", "split_rows"]
 
 
@@ -44,9 +47,14 @@ class SparseTable:
     """A table of ``shape`` built from entries in file order (module docstring); :meth:`cells` resolves it.
 
     An entry's ``index`` has one item per axis: an ``int`` fixes the axis, ``None`` covers every value.
+    ``cell_limit``: the most cells the entries may spread over (``*``, rows, identities), counted as each entry
+    comes, before anything is allocated; past it :class:`~planner.validation.InputLimitError` (None: no limit,
+    for a table that is only looked up, never resolved: a ``.pomdp`` file's reward).
     """
 
-    def __init__(self, shape: tuple[int, ...]):
+    def __init__(self, shape: tuple[int, ...], cell_limit: int | None = SPREAD_CELL_LIMIT):
+        self.cell_limit = cell_limit
+        self.spread_cells = 0
         self.shape = tuple(int(n) for n in shape)
         self.size = int(np.prod(self.shape, dtype=np.int64))
         self.order = 0
@@ -80,6 +88,8 @@ class SparseTable:
             group.values.append(value)
             group.blocks.append(-1)
         else:
+            if value != 0:
+                self._count(int(np.prod([n for i, n in zip(index, self.shape) if i is None], dtype=np.int64)))
             mask, key = self._key(index)
             group = self._group(mask)
             group.values.append(value)
@@ -97,7 +107,20 @@ class SparseTable:
         """Set the cells ``index`` covers to 1 where the coordinates on ``axes`` are equal, else 0."""
         self._block(index, "identity", axes, None)
 
+    def _count(self, cells: int) -> None:
+        """Add ``cells`` to the cells the entries spread over; refuse past ``cell_limit``."""
+        self.spread_cells += cells
+        if self.cell_limit is not None and self.spread_cells > self.cell_limit:
+            raise InputLimitError(f"the entries so far spread over {self.spread_cells:,} cells of a table of shape "
+                                  f"{' x '.join(map(str, self.shape))}, more than the limit of {self.cell_limit:,} "
+                                  "(about 150 bytes each while the table is built); list the non-zero entries "
+                                  "instead of '*', uniform or whole rows")
+
     def _block(self, index, kind, axes, values) -> None:
+        rest = int(np.prod([n for k, (i, n) in enumerate(zip(index, self.shape)) if i is None and k not in axes],
+                           dtype=np.int64))
+        listed = min(self.shape[axes[0]], self.shape[axes[1]]) if kind == "identity" else np.count_nonzero(values)
+        self._count(int(listed) * rest)
         mask, key = self._key(index)
         group = self._group(mask)
         group.keys.append(key)

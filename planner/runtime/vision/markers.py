@@ -18,7 +18,8 @@ import numpy as np
 from ...errors import PlannerError
 from ...product import DEFAULT_MARKER_DICTIONARY, MARKER_DICTIONARIES, Markers, Product
 
-__all__ = ["VisionError", "MarkerMap", "default_markers", "marker_map", "MarkerDetector", "detections"]
+__all__ = ["VisionError", "MarkerMap", "default_markers", "dictionary_size", "marker_map",
+           "MarkerDetector", "detections"]
 
 
 class VisionError(PlannerError):
@@ -43,6 +44,17 @@ def default_markers(product: Product) -> Markers:
     return Markers(tuple((name, k) for k, name in enumerate(names)), DEFAULT_MARKER_DICTIONARY)
 
 
+def dictionary_size(dictionary: str) -> int | None:
+    """How many markers the OpenCV ArUco ``dictionary`` holds (``DICT_4X4_50``: 50), None if OpenCV does not
+    know it (:class:`MarkerDetector` says so). O(1) after OpenCV's own lookup."""
+    import cv2
+
+    code = getattr(cv2.aruco, dictionary, None) if dictionary in MARKER_DICTIONARIES else None
+    if code is None:
+        return None
+    return int(cv2.aruco.getPredefinedDictionary(code).bytesList.shape[0])
+
+
 def marker_map(product: Product, require_all: bool = True) -> MarkerMap:
     """The product's marker map (its ``markers``, else :func:`default_markers`).
 
@@ -51,6 +63,14 @@ def marker_map(product: Product, require_all: bool = True) -> MarkerMap:
     """
     markers = product.markers if product.markers is not None else default_markers(product)
     items = markers.by_id()
+    capacity = dictionary_size(markers.dictionary)
+    beyond = sorted(k for k in items if not 0 <= k < capacity) if capacity else []
+    if beyond:
+        how = ("give the product a 'markers' map with a larger dictionary, e.g. DICT_4X4_250 or DICT_5X5_1000"
+               if product.markers is None else "choose a larger dictionary in its 'markers' map, or smaller ids")
+        raise VisionError(f"{product.source or product.name}: {len(items)} markers, ids up to {max(items)}, but "
+                          f"{markers.dictionary} has {capacity} (ids 0 to {capacity - 1}); {how} (see "
+                          "docs/product-format.md)")
     if require_all:
         used_tools = {t.id for t in product.tools}
         missing = [name for name in list(product.part_ids) + sorted(used_tools) if markers.of(name) is None]
