@@ -197,9 +197,9 @@ def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--resolution", type=number(16, RESOLUTION_LIMIT, integer=True), default=d.resolution,
                        metavar="N", help=f"mesh engine: pixels across the product for the projection test, 16 to "
                                          f"{RESOLUTION_LIMIT:,} (default {d.resolution})")
-    group.add_argument("--pair-budget", type=number(0, low_open=True), default=d.pair_budget, metavar="S",
-                       help="occt engine: seconds of work per pair of parts; a pair not decided in time is reported "
-                            f"and counted as touching and blocking (default {d.pair_budget:g})")
+    group.add_argument("--pair-budget", type=number(0), default=d.pair_budget, metavar="S",
+                       help="occt engine: seconds of work per pair of parts, at least 0; a pair not decided in time "
+                            f"is reported and counted as touching and blocking (default {d.pair_budget:g})")
     group.add_argument("--directions", type=_direction_count, default=d.directions, metavar="N",
                        help="mesh engine: motion directions besides the axes to find on the parts' faces and axes "
                             f"and test like the axes, 0 to 64 (default {d.directions}; 0: the axes only)")
