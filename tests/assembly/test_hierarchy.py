@@ -329,3 +329,22 @@ def test_groups_that_would_block_each_other_once_built_are_merged():
         assert plan_statistics(make_plan(level.product)).sequences >= 1
     # Without the relations the first round keeps the pairs.
     assert [("p1", "p2"), ("p3", "p4")] == [tuple(g.parts) for g in propose_subassemblies(chain, 3)][:2]
+
+
+def test_groups_too_large_to_merge_are_peeled_instead():
+    """A chain of 9, at most 4 members: the first round gives {p1..p4}, {p5, p6}, {p7, p8, p9}. Along +X p2 hits
+    p8 and p8 hits p3: built, {p1..p4} and {p7, p8, p9} would block each other, and their union (7 members) is
+    past 1.5 x 4. Taking p2 out (the first member whose removal leaves no interlocked pair) splits its group
+    into {p1} and {p3, p4}; every level can be built and none passes the cap (merged, one would hold 7)."""
+    chain = chain_product(9)
+    along_x = Obstruction(Direction.from_vector((1.0, 0.0, 0.0)), (("p2", "p8"), ("p8", "p3")))
+    product = replace(chain, obstructions=(along_x,))
+    proposed = propose_subassemblies(product, 4)
+    assert ("p3", "p4") in [g.parts for g in proposed] and ("p7", "p8", "p9") in [g.parts for g in proposed]
+    levels = product_levels(replace(product, subassemblies=proposed))
+    for level in levels:
+        assert len(level.members) <= 4, level.id
+        assert plan_statistics(make_plan(level.product)).sequences >= 1, level.id
+    # the same groups without the relations: the first round is kept as it is
+    assert [g.parts for g in propose_subassemblies(chain, 4)][:3] == [("p1", "p2", "p3", "p4"), ("p5", "p6"),
+                                                                      ("p7", "p8", "p9")]
