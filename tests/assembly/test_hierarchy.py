@@ -8,8 +8,9 @@ from dataclasses import replace
 from math import comb, factorial
 
 import pytest
+from real_models import real_bundles  # noqa: F401  (a fixture)
 
-from planner import make_plan, plan_statistics
+from planner import make_plan, plan_statistics, resolve_product
 from planner.assembly import statistics_within
 from planner.assembly.hierarchy import (
     TOP,
@@ -348,3 +349,23 @@ def test_groups_too_large_to_merge_are_peeled_instead():
     # the same groups without the relations: the first round is kept as it is
     assert [g.parts for g in propose_subassemblies(chain, 4)][:3] == [("p1", "p2", "p3", "p4"), ("p5", "p6"),
                                                                       ("p7", "p8", "p9")]
+
+
+@pytest.mark.freecad
+def test_the_pump_plans_at_every_level_in_workstations_of_at_most_eight(real_bundles):  # noqa: F811
+    """The diaphragm pump exported with the defaults, its overlapping pair 21_001 / 26_001 (1,434 mm^3 shared in
+    the model) marked as not blocking each other, its fasteners proposed: every proposed level plans, none
+    holds more than 8 members besides its fasteners (the long bolts 13_* fold: before, the body's workstation
+    held them and had 11), and the 24 fasteners are installed where their hosts meet."""
+    product = load_product(real_bundles["diaphragm_pump"] / "product.json")
+    pair = {"21_001", "26_001"}
+    product = replace(product, obstructions=tuple(Obstruction(o.direction, tuple(b for b in o.blocks if set(b) != pair))
+                                                  for o in product.obstructions))
+    product = with_subassemblies(resolve_product(product, fasteners="auto"), "auto")
+    installed = set()
+    for level, figures in level_statistics(product):
+        fasteners = {p for group in level.product.fasteners for p in group.parts}
+        installed |= fasteners
+        assert not isinstance(figures, PlannerError), (level.id, figures)
+        assert figures.sequences >= 1 and len(set(level.members) - fasteners) <= 8, level.id
+    assert {f"13_00{k}" for k in range(1, 5)} <= installed and len(installed) == 32   # 24 fasteners, 8 fittings
