@@ -262,6 +262,8 @@ def propose_subassemblies(product: Product, max_components: int = 8) -> tuple[Su
         if all(len(g) == 1 for g in groups):  # cannot happen on a connected diagram; never loop forever
             break
         groups = _separable_groups(product, found, groups, current, max_components)
+        if all(len(g) == 1 for g in groups):  # peeled down to single members: nothing to group this round
+            break
         added = []
         for group in groups:
             if len(group) < 2:
@@ -297,7 +299,7 @@ def _separable_groups(product: Product, found: list[Subassembly], groups: list[l
     for _ in range(2 * len(groups) + 1):
         names, pairs = _interlocked_groups(product, found, groups)
         pair = next(((a, b) for a, b in pairs if a in names or b in names), None)
-        if pair is None or len(groups) <= 1:
+        if pair is None:
             break
         first, second = (names.get(p, [p]) for p in pair)
         rest = [g for g in groups if g is not first and g is not second]
@@ -306,6 +308,8 @@ def _separable_groups(product: Product, found: list[Subassembly], groups: list[l
             if peeled is not None:
                 groups = peeled
                 continue
+        if len(groups) <= 2:  # merged, one group would hold everything: the round would never end
+            break
         groups = rest + [first + second]
     return groups
 
