@@ -301,7 +301,7 @@ def _separable_groups(product: Product, found: list[Subassembly], groups: list[l
         pair = next(((a, b) for a, b in pairs if a in names or b in names), None)
         if pair is None:
             break
-        first, second = (names.get(p, [p]) for p in pair)
+        first, second = (names[p] if p in names else next(g for g in groups if g == [p]) for p in pair)
         rest = [g for g in groups if g is not first and g is not second]
         if len(first) + len(second) > cap + cap // 2:
             peeled = _peeled(product, found, current, rest, first, second, len(pairs))

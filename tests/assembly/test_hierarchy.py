@@ -369,3 +369,17 @@ def test_the_pump_plans_at_every_level_in_workstations_of_at_most_eight(real_bun
         assert not isinstance(figures, PlannerError), (level.id, figures)
         assert figures.sequences >= 1 and len(set(level.members) - fasteners) <= 8, level.id
     assert {f"13_00{k}" for k in range(1, 5)} <= installed and len(installed) == 32   # 24 fasteners, 8 fittings
+
+
+
+def test_a_single_member_interlocked_with_a_group_joins_it_once():
+    """Built, {p1, p2, p3} and p4 block each other along every axis (along X p1 hits p4 and p4 hits p2, and so
+    on), though no two parts do: the single member p4 is merged into the group (4 members, within 1.5 x 3),
+    and appears once."""
+    from planner.assembly.hierarchy import _separable_groups
+
+    axes = [Direction.from_vector(v) for v in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))]
+    blocks = [(("p1", "p4"), ("p4", "p2")), (("p2", "p4"), ("p4", "p3")), (("p3", "p4"), ("p4", "p1"))]
+    product = replace(chain_product(6), obstructions=tuple(Obstruction(a, b) for a, b in zip(axes, blocks)))
+    groups = _separable_groups(product, [], [["p1", "p2", "p3"], ["p4"], ["p5", "p6"]], product, 3)
+    assert sorted(sorted(g) for g in groups) == [["p1", "p2", "p3", "p4"], ["p5", "p6"]]
