@@ -236,7 +236,8 @@ def propose_subassemblies(product: Product, max_components: int = 8) -> tuple[Su
     is and a warning names its stuck parts (its level's plan will then fail with the same reason).
 
     Two groups of one round that would block each other along every direction once built are merged into
-    one (:func:`_separable_groups`), so the level above can take its members apart.
+    one, or when their union would pass 1.5 x ``max_components`` members, one member is taken out of them
+    (:func:`_separable_groups`), so the level above can take its members apart.
 
     Fasteners are left out of the groups (the connection diagram is that of the folded product, its fasteners'
     hosts joined: :func:`~planner.product.fold`); :func:`product_levels` installs each group where its hosts
@@ -260,7 +261,9 @@ def propose_subassemblies(product: Product, max_components: int = 8) -> tuple[Su
         groups = _agglomerate(current, max_components)
         if all(len(g) == 1 for g in groups):  # cannot happen on a connected diagram; never loop forever
             break
-        groups = _separable_groups(product, found, groups)
+        groups = _separable_groups(product, found, groups, current, max_components)
+        if all(len(g) == 1 for g in groups):  # peeled down to single members: nothing to group this round
+            break
         added = []
         for group in groups:
             if len(group) < 2:
@@ -274,26 +277,89 @@ def propose_subassemblies(product: Product, max_components: int = 8) -> tuple[Su
     return tuple(found)
 
 
-def _separable_groups(product: Product, found: list[Subassembly], groups: list[list[str]]) -> list[list[str]]:
-    """``groups`` (one round's members, grouped) with every two that the level above could never separate merged:
-    built, two groups that block each other along every direction (:func:`~planner.assembly.feasibility.
-    interlocked_pairs`) are one subassembly (a merged group may pass the size cap: a workstation too large is
-    better than a product that cannot be taken apart). Two single members that block each other stay as they
-    are: no grouping separates them (the level's plan names them). Cost: one level product and one O(n^2 D)
-    test per merge, at most one merge per group."""
+def _separable_groups(product: Product, found: list[Subassembly], groups: list[list[str]], current: Product,
+                      cap: int) -> list[list[str]]:
+    """``groups`` (one round's members of ``current``, grouped) changed until the level above could take them
+    apart: two groups that, built, would block each other along every direction (:func:`~planner.assembly.
+    feasibility.interlocked_pairs`) are
+
+    - merged into one when their union has at most 1.5 ``cap`` members (a workstation a little too large is
+      better than a product that cannot be taken apart), else
+    - *peeled*: the member of the two whose removal leaves the fewest interlocked pairs above (fewer than
+      before) is taken out and left to the level above, its group split into its connected pieces, each
+      buildable on its own (the pump's head 9_001, which holds the outlet manifold on one side while the
+      inlet manifold spans both heads), else
+    - merged anyway.
+
+    Two single members that block each other stay as they are: no grouping separates them (the level's plan
+    names them). Cost: per change, one level product and one O(n^2 D) test per member of the two groups (a
+    peel), and one AND/OR graph of at most ``cap`` members per piece kept; at most 2 x ``len(groups)`` changes.
+    """
     groups = [list(g) for g in groups]
-    for _ in range(len(groups)):
-        names = {f"_group{k}": group for k, group in enumerate(groups) if len(group) > 1}
-        trial = tuple(found) + tuple(Subassembly(name, tuple(group)) for name, group in names.items())
-        above = product_levels(replace(product, subassemblies=trial))[-1].product
-        pair = next(((p.first, p.second) for p in interlocked_pairs(above)
-                     if p.first in names or p.second in names), None)
-        if pair is None or len(above.parts) <= 2:
+    for _ in range(2 * len(groups) + 1):
+        names, pairs = _interlocked_groups(product, found, groups)
+        pair = next(((a, b) for a, b in pairs if a in names or b in names), None)
+        if pair is None:
             break
-        union = names.get(pair[0], [pair[0]]) + names.get(pair[1], [pair[1]])
-        groups = [g for g in groups if g is not names.get(pair[0]) and g is not names.get(pair[1])
-                  and g != [pair[0]] and g != [pair[1]]] + [union]
+        first, second = (names[p] if p in names else next(g for g in groups if g == [p]) for p in pair)
+        rest = [g for g in groups if g is not first and g is not second]
+        if len(first) + len(second) > cap + cap // 2:
+            peeled = _peeled(product, found, current, rest, first, second, len(pairs))
+            if peeled is not None:
+                groups = peeled
+                continue
+        if len(groups) <= 2:  # merged, one group would hold everything: the round would never end
+            break
+        groups = rest + [first + second]
     return groups
+
+
+def _interlocked_groups(product: Product, found: list[Subassembly], groups: list[list[str]]) \
+        -> tuple[dict[str, list[str]], list[tuple[str, str]]]:
+    """The trial names of the groups of two or more, and the interlocked pairs of the level above them."""
+    names = {f"_group{k}": group for k, group in enumerate(groups) if len(group) > 1}
+    trial = tuple(found) + tuple(Subassembly(name, tuple(group)) for name, group in names.items())
+    above = product_levels(replace(product, subassemblies=trial))[-1].product
+    return names, [(p.first, p.second) for p in interlocked_pairs(above)]
+
+
+def _peeled(product: Product, found: list[Subassembly], current: Product, rest: list[list[str]], first: list[str],
+            second: list[str], before: int) -> list[list[str]] | None:
+    """The groups with one member of ``first`` or ``second`` taken out (see :func:`_separable_groups`), or None
+    when no member's removal leaves fewer than ``before`` interlocked pairs with buildable pieces."""
+    best = None
+    for member in first + second:
+        pieces = [piece for group in (first, second) for piece in _pieces(current, [m for m in group if m != member])]
+        trial = rest + pieces + [[member]]
+        count = len(_interlocked_groups(product, found, trial)[1])
+        if count < before and (best is None or count < best[0]) \
+                and all(len(piece) < 2 or _stuck_parts(current, piece) is None for piece in pieces):
+            best = (count, trial)
+    return None if best is None else best[1]
+
+
+def _pieces(product: Product, members: list[str]) -> list[list[str]]:
+    """``members`` split into the sets connected by ``product``'s contacts among them, in member order."""
+    inside = set(members)
+    touching: dict[str, set[str]] = {m: set() for m in members}
+    for a, b in product.contacts:
+        if a in inside and b in inside:
+            touching[a].add(b)
+            touching[b].add(a)
+    seen: set[str] = set()
+    out = []
+    for start in members:
+        if start in seen:
+            continue
+        piece, stack = [], [start]
+        seen.add(start)
+        while stack:
+            part = stack.pop()
+            piece.append(part)
+            stack.extend(sorted(touching[part] - seen))
+            seen.update(touching[part])
+        out.append(sorted(piece, key=members.index))
+    return out
 
 
 def _agglomerate(product: Product, cap: int) -> list[list[str]]:

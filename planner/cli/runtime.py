@@ -53,7 +53,9 @@ def _open_stream(args: argparse.Namespace, model: IntentionModel, markers, detec
         operator = ScriptedOperator(model.plan, _demo_operations(model, args.demo))
         camera = CameraModel(blur=1.2, noise=6, perspective=0.04, hands=True, seed=args.demo)
         # Operations without a tool end when the tray stays quiet: the simulated operator takes that long.
-        cell = SimulatedCell(tray_layout(markers), operator, camera, settle=args.quiet_frames + 5)
+        # Slots clear of the frame's edges by the camera's tilt and 2 % more (a 35-marker tray reached them).
+        layout = tray_layout(markers, margin=camera.perspective + 0.02)
+        cell = SimulatedCell(layout, operator, camera, settle=args.quiet_frames + 5)
         return detections(cell, detector), ScriptedRobot(on_perform=cell.robot)
     frames = video_frames(args.video) if args.video is not None else image_frames(args.images)
     return _Primed(detections(frames, detector)), None

@@ -10,11 +10,21 @@ A part is a *candidate* fastener when
   touches are each :data:`HOST_VOLUME_RATIO` times its volume or more (a small part that joins two others).
 
 Candidates that touch one another form one fastener (a bolt, its nut and washer); its hosts are the
-non-candidate parts it touches. A fastener that joins fewer than two parts is not proposed (it is listed in
-:attr:`FastenerProposals.left_out` with the reason). Fasteners with the same hosts make one group (the four
-screws of one wheel), installed by one operation.
+non-candidate parts it touches. A host ``X`` of a fastener is its *shaft* (a long bolt held by a washer or nut
+stack, passing through a bore with clearance) when
 
-Cost: O(parts log parts + contacts).
+- *stack*: ``X`` touches the fastener and exactly one other part ``H`` (what the shaft is screwed into), and
+- *bore*: another host ``G`` of the fastener (what the stack clamps) surrounds ``X``: ``G`` blocks ``X`` both
+  ways along at least two direction lines of the obstruction diagrams (``X`` can leave ``G`` along its own
+  axis only), and
+- *size*: ``H`` and ``G`` are each :data:`HOST_VOLUME_RATIO` times ``X``'s volume or more.
+
+A shaft joins the fastener, whose hosts become ``G`` and ``H`` (the pump's bolts 13_*: a washer 12_* on the
+motor 11_001, the bolt through the motor's bore into the body 1_001). A fastener that joins fewer than two
+parts is not proposed (it is listed in :attr:`FastenerProposals.left_out` with the reason). Fasteners with the
+same hosts make one group (the four screws of one wheel), installed by one operation.
+
+Cost: O(parts log parts + contacts + obstruction pairs).
 """
 from __future__ import annotations
 
@@ -81,9 +91,15 @@ def fastener_proposals(product: Product) -> FastenerProposals:
             ratio = min(volumes[n] for n in big) / max(volume, 1e-12)
             why[part.id] = f"geometry (volume {volume:.4g}, at most the median {median:.4g}; joins {', '.join(big)}, " \
                            f"each {ratio:.0f} times larger or more)"
+    enclosing = _enclosing(product)
     fasteners, left_out = [], []
     for members in _touching_groups(sorted(why, key=product.part_ids.index), touching):
         hosts = frozenset(n for m in members for n in touching[m] if n not in why and n not in tagged)
+        for shaft, held_by, bore in _shafts(members, hosts, touching, volumes, enclosing, tagged | set(why)):
+            why[shaft] = f"geometry (a shaft through the bore of {bore}, held by {', '.join(members)}; " \
+                         f"screwed into {held_by})"
+            members = sorted([*members, shaft], key=product.part_ids.index)
+            hosts = hosts - {shaft} | {held_by}
         if len(hosts) < 2:
             joined = f"only {min(hosts)}" if hosts else "nothing"
             left_out.extend((m, f"{why[m]}, but it joins {joined}: left as a part (check its contacts)")
@@ -91,6 +107,42 @@ def fastener_proposals(product: Product) -> FastenerProposals:
         else:
             fasteners.append((members, hosts))
     return FastenerProposals(_grouped(fasteners, why), tuple(left_out))
+
+
+def _enclosing(product: Product) -> dict[str, set[str]]:
+    """Part -> the parts that surround it: that block it both ways along two or more direction lines of the
+    obstruction diagrams (a bore around a shaft). Cost: O(obstruction pairs)."""
+    moves: dict[tuple[str, str], set[tuple[float, ...]]] = {}
+    for obstruction in product.obstructions:
+        forward = tuple(round(c, 6) for c in obstruction.direction.vector)
+        backward = tuple(-c for c in forward)
+        for x, y in obstruction.blocks:  # x moving along the direction hits y; y moving back hits x
+            moves.setdefault((x, y), set()).add(forward)
+            moves.setdefault((y, x), set()).add(backward)
+    out: dict[str, set[str]] = {}
+    for (x, y), blocked in moves.items():
+        lines = {d for d in blocked if tuple(-c for c in d) in blocked and d > tuple(-c for c in d)}
+        if len(lines) >= 2:
+            out.setdefault(x, set()).add(y)
+    return out
+
+
+def _shafts(members: list[str], hosts: frozenset[str], touching: dict[str, set[str]], volumes: dict[str, float],
+            enclosing: dict[str, set[str]], excluded: set[str]) -> list[tuple[str, str, str]]:
+    """The hosts of the fastener ``members`` that are shafts (see the module's definition), each as
+    (shaft, the part it is screwed into, the host whose bore it passes through)."""
+    found = []
+    for shaft in sorted(hosts):
+        others = touching[shaft] - set(members)
+        volume = volumes.get(shaft)
+        if len(others) != 1 or volume is None or others & excluded:
+            continue
+        (held_by,) = others
+        big = HOST_VOLUME_RATIO * max(volume, 1e-12)
+        bores = sorted(g for g in hosts - {shaft, held_by} if g in enclosing.get(shaft, ()) and volumes.get(g, 0.0) >= big)
+        if bores and volumes.get(held_by, 0.0) >= big:
+            found.append((shaft, held_by, bores[0]))
+    return found
 
 
 def propose_fasteners(product: Product) -> list[FastenerGroup]:

@@ -46,11 +46,16 @@ class TrayLayout:
 
 
 def tray_layout(markers: MarkerMap, size: tuple[int, int] = (1920, 1080), marker_px: int = 96,
-                columns: int | None = None) -> TrayLayout:
-    """A grid of slots centred in the frame, ``2.2 * marker_px`` apart, items in marker-id order."""
+                columns: int | None = None, margin: float = 0.0) -> TrayLayout:
+    """A grid of slots centred in the frame, ``2.2 * marker_px`` apart, items in marker-id order. ``margin``: the
+    fraction of the frame's width and height kept free on each side (a tilted camera moves the frame's corners;
+    a marker at the edge then flickers), ``marker_px`` made smaller where the grid would reach into it."""
     names = [markers.items[k] for k in sorted(markers.items)]
     columns = columns or math.ceil(math.sqrt(len(names) * size[0] / size[1]))
     rows = math.ceil(len(names) / columns)
+    if margin > 0:
+        room = min(size[0] * (1 - 2 * margin) / columns, size[1] * (1 - 2 * margin) / rows)
+        marker_px = max(1, min(marker_px, int(room / 2.2)))
     pitch = int(2.2 * marker_px)
     x0 = (size[0] - columns * pitch) // 2 + (pitch - marker_px) // 2
     y0 = (size[1] - rows * pitch) // 2 + (pitch - marker_px) // 2
@@ -95,13 +100,14 @@ def render_tray(layout: TrayLayout, in_tray: Iterable[str], blur: float = 0.0, n
             if len(scenes) >= 8:
                 scenes.pop(next(iter(scenes)))
             scenes[key] = _scene(layout, present, blur, perspective, (), camera_seed)
-        frame = scenes[key].copy()
+        frame = scenes[key]
     if noise > 0:
         cv2.setRNGSeed(seed)
         grain = np.empty(frame.shape[:2], np.int16)  # luminance noise: what survives the grey conversion
         cv2.randn(grain, 0, noise)
-        frame = np.clip(frame.astype(np.int16) + grain[:, :, None], 0, 255).astype(np.uint8)
-    return frame
+        # frame + grain saturated to 0..255 in one pass (the same bytes as numpy's clip, in half the time)
+        return cv2.add(frame, cv2.merge((grain, grain, grain)), dtype=cv2.CV_8U)
+    return frame.copy()
 
 
 _SCENES: dict[int, tuple] = {}  # id(layout) -> (layout, {(items, blur, tilt, camera): frame}): drawn scenes

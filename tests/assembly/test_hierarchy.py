@@ -8,8 +8,9 @@ from dataclasses import replace
 from math import comb, factorial
 
 import pytest
+from real_models import real_bundles  # noqa: F401  (a fixture)
 
-from planner import make_plan, plan_statistics
+from planner import make_plan, plan_statistics, resolve_product
 from planner.assembly import statistics_within
 from planner.assembly.hierarchy import (
     TOP,
@@ -329,3 +330,56 @@ def test_groups_that_would_block_each_other_once_built_are_merged():
         assert plan_statistics(make_plan(level.product)).sequences >= 1
     # Without the relations the first round keeps the pairs.
     assert [("p1", "p2"), ("p3", "p4")] == [tuple(g.parts) for g in propose_subassemblies(chain, 3)][:2]
+
+
+def test_groups_too_large_to_merge_are_peeled_instead():
+    """A chain of 9, at most 4 members: the first round gives {p1..p4}, {p5, p6}, {p7, p8, p9}. Along +X p2 hits
+    p8 and p8 hits p3: built, {p1..p4} and {p7, p8, p9} would block each other, and their union (7 members) is
+    past 1.5 x 4. Taking p2 out (the first member whose removal leaves no interlocked pair) splits its group
+    into {p1} and {p3, p4}; every level can be built and none passes the cap (merged, one would hold 7)."""
+    chain = chain_product(9)
+    along_x = Obstruction(Direction.from_vector((1.0, 0.0, 0.0)), (("p2", "p8"), ("p8", "p3")))
+    product = replace(chain, obstructions=(along_x,))
+    proposed = propose_subassemblies(product, 4)
+    assert ("p3", "p4") in [g.parts for g in proposed] and ("p7", "p8", "p9") in [g.parts for g in proposed]
+    levels = product_levels(replace(product, subassemblies=proposed))
+    for level in levels:
+        assert len(level.members) <= 4, level.id
+        assert plan_statistics(make_plan(level.product)).sequences >= 1, level.id
+    # the same groups without the relations: the first round is kept as it is
+    assert [g.parts for g in propose_subassemblies(chain, 4)][:3] == [("p1", "p2", "p3", "p4"), ("p5", "p6"),
+                                                                      ("p7", "p8", "p9")]
+
+
+@pytest.mark.freecad
+def test_the_pump_plans_at_every_level_in_workstations_of_at_most_eight(real_bundles):  # noqa: F811
+    """The diaphragm pump exported with the defaults, its overlapping pair 21_001 / 26_001 (1,434 mm^3 shared in
+    the model) marked as not blocking each other, its fasteners proposed: every proposed level plans, none
+    holds more than 8 members besides its fasteners (the long bolts 13_* fold: before, the body's workstation
+    held them and had 11), and the 24 fasteners are installed where their hosts meet."""
+    product = load_product(real_bundles["diaphragm_pump"] / "product.json")
+    pair = {"21_001", "26_001"}
+    product = replace(product, obstructions=tuple(Obstruction(o.direction, tuple(b for b in o.blocks if set(b) != pair))
+                                                  for o in product.obstructions))
+    product = with_subassemblies(resolve_product(product, fasteners="auto"), "auto")
+    installed = set()
+    for level, figures in level_statistics(product):
+        fasteners = {p for group in level.product.fasteners for p in group.parts}
+        installed |= fasteners
+        assert not isinstance(figures, PlannerError), (level.id, figures)
+        assert figures.sequences >= 1 and len(set(level.members) - fasteners) <= 8, level.id
+    assert {f"13_00{k}" for k in range(1, 5)} <= installed and len(installed) == 32   # 24 fasteners, 8 fittings
+
+
+
+def test_a_single_member_interlocked_with_a_group_joins_it_once():
+    """Built, {p1, p2, p3} and p4 block each other along every axis (along X p1 hits p4 and p4 hits p2, and so
+    on), though no two parts do: the single member p4 is merged into the group (4 members, within 1.5 x 3),
+    and appears once."""
+    from planner.assembly.hierarchy import _separable_groups
+
+    axes = [Direction.from_vector(v) for v in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))]
+    blocks = [(("p1", "p4"), ("p4", "p2")), (("p2", "p4"), ("p4", "p3")), (("p3", "p4"), ("p4", "p1"))]
+    product = replace(chain_product(6), obstructions=tuple(Obstruction(a, b) for a, b in zip(axes, blocks)))
+    groups = _separable_groups(product, [], [["p1", "p2", "p3"], ["p4"], ["p5", "p6"]], product, 3)
+    assert sorted(sorted(g) for g in groups) == [["p1", "p2", "p3", "p4"], ["p5", "p6"]]

@@ -3,6 +3,7 @@ against the fasteners counted by hand (fastener_ground_truth.json)."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -95,3 +96,38 @@ def test_real_models_against_the_hand_count(real_bundles, model):  # noqa: F811
     # every proposal is a valid group: accepted, the product still checks and folds
     accepted = resolve_product(product, fasteners="auto")
     assert len(accepted.fasteners) == measured["groups"]
+
+
+def _bolt_through_a_bore(bore: bool) -> Product:
+    """A motor held on a body by a long bolt through the motor's bore (clearance: no contact), a washer under
+    its head: the washer touches the motor and the bolt, the bolt the washer and the body (the pump's 11_001,
+    12_*, 13_*, 1_001; no fastener words in the ids). With ``bore``, the motor blocks the bolt both ways along Y
+    and Z."""
+    from planner.product import Direction, Obstruction
+
+    volumes = {"body": 600000.0, "motor": 130000.0, "ring": 200.0, "shank": 4000.0, "cover": 9000.0}
+    contacts = [("body", "motor"), ("ring", "motor"), ("ring", "shank"), ("shank", "body"), ("cover", "body")]
+    around = (("shank", "motor"), ("motor", "shank")) if bore else ()
+    obstructions = (Obstruction(Direction.from_vector((1.0, 0.0, 0.0)), (("shank", "body"),)),
+                    Obstruction(Direction.from_vector((0.0, 1.0, 0.0)), around),
+                    Obstruction(Direction.from_vector((0.0, 0.0, 1.0)), around))
+    return Product(tuple(Part(p, volume=v) for p, v in volumes.items()), tuple(contacts), obstructions)
+
+
+def test_a_bolt_through_a_bore_held_by_a_washer_joins_what_the_washer_clamps():
+    (group,) = propose_fasteners(_bolt_through_a_bore(bore=True))
+    assert group.parts == ("ring", "shank") and group.hosts == {"motor", "body"}
+    # without the bore the bolt is a host of the washer, as before (and the washer joins the motor and the bolt)
+    (group,) = propose_fasteners(_bolt_through_a_bore(bore=False))
+    assert group.parts == ("ring",) and group.hosts == {"motor", "shank"}
+
+
+def test_a_shaft_needs_a_single_other_part_and_large_hosts():
+    product = _bolt_through_a_bore(bore=True)
+    # the bolt also touches the cover: not a shaft screwed into one part
+    touching_two = replace(product, contacts=product.contacts + (("shank", "cover"),))
+    assert [g.parts for g in propose_fasteners(touching_two)] == [("ring",)]
+    # a motor not ten times the bolt's volume
+    small_motor = replace(product, parts=tuple(replace(p, volume=30000.0) if p.id == "motor" else p
+                                               for p in product.parts))
+    assert [g.parts for g in propose_fasteners(small_motor)] == [("ring",)]

@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 
 import cv2
+import numpy as np
 import pytest
 from figure_support import pyplot_untouched
 
@@ -312,3 +313,33 @@ def test_background_reading_keeps_order_and_reraises():
     while any(t.name == "aplan-vision" for t in threading.enumerate()) and time.monotonic() < deadline:
         time.sleep(0.01)
     assert not any(t.name == "aplan-vision" for t in threading.enumerate())
+
+
+def test_a_tray_layout_keeps_its_margin_and_every_marker_is_seen():
+    """35 markers of 96 px fill 1,055 of 1,080 rows: the top row is 69 px from the edge, which a camera tilted by
+    4 % (43 px) nearly reaches, and markers there flicker (the pump's top level). With the demo's margin (the
+    tilt and 2 % more) the markers shrink to fit (86 px) and every one is seen in every frame; a small tray
+    keeps its 96 px."""
+    from planner.product import Part, Product
+
+    many = marker_map(Product(tuple(Part(f"p{k}") for k in range(35)), ()))
+    layout = tray_layout(many, (1920, 1080), 96, margin=0.06)
+    assert layout.marker_px == 86 and tray_layout(many).marker_px == 96
+    assert all(0.06 * 1080 <= y and y + 86 <= 0.94 * 1080 for _, y in layout.slots.values())
+    assert tray_layout(marker_map(Product(tuple(Part(f"p{k}") for k in range(12)), ())), margin=0.06).marker_px == 96
+    detector = MarkerDetector()
+    for seed in range(6):
+        frame = render_tray(layout, set(), 1.2, 6, 0.04, seed=seed, camera_seed=0)
+        assert detector.detect(frame) == set(many.items), seed
+
+
+def test_noise_is_added_with_saturation(markers):
+    """The frame is the noiseless scene plus the seed's grain, clipped to 0..255 on every channel."""
+    layout = tray_layout(markers, *SMALL)
+    clean = render_tray(layout, {"ink"}, blur=1.0)
+    noisy = render_tray(layout, {"ink"}, blur=1.0, noise=40, seed=7)
+    cv2.setRNGSeed(7)
+    grain = np.empty(clean.shape[:2], np.int16)
+    cv2.randn(grain, 0, 40)
+    assert np.array_equal(noisy, np.clip(clean.astype(np.int16) + grain[:, :, None], 0, 255).astype(np.uint8))
+    assert noisy.min() == 0 and noisy.max() == 255   # saturated both ways
