@@ -4,7 +4,7 @@ as a user runs it, timed stage by stage, each stage a fresh process under one BL
     export   aplan export-freecad MODEL -o BUNDLE [model options]        (FreeCADCmd, then the mesh engine)
     stats    aplan stats BUNDLE --fasteners auto --subassemblies auto
     session  aplan session BUNDLE --fasteners auto --subassemblies auto --demo 0 --log LOG
-    whole    aplan session MODEL.FCStd --fasteners auto --subassemblies auto --demo 0 --log LOG
+    whole    aplan session MODEL.FCStd [model options] --fasteners auto --subassemblies auto --demo 0 --log LOG
              (with model options: export, then session on the bundle, timed together)
 
 Wall seconds, CPU seconds (user + system: what the stage costs one core, whatever else the machine runs) and
@@ -19,7 +19,6 @@ from __future__ import annotations
 import argparse
 import os
 import re
-import shlex
 import subprocess
 import sys
 import tempfile
@@ -57,12 +56,8 @@ def run(name: str, folder: Path) -> list[tuple]:
     steps = [("export", APLAN + ["export-freecad", str(model), "-o", str(bundle), *options]),
              ("stats", APLAN + ["stats", str(bundle), *PLAN]),
              ("session", APLAN + ["session", str(bundle), *PLAN, "--demo", "0", "--log", str(folder / f"{name}.jsonl")]),
-             ("whole", APLAN + ["session", str(model), *PLAN, "--demo", "0", "--log", str(folder / f"{name}-whole.jsonl")])]
-    if options:  # export options are export-freecad's: the whole run is the two commands the README gives
-        both = folder / f"{name}-whole"
-        steps[-1] = ("whole", ["sh", "-c", shlex.join(APLAN + ["export-freecad", str(model), "-o", str(both), *options])
-                               + " && " + shlex.join(APLAN + ["session", str(both), *PLAN, "--demo", "0", "--log",
-                                                              str(folder / f"{name}-whole.jsonl")])])
+             ("whole", APLAN + ["session", str(model), *options, *PLAN, "--demo", "0", "--log",
+                                str(folder / f"{name}-whole.jsonl")])]
     for stage, command in steps:
         seconds, cpu, mib, status, output = _timed(command, 900)
         levels = len(re.findall(r"^level \S+ \(\d+ of \d+\)", output, re.M))

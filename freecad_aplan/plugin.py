@@ -112,11 +112,12 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
     return load_bundle(bundle)
 
 
-def _load_model(path: Path, tolerances: Tolerances | None = None) -> Product:
+def _load_model(path: Path, tolerances: Tolerances | None = None, groups: dict[str, list[str]] | None = None,
+                exclude: list[str] | None = None) -> Product:
     """PRODUCT given as a CAD model: export it to a temporary bundle and analyse its meshes (with
-    ``tolerances`` when given, e.g. ``contact="auto"``)."""
+    ``tolerances`` when given, e.g. ``contact="auto"``); ``groups`` and ``exclude`` as export-freecad's."""
     with tempfile.TemporaryDirectory(prefix="aplan-") as folder:
-        return export_bundle(path, Path(folder) / "bundle", tolerances=tolerances,
+        return export_bundle(path, Path(folder) / "bundle", tolerances=tolerances, groups=groups, exclude=exclude,
                              redetect=tolerances is not None)
 
 
@@ -140,16 +141,9 @@ def occt_report(product: Product, data: dict) -> GeometryReport:
         seconds=float(data.get("seconds", 0.0)))
 
 
-def _parse_group(text: str) -> tuple[str, list[str]]:
-    name, sep, members = text.partition("=")
-    if not sep or not name or not members:
-        raise argparse.ArgumentTypeError(f"expected NAME=LABEL,LABEL,..., got {text!r}")
-    return name, [m for m in members.split(",") if m]
-
-
 def _export_command(subparsers) -> None:
     from planner.cli import add_tolerance_options
-    from planner.cli.options import number
+    from planner.cli.options import number, parse_group
 
     parser = subparsers.add_parser(
         "export-freecad", help="export a FreeCAD document or STEP file as a product bundle (runs FreeCADCmd)",
@@ -168,7 +162,7 @@ def _export_command(subparsers) -> None:
     parser.add_argument("--redetect", action="store_true",
                         help="detect contacts and obstructions again even when the document's APLAN analysis "
                              "stores diagrams (possibly edited by the designer) that fit the components")
-    parser.add_argument("--group", action="append", type=_parse_group, default=[], metavar="NAME=A,B,...",
+    parser.add_argument("--group", action="append", type=parse_group, default=[], metavar="NAME=A,B,...",
                         help="make one component NAME of the objects A, B, ... (labels, or shell-style patterns "
                              "such as 'bolt_*'; repeatable)")
     parser.add_argument("--exclude", action="append", default=[], metavar="LABEL",

@@ -100,7 +100,8 @@ PLANNERS = ("offline", "online")
 Model = IntentionModel | LumpedModel | POMDP
 
 
-def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fasteners: str = "tagged") -> Product:
+def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fasteners: str = "tagged",
+                    model_options: dict | None = None) -> Product:
     """Load PRODUCT: a product file, a bundle folder, a CAD file a plugin reads (``.FCStd``, STEP: through
     FreeCAD), or the name of an embedded example (``pen``).
 
@@ -110,10 +111,16 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
     product's parts need meshes then.
     ``fasteners``: the fastener groups plans fold: ``tagged`` the product's own (its ``fasteners`` section),
     ``auto`` those and the planner's proposals (:func:`~planner.product.propose_fasteners`), ``none`` none.
+    ``model_options``: how a CAD model is read (``{"groups": {NAME: [labels]}, "exclude": [labels]}``, as
+    ``aplan export-freecad --group/--exclude``); only for a CAD model, an error for anything else.
     """
     if fasteners not in FASTENER_MODES:
         raise PlannerError(f"unknown fastener mode {fasteners!r}; use one of {', '.join(FASTENER_MODES)}")
-    product = argument if isinstance(argument, Product) else _load(argument, tolerances)
+    model_options = {k: v for k, v in (model_options or {}).items() if v}
+    if model_options and not _is_model_file(argument):
+        raise PlannerError(f"{argument}: --group and --exclude choose the components of a CAD model (.FCStd, "
+                           "STEP); this product's parts are chosen already (export the model again with them)")
+    product = argument if isinstance(argument, Product) else _load(argument, tolerances, model_options)
     proposals = fastener_proposals(product).groups if fasteners == "auto" else ()
     return with_fastener_mode(product, fasteners, proposals)
 
@@ -128,7 +135,15 @@ def accept_fasteners(product: Product) -> Product:
     return resolve_product(product, fasteners="auto")
 
 
-def _load(argument: str | os.PathLike, tolerances=None) -> Product:
+def _is_model_file(argument) -> bool:
+    """Whether ``argument`` names a file that a plugin's loader reads (a CAD model)."""
+    from .plugins import registry
+
+    return not isinstance(argument, Product) and Path(argument).is_file() and \
+        Path(argument).suffix.lower() in registry().loaders
+
+
+def _load(argument: str | os.PathLike, tolerances=None, model_options: dict | None = None) -> Product:
     from .geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, is_analysed
     from .plugins import registry
 
@@ -145,7 +160,7 @@ def _load(argument: str | os.PathLike, tolerances=None) -> Product:
     if path.is_file():
         loader = registry().loaders.get(path.suffix.lower())
         if loader is not None:
-            return loader(path) if tolerances is None else loader(path, tolerances=tolerances)
+            return loader(path, **({} if tolerances is None else {"tolerances": tolerances}), **(model_options or {}))
         if path.suffix.lower() in (".fcstd", ".step", ".stp"):
             raise UnknownProductError(f"{argument}: reading {path.suffix} files needs APLAN's FreeCAD side "
                                       "(install the project with `pip install -e .` and FreeCAD)")

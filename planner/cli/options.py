@@ -23,7 +23,8 @@ from ..product.examples import EXAMPLES
 from ..validation import InputError, check_number, check_output
 
 __all__ = ["PRODUCT_HELP", "number", "finite", "positive", "whole", "index", "add_force", "check_outputs",
-           "add_technical", "add_base_part", "add_hierarchy", "add_fasteners",
+           "add_technical", "add_base_part", "add_hierarchy", "add_fasteners", "add_model_options",
+           "model_options_from", "parse_group",
            "product_from", "add_decision_options", "rewards_from", "add_tolerance_options", "tolerances_from",
            "add_contact_options", "contact_tolerances_from", "contact_tolerance", "positive_length",
            "add_policy_options", "add_episode_options", "positive_seconds",
@@ -121,13 +122,38 @@ def add_fasteners(parser) -> None:
                              "none: plan every part")
 
 
+def parse_group(text: str) -> tuple[str, list[str]]:
+    """``NAME=A,B,...`` (``--group``): the component's name and its objects' labels or patterns."""
+    name, sep, members = text.partition("=")
+    if not sep or not name or not members:
+        raise argparse.ArgumentTypeError(f"expected NAME=LABEL,LABEL,..., got {text!r}")
+    return name, [m for m in members.split(",") if m]
+
+
+def add_model_options(parser) -> None:
+    """``--group`` and ``--exclude`` for a PRODUCT given as a CAD model (export-freecad's, same meaning)."""
+    group = parser.add_argument_group("when PRODUCT is a CAD model (.FCStd, STEP), as aplan export-freecad")
+    group.add_argument("--group", action="append", type=parse_group, default=[], metavar="NAME=A,B,...",
+                       help="make one component NAME of the objects A, B, ... (labels or shell-style patterns; "
+                            "repeatable)")
+    group.add_argument("--exclude", action="append", default=[], metavar="LABEL",
+                       help="leave out the objects with this label or matching this pattern (repeatable)")
+
+
+def model_options_from(args: argparse.Namespace) -> dict:
+    """The CAD model options of ``args`` (:func:`add_model_options`) for :func:`planner.api.resolve_product`."""
+    return {"groups": dict(getattr(args, "group", None) or []), "exclude": list(getattr(args, "exclude", None) or [])}
+
+
 def product_from(args: argparse.Namespace, argument):
-    """PRODUCT resolved with ``--fasteners`` (a Product); a model file's name stays as it is."""
+    """PRODUCT resolved with ``--fasteners`` and the CAD model options (a Product); a decision model file's
+    name stays as it is."""
     from .. import api
 
     if isinstance(argument, api.Product) or str(argument).lower().endswith(api.MODEL_SUFFIXES):
         return argument   # a product already resolved (a level: its fasteners were chosen with the whole)
-    return api.resolve_product(argument, fasteners=getattr(args, "fasteners", "tagged"))
+    return api.resolve_product(argument, fasteners=getattr(args, "fasteners", "tagged"),
+                               model_options=model_options_from(args))
 
 
 def add_decision_options(parser: argparse.ArgumentParser) -> None:
@@ -138,6 +164,7 @@ def add_decision_options(parser: argparse.ArgumentParser) -> None:
     add_technical(group)
     add_base_part(group)
     add_fasteners(group)
+    add_model_options(parser)
     group.add_argument("--discount", type=number(0, 1, high_open=True), default=DISCOUNT,
                        help=f"discount factor, from 0 to below 1 (default {DISCOUNT:g})")
     group.add_argument("--reward-unfavorable", type=finite, default=d.unfavorable, metavar="R",

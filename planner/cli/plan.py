@@ -28,11 +28,13 @@ from .options import (
     add_fasteners,
     add_force,
     add_hierarchy,
+    add_model_options,
     add_size_options,
     add_technical,
     advice,
     contact_tolerances_from,
     limits_from,
+    model_options_from,
     positive,
     product_from,
 )
@@ -65,7 +67,7 @@ def _print_designer(product) -> None:
 
 
 def _stats(args: argparse.Namespace) -> int:
-    product = api.resolve_product(args.product, contact_tolerances_from(args), args.fasteners)
+    product = api.resolve_product(args.product, contact_tolerances_from(args), args.fasteners, model_options_from(args))
     if args.contact is not None:  # analysed again here: say what the analysis found, as aplan analyze does
         for warning in product.geometry.get("analysis", {}).get("warnings", []):
             log.warning("%s", warning)
@@ -276,6 +278,7 @@ def add_commands(commands) -> None:
     add_base_part(stats)
     add_hierarchy(stats)
     add_fasteners(stats)
+    add_model_options(stats)
     add_size_options(stats)
     add_contact_options(stats)
     stats.set_defaults(run=_stats)
@@ -290,6 +293,7 @@ def add_commands(commands) -> None:
     add_base_part(intentions)
     add_hierarchy(intentions)
     add_fasteners(intentions)
+    add_model_options(intentions)
     add_size_options(intentions)
     intentions.set_defaults(run=_intentions)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from conftest import SHARED, require_freecadcmd, require_shared
+from conftest import PEN_MODELS, SHARED, require_freecadcmd, require_shared
 
 from integration.freecad_tools import aplan
 
@@ -35,3 +35,22 @@ def test_a_pattern_that_matches_nothing(tmp_path, option, pattern, message):
                  option, pattern, check=False)
     assert done.returncode == 1 and message in done.stderr and "Traceback" not in done.stderr
     assert not bundle.exists()
+
+
+@pytest.mark.freecad
+def test_a_cad_model_read_with_groups_by_any_command(tmp_path):
+    """--group on a command given the .FCStd itself reads it as export-freecad --group would: the same parts
+    and the same figures as the bundle exported with that group."""
+    require_freecadcmd()
+    pen = str(require_shared(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"))
+    direct = json.loads(aplan("stats", pen, "--group", "refill=cartridge_001,ink_*", "--json").stdout)
+    bundle = tmp_path / "pen"
+    aplan("export-freecad", pen, "-o", str(bundle), "--group", "refill=cartridge_001,ink_*")
+    exported = json.loads(aplan("stats", str(bundle), "--json").stdout)
+    assert direct == exported and direct["parts"] == 5    # 6 parts, two of them one component
+
+
+def test_groups_are_refused_for_a_product_that_is_no_cad_model():
+    done = aplan("stats", "pen", "--group", "a=b", check=False)
+    assert done.returncode == 1 and "choose the components of a CAD model" in done.stderr
+    assert "Traceback" not in done.stderr
