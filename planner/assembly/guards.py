@@ -61,8 +61,9 @@ OPTIONS = {
     "intentions": ("--limit", "--limit N raises the intention limit"),
     "fasteners": ("--fasteners", "--fasteners auto folds the fasteners the planner proposes into the operations "
                                  "that install them (aplan fasteners PRODUCT lists them)"),
-    "exclude": ("--exclude", "--exclude LABEL leaves a part (a fastener) out"),
-    "group": ("--group", "--group NAME=A,B makes one part of several (a fastener and a part it holds)"),
+    "exclude": ("--exclude", "--exclude LABEL leaves a part (a fastener) out of a CAD model"),
+    "group": ("--group", "--group NAME=A,B makes one part of several in a CAD model (a fastener and a part it "
+                         "holds)"),
     "base_part": ("--base-part", "--base-part [PART] keeps only the sequences that start from the base part"),
     "online": ("--planner", "--planner online decides by lookahead, without the flat model"),
 }

@@ -39,7 +39,7 @@ def test_stats_of_an_exploding_product(capsys, screwed):
     reason = data["not_computed"]["reason"]
     assert "AND/OR graph: at least 3,298,534,883,368 connected part sets" in reason
     assert "40 part(s) look like fasteners by name (screw_01, screw_02" in reason
-    assert "--max-subassemblies N raises" in reason and "aplan export-freecad --exclude LABEL" in reason
+    assert "--max-subassemblies N raises" in reason and "--exclude LABEL leaves a part (a fastener) out of a CAD model" in reason
 
     code, out, _ = run(capsys, "stats", screwed)
     assert code == 3
