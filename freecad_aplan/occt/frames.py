@@ -10,8 +10,9 @@ _CORNERS = np.array([[(k >> m) & 1 for m in range(3)] for k in range(8)], dtype=
 
 
 def direction_frame(d) -> np.ndarray:
-    """Rows ``(u, v, d)``: two unit vectors across the unit vector ``d``, then ``d`` (an orthonormal frame). Along an axis, the other two axes in order, so that :func:`frame_boxes` only permutes
-    coordinates (exactly). Cost O(1)."""
+    """Rows ``(u, v, d)``: two unit vectors across the unit vector ``d``, then ``d`` (an orthonormal frame).
+    Along an axis, the other two axes in order, so that :func:`frame_boxes` only permutes coordinates
+    (exactly). Cost O(1)."""
     d = np.asarray(d, dtype=float)
     d = d / np.linalg.norm(d)
     for k in range(3):

@@ -33,7 +33,8 @@ def test_frame_boxes_equal_the_corners_brute_force_and_hold_every_point():
         frame = frames.direction_frame(d)
         got = frames.frame_boxes(boxes, frame)
         for box, turned in zip(boxes, got):
-            corners = np.array([[box[c][k] for k, c in enumerate(pick)] for pick in itertools.product((0, 1), repeat=3)])
+            picks = itertools.product((0, 1), repeat=3)
+            corners = np.array([[box[c][k] for k, c in enumerate(pick)] for pick in picks])
             seen = corners @ frame.T
             assert turned[0] == pytest.approx(seen.min(axis=0), abs=1e-12)
             assert turned[1] == pytest.approx(seen.max(axis=0), abs=1e-12)
