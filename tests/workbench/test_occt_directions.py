@@ -13,6 +13,9 @@ import numpy as np
 import pytest
 from conftest import REPO, require_freecadcmd
 
+from integration.freecad_tools import aplan
+
+from planner import load_product
 from planner.geometry import PartMesh, Tolerances, analyze_meshes
 from planner.geometry.bundle import apply_report
 from planner.product import AXIS_DIRECTIONS, Direction, Part, Product
@@ -39,6 +42,10 @@ block = Part.makeBox(50, 30, 30, V(-25, -15, -15))
 for x in (-12, 12):
     block = block.cut(turned_box((10, 10, 80), x))
 parts = [("block", block), ("peg1", turned_box((10, 10, 60), -12)), ("peg2", turned_box((10, 10, 60), 12))]
+document = FreeCAD.newDocument("pegs")
+for name, shape in parts:
+    document.addObject("Part::Feature", name).Shape = shape
+document.saveAs(MODEL)
 print("APLAN-RESULT " + json.dumps(analyze_shapes(parts, directions=DIRECTIONS)), flush=True)
 """
 
@@ -47,12 +54,13 @@ print("APLAN-RESULT " + json.dumps(analyze_shapes(parts, directions=DIRECTIONS))
 def occt(tmp_path_factory) -> dict:
     freecadcmd = require_freecadcmd()
     script = tmp_path_factory.mktemp("occt_dirs") / "occt_directions_probe.py"
-    script.write_text(f"REPO = {str(REPO)!r}\nDIRECTIONS = {[SLOT, MIRROR]!r}\n" + SCRIPT)
+    script.write_text(f"REPO = {str(REPO)!r}\nDIRECTIONS = {[SLOT, MIRROR]!r}\n"
+                      f"MODEL = {str(script.parent / 'pegs.FCStd')!r}\n" + SCRIPT)
     done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=600,
                           stdin=subprocess.DEVNULL)
     found = re.search(r"APLAN-RESULT (.*)", done.stdout)
     assert found, f"no result from FreeCAD:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
-    return json.loads(found.group(1))
+    return {**json.loads(found.group(1)), "model": str(script.parent / "pegs.FCStd")}
 
 
 @pytest.fixture(scope="module")
@@ -113,3 +121,19 @@ def test_planner_reads_the_directions_without_a_warning(occt):
     along = {o.direction.name: o for o in applied.obstructions if o.direction.name not in AXIS_DIRECTIONS}
     assert along[Direction.from_vector(SLOT).name].blocks == ()
     assert not any("does not test" in w for w in applied.geometry["analysis"]["warnings"])
+
+
+@pytest.mark.freecad
+@pytest.mark.parametrize("options", [("--direction", ",".join(str(c) for c in SLOT), "--directions", "0"), ()],
+                         ids=["designer", "candidates"])
+def test_analyze_with_the_occt_engine_tests_the_slots(occt, tmp_path, options):
+    """aplan analyze --engine occt: the designer's direction, or the candidate directions the mesh engine
+    finds on the bundle's meshes (the slots' direction among them), are swept exactly."""
+    bundle = tmp_path / "pegs"
+    aplan("export-freecad", occt["model"], "-o", str(bundle), "--engine", "none")
+    aplan("analyze", str(bundle), "--engine", "occt", *options)
+    product = load_product(bundle / "product.json")
+    along = {o.direction.name: o for o in product.obstructions if o.direction.name not in AXIS_DIRECTIONS}
+    assert along[Direction.from_vector(SLOT).name].blocks == ()
+    analysis = product.geometry["analysis"]
+    assert analysis["engine"] == "occt" and not any("does not test" in w for w in analysis["warnings"])
