@@ -33,7 +33,7 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
                    progress: Callable[[str], None] | None = None, directions=()) -> dict:
     """Contacts, interferences and the +X, +Y, +Z obstruction diagrams of exact part shapes, and those along
     the unit vectors ``directions`` (the designer's, the candidate directions of
-    :func:`planner.geometry.candidate_directions`), tested like the axes.
+    :func:`planner.geometry.mesh_engine.candidate_directions`), tested like the axes.
 
     ``parts``: (id, shape) pairs, shapes holding solids in global coordinates (they are not modified).
     Returns the layout of :meth:`planner.geometry.GeometryReport.as_dict` with engine ``"occt"``; contact and
@@ -50,7 +50,7 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     blocking, is listed under ``undecided`` and named in a warning, and the others go on. ``progress``
     receives a line every few seconds. ``pairs`` counts the contact pairs decided by part boxes (``far``), by
     face boxes (``far_faces``) and those measured exactly (``exact``), and the obstruction candidates (over
-    the three axes) by part boxes (``sweep_candidates``) and those left by face boxes (``sweep_exact``).
+    all the directions) by part boxes (``sweep_candidates``) and those left by face boxes (``sweep_exact``).
 
     Raises :class:`BrepError` naming the part when
     a shape holds no solid or no volume, :class:`~planner.errors.GeometryError` for a negative tolerance.
@@ -137,7 +137,8 @@ def analyze_bundle_breps(folder: str, budgets: list | None = None, **tolerances)
     """:func:`analyze_shapes` on the B-reps of a bundle: ``folder/product.json`` and its ``breps/*.brep``.
 
     ``tolerances``: ``contact``, ``interference``, ``depth``, ``pair_budget``, ``progress`` and
-    ``directions`` as in :func:`analyze_shapes`; ``budgets``: ``[[id, id, seconds], ...]`` (JSON has no tuple keys).
+    ``directions`` as in :func:`analyze_shapes`; ``budgets``: ``[[id, id, seconds], ...]`` (JSON has no
+    tuple keys).
     Raises :class:`BrepError` naming the part and the file when a B-rep is missing or unreadable.
     Cost: reading the files, then that of :func:`analyze_shapes`.
     """

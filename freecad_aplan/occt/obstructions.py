@@ -1,5 +1,5 @@
-"""Obstruction diagrams: for each axis, the pairs (x, y) such that x swept along the axis takes volume from
-y, with the verdict of each boolean confirmed by the cross-checks OCCT needs."""
+"""Obstruction diagrams: for each axis (and each other direction asked for), the pairs (x, y) such that x swept
+along it takes volume from y, with the verdict of each boolean confirmed by the cross-checks OCCT needs."""
 from __future__ import annotations
 
 import FreeCAD
@@ -80,7 +80,8 @@ def _blocks(prisms, other, other_box, shared, frame, volume_tolerance: float, fu
     """True when one of the prisms takes more than ``volume_tolerance`` of ``other`` outside ``shared``
     (the (volume, solid) the moving part already shares with it); None when no prism decided because
     booleans failed; ``"late"`` when ``late()`` said the time was up before a prism was tested.
-    ``other_box`` is ``other``'s box in the coordinates of ``frame`` (rows u, v, d: :func:`~.frames.frame_boxes`)."""
+    ``other_box`` is ``other``'s box in the coordinates of ``frame`` (rows u, v, d:
+    :func:`~.frames.frame_boxes`)."""
     lo, hi = other_box
     unsure = False
     for prism in prisms:
