@@ -21,6 +21,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION, LINEAR_DEFLECTION_MIN
+from planner.errors import PlannerError
 from planner.files import make_folder_beside
 from planner.geometry import GeometryReport, Tolerances
 from planner.geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
@@ -126,9 +127,30 @@ def _occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
         raise FreeCADError("the occt engine reads a bundle's B-rep files: give it a bundle folder")
     data = run_batch("analyze-occt", {"folder": str(Path(product.source).parent), "contact": tolerances.contact,
                                       "interference": tolerances.interference, "depth": tolerances.depth,
-                                      "pair_budget": tolerances.pair_budget},
+                                      "pair_budget": tolerances.pair_budget,
+                                      "directions": _occt_directions(product, tolerances)},
                      on_note=lambda text: print(text, file=sys.stderr, flush=True))
     return occt_report(product, data)
+
+
+def _occt_directions(product: Product, tolerances: Tolerances) -> list[list[float]]:
+    """The directions besides the axes the occt engine tests: the designer's, then the candidate directions
+    the mesh engine would find on the bundle's meshes (:func:`planner.geometry.candidate_directions`, at
+    most ``tolerances.directions``; none when the meshes cannot be read, the exact engine's job being the
+    B-reps). Cost: one pass over the meshes' facets."""
+    import numpy as np
+
+    from planner.geometry.bundle import load_part_meshes
+    from planner.geometry.mesh_engine import candidate_directions
+
+    designer = [np.asarray(v, dtype=float) for v in tolerances.designer_directions]
+    found: list = []
+    if tolerances.directions > 0:
+        try:
+            found = candidate_directions(load_part_meshes(product), tolerances.directions, designer)
+        except PlannerError:
+            found = []
+    return [[float(c) for c in v] for v in designer + list(found)]
 
 
 def occt_report(product: Product, data: dict) -> GeometryReport:
@@ -138,7 +160,8 @@ def occt_report(product: Product, data: dict) -> GeometryReport:
         interferences=tuple((i["parts"][0], i["parts"][1], float(i["volume"])) for i in data["interferences"]),
         obstructions={axis: tuple(tuple(p) for p in pairs) for axis, pairs in data["obstructions"].items()},
         tolerances=data.get("tolerances", {}), warnings=tuple(data.get("warnings", ())),
-        seconds=float(data.get("seconds", 0.0)))
+        seconds=float(data.get("seconds", 0.0)),
+        directions={name: tuple(float(c) for c in v) for name, v in data.get("directions", {}).items()})
 
 
 def _export_command(subparsers) -> None:

@@ -145,11 +145,14 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
     product = load_bundle(folder)
     tolerances = Tolerances(contact=contact, interference=interference, depth=depth)
     if engine == "occt":
+        from planner.product.designer import designer_geometry
+
         from .occt import analyze_bundle_breps
         from .plugin import occt_report
 
+        designer = [d.vector for d in designer_geometry(product).directions]  # tested like the axes
         report = occt_report(product, analyze_bundle_breps(folder, contact=contact, interference=interference,
-                                                           depth=depth))
+                                                           depth=depth, directions=designer))
     else:
         report = analyze_product(product, engine, tolerances)
     save_product(apply_report(product, report), Path(folder) / PRODUCT_FILE)

@@ -39,11 +39,18 @@ Broad phase: contact pairs whose bounding boxes are farther apart than ``contact
 the obstruction along ``d``, ``y`` must overlap ``x``'s box in the two directions across ``d`` by more than
 ``contact`` (narrower contacts only graze) and reach more than ``depth`` beyond the start of ``x`` along
 ``d``; a prism is only tested against ``y`` when their boxes overlap. Prisms are built once per part and
-axis, only when a candidate needs them.
+direction, only when a candidate needs them.
+
+Directions: the three axes, then any unit vectors given (``directions``: the designer's and the candidate
+directions the mesh engine finds on the bundle's meshes, :func:`planner.geometry.mesh_engine.candidate_directions`),
+tested the same way. Along a direction other than an axis the boxes above are seen in a frame ``(u, v, d)``:
+the box of a box's eight corners (:mod:`.frames`), which holds the box, so the culling never drops a pair that
+could block; along an axis it is the box itself.
 
 Modules: :mod:`.analyze` (the entry points), :mod:`.contacts`, :mod:`.obstructions` (the sweeps' verdicts
 and their cross-checks), :mod:`.prisms` (the sweeps), :mod:`.silhouettes` (splitting faces so that they can
-be swept), :mod:`.solids` (boxes, booleans, point classification).
+be swept), :mod:`.frames` (boxes seen along a direction), :mod:`.solids` (boxes, booleans, point
+classification).
 """
 from __future__ import annotations
 

@@ -3,6 +3,7 @@ interferences and obstruction diagrams."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import time
 from typing import Callable
@@ -11,6 +12,7 @@ import Part
 
 from planner.defaults import BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, OCCT_PAIR_BUDGET, PRODUCT_FILE
 from planner.errors import GeometryError
+from planner.product import AXIS_DIRECTIONS, Direction
 
 from ..document import DocumentError
 from .budget import PairClock, face_boxes
@@ -28,8 +30,10 @@ class BrepError(DocumentError):
 def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTACT_TOLERANCE,
                    interference: float = INTERFERENCE_VOLUME, depth: float = BLOCKING_DEPTH,
                    pair_budget: float = OCCT_PAIR_BUDGET, budgets: dict | None = None,
-                   progress: Callable[[str], None] | None = None) -> dict:
-    """Contacts, interferences and the +X, +Y, +Z obstruction diagrams of exact part shapes.
+                   progress: Callable[[str], None] | None = None, directions=()) -> dict:
+    """Contacts, interferences and the +X, +Y, +Z obstruction diagrams of exact part shapes, and those along
+    the unit vectors ``directions`` (the designer's, the candidate directions of
+    :func:`planner.geometry.mesh_engine.candidate_directions`), tested like the axes.
 
     ``parts``: (id, shape) pairs, shapes holding solids in global coordinates (they are not modified).
     Returns the layout of :meth:`planner.geometry.GeometryReport.as_dict` with engine ``"occt"``; contact and
@@ -46,7 +50,7 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     blocking, is listed under ``undecided`` and named in a warning, and the others go on. ``progress``
     receives a line every few seconds. ``pairs`` counts the contact pairs decided by part boxes (``far``), by
     face boxes (``far_faces``) and those measured exactly (``exact``), and the obstruction candidates (over
-    the three axes) by part boxes (``sweep_candidates``) and those left by face boxes (``sweep_exact``).
+    all the directions) by part boxes (``sweep_candidates``) and those left by face boxes (``sweep_exact``).
 
     Raises :class:`BrepError` naming the part when
     a shape holds no solid or no volume, :class:`~planner.errors.GeometryError` for a negative tolerance.
@@ -95,13 +99,16 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     for i, j, volume in interferences:
         warnings.append(f"parts {ids[i]!r} and {ids[j]!r} interpenetrate by {volume:.4g} cubic units "
                         f"(more than the interference tolerance {interference:g})")
-    obstructions = find_obstructions(ids, shapes, boxes, faces, overlap, contact, depth, fuzzies, warnings, clock)
+    extra = _named_directions(directions)
+    obstructions = find_obstructions(ids, shapes, boxes, faces, overlap, contact, depth, fuzzies, warnings, clock,
+                                     list(extra.items()))
     warnings.extend(clock.warnings())
     return {
         "engine": "occt", "parts": len(ids),
         "contacts": [[ids[i], ids[j]] for i, j in contacts],
         "interferences": [{"parts": [ids[i], ids[j]], "volume": round(v, 6)} for i, j, v in interferences],
         "obstructions": {name: [[ids[i], ids[j]] for i, j in pairs] for name, pairs in obstructions.items()},
+        **({"directions": {name: list(v) for name, v in extra.items()}} if extra else {}),
         "tolerances": {"contact": contact, "interference": interference, "depth": depth,
                        "volume": depth ** 3},
         "undecided": [[ids[i], ids[j]] for i, j in sorted(clock.undecided)], "pairs": dict(clock.counts),
@@ -109,11 +116,29 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     }
 
 
+def _named_directions(directions) -> dict[str, tuple[float, float, float]]:
+    """The unit vectors ``directions`` by their names (:meth:`planner.product.Direction.from_vector`), the
+    axes and repeated names left out (the axes are always tested). Raises GeometryError for a vector that
+    is not three finite numbers of positive length."""
+    named: dict[str, tuple[float, float, float]] = {}
+    for vector in directions:
+        values = [float(c) for c in vector]
+        length = math.sqrt(sum(c * c for c in values))
+        if len(values) != 3 or not math.isfinite(length) or length == 0:
+            raise GeometryError(f"direction {list(vector)!r} is not three finite numbers of positive length")
+        unit = tuple(c / length for c in values)
+        name = Direction.from_vector(unit).name
+        if name not in AXIS_DIRECTIONS and name not in named:
+            named[name] = unit
+    return named
+
+
 def analyze_bundle_breps(folder: str, budgets: list | None = None, **tolerances) -> dict:
     """:func:`analyze_shapes` on the B-reps of a bundle: ``folder/product.json`` and its ``breps/*.brep``.
 
-    ``tolerances``: ``contact``, ``interference``, ``depth``, ``pair_budget`` and ``progress`` as in
-    :func:`analyze_shapes`; ``budgets``: ``[[id, id, seconds], ...]`` (JSON has no tuple keys).
+    ``tolerances``: ``contact``, ``interference``, ``depth``, ``pair_budget``, ``progress`` and
+    ``directions`` as in :func:`analyze_shapes`; ``budgets``: ``[[id, id, seconds], ...]`` (JSON has no
+    tuple keys).
     Raises :class:`BrepError` naming the part and the file when a B-rep is missing or unreadable.
     Cost: reading the files, then that of :func:`analyze_shapes`.
     """

@@ -109,3 +109,4 @@ def sweep_meets(moving: np.ndarray, other: np.ndarray, axis: int, contact: float
     overlap = (np.minimum(hi_m, hi_o) - np.maximum(lo_m, lo_o))[..., across].min(axis=2) > contact
     ahead = hi_o[..., axis] > lo_m[..., axis] + depth
     return bool((overlap & ahead).any())
+

@@ -1,12 +1,14 @@
-"""Obstruction diagrams: for each axis, the pairs (x, y) such that x swept along the axis takes volume from
-y, with the verdict of each boolean confirmed by the cross-checks OCCT needs."""
+"""Obstruction diagrams: for each axis (and each other direction asked for), the pairs (x, y) such that x swept
+along it takes volume from y, with the verdict of each boolean confirmed by the cross-checks OCCT needs."""
 from __future__ import annotations
 
 import FreeCAD
+import numpy as np
 
 from planner.product import AXIS_DIRECTIONS
 
 from .budget import PairClock, sweep_meets
+from .frames import direction_frame, frame_boxes
 from .prisms import sweep_prisms
 from .solids import common_volume
 
@@ -16,30 +18,37 @@ AXES = ("+X", "+Y", "+Z")
 
 
 def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth: float, fuzzies,
-                      warnings: list[str], clock: PairClock):
-    """Per axis, the pairs (i, j): part i moving along the axis collides with part j.
+                      warnings: list[str], clock: PairClock, directions=()):
+    """Per direction (the axes, then ``directions``: (name, unit vector) pairs), the pairs (i, j): part i
+    moving along it collides with part j.
 
     Candidates are the pairs whose boxes meet along the sweep, then whose face boxes do
-    (:func:`~.budget.sweep_meets`). Each candidate pair is worked on within ``clock``'s budget for its two
-    parts (contacts included); a pair out of time is counted as blocking and reported."""
-    scene_hi = [max(b[1][k] for b in boxes) for k in range(3)]
+    (:func:`~.budget.sweep_meets`), both seen in the frame of the direction (:func:`~.frames.frame_boxes`:
+    exact along an axis, a box around the box along another direction, so no pair that could block is
+    dropped). Each candidate pair is worked on within ``clock``'s budget for its two parts (contacts
+    included); a pair out of time is counted as blocking and reported."""
     volume_tolerance = depth ** 3
     result = {}
-    for axis, name in enumerate(AXES):
-        d = FreeCAD.Vector(*AXIS_DIRECTIONS[name])
-        across = [k for k in range(3) if k != axis]
+    tested = [(name, AXIS_DIRECTIONS[name]) for name in AXES] + list(directions)
+    part_boxes = np.array(boxes, dtype=float).reshape(-1, 2, 3)
+    for name, vector in tested:
+        frame = direction_frame(vector)
+        d = FreeCAD.Vector(*(float(c) for c in frame[2]))
+        turned = frame_boxes(part_boxes, frame)
+        turned_faces = [frame_boxes(f, frame) for f in faces]
+        scene_hi = float(turned[:, 1, 2].max())
         pairs = []
-        for i, (lo, hi) in enumerate(boxes):
+        for i, (lo, hi) in enumerate(turned):
             clock.tick(f"obstructions {name}", i + 1, len(boxes))
-            candidates = [j for j, (lo2, hi2) in enumerate(boxes) if j != i
-                          and all(min(hi[k], hi2[k]) - max(lo[k], lo2[k]) > contact for k in across)
-                          and hi2[axis] > lo[axis] + depth]
+            candidates = [j for j, (lo2, hi2) in enumerate(turned) if j != i
+                          and all(min(hi[k], hi2[k]) - max(lo[k], lo2[k]) > contact for k in (0, 1))
+                          and hi2[2] > lo[2] + depth]
             clock.counts["sweep_candidates"] += len(candidates)
-            candidates = [j for j in candidates if sweep_meets(faces[i], faces[j], axis, contact, depth)]
+            candidates = [j for j in candidates if sweep_meets(turned_faces[i], turned_faces[j], 2, contact, depth)]
             clock.counts["sweep_exact"] += len(candidates)
             if not candidates:
                 continue
-            length = scene_hi[axis] - lo[axis] + 1.0
+            length = scene_hi - float(lo[2]) + 1.0
             prisms, meshed = sweep_prisms(shapes[i], d, length, contact / 2, contact * 1e-3)
             if meshed:
                 warnings.append(f"part {ids[i]!r}: {meshed} face piece(s) swept along {name} as triangles within "
@@ -50,7 +59,7 @@ def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth:
                     pairs.append((i, j))
                     continue
                 clock.start(i, j)
-                verdict = _blocks(prisms, shapes[j], boxes[j], overlap.get((i, j)), axis, volume_tolerance,
+                verdict = _blocks(prisms, shapes[j], turned[j], overlap.get((i, j)), frame, volume_tolerance,
                                   fuzzies, lambda i=i, j=j: clock.exhausted(i, j))
                 if verdict == "late":
                     clock.give_up(i, j, f"{ids[i]} moving along {name}")
@@ -66,20 +75,22 @@ def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth:
     return result
 
 
-def _blocks(prisms, other, other_box, shared, axis: int, volume_tolerance: float, fuzzies,
+def _blocks(prisms, other, other_box, shared, frame, volume_tolerance: float, fuzzies,
             late=lambda: False) -> bool | None | str:
     """True when one of the prisms takes more than ``volume_tolerance`` of ``other`` outside ``shared``
     (the (volume, solid) the moving part already shares with it); None when no prism decided because
-    booleans failed; ``"late"`` when ``late()`` said the time was up before a prism was tested."""
+    booleans failed; ``"late"`` when ``late()`` said the time was up before a prism was tested.
+    ``other_box`` is ``other``'s box in the coordinates of ``frame`` (rows u, v, d:
+    :func:`~.frames.frame_boxes`)."""
     lo, hi = other_box
     unsure = False
     for prism in prisms:
-        plo, phi = prism.box
-        if phi[axis] <= lo[axis] or any(min(phi[k], hi[k]) - max(plo[k], lo[k]) <= 0 for k in range(3) if k != axis):
+        plo, phi = frame_boxes(np.array(prism.box, dtype=float), frame)[0]
+        if phi[2] <= lo[2] or any(min(phi[k], hi[k]) - max(plo[k], lo[k]) <= 0 for k in (0, 1)):
             continue
         if late():
             return "late"
-        verdict = _prism_blocks(prism, other, other_box, shared, axis, volume_tolerance, fuzzies)
+        verdict = _prism_blocks(prism, other, other_box, shared, frame, volume_tolerance, fuzzies)
         if verdict:
             return True
         unsure = unsure or verdict is None
@@ -95,7 +106,7 @@ def _gained(solid, other, shared, fuzzy: float) -> float | None:
     return volume
 
 
-def _prism_blocks(prism, other, other_box, shared, axis: int, volume_tolerance: float, fuzzies) -> bool | None:
+def _prism_blocks(prism, other, other_box, shared, frame, volume_tolerance: float, fuzzies) -> bool | None:
     """Whether ``prism`` takes more than ``volume_tolerance`` of ``other`` outside ``shared``.
 
     OCCT's booleans fail quietly now and then: an empty common for a door moving onto its screws, or for a
@@ -113,7 +124,7 @@ def _prism_blocks(prism, other, other_box, shared, axis: int, volume_tolerance: 
             if gained > volume_tolerance:
                 return True
             empty = True
-    rays = not shared and _ray_hits(prism, other, other_box, axis, fuzzies[-1])
+    rays = not shared and _ray_hits(prism, other, other_box, frame, fuzzies[-1])
     if empty or rays:
         return rays
     meshed = prism.meshed()
@@ -121,22 +132,23 @@ def _prism_blocks(prism, other, other_box, shared, axis: int, volume_tolerance: 
     return None if gained is None else gained > volume_tolerance
 
 
-def _ray_hits(prism, other, other_box, axis: int, tolerance: float, steps: int = 4) -> bool:
+def _ray_hits(prism, other, other_box, frame, tolerance: float, steps: int = 4) -> bool:
     """True when a ray along the sweep from a sample point of the prism's face (away from its edges)
     passes through the inside of ``other``, deeper than ``tolerance`` (``steps`` points per ray, spread over
-    ``other``'s box): then the prism and ``other`` overlap, whatever a boolean says."""
+    ``other``'s box ``other_box``, in the coordinates of ``frame``: rows u, v, d): then the prism and
+    ``other`` overlap, whatever a boolean says."""
     lo, hi = other_box
-    across = [k for k in range(3) if k != axis]
+    d = FreeCAD.Vector(*(float(c) for c in frame[2]))
     for start in prism.points:
-        if not all(lo[k] < start[k] < hi[k] for k in across):
+        local = frame @ np.array([start.x, start.y, start.z])
+        if not all(lo[k] < local[k] < hi[k] for k in (0, 1)):
             continue
-        begin = max(lo[axis], start[axis])
-        if begin >= hi[axis]:
+        begin = max(lo[2], local[2])
+        if begin >= hi[2]:
             continue
         for step in range(steps):
-            position = begin + (hi[axis] - begin) * (step + 0.5) / steps
-            point = FreeCAD.Vector(start)
-            point[axis] = position
+            position = begin + (hi[2] - begin) * (step + 0.5) / steps
+            point = FreeCAD.Vector(start) + d * float(position - local[2])
             if other.isInside(point, tolerance, False):
                 return True
     return False

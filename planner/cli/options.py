@@ -228,8 +228,8 @@ def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
                        help="occt engine: seconds of work per pair of parts, at least 0; a pair not decided in time "
                             f"is reported and counted as touching and blocking (default {d.pair_budget:g})")
     group.add_argument("--directions", type=_direction_count, default=d.directions, metavar="N",
-                       help="mesh engine: motion directions besides the axes to find on the parts' faces and axes "
-                            f"and test like the axes, 0 to 64 (default {d.directions}; 0: the axes only)")
+                       help="mesh and occt engines: motion directions besides the axes to find on the parts' faces and "
+                            f"axes and test like the axes, 0 to 64 (default {d.directions}; 0: the axes only)")
     group.add_argument("--direction", action="append", type=designer_direction, default=[], metavar="X,Y,Z",
                        help="a motion direction of the designer's, tested like the axes at this and every later "
                             "detection (recorded in the product's geometry.designer; normalised; one along an "
