@@ -10,8 +10,8 @@ import pytest
 from planner import api
 from planner.decision.solvers.lower import LowerBound
 from planner.decision.solvers.point_based import PointBasedSolver
-from planner.decision.solvers.tables import Tables, fast_informed_bound, mdp_upper_bound
-from planner.decision.solvers.trials import descend
+from planner.decision.solvers.tables import SolveStopped, Tables, fast_informed_bound, mdp_upper_bound
+from planner.decision.solvers.trials import descend, trial
 from planner.decision.solvers.upper import UpperBound
 
 
@@ -82,8 +82,39 @@ def test_a_deep_trial_stops_at_the_limit(slow_pen):
     upper = UpperBound(mdp_upper_bound(m, max_sweeps=3), np.random.default_rng(0).random(m.S))
     deep = descend(m, b0, lower, upper, epsilon=1e-3, max_depth=50)
     assert len(deep) > 10  # with a discount near 1 a trial goes deep
-    stopped = descend(m, b0, lower, upper, epsilon=1e-3, max_depth=50, stop=lambda: True)
-    assert len(stopped) == 1  # the first step (its own bounds at b0), then no further
+    assert descend(m, b0, lower, upper, epsilon=1e-3, max_depth=50, stop=lambda: True) == []  # not even one step
+    # The limit passing inside a step (the k-th reading of the clock) drops that step: the path is the deep
+    # one's first steps, each complete.
+    for k in (1, 5, 40):
+        readings = itertools.count()
+        stopped = descend(m, b0, lower, upper, epsilon=1e-3, max_depth=50, stop=lambda: next(readings) >= k)
+        assert 0 < len(stopped) < len(deep)
+        assert all(np.array_equal(a.belief, b.belief) for a, b in zip(stopped, deep))
+        assert all(len(a.successors.action) == len(b.successors.action) for a, b in zip(stopped, deep))
+
+
+def test_a_step_stopped_on_a_large_model(slow_pen, monkeypatch):
+    """Per action on a large model (past SUCCESSOR_BLOCK): the limit passing between two actions stops the
+    step (SolveStopped), and a trial then backs up only the steps it finished, so both bounds at b0 stay
+    bounds (the lower at most, the upper at least, the unstopped trial's)."""
+    import planner.decision.solvers.tables as tables
+
+    monkeypatch.setattr(tables, "SUCCESSOR_BLOCK", 0)
+    m = Tables(slow_pen)
+    b0 = np.asarray(slow_pen.initial, dtype=float)
+    readings = itertools.count()
+    with pytest.raises(SolveStopped):
+        m.successors(b0, None, stop=lambda: next(readings) >= 3)
+    lower = LowerBound.blind(m)
+    upper = UpperBound(mdp_upper_bound(m, max_sweeps=3), np.random.default_rng(0).random(m.S))
+    readings = itertools.count()
+    trial(m, b0, lower, upper, None, 1e-3, max_depth=50, stop=lambda: next(readings) >= 60)
+    cut_low, cut_high = lower.value(b0), upper.value(b0)
+    lower_full = LowerBound.blind(m)
+    upper_full = UpperBound(mdp_upper_bound(m, max_sweeps=3), np.random.default_rng(0).random(m.S))
+    trial(m, b0, lower_full, upper_full, None, 1e-3, max_depth=50)
+    assert cut_low <= lower_full.value(b0) + 1e-9 and cut_high >= upper_full.value(b0) - 1e-9
+    assert cut_low <= cut_high
 
 
 def test_large_model_successors_are_the_same(slow_pen, monkeypatch):

@@ -44,9 +44,10 @@ class LowerBound:
         """(n, S): the alpha vectors (a view: it changes as vectors are added or pruned)."""
         return self._rows.rows
 
-    def at(self, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The bound at the beliefs ``B`` (m, S) and the index of the best vector at each. Cost: O(m n S)."""
-        return best_products(B, self._rows.rows)
+    def at(self, B: np.ndarray, stop=None) -> tuple[np.ndarray, np.ndarray]:
+        """The bound at the beliefs ``B`` (m, S) and the index of the best vector at each (``stop``:
+        :func:`~.tables.best_products`'). Cost: O(m n S)."""
+        return best_products(B, self._rows.rows, stop)
 
     def value(self, b: np.ndarray) -> float:
         """The bound at one belief ``b`` (S,). Cost: O(n S)."""

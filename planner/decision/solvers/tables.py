@@ -11,7 +11,7 @@ import scipy.sparse.linalg as spla
 
 from ..pomdp import POMDP
 
-__all__ = ["BLOCK", "best_products", "Rows", "Tables", "blind_lower_bound", "mdp_upper_bound", "moving_rows", "fast_informed_bound"]
+__all__ = ["BLOCK", "SolveStopped", "best_products", "Rows", "Tables", "blind_lower_bound", "mdp_upper_bound", "moving_rows", "fast_informed_bound"]
 
 SUCCESSOR_BLOCK = 10_000_000  # numbers of the (actions, observations, states) product built at once, at most
 DENSE_LIMIT = 20_000_000  # A * S * S entries up to which transitions may be kept dense
@@ -20,15 +20,28 @@ DENSE_LIMIT = 20_000_000  # A * S * S entries up to which transitions may be kep
 BLOCK = 2_000_000
 
 
-def best_products(B: np.ndarray, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+class SolveStopped(Exception):
+    """Raised inside a long step when its ``stop()`` turns true (the solver's time limit): the caller drops the
+    unfinished step, which leaves every bound as valid as before it."""
+
+
+def _check(stop: Callable[[], bool] | None) -> None:
+    if stop is not None and stop():
+        raise SolveStopped
+
+
+def best_products(B: np.ndarray, V: np.ndarray,
+                  stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """For each row b of ``B`` (m, S): ``max_k V[k] . b`` and its ``k``, over ``V`` (n, S), computed
-    ``BLOCK`` products at a time. Cost: O(m n S) time, O(BLOCK) extra memory."""
+    ``BLOCK`` products at a time (``stop``: checked before each block, :class:`SolveStopped`). Cost: O(m n S)
+    time, O(BLOCK) extra memory."""
     values, best = np.empty(len(B)), np.empty(len(B), dtype=np.int64)
     cols = np.flatnonzero((B != 0).any(axis=0))
     if 4 * len(cols) < 3 * B.shape[1] and len(B) >= 8:  # beliefs with small supports: only their columns
         B, V = B[:, cols], V[:, cols]
     step = max(1, BLOCK // max(1, len(V)))
     for first in range(0, len(B), step):
+        _check(stop)
         products = B[first:first + step] @ V.T
         best[first:first + step] = products.argmax(axis=1)
         values[first:first + step] = products[np.arange(len(products)), best[first:first + step]]
@@ -123,15 +136,20 @@ class Tables:
         """(n, S): for each row w of ``W`` (n, S), sum_s' T(s'|s,a) w[s']."""
         return W @ self.TD[a].T if self.dense else np.asarray((self.T[a] @ W.T).T)
 
-    def successors(self, b: np.ndarray, actions: np.ndarray | None = None):
+    def successors(self, b: np.ndarray, actions: np.ndarray | None = None, stop: Callable[[], bool] | None = None):
         """Non-zero (action, observation) pairs after ``b`` under ``actions`` (sorted; default: all): their
-        action and observation indices, probabilities and beliefs."""
+        action and observation indices, probabilities and beliefs (``stop``: checked per action on large
+        models, :class:`SolveStopped`)."""
         if actions is None or len(actions) == self.A:
             predicted, actions = self.predict(b), np.arange(self.A)              # (A, S)
         else:
             predicted = np.stack([self.step(b[None], int(a))[0] for a in actions])
         if len(actions) * self.Z * self.S > SUCCESSOR_BLOCK:  # large: never the whole (A', Z, S) product
-            pz = np.stack([self.OZ[a] @ predicted[i] for i, a in enumerate(actions)])  # (A', Z)
+            rows = []
+            for i, a in enumerate(actions):
+                _check(stop)
+                rows.append(self.OZ[a] @ predicted[i])
+            pz = np.stack(rows)  # (A', Z)
             a_idx, z_idx = np.nonzero(pz > 1e-15)
             probs = pz[a_idx, z_idx]
             beliefs = self.OZ[actions[a_idx], z_idx] * predicted[a_idx] / probs[:, None]

@@ -24,7 +24,7 @@ import numpy as np
 
 from .belief_set import BeliefSet
 from .lower import LowerBound
-from .tables import Tables
+from .tables import SolveStopped, Tables
 from .upper import UpperBound
 
 __all__ = ["Successors", "candidate_actions", "successors", "q_upper", "q_lower", "backup", "backup_groups", "descend",
@@ -67,19 +67,19 @@ def candidate_actions(m: Tables, b: np.ndarray, upper: UpperBound, low: float) -
 
 
 def successors(m: Tables, b: np.ndarray, lower: LowerBound, upper: UpperBound,
-               low: float | None = None) -> Successors:
+               low: float | None = None, stop: Callable[[], bool] | None = None) -> Successors:
     """The successors of ``b`` under every action and observation (with ``low``, a lower bound on V*(b):
     under the :func:`candidate_actions` only), with both bounds at each. Cost: O(A (nnz(T) + S Z)) for the
     beliefs and O((K + N) S d) for the bounds at the d distinct ones."""
-    a_idx, z_idx, probs, nxt = m.successors(b, None if low is None else candidate_actions(m, b, upper, low))
+    a_idx, z_idx, probs, nxt = m.successors(b, None if low is None else candidate_actions(m, b, upper, low), stop)
     # Many actions leave most intentions as they are: bound each distinct successor belief once.
     _, first, back = np.unique(nxt @ upper.fingerprint, return_index=True, return_inverse=True)
     distinct = nxt[first]
     if not np.array_equal(distinct[back], nxt):  # a fingerprint collision: compare whole rows
         distinct, back = np.unique(nxt, axis=0, return_inverse=True)
     back = back.reshape(-1)
-    lo, best = lower.at(distinct)
-    return Successors(a_idx, z_idx, probs, nxt, lo[back], best[back], upper.at(distinct)[back])
+    lo, best = lower.at(distinct, stop)
+    return Successors(a_idx, z_idx, probs, nxt, lo[back], best[back], upper.at(distinct, stop=stop)[back])
 
 
 def _q(m: Tables, b: np.ndarray, s: Successors, values: np.ndarray) -> np.ndarray:
@@ -145,7 +145,10 @@ def descend(m: Tables, b0: np.ndarray, lower: LowerBound, upper: UpperBound, eps
     b, depth, known = b0, 0, (low, int(best_vector), upper.value(b0))
     path: list[Step] = []
     while depth < max_depth and not (depth and stop is not None and stop()):
-        s = successors(m, b, lower, upper, known[0])
+        try:
+            s = successors(m, b, lower, upper, known[0], stop)
+        except SolveStopped:  # the time limit inside a long step: drop it (the path so far stays valid)
+            break
         path.append(Step(b, s, None, known))
         if known[2] - known[0] <= epsilon * m.gamma ** (-depth):
             break

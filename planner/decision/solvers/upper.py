@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .tables import BLOCK, Rows
+from .tables import BLOCK, Rows, SolveStopped
 
 __all__ = ["CornerGroups", "UpperBound"]
 
@@ -103,9 +103,10 @@ class UpperBound:
         """(n,): ``v_i - c . b_i`` for each stored point."""
         return self._excess[:self.points.n]
 
-    def at(self, B: np.ndarray, allowed: np.ndarray | None = None) -> np.ndarray:
+    def at(self, B: np.ndarray, allowed: np.ndarray | None = None, stop=None) -> np.ndarray:
         """The bound at the beliefs ``B`` (m, S); ``allowed`` (n, m): which points may serve which belief
-        (default: all). Cost: O(m S (A + n)) (the sawtooth only over the pairs whose supports nest)."""
+        (default: all); ``stop``: checked before each block of the sawtooth (:class:`~.tables.SolveStopped`).
+        Cost: O(m S (A + n)) (the sawtooth only over the pairs whose supports nest)."""
         base = B @ self.corner
         fit = None
         if self.groups is not None:
@@ -131,6 +132,8 @@ class UpperBound:
             width = max(len(cols), 0 if fit is None else fit.shape[1], 1)
             block = max(1, BLOCK // width)  # (point, belief) pairs per product
             for first in range(0, i_idx.size, block):
+                if stop is not None and stop():
+                    raise SolveStopped
                 ii, bb = i_idx[first:first + block], b_idx[first:first + block]
                 ratio = 1.0 / (self.points.rows[np.ix_(ii, cols)] * inverse[bb]).max(axis=1)
                 gain = self.excess[ii] * ratio
