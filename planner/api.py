@@ -85,7 +85,7 @@ from .product import (
 from .product.examples import EXAMPLES, example_path
 
 __all__ = ["resolve_product", "fastener_report", "accept_fasteners", "FASTENER_MODES", "plan_of",
-           "proposed_subassemblies", "structure_problems", "level_report", "LEVEL_KEYS",
+           "proposed_subassemblies", "structure_problems", "level_report", "level_table", "LEVEL_KEYS",
            "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
            "policy_for", "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner",
@@ -321,6 +321,13 @@ def level_report(product: Product, technical: bool | None = None, limits: SizeLi
     it is done. Cost: the levels' plans plus the flat plan within its limits."""
     flat_limits = flat_limits or SizeLimits(min(limits.subassemblies, SUBASSEMBLY_LIMIT), min(limits.memory, 2 ** 30))
     levels, flat = hierarchy_statistics_of(product, technical, limits, flat_limits=flat_limits, progress=progress)
+    return level_table(product, levels, flat)
+
+
+def level_table(product: Product, levels: list, flat) -> dict:
+    """:func:`level_report`'s dict from :func:`hierarchy_statistics_of`'s answer ``(levels, flat)`` (each
+    level's statistics or the error it ended with; the flat statistics, the reason they are missing, or None).
+    Cost: O(levels x figures)."""
     rows = []
     for level, stats in levels:
         row = {"level": level.id, "members": list(level.members)}

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import math
 import os
 import sys
 from dataclasses import replace
@@ -48,9 +47,7 @@ log = logging.getLogger(__name__)
 PARTIAL = 3
 
 
-# The figures a hierarchy adds up over its levels (sequences multiply: each workstation picks its own).
-_LEVEL_KEYS = ("parts", "subassemblies", "operations", "states", "state_edges", "intentions", "sequences")
-# The flat plan is only counted for comparison: within these limits (a few seconds), else refused.
+# The flat plan of a hierarchy is only counted for comparison: within these limits (a few seconds), else refused.
 _FLAT_LIMITS = SizeLimits(SUBASSEMBLY_LIMIT, 2 ** 30)
 
 
@@ -126,31 +123,14 @@ def _level_stats(args: argparse.Namespace, product) -> int:
     flat_limits = SizeLimits(min(limits.subassemblies, _FLAT_LIMITS.subassemblies),
                              min(limits.memory, _FLAT_LIMITS.memory))
     levels, flat = api.hierarchy_statistics_of(product, args.technical, limits, flat_limits=flat_limits)
+    report = api.level_table(product, levels, flat)  # the figures, as the workbench's level_report gives them
     failed = [(level.id, error) for level, error in levels if not isinstance(error, PlanStatistics)]
-    levels = [(level, stats if isinstance(stats, PlanStatistics) else None) for level, stats in levels]
-    figures = {level.id: stats.as_dict() if stats else {key: None for key in STAT_KEYS} for level, stats in levels}
-    total: dict[str, int | None] = {}
-    for key in _LEVEL_KEYS:
-        values = [figures[level.id][key] for level, _ in levels]
-        if key == "parts":
-            total[key] = len(product.parts)
-        elif any(v is None for v in values):
-            total[key] = None
-        elif key == "sequences":
-            total[key] = math.prod(values)
-        else:
-            total[key] = sum(values)
-    refused = [(level.id, stats.refused) for level, stats in levels if stats and stats.refused]
-    flat_dict = flat.as_dict() if isinstance(flat, PlanStatistics) else None
-    flat_reason = (str(flat.refused) if isinstance(flat, PlanStatistics) and flat.refused else
-                   None if isinstance(flat, PlanStatistics) else str(flat))
+    refused = [(level.id, stats.refused) for level, stats in levels
+               if isinstance(stats, PlanStatistics) and stats.refused]
+    total, flat_dict, flat_reason = report["total"], report["flat"], report.get("flat_not_computed")
+    figures = {row["level"]: row for row in report["levels"]}
     if args.json:
-        print(json.dumps({"levels": [{"level": level.id, "members": list(level.members), **figures[level.id],
-                                      **({"not_computed": str(stats.refused)} if stats and stats.refused else {}),
-                                      **({"error": str(dict(failed)[level.id])} if level.id in dict(failed) else {})}
-                                     for level, stats in levels],
-                          "total": total, "flat": flat_dict, **({"flat_not_computed": flat_reason}
-                                                                 if flat_reason else {})}))
+        print(json.dumps(report))
         return 1 if failed else PARTIAL if refused else 0
     print(f"{product.name or str(args.product)} ({product.source}): {len(product.parts)} parts in {len(levels)} "
           f"levels (workstations), planned bottom-up")
@@ -161,7 +141,7 @@ def _level_stats(args: argparse.Namespace, product) -> int:
     rows.append(("total", total["parts"], sum(built.values()), total))
     if flat_dict is not None:
         rows.append(("flat", flat_dict["parts"], 0, flat_dict))
-    keys = _LEVEL_KEYS[1:]
+    keys = api.LEVEL_KEYS[1:]
     # Each column as wide as its widest figure (a product of the levels' sequence counts can be long).
     width = {k: 2 + max(len(names.get(k, k)), *(len(shown(d[k])) for *_, d in rows)) for k in keys}
     first = max(8, *(len(str(name)) + 1 for name, *_ in rows))
