@@ -29,3 +29,23 @@ def aplan(*args: str, check: bool = True) -> subprocess.CompletedProcess:
     if check and done.returncode != 0:
         raise AssertionError(f"aplan {' '.join(args)} failed ({done.returncode}):\n{done.stdout}\n{done.stderr}")
     return done
+
+
+# Shared by the GUI test scripts (run inside the FreeCAD window; each defines OUT, result and imports json, os,
+# traceback): write the result and leave at once; run a Qt-timer step, ending the run with its traceback.
+GUI_HELPERS = '''
+def finish(code):
+    with open(OUT, "w") as handle:
+        json.dump(result, handle)
+    os._exit(code)
+
+
+def guarded(step):
+    def run():
+        try:
+            step()
+        except Exception:
+            result["error"] = traceback.format_exc()
+            finish(1)
+    return run
+'''

@@ -10,7 +10,7 @@ import subprocess
 
 import pytest
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared, run_freecad_gui
-from integration.freecad_tools import freecad_result
+from integration.freecad_tools import GUI_HELPERS, freecad_result
 
 from planner import api, product_to_dict
 
@@ -137,20 +137,7 @@ OUT, COPY, ARTIFACTS = {out!r}, {copy!r}, {artifacts!r}
 result = {{}}
 
 
-def finish(code):
-    with open(OUT, "w") as handle:
-        json.dump(result, handle)
-    os._exit(code)
-
-
-def guarded(step):
-    def run():
-        try:
-            step()
-        except Exception:
-            result["error"] = traceback.format_exc()
-            finish(1)
-    return run
+{gui_helpers}
 
 
 def start():
@@ -193,7 +180,7 @@ def test_base_part_field_in_the_task_panel(tmp_path):
     ARTIFACTS.mkdir(exist_ok=True)
     out = tmp_path / "result.json"
     script = tmp_path / "gui_base_part.py"
-    script.write_text(GUI.format(out=str(out), copy=str(copy), artifacts=str(ARTIFACTS), diagrams=_pen_diagrams()))
+    script.write_text(GUI.format(gui_helpers=GUI_HELPERS, out=str(out), copy=str(copy), artifacts=str(ARTIFACTS), diagrams=_pen_diagrams()))
     data = run_freecad_gui(tmp_path, script, out)
     assert data["choices"][:2] == ["", "auto"] and "body_001" in data["choices"]
     assert data["bad_accepted"] is False and data["bad_stored"] == ""

@@ -7,7 +7,7 @@ import shutil
 
 import pytest
 from conftest import PEN_MODELS, REPO, require_shared, run_freecad_gui
-from integration.freecad_tools import aplan
+from integration.freecad_tools import GUI_HELPERS, aplan
 
 ARTIFACTS = REPO / "tests" / "artifacts"
 
@@ -20,20 +20,7 @@ OUT, COPY, ARTIFACTS = {out!r}, {copy!r}, {artifacts!r}
 result = {{"ticks": 0, "cancel_ticks": 0}}
 
 
-def finish(code):
-    with open(OUT, "w") as handle:
-        json.dump(result, handle)
-    os._exit(code)
-
-
-def guarded(step):
-    def run():
-        try:
-            step()
-        except Exception:
-            result["error"] = traceback.format_exc()
-            finish(1)
-    return run
+{gui_helpers}
 
 
 def status():
@@ -277,7 +264,7 @@ def test_workbench_in_the_real_freecad_window(tmp_path):
     ARTIFACTS.mkdir(exist_ok=True)
     out = tmp_path / "result.json"
     script = tmp_path / "gui_test.py"
-    script.write_text(GUI_SCRIPT.format(out=str(out), copy=str(copy), artifacts=str(ARTIFACTS)))
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, out=str(out), copy=str(copy), artifacts=str(ARTIFACTS)))
     data = run_freecad_gui(tmp_path, script, out)
     assert data["workbench"] == "AplanWorkbench" and all(data["commands"].values())
     # Bad input: one clear line each, and the document untouched.

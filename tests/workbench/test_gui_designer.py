@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import pytest
 from conftest import REPO, run_freecad_gui
+from integration.freecad_tools import GUI_HELPERS
 
 ARTIFACTS = REPO / "tests" / "artifacts"
 
@@ -18,20 +19,7 @@ OUT, COPY, ARTIFACTS = {out!r}, {copy!r}, {artifacts!r}
 result = {{}}
 
 
-def finish(code):
-    with open(OUT, "w") as handle:
-        json.dump(result, handle)
-    os._exit(code)
-
-
-def guarded(step):
-    def run():
-        try:
-            step()
-        except Exception:
-            result["error"] = traceback.format_exc()
-            finish(1)
-    return run
+{gui_helpers}
 
 
 def state():
@@ -147,7 +135,7 @@ def test_diagrams_panel_adds_a_direction_and_marks_a_relation(tmp_path):
     ARTIFACTS.mkdir(exist_ok=True)
     out = tmp_path / "result.json"
     script = tmp_path / "gui_designer.py"
-    script.write_text(GUI_SCRIPT.format(out=str(out), copy=str(tmp_path / "wedge.FCStd"), artifacts=str(ARTIFACTS)))
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, out=str(out), copy=str(tmp_path / "wedge.FCStd"), artifacts=str(ARTIFACTS)))
     data = run_freecad_gui(tmp_path, script, out)
     assert "zero vector" in data["bad_direction"][0] and data["bad_direction"][1] == 0
     text, shown, step, steps, directions = data["direction"]

@@ -11,7 +11,7 @@ import shutil
 
 import pytest
 from conftest import REPO, SHARED, require_shared, run_freecad_gui
-from integration.freecad_tools import aplan
+from integration.freecad_tools import GUI_HELPERS, aplan
 from real_models import real_bundles  # noqa: F401  (fixture: the truck exported once per session)
 
 ARTIFACTS = REPO / "tests" / "artifacts"
@@ -26,20 +26,7 @@ OUT, COPY, BUNDLE, ARTIFACTS = {out!r}, {copy!r}, {bundle!r}, {artifacts!r}
 result = {{"ticks": 0, "progress": [], "plan_ticks": 0}}
 
 
-def finish(code):
-    with open(OUT, "w") as handle:
-        json.dump(result, handle)
-    os._exit(code)
-
-
-def guarded(step):
-    def run():
-        try:
-            step()
-        except Exception:
-            result["error"] = traceback.format_exc()
-            finish(1)
-    return run
+{gui_helpers}
 
 
 def state():
@@ -198,7 +185,7 @@ def test_truck_structure_in_the_workbench(tmp_path, real_bundles):  # noqa: F811
     ARTIFACTS.mkdir(exist_ok=True)
     out, bundle = tmp_path / "result.json", tmp_path / "bundle"
     script = tmp_path / "gui_truck.py"
-    script.write_text(GUI_SCRIPT.format(out=str(out), copy=str(copy), bundle=str(bundle), artifacts=str(ARTIFACTS)))
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, out=str(out), copy=str(copy), bundle=str(bundle), artifacts=str(ARTIFACTS)))
     data = run_freecad_gui(tmp_path, script, out)
     # Detection stayed in the background: the command returned at once (the quick component check and a copy
     # of the document), the event loop kept running, the dialog showed the parts being tessellated.
