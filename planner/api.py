@@ -34,6 +34,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from .assembly.explode import ExplodedView, exploded_view, sequence_at, sequence_count
 from .assembly.guards import OPTIONS, SizeLimits, memory_options
 from .assembly.hierarchy import (
     Level,
@@ -83,13 +84,15 @@ from .product import (
     with_fastener_mode,
 )
 from .product.examples import EXAMPLES, example_path
+from .runtime.logged_sequence import LoggedSequence, complete_sequence, logged_sequence
 
 __all__ = ["resolve_product", "fastener_report", "accept_fasteners", "FASTENER_MODES", "plan_of",
            "proposed_subassemblies", "structure_problems", "level_report", "level_table", "LEVEL_KEYS",
            "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
            "policy_for", "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner",
-           "choose_planner", "decision_maker", "arranged", "levels_of", "level_product", "hierarchy_statistics_of"]
+           "choose_planner", "decision_maker", "arranged", "levels_of", "level_product", "hierarchy_statistics_of",
+           "sequence_choices", "plan_in_3d", "sequence_from_log"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
 FILE_OPTION = ("--max-file", "--max-file GIB raises the file size budget")
@@ -370,6 +373,46 @@ def base_part_of(plan: Plan, base_part: str | None) -> str | None:
     base = most_connected_part(plan.product) if base_part == AUTO_BASE_PART else str(base_part)
     base_part_first_edges(plan.states, base)  # raises for a part the product does not have
     return base
+
+
+def sequence_choices(plan: Plan, base_part: str | None = None, limit: int = 200) -> tuple[int, list[list[int]]]:
+    """The number of full assembly sequences (from ``base_part``, ``"auto"`` resolved) and the first ``limit``
+    of them by rank (:func:`~planner.assembly.explode.sequence_at`): what a sequence chooser lists; past the
+    limit a chooser asks for a rank."""
+    base = base_part_of(plan, base_part)
+    count = sequence_count(plan, base)
+    return count, [sequence_at(plan, rank, base) for rank in range(min(count, limit))]
+
+
+def plan_in_3d(plan: Plan, sequence: int | Sequence[int], spacing: float = 1.0,
+               base_part: str | None = None) -> ExplodedView:
+    """The exploded view of a full assembly sequence (:mod:`planner.assembly.explode`): ``sequence`` is a rank
+    (among the sequences from ``base_part``) or the operations themselves; the base part (``"auto"``
+    resolved) also decides which side of each operation moves."""
+    base = base_part_of(plan, base_part)
+    operations = sequence_at(plan, sequence, base) if isinstance(sequence, (int, np.integer)) else list(sequence)
+    return exploded_view(plan, operations, spacing, base)
+
+
+def sequence_from_log(path: str | os.PathLike, plan: Plan | None = None) -> tuple[list[int], LoggedSequence]:
+    """The sequence a session log recorded (:func:`~planner.runtime.logged_sequence.logged_sequence`), completed
+    by the first continuation when the session stopped early, as operations of ``plan`` (default: the plan of
+    the product the log stores). Raises :class:`PlannerError` when the log's operations are not operations
+    of ``plan`` (a log of another product)."""
+    logged = logged_sequence(path)
+    operations = complete_sequence(logged.plan, list(logged.operations))
+    if plan is None:
+        return operations, logged
+    index = {frozenset(plan.andor.inputs(j)): j for j in range(len(plan.andor.operations))}
+    mapped = []
+    for operation in operations:
+        inputs = logged.plan.andor.inputs(operation)
+        if frozenset(inputs) not in index:
+            raise PlannerError(f"{path}: the logged operation {logged.plan.andor.describe(operation)} is not an "
+                               f"operation of {plan.product.name or 'this product'}; the log was recorded for "
+                               f"{logged.product.name or 'another product'} (parts: {', '.join(logged.plan.andor.parts)})")
+        mapped.append(index[frozenset(inputs)])
+    return mapped, logged
 
 
 def plan_statistics_of(product: str | os.PathLike | Product | Plan, technical: bool | None = None,

@@ -1,0 +1,122 @@
+"""The assembly sequence a session log recorded: the robot's operations and the operator's, in the order done.
+
+The log names the robot's operations (its actions) but only what the operator was seen picking (an
+observation), which several operations of a state may explain. The sequence is the first one, in the order
+of the state graph's edges, that explains every logged event; ``ambiguous`` says whether another one does too.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..assembly.explode import SequenceError, check_sequence
+from ..assembly.plan import Plan
+from ..assembly.tags import BLANK
+from ..product import Product
+from .log import SessionError, replay
+
+__all__ = ["LoggedSequence", "complete_sequence", "explain_steps", "logged_sequence", "logged_steps"]
+
+
+@dataclass(frozen=True)
+class LoggedSequence:
+    """``operations`` (AND/OR indices of ``plan``) in the order they were done, ``by`` who did each (``robot``
+    or ``operator``); ``complete``: the product was finished; ``ambiguous``: another sequence explains the
+    log too."""
+
+    product: Product
+    plan: Plan
+    operations: tuple[int, ...]
+    by: tuple[str, ...]
+    complete: bool
+    ambiguous: bool
+
+
+def logged_steps(events: list[dict], model) -> list[tuple[str, int]]:
+    """The log's events as ``("robot", operation)`` for each robot operation reported done and
+    ``("operator", observation index)`` for each observation, in order (a blank observation: the operator did
+    nothing, or an operation that needs no tool and takes no single part). Cost: O(events)."""
+    steps, pending = [], {}
+    for event in events:
+        kind = event.get("event")
+        if kind == "action":
+            pending[event.get("step")] = model.operation(int(event["action"]))
+        elif kind == "robot" and event.get("ok") and pending.get(event.get("step")) is not None:
+            steps.append(("robot", int(pending[event.get("step")])))
+        elif kind == "observation" and event.get("index") is not None:
+            steps.append(("operator", int(event["index"])))
+    return steps
+
+
+#: How many explanations of a log :func:`explain_steps` collects before it chooses.
+EXPLANATIONS = 64
+
+
+def explain_steps(plan: Plan, steps: list[tuple[str, int]]) -> tuple[list[tuple[int, str]], bool]:
+    """A sequence of ``(operation, who)`` (``robot`` or ``operator``) that explains ``steps``
+    (:func:`logged_steps`), and whether another one does.
+
+    Explanations are searched depth first over the state edges, smallest first (a blank observation: an
+    operation it explains first, then nothing); of the first :data:`EXPLANATIONS`, the first that finishes
+    the product is chosen, else the first. Raises :class:`SequenceError` when none explains the steps.
+    Cost: O(b^k E) for k steps with at most b candidates each (b is 1 when every observation names one
+    operation and none is blank)."""
+    states, seen = plan.states, plan.operation_observation
+    blank = plan.observations.index(BLANK)
+    found: list[tuple[list[tuple[int, str]], bool]] = []
+
+    def search(state: int, at: int, done: list[int]) -> None:
+        if len(found) == EXPLANATIONS:
+            return
+        if at == len(steps):
+            found.append((list(done), state == states.final))
+            return
+        who, value = steps[at]
+        out = np.flatnonzero(states.edge_source == state)
+        ops = states.edge_operation[out]
+        match = out[ops == value] if who == "robot" else out[seen[ops] == value]
+        for edge in match:
+            search(int(states.edge_target[edge]), at + 1, done + [(int(states.edge_operation[edge]), who)])
+        if who == "operator" and value == blank:
+            search(state, at + 1, done)
+
+    search(states.initial, 0, [])
+    if not found:
+        raise SequenceError("no assembly sequence of the product explains the logged operations and observations; "
+                            "the log is damaged or was written for another product")
+    chosen = next((ops for ops, finished in found if finished), found[0][0])
+    return chosen, len({tuple(op for op, _ in ops) for ops, _ in found}) > 1
+
+
+def complete_sequence(plan: Plan, operations: list[int]) -> list[int]:
+    """``operations`` (a prefix of a full sequence) followed by the first continuation (smallest state edges)
+    to the finished product. Cost: O(n E)."""
+    states = plan.states
+    state, out = check_sequence(plan, operations)[-1], list(operations)
+    while state != states.final:
+        edge = int(np.flatnonzero(states.edge_source == state)[0])
+        out.append(int(states.edge_operation[edge]))
+        state = int(states.edge_target[edge])
+    return out
+
+
+def logged_sequence(path: str | os.PathLike) -> LoggedSequence:
+    """The sequence the session log at ``path`` recorded (module docstring), over the plan of the product
+    the log stores. Raises :class:`~planner.runtime.log.SessionError` for a file that is not a session log,
+    :class:`~planner.assembly.explode.SequenceError` when no sequence explains it. Cost: the replay (one model
+    build and one belief update per step) and :func:`explain_steps`."""
+    path = Path(path)
+    done = replay(path)
+    plan = done.model.plan
+    steps = logged_steps(done.events, done.model)
+    try:
+        explained, ambiguous = explain_steps(plan, steps)
+    except SequenceError as exc:
+        raise SessionError(f"{path}: {exc}") from None
+    operations = [op for op, _ in explained]
+    state = check_sequence(plan, operations)[-1]
+    return LoggedSequence(done.product, plan, tuple(operations), tuple(who for _, who in explained),
+                          state == plan.states.final, ambiguous)
