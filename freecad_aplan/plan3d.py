@@ -1,24 +1,24 @@
-"""The plan shown on the document itself, and put back exactly: parts moved to their exploded offsets, coloured
-by their role in an operation or a relation, then restored.
+"""The plan shown on the document's 3D view, and put back exactly: parts moved to their exploded offsets and
+coloured by their role in an operation or a relation, then restored.
 
-What changes is kept in a :class:`SceneChanges`: before an object is first moved or painted, its
-``Placement`` and, in the GUI, its view properties (:data:`VIEW_PROPERTIES`) are saved as they are;
-:meth:`SceneChanges.restore` writes them back in an order that reproduces them exactly, clears the
-recompute marks the moves left on objects that had none, and gives the document its modified flag back.
-No transaction is opened: a move never becomes an undo step, and whatever the user does meanwhile is not
-rolled back with it (an aborted transaction would take it too, and does nothing when undo is off).
+In the GUI nothing of the document changes: the parts are moved and painted in the 3D view's scene graph
+only (each view provider's Coin3D transform and face materials), so no property changes, no undo step is
+recorded, the document is not marked modified and nothing needs a recompute; the user's ``Placement``,
+``ShapeColor``, ``DiffuseColor``, ``Transparency`` and ``Visibility`` are never written (hidden parts stay
+hidden). What was there is saved first and written back by :meth:`SceneChanges.restore`. FreeCAD redraws a
+part from its properties whenever one of them changes, which also ends the temporary look.
+
+Without the GUI (FreeCADCmd: no view providers) a move sets ``Placement`` itself, with the property marked
+``NoModify`` meanwhile, and the saved placement is written back bit for bit on restore; no transaction is
+opened, so a move is never an undo step and nothing the user does meanwhile is rolled back with it.
 The planner's exploded view (:func:`planner.api.plan_in_3d`) says which part goes where.
 """
 from __future__ import annotations
 
 import FreeCAD
 
-__all__ = ["VIEW_PROPERTIES", "COLOURS", "SceneChanges", "component_objects", "extent", "bound_box",
-           "step_looks", "relation_looks"]
-
-#: The view properties saved before painting, in the order they are restored (ShapeColor resets DiffuseColor
-#: and Transparency rewrites its alpha: DiffuseColor comes after both).
-VIEW_PROPERTIES = ("ShapeColor", "Transparency", "DiffuseColor", "Visibility")
+__all__ = ["COLOURS", "DIMMED", "SceneChanges", "bound_box", "component_objects", "extent", "face_materials",
+           "relation_looks", "shown_transform", "step_looks"]
 
 #: Colours (RGB 0..1) and transparencies (percent) of the roles.
 COLOURS = {"moving": (1.0, 0.55, 0.0), "blocked": (0.85, 0.1, 0.1), "blocking": (0.1, 0.35, 0.9)}
@@ -39,7 +39,7 @@ def component_objects(document, diagrams: dict) -> dict[str, list]:
     return out
 
 
-def bound_box(objects) -> "FreeCAD.BoundBox":
+def bound_box(objects) -> FreeCAD.BoundBox:
     """The global bounding box of the shapes of ``objects`` (objects without a shape are skipped)."""
     box = FreeCAD.BoundBox()
     for obj in objects:
@@ -67,14 +67,63 @@ def relation_looks(parts, blocked: str, blocking: str) -> dict[str, tuple]:
             else (None, DIMMED["idle"]) for p in parts}
 
 
-def _parent_rotation(obj) -> "FreeCAD.Rotation":
+def _parent_rotation(obj) -> FreeCAD.Rotation:
     """The rotation from ``obj``'s own frame to the global one (its containers'), so a global offset can be
-    written into its local placement."""
+    written into its local placement (or its view provider's transform, which mirrors it)."""
     try:
         parent = obj.getGlobalPlacement().multiply(obj.Placement.inverse())
-    except Exception:  # an object FreeCAD cannot place globally: take its placement as global
+    except (RuntimeError, AttributeError):  # an object FreeCAD cannot place globally: its placement is global
         return FreeCAD.Rotation()
     return parent.Rotation
+
+
+def shown_transform(obj):
+    """The Coin3D transform the 3D view draws ``obj`` with (its view provider's first node), or None without a
+    view."""
+    view = getattr(obj, "ViewObject", None)
+    root = getattr(view, "RootNode", None) if view is not None else None
+    if root is None or root.getNumChildren() == 0:
+        return None
+    node = root.getChild(0)
+    return node if node.getTypeId().getName().getString() == "Transform" else None
+
+
+def face_materials(obj) -> list:
+    """The Coin3D materials the 3D view paints ``obj``'s faces with: those of its view provider whose colours are
+    its ``DiffuseColor`` (or ``ShapeColor``); the lines' and points' materials are left alone. Empty without a
+    view."""
+    view = getattr(obj, "ViewObject", None)
+    root = getattr(view, "RootNode", None) if view is not None else None
+    if root is None:
+        return []
+    from pivy import coin
+
+    search = coin.SoSearchAction()
+    search.setType(coin.SoMaterial.getClassTypeId())
+    search.setInterest(coin.SoSearchAction.ALL)
+    search.setSearchingAll(True)
+    search.apply(root)
+    paths = search.getPaths()
+    faces = {tuple(round(c, 4) for c in colour[:3]) for colour in list(getattr(view, "DiffuseColor", []))
+             + [tuple(getattr(view, "ShapeColor", (0, 0, 0)))]}
+    out = []
+    for i in range(paths.getLength()):
+        material = paths[i].getTail()
+        if material.diffuseColor.getNum() and tuple(round(c, 4) for c in material.diffuseColor[0]) in faces:
+            out.append(material)
+    return out
+
+
+def _fields(material) -> tuple[list, list]:
+    return ([tuple(material.diffuseColor[k]) for k in range(material.diffuseColor.getNum())],
+            [material.transparency[k] for k in range(material.transparency.getNum())])
+
+
+def _set_fields(material, colours: list, transparencies: list) -> None:
+    material.diffuseColor.setNum(len(colours))
+    material.diffuseColor.setValues(0, len(colours), colours)
+    material.transparency.setNum(len(transparencies))
+    material.transparency.setValues(0, len(transparencies), transparencies)
 
 
 class SceneChanges:
@@ -83,43 +132,36 @@ class SceneChanges:
     def __init__(self, document):
         self.document = document
         self.placements: dict[str, FreeCAD.Placement] = {}
-        self.views: dict[str, dict] = {}
-        self.touched = {o.Name for o in document.Objects if _touched(o)}
-        self.modified = _modified(document)
+        self.transforms: dict[str, tuple] = {}
+        self.materials: dict[str, list] = {}
 
     def _keep(self, obj) -> None:
-        if obj.Name not in self.placements:
-            self.placements[obj.Name] = FreeCAD.Placement(obj.Placement)
-            view = getattr(obj, "ViewObject", None)
-            if view is not None:
-                self.views[obj.Name] = {p: _copy(getattr(view, p)) for p in VIEW_PROPERTIES if hasattr(view, p)}
+        if obj.Name in self.placements:
+            return
+        self.placements[obj.Name] = FreeCAD.Placement(obj.Placement)
+        node = shown_transform(obj)
+        if node is not None:
+            self.transforms[obj.Name] = (node, tuple(node.translation.getValue()))
+        self.materials[obj.Name] = [(m, *_fields(m)) for m in face_materials(obj)]
 
     def move(self, obj, offset) -> None:
-        """Put ``obj`` at its saved placement shifted by the global vector ``offset``."""
+        """Show ``obj`` at its saved placement shifted by the global vector ``offset``."""
         self._keep(obj)
-        home = self.placements[obj.Name]
         shift = _parent_rotation(obj).inverted().multVec(FreeCAD.Vector(*offset))
-        moved = FreeCAD.Placement(home.Base + shift, home.Rotation)
-        if not _same(moved, obj.Placement):
-            obj.Placement = moved
+        if obj.Name in self.transforms:
+            node, home = self.transforms[obj.Name]
+            node.translation.setValue(*(FreeCAD.Vector(*home) + shift))
+            return
+        home = self.placements[obj.Name]
+        _set_placement(obj, FreeCAD.Placement(home.Base + shift, home.Rotation))
 
     def paint(self, obj, colour, transparency) -> None:
-        """Give ``obj`` a colour (None: its own, as saved) and a transparency (None: its own); GUI only."""
+        """Paint ``obj``'s faces ``colour`` (None: their own) with ``transparency`` percent (None: their own);
+        nothing without the GUI."""
         self._keep(obj)
-        view = getattr(obj, "ViewObject", None)
-        if view is None:
-            return
-        saved = self.views.get(obj.Name, {})
-        if colour is not None:
-            view.ShapeColor = tuple(colour)
-        elif "ShapeColor" in saved:
-            view.ShapeColor = saved["ShapeColor"]
-            if "DiffuseColor" in saved:
-                view.DiffuseColor = saved["DiffuseColor"]
-        if hasattr(view, "Transparency"):
-            view.Transparency = int(saved.get("Transparency", 0) if transparency is None else transparency)
-        if hasattr(view, "Visibility"):
-            view.Visibility = True
+        for material, colours, transparencies in self.materials[obj.Name]:
+            _set_fields(material, [tuple(colour)] * len(colours) if colour is not None else colours,
+                        [transparency / 100.0] * len(transparencies) if transparency is not None else transparencies)
 
     def apply(self, objects: dict[str, list], offsets: dict[str, tuple] | None, looks: dict[str, tuple]) -> None:
         """Move every component's objects by ``offsets`` (None: leave them where they are) and paint them as
@@ -132,24 +174,29 @@ class SceneChanges:
                     self.paint(obj, *looks[part])
 
     def restore(self) -> None:
-        """Every saved placement and view property back as it was; recompute marks and the document's modified
-        flag as they were before the first change. Safe to call twice."""
+        """Every saved transform, material and placement back as it was. Safe to call twice."""
+        for node, home in self.transforms.values():
+            node.translation.setValue(*home)
+        for saved in self.materials.values():
+            for material, colours, transparencies in saved:
+                _set_fields(material, colours, transparencies)
         for name, placement in self.placements.items():
             obj = self.document.getObject(name)
-            if obj is None:  # deleted meanwhile: nothing to put back
-                continue
-            if not _same(obj.Placement, placement):
-                obj.Placement = placement
-            view = getattr(obj, "ViewObject", None)
-            for prop, value in self.views.get(name, {}).items():
-                if view is not None and _copy(getattr(view, prop)) != value:
-                    setattr(view, prop, value)
-        for name in self.placements:
-            obj = self.document.getObject(name)
-            if obj is not None and name not in self.touched and _touched(obj):
-                obj.purgeTouched()
-        self.placements, self.views = {}, {}
-        _set_modified(self.document, self.modified)
+            if obj is not None and name not in self.transforms and not _same(obj.Placement, placement):
+                _set_placement(obj, placement)
+        self.placements, self.transforms, self.materials = {}, {}, {}
+
+
+def _set_placement(obj, placement) -> None:
+    """Set ``Placement`` without marking the document modified or the object for recompute (headless moves)."""
+    touched = _touched(obj)
+    obj.setPropertyStatus("Placement", "NoModify")
+    try:
+        obj.Placement = placement
+    finally:
+        obj.setPropertyStatus("Placement", "-NoModify")
+    if not touched and _touched(obj):
+        obj.purgeTouched()
 
 
 def _same(a, b) -> bool:
@@ -157,35 +204,8 @@ def _same(a, b) -> bool:
     return tuple(a.Base) == tuple(b.Base) and tuple(a.Rotation.Q) == tuple(b.Rotation.Q)
 
 
-def _copy(value):
-    """A view property's value as plain data (lists of tuples), comparable and safe to keep."""
-    if isinstance(value, list):
-        return [tuple(v) if isinstance(v, tuple) else v for v in value]
-    return value
-
-
 def _touched(obj) -> bool:
     try:
         return bool(obj.isTouched())
     except AttributeError:
         return False
-
-
-def _modified(document) -> bool | None:
-    """The GUI document's modified flag (None without the GUI)."""
-    if not FreeCAD.GuiUp:
-        return None
-    import FreeCADGui
-
-    gui = FreeCADGui.getDocument(document.Name)
-    return bool(gui.Modified) if gui is not None else None
-
-
-def _set_modified(document, modified: bool | None) -> None:
-    if modified is None or not FreeCAD.GuiUp:
-        return
-    import FreeCADGui
-
-    gui = FreeCADGui.getDocument(document.Name)
-    if gui is not None and bool(gui.Modified) != modified:
-        gui.Modified = modified

@@ -275,7 +275,7 @@ class Plan(_Command):
             self._levels(product)
             return
         folder = tempfile.mkdtemp(prefix="aplan-plan-")
-        _, statistics, images = workflow.plan_report(product, folder, base_part=workflow.analysis_base_part(analysis))
+        plan, statistics, images = workflow.plan_report(product, folder, base_part=workflow.analysis_base_part(analysis))
         figures = statistics.as_dict()
         if statistics.base_part:  # intentions and sequences are those that start from it
             figures["base part"] = statistics.base_part
@@ -283,6 +283,9 @@ class Plan(_Command):
         _message(", ".join(f"{k} {v:,}" if isinstance(v, int) else f"{k} {v}" for k, v in figures.items()),
                  error=False)
         self.state.plan_dialog = PlanDialog(product.name, figures, images, FreeCADGui.getMainWindow())
+        from .plan3d import add_parts_tab
+
+        add_parts_tab(self.state.plan_dialog, plan, analysis)  # an operation or a state selected: its parts in 3D
         self.state.plan_dialog.show()
 
     def _levels(self, product):
@@ -312,6 +315,19 @@ class Plan(_Command):
         BackgroundJob(f"Planning {len(product.subassemblies)} subassemblies and the top level",
                       workflow.worker_command("level-stats"), {"action": "level-stats", "product": path}, done,
                       failed, self.state.jobs, FreeCADGui.getMainWindow()).start()
+
+
+class Plan3D(_Command):
+    name, menu = "Aplan_Plan3D", "Plan in 3D"
+    tooltip = ("Step through a full assembly sequence in the 3D view (an exploded view that collapses operation by "
+               "operation), or the one a session log recorded; the document is restored when the panel closes")
+
+    def run(self):
+        from .plan3d import Plan3DPanel
+
+        analysis = workflow.require_analysis(_document())
+        product = workflow.analysis_product(analysis)
+        _show_panel(self.state, Plan3DPanel(analysis, product, workflow.analysis_base_part(analysis)))
 
 
 class Fasteners(_Command):
@@ -440,7 +456,7 @@ class Simulate(_Command):
 
 
 COMMANDS = (CreateAnalysis, GroupComponent, ExcludeParts, Detect, Diagrams, Intent, Fasteners, Subassemblies, Plan,
-            ExportBundle, ExportModel, Solve, Simulate)
+            Plan3D, ExportBundle, ExportModel, Solve, Simulate)
 
 
 def register(state: WorkbenchState) -> list[str]:

@@ -66,6 +66,7 @@ class DiagramsPanel:
         self.diagrams = read_intent(analysis).diagrams
         self.removed: list[tuple[str, str, str]] = []
         self.added: list[tuple[str, str, str]] = []
+        self.plan_view = None  # the selected relation in 3D (made on the first selection)
         self.form = QtGui.QWidget()
         self.form.setObjectName("AplanDiagramsPanel")
         self.form.setWindowTitle("APLAN: connection and obstruction diagrams")
@@ -259,6 +260,21 @@ class DiagramsPanel:
                 for name in objects.get(part, []):
                     if document.getObject(name) is not None:
                         FreeCADGui.Selection.addSelection(document.Name, name)
+        self._show_in_3d()
+
+    def _show_in_3d(self) -> None:
+        """One selected relation shown in 3D (blocked part red, blocking part blue, an arrow along the direction,
+        :class:`~freecad_aplan.gui.plan3d.PlanView`); any other selection restores the view."""
+        from .plan3d import PlanView, restore_when_gone
+
+        if self.plan_view is None:
+            self.plan_view = PlanView(self.analysis.Document, self.diagrams)
+            restore_when_gone(self.form, self.plan_view)
+        relations = self._selected_relations()
+        if len(relations) == 1:
+            self.plan_view.show_relation(*relations[0])
+        else:
+            self.plan_view.restore()
 
     def remove_selected(self) -> None:
         for index in sorted((i.row() for i in self.table.selectionModel().selectedRows()), reverse=True):
@@ -293,10 +309,14 @@ class DiagramsPanel:
         except (RelationError, IntentError) as exc:
             self._say(str(exc), error=True)
             return False
+        if self.plan_view is not None:
+            self.plan_view.restore()
         FreeCADGui.Control.closeDialog()
         return True
 
     def reject(self) -> bool:
+        if self.plan_view is not None:
+            self.plan_view.restore()
         FreeCADGui.Control.closeDialog()
         return True
 

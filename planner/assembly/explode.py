@@ -15,9 +15,11 @@ obstruction diagrams: ``(x, y)`` along ``d`` blocks ``x`` moving along ``d``; al
 Among the free directions the first of the product's directions, each followed by its reverse, that also
 leaves every other part of the product unhit; failing that, the first free one.
 
-The *exploded offset* of part ``p`` before step ``k`` is ``spacing * sum(d_j)`` over the steps ``j >= k``
-whose moving side holds ``p``: every part sits away along the directions it has still to be inserted along,
-and the view collapses one operation at a time to the assembled product (all offsets zero).
+The *exploded offset* of part ``p`` before step ``k`` is ``spacing * sum(w_j d_j)`` over the steps ``j >= k``
+whose moving side holds ``p``, with the weight ``w_j = 1 + j / K`` for ``K`` steps: every part sits away
+along the directions it has still to be inserted along, those that go in later farther out (so that two
+sides leaving the same way do not end up inside each other), and the view collapses one operation at a time
+to the assembled product (all offsets zero).
 """
 from __future__ import annotations
 
@@ -203,8 +205,8 @@ def free_direction(product: Product, moving: frozenset[str], fixed: frozenset[st
 
 def exploded_view(plan: Plan, operations: list[int], spacing: float = 1.0,
                   base_part: str | None = None) -> ExplodedView:
-    """The exploded view of a full assembly sequence (module docstring). ``spacing``: how far a moving side
-    sits away per step still to come (say the product's bounding-box diagonal). Raises
+    """The exploded view of a full assembly sequence (module docstring). ``spacing``: how far the first moving
+    side sits away (say the product's bounding-box diagonal; the last one sits about twice as far). Raises
     :class:`SequenceError` when ``operations`` is not a full sequence of ``plan``. Cost: O(k E + k D B) for k
     operations."""
     visited = check_sequence(plan, operations)
@@ -218,9 +220,9 @@ def exploded_view(plan: Plan, operations: list[int], spacing: float = 1.0,
                                   free_direction(plan.product, moving, fixed)))
     parts = plan.andor.parts
     offsets = [{p: (0.0, 0.0, 0.0) for p in parts}]
-    for step in reversed(steps):
-        before = dict(offsets[0])
-        for p in step.moving:
-            before[p] = tuple(a + spacing * c for a, c in zip(before[p], step.direction.vector))
+    for j in range(len(steps) - 1, -1, -1):
+        before, away = dict(offsets[0]), spacing * (1.0 + j / len(steps))
+        for p in steps[j].moving:
+            before[p] = tuple(a + away * c for a, c in zip(before[p], steps[j].direction.vector))
         offsets.insert(0, before)
     return ExplodedView(parts, tuple(steps), tuple(offsets), float(spacing))

@@ -124,13 +124,15 @@ def test_offsets_collapse_one_step_at_a_time(plan):
             assert {p for p, r in roles.items() if r == "fixed"} == step.fixed
             for part in view.parts:
                 delta = [a - b for a, b in zip(view.offsets[k][part], view.offsets[k + 1][part])]
-                expected = [spacing * c for c in step.direction.vector] if part in step.moving else [0, 0, 0]
+                away = spacing * (1 + k / 5)  # the later steps farther out
+                expected = [away * c for c in step.direction.vector] if part in step.moving else [0, 0, 0]
                 assert delta == pytest.approx(expected)
         assert set(view.roles(len(view.steps)).values()) == {"idle"}
-    # Closed form: before step 0, a part sits at spacing times the sum of the directions it moves along.
+    # Closed form: before step 0, a part sits at the weighted sum of the directions it moves along.
     view = api.plan_in_3d(plan, 0, 1.0)
     for part in view.parts:
-        total = [sum(s.direction.vector[i] for s in view.steps if part in s.moving) for i in range(3)]
+        total = [sum((1 + j / 5) * s.direction.vector[i] for j, s in enumerate(view.steps) if part in s.moving)
+                 for i in range(3)]
         assert list(view.offsets[0][part]) == pytest.approx(total)
 
 

@@ -67,8 +67,10 @@ out["moved"] = placements()
 out["undo_while_shown"] = len(doc.UndoNames) - steps
 scene.apply(objects, view.offsets[3], step_looks(view.roles(3)))
 out["moved3"] = placements()
+status = {{o.Name: o.getPropertyStatus("Placement") for o in doc.Objects if o.Name.startswith("b_")}}
 scene.restore()
 scene.restore()
+out["status_kept"] = status == {{o.Name: o.getPropertyStatus("Placement") for o in doc.Objects if o.Name.startswith("b_")}}
 out["restored"] = placements() == before
 out["undo_after"] = len(doc.UndoNames) - steps
 out["touched"] = [o.Name for o in doc.Objects if hasattr(o, "isTouched") and o.isTouched()]
@@ -97,4 +99,4 @@ def test_a_step_moves_the_parts_and_restore_puts_them_back(tmp_path):
             assert moved[name][1] == data["before"][name][1]  # moved, never turned
     assert any(any(abs(c) > 1 for c in v) for v in data["offsets"].values())
     assert data["undo_while_shown"] == 0 and data["undo_after"] == 0
-    assert data["restored"] is True and data["touched"] == []
+    assert data["restored"] is True and data["touched"] == [] and data["status_kept"] is True

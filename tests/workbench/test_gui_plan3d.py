@@ -1,0 +1,301 @@
+"""The plan in the real FreeCAD window (under Xvfb), one window for all of it: a pen sequence stepped through in
+the 3D view (a screenshot per step in tests/artifacts/), one obstruction relation of the diagrams panel, the
+parts of an operation and a state of the plan dialog; after each, every placement and colour of the user's
+parts is back exactly, with no undo step and the document not modified."""
+from __future__ import annotations
+
+import shutil
+
+import pytest
+from conftest import PEN_MODELS, REPO, require_shared, run_freecad_gui
+from integration.freecad_tools import GUI_HELPERS
+from test_plan3d import pen_diagrams
+
+from planner import api
+from planner.assembly.explode import sequence_at
+
+ARTIFACTS = REPO / "tests" / "artifacts"
+PEN = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
+
+GUI_SCRIPT = r"""
+import json, os, sys, traceback
+from PySide import QtCore, QtGui
+import FreeCAD, FreeCADGui
+
+OUT, COPY, ARTIFACTS = {out!r}, {copy!r}, {artifacts!r}
+result = {{"steps": [], "played": 0}}
+MATERIALS = {{}}
+
+
+{gui_helpers}
+
+
+def state():
+    return FreeCADGui.getWorkbench("AplanWorkbench").state
+
+
+def parts():
+    return [o for o in FreeCAD.ActiveDocument.Objects if o.Name.startswith("b_")]
+
+
+def snapshot():
+    # Placements and the view properties of the user's parts, exactly as FreeCAD gives them.
+    out = {{}}
+    for o in parts():
+        v = o.ViewObject
+        out[o.Name] = {{"base": list(o.Placement.Base), "rotation": list(o.Placement.Rotation.Q),
+                       "shape": list(v.ShapeColor), "diffuse": [list(c) for c in v.DiffuseColor],
+                       "transparency": v.Transparency, "visibility": bool(v.Visibility)}}
+    return out
+
+
+def arrows():
+    from freecad_aplan.gui.plan3d import ARROW_NAME
+    graph = FreeCADGui.ActiveDocument.ActiveView.getSceneGraph()
+    return [graph.getChild(i) for i in range(graph.getNumChildren()) if graph.getChild(i).getName() == ARROW_NAME]
+
+
+def arrow_points():
+    found = arrows()
+    if not found:
+        return None
+    points = found[0].getChild(2).point
+    return [list(points[0].getValue()), list(points[1].getValue())]
+
+
+def looks():
+    # What the 3D view shows: the face colour and transparency (percent) of each part, and its shift from the
+    # part's placement (the view provider's transform).
+    from freecad_aplan.plan3d import face_materials, shown_transform
+    if not MATERIALS:  # found once, before anything is painted (they are found by their colours)
+        MATERIALS.update({{o.Name: face_materials(o)[0] for o in parts()}})
+    out = {{}}
+    for o in parts():
+        material = MATERIALS[o.Name]
+        shown = list(shown_transform(o).translation.getValue())
+        out[o.Name] = [list(material.diffuseColor[0]), round(100 * material.transparency[0]),
+                       [a - b for a, b in zip(shown, o.Placement.Base)]]
+    return out
+
+
+def undo_and_modified():
+    doc = FreeCAD.ActiveDocument
+    return [len(doc.UndoNames), bool(FreeCADGui.ActiveDocument.Modified)]
+
+
+def start():
+    FreeCADGui.activateWorkbench("AplanWorkbench")
+    from freecad_aplan.intent import create_analysis, update_intent
+    doc = FreeCAD.openDocument(COPY)
+    doc.UndoMode = 1
+    analysis = create_analysis(doc)
+    update_intent(analysis, "diagrams", diagrams={diagrams!r})
+    # The user's own looks, to be given back exactly: per-face colours, a transparent cap, a hidden button.
+    ink = doc.getObject("b_ink_001_").ViewObject
+    ink.DiffuseColor = [(0.2, 0.4, 0.6, 0.0)] + [(0.9, 0.1, 0.3, 0.0)] * (len(ink.DiffuseColor) - 1)
+    doc.getObject("b_cap_001_").ViewObject.Transparency = 30
+    doc.getObject("b_button_001_").ViewObject.Visibility = False
+    FreeCADGui.runCommand("Std_Save")
+    QtGui.QApplication.processEvents()
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
+    result["before"] = snapshot()
+    result["before_looks"] = looks()
+    result["before_flags"] = undo_and_modified()
+    FreeCADGui.runCommand("Aplan_Plan3D")
+    panel = state().panel
+    window = FreeCADGui.getMainWindow()
+    form = window.findChild(QtGui.QWidget, "AplanPlan3DPanel")
+    chooser = form.findChild(QtGui.QComboBox, "AplanSequenceChooser")
+    result["choices"] = [chooser.itemText(i) for i in range(chooser.count())]
+    chooser.setCurrentIndex(7)
+    result["exploded"] = {{"offsets": list(panel.exploded.offsets), "spacing": panel.exploded.spacing,
+                          "roles": [panel.exploded.roles(k) for k in range(len(panel.exploded.steps) + 1)],
+                          "operations": [s.operation for s in panel.exploded.steps],
+                          "directions": [list(s.direction.vector) for s in panel.exploded.steps]}}
+    forward = form.findChild(QtGui.QPushButton, "AplanStepForward")
+    label = form.findChild(QtGui.QPlainTextEdit, "AplanStepLabel")
+    view = FreeCADGui.ActiveDocument.ActiveView
+    for k in range(len(panel.exploded.steps) + 1):
+        if k:
+            forward.click()
+        QtGui.QApplication.processEvents()
+        FreeCADGui.SendMsgToActiveView("ViewFit")
+        view.saveImage(os.path.join(ARTIFACTS, f"plan3d_step_{{k}}.png"), 800, 600, "White")
+        result["steps"].append({{"k": panel.k, "label": label.toPlainText(), "snapshot": snapshot(), "looks": looks(),
+                                "arrows": len(arrows()),
+                                "arrow": arrow_points(), "forward": forward.isEnabled(), "flags": undo_and_modified()}})
+    form.findChild(QtGui.QPushButton, "AplanStepBack").click()
+    result["back"] = [panel.k, looks()]
+    QtGui.QApplication.processEvents()
+    result["panel_fits"] = [form.minimumSizeHint().width(), label.verticalScrollBar().maximum()]
+    panel.show(1)
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    QtGui.QApplication.processEvents()
+    QtGui.QApplication.primaryScreen().grabWindow(0).save(os.path.join(ARTIFACTS, "plan3d_panel.png"))
+    result["bad_log"] = [panel.load_log(COPY), label.toPlainText()]
+    panel.timer.setInterval(30)  # Play from the first step, quicker than a person would want it
+    panel.show(0)
+    panel.timer.timeout.connect(lambda: result.__setitem__("ticks", result.get("ticks", 0) + 1))
+    form.findChild(QtGui.QPushButton, "AplanStepPlay").click()
+    QtCore.QTimer.singleShot(50, guarded(wait_play))
+
+
+def wait_play():
+    panel = state().panel
+    if panel.timer.isActive():
+        result["played"] += 1
+        QtCore.QTimer.singleShot(50, guarded(wait_play))
+        return
+    result["play_end"] = [panel.k, len(panel.exploded.steps)]
+    panel.reject()
+    QtGui.QApplication.processEvents()
+    result["after_close"] = [snapshot(), undo_and_modified(), len(arrows()), looks()]
+    # A panel closed by another command (no accept, no reject): its widget going away restores the view.
+    FreeCADGui.runCommand("Aplan_Plan3D")
+    FreeCADGui.getMainWindow().findChild(QtGui.QPushButton, "AplanStepForward").click()
+    result["shown_again"] = looks()
+    FreeCADGui.runCommand("Aplan_Diagrams")
+    QtGui.QApplication.processEvents()
+    result["after_replaced"] = [snapshot(), len(arrows()), looks()]
+    relation()
+
+
+def relation():
+    # The diagrams panel: one obstruction relation in 3D, then a contact, then nothing selected, then closed.
+    window = FreeCADGui.getMainWindow()
+    table = window.findChild(QtGui.QTableWidget, "AplanDiagramsTable")
+    rows = [[table.item(r, c).text() for c in range(3)] for r in range(table.rowCount())]
+    row = rows.index(["blocks +X", "head_001", "body_001"])
+    table.selectRow(row)
+    QtGui.QApplication.processEvents()
+    view = FreeCADGui.ActiveDocument.ActiveView
+    view.saveImage(os.path.join(ARTIFACTS, "plan3d_relation.png"), 800, 600, "White")
+    result["relation"] = {{"row": rows[row], "looks": looks(), "snapshot": snapshot(), "arrow": arrow_points(),
+                          "arrows": len(arrows()), "selected": sorted(o.Name for o in FreeCADGui.Selection.getSelection())}}
+    contact = next(r for r, (kind, a, b) in enumerate(rows) if kind == "contact")
+    table.selectRow(contact)
+    result["contact"] = {{"row": rows[contact], "looks": looks(), "arrows": len(arrows())}}
+    table.clearSelection()
+    result["cleared"] = [snapshot(), len(arrows()), looks()]
+    table.selectRow(row)
+    state().panel.reject()
+    QtGui.QApplication.processEvents()
+    result["after_relation"] = [snapshot(), undo_and_modified(), len(arrows()), looks()]
+    statistics()
+
+
+def statistics():
+    # The plan dialog: selecting an operation, then a state, highlights their parts; closing restores.
+    FreeCADGui.runCommand("Aplan_Plan")
+    dialog = state().plan_dialog
+    table = dialog.findChild(QtGui.QTableWidget, "AplanPlanPartsTable")
+    rows = [[table.item(r, c).text() for c in range(2)] for r in range(table.rowCount())]
+    result["parts_rows"] = rows
+    operation = next(r for r, (kind, text) in enumerate(rows) if kind == "operation")
+    table.selectRow(operation)
+    result["operation"] = looks()
+    state_row = next(r for r, (kind, text) in enumerate(rows) if kind == "state" and text.count("{{") == 2
+                     and "," in text)
+    table.selectRow(state_row)
+    result["state"] = [rows[state_row], looks()]
+    dialog.close()
+    QtGui.QApplication.processEvents()
+    result["after_dialog"] = [snapshot(), undo_and_modified(), looks()]
+    finish(0)
+
+
+FreeCADGui.getMainWindow().showMaximized()
+QtCore.QTimer.singleShot(1500, guarded(start))
+"""
+
+DIMMED = {"fixed": 55, "idle": 85}
+ORANGE, RED, BLUE = [1.0, 0.55, 0.0], [0.85, 0.1, 0.1], [0.1, 0.35, 0.9]
+
+
+def _obj(part: str) -> str:
+    return f"b_{part}_"
+
+
+@pytest.mark.freecad
+def test_plan_and_relation_in_the_3d_view(tmp_path):
+    copy = tmp_path / "pen.FCStd"
+    shutil.copy(require_shared(PEN), copy)
+    ARTIFACTS.mkdir(exist_ok=True)
+    out = tmp_path / "result.json"
+    script = tmp_path / "gui_plan3d.py"
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, out=str(out), copy=str(copy),
+                                        artifacts=str(ARTIFACTS), diagrams=pen_diagrams()))
+    data = run_freecad_gui(tmp_path, script, out)
+    before = data["before"]
+    assert data["before_flags"][1] is False  # saved: not modified
+    # The chooser lists the pen's 24 sequences, in rank order (the planner's, with the document's part ids).
+    plan = api.plan_of(api.resolve_product("pen"))
+    assert len(data["choices"]) == 24 and data["choices"][7].startswith("7: ")
+    expected = [plan.andor.describe(o).replace(", ", "_001, ").replace("}", "_001}") for o in sequence_at(plan, 7)]
+    assert data["choices"][7] == "7: " + " ; ".join(expected)
+    exploded = data["exploded"]
+    home = data["before_looks"]
+    assert all(shift == pytest.approx([0, 0, 0], abs=1e-4) for _, _, shift in home.values())
+    assert home[_obj("ink_001")][0] == pytest.approx([0.2, 0.4, 0.6], abs=1e-6)  # the user's first face colour
+    assert 200 < exploded["spacing"] < 300 and len(data["steps"]) == 6
+    for step in data["steps"]:
+        k, shown = step["k"], step["looks"]
+        assert step["snapshot"] == before  # the document itself never changes: only the 3D view does
+        assert step["flags"] == data["before_flags"]  # no undo step, not modified
+        roles, offsets = exploded["roles"][k], exploded["offsets"][k]
+        for part, role in roles.items():
+            colour, transparency, shift = shown[_obj(part)]
+            assert shift == pytest.approx(offsets[part], abs=1e-3), (k, part)  # moved by the planner's offset
+            if k == 5:  # assembled: the user's own colours
+                assert [colour, transparency] == home[_obj(part)][:2]
+            elif role == "moving":
+                assert colour == pytest.approx(ORANGE) and transparency == 0
+            else:
+                assert transparency == DIMMED[role], (k, part, role)
+        assert step["arrows"] == (1 if k < 5 else 0) and step["forward"] == (k < 5)
+        if k < 5:
+            # The arrow points along the insertion direction (the reverse of the free one).
+            (start, end) = step["arrow"]
+            direction = [b - a for a, b in zip(start, end)]
+            norm = sum(c * c for c in direction) ** 0.5
+            assert [c / norm for c in direction] == pytest.approx([-c for c in exploded["directions"][k]], abs=1e-6)
+            assert f"step {k + 1} of 5" in step["label"]
+        assert (ARTIFACTS / f"plan3d_step_{k}.png").stat().st_size > 5_000
+    assert any(any(abs(c) > 100 for c in shift) for _, _, shift in data["steps"][0]["looks"].values())
+    assert "assembled (5 operations)" in data["steps"][5]["label"]
+    assert data["back"] == [4, data["steps"][4]["looks"]]
+    assert data["bad_log"][0] is False and "cannot show that log" in data["bad_log"][1]
+    assert data["play_end"] == [5, 5] and data["ticks"] == 6  # five steps forward, then the stop
+    # Closed: every placement and colour exactly as the user had them, no undo step, not modified, no arrow.
+    assert data["after_close"] == [before, data["before_flags"], 0, home]
+    assert data["shown_again"] != home and data["after_replaced"] == [before, 0, home]
+    # One obstruction relation: the head, moved along +X, hits the body.
+    relation = data["relation"]
+    assert relation["row"] == ["blocks +X", "head_001", "body_001"]
+    assert relation["looks"][_obj("head_001")][:2] == [pytest.approx(RED), 0]
+    assert relation["looks"][_obj("body_001")][:2] == [pytest.approx(BLUE), 0]
+    assert all(t == DIMMED["idle"] for name, (_, t, _) in relation["looks"].items()
+               if name not in (_obj("head_001"), _obj("body_001")))
+    assert all(shift == pytest.approx([0, 0, 0], abs=1e-4) for _, _, shift in relation["looks"].values())
+    assert relation["snapshot"] == before
+    (start, end) = relation["arrow"]
+    assert [b - a for a, b in zip(start, end)][1:] == pytest.approx([0, 0], abs=1e-6) and end[0] > start[0]
+    assert relation["arrows"] == 1 and relation["selected"] == [_obj("body_001"), _obj("head_001")]
+    assert (ARTIFACTS / "plan3d_relation.png").stat().st_size > 5_000
+    contact = data["contact"]
+    assert contact["arrows"] == 0 and contact["row"][0] == "contact"
+    assert contact["looks"][_obj(contact["row"][1])][0] == pytest.approx(RED)
+    assert data["cleared"] == [before, 0, home]
+    assert data["after_relation"] == [before, data["before_flags"], 0, home]
+    # The plan dialog: operations (21) and states (18) listed; their parts highlighted, then restored.
+    kinds = [kind for kind, _ in data["parts_rows"]]
+    assert kinds.count("operation") == 21 and kinds.count("state") == 18
+    lit = [name for name, (colour, t, _) in data["operation"].items() if t == 0]
+    assert len(lit) >= 2
+    (kind, _), state_looks = data["state"]
+    assert kind == "state" and sum(1 for _, t, _ in state_looks.values() if t == 0) >= 2
+    assert data["after_dialog"] == [before, data["before_flags"], home]
+    assert (ARTIFACTS / "plan3d_panel.png").stat().st_size > 10_000
+    narrowest, scroll = data["panel_fits"]
+    assert narrowest <= 250 and scroll == 0, data["panel_fits"]  # fits the default task view; the step text shows
