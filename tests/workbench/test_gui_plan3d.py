@@ -4,6 +4,7 @@ parts of an operation and a state of the plan dialog; after each, every placemen
 parts is back exactly, with no undo step and the document not modified."""
 from __future__ import annotations
 
+import json
 import shutil
 
 import pytest
@@ -11,8 +12,12 @@ from conftest import PEN_MODELS, REPO, require_shared, run_freecad_gui
 from integration.freecad_tools import GUI_HELPERS
 from test_plan3d import pen_diagrams
 
-from planner import api
+from planner import api, product_from_dict, product_to_dict
 from planner.assembly.explode import sequence_at
+from planner.decision.intention_model import intention_model
+from planner.runtime.log import EventLog
+from planner.runtime.scripted import ScriptedOperator, ScriptedRobot
+from planner.runtime.session import run_session
 
 ARTIFACTS = REPO / "tests" / "artifacts"
 PEN = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
@@ -22,7 +27,7 @@ import json, os, sys, traceback
 from PySide import QtCore, QtGui
 import FreeCAD, FreeCADGui
 
-OUT, COPY, ARTIFACTS = {out!r}, {copy!r}, {artifacts!r}
+OUT, COPY, ARTIFACTS, LOG = {out!r}, {copy!r}, {artifacts!r}, {log!r}
 result = {{"steps": [], "played": 0}}
 MATERIALS = {{}}
 
@@ -134,6 +139,8 @@ def start():
     QtGui.QApplication.processEvents()
     QtGui.QApplication.primaryScreen().grabWindow(0).save(os.path.join(ARTIFACTS, "plan3d_panel.png"))
     result["bad_log"] = [panel.load_log(COPY), label.toPlainText()]
+    result["log"] = [panel.load_log(LOG), label.toPlainText(), [s.operation for s in panel.exploded.steps],
+                     [s.description for s in panel.exploded.steps]]
     panel.timer.setInterval(30)  # Play from the first step, quicker than a person would want it
     panel.show(0)
     panel.timer.timeout.connect(lambda: result.__setitem__("ticks", result.get("ticks", 0) + 1))
@@ -213,6 +220,28 @@ DIMMED = {"fixed": 55, "idle": 85}
 ORANGE, RED, BLUE = [1.0, 0.55, 0.0], [0.85, 0.1, 0.1], [0.1, 0.35, 0.9]
 
 
+class _Waits:
+    """A policy that always waits: the operator does every operation."""
+
+    def action(self, belief) -> int:
+        return len(self.actions) - 1
+
+
+def _session_log(path, rank: int) -> list[str]:
+    """A pen session over the document's component ids (ink_001, ...), the operator following the sequence of
+    rank ``rank``; returns its operations as text."""
+    text = json.dumps(product_to_dict(api.resolve_product("pen")))
+    for part in ("ink", "cartridge", "head", "body", "cap", "button"):
+        text = text.replace(f'"{part}"', f'"{part}_001"')
+    model = intention_model(api.plan_of(product_from_dict(json.loads(text))))
+    policy = _Waits()
+    policy.actions = model.actions
+    operations = sequence_at(model.plan, rank)
+    result = run_session(model, policy, ScriptedOperator(model.plan, operations), ScriptedRobot(), EventLog(path))
+    assert result.assembled
+    return [model.plan.andor.describe(o) for o in operations]
+
+
 def _obj(part: str) -> str:
     return f"b_{part}_"
 
@@ -224,7 +253,8 @@ def test_plan_and_relation_in_the_3d_view(tmp_path):
     ARTIFACTS.mkdir(exist_ok=True)
     out = tmp_path / "result.json"
     script = tmp_path / "gui_plan3d.py"
-    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, out=str(out), copy=str(copy),
+    logged = _session_log(tmp_path / "session.jsonl", 13)
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, out=str(out), copy=str(copy), log=str(tmp_path / "session.jsonl"),
                                         artifacts=str(ARTIFACTS), diagrams=pen_diagrams()))
     data = run_freecad_gui(tmp_path, script, out)
     before = data["before"]
@@ -266,6 +296,8 @@ def test_plan_and_relation_in_the_3d_view(tmp_path):
     assert "assembled (5 operations)" in data["steps"][5]["label"]
     assert data["back"] == [4, data["steps"][4]["looks"]]
     assert data["bad_log"][0] is False and "cannot show that log" in data["bad_log"][1]
+    loaded, text, _, described = data["log"]
+    assert loaded is True and described == logged and "the logged sequence, step 1 of 5" in text
     assert data["play_end"] == [5, 5] and data["ticks"] == 6  # five steps forward, then the stop
     # Closed: every placement and colour exactly as the user had them, no undo step, not modified, no arrow.
     assert data["after_close"] == [before, data["before_flags"], 0, home]
