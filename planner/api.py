@@ -34,7 +34,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from .assembly.explode import ExplodedView, exploded_view, sequence_at, sequence_count
+from .assembly.explode import ExplodedView, exploded_view, first_sequences, sequence_at
 from .assembly.guards import OPTIONS, SizeLimits, memory_options
 from .assembly.hierarchy import (
     Level,
@@ -379,9 +379,7 @@ def sequence_choices(plan: Plan, base_part: str | None = None, limit: int = 200)
     """The number of full assembly sequences (from ``base_part``, ``"auto"`` resolved) and the first ``limit``
     of them by rank (:func:`~planner.assembly.explode.sequence_at`): what a sequence chooser lists; past the
     limit a chooser asks for a rank."""
-    base = base_part_of(plan, base_part)
-    count = sequence_count(plan, base)
-    return count, [sequence_at(plan, rank, base) for rank in range(min(count, limit))]
+    return first_sequences(plan, limit, base_part_of(plan, base_part))
 
 
 def plan_in_3d(plan: Plan, sequence: int | Sequence[int], spacing: float = 1.0,

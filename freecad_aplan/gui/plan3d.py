@@ -268,7 +268,8 @@ class Plan3DPanel:
         """Show the sequence of rank ``rank`` from its first step."""
         from planner import api
 
-        self.use(api.plan_in_3d(self.plan, int(rank), self.view.spacing, self.base_part), f"sequence {rank}")
+        listed = self.sequences[rank] if 0 <= rank < len(self.sequences) else int(rank)  # listed: no ranking again
+        self.use(api.plan_in_3d(self.plan, listed, self.view.spacing, self.base_part), f"sequence {rank}")
 
     def use(self, exploded, title: str) -> None:
         self.timer.stop()

@@ -85,56 +85,80 @@ class ExplodedView:
                 for p in self.parts}
 
 
-def _state_of_level(states: AssemblyStateGraph, state: int) -> tuple[int, int]:
-    """(level, position): ``state`` has ``level + 1`` blocks and is number ``position`` of its level."""
-    level = int(np.searchsorted(states.level_start, state, side="right")) - 1
-    return level, state - int(states.level_start[level])
+class _Ranking:
+    """What ranking needs, computed once per plan: paths to the final state per state, and the edges out of
+    each state in increasing order (CSR). Cost: O(E log E) time, O(S + E) memory."""
 
+    def __init__(self, states: AssemblyStateGraph):
+        self.states = states
+        paths = paths_to_final(states)
+        exact = any(counts.dtype == object for counts in paths)  # counts past 2**52 are Python ints
+        self.paths = np.zeros(states.n_states, dtype=object if exact else np.int64)
+        for level, counts in enumerate(paths):  # levels are contiguous state ranges, most assembled first
+            start = int(states.level_start[level])
+            self.paths[start:start + counts.shape[0]] = counts
+        self.order = np.argsort(states.edge_source, kind="stable")
+        self.start = np.searchsorted(states.edge_source[self.order], np.arange(states.n_states + 1))
 
-def _paths_from(states: AssemblyStateGraph, paths: list[np.ndarray], state: int) -> int:
-    level, position = _state_of_level(states, state)
-    return int(paths[level][position]) if level < len(paths) else 0
+    def out(self, state: int, base_part: str | None) -> np.ndarray:
+        """The edges out of ``state`` in increasing order (from the initial state, those joining ``base_part``)."""
+        if base_part is not None and state == self.states.initial:
+            return base_part_first_edges(self.states, base_part)
+        return self.order[self.start[state]:self.start[state + 1]]
 
+    def count(self, base_part: str | None) -> int:
+        states = self.states
+        if states.initial == states.final:
+            return 1
+        return sum(int(self.paths[states.edge_target[e]]) for e in self.out(states.initial, base_part))
 
-def _out_edges(states: AssemblyStateGraph, state: int, base_part: str | None) -> np.ndarray:
-    """The edges out of ``state`` in increasing order (from the initial state, only those joining the base part)."""
-    if base_part is not None and state == states.initial:
-        return base_part_first_edges(states, base_part)
-    return np.flatnonzero(states.edge_source == state)
+    def at(self, rank: int, base_part: str | None) -> list[int]:
+        states, operations, state = self.states, [], self.states.initial
+        while state != states.final:
+            for edge in self.out(state, base_part):
+                below = int(self.paths[states.edge_target[edge]])
+                if rank < below:
+                    operations.append(int(states.edge_operation[edge]))
+                    state = int(states.edge_target[edge])
+                    break
+                rank -= below
+        return operations
 
 
 def sequence_count(plan: Plan, base_part: str | None = None) -> int:
     """The number of full assembly sequences (those whose first operation joins ``base_part``, if given).
-    Cost: O(E) for E state edges."""
-    states, paths = plan.states, paths_to_final(plan.states)
-    if states.initial == states.final:
-        return 1
-    return sum(_paths_from(states, paths, int(states.edge_target[e]))
-               for e in _out_edges(states, states.initial, base_part))
+    Cost: O(E log E) for E state edges."""
+    return _Ranking(plan.states).count(base_part)
+
+
+def sequences_at(plan: Plan, ranks, base_part: str | None = None) -> list[list[int]]:
+    """The operations of the full assembly sequences of ``ranks`` (module docstring), each from 0.
+
+    Raises :class:`SequenceError` for a rank not in ``0..count - 1``. Cost: O(E log E) once, then
+    O(n b) per sequence for n parts and at most b edges out of a state, whatever the number of sequences.
+    """
+    ranking = _Ranking(plan.states)
+    total = ranking.count(base_part)
+    out = []
+    for rank in ranks:
+        if not 0 <= int(rank) < total:
+            raise SequenceError(f"sequence rank {rank} is out of range: the plan has {total:,} full assembly "
+                                f"sequences, ranked 0..{total - 1:,}; choose a rank in that range")
+        out.append(ranking.at(int(rank), base_part))
+    return out
+
+
+def first_sequences(plan: Plan, limit: int, base_part: str | None = None) -> tuple[int, list[list[int]]]:
+    """The number of full assembly sequences and the first ``limit`` of them by rank, with one ranking
+    (:func:`sequences_at`). Cost: O(E log E) plus O(n b) per sequence listed."""
+    ranking = _Ranking(plan.states)
+    count = ranking.count(base_part)
+    return count, [ranking.at(rank, base_part) for rank in range(min(count, max(int(limit), 0)))]
 
 
 def sequence_at(plan: Plan, rank: int, base_part: str | None = None) -> list[int]:
-    """The operations of the full assembly sequence of rank ``rank`` (module docstring), from 0.
-
-    Raises :class:`SequenceError` when ``rank`` is not in ``0..count - 1``. Cost: O(n E) for n parts
-    (one pass over the edges per step), whatever the number of sequences.
-    """
-    states, paths = plan.states, paths_to_final(plan.states)
-    total = sequence_count(plan, base_part)
-    if not 0 <= rank < total:
-        raise SequenceError(f"sequence rank {rank} is out of range: the plan has {total:,} full assembly "
-                            f"sequences, ranked 0..{total - 1:,}; choose a rank in that range")
-    operations, state, rank = [], states.initial, int(rank)
-    while state != states.final:
-        for edge in _out_edges(states, state, base_part):
-            below = _paths_from(states, paths, int(states.edge_target[edge]))
-            if rank < below:
-                operations.append(int(states.edge_operation[edge]))
-                state = int(states.edge_target[edge])
-                break
-            rank -= below
-        base_part = None  # only the first step is restricted
-    return operations
+    """The operations of the full assembly sequence of rank ``rank`` (:func:`sequences_at`)."""
+    return sequences_at(plan, [rank], base_part)[0]
 
 
 def check_sequence(plan: Plan, operations: list[int]) -> list[int]:
