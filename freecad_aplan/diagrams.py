@@ -26,7 +26,7 @@ from planner.errors import PlannerError
 from planner.product import AXIS_DIRECTIONS
 
 __all__ = ["RELATION_KINDS", "RelationError", "relation_rows", "edited_diagrams", "diagrams_source",
-           "stored_analysis", "describe_relation"]
+           "stored_analysis", "describe_relation", "relation_direction"]
 
 #: The kinds of relation the designer can add: a contact, or an obstruction along one of the six axes.
 RELATION_KINDS: tuple[str, ...] = ("contact",) + tuple(f"blocks {axis}" for axis in AXIS_DIRECTIONS)
@@ -177,3 +177,20 @@ def stored_analysis(diagrams: dict) -> dict:
     if diagrams.get("edits"):
         out["edits"] = list(diagrams["edits"])
     return out
+
+
+def relation_direction(kind: str) -> tuple[float, float, float] | None:
+    """The direction of a relation kind (``blocks +X``, or ``blocks [x, y, z]`` for a designer direction) as a
+    vector; None for a contact or a kind that names no direction."""
+    if not kind.startswith("blocks "):
+        return None
+    name = kind[len("blocks "):].strip()
+    if name in AXIS_DIRECTIONS:
+        return tuple(float(c) for c in AXIS_DIRECTIONS[name])
+    try:
+        vector = json.loads(name)
+    except ValueError:
+        return None
+    if not (isinstance(vector, list) and len(vector) == 3 and all(isinstance(c, (int, float)) for c in vector)):
+        return None
+    return tuple(float(c) for c in vector)

@@ -181,8 +181,10 @@ class SceneChanges:
             for material, colours, transparencies in saved:
                 _set_fields(material, colours, transparencies)
         for name, placement in self.placements.items():
+            if name in self.transforms:  # shown moved, never moved in the document
+                continue
             obj = self.document.getObject(name)
-            if obj is not None and name not in self.transforms and not _same(obj.Placement, placement):
+            if obj is not None and not _same(obj.Placement, placement):
                 _set_placement(obj, placement)
         self.placements, self.transforms, self.materials = {}, {}, {}
 

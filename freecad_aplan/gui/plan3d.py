@@ -10,42 +10,26 @@ back exactly; in the GUI only the scene graph changes, never the document) and a
 """
 from __future__ import annotations
 
-import json
-
 import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
-from planner.product import AXIS_DIRECTIONS
-
+from ..diagrams import relation_direction
 from ..plan3d import COLOURS, DIMMED, SceneChanges, bound_box, component_objects, extent, relation_looks, step_looks
 
-__all__ = ["ARROW_NAME", "SEQUENCE_LIST_LIMIT", "Plan3DPanel", "PlanView", "add_parts_tab", "relation_direction",
+__all__ = ["ARROW_NAME", "PARTS_TAB_LIMIT", "SEQUENCE_LIST_LIMIT", "Plan3DPanel", "PlanView", "add_parts_tab",
            "restore_when_gone"]
 
 #: The name of the arrow's Coin3D node (tests look for it in the scene graph).
 ARROW_NAME = "AplanArrow"
 #: Up to this many full sequences the panel lists them; past it, a spin box over the rank.
 SEQUENCE_LIST_LIMIT = 200
+#: Rows of the plan dialog's operations-and-states tab at most (a large plan lists its first ones).
+PARTS_TAB_LIMIT = 2000
 #: Milliseconds between steps when playing.
 PLAY_INTERVAL = 900
 #: Colours of the blocks of a state (multi-part subassemblies), in turn.
 PALETTE = ((1.0, 0.55, 0.0), (0.1, 0.35, 0.9), (0.15, 0.65, 0.2), (0.75, 0.2, 0.75), (0.85, 0.1, 0.1))
-
-
-def relation_direction(kind: str) -> tuple[float, float, float] | None:
-    """The direction of a diagrams-table relation kind (``blocks +X`` or ``blocks [x, y, z]``); None for a
-    contact or a kind it cannot read."""
-    if not kind.startswith("blocks "):
-        return None
-    name = kind[len("blocks "):].strip()
-    if name in AXIS_DIRECTIONS:
-        return tuple(float(c) for c in AXIS_DIRECTIONS[name])
-    try:
-        vector = json.loads(name)
-    except ValueError:
-        return None
-    return tuple(float(c) for c in vector) if isinstance(vector, list) and len(vector) == 3 else None
 
 
 def _arrow(start, vector, colour):
@@ -369,10 +353,14 @@ def add_parts_tab(dialog, plan, analysis) -> QtGui.QTableWidget:
 
     view = PlanView(analysis.Document, read_intent(analysis).diagrams)
     andor, states = plan.andor, plan.states
-    rows = [("operation", andor.describe(j), [frozenset(s) for s in andor.inputs(j)])
-            for j in range(len(andor.operations))]
+    operations = range(min(len(andor.operations), PARTS_TAB_LIMIT))
+    rows = [("operation", andor.describe(j), [frozenset(s) for s in andor.inputs(j)]) for j in operations]
     rows += [("state", states.describe(s), [andor.parts_of(b) for b in states.subassemblies_of(s)
-                                            if len(andor.parts_of(b)) > 1]) for s in range(states.n_states)]
+                                            if len(andor.parts_of(b)) > 1])
+             for s in range(min(states.n_states, PARTS_TAB_LIMIT - len(rows)))]
+    left = len(andor.operations) + states.n_states - len(rows)
+    if left:
+        rows.append(("...", f"{left:,} more operations and states, not listed", []))
     table = QtGui.QTableWidget(len(rows), 2)
     table.setObjectName("AplanPlanPartsTable")
     table.setHorizontalHeaderLabels(["kind", "parts"])
