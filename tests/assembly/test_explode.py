@@ -147,3 +147,12 @@ def test_bad_sequences_are_refused_with_the_reason(plan):
         exploded_view(plan, first[:3])
     with pytest.raises(SequenceError, match="operation 999"):
         check_sequence(plan, [999])
+
+
+def test_with_a_base_part_it_never_moves(plan):
+    count, listed = api.sequence_choices(plan, "body", limit=100)
+    assert len(listed) == count > 0
+    for rank in range(count):
+        view = api.plan_in_3d(plan, rank, 1.0, "body")
+        assert all("body" in step.fixed for step in view.steps if "body" in step.moving | step.fixed)
+        assert view.offsets[0]["body"] == (0.0, 0.0, 0.0)  # the base part stays put throughout

@@ -55,6 +55,8 @@ def placements():
 before = placements()
 objects = component_objects(doc, {diagrams!r})
 out["objects"] = {{p: [o.Name for o in objs] for p, objs in objects.items()}}
+unrecorded = dict({diagrams!r}, objects={{}}, parts={diagrams!r}["parts"] + ["lid_001"])
+out["by_label"] = {{p: [o.Name for o in objs] for p, objs in component_objects(doc, unrecorded).items()}}
 plan = api.plan_of(workflow.analysis_product(analysis))
 spacing = extent([o for objs in objects.values() for o in objs])
 view = api.plan_in_3d(plan, 0, spacing)
@@ -89,6 +91,7 @@ def test_a_step_moves_the_parts_and_restore_puts_them_back(tmp_path):
     done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=120, check=False)
     data = freecad_result(done)
     assert data["objects"] == {p: [f"b_{p}_"] for p in pen_diagrams()["parts"]}
+    assert data["by_label"] == data["objects"]  # without the detection's record: by label; no object, left out
     # The pen is about 250 mm long: the exploded parts sit one bounding-box diagonal away per step to come.
     assert 200 < data["spacing"] < 300
     for moved, offsets in ((data["moved"], data["offsets"]), (data["moved3"], data["offsets3"])):
