@@ -298,7 +298,8 @@ class Plan3DPanel:
         else:
             step = exploded.steps[self.k]
             moving = ", ".join(sorted(step.moving))
-            text = (f"{self.title}, step {self.k + 1} of {total}: {step.description}. {moving} moves in along "
+            verb = "moves" if len(step.moving) == 1 else "move"
+            text = (f"{self.title}, step {self.k + 1} of {total}: {step.description}. {moving} {verb} in along "
                     f"{step.direction.reverse.name} (it leaves freely along {step.direction.name}).")
         self.label.setPlainText(text)
         self.buttons["Back"].setEnabled(self.k > 0)

@@ -32,9 +32,11 @@ from .options import (
     add_technical,
     advice,
     contact_tolerances_from,
+    index,
     limits_from,
     model_options_from,
     positive,
+    positive_length,
     product_from,
 )
 
@@ -187,6 +189,33 @@ def _intentions(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sequence(args: argparse.Namespace) -> int:
+    """``aplan sequence``: one full assembly sequence step by step, as the workbench's "Plan in 3D" shows it."""
+    plan = api.plan_of(product_from(args, args.product), args.technical, limits_from(args))
+    title = f"sequence {args.rank}"
+    if args.session_log:
+        operations, logged = api.sequence_from_log(args.session_log, plan)
+        title = f"the sequence {args.session_log} recorded" + ("" if logged.complete else
+                                                        f" ({len(logged.operations)} operations, then the first way to finish)")
+        view = api.plan_in_3d(plan, operations, args.spacing, args.base_part)
+    else:
+        view = api.plan_in_3d(plan, args.rank, args.spacing, args.base_part)
+    if args.json:
+        print(json.dumps({"sequence": None if args.session_log else args.rank, "spacing": view.spacing, "steps": [
+            {"operation": step.operation, "joins": step.description, "moving": sorted(step.moving),
+             "fixed": sorted(step.fixed), "free_direction": step.direction.name,
+             "vector": list(step.direction.vector), "offsets": {p: list(v) for p, v in view.offsets[k].items()}}
+            for k, step in enumerate(view.steps)]}))
+        return 0
+    print(f"{plan.product.name or args.product}: {title}, {len(view.steps)} operations; the moving side goes in "
+          "along the reverse of its free direction")
+    for k, step in enumerate(view.steps, start=1):
+        verb = "moves" if len(step.moving) == 1 else "move"
+        print(f"  {k}. {step.description}: {', '.join(sorted(step.moving))} {verb} in along "
+              f"{step.direction.reverse.name} (free along {step.direction.name})")
+    return 0
+
+
 def _fasteners(args: argparse.Namespace) -> int:
     product = api.resolve_product(args.product)
     designed, proposals = api.fastener_report(product)
@@ -276,6 +305,27 @@ def add_commands(commands) -> None:
     add_model_options(intentions)
     add_size_options(intentions)
     intentions.set_defaults(run=_intentions)
+
+    sequence = commands.add_parser(
+        "sequence", help="one full assembly sequence step by step: what moves, along which free direction",
+        description="Show a full assembly sequence (by rank, or the one a session log recorded) as the workbench's "
+                    "Plan in 3D steps through it: per operation the side that moves (the one without the base part, "
+                    "else the smaller), the free direction it leaves the other side along (it goes in along the "
+                    "reverse), and with --json every part's exploded offset before the step.")
+    sequence.add_argument("product", metavar="PRODUCT", help=PRODUCT_HELP)
+    which = sequence.add_mutually_exclusive_group()
+    which.add_argument("--rank", type=index, default=0, metavar="K",
+                       help="the sequence of rank K (from 0; sequences in the order of the state graph's edges)")
+    which.add_argument("--log", dest="session_log", metavar="LOG",  # not "log": that names an output to check
+                       help="the sequence the session log LOG (aplan session --log) recorded")
+    sequence.add_argument("--spacing", type=positive_length, default=1.0, metavar="D",
+                          help="how far the first moving side sits away in the exploded offsets (default 1)")
+    sequence.add_argument("--json", action="store_true", help="print one JSON object with the steps and offsets")
+    add_technical(sequence)
+    add_base_part(sequence)
+    add_model_options(sequence)
+    add_size_options(sequence)
+    sequence.set_defaults(run=_sequence)
 
     fasteners = commands.add_parser(
         "fasteners", help="list the fastener groups: the designer's and those the planner proposes",
