@@ -2,11 +2,11 @@
 collapses step by step), a relation of the diagrams panel shown in 3D, the parts of an operation or a state
 of the plan dialog highlighted.
 
-The planner says what goes where (:func:`planner.api.plan_in_3d`); :class:`PlanView` shows it on the
-document with :class:`freecad_aplan.plan3d.SceneChanges` (placements and view properties saved, then put
-back exactly; in the GUI only the scene graph changes, never the document) and a temporary Coin3D arrow
-(never a document object), and restores everything on
-:meth:`PlanView.restore`: when the selection changes, when a panel closes, when its widget goes away.
+The planner says what goes where (:func:`planner.api.plan_in_3d`); :class:`PlanView` shows it with
+:class:`freecad_aplan.plan3d.SceneChanges` (the view providers' Coin3D transforms and face materials, saved
+first and put back exactly: the document itself never changes) and a temporary Coin3D arrow (never a
+document object), and restores everything on :meth:`PlanView.restore`: when the selection changes, when a
+panel closes, when its widget goes away.
 """
 from __future__ import annotations
 
