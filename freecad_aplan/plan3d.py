@@ -22,7 +22,7 @@ __all__ = ["COLOURS", "DIMMED", "SceneChanges", "bound_box", "component_objects"
 
 #: Colours (RGB 0..1) and transparencies (percent) of the roles.
 COLOURS = {"moving": (1.0, 0.55, 0.0), "blocked": (0.85, 0.1, 0.1), "blocking": (0.1, 0.35, 0.9)}
-DIMMED = {"fixed": 55, "idle": 85}
+DIMMED = {"fixed": 55, "idle": 85, "blocking": 50}
 
 
 def component_objects(document, diagrams: dict) -> dict[str, list]:
@@ -62,9 +62,10 @@ def step_looks(roles: dict[str, str]) -> dict[str, tuple]:
 
 
 def relation_looks(parts, blocked: str, blocking: str) -> dict[str, tuple]:
-    """Per part for an obstruction relation: the blocked part red, the blocking part blue, the others dimmed."""
-    return {p: (COLOURS["blocked"], 0) if p == blocked else (COLOURS["blocking"], 0) if p == blocking
-            else (None, DIMMED["idle"]) for p in parts}
+    """Per part for an obstruction relation: the blocked part red, the blocking part blue and see-through (it
+    often encloses the blocked one), the others dimmed."""
+    return {p: (COLOURS["blocked"], 0) if p == blocked else (COLOURS["blocking"], DIMMED["blocking"])
+            if p == blocking else (None, DIMMED["idle"]) for p in parts}
 
 
 def _parent_rotation(obj) -> FreeCAD.Rotation:

@@ -264,7 +264,8 @@ class DiagramsPanel:
 
     def _show_in_3d(self) -> None:
         """One selected relation shown in 3D (blocked part red, blocking part blue, an arrow along the direction,
-        :class:`~freecad_aplan.gui.plan3d.PlanView`); any other selection restores the view."""
+        :class:`~freecad_aplan.gui.plan3d.PlanView`; an obstruction's parts are then not left selected, whose
+        highlight would hide the colours); any other selection restores the view."""
         from .plan3d import PlanView, restore_when_gone
 
         if self.plan_view is None:
@@ -273,6 +274,8 @@ class DiagramsPanel:
         relations = self._selected_relations()
         if len(relations) == 1:
             self.plan_view.show_relation(*relations[0])
+            if relations[0][0] != "contact":  # the selection's green would hide which part is which
+                FreeCADGui.Selection.clearSelection()
         else:
             self.plan_view.restore()
 

@@ -44,8 +44,13 @@ def _arrow(start, vector, colour):
     tip_base = start + unit * (length - head)
     root = coin.SoSeparator()
     root.setName(ARROW_NAME)
-    root.addChild(coin.SoBaseColor())
-    root.getChild(0).rgb.setValue(*colour)
+    if hasattr(coin, "SoDepthBuffer"):  # drawn over the parts: it often runs through one
+        depth = coin.SoDepthBuffer()
+        depth.test = False
+        root.addChild(depth)
+    colour_node = coin.SoBaseColor()
+    colour_node.rgb.setValue(*colour)
+    root.addChild(colour_node)
     style = coin.SoDrawStyle()
     style.lineWidth = 4
     root.addChild(style)
@@ -73,6 +78,7 @@ class PlanView:
         self.spacing = extent([o for members in self.objects.values() for o in members])
         self.scene: SceneChanges | None = None
         self.arrow = None
+        self.camera: str | None = None  # the user's camera, while :meth:`fit` has changed it
 
     def _begin(self) -> SceneChanges:
         global _SHOWING
@@ -125,6 +131,22 @@ class PlanView:
             looks.update({p: (colour, 0) for p in group})
         self._begin().apply(self.objects, None, looks)
 
+    def fit(self) -> None:
+        """Fit the 3D view to what it shows (an exploded view is larger than the product); the user's camera is
+        kept for :meth:`restore_camera`."""
+        view = _view(self.document)
+        if view is not None:
+            if self.camera is None:
+                self.camera = view.getCamera()
+            view.fitAll()
+
+    def restore_camera(self) -> None:
+        """The user's camera back, if :meth:`fit` changed it."""
+        view = _view(self.document)
+        if view is not None and self.camera is not None:
+            view.setCamera(self.camera)
+        self.camera = None
+
     def restore(self) -> None:
         """Everything back as it was: placements, colours, the arrow removed. Safe to call at any time."""
         global _SHOWING
@@ -158,7 +180,7 @@ def _view(document):
 
 def restore_when_gone(widget, view: PlanView) -> None:
     """Restore ``view`` when ``widget`` is destroyed (a task panel closed by another command)."""
-    widget.destroyed.connect(lambda *_: view.restore())
+    widget.destroyed.connect(lambda *_: (view.restore(), view.restore_camera()))
 
 
 def _text_box(name: str, lines: int) -> QtGui.QPlainTextEdit:
@@ -259,6 +281,7 @@ class Plan3DPanel:
         self.timer.stop()
         self.exploded, self.title = exploded, title
         self.show(0)
+        self.view.fit()  # the first step is the most exploded: the later ones stay in view
 
     def load_log(self, path: str) -> bool:
         """Show the sequence the session log ``path`` recorded; say why not in the panel otherwise."""
@@ -330,6 +353,7 @@ class Plan3DPanel:
     def close(self) -> bool:
         self.timer.stop()
         self.view.restore()
+        self.view.restore_camera()
         FreeCADGui.Control.closeDialog()
         return True
 

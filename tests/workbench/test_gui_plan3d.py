@@ -64,7 +64,10 @@ def arrow_points():
     found = arrows()
     if not found:
         return None
-    points = found[0].getChild(2).point
+    from pivy import coin
+    (points,) = [found[0].getChild(i) for i in range(found[0].getNumChildren())
+                 if found[0].getChild(i).isOfType(coin.SoCoordinate3.getClassTypeId())]
+    points = points.point
     return [list(points[0].getValue()), list(points[1].getValue())]
 
 
@@ -107,6 +110,7 @@ def start():
     result["before"] = snapshot()
     result["before_looks"] = looks()
     result["before_flags"] = undo_and_modified()
+    result["camera"] = FreeCADGui.ActiveDocument.ActiveView.getCamera()
     FreeCADGui.runCommand("Aplan_Plan3D")
     panel = state().panel
     window = FreeCADGui.getMainWindow()
@@ -125,7 +129,6 @@ def start():
         if k:
             forward.click()
         QtGui.QApplication.processEvents()
-        FreeCADGui.SendMsgToActiveView("ViewFit")
         view.saveImage(os.path.join(ARTIFACTS, f"plan3d_step_{{k}}.png"), 800, 600, "White")
         result["steps"].append({{"k": panel.k, "label": label.toPlainText(), "snapshot": snapshot(), "looks": looks(),
                                 "arrows": len(arrows()),
@@ -158,6 +161,7 @@ def wait_play():
     panel.reject()
     QtGui.QApplication.processEvents()
     result["after_close"] = [snapshot(), undo_and_modified(), len(arrows()), looks()]
+    result["camera_after"] = FreeCADGui.ActiveDocument.ActiveView.getCamera()
     # A panel closed by another command (no accept, no reject): its widget going away restores the view.
     FreeCADGui.runCommand("Aplan_Plan3D")
     FreeCADGui.getMainWindow().findChild(QtGui.QPushButton, "AplanStepForward").click()
@@ -176,6 +180,7 @@ def relation():
     row = rows.index(["blocks +X", "head_001", "body_001"])
     table.selectRow(row)
     QtGui.QApplication.processEvents()
+    FreeCADGui.SendMsgToActiveView("ViewFit")
     view = FreeCADGui.ActiveDocument.ActiveView
     view.saveImage(os.path.join(ARTIFACTS, "plan3d_relation.png"), 800, 600, "White")
     result["relation"] = {{"row": rows[row], "looks": looks(), "snapshot": snapshot(), "arrow": arrow_points(),
@@ -242,6 +247,13 @@ def _session_log(path, rank: int) -> list[str]:
     return [model.plan.andor.describe(o) for o in operations]
 
 
+def _camera(text: str) -> list[float]:
+    """Position, orientation, focal distance and height of an Inventor camera (near and far distances are left
+    out: the viewer sets them at every redraw)."""
+    fields = dict(line.strip().split(" ", 1) for line in text.splitlines() if line.startswith("  "))
+    return [float(v) for key in ("position", "orientation", "focalDistance", "height") for v in fields[key].split()]
+
+
 def _obj(part: str) -> str:
     return f"b_{part}_"
 
@@ -301,19 +313,20 @@ def test_plan_and_relation_in_the_3d_view(tmp_path):
     assert data["play_end"] == [5, 5] and data["ticks"] == 6  # five steps forward, then the stop
     # Closed: every placement and colour exactly as the user had them, no undo step, not modified, no arrow.
     assert data["after_close"] == [before, data["before_flags"], 0, home]
+    assert _camera(data["camera_after"]) == pytest.approx(_camera(data["camera"]), abs=1e-5)  # the user's camera
     assert data["shown_again"] != home and data["after_replaced"] == [before, 0, home]
     # One obstruction relation: the head, moved along +X, hits the body.
     relation = data["relation"]
     assert relation["row"] == ["blocks +X", "head_001", "body_001"]
     assert relation["looks"][_obj("head_001")][:2] == [pytest.approx(RED), 0]
-    assert relation["looks"][_obj("body_001")][:2] == [pytest.approx(BLUE), 0]
-    assert all(t == DIMMED["idle"] for name, (_, t, _) in relation["looks"].items()
+    assert relation["looks"][_obj("body_001")][:2] == [pytest.approx(BLUE), 50]  # see-through: it encloses the head
+    assert all(t == 85 for name, (_, t, _) in relation["looks"].items()
                if name not in (_obj("head_001"), _obj("body_001")))
     assert all(shift == pytest.approx([0, 0, 0], abs=1e-4) for _, _, shift in relation["looks"].values())
     assert relation["snapshot"] == before
     (start, end) = relation["arrow"]
     assert [b - a for a, b in zip(start, end)][1:] == pytest.approx([0, 0], abs=1e-6) and end[0] > start[0]
-    assert relation["arrows"] == 1 and relation["selected"] == [_obj("body_001"), _obj("head_001")]
+    assert relation["arrows"] == 1 and relation["selected"] == []  # their colours say which is which
     assert (ARTIFACTS / "plan3d_relation.png").stat().st_size > 5_000
     contact = data["contact"]
     assert contact["arrows"] == 0 and contact["row"][0] == "contact"
