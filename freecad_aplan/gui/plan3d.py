@@ -131,14 +131,25 @@ class PlanView:
             looks.update({p: (colour, 0) for p in group})
         self._begin().apply(self.objects, None, looks)
 
-    def fit(self) -> None:
-        """Fit the 3D view to what it shows (an exploded view is larger than the product); the user's camera is
-        kept for :meth:`restore_camera`."""
+    def fit(self, offsets: dict[str, tuple]) -> None:
+        """Fit the 3D view to the parts moved by ``offsets`` (an exploded view is larger than the product); the
+        user's camera is kept for :meth:`restore_camera`."""
+        from pivy import coin
+
         view = _view(self.document)
-        if view is not None:
-            if self.camera is None:
-                self.camera = view.getCamera()
-            view.fitAll()
+        box = FreeCAD.BoundBox()
+        for part, members in self.objects.items():
+            moved = FreeCAD.BoundBox(bound_box(members))
+            if moved.isValid():
+                moved.move(FreeCAD.Vector(*offsets.get(part, (0.0, 0.0, 0.0))))
+                box.add(moved)
+        if view is None or not box.isValid():
+            return
+        if self.camera is None:
+            self.camera = view.getCamera()
+        width, height = view.getSize()
+        view.getCameraNode().viewBoundingBox(coin.SbBox3f(box.XMin, box.YMin, box.ZMin, box.XMax, box.YMax, box.ZMax),
+                                             width / max(height, 1), 1.0)
 
     def restore_camera(self) -> None:
         """The user's camera back, if :meth:`fit` changed it."""
@@ -281,7 +292,7 @@ class Plan3DPanel:
         self.timer.stop()
         self.exploded, self.title = exploded, title
         self.show(0)
-        self.view.fit()  # the first step is the most exploded: the later ones stay in view
+        self.view.fit(exploded.offsets[0])  # the first step is the most exploded: the later ones stay in view
 
     def load_log(self, path: str) -> bool:
         """Show the sequence the session log ``path`` recorded; say why not in the panel otherwise."""

@@ -98,11 +98,11 @@ def start():
     doc.UndoMode = 1
     analysis = create_analysis(doc)
     update_intent(analysis, "diagrams", diagrams={diagrams!r})
-    # The user's own looks, to be given back exactly: per-face colours, a transparent cap, a hidden button.
+    # The user's own looks, to be given back exactly: per-face colours, a transparent cap, a blue button.
     ink = doc.getObject("b_ink_001_").ViewObject
     ink.DiffuseColor = [(0.2, 0.4, 0.6, 0.0)] + [(0.9, 0.1, 0.3, 0.0)] * (len(ink.DiffuseColor) - 1)
     doc.getObject("b_cap_001_").ViewObject.Transparency = 30
-    doc.getObject("b_button_001_").ViewObject.Visibility = False
+    doc.getObject("b_button_001_").ViewObject.ShapeColor = (0.2, 0.3, 0.8)
     FreeCADGui.runCommand("Std_Save")
     QtGui.QApplication.processEvents()
     FreeCADGui.SendMsgToActiveView("ViewFit")
@@ -129,7 +129,7 @@ def start():
         if k:
             forward.click()
         QtGui.QApplication.processEvents()
-        view.saveImage(os.path.join(ARTIFACTS, f"plan3d_step_{{k}}.png"), 800, 600, "White")
+        view.saveImage(os.path.join(ARTIFACTS, f"plan3d_step_{{k}}.png"), *view.getSize(), "White")  # as seen
         result["steps"].append({{"k": panel.k, "label": label.toPlainText(), "snapshot": snapshot(), "looks": looks(),
                                 "arrows": len(arrows()),
                                 "arrow": arrow_points(), "forward": forward.isEnabled(), "flags": undo_and_modified()}})
