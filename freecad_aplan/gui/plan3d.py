@@ -227,11 +227,11 @@ class Plan3DPanel:
         self.form.setObjectName("AplanPlan3DPanel")
         self.form.setWindowTitle("APLAN: plan in 3D")
         layout = QtGui.QVBoxLayout(self.form)
-        intro = _text_box("AplanPlan3DIntro", 5)
+        intro = _text_box("AplanPlan3DIntro", 4)
         intro.setPlainText(f"{self.count:,} full assembly sequences"
                            + (f" from the base part {base_part}" if base_part else "")
-                           + ". Orange: the parts that move, where they come from; the arrow: the way they go "
-                             "in. Closing restores the view.")
+                           + ". Orange: the parts that move; the arrow: the way they go in. Closing restores "
+                             "the view.")
         layout.addWidget(intro)
         self.chooser = self._chooser()
         layout.addWidget(self.chooser)
@@ -239,8 +239,6 @@ class Plan3DPanel:
         log.setObjectName("AplanSequenceFromLog")
         log.clicked.connect(lambda: self.ask_log())
         layout.addWidget(log)
-        self.label = _text_box("AplanStepLabel", 8)
-        layout.addWidget(self.label)
         buttons = QtGui.QHBoxLayout()
         self.buttons = {}
         for name, text, action in (("Back", "Back", self.back), ("Forward", "Forward", self.forward),
@@ -251,7 +249,9 @@ class Plan3DPanel:
             button.setSizePolicy(QtGui.QSizePolicy.Ignored, QtGui.QSizePolicy.Fixed)  # share a narrow task view
             buttons.addWidget(button)
             self.buttons[name] = button
-        layout.addLayout(buttons)
+        layout.addLayout(buttons)  # above the step text: in view even when the task view is short
+        self.label = _text_box("AplanStepLabel", 7)
+        layout.addWidget(self.label)
         layout.addStretch(1)
         self.timer = QtCore.QTimer(self.form)
         self.timer.setInterval(PLAY_INTERVAL)

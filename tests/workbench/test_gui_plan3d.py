@@ -136,7 +136,9 @@ def start():
     form.findChild(QtGui.QPushButton, "AplanStepBack").click()
     result["back"] = [panel.k, looks()]
     QtGui.QApplication.processEvents()
-    result["panel_fits"] = [form.minimumSizeHint().width(), label.verticalScrollBar().maximum()]
+    intro = form.findChild(QtGui.QPlainTextEdit, "AplanPlan3DIntro")
+    result["panel_fits"] = [form.minimumSizeHint().width(),
+                            label.verticalScrollBar().maximum() + intro.verticalScrollBar().maximum()]
     panel.show(1)
     FreeCADGui.SendMsgToActiveView("ViewFit")
     QtGui.QApplication.processEvents()
