@@ -1,8 +1,10 @@
 """The assembly sequence a session log recorded: the robot's operations and the operator's, in the order done.
 
 The log names the robot's operations (its actions) but only what the operator was seen picking (an
-observation), which several operations of a state may explain. The sequence is the first one, in the order
-of the state graph's edges, that explains every logged event; ``ambiguous`` says whether another one does too.
+observation), which several operations of a state may explain, and a blank observation may hide one (an
+operation that takes no single part and no tool). The sequence is the first, in the order of the state
+graph's edges, that explains every logged event, preferring one that finishes the product
+(:func:`explain_steps`); ``ambiguous`` says whether another one explains the log too.
 """
 from __future__ import annotations
 
@@ -105,9 +107,9 @@ def complete_sequence(plan: Plan, operations: list[int]) -> list[int]:
 
 def logged_sequence(path: str | os.PathLike) -> LoggedSequence:
     """The sequence the session log at ``path`` recorded (module docstring), over the plan of the product
-    the log stores. Raises :class:`~planner.runtime.log.SessionError` for a file that is not a session log,
-    :class:`~planner.assembly.explode.SequenceError` when no sequence explains it. Cost: the replay (one model
-    build and one belief update per step) and :func:`explain_steps`."""
+    the log stores. Raises :class:`~planner.runtime.log.SessionError` for a file that is not a session log
+    and when no sequence of that product explains it. Cost: the replay (one model build and one belief update
+    per step) and :func:`explain_steps`."""
     path = Path(path)
     done = replay(path)
     plan = done.model.plan
