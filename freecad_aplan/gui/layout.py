@@ -1,0 +1,167 @@
+"""Layout rules that make the task panels fit FreeCAD's default combo view (about 245 px of visible width at the
+default window size): text wraps, buttons flow onto as many rows as the width needs, tables stretch their columns
+to the width, fields stand in a form (label above field) instead of one long line.
+
+Every panel and dialog of the workbench is built with these helpers; tests/workbench/test_gui.py opens each one at
+the default width and checks that nothing is cut off.
+"""
+from __future__ import annotations
+
+import re
+
+from PySide import QtCore, QtGui
+
+__all__ = ["BreakAnywhere", "FlowLayout", "breakable", "button_rows", "fit_columns", "narrow_combo", "stacked_field", "wrapped_label"]
+
+
+def wrapped_label(text: str = "", name: str = "") -> QtGui.QLabel:
+    """A label whose text wraps at the panel's width (selectable, so a message can be copied)."""
+    label = QtGui.QLabel(text)
+    label.setWordWrap(True)
+    label.setTextInteractionFlags(QtCore.Qt.TextSelectableByMouse)
+    if name:
+        label.setObjectName(name)
+    return label
+
+
+class FlowLayout(QtGui.QLayout):
+    """Widgets side by side while they fit, then on the next row (Qt's flow layout example): the height follows
+    the width (``heightForWidth``), so a row of buttons never makes the panel wider than the combo view.
+    Cost: O(items) per layout pass."""
+
+    def __init__(self, parent=None, spacing: int = 6):
+        super().__init__(parent)
+        self._items: list = []
+        self.setSpacing(spacing)
+        self.setContentsMargins(0, 0, 0, 0)
+
+    def addItem(self, item) -> None:
+        self._items.append(item)
+
+    def count(self) -> int:
+        return len(self._items)
+
+    def itemAt(self, index: int):
+        return self._items[index] if 0 <= index < len(self._items) else None
+
+    def takeAt(self, index: int):
+        return self._items.pop(index) if 0 <= index < len(self._items) else None
+
+    def expandingDirections(self):
+        return QtCore.Qt.Orientations(0)
+
+    def hasHeightForWidth(self) -> bool:
+        return True
+
+    def heightForWidth(self, width: int) -> int:
+        return self._arrange(QtCore.QRect(0, 0, width, 0), move=False)
+
+    def setGeometry(self, rect) -> None:
+        super().setGeometry(rect)
+        self._arrange(rect, move=True)
+
+    def sizeHint(self):
+        return self.minimumSize()
+
+    def minimumSize(self):
+        """The widest single item: the narrowest width at which every item still shows whole."""
+        size = QtCore.QSize()
+        for item in self._items:
+            size = size.expandedTo(item.minimumSize()).expandedTo(QtCore.QSize(item.sizeHint().width(), 0))
+        margins = self.contentsMargins()
+        return size + QtCore.QSize(margins.left() + margins.right(), margins.top() + margins.bottom())
+
+    def _arrange(self, rect, move: bool) -> int:
+        """Place the items left to right, wrapping when the next one would pass the right edge; the height used."""
+        margins = self.contentsMargins()
+        area = rect.adjusted(margins.left(), margins.top(), -margins.right(), -margins.bottom())
+        x, y, row_height = area.x(), area.y(), 0
+        for item in self._items:
+            hint = item.sizeHint()
+            if x + hint.width() > area.right() + 1 and row_height > 0:  # this row is full: start the next one
+                x, y, row_height = area.x(), y + row_height + self.spacing(), 0
+            if move:
+                item.setGeometry(QtCore.QRect(QtCore.QPoint(x, y), QtCore.QSize(min(hint.width(), area.width()),
+                                                                                hint.height())))
+            x += hint.width() + self.spacing()
+            row_height = max(row_height, hint.height())
+        return y + row_height - rect.y() + margins.bottom()
+
+
+def button_rows(*widgets) -> QtGui.QWidget:
+    """The buttons (or other small widgets) in a row that wraps onto more rows when the panel is narrow."""
+    holder = QtGui.QWidget()
+    flow = FlowLayout(holder)
+    for widget in widgets:
+        flow.addWidget(widget)
+    policy = QtGui.QSizePolicy(QtGui.QSizePolicy.Preferred, QtGui.QSizePolicy.Preferred)
+    policy.setHeightForWidth(True)
+    holder.setSizePolicy(policy)
+    return holder
+
+
+_BREAK = "\u200b"  # a zero-width space: where a line may break
+_LONG = re.compile(r"[^\s_,/.]{8,}")
+
+
+def breakable(text: str) -> str:
+    """``text`` with line-break opportunities after ``_ , / .`` and between the characters of any run of 8
+    or more other characters: ``cartridge_001`` may wrap as ``cartridge_`` / ``001`` or inside ``cartridge``."""
+    text = re.sub(r"([_,/.])", "\\1" + _BREAK, text)
+    return _LONG.sub(lambda found: _BREAK.join(found.group(0)), text)
+
+
+class BreakAnywhere(QtGui.QStyledItemDelegate):
+    """Cells that wrap inside names: Qt's item views wrap at spaces only, and part names (``cartridge_001``) have
+    none. The text shown (not the item's) gets line-break opportunities (:func:`breakable`)."""
+
+    def displayText(self, value, locale) -> str:
+        return breakable(super().displayText(value, locale))
+
+    def sizeHint(self, option, index):
+        """A tree gives the first column's whole width, indentation included: wrap at the width the text has."""
+        view = self.parent()
+        if isinstance(view, QtGui.QTreeView) and index.column() == 0:
+            depth, parent = int(view.rootIsDecorated()), index.parent()
+            while parent.isValid():
+                depth, parent = depth + 1, parent.parent()
+            option = QtGui.QStyleOptionViewItem(option)
+            option.rect.setWidth(max(1, view.header().sectionSize(0) - depth * view.indentation()))
+        return super().sizeHint(option, index)
+
+
+def fit_columns(view: QtGui.QAbstractItemView, fit: tuple[int, ...] = ()) -> None:
+    """Columns that share the table's (or tree's) width, no sideways scrolling: the ``fit`` columns (check boxes,
+    short codes) as wide as their contents, the others stretched. Text too long for its column wraps (anywhere:
+    part names have no spaces) and the row grows, so no name is elided."""
+    header = view.horizontalHeader() if isinstance(view, QtGui.QTableView) else view.header()
+    for column in range(header.count()):
+        mode = QtGui.QHeaderView.ResizeToContents if column in fit else QtGui.QHeaderView.Stretch
+        header.setSectionResizeMode(column, mode)
+    header.setStretchLastSection(False)  # the Stretch columns share the width already
+    header.setMinimumSectionSize(24)
+    view.setWordWrap(True)
+    view.setTextElideMode(QtCore.Qt.ElideNone)
+    view.setItemDelegate(BreakAnywhere(view))
+    # Qt sizes the rows for the column widths of the moment: size them again when a column changes width.
+    if isinstance(view, QtGui.QTableView):
+        view.verticalHeader().setSectionResizeMode(QtGui.QHeaderView.ResizeToContents)
+        header.sectionResized.connect(lambda *_: view.resizeRowsToContents())
+    else:
+        view.setUniformRowHeights(False)
+        header.sectionResized.connect(lambda *_: view.doItemsLayout())
+
+
+def narrow_combo(combo: QtGui.QComboBox, characters: int = 8) -> QtGui.QComboBox:
+    """A combo box that does not ask for the width of its longest entry (a long part name would widen the panel);
+    the open list still shows the entries whole."""
+    combo.setSizeAdjustPolicy(QtGui.QComboBox.AdjustToMinimumContentsLengthWithIcon)
+    combo.setMinimumContentsLength(characters)
+    combo.view().setTextElideMode(QtCore.Qt.ElideNone)
+    return combo
+
+
+def stacked_field(layout: QtGui.QBoxLayout, text: str, field: QtGui.QWidget) -> None:
+    """A field under its (wrapped) label, instead of label and field on one line that may not fit."""
+    layout.addWidget(wrapped_label(text))
+    layout.addWidget(field)
