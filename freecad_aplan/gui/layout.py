@@ -11,7 +11,16 @@ import re
 
 from PySide import QtCore, QtGui
 
-__all__ = ["BreakAnywhere", "FlowLayout", "breakable", "button_rows", "fit_columns", "narrow_combo", "stacked_field", "wrapped_label"]
+__all__ = ["BreakAnywhere", "FlowLayout", "breakable", "button_rows", "fit_columns", "header_width", "narrow_combo",
+           "panel_layout", "stacked_field", "wrapped_label"]
+
+
+def panel_layout(form: QtGui.QWidget) -> QtGui.QVBoxLayout:
+    """The column a task panel stacks its widgets in, without margins of its own: the task box around it has
+    them already, and a narrow combo view has no pixel to spare."""
+    layout = QtGui.QVBoxLayout(form)
+    layout.setContentsMargins(0, 0, 0, 0)
+    return layout
 
 
 def wrapped_label(text: str = "", name: str = "") -> QtGui.QLabel:
@@ -101,12 +110,13 @@ def button_rows(*widgets) -> QtGui.QWidget:
 
 
 _BREAK = "\u200b"  # a zero-width space: where a line may break
-_LONG = re.compile(r"[^\s_,/.]{8,}")
+_LONG = re.compile(r"[^\s_,/.]{4,}")
 
 
 def breakable(text: str) -> str:
-    """``text`` with line-break opportunities after ``_ , / .`` and between the characters of any run of 8
-    or more other characters: ``cartridge_001`` may wrap as ``cartridge_`` / ``001`` or inside ``cartridge``."""
+    """``text`` with line-break opportunities after ``_ , / .`` and between the characters of any run of 4
+    or more other characters: ``cartridge_001`` may wrap as ``cartridge_`` / ``001`` or inside ``cartridge``, so
+    that even a column a few letters wide shows every letter."""
     text = re.sub(r"([_,/.])", "\\1" + _BREAK, text)
     return _LONG.sub(lambda found: _BREAK.join(found.group(0)), text)
 
@@ -119,36 +129,87 @@ class BreakAnywhere(QtGui.QStyledItemDelegate):
         return breakable(super().displayText(value, locale))
 
     def sizeHint(self, option, index):
-        """A tree gives the first column's whole width, indentation included: wrap at the width the text has."""
+        """A tree asks without a width (Qt's item views wrap only in a valid rect): give the column's width less
+        the first column's indentation, so that the row is as tall as the wrapped text."""
         view = self.parent()
-        if isinstance(view, QtGui.QTreeView) and index.column() == 0:
-            depth, parent = int(view.rootIsDecorated()), index.parent()
-            while parent.isValid():
-                depth, parent = depth + 1, parent.parent()
+        if isinstance(view, QtGui.QTreeView):
+            width = view.header().sectionSize(index.column())
+            if index.column() == 0:
+                depth, parent = int(view.rootIsDecorated()), index.parent()
+                while parent.isValid():
+                    depth, parent = depth + 1, parent.parent()
+                width -= depth * view.indentation()
             option = QtGui.QStyleOptionViewItem(option)
-            option.rect.setWidth(max(1, view.header().sectionSize(0) - depth * view.indentation()))
+            option.rect = QtCore.QRect(0, 0, max(1, width), max(1, option.rect.height()))
         return super().sizeHint(option, index)
+
+
+def _header(view: QtGui.QAbstractItemView) -> QtGui.QHeaderView:
+    return view.horizontalHeader() if isinstance(view, QtGui.QTableView) else view.header()
+
+
+def header_width(header: QtGui.QHeaderView, column: int) -> int:
+    """The width a column needs for its header text to show whole: the text and the header's margins."""
+    text = header.model().headerData(column, header.orientation()) or ""
+    margin = header.style().pixelMetric(QtGui.QStyle.PM_HeaderMargin, None, header)
+    return header.fontMetrics().horizontalAdvance(str(text)) + 2 * margin + 2
+
+
+class _SharedWidths(QtCore.QObject):
+    """Sets the widths of a view's columns whenever the view or a ``fit`` column changes width: the ``fit``
+    columns as wide as their contents (Qt's ResizeToContents), each other column its header's width
+    (:func:`header_width`) plus an equal share of what is left. Cost: O(columns) per resize."""
+
+    def __init__(self, view: QtGui.QAbstractItemView, fit: tuple[int, ...]):
+        super().__init__(view)
+        self.view, self.fit, self.busy = view, fit, False
+        view.viewport().installEventFilter(self)
+        _header(view).sectionResized.connect(lambda column, *_: column in self.fit and self.share())
+
+    def eventFilter(self, watched, event) -> bool:
+        if event.type() == QtCore.QEvent.Resize:
+            self.share()
+        return False
+
+    def share(self) -> None:
+        header = _header(self.view)
+        shared = [c for c in range(header.count()) if c not in self.fit and not header.isSectionHidden(c)]
+        if self.busy or not shared:
+            return
+        self.busy = True  # resizing a section reports back through sectionResized
+        try:
+            needs = {c: header_width(header, c) for c in shared}
+            spare = max(0, self.view.viewport().width() - sum(header.sectionSize(c) for c in self.fit)
+                        - sum(needs.values()))
+            for k, column in enumerate(shared):
+                header.resizeSection(column, needs[column] + spare // len(shared) + (k < spare % len(shared)))
+        finally:
+            self.busy = False
 
 
 def fit_columns(view: QtGui.QAbstractItemView, fit: tuple[int, ...] = ()) -> None:
     """Columns that share the table's (or tree's) width, no sideways scrolling: the ``fit`` columns (check boxes,
-    short codes) as wide as their contents, the others stretched. Text too long for its column wraps (anywhere:
-    part names have no spaces) and the row grows, so no name is elided."""
-    header = view.horizontalHeader() if isinstance(view, QtGui.QTableView) else view.header()
+    short codes) as wide as their contents, each other one its header's width and an equal share of the rest
+    (:class:`_SharedWidths`). Text too long for its column wraps (inside names too, :class:`BreakAnywhere`) and
+    the row grows, so no name is elided."""
+    header = _header(view)
     for column in range(header.count()):
-        mode = QtGui.QHeaderView.ResizeToContents if column in fit else QtGui.QHeaderView.Stretch
+        mode = QtGui.QHeaderView.ResizeToContents if column in fit else QtGui.QHeaderView.Interactive
         header.setSectionResizeMode(column, mode)
-    header.setStretchLastSection(False)  # the Stretch columns share the width already
-    header.setMinimumSectionSize(24)
+    header.setStretchLastSection(False)  # the shared columns fill the width already
+    header.setMinimumSectionSize(16)
+    view.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarAlwaysOff)  # the columns fit: no bar flickering
     view.setWordWrap(True)
     view.setTextElideMode(QtCore.Qt.ElideNone)
     view.setItemDelegate(BreakAnywhere(view))
+    view._aplan_widths = _SharedWidths(view, fit)  # kept with the view
     # Qt sizes the rows for the column widths of the moment: size them again when a column changes width.
     if isinstance(view, QtGui.QTableView):
         view.verticalHeader().setSectionResizeMode(QtGui.QHeaderView.ResizeToContents)
         header.sectionResized.connect(lambda *_: view.resizeRowsToContents())
     else:
         view.setUniformRowHeights(False)
+        view.setIndentation(min(view.indentation(), 12))  # deep trees leave their names some width
         header.sectionResized.connect(lambda *_: view.doItemsLayout())
 
 

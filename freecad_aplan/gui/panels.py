@@ -13,7 +13,7 @@ from PySide import QtCore, QtGui
 
 from ..diagrams import RELATION_KINDS, RelationError, describe_relation, edited_diagrams, relation_rows
 from ..intent import BASE_PART_AUTO, IntentError, read_intent, update_intent
-from .layout import button_rows, fit_columns, narrow_combo, stacked_field, wrapped_label
+from .layout import button_rows, fit_columns, narrow_combo, panel_layout, stacked_field, wrapped_label
 
 __all__ = ["DiagramsPanel", "IntentPanel", "PlanDialog", "ImageDialog", "relation_rows"]
 
@@ -76,7 +76,7 @@ class DiagramsPanel:
         self.form = QtGui.QWidget()
         self.form.setObjectName("AplanDiagramsPanel")
         self.form.setWindowTitle("APLAN: diagrams")
-        layout = QtGui.QVBoxLayout(self.form)
+        layout = panel_layout(self.form)
         summary = self.diagrams.get("analysis", {})
         edited = f", {len(self.diagrams['edits'])} edits" if self.diagrams.get("edits") else ""
         intro = wrapped_label(
@@ -324,7 +324,7 @@ class IntentPanel:
         self.form = QtGui.QWidget()
         self.form.setObjectName("AplanIntentPanel")
         self.form.setWindowTitle("APLAN: constraints, tags")
-        layout = QtGui.QVBoxLayout(self.form)
+        layout = panel_layout(self.form)
         layout.addWidget(wrapped_label("Technical constraints: these parts only together with 'requires'"))
         self.constraints = _table(["parts", "requires", "active"], "AplanConstraintsTable", fit=(2,),
                                   tips={0: "parts, comma-separated"})

@@ -10,7 +10,7 @@ from PySide import QtCore, QtGui
 
 from .. import structure
 from ..intent import IntentError, read_intent
-from .layout import button_rows, fit_columns, narrow_combo, wrapped_label
+from .layout import button_rows, fit_columns, narrow_combo, panel_layout, wrapped_label
 from .panels import _check, _checked, _item, _table
 
 __all__ = ["FastenersPanel", "SubassembliesPanel", "LevelsDialog", "level_rows"]
@@ -43,12 +43,13 @@ class FastenersPanel:
         self.form = QtGui.QWidget()
         self.form.setObjectName("AplanFastenersPanel")
         self.form.setWindowTitle("APLAN: fasteners")
-        layout = QtGui.QVBoxLayout(self.form)
+        layout = panel_layout(self.form)
         self.summary = wrapped_label()
         layout.addWidget(self.summary)
         self.table = _table(["use", "group", "parts", "joins", "tool", "why"], "AplanFastenersTable", fit=(0,),
-                            tips={0: "ticked: kept (tagged) or accepted (proposed) on OK", 2: "the fasteners of the group", 3: "the parts the group joins",
-                                  5: "designer (tagged) or why the planner proposes it"})
+                            tips={0: "ticked: kept (tagged) or accepted (proposed) on OK", 2: "the fasteners of the group",
+                                  3: "the parts the group joins", 5: "designer (tagged) or why the planner proposes it"})
+        self.table.setMinimumHeight(280)  # six columns in a narrow panel make tall rows: show a few of them
         layout.addWidget(self.table)
         self.tool = QtGui.QLineEdit()
         self.tool.setObjectName("AplanFastenerTool")
@@ -131,14 +132,15 @@ class SubassembliesPanel:
         self.form = QtGui.QWidget()
         self.form.setObjectName("AplanSubassembliesPanel")
         self.form.setWindowTitle("APLAN: subassemblies")
-        layout = QtGui.QVBoxLayout(self.form)
+        layout = panel_layout(self.form)
         self.source = wrapped_label(f"from the {source}")
         layout.addWidget(self.source)
         self.tree = QtGui.QTreeWidget()
         self.tree.setObjectName("AplanSubassemblyTree")
         self.tree.setHeaderLabels(["member", "kind"])
         self.tree.setSelectionMode(QtGui.QAbstractItemView.ExtendedSelection)
-        fit_columns(self.tree, fit=(1,))
+        fit_columns(self.tree)
+        self.tree.setMinimumHeight(280)  # names wrap in a narrow panel: show a good part of the tree
         layout.addWidget(self.tree)
         layout.addWidget(wrapped_label("Start from:"))
         layout.addWidget(button_rows(_button("Planner's proposal", "AplanProposeSubassemblies", self.propose),

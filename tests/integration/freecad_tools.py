@@ -103,8 +103,8 @@ def cut_off(root):
     """What does not fit in ``root`` (a task view's viewport or a dialog) at its current width: a widget whose
     right edge is beyond the root's, a label without word wrap wider than its box, a word-wrapped label
     taller than its box, a button or tab whose text is wider than the button, a table or tree whose columns
-    are wider than its viewport (a horizontal scroll bar) or whose cell text does not fit its cell (elided),
-    a sideways scroll bar on the task view."""
+    are wider than its viewport (a horizontal scroll bar), whose header text or cell text does not fit its
+    column or cell (elided or clipped), a sideways scroll bar on the task view."""
     problems = []
     width = root.width()
     if isinstance(root.parentWidget(), QtGui.QAbstractScrollArea):
@@ -134,6 +134,12 @@ def cut_off(root):
                 problems.append(f"{name}: columns need {header.length()} px, "
                                 f"the table shows {widget.viewport().width()}")
             problems += _cut_cells(widget, name)
+            margin = 2 * header.style().pixelMetric(QtGui.QStyle.PM_HeaderMargin, None, header)
+            for column in range(header.count()):
+                text = str(header.model().headerData(column, QtCore.Qt.Horizontal) or "")
+                needed = header.fontMetrics().horizontalAdvance(text) + margin
+                if not header.isSectionHidden(column) and needed > header.sectionSize(column):
+                    problems.append(f"{name}: header {text!r} needs {needed} px, has {header.sectionSize(column)}")
         if isinstance(widget, QtGui.QTabBar):
             for k in range(widget.count()):
                 if widget.tabRect(k).right() > widget.width():
