@@ -7,12 +7,12 @@ the default width and checks that nothing is cut off.
 """
 from __future__ import annotations
 
-import re
-
 from PySide import QtCore, QtGui
 
-__all__ = ["BreakAnywhere", "FlowLayout", "breakable", "button_rows", "fit_columns", "header_width", "narrow_combo",
-           "panel_layout", "stacked_field", "wrapped_label"]
+from .fitting import breakable, shared_widths
+
+__all__ = ["BreakAnywhere", "FlowLayout", "button_rows", "fit_columns", "header_width", "narrow_combo", "panel_layout",
+           "stacked_field", "wrapped_label"]
 
 
 def panel_layout(form: QtGui.QWidget) -> QtGui.QVBoxLayout:
@@ -109,21 +109,9 @@ def button_rows(*widgets) -> QtGui.QWidget:
     return holder
 
 
-_BREAK = "\u200b"  # a zero-width space: where a line may break
-_LONG = re.compile(r"[^\s_,/.]{4,}")
-
-
-def breakable(text: str) -> str:
-    """``text`` with line-break opportunities after ``_ , / .`` and between the characters of any run of 4
-    or more other characters: ``cartridge_001`` may wrap as ``cartridge_`` / ``001`` or inside ``cartridge``, so
-    that even a column a few letters wide shows every letter."""
-    text = re.sub(r"([_,/.])", "\\1" + _BREAK, text)
-    return _LONG.sub(lambda found: _BREAK.join(found.group(0)), text)
-
-
 class BreakAnywhere(QtGui.QStyledItemDelegate):
     """Cells that wrap inside names: Qt's item views wrap at spaces only, and part names (``cartridge_001``) have
-    none. The text shown (not the item's) gets line-break opportunities (:func:`breakable`)."""
+    none. The text shown (not the item's) gets line-break opportunities (:func:`.fitting.breakable`)."""
 
     def displayText(self, value, locale) -> str:
         return breakable(super().displayText(value, locale))
@@ -157,8 +145,8 @@ def header_width(header: QtGui.QHeaderView, column: int) -> int:
 
 class _SharedWidths(QtCore.QObject):
     """Sets the widths of a view's columns whenever the view or a ``fit`` column changes width: the ``fit``
-    columns as wide as their contents (Qt's ResizeToContents), each other column its header's width
-    (:func:`header_width`) plus an equal share of what is left. Cost: O(columns) per resize."""
+    columns as wide as their contents (Qt's ResizeToContents), the others the rest, as equal as their headers'
+    widths allow (:func:`.fitting.shared_widths`). Cost: O(columns^2) per resize."""
 
     def __init__(self, view: QtGui.QAbstractItemView, fit: tuple[int, ...]):
         super().__init__(view)
@@ -178,19 +166,17 @@ class _SharedWidths(QtCore.QObject):
             return
         self.busy = True  # resizing a section reports back through sectionResized
         try:
-            needs = {c: header_width(header, c) for c in shared}
-            spare = max(0, self.view.viewport().width() - sum(header.sectionSize(c) for c in self.fit)
-                        - sum(needs.values()))
-            for k, column in enumerate(shared):
-                header.resizeSection(column, needs[column] + spare // len(shared) + (k < spare % len(shared)))
+            width = self.view.viewport().width() - sum(header.sectionSize(c) for c in self.fit)
+            for column, size in shared_widths([header_width(header, c) for c in shared], width).items():
+                header.resizeSection(shared[column], size)
         finally:
             self.busy = False
 
 
 def fit_columns(view: QtGui.QAbstractItemView, fit: tuple[int, ...] = ()) -> None:
     """Columns that share the table's (or tree's) width, no sideways scrolling: the ``fit`` columns (check boxes,
-    short codes) as wide as their contents, each other one its header's width and an equal share of the rest
-    (:class:`_SharedWidths`). Text too long for its column wraps (inside names too, :class:`BreakAnywhere`) and
+    short codes) as wide as their contents, the others sharing the rest as equally as their headers allow
+    (:func:`.fitting.shared_widths`). Text too long for its column wraps (inside names too, :class:`BreakAnywhere`) and
     the row grows, so no name is elided."""
     header = _header(view)
     for column in range(header.count()):

@@ -39,7 +39,7 @@ def _table(headers: list[str], name: str, fit: tuple[int, ...] = (), tips: dict[
 
 def _item(text: str, editable: bool = False) -> QtGui.QTableWidgetItem:
     item = QtGui.QTableWidgetItem(text)
-    item.setToolTip(text)  # the whole text of a cell elided in a narrow panel
+    item.setToolTip(text)  # the text on one line, where a narrow column wraps it
     if not editable:
         item.setFlags(item.flags() & ~QtCore.Qt.ItemIsEditable)
     return item
