@@ -106,8 +106,10 @@ def wait_cancel():
     FreeCADGui.Control.closeDialog()
     FreeCADGui.Selection.clearSelection()
     # The README's picture shows the plan's line only: the bad inputs above (red, on purpose) and the sample's
-    # A2plus proxies (FreeCAD refuses to import them without A2plus: red, with this script's path) are cleared.
+    # A2plus proxies (FreeCAD refuses to import them without A2plus: red, with this script's path) are cleared,
+    # and so is the red FreeCAD leaves on the status bar after an error message.
     FreeCADGui.getMainWindow().findChild(QtGui.QDockWidget, "Report view").widget().clear()
+    FreeCADGui.getMainWindow().statusBar().setStyleSheet("")
     FreeCADGui.runCommand("Aplan_Plan")
     result["plan"] = state().plan
     dialog = FreeCADGui.getMainWindow().findChild(QtGui.QDialog, "AplanPlanDialog")
