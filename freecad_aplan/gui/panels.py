@@ -13,6 +13,7 @@ from PySide import QtCore, QtGui
 
 from ..diagrams import RELATION_KINDS, RelationError, describe_relation, edited_diagrams, relation_rows
 from ..intent import BASE_PART_AUTO, IntentError, read_intent, update_intent
+from .layout import button_rows, fit_columns, narrow_combo, panel_layout, stacked_field, wrapped_label
 
 __all__ = ["DiagramsPanel", "IntentPanel", "PlanDialog", "ImageDialog", "relation_rows"]
 
@@ -22,17 +23,23 @@ def _direction_name(direction) -> str:
     return direction if isinstance(direction, str) else json.dumps(direction)
 
 
-def _table(headers: list[str], name: str) -> QtGui.QTableWidget:
+def _table(headers: list[str], name: str, fit: tuple[int, ...] = (), tips: dict[int, str] | None = None
+           ) -> QtGui.QTableWidget:
+    """A table whose columns share the panel's width (:func:`.layout.fit_columns`); ``tips``: header tooltips
+    (the long name of a column whose header is kept short)."""
     table = QtGui.QTableWidget(0, len(headers))
     table.setObjectName(name)
     table.setHorizontalHeaderLabels(headers)
-    table.horizontalHeader().setStretchLastSection(True)
+    for column, tip in (tips or {}).items():
+        table.horizontalHeaderItem(column).setToolTip(tip)
+    fit_columns(table, fit)
     table.verticalHeader().setVisible(False)
     return table
 
 
 def _item(text: str, editable: bool = False) -> QtGui.QTableWidgetItem:
     item = QtGui.QTableWidgetItem(text)
+    item.setToolTip(text)  # the text on one line, where a narrow column wraps it
     if not editable:
         item.setFlags(item.flags() & ~QtCore.Qt.ItemIsEditable)
     return item
@@ -69,15 +76,14 @@ class DiagramsPanel:
         self.plan_view = None  # the selected relation in 3D (made on the first selection)
         self.form = QtGui.QWidget()
         self.form.setObjectName("AplanDiagramsPanel")
-        self.form.setWindowTitle("APLAN: connection and obstruction diagrams")
-        layout = QtGui.QVBoxLayout(self.form)
+        self.form.setWindowTitle("APLAN: diagrams")
+        layout = panel_layout(self.form)
         summary = self.diagrams.get("analysis", {})
         edited = f", {len(self.diagrams['edits'])} edits" if self.diagrams.get("edits") else ""
-        intro = QtGui.QLabel(
+        intro = wrapped_label(
             f"{len(self.diagrams.get('parts', []))} parts, {len(self.diagrams.get('contacts', []))} contacts "
             f"({summary.get('engine', '?')} engine{edited}). A row 'blocks +X: a, b' means a, moved along +X, "
             "hits b (and b, moved along -X, hits a).")
-        intro.setWordWrap(True)
         layout.addWidget(intro)
         self.table = _table(["relation", "part", "part"], "AplanDiagramsTable")
         self.table.setSelectionBehavior(QtGui.QAbstractItemView.SelectRows)
@@ -85,11 +91,10 @@ class DiagramsPanel:
             self._append_row(relation)
         self.table.itemSelectionChanged.connect(self.highlight)
         layout.addWidget(self.table)
-        remove = QtGui.QPushButton("Remove selected relations")
+        remove = QtGui.QPushButton("Remove selected")
         remove.setObjectName("AplanRemoveRelations")
+        remove.setToolTip("Remove the selected relations (stored on OK)")
         remove.clicked.connect(self.remove_selected)
-        layout.addWidget(remove)
-        adding = QtGui.QHBoxLayout()
         parts = list(self.diagrams.get("parts", []))
         self.kind = self._combo("AplanRelationKind", RELATION_KINDS, editable=False)
         self.first = self._combo("AplanRelationFirst", parts, editable=True)
@@ -97,26 +102,29 @@ class DiagramsPanel:
         add = QtGui.QPushButton("Add")
         add.setObjectName("AplanAddRelation")
         add.clicked.connect(lambda: self.add_relation())
-        for widget in (self.kind, self.first, self.second, add):
-            adding.addWidget(widget)
-        layout.addWidget(QtGui.QLabel("Add a relation: contact a, b, or 'blocks +X' a, b (a blocked by b "
-                                      "along +X)"))
+        self._designer_widgets(layout, remove)
+        layout.addWidget(wrapped_label("Add a relation: contact a, b, or 'blocks +X' a, b (a blocked by b "
+                                       "along +X)"))
+        adding = QtGui.QFormLayout()
+        adding.setRowWrapPolicy(QtGui.QFormLayout.DontWrapRows)
+        adding.setFieldGrowthPolicy(QtGui.QFormLayout.AllNonFixedFieldsGrow)
+        for text, widget in (("relation", self.kind), ("a", self.first), ("b", self.second)):
+            adding.addRow(text, widget)
+        adding.addRow("", add)
         layout.addLayout(adding)
-        self._designer_widgets(layout)
-        self.message = QtGui.QLabel("")
-        self.message.setObjectName("AplanDiagramsMessage")
-        self.message.setWordWrap(True)
+        self._direction_widgets(layout)
+        self.message = wrapped_label("", "AplanDiagramsMessage")
         layout.addWidget(self.message)
 
-    def _designer_widgets(self, layout) -> None:
-        """"Mark not blocking", the list of marks with "Unmark", and the "Add a direction" field."""
-        mark = QtGui.QPushButton("Mark selected relations not blocking")
+    def _designer_widgets(self, layout, remove: QtGui.QPushButton) -> None:
+        """"Remove selected" and "Mark not blocking" under the table, the list of marks with "Unmark"."""
+        mark = QtGui.QPushButton("Mark not blocking")
         mark.setObjectName("AplanMarkNotBlocking")
         mark.setToolTip("The selected obstructions do not block (a detection is wrong about them): stored at once "
                         "and applied after every detection")
         mark.clicked.connect(lambda: self.mark_selected())
-        layout.addWidget(mark)
-        layout.addWidget(QtGui.QLabel("Not blocking (designer marks, applied after every detection):"))
+        layout.addWidget(button_rows(remove, mark))
+        layout.addWidget(wrapped_label("Not blocking (designer marks, applied after every detection):"))
         self.marks = QtGui.QListWidget()
         self.marks.setObjectName("AplanNotBlockingList")
         self.marks.setMaximumHeight(80)
@@ -124,21 +132,20 @@ class DiagramsPanel:
         unmark = QtGui.QPushButton("Unmark selected")
         unmark.setObjectName("AplanUnmark")
         unmark.clicked.connect(lambda: self.unmark_selected())
-        layout.addWidget(unmark)
-        row = QtGui.QHBoxLayout()
-        row.addWidget(QtGui.QLabel("Add a direction X,Y,Z:"))
+        layout.addWidget(button_rows(unmark))
+
+    def _direction_widgets(self, layout) -> None:
+        """The "Add a direction" field and button, and the designer's directions."""
         self.direction = QtGui.QLineEdit()
         self.direction.setObjectName("AplanDirectionField")
-        self.direction.setPlaceholderText("e.g. 0, -0.5, 0.866 (normalised)")
-        row.addWidget(self.direction)
+        self.direction.setPlaceholderText("e.g. 0, -0.5, 0.866")
+        self.direction.setToolTip("A motion direction X,Y,Z (normalised) that every detection tests like the axes")
+        stacked_field(layout, "Add a direction X,Y,Z:", self.direction)
         add = QtGui.QPushButton("Add direction")
         add.setObjectName("AplanAddDirection")
         add.clicked.connect(lambda: self.add_direction())
-        row.addWidget(add)
-        layout.addLayout(row)
-        self.directions = QtGui.QLabel("")
-        self.directions.setObjectName("AplanDesignerDirections")
-        self.directions.setWordWrap(True)
+        layout.addWidget(button_rows(add))
+        self.directions = wrapped_label("", "AplanDesignerDirections")
         layout.addWidget(self.directions)
         self._show_designer()
 
@@ -237,7 +244,7 @@ class DiagramsPanel:
         combo.setObjectName(name)
         combo.setEditable(editable)
         combo.addItems(list(items))
-        return combo
+        return narrow_combo(combo)
 
     def _append_row(self, relation) -> None:
         row = self.table.rowCount()
@@ -339,22 +346,21 @@ class IntentPanel:
         self.intent = intent
         self.form = QtGui.QWidget()
         self.form.setObjectName("AplanIntentPanel")
-        self.form.setWindowTitle("APLAN: technical constraints and operation tags")
-        layout = QtGui.QVBoxLayout(self.form)
-        layout.addWidget(QtGui.QLabel("Technical constraints: these parts only together with 'requires'"))
-        self.constraints = _table(["parts (comma-separated)", "requires", "active"], "AplanConstraintsTable")
+        self.form.setWindowTitle("APLAN: constraints, tags")
+        layout = panel_layout(self.form)
+        layout.addWidget(wrapped_label("Technical constraints: these parts only together with 'requires'"))
+        self.constraints = _table(["parts", "requires", "active"], "AplanConstraintsTable", fit=(2,),
+                                  tips={0: "parts, comma-separated"})
         for c in intent.technical_constraints:
             self._add_constraint(", ".join(c.get("parts", [])), c.get("requires", ""), c.get("active", True))
         layout.addWidget(self.constraints)
-        buttons = QtGui.QHBoxLayout()
         add, remove = QtGui.QPushButton("Add constraint"), QtGui.QPushButton("Remove constraint")
         add.clicked.connect(lambda: self._add_constraint("", "", True))
         remove.clicked.connect(lambda: self.constraints.removeRow(self.constraints.currentRow()))
-        buttons.addWidget(add)
-        buttons.addWidget(remove)
-        layout.addLayout(buttons)
-        layout.addWidget(QtGui.QLabel("Operation tags (unfavorable to humans, robot-capable, tool)"))
-        self.tags = _table(["operation", "unfavorable", "robot", "tool"], "AplanTagsTable")
+        layout.addWidget(button_rows(add, remove))
+        layout.addWidget(wrapped_label("Operation tags: U unfavorable to humans, R robot-capable, and the tool"))
+        self.tags = _table(["operation", "U", "R", "tool"], "AplanTagsTable", fit=(1, 2, 3),
+                           tips={1: "unfavorable to humans", 2: "robot-capable", 3: "the tool the operation needs"})
         andor, tags = plan.andor, plan.tags
         self.defaults = []
         for j in range(len(andor.operations)):
@@ -365,16 +371,15 @@ class IntentPanel:
             self.tags.setItem(j, 3, _item(tags.tool[j] or "", editable=True))
             self.defaults.append((bool(tags.unfavorable[j]), bool(tags.robot[j]), tags.tool[j] or ""))
         layout.addWidget(self.tags)
-        row = QtGui.QHBoxLayout()
-        row.addWidget(QtGui.QLabel("Base part"))
-        self.base_part = QtGui.QComboBox()
+        row = QtGui.QFormLayout()
+        self.base_part = narrow_combo(QtGui.QComboBox())
         self.base_part.setObjectName("AplanBasePart")
         self.base_part.setEditable(True)
         self.base_part.setToolTip("The part every assembly sequence starts from (paper Sec. V): empty for none, "
                                   "auto for the most connected part, or a component")
         self.base_part.addItems(["", BASE_PART_AUTO, *plan.andor.parts])
         self.base_part.setEditText(intent.base_part)
-        row.addWidget(self.base_part)
+        row.addRow("Base part", self.base_part)
         layout.addLayout(row)
 
     def _add_constraint(self, parts: str, requires: str, active: bool) -> None:
@@ -434,12 +439,12 @@ class IntentPanel:
 
 def _image_tab(path_or_reason: str) -> QtGui.QWidget:
     scroll = QtGui.QScrollArea()
-    label = QtGui.QLabel()
     if path_or_reason.endswith(".png"):
+        label = QtGui.QLabel()
         label.setPixmap(QtGui.QPixmap(path_or_reason))
     else:
-        label.setText(path_or_reason)
-        label.setWordWrap(True)
+        label = wrapped_label(path_or_reason)
+        scroll.setWidgetResizable(True)  # the reason wraps at the dialog's width
     scroll.setWidget(label)
     return scroll
 
@@ -454,7 +459,7 @@ class PlanDialog(QtGui.QDialog):
         self.resize(900, 650)
         layout = QtGui.QVBoxLayout(self)
         tabs = QtGui.QTabWidget()
-        table = _table(["figure", "value"], "AplanStatisticsTable")
+        table = _table(["figure", "value"], "AplanStatisticsTable", fit=(0,))
         for row, (key, value) in enumerate(statistics.items()):
             table.insertRow(row)
             table.setItem(row, 0, _item(key))
@@ -477,8 +482,6 @@ class ImageDialog(QtGui.QDialog):
         self.setObjectName("AplanImageDialog")
         self.setWindowTitle(title)
         layout = QtGui.QVBoxLayout(self)
-        text = QtGui.QLabel(caption)
-        text.setWordWrap(True)
-        layout.addWidget(text)
+        layout.addWidget(wrapped_label(caption))
         layout.addWidget(_image_tab(path))
         self.resize(700, 600)

@@ -10,6 +10,7 @@ from PySide import QtCore, QtGui
 
 from .. import structure
 from ..intent import IntentError, read_intent
+from .layout import button_rows, fit_columns, narrow_combo, panel_layout, wrapped_label
 from .panels import _check, _checked, _item, _table
 
 __all__ = ["FastenersPanel", "SubassembliesPanel", "LevelsDialog", "level_rows"]
@@ -23,10 +24,7 @@ def _button(text: str, name: str, slot) -> QtGui.QPushButton:
 
 
 def _message_label(name: str) -> QtGui.QLabel:
-    label = QtGui.QLabel("")
-    label.setObjectName(name)
-    label.setWordWrap(True)
-    return label
+    return wrapped_label("", name)
 
 
 def _selected_names(analysis) -> list[str]:
@@ -45,20 +43,20 @@ class FastenersPanel:
         self.form = QtGui.QWidget()
         self.form.setObjectName("AplanFastenersPanel")
         self.form.setWindowTitle("APLAN: fasteners")
-        layout = QtGui.QVBoxLayout(self.form)
-        self.summary = QtGui.QLabel("")
-        self.summary.setWordWrap(True)
+        layout = panel_layout(self.form)
+        self.summary = wrapped_label()
         layout.addWidget(self.summary)
-        self.table = _table(["use", "group", "fasteners", "joins", "tool", "source / why"], "AplanFastenersTable")
+        self.table = _table(["use", "group", "parts", "joins", "tool", "why"], "AplanFastenersTable", fit=(0,),
+                            tips={0: "ticked: kept (tagged) or accepted (proposed) on OK", 2: "the fasteners of the group",
+                                  3: "the parts the group joins", 5: "designer (tagged) or why the planner proposes it"})
+        self.table.setMinimumHeight(280)  # six columns in a narrow panel make tall rows: show a few of them
         layout.addWidget(self.table)
-        row = QtGui.QHBoxLayout()
         self.tool = QtGui.QLineEdit()
         self.tool.setObjectName("AplanFastenerTool")
         self.tool.setPlaceholderText("tool (e.g. screwdriver)")
-        row.addWidget(self.tool)
-        row.addWidget(_button("Tag selected", "AplanTagFasteners", self.tag_selected))
-        row.addWidget(_button("Untag selected", "AplanUntagFasteners", self.untag_selected))
-        layout.addLayout(row)
+        layout.addWidget(self.tool)
+        layout.addWidget(button_rows(_button("Tag selected", "AplanTagFasteners", self.tag_selected),
+                                     _button("Untag selected", "AplanUntagFasteners", self.untag_selected)))
         self.message = _message_label("AplanFastenersMessage")
         layout.addWidget(self.message)
         self.refresh()
@@ -134,33 +132,30 @@ class SubassembliesPanel:
         self.form = QtGui.QWidget()
         self.form.setObjectName("AplanSubassembliesPanel")
         self.form.setWindowTitle("APLAN: subassemblies")
-        layout = QtGui.QVBoxLayout(self.form)
-        self.source = QtGui.QLabel(f"from the {source}")
-        self.source.setWordWrap(True)
+        layout = panel_layout(self.form)
+        self.source = wrapped_label(f"from the {source}")
         layout.addWidget(self.source)
         self.tree = QtGui.QTreeWidget()
         self.tree.setObjectName("AplanSubassemblyTree")
         self.tree.setHeaderLabels(["member", "kind"])
         self.tree.setSelectionMode(QtGui.QAbstractItemView.ExtendedSelection)
+        fit_columns(self.tree)
+        self.tree.setMinimumHeight(280)  # names wrap in a narrow panel: show a good part of the tree
         layout.addWidget(self.tree)
-        starts = QtGui.QHBoxLayout()
-        starts.addWidget(_button("Planner's proposal", "AplanProposeSubassemblies", self.propose))
-        starts.addWidget(_button("Document's structure", "AplanDocumentSubassemblies", self.from_document))
-        layout.addLayout(starts)
-        edits = QtGui.QHBoxLayout()
+        layout.addWidget(wrapped_label("Start from:"))
+        layout.addWidget(button_rows(_button("Planner's proposal", "AplanProposeSubassemblies", self.propose),
+                                     _button("Document's structure", "AplanDocumentSubassemblies",
+                                             self.from_document)))
         self.name = QtGui.QLineEdit()
         self.name.setObjectName("AplanSubassemblyName")
         self.name.setPlaceholderText("new subassembly name")
-        edits.addWidget(self.name)
-        edits.addWidget(_button("New of selected", "AplanNewSubassembly", self.new))
-        edits.addWidget(_button("Delete", "AplanDeleteSubassembly", self.delete))
-        layout.addLayout(edits)
-        moves = QtGui.QHBoxLayout()
-        self.target = QtGui.QComboBox()
+        layout.addWidget(self.name)
+        layout.addWidget(button_rows(_button("New of selected", "AplanNewSubassembly", self.new),
+                                     _button("Delete", "AplanDeleteSubassembly", self.delete)))
+        self.target = narrow_combo(QtGui.QComboBox())
         self.target.setObjectName("AplanMoveTarget")
-        moves.addWidget(self.target)
-        moves.addWidget(_button("Move selected here", "AplanMoveMember", self.move))
-        layout.addLayout(moves)
+        layout.addWidget(self.target)
+        layout.addWidget(button_rows(_button("Move selected here", "AplanMoveMember", self.move)))
         self.message = _message_label("AplanSubassembliesMessage")
         layout.addWidget(self.message)
         self.show()
@@ -178,6 +173,8 @@ class SubassembliesPanel:
             kind = "subassembly" if member in by_id else "fastener" if member in fasteners else "part"
             label = by_id[member].get("label", "") if member in by_id else ""
             item = QtGui.QTreeWidgetItem(parent, [member, f"{kind}: {label}" if label and label != member else kind])
+            for column in (0, 1):  # the whole name of an entry elided in a narrow panel
+                item.setToolTip(column, item.text(column))
             item.setData(0, QtCore.Qt.UserRole, member)
             if member in by_id and member not in seen:
                 for inner in by_id[member]["parts"]:

@@ -49,3 +49,107 @@ def guarded(step):
             finish(1)
     return run
 '''
+
+
+# Shared by the GUI test scripts that show task panels and dialogs (needs QtCore, QtGui and FreeCADGui): what
+# is cut off in a panel at the width it has, and the task view's visible part, the root those checks start from.
+LAYOUT_CHECK = '''
+def _widget_name(widget):
+    text = widget.text() if hasattr(widget, "text") and callable(widget.text) else ""
+    return f"{type(widget).__name__} {widget.objectName() or repr(str(text)[:40])}"
+
+
+def _inside_nested_scroll(widget, root):
+    # Pictures in a scroll area of their own may scroll: only the root's own layout must fit.
+    parent = widget.parentWidget()
+    while parent is not None and parent is not root:
+        if isinstance(parent, QtGui.QAbstractScrollArea) and widget is not parent:
+            return True
+        parent = parent.parentWidget()
+    return False
+
+
+def _indexes(model, parent=None, limit=200):
+    parent = parent or QtCore.QModelIndex()
+    for row in range(min(model.rowCount(parent), limit)):
+        for column in range(model.columnCount(parent)):
+            index = model.index(row, column, parent)
+            yield index
+            if column == 0:
+                yield from _indexes(model, index, limit)
+
+
+def _cut_cells(view, name):
+    # A cell whose text as the view shows it (its delegate's displayText), wrapped as Qt wraps it (at break
+    # opportunities, when the view wraps) at its column's width less the item's margins, is wider or taller
+    # than the cell: it is elided or clipped.
+    problems = []
+    metrics, margin = view.fontMetrics(), 2 * (view.style().pixelMetric(QtGui.QStyle.PM_FocusFrameHMargin) + 1)
+    wrap = int(QtCore.Qt.TextWordWrap) if view.wordWrap() else 0
+    for index in _indexes(view.model()):
+        data, rect = index.data(), view.visualRect(index)
+        if not data or rect.width() <= 0 or (index.flags() & QtCore.Qt.ItemIsUserCheckable and
+                                             index.data(QtCore.Qt.CheckStateRole) is not None):
+            continue
+        text = view.itemDelegate(index).displayText(data, QtCore.QLocale())
+        needed = metrics.boundingRect(QtCore.QRect(0, 0, rect.width() - margin, 10 ** 5), wrap, text)
+        if needed.height() > rect.height() or needed.width() > rect.width() - margin:
+            problems.append(f"{name}: cell {data!r} needs {needed.width()}x{needed.height()} px, "
+                            f"has {rect.width() - margin}x{rect.height()}")
+    return problems
+
+
+def cut_off(root):
+    """What does not fit in ``root`` (a task view's viewport or a dialog) at its current width: a widget whose
+    right edge is beyond the root's, a label without word wrap wider than its box, a word-wrapped label
+    taller than its box, a button or tab whose text is wider than the button, a table or tree whose columns
+    are wider than its viewport (a horizontal scroll bar), whose header text or cell text does not fit its
+    column or cell (elided or clipped), a sideways scroll bar on the task view."""
+    problems = []
+    width = root.width()
+    if isinstance(root.parentWidget(), QtGui.QAbstractScrollArea):
+        bar = root.parentWidget().horizontalScrollBar()
+        if bar.isVisible() and bar.maximum() > 0:
+            problems.append(f"the task view scrolls sideways by {bar.maximum()} px")
+    for widget in root.findChildren(QtGui.QWidget):
+        if not widget.isVisibleTo(root) or widget.width() <= 0 or _inside_nested_scroll(widget, root):
+            continue
+        name = _widget_name(widget)
+        right = widget.mapTo(root, QtCore.QPoint(widget.width(), 0)).x()
+        if right > width:
+            problems.append(f"{name}: right edge at {right} px, beyond the visible {width} px")
+        if isinstance(widget, QtGui.QLabel) and widget.text() and widget.pixmap() is None:
+            if widget.wordWrap():
+                if widget.heightForWidth(widget.width()) > widget.height():
+                    problems.append(f"{name}: wrapped text needs {widget.heightForWidth(widget.width())} px "
+                                    f"of height, has {widget.height()}")
+            elif widget.sizeHint().width() > widget.width():
+                problems.append(f"{name}: text needs {widget.sizeHint().width()} px, has {widget.width()}")
+        if isinstance(widget, QtGui.QAbstractButton) and widget.text():
+            if widget.sizeHint().width() > widget.width():
+                problems.append(f"{name}: text needs {widget.sizeHint().width()} px, has {widget.width()}")
+        if isinstance(widget, (QtGui.QTableView, QtGui.QTreeView)):
+            header = widget.horizontalHeader() if isinstance(widget, QtGui.QTableView) else widget.header()
+            if header.length() > widget.viewport().width():
+                problems.append(f"{name}: columns need {header.length()} px, "
+                                f"the table shows {widget.viewport().width()}")
+            problems += _cut_cells(widget, name)
+            margin = 2 * header.style().pixelMetric(QtGui.QStyle.PM_HeaderMargin, None, header)
+            for column in range(header.count()):
+                text = str(header.model().headerData(column, QtCore.Qt.Horizontal) or "")
+                needed = header.fontMetrics().horizontalAdvance(text) + margin
+                if not header.isSectionHidden(column) and needed > header.sectionSize(column):
+                    problems.append(f"{name}: header {text!r} needs {needed} px, has {header.sectionSize(column)}")
+        if isinstance(widget, QtGui.QTabBar):
+            for k in range(widget.count()):
+                if widget.tabRect(k).right() > widget.width():
+                    problems.append(f"{name}: tab {widget.tabText(k)!r} beyond the tab bar")
+    return problems
+
+
+def task_view_viewport():
+    """The visible part of the combo view's task panel (FreeCAD's TaskView is a QScrollArea)."""
+    views = [w for w in FreeCADGui.getMainWindow().findChildren(QtGui.QScrollArea)
+             if type(w).__name__ == "TaskView" or w.metaObject().className() == "Gui::TaskView::TaskView"]
+    return views[0].viewport() if views else None
+'''

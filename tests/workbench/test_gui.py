@@ -1,5 +1,7 @@
 """The workbench in the real FreeCAD window (under Xvfb): activate APLAN, run its commands on the pen up to
-the statistics, take screenshots (tests/artifacts/), and check that the user's parts did not move."""
+the statistics, take screenshots (tests/artifacts/), and check that the user's parts did not move; open every
+task panel and dialog at FreeCAD's default size, save a picture of each (tests/artifacts/gui_panel_*.png) and
+check that nothing in them is cut off."""
 from __future__ import annotations
 
 import json
@@ -7,7 +9,7 @@ import shutil
 
 import pytest
 from conftest import PEN_MODELS, REPO, require_shared, run_freecad_gui
-from integration.freecad_tools import GUI_HELPERS, aplan
+from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, aplan
 
 ARTIFACTS = REPO / "tests" / "artifacts"
 
@@ -21,6 +23,8 @@ result = {{"ticks": 0, "cancel_ticks": 0}}
 
 
 {gui_helpers}
+
+{layout_check}
 
 
 def status():
@@ -101,6 +105,11 @@ def wait_cancel():
     result["selected"] = sorted(o.Label for o in FreeCADGui.Selection.getSelection())
     FreeCADGui.Control.closeDialog()
     FreeCADGui.Selection.clearSelection()
+    # The README's picture shows the plan's line only: the bad inputs above (red, on purpose) and the sample's
+    # A2plus proxies (FreeCAD refuses to import them without A2plus: red, with this script's path) are cleared,
+    # and so is the red FreeCAD leaves on the status bar after an error message.
+    FreeCADGui.getMainWindow().findChild(QtGui.QDockWidget, "Report view").widget().clear()
+    FreeCADGui.getMainWindow().statusBar().setStyleSheet("")
     FreeCADGui.runCommand("Aplan_Plan")
     result["plan"] = state().plan
     dialog = FreeCADGui.getMainWindow().findChild(QtGui.QDialog, "AplanPlanDialog")
@@ -113,6 +122,10 @@ def wait_cancel():
     # For the window's screenshot: the dialog on the right, the fitted pen centred in the 3D view left of it.
     dialog.setGeometry(800, 100, 470, 640)
     QtGui.QApplication.processEvents()
+    overhang = dialog.frameGeometry().right() - QtGui.QApplication.primaryScreen().geometry().right()
+    if overhang > 0:  # wider than asked (its minimum size): keep its right edge on the screen
+        dialog.move(dialog.x() - overhang - 4, dialog.y())
+        QtGui.QApplication.processEvents()
     frame_left_of(dialog.frameGeometry().x())
     QtCore.QTimer.singleShot(800, guarded(screenshots))
 
@@ -132,11 +145,57 @@ def frame_left_of(right):
     camera.position.setValue(camera.position.getValue() + sideways * shift)
 
 
+def settle():
+    for _ in range(5):
+        QtGui.QApplication.processEvents()
+
+
+def panels_at_default_width():
+    # Every task panel and dialog of the workbench at FreeCAD's default size (the combo view as a fresh FreeCAD
+    # shows it): a picture of each (the whole panel at the task view's width) and what is cut off (cut_off).
+    from dataclasses import replace
+    from planner.api import level_report
+    from planner.product import Subassembly
+    from freecad_aplan import workflow
+    from freecad_aplan.intent import find_analysis
+    from freecad_aplan.gui.panels import ImageDialog, PlanDialog
+    from freecad_aplan.gui.structure import LevelsDialog
+    window = FreeCADGui.getMainWindow()
+    combo = window.findChild(QtGui.QDockWidget, "Combo View")
+    result["combo_view_width"] = combo.width()
+    result["cut_off"], result["task_view_width"] = {{}}, {{}}
+    for name, command in (("diagrams", "Aplan_Diagrams"), ("intent", "Aplan_Intent"),
+                          ("fasteners", "Aplan_Fasteners"), ("subassemblies", "Aplan_Subassemblies")):
+        FreeCADGui.runCommand(command)
+        settle()
+        viewport = task_view_viewport()
+        result["task_view_width"][name] = viewport.width()
+        result["cut_off"][name] = cut_off(viewport)
+        viewport.parentWidget().widget().grab().save(os.path.join(ARTIFACTS, f"gui_panel_{{name}}.png"))
+        FreeCADGui.Control.closeDialog()
+    settle()
+    plan = state().plan
+    product = workflow.analysis_product(find_analysis(FreeCAD.ActiveDocument))
+    levels = replace(product, subassemblies=(Subassembly("writing unit", ("ink_001", "cartridge_001", "head_001")),))
+    caption = "The AND/OR graph, in the belief dialog of Simulate (a picture with its caption)."
+    for name, dialog in (("plan", PlanDialog(product.name, plan["statistics"], plan["images"], window)),
+                         ("levels", LevelsDialog(product.name, level_report(levels), window)),
+                         ("image", ImageDialog("APLAN belief", caption, plan["images"]["andor"], window))):
+        dialog.show()
+        settle()
+        result["cut_off"][name] = cut_off(dialog)
+        dialog.grab().save(os.path.join(ARTIFACTS, f"gui_panel_{{name}}.png"))
+        dialog.close()
+
+
 def screenshots():
     doc = FreeCAD.ActiveDocument
     screen = QtGui.QApplication.primaryScreen().grabWindow(0)
     screen.save(os.path.join(ARTIFACTS, "gui_main_window.png"))
+    result["report_view"] = FreeCADGui.getMainWindow().findChild(QtGui.QDockWidget, "Report view").widget(
+        ).toPlainText()
     result["after"] = snapshot(doc)
+    panels_at_default_width()
     # Designer intent in the task panel: the pen's technical constraint and a tag (body + button needs a
     # screwdriver and is left to the human), then the plan again.
     FreeCADGui.getMainWindow().findChild(QtGui.QDialog, "AplanPlanDialog").close()
@@ -264,7 +323,8 @@ def test_workbench_in_the_real_freecad_window(tmp_path):
     ARTIFACTS.mkdir(exist_ok=True)
     out = tmp_path / "result.json"
     script = tmp_path / "gui_test.py"
-    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, out=str(out), copy=str(copy), artifacts=str(ARTIFACTS)))
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, layout_check=LAYOUT_CHECK, out=str(out), copy=str(copy),
+                                        artifacts=str(ARTIFACTS)))
     data = run_freecad_gui(tmp_path, script, out)
     assert data["workbench"] == "AplanWorkbench" and all(data["commands"].values())
     # Bad input: one clear line each, and the document untouched.
@@ -325,3 +385,17 @@ def test_workbench_in_the_real_freecad_window(tmp_path):
     assert "the document has no solids to plan with" in data["no_solids"] and data["no_solids_jobs"] == 0
     for name in ("gui_main_window.png", "gui_3d_view.png"):
         assert (ARTIFACTS / name).stat().st_size > 10_000
+    # The README's picture (docs/workbench.png is a copy of gui_main_window.png): the plan's line, no red lines
+    # of the sample's A2plus proxies, no path of the test's temporary folder.
+    assert "APLAN: parts 6, contacts 5" in data["report_view"], data["report_view"]
+    assert "ImportError" not in data["report_view"] and "a2p_" not in data["report_view"], data["report_view"]
+    assert str(tmp_path) not in data["report_view"] and "/tmp/" not in data["report_view"], data["report_view"]
+    # Every task panel and dialog at FreeCAD's default size: nothing cut off (the panels before issue 15 each
+    # had a dozen problems: a right edge at 300 to 480 px in a task view of 244, columns beyond the table).
+    assert 200 <= data["combo_view_width"] <= 300, data["combo_view_width"]
+    assert set(data["task_view_width"]) == {"diagrams", "intent", "fasteners", "subassemblies"}
+    assert all(width <= data["combo_view_width"] for width in data["task_view_width"].values())
+    assert data["cut_off"] == {name: [] for name in ("diagrams", "intent", "fasteners", "subassemblies", "plan",
+                                                     "levels", "image")}, data["cut_off"]
+    for name in data["cut_off"]:
+        assert (ARTIFACTS / f"gui_panel_{name}.png").stat().st_size > 5_000

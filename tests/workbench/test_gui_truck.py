@@ -11,7 +11,7 @@ import shutil
 
 import pytest
 from conftest import REPO, SHARED, require_shared, run_freecad_gui
-from integration.freecad_tools import GUI_HELPERS, aplan
+from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, aplan
 from real_models import real_bundles  # noqa: F401  (fixture: the truck exported once per session)
 
 ARTIFACTS = REPO / "tests" / "artifacts"
@@ -27,6 +27,17 @@ result = {{"ticks": 0, "progress": [], "plan_ticks": 0}}
 
 
 {gui_helpers}
+
+{layout_check}
+
+
+def at_default_width(name):
+    # The task panel in the combo view as a fresh FreeCAD shows it: what is cut off, and a picture of it.
+    for _ in range(5):
+        QtGui.QApplication.processEvents()
+    viewport = task_view_viewport()
+    viewport.parentWidget().widget().grab().save(os.path.join(ARTIFACTS, f"gui_panel_{{name}}_truck.png"))
+    return cut_off(viewport)
 
 
 def state():
@@ -71,6 +82,7 @@ def wait_detection():
     # Fasteners: the panel lists the planner's proposals; all ticked, OK accepts them (one undo step).
     FreeCADGui.runCommand("Aplan_Fasteners")
     panel = state().panel
+    result["fasteners_cut_off"] = at_default_width("fasteners")
     table = FreeCADGui.getMainWindow().findChild(QtGui.QTableWidget, "AplanFastenersTable")
     result["fastener_rows"] = [[table.item(r, c).text() for c in range(1, 4)] for r in range(table.rowCount())]
     # Bad input in the panel: wood_screw_004 touches one part only; tagging it is refused with a message.
@@ -90,6 +102,7 @@ def wait_detection():
     FreeCADGui.runCommand("Aplan_Subassemblies")
     panel = state().panel
     panel.propose()
+    result["tree_cut_off"] = at_default_width("subassemblies")
     tree = FreeCADGui.getMainWindow().findChild(QtGui.QTreeWidget, "AplanSubassemblyTree")
     top = tree.topLevelItem(0)
     result["tree_top"] = sorted(top.child(k).text(0) for k in range(top.childCount()))
@@ -185,7 +198,8 @@ def test_truck_structure_in_the_workbench(tmp_path, real_bundles):  # noqa: F811
     ARTIFACTS.mkdir(exist_ok=True)
     out, bundle = tmp_path / "result.json", tmp_path / "bundle"
     script = tmp_path / "gui_truck.py"
-    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, out=str(out), copy=str(copy), bundle=str(bundle), artifacts=str(ARTIFACTS)))
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, layout_check=LAYOUT_CHECK, out=str(out), copy=str(copy),
+                                        bundle=str(bundle), artifacts=str(ARTIFACTS)))
     data = run_freecad_gui(tmp_path, script, out)
     # Detection stayed in the background: the command returned at once (the quick component check and a copy
     # of the document), the event loop kept running, the dialog showed the parts being tessellated.
@@ -201,6 +215,9 @@ def test_truck_structure_in_the_workbench(tmp_path, real_bundles):  # noqa: F811
     assert message.startswith("the fasteners wood_screw_004 join only ") and "joins nothing or only one part" in message
     assert steps == 0
     assert data["fastener_accepted"] is True
+    # Both panels, filled with the truck's 22 proposals and its subassembly tree, fit the default combo view.
+    assert data["fasteners_cut_off"] == [] and data["tree_cut_off"] == [], (data["fasteners_cut_off"],
+                                                                           data["tree_cut_off"])
     assert data["tagged"] == [22, "APLAN: accept 22 proposed fastener groups", 1]
     designer = json.loads(aplan("fasteners", str(bundle), "--json").stdout)
     assert sorted([g["id"], ", ".join(g["parts"]), ", ".join(g["hosts"])] for g in designer["designer"]) == expected
