@@ -16,6 +16,7 @@ from PySide import QtCore, QtGui
 
 from ..diagrams import relation_direction
 from ..plan3d import COLOURS, DIMMED, SceneChanges, bound_box, component_objects, extent, relation_looks, step_looks
+from .layout import button_rows, narrow_combo, panel_layout
 
 __all__ = ["ARROW_NAME", "PARTS_TAB_LIMIT", "SEQUENCE_LIST_LIMIT", "Plan3DPanel", "PlanView", "add_parts_tab",
            "restore_when_gone"]
@@ -226,7 +227,7 @@ class Plan3DPanel:
         self.form = QtGui.QWidget()
         self.form.setObjectName("AplanPlan3DPanel")
         self.form.setWindowTitle("APLAN: plan in 3D")
-        layout = QtGui.QVBoxLayout(self.form)
+        layout = panel_layout(self.form)
         intro = _text_box("AplanPlan3DIntro", 4)
         intro.setPlainText(f"{self.count:,} full assembly sequences"
                            + (f" from the base part {base_part}" if base_part else "")
@@ -239,17 +240,14 @@ class Plan3DPanel:
         log.setObjectName("AplanSequenceFromLog")
         log.clicked.connect(lambda: self.ask_log())
         layout.addWidget(log)
-        buttons = QtGui.QHBoxLayout()
         self.buttons = {}
         for name, text, action in (("Back", "Back", self.back), ("Forward", "Forward", self.forward),
                                    ("Play", "Play", self.play)):
             button = QtGui.QPushButton(text)
             button.setObjectName(f"AplanStep{name}")
             button.clicked.connect(lambda checked=False, act=action: act())
-            button.setSizePolicy(QtGui.QSizePolicy.Ignored, QtGui.QSizePolicy.Fixed)  # share a narrow task view
-            buttons.addWidget(button)
             self.buttons[name] = button
-        layout.addLayout(buttons)  # above the step text: in view even when the task view is short
+        layout.addWidget(button_rows(*self.buttons.values()))  # above the step text: in view when the view is short
         self.label = _text_box("AplanStepLabel", 7)
         layout.addWidget(self.label)
         layout.addStretch(1)
@@ -269,9 +267,7 @@ class Plan3DPanel:
             combo.currentIndexChanged.connect(lambda rank: self.choose(int(rank)))
             # The operations are long: the closed box shows what fits (its tooltip and the list show all), so
             # that the panel keeps the task view's width.
-            combo.setSizeAdjustPolicy(QtGui.QComboBox.AdjustToMinimumContentsLengthWithIcon)
-            combo.setMinimumContentsLength(8)
-            combo.view().setTextElideMode(QtCore.Qt.ElideNone)
+            narrow_combo(combo)
             combo.setToolTip("Full assembly sequences by rank: their operations in order")
             return combo
         spin = QtGui.QSpinBox()

@@ -165,7 +165,8 @@ def panels_at_default_width():
     result["combo_view_width"] = combo.width()
     result["cut_off"], result["task_view_width"] = {{}}, {{}}
     for name, command in (("diagrams", "Aplan_Diagrams"), ("intent", "Aplan_Intent"),
-                          ("fasteners", "Aplan_Fasteners"), ("subassemblies", "Aplan_Subassemblies")):
+                          ("fasteners", "Aplan_Fasteners"), ("subassemblies", "Aplan_Subassemblies"),
+                          ("plan3d", "Aplan_Plan3D")):
         FreeCADGui.runCommand(command)
         settle()
         viewport = task_view_viewport()
@@ -393,9 +394,9 @@ def test_workbench_in_the_real_freecad_window(tmp_path):
     # Every task panel and dialog at FreeCAD's default size: nothing cut off (the panels before issue 15 each
     # had a dozen problems: a right edge at 300 to 480 px in a task view of 244, columns beyond the table).
     assert 200 <= data["combo_view_width"] <= 300, data["combo_view_width"]
-    assert set(data["task_view_width"]) == {"diagrams", "intent", "fasteners", "subassemblies"}
+    assert set(data["task_view_width"]) == {"diagrams", "intent", "fasteners", "subassemblies", "plan3d"}
     assert all(width <= data["combo_view_width"] for width in data["task_view_width"].values())
-    assert data["cut_off"] == {name: [] for name in ("diagrams", "intent", "fasteners", "subassemblies", "plan",
-                                                     "levels", "image")}, data["cut_off"]
+    assert data["cut_off"] == {name: [] for name in ("diagrams", "intent", "fasteners", "subassemblies", "plan3d",
+                                                     "plan", "levels", "image")}, data["cut_off"]
     for name in data["cut_off"]:
         assert (ARTIFACTS / f"gui_panel_{name}.png").stat().st_size > 5_000
