@@ -5,10 +5,12 @@ from __future__ import annotations
 import json
 import re
 import subprocess
+import sys
 
 from aplan_runner import run_aplan
+from background import run
 
-__all__ = ["LIAISONS", "aplan", "freecad_result"]
+__all__ = ["LIAISONS", "aplan", "aplan_process", "freecad_result", "succeeded"]
 
 #: The pen's connection diagram (the ground truth of the models in ../shared).
 LIAISONS = {frozenset(p) for p in [("ink_001", "cartridge_001"), ("cartridge_001", "head_001"),
@@ -26,8 +28,21 @@ def aplan(*args: str, check: bool = True) -> subprocess.CompletedProcess:
     """Run the command line ``aplan ARGS`` (its ``main``, in this process: FreeCAD still runs in its own, as it
     does from ``python -m planner``); fails the test when it fails, if ``check``."""
     done = run_aplan(*args)
-    if check and done.returncode != 0:
-        raise AssertionError(f"aplan {' '.join(args)} failed ({done.returncode}):\n{done.stdout}\n{done.stderr}")
+    return succeeded(done) if check else done
+
+
+def aplan_process(*args: str) -> subprocess.CompletedProcess:
+    """``aplan ARGS`` in a process of its own, unchecked: what a background job (tests/background.py) runs,
+    since ``aplan`` in this process redirects the standard output, which only the tests' thread may do."""
+    done = run([sys.executable, "-m", "planner", *args])
+    return subprocess.CompletedProcess(["aplan", *args], done.returncode, done.stdout, done.stderr)
+
+
+def succeeded(done: subprocess.CompletedProcess) -> subprocess.CompletedProcess:
+    """``done``, when ``aplan`` succeeded; fails the test with its output otherwise."""
+    if done.returncode != 0:
+        raise AssertionError(f"aplan {' '.join(done.args[1:])} failed ({done.returncode}):\n{done.stdout}\n"
+                             f"{done.stderr}")
     return done
 
 

@@ -1,15 +1,17 @@
 """From real CAD files to plans, through real FreeCAD: export, mesh analysis, statistics, bad input."""
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 import subprocess
 
 import pytest
+from background import Job, folder
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
-from real_models import real_bundle, real_export_output
+from real_models import JOBS, real_bundle, real_export_output
 
-from integration.freecad_tools import LIAISONS, aplan, freecad_result
+from integration.freecad_tools import LIAISONS, aplan, aplan_process, freecad_result, succeeded
 from planner import load_product
 from planner.geometry.bundle import bundle_product_path
 
@@ -21,14 +23,25 @@ def ground_truth(axis: str) -> set[tuple[str, str]]:
     return {(link["source"], link["target"]) for link in json.loads(path.read_text())["links"]}
 
 
+def _export_pen(variant: str, ext: str) -> tuple:
+    bundle = folder("pen") / f"{variant}_{ext}"
+    model = PEN_MODELS / variant / f"asm_bourjault_ballpoint.{ext}"
+    return bundle, aplan_process("export-freecad", str(model), "-o", str(bundle))
+
+
+PEN_JOBS = {(v, ext): Job(f"export the {v} pen ({ext})", functools.partial(_export_pen, v, ext)) for v, ext in VARIANTS}
+#: The exports the fixtures read, done in the background (tests/background.py).
+BACKGROUND = (*PEN_JOBS.values(), *JOBS.values())
+
+
 @pytest.fixture(scope="module")
-def pen_bundles(tmp_path_factory):
+def pen_bundles():
     require_freecadcmd()
     out = {}
     for variant, ext in VARIANTS:
-        model = require_shared(PEN_MODELS / variant / f"asm_bourjault_ballpoint.{ext}")
-        bundle = tmp_path_factory.mktemp("bundles") / f"{variant}_{ext}"
-        aplan("export-freecad", str(model), "-o", str(bundle))
+        require_shared(PEN_MODELS / variant / f"asm_bourjault_ballpoint.{ext}")
+        bundle, done = PEN_JOBS[variant, ext].result()
+        succeeded(done)
         out[variant, ext] = bundle
     return out
 

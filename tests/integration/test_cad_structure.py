@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import pytest
 from conftest import REPO, require_freecadcmd
-from real_models import real_bundle
+from real_models import BACKGROUND, real_bundle  # noqa: F401  (the exports, done in the background)
 
 from integration.freecad_tools import aplan, freecad_result
 from planner.api import resolve_product

@@ -7,9 +7,10 @@ from __future__ import annotations
 import itertools
 
 import pytest
+from background import Job, folder
 from conftest import SHARED, require_freecadcmd, require_shared
 
-from integration.freecad_tools import aplan
+from integration.freecad_tools import aplan, aplan_process, succeeded
 from planner import api, load_product
 from planner.errors import ContactCeilingError, DisconnectedProductError
 from planner.geometry import Tolerances, analyze_product, apply_report
@@ -20,12 +21,23 @@ from planner.geometry.mesh_engine import _manifold
 PUMP = SHARED / "models" / "diaphragm_pump" / "asm_diaphragm_pump.FCStd"
 
 
+def _export_pump() -> tuple:
+    bundle = folder("pump") / "bundle"
+    return bundle, aplan_process("export-freecad", str(PUMP), "-o", str(bundle), "--exclude", "16_001", "--exclude",
+                                 "21_001")
+
+
+#: The export the fixtures read, done in the background (tests/background.py).
+BACKGROUND = (Job("export the pump without its shells", _export_pump),)
+
+
 @pytest.fixture(scope="session")
-def pump_bundle(tmp_path_factory):
+def pump_bundle():
     """The pump without its two shells, exported once (default tolerances) for every test here."""
     require_freecadcmd()
-    bundle = tmp_path_factory.mktemp("pump") / "bundle"
-    aplan("export-freecad", str(require_shared(PUMP)), "-o", str(bundle), "--exclude", "16_001", "--exclude", "21_001")
+    require_shared(PUMP)
+    bundle, done = BACKGROUND[0].result()
+    succeeded(done)
     return bundle
 
 
