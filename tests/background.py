@@ -42,15 +42,13 @@ class Job:
         self.name, self.work = name, work
         self._future: concurrent.futures.Future | None = None
         self._lock = threading.Lock()
-        self._done = False
-        self._value: object = None
 
     def __repr__(self) -> str:
         return f"Job({self.name!r})"
 
     def submit(self, executor: concurrent.futures.ThreadPoolExecutor) -> None:
         with self._lock:
-            if self._future is None and not self._done:
+            if self._future is None:
                 self._future = executor.submit(self.work)
 
     def result(self) -> object:
@@ -58,15 +56,17 @@ class Job:
         started, or is still queued behind others (then it is taken off the queue). An exception of the
         work is raised here, in the test."""
         with self._lock:
+            mine = self._future is None or self._future.cancel()
+            if mine:  # this thread does the work; others asking meanwhile wait for it
+                self._future = concurrent.futures.Future()
+                self._future.set_running_or_notify_cancel()
             future = self._future
-            if self._done:
-                return self._value
-            if future is not None and future.cancel():
-                future = None
-        value = future.result() if future is not None else self.work()
-        with self._lock:
-            self._done, self._value = True, value
-        return value
+        if mine:
+            try:
+                future.set_result(self.work())
+            except Exception as exc:  # noqa: BLE001  (raised again by future.result(), in every waiting test)
+                future.set_exception(exc)
+        return future.result()
 
 
 def start(jobs: Iterable[Job]) -> None:

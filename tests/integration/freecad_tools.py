@@ -4,13 +4,16 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 import subprocess
 import sys
+from collections.abc import Callable
+from pathlib import Path
 
 from aplan_runner import run_aplan
-from background import run
+from background import Job, folder, run
 
-__all__ = ["LIAISONS", "aplan", "aplan_process", "freecad_result", "succeeded"]
+__all__ = ["LIAISONS", "aplan", "aplan_process", "freecad_result", "freecadcmd_job", "succeeded"]
 
 #: The pen's connection diagram (the ground truth of the models in ../shared).
 LIAISONS = {frozenset(p) for p in [("ink_001", "cartridge_001"), ("cartridge_001", "head_001"),
@@ -22,6 +25,22 @@ def freecad_result(done: subprocess.CompletedProcess) -> dict:
     found = re.search(r"APLAN-RESULT (.*)", done.stdout)
     assert found, f"no result from FreeCAD:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
     return json.loads(found.group(1))
+
+
+def freecadcmd_job(name: str, script: Callable[[Path], str], files: dict[str, Path] | None = None) -> Job:
+    """A background job (tests/background.py): FreeCADCmd runs the script ``script(tmp)`` in a new folder
+    ``tmp``, after ``files`` (name there -> file) are copied into it; its result is ``(tmp, the run)``.
+    ``name`` names the folder and the script (``NAME_probe.py``: FreeCADCmd imports a script by its name)."""
+
+    def work() -> tuple[Path, subprocess.CompletedProcess]:
+        tmp = folder(name)
+        for target, source in (files or {}).items():
+            shutil.copy(source, tmp / target)
+        path = tmp / f"{name}_probe.py"
+        path.write_text(script(tmp))
+        return tmp, run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(path)])
+
+    return Job(name, work)
 
 
 def aplan(*args: str, check: bool = True) -> subprocess.CompletedProcess:

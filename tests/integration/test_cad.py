@@ -4,6 +4,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import json
+import shutil
 import subprocess
 
 import pytest
@@ -29,9 +30,20 @@ def _export_pen(variant: str, ext: str) -> tuple:
     return bundle, aplan_process("export-freecad", str(model), "-o", str(bundle))
 
 
+def _occt_analysis() -> tuple:
+    """`aplan analyze --engine occt` on a copy of the simplified pen's bundle: (bundle, the run)."""
+    source, exported = PEN_JOBS["simplified", "FCStd"].result()
+    bundle = folder("occt-cli") / "b"
+    if exported.returncode != 0:
+        return bundle, exported  # the pen_bundles fixture reports it
+    shutil.copytree(source, bundle)
+    return bundle, aplan_process("analyze", str(bundle), "--engine", "occt")
+
+
 PEN_JOBS = {(v, ext): Job(f"export the {v} pen ({ext})", functools.partial(_export_pen, v, ext)) for v, ext in VARIANTS}
-#: The exports the fixtures read, done in the background (tests/background.py).
-BACKGROUND = (*PEN_JOBS.values(), *JOBS.values())
+OCCT_JOB = Job("the OCCT engine on the pen's bundle", _occt_analysis)
+#: The exports and the analysis the tests read, done in the background (tests/background.py).
+BACKGROUND = (*PEN_JOBS.values(), OCCT_JOB, *JOBS.values())
 
 
 @pytest.fixture(scope="module")
@@ -256,13 +268,10 @@ def test_document_object_types(tmp_path):
 
 
 @pytest.mark.freecad
-def test_occt_engine_through_the_command_line(pen_bundles, tmp_path):
+def test_occt_engine_through_the_command_line(pen_bundles):
     """aplan analyze --engine occt: the exact engine, run in FreeCADCmd on the bundle's B-reps."""
-    import shutil
-
-    bundle = tmp_path / "b"
-    shutil.copytree(pen_bundles["simplified", "FCStd"], bundle)
-    done = aplan("analyze", str(bundle), "--engine", "occt")
+    bundle, done = OCCT_JOB.result()
+    succeeded(done)
     assert "(occt engine" in done.stdout
     product = load_product(bundle / "product.json")
     assert product.geometry["analysis"]["engine"] == "occt"
@@ -275,8 +284,6 @@ def test_occt_engine_through_the_command_line(pen_bundles, tmp_path):
 def test_occt_pair_budget_through_the_command_line(pen_bundles, tmp_path):
     """--pair-budget 0: every pair OCCT would measure is reported undecided (counted as touching), with
     progress on standard error; the pairs told apart by their boxes are still decided."""
-    import shutil
-
     bundle = tmp_path / "b"
     shutil.copytree(pen_bundles["simplified", "FCStd"], bundle)
     done = aplan("analyze", str(bundle), "--engine", "occt", "--pair-budget", "0", "--json")

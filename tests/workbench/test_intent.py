@@ -6,8 +6,9 @@ import shutil
 import subprocess
 
 import pytest
+from background import Job, folder, run
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
-from integration.freecad_tools import aplan, freecad_result
+from integration.freecad_tools import aplan, aplan_process, freecad_result, succeeded
 
 from planner import load_product
 
@@ -143,12 +144,36 @@ def test_export_uses_the_stored_intent(tmp_path):
     assert stats["actions"] == 18 - 1
 
 
+GROUPED = {"groups": {"refill": ["b_ink_001_", "b_cartridge_001_"]}, "excluded": ["b_button_001_"], "engine": "occt",
+           "contact": 0.05}
+
+
+def _export_grouped() -> tuple:
+    """The pen with the GROUPED intent stored (FreeCADCmd), then exported by `aplan export-freecad` (the OCCT
+    engine): (folder, the store's run, the export's run or None); the bundle in folder/b."""
+    tmp = folder("grouped")
+    path = tmp / "grouped.FCStd"
+    shutil.copy(PEN, path)
+    script = tmp / "store_grouped.py"
+    script.write_text(STORE.format(repo=str(REPO), path=str(path), changes=GROUPED))
+    stored = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(script)])
+    exported = aplan_process("export-freecad", str(path), "-o", str(tmp / "b")) if "APLAN-RESULT" in stored.stdout \
+        else None
+    return tmp, stored, exported
+
+
+#: The store and export the test reads, done in the background (tests/background.py).
+BACKGROUND = (Job("the pen's intent stored and exported with the OCCT engine", _export_grouped),)
+
+
 @pytest.mark.freecad
 def test_export_uses_stored_components_engine_and_rejects_bad_intent(tmp_path):
-    model = _store_intent(tmp_path, "grouped", groups={"refill": ["b_ink_001_", "b_cartridge_001_"]},
-                          excluded=["b_button_001_"], engine="occt", contact=0.05)
-    aplan("export-freecad", model, "-o", str(tmp_path / "b"))
-    product = load_product(tmp_path / "b" / "product.json")
+    require_freecadcmd()
+    require_shared(PEN)
+    grouped, stored, exported = BACKGROUND[0].result()
+    freecad_result(stored)
+    succeeded(exported)
+    product = load_product(grouped / "b" / "product.json")
     assert sorted(product.part_ids) == ["body_001", "cap_001", "head_001", "refill"]
     assert product.geometry["analysis"]["engine"] == "occt"
     assert product.geometry["analysis"]["tolerances"]["contact"] == 0.05
