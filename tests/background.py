@@ -17,6 +17,7 @@ import atexit
 import concurrent.futures
 import os
 import shutil
+import signal
 import subprocess
 import tempfile
 import threading
@@ -88,7 +89,15 @@ def stop() -> None:
         _executor = None
     with _lock:
         for process in list(_running):
-            process.kill()
+            _kill(process)
+
+
+def _kill(process: subprocess.Popen) -> None:
+    """End ``process`` and what it started (xvfb-run starts Xvfb and FreeCAD): its whole process group."""
+    try:
+        os.killpg(process.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
 
 
 def folder(name: str) -> Path:
@@ -100,15 +109,16 @@ def folder(name: str) -> Path:
 
 def run(command: list[str], timeout: float = 600, **options) -> subprocess.CompletedProcess:
     """``subprocess.run(command, capture_output=True, text=True, timeout=timeout, **options)``, with standard
-    input closed, whose process :func:`stop` ends when the session ends first."""
+    input closed, in a process group of its own that :func:`stop` ends when the session ends first (and a
+    timeout ends, failing the test that reads the job)."""
     with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
-                          text=True, **options) as process:
+                          text=True, start_new_session=True, **options) as process:
         with _lock:
             _running.add(process)
         try:
             stdout, stderr = process.communicate(timeout=timeout)
         except subprocess.TimeoutExpired:
-            process.kill()
+            _kill(process)
             stdout, stderr = process.communicate()
             raise AssertionError(f"{command[0]} ran longer than {timeout} s:\n{stdout[-3000:]}\n{stderr[-3000:]}")
         finally:
