@@ -24,7 +24,12 @@ import threading
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
-__all__ = ["Job", "enabled", "folder", "run", "start", "stop"]
+__all__ = ["ENVIRONMENT", "WORKING_FOLDER", "Job", "enabled", "folder", "run", "start", "stop"]
+
+#: The environment and working folder of the session's start, for every command run here: a test may change
+#: its own for a while (a fault-injection variable, ``monkeypatch.chdir``) while a job starts.
+ENVIRONMENT = dict(os.environ)
+WORKING_FOLDER = os.getcwd()
 
 _executor: concurrent.futures.ThreadPoolExecutor | None = None
 _running: set[subprocess.Popen] = set()
@@ -109,8 +114,10 @@ def folder(name: str) -> Path:
 
 def run(command: list[str], timeout: float = 600, **options) -> subprocess.CompletedProcess:
     """``subprocess.run(command, capture_output=True, text=True, timeout=timeout, **options)``, with standard
-    input closed, in a process group of its own that :func:`stop` ends when the session ends first (and a
+    input closed, the environment and working folder of the session's start (unless ``options`` give them),
+    in a process group of its own that :func:`stop` ends when the session ends first (and a
     timeout ends, failing the test that reads the job)."""
+    options = {"env": ENVIRONMENT, "cwd": WORKING_FOLDER, **options}
     with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
                           text=True, start_new_session=True, **options) as process:
         with _lock:

@@ -52,8 +52,8 @@ def freecad_gui_run(folder: Path, script: Path, display: int = 99) -> subprocess
     mod = home / ".local" / "share" / "FreeCAD" / "Mod"
     mod.mkdir(parents=True)
     (mod / "APLAN").symlink_to(REPO, target_is_directory=True)
-    env = {**{k: v for k, v in os.environ.items() if k not in ("DISPLAY", "APLAN_PYTHON")}, "HOME": str(home),
-           "QTWEBENGINE_CHROMIUM_FLAGS": "--no-sandbox --disable-gpu", "LANG": "C.UTF-8"}
+    kept = {k: v for k, v in background.ENVIRONMENT.items() if k not in ("DISPLAY", "APLAN_PYTHON")}
+    env = {**kept, "HOME": str(home), "QTWEBENGINE_CHROMIUM_FLAGS": "--no-sandbox --disable-gpu", "LANG": "C.UTF-8"}
     command = [shutil.which("xvfb-run"), "-n", str(display), "-a", "-s", "-screen 0 1280x800x24",
                shutil.which("freecad"), str(script)]
     return background.run(command, timeout=300, env=env)

@@ -66,5 +66,18 @@ def test_the_exception_of_a_job_is_raised_in_every_test_that_asks():
 
 
 def test_run_returns_what_subprocess_run_would():
-    done = background.run([sys.executable, "-c", "import sys; print('out'); print('err', file=sys.stderr); sys.exit(3)"])
+    script = "import sys; print('out'); print('err', file=sys.stderr); sys.exit(3)"
+    done = background.run([sys.executable, "-c", script])
     assert (done.returncode, done.stdout, done.stderr) == (3, "out\n", "err\n")
+
+
+def test_commands_run_in_the_environment_and_folder_of_the_session_start(monkeypatch, tmp_path):
+    """A test changing its environment or folder for a while (fault injection, monkeypatch.chdir) does not
+    reach a job that starts meanwhile."""
+    monkeypatch.setenv("APLAN_FAULT_DISK_FULL", "0")
+    monkeypatch.chdir(tmp_path)
+    script = "import os; print(os.environ.get('APLAN_FAULT_DISK_FULL', 'unset')); print(os.getcwd())"
+    done = background.run([sys.executable, "-c", script])
+    assert done.stdout.splitlines() == [background.ENVIRONMENT.get("APLAN_FAULT_DISK_FULL", "unset"),
+                                        background.WORKING_FOLDER]
+    assert background.WORKING_FOLDER != str(tmp_path)
