@@ -12,7 +12,7 @@ from background import Job, folder
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
 from real_models import JOBS, real_bundle, real_export_output
 
-from integration.freecad_tools import LIAISONS, aplan, aplan_process, freecad_result, succeeded
+from integration.freecad_tools import LIAISONS, aplan, aplan_process, freecad_result, freecadcmd_job, succeeded
 from planner import load_product
 from planner.geometry.bundle import bundle_product_path
 
@@ -42,8 +42,6 @@ def _occt_analysis() -> tuple:
 
 PEN_JOBS = {(v, ext): Job(f"export the {v} pen ({ext})", functools.partial(_export_pen, v, ext)) for v, ext in VARIANTS}
 OCCT_JOB = Job("the OCCT engine on the pen's bundle", _occt_analysis)
-#: The exports and the analysis the tests read, done in the background (tests/background.py).
-BACKGROUND = (*PEN_JOBS.values(), OCCT_JOB, *JOBS.values())
 
 
 @pytest.fixture(scope="module")
@@ -115,13 +113,14 @@ print("APLAN-RESULT " + json.dumps({{"same": snapshot() == before, "ids": sorted
 """
 
 
+PLACEMENTS_JOB = freecadcmd_job("placements", lambda tmp: PLACEMENTS.format(
+    repo=str(REPO), model=str(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd")))
+
+
 @pytest.mark.freecad
-def test_placements_unchanged_and_groups(tmp_path):
-    freecadcmd = require_freecadcmd()
-    script = tmp_path / "probe.py"
-    script.write_text(PLACEMENTS.format(repo=str(REPO), model=str(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd")))
-    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300)
-    data = freecad_result(done)
+def test_placements_unchanged_and_groups():
+    require_freecadcmd()
+    data = freecad_result(PLACEMENTS_JOB.result()[1])
     assert data["same"] is True
     assert data["ids"] == ["body_001", "cap_001", "head_001", "refill"]
 
@@ -246,14 +245,15 @@ print("APLAN-RESULT " + json.dumps({{"components": out, "warnings": result.warni
 """
 
 
+# The script is document_types_probe.py: types.py would shadow the standard module.
+DOCUMENT_TYPES_JOB = freecadcmd_job("document_types", lambda tmp: DOCUMENT_TYPES.format(repo=str(REPO)))
+
+
 @pytest.mark.freecad
-def test_document_object_types(tmp_path):
+def test_document_object_types():
     """PartDesign bodies, booleans, App::Part containers and links to other documents, built in FreeCAD."""
-    freecadcmd = require_freecadcmd()
-    script = tmp_path / "document_types_probe.py"  # not types.py: it would shadow the standard module
-    script.write_text(DOCUMENT_TYPES.format(repo=str(REPO)))
-    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300)
-    data = freecad_result(done)
+    require_freecadcmd()
+    data = freecad_result(DOCUMENT_TYPES_JOB.result()[1])
     assert data["components"] == {
         "Body": [1000.0, [0.0, 0.0, 0.0]],      # the body, not its feature
         "Cut": [875.0, [20.0, 0.0, 0.0]],       # the boolean, not its operands
@@ -349,3 +349,8 @@ def test_step_import_restores_the_link_group_preference(tmp_path):
     assert data.pop("during") == [False] * 6  # every import ran without link groups
     assert data == {"True pen": True, "True corrupt": True, "False pen": False, "False corrupt": False,
                     "None pen": None, "None corrupt": None}
+
+
+#: The exports and FreeCAD runs the tests read, done in the background (tests/background.py), in the order the
+#: tests need them.
+BACKGROUND = (*PEN_JOBS.values(), PLACEMENTS_JOB, *JOBS.values(), DOCUMENT_TYPES_JOB, OCCT_JOB)
