@@ -1,4 +1,5 @@
-"""Shared fixtures: the repository layout, ../shared, and real FreeCAD."""
+"""Shared fixtures: the repository layout, ../shared, and real FreeCAD; the background jobs of the session
+(tests/background.py)."""
 from __future__ import annotations
 
 import json
@@ -7,6 +8,7 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import background
 import pytest
 
 REPO = Path(__file__).resolve().parent.parent
@@ -29,20 +31,36 @@ def run_freecad_gui(tmp_path: Path, script: Path, out: Path) -> dict:
     workbench in a fresh home, and return the JSON the script wrote to ``out`` (asserting that it wrote one
     without an ``error``). Skips without the FreeCAD GUI or xvfb-run; fails instead when
     APLAN_REQUIRE_FREECAD=1 (CI)."""
+    require_freecad_gui()
+    return freecad_gui_result(freecad_gui_run(tmp_path, script), out)
+
+
+def require_freecad_gui() -> None:
+    """Skip without FreeCAD, its GUI or xvfb-run; fail instead when APLAN_REQUIRE_FREECAD=1 (CI)."""
     require_freecadcmd()
-    freecad, xvfb = shutil.which("freecad"), shutil.which("xvfb-run")
-    if freecad is None or xvfb is None:
+    if shutil.which("freecad") is None or shutil.which("xvfb-run") is None:
         if os.environ.get("APLAN_REQUIRE_FREECAD") == "1":
             pytest.fail("APLAN_REQUIRE_FREECAD=1 but the FreeCAD GUI or xvfb-run is missing; install freecad and xvfb")
         pytest.skip("the FreeCAD GUI (freecad) or xvfb-run is not installed")
-    home = tmp_path / "home"
+
+
+def freecad_gui_run(folder: Path, script: Path, display: int = 99) -> subprocess.CompletedProcess:
+    """The run of :func:`run_freecad_gui` without its checks (a background job may call it): FreeCAD's home in
+    ``folder/home``; the X display the first free one from ``display`` on (background jobs start elsewhere
+    than the tests, so that two Xvfb never race for one number)."""
+    home = folder / "home"
     mod = home / ".local" / "share" / "FreeCAD" / "Mod"
     mod.mkdir(parents=True)
     (mod / "APLAN").symlink_to(REPO, target_is_directory=True)
-    env = {**{k: v for k, v in os.environ.items() if k not in ("DISPLAY", "APLAN_PYTHON")}, "HOME": str(home),
-           "QTWEBENGINE_CHROMIUM_FLAGS": "--no-sandbox --disable-gpu", "LANG": "C.UTF-8"}
-    done = subprocess.run([xvfb, "-a", "-s", "-screen 0 1280x800x24", freecad, str(script)], capture_output=True,
-                          text=True, timeout=300, env=env, stdin=subprocess.DEVNULL, check=False)
+    kept = {k: v for k, v in background.ENVIRONMENT.items() if k not in ("DISPLAY", "APLAN_PYTHON")}
+    env = {**kept, "HOME": str(home), "QTWEBENGINE_CHROMIUM_FLAGS": "--no-sandbox --disable-gpu", "LANG": "C.UTF-8"}
+    command = [shutil.which("xvfb-run"), "-n", str(display), "-a", "-s", "-screen 0 1280x800x24",
+               shutil.which("freecad"), str(script)]
+    return background.run(command, timeout=300, env=env)
+
+
+def freecad_gui_result(done: subprocess.CompletedProcess, out: Path) -> dict:
+    """The JSON a GUI script wrote to ``out``, asserting that it wrote one without an ``error``."""
     assert out.is_file(), f"the GUI test wrote no result:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
     data = json.loads(out.read_text())
     assert "error" not in data, data.get("error")
@@ -60,3 +78,28 @@ def pen():
     from planner import resolve_product
 
     return resolve_product("pen")
+
+
+def _jobs(item: pytest.Item) -> tuple:
+    module = getattr(item, "module", None)
+    return tuple(getattr(module, "BACKGROUND", ()))
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(session: pytest.Session, config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Modules that read background jobs (a ``BACKGROUND`` attribute) run after the others, whole and in their
+    usual order, so that FreeCAD does their slow work while the others run."""
+    if background.enabled():
+        items[:] = [i for i in items if not _jobs(i)] + [i for i in items if _jobs(i)]
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """Start the background jobs of the selected tests, in the order the tests will need them (only when
+    FreeCAD is there: without it those tests skip, or fail under APLAN_REQUIRE_FREECAD=1, as before)."""
+    if session.config.option.collectonly or not (shutil.which("freecadcmd") or shutil.which("FreeCADCmd")):
+        return
+    background.start(job for item in session.items for job in _jobs(item))
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    background.stop()

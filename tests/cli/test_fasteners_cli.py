@@ -4,7 +4,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from real_models import real_bundles  # noqa: F401  (a fixture)
+from real_models import BACKGROUND, real_bundles  # noqa: F401  (the exports, done in the background; a fixture)
 
 from planner import load_product, product_to_dict, save_product
 from planner.cli import main

@@ -1,15 +1,18 @@
 """From real CAD files to plans, through real FreeCAD: export, mesh analysis, statistics, bad input."""
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
+import shutil
 import subprocess
 
 import pytest
+from background import Job, folder
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
-from real_models import real_bundle, real_export_output
+from real_models import JOBS, real_bundle, real_export_output
 
-from integration.freecad_tools import LIAISONS, aplan, freecad_result
+from integration.freecad_tools import LIAISONS, aplan, aplan_process, freecad_result, freecadcmd_job, succeeded
 from planner import load_product
 from planner.geometry.bundle import bundle_product_path
 
@@ -21,14 +24,34 @@ def ground_truth(axis: str) -> set[tuple[str, str]]:
     return {(link["source"], link["target"]) for link in json.loads(path.read_text())["links"]}
 
 
+def _export_pen(variant: str, ext: str) -> tuple:
+    bundle = folder("pen") / f"{variant}_{ext}"
+    model = PEN_MODELS / variant / f"asm_bourjault_ballpoint.{ext}"
+    return bundle, aplan_process("export-freecad", str(model), "-o", str(bundle))
+
+
+def _occt_analysis() -> tuple:
+    """`aplan analyze --engine occt` on a copy of the simplified pen's bundle: (bundle, the run)."""
+    source, exported = PEN_JOBS["simplified", "FCStd"].result()
+    bundle = folder("occt-cli") / "b"
+    if exported.returncode != 0:
+        return bundle, exported  # the pen_bundles fixture reports it
+    shutil.copytree(source, bundle)
+    return bundle, aplan_process("analyze", str(bundle), "--engine", "occt")
+
+
+PEN_JOBS = {(v, ext): Job(f"export the {v} pen ({ext})", functools.partial(_export_pen, v, ext)) for v, ext in VARIANTS}
+OCCT_JOB = Job("the OCCT engine on the pen's bundle", _occt_analysis)
+
+
 @pytest.fixture(scope="module")
-def pen_bundles(tmp_path_factory):
+def pen_bundles():
     require_freecadcmd()
     out = {}
     for variant, ext in VARIANTS:
-        model = require_shared(PEN_MODELS / variant / f"asm_bourjault_ballpoint.{ext}")
-        bundle = tmp_path_factory.mktemp("bundles") / f"{variant}_{ext}"
-        aplan("export-freecad", str(model), "-o", str(bundle))
+        require_shared(PEN_MODELS / variant / f"asm_bourjault_ballpoint.{ext}")
+        bundle, done = PEN_JOBS[variant, ext].result()
+        succeeded(done)
         out[variant, ext] = bundle
     return out
 
@@ -90,13 +113,14 @@ print("APLAN-RESULT " + json.dumps({{"same": snapshot() == before, "ids": sorted
 """
 
 
+PLACEMENTS_JOB = freecadcmd_job("placements", lambda tmp: PLACEMENTS.format(
+    repo=str(REPO), model=str(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd")))
+
+
 @pytest.mark.freecad
-def test_placements_unchanged_and_groups(tmp_path):
-    freecadcmd = require_freecadcmd()
-    script = tmp_path / "probe.py"
-    script.write_text(PLACEMENTS.format(repo=str(REPO), model=str(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd")))
-    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300)
-    data = freecad_result(done)
+def test_placements_unchanged_and_groups():
+    require_freecadcmd()
+    data = freecad_result(PLACEMENTS_JOB.result()[1])
     assert data["same"] is True
     assert data["ids"] == ["body_001", "cap_001", "head_001", "refill"]
 
@@ -221,14 +245,15 @@ print("APLAN-RESULT " + json.dumps({{"components": out, "warnings": result.warni
 """
 
 
+# The script is document_types_probe.py: types.py would shadow the standard module.
+DOCUMENT_TYPES_JOB = freecadcmd_job("document_types", lambda tmp: DOCUMENT_TYPES.format(repo=str(REPO)))
+
+
 @pytest.mark.freecad
-def test_document_object_types(tmp_path):
+def test_document_object_types():
     """PartDesign bodies, booleans, App::Part containers and links to other documents, built in FreeCAD."""
-    freecadcmd = require_freecadcmd()
-    script = tmp_path / "document_types_probe.py"  # not types.py: it would shadow the standard module
-    script.write_text(DOCUMENT_TYPES.format(repo=str(REPO)))
-    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300)
-    data = freecad_result(done)
+    require_freecadcmd()
+    data = freecad_result(DOCUMENT_TYPES_JOB.result()[1])
     assert data["components"] == {
         "Body": [1000.0, [0.0, 0.0, 0.0]],      # the body, not its feature
         "Cut": [875.0, [20.0, 0.0, 0.0]],       # the boolean, not its operands
@@ -243,13 +268,10 @@ def test_document_object_types(tmp_path):
 
 
 @pytest.mark.freecad
-def test_occt_engine_through_the_command_line(pen_bundles, tmp_path):
+def test_occt_engine_through_the_command_line(pen_bundles):
     """aplan analyze --engine occt: the exact engine, run in FreeCADCmd on the bundle's B-reps."""
-    import shutil
-
-    bundle = tmp_path / "b"
-    shutil.copytree(pen_bundles["simplified", "FCStd"], bundle)
-    done = aplan("analyze", str(bundle), "--engine", "occt")
+    bundle, done = OCCT_JOB.result()
+    succeeded(done)
     assert "(occt engine" in done.stdout
     product = load_product(bundle / "product.json")
     assert product.geometry["analysis"]["engine"] == "occt"
@@ -262,8 +284,6 @@ def test_occt_engine_through_the_command_line(pen_bundles, tmp_path):
 def test_occt_pair_budget_through_the_command_line(pen_bundles, tmp_path):
     """--pair-budget 0: every pair OCCT would measure is reported undecided (counted as touching), with
     progress on standard error; the pairs told apart by their boxes are still decided."""
-    import shutil
-
     bundle = tmp_path / "b"
     shutil.copytree(pen_bundles["simplified", "FCStd"], bundle)
     done = aplan("analyze", str(bundle), "--engine", "occt", "--pair-budget", "0", "--json")
@@ -329,3 +349,8 @@ def test_step_import_restores_the_link_group_preference(tmp_path):
     assert data.pop("during") == [False] * 6  # every import ran without link groups
     assert data == {"True pen": True, "True corrupt": True, "False pen": False, "False corrupt": False,
                     "None pen": None, "None corrupt": None}
+
+
+#: The exports and FreeCAD runs the tests read, done in the background (tests/background.py), in the order the
+#: tests need them.
+BACKGROUND = (*PEN_JOBS.values(), PLACEMENTS_JOB, *JOBS.values(), DOCUMENT_TYPES_JOB, OCCT_JOB)

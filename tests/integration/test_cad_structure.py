@@ -4,14 +4,15 @@ planned one workstation at a time; the truck's proposed workstations."""
 from __future__ import annotations
 
 import json
-import subprocess
+import shutil
 from dataclasses import replace
 
 import pytest
+from background import Job, folder, run
 from conftest import REPO, require_freecadcmd
-from real_models import real_bundle
+from real_models import JOBS, real_bundle
 
-from integration.freecad_tools import aplan, freecad_result
+from integration.freecad_tools import aplan, aplan_process, freecad_result, succeeded
 from planner.api import resolve_product
 from planner.assembly.hierarchy import level_statistics, propose_subassemblies
 from planner.product import Obstruction
@@ -42,23 +43,36 @@ print("APLAN-RESULT " + json.dumps(document_subassemblies(doc, result.components
 """
 
 
+def _structured_export() -> tuple:
+    """The document of STRUCTURED built in FreeCADCmd, then `aplan export-freecad --split-solids`: (folder,
+    the script's run, the export's run or None); the bundle in folder/b."""
+    tmp = folder("structured")
+    script = tmp / "structured.py"
+    script.write_text(STRUCTURED.format(repo=str(REPO), path=str(tmp / "asm.FCStd")))
+    built = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(script)])
+    exported = aplan_process("export-freecad", str(tmp / "asm.FCStd"), "-o", str(tmp / "b"), "--split-solids") \
+        if "APLAN-RESULT" in built.stdout else None
+    return tmp, built, exported
+
+
+#: The exports the tests read, done in the background (tests/background.py).
+BACKGROUND = (Job("a document with App::Part containers, built and exported", _structured_export), *JOBS.values())
+
+
 @pytest.mark.freecad
-def test_app_part_containers_become_subassemblies(tmp_path):
-    freecadcmd = require_freecadcmd()
-    model = tmp_path / "asm.FCStd"
-    script = tmp_path / "structured.py"
-    script.write_text(STRUCTURED.format(repo=str(REPO), path=str(model)))
-    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300, check=False)
+def test_app_part_containers_become_subassemblies():
+    require_freecadcmd()
+    tmp, done, exported = BACKGROUND[0].result()
     assert freecad_result(done) == [
         {"id": "Wheel", "parts": ["A", "B"], "label": "Wheel", "source": "designer"},
         {"id": "Frame", "parts": ["Wheel", "C"], "label": "Frame", "source": "designer"},
         {"id": "Pair", "parts": ["Pair_001", "Pair_002"], "label": "Pair", "source": "designer"}]
     # Exported and planned: Wheel (a chain of 2), Frame (Wheel - C), Pair (a chain of 2), top (Frame - D - E -
     # Pair, a chain of 4).
-    aplan("export-freecad", str(model), "-o", str(tmp_path / "b"), "--split-solids")
-    product = json.loads((tmp_path / "b" / "product.json").read_text())
+    succeeded(exported)
+    product = json.loads((tmp / "b" / "product.json").read_text())
     assert [g["id"] for g in product["subassemblies"]] == ["Wheel", "Frame", "Pair"]
-    data = json.loads(aplan("stats", str(tmp_path / "b"), "--json").stdout)
+    data = json.loads(aplan("stats", str(tmp / "b"), "--json").stdout)
     assert [(level["level"], level["members"]) for level in data["levels"]] == [
         ("Wheel", ["A", "B"]), ("Frame", ["Wheel", "C"]), ("Pair", ["Pair_001", "Pair_002"]),
         ("top", ["D", "E", "Frame", "Pair"])]
@@ -66,9 +80,9 @@ def test_app_part_containers_become_subassemblies(tmp_path):
         (3, 1, 1), (3, 1, 1), (3, 1, 1), (10, 10, 6)]  # chains of 2, 2, 2 and 4: n(n+1)/2, C(n+1, 3), (n-1)!
     assert data["flat"]["sequences"] == 720  # a chain of 7 planned flat: 6!
     # --subassemblies none plans it flat; --level picks one workstation.
-    flat = json.loads(aplan("stats", str(tmp_path / "b"), "--subassemblies", "none", "--json").stdout)
+    flat = json.loads(aplan("stats", str(tmp / "b"), "--subassemblies", "none", "--json").stdout)
     assert flat["sequences"] == 720 and "levels" not in flat
-    top = json.loads(aplan("stats", str(tmp_path / "b"), "--level", "top", "--json").stdout)
+    top = json.loads(aplan("stats", str(tmp / "b"), "--level", "top", "--json").stdout)
     assert top["parts"] == 4 and top["sequences"] == 6
 
 

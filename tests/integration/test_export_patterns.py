@@ -2,22 +2,40 @@
 error naming it, and nothing is written."""
 from __future__ import annotations
 
+import functools
 import json
 
 import pytest
+from background import Job, folder
 from conftest import PEN_MODELS, SHARED, require_freecadcmd, require_shared
 
-from integration.freecad_tools import aplan
+from integration.freecad_tools import aplan, aplan_process, succeeded
 
 TRUCK = SHARED / "models" / "toy_truck" / "asm_cement_mixer_truck.FCStd"
 
 
+PATTERNS = {"chosen": ("--exclude", "wood_screw*", "--group", "front_tires=tire_00[12]"),
+            "no exclude": ("--exclude", "woodscrew*"), "no group": ("--group", "g=tire_9*")}
+
+
+def _export(options: tuple[str, ...]) -> tuple:
+    """`aplan export-freecad` of the truck (no engine) with the pattern options: (bundle, the run)."""
+    bundle = folder("patterns") / "truck"
+    return bundle, aplan_process("export-freecad", str(TRUCK), "-o", str(bundle), "--engine", "none", *options)
+
+
+EXPORTS = {name: Job(f"the truck exported with {name!r} patterns", functools.partial(_export, options))
+           for name, options in PATTERNS.items()}
+#: The exports the tests read, done in the background (tests/background.py).
+BACKGROUND = tuple(EXPORTS.values())
+
+
 @pytest.mark.freecad
-def test_patterns_choose_the_truck_components(tmp_path):
+def test_patterns_choose_the_truck_components():
     require_freecadcmd()
-    bundle = tmp_path / "truck"
-    aplan("export-freecad", str(require_shared(TRUCK)), "-o", str(bundle), "--engine", "none",
-          "--exclude", "wood_screw*", "--group", "front_tires=tire_00[12]")
+    require_shared(TRUCK)
+    bundle, done = EXPORTS["chosen"].result()
+    succeeded(done)
     ids = [p["id"] for p in json.loads((bundle / "product.json").read_text())["parts"]]
     # 61 solids - 39 screws - 2 tires + 1 group
     assert len(ids) == 21 and not any(i.startswith("wood_screw") for i in ids)
@@ -25,14 +43,13 @@ def test_patterns_choose_the_truck_components(tmp_path):
 
 
 @pytest.mark.freecad
-@pytest.mark.parametrize("option, pattern, message", [
-    ("--exclude", "woodscrew*", "exclude 'woodscrew*' matches no object"),
-    ("--group", "g=tire_9*", "group 'g': 'tire_9*' matches no object")])
-def test_a_pattern_that_matches_nothing(tmp_path, option, pattern, message):
+@pytest.mark.parametrize("export, message", [
+    ("no exclude", "exclude 'woodscrew*' matches no object"),
+    ("no group", "group 'g': 'tire_9*' matches no object")])
+def test_a_pattern_that_matches_nothing(export, message):
     require_freecadcmd()
-    bundle = tmp_path / "truck"
-    done = aplan("export-freecad", str(require_shared(TRUCK)), "-o", str(bundle), "--engine", "none",
-                 option, pattern, check=False)
+    require_shared(TRUCK)
+    bundle, done = EXPORTS[export].result()
     assert done.returncode == 1 and message in done.stderr and "Traceback" not in done.stderr
     assert not bundle.exists()
 

@@ -5,11 +5,13 @@ brute force, and --contact auto."""
 from __future__ import annotations
 
 import itertools
+import shutil
 
 import pytest
+from background import Job, folder, run
 from conftest import SHARED, require_freecadcmd, require_shared
 
-from integration.freecad_tools import aplan
+from integration.freecad_tools import aplan, aplan_process, succeeded
 from planner import api, load_product
 from planner.errors import ContactCeilingError, DisconnectedProductError
 from planner.geometry import Tolerances, analyze_product, apply_report
@@ -20,12 +22,21 @@ from planner.geometry.mesh_engine import _manifold
 PUMP = SHARED / "models" / "diaphragm_pump" / "asm_diaphragm_pump.FCStd"
 
 
+def _export_pump() -> tuple:
+    bundle = folder("pump") / "bundle"
+    return bundle, aplan_process("export-freecad", str(PUMP), "-o", str(bundle), "--exclude", "16_001", "--exclude",
+                                 "21_001")
+
+
+
+
 @pytest.fixture(scope="session")
-def pump_bundle(tmp_path_factory):
+def pump_bundle():
     """The pump without its two shells, exported once (default tolerances) for every test here."""
     require_freecadcmd()
-    bundle = tmp_path_factory.mktemp("pump") / "bundle"
-    aplan("export-freecad", str(require_shared(PUMP)), "-o", str(bundle), "--exclude", "16_001", "--exclude", "21_001")
+    require_shared(PUMP)
+    bundle, done = BACKGROUND[0].result()  # the module's jobs, listed below the two boxes' script
+    succeeded(done)
     return bundle
 
 
@@ -123,28 +134,40 @@ print("APLAN-RESULT {{}}")
 """
 
 
+def _two_boxes() -> tuple:
+    """TWO_BOXES built in FreeCADCmd, then exported with --contact auto (refused) and with the ceiling raised:
+    (folder, the script's run, the refused export, the folder's files after it, the second export)."""
+    tmp = folder("two-boxes")
+    script = tmp / "make.py"
+    script.write_text(TWO_BOXES.format(path=str(tmp / "gap.FCStd")))
+    built = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(script)], timeout=120)
+    model = str(tmp / "gap.FCStd")
+    refused = aplan_process("export-freecad", model, "-o", str(tmp / "b"), "--contact", "auto")
+    left = sorted(p.name for p in tmp.iterdir())
+    done = aplan_process("export-freecad", model, "-o", str(tmp / "b"), "--contact", "auto", "--contact-ceiling", "1")
+    return tmp, built, refused, left, done
+
+
+#: The exports the tests read, done in the background (tests/background.py).
+BACKGROUND = (Job("export the pump without its shells", _export_pump), Job("two boxes 0.5 apart", _two_boxes))
+
+
 @pytest.mark.freecad
-def test_export_freecad_contact_auto(tmp_path):
+def test_export_freecad_contact_auto():
     """Two 10 mm cubes 0.5 mm apart: auto needs 0.501, above the default ceiling (1 % of the 24.9 mm
     diagonal): refused, no bundle; with --contact-ceiling 1 the bundle records the choice."""
-    import subprocess
-
     from integration.freecad_tools import freecad_result
 
-    freecadcmd = require_freecadcmd()
-    script = tmp_path / "make.py"
-    script.write_text(TWO_BOXES.format(path=str(tmp_path / "gap.FCStd")))
-    freecad_result(subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=120,
-                                  check=False))
-    model = str(tmp_path / "gap.FCStd")
-    refused = aplan("export-freecad", model, "-o", str(tmp_path / "b"), "--contact", "auto", check=False)
+    require_freecadcmd()
+    tmp, built, refused, left, done = BACKGROUND[1].result()
+    freecad_result(built)
     assert refused.returncode == 1 and "Traceback" not in refused.stderr
     assert "tolerance of 0.501 to be connected, above the ceiling of 0.249" in refused.stderr
     assert "0.5 between Left and Right" in refused.stderr
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["gap.FCStd", "make.py"]  # nothing written
-    done = aplan("export-freecad", model, "-o", str(tmp_path / "b"), "--contact", "auto", "--contact-ceiling", "1")
+    assert left == ["gap.FCStd", "make.py"]  # nothing written
+    succeeded(done)
     assert "contact tolerance auto: 0.501 (ceiling 1), joining 1 gap(s): Left/Right 0.5" in done.stdout
-    product = load_product(bundle_product_path(tmp_path / "b"))
+    product = load_product(bundle_product_path(tmp / "b"))
     assert product.contacts == (("Left", "Right"),)
     assert product.geometry["analysis"]["tolerances"]["contact_auto"] == {
         "chosen": 0.501, "ceiling": 1.0, "default": 0.1, "gaps_joined": [["Left", "Right", 0.5]]}

@@ -7,7 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from real_models import real_bundles  # noqa: F401  (a fixture)
+from real_models import BACKGROUND, real_bundles  # noqa: F401  (the exports, done in the background; a fixture)
 
 from planner import load_product, resolve_product
 from planner.product import FastenerGroup, Part, Product, fastener_proposals, propose_fasteners

@@ -6,11 +6,19 @@ from __future__ import annotations
 import json
 import re
 import shutil
-import subprocess
 
 import pytest
-from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared, run_freecad_gui
-from integration.freecad_tools import GUI_HELPERS, freecad_result
+from background import Job, folder
+from conftest import (
+    PEN_MODELS,
+    REPO,
+    freecad_gui_result,
+    freecad_gui_run,
+    require_freecad_gui,
+    require_freecadcmd,
+    require_shared,
+)
+from integration.freecad_tools import GUI_HELPERS, freecad_result, freecadcmd_job
 
 from planner import api, product_to_dict
 
@@ -107,13 +115,10 @@ print("APLAN-RESULT " + json.dumps(out))
 
 
 @pytest.mark.freecad
-def test_base_part_in_the_analysis_headless(tmp_path):
-    freecadcmd = require_freecadcmd()
-    shutil.copy(require_shared(PEN), tmp_path / "pen.FCStd")
-    script = tmp_path / "base_part_probe.py"
-    script.write_text(HEADLESS.format(repo=str(REPO), tmp=str(tmp_path), diagrams=_pen_diagrams()))
-    data = freecad_result(subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=600,
-                                                 check=False))
+def test_base_part_in_the_analysis_headless():
+    require_freecadcmd()
+    require_shared(PEN)
+    data = freecad_result(BACKGROUND[0].result()[1])
     assert data["default"] == ["", None]
     assert "BasePart: 'lid' is not a component; use one of ink_001" in data["bad"] and data["bad_unchanged"] == ""
     assert data["undo_name"] == "APLAN: base part"
@@ -173,15 +178,30 @@ QtCore.QTimer.singleShot(1500, guarded(start))
 """
 
 
-@pytest.mark.freecad
-def test_base_part_field_in_the_task_panel(tmp_path):
-    copy = tmp_path / "pen.FCStd"
-    shutil.copy(require_shared(PEN), copy)
+def _panel_in_the_window() -> tuple:
+    """The GUI script's run on a copy of the pen: (folder, FreeCAD's run); the result in folder/result.json."""
+    tmp = folder("gui-base-part")
+    copy = tmp / "pen.FCStd"
+    shutil.copy(PEN, copy)
     ARTIFACTS.mkdir(exist_ok=True)
-    out = tmp_path / "result.json"
-    script = tmp_path / "gui_base_part.py"
-    script.write_text(GUI.format(gui_helpers=GUI_HELPERS, out=str(out), copy=str(copy), artifacts=str(ARTIFACTS), diagrams=_pen_diagrams()))
-    data = run_freecad_gui(tmp_path, script, out)
+    script = tmp / "gui_base_part.py"
+    script.write_text(GUI.format(gui_helpers=GUI_HELPERS, out=str(tmp / "result.json"), copy=str(copy),
+                                 artifacts=str(ARTIFACTS), diagrams=_pen_diagrams()))
+    return tmp, freecad_gui_run(tmp, script, display=150)
+
+
+#: The FreeCAD runs the tests read, done in the background (tests/background.py).
+BACKGROUND = (freecadcmd_job("base_part", lambda tmp: HEADLESS.format(repo=str(REPO), tmp=str(tmp),
+                                                                      diagrams=_pen_diagrams()), {"pen.FCStd": PEN}),
+              Job("the base part panel in the FreeCAD window", _panel_in_the_window))
+
+
+@pytest.mark.freecad
+def test_base_part_field_in_the_task_panel():
+    require_freecad_gui()
+    require_shared(PEN)
+    tmp, done = BACKGROUND[1].result()
+    data = freecad_gui_result(done, tmp / "result.json")
     assert data["choices"][:2] == ["", "auto"] and "body_001" in data["choices"]
     assert data["bad_accepted"] is False and data["bad_stored"] == ""
     assert data["accepted"] is True and data["stored"] == "auto"

@@ -5,11 +5,10 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
 
 import pytest
 from conftest import REPO, require_freecadcmd
-from integration.freecad_tools import aplan, freecad_result
+from integration.freecad_tools import aplan, freecad_result, freecadcmd_job
 
 from planner import load_product
 
@@ -120,12 +119,15 @@ print("APLAN-RESULT " + json.dumps(out))
 """
 
 
+#: The FreeCADCmd run the test reads, done in the background (tests/background.py).
+BACKGROUND = (freecadcmd_job("designer", lambda tmp: SCRIPT.format(repo=str(REPO), tmp=str(tmp))),)
+
+
 @pytest.mark.freecad
 def test_directions_and_marks_in_the_workflow(tmp_path):
-    freecadcmd = require_freecadcmd()
-    script = tmp_path / "designer_probe.py"
-    script.write_text(SCRIPT.format(repo=str(REPO), tmp=str(tmp_path)))
-    data = freecad_result(subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=600))
+    require_freecadcmd()
+    tmp, done = BACKGROUND[0].result()
+    data = freecad_result(done)
     slot = [0.0, -0.5, math.sqrt(3) / 2]
     assert data["zero"][0] == "GeometryError" and "zero vector" in data["zero"][1] and data["zero"][2]
     assert "finite" in data["nan"][1] and data["nan"][2]
@@ -157,11 +159,11 @@ def test_directions_and_marks_in_the_workflow(tmp_path):
     assert data["unmark"] == [[], 0, f"APLAN: unmark {z[1]} blocked by {z[2]} along +Z"]
     assert "no such designer mark" in data["unmark_again"][1] and data["unmark_again"][2]
     assert data["reopened"] is True
-    assert load_product(tmp_path / "second" / "product.json").geometry["designer"]["not_blocking"] == data["marks"]
+    assert load_product(tmp / "second" / "product.json").geometry["designer"]["not_blocking"] == data["marks"]
     # The saved document through aplan export-freecad: its analysis' direction and mark go into the product
     # (geometry.designer), the detection (candidate directions off) tests the direction and applies the mark.
     bundle = tmp_path / "bundle"
-    done = aplan("export-freecad", str(tmp_path / "wedge.FCStd"), "-o", str(bundle), "--directions", "0",
+    done = aplan("export-freecad", str(tmp / "wedge.FCStd"), "-o", str(bundle), "--directions", "0",
                  "--resolution", "512", "--direction", "0,0,1")
     assert "direction +Z merged with the axis +Z" in done.stdout
     exported = load_product(bundle / "product.json")

@@ -10,9 +10,10 @@ import json
 import shutil
 
 import pytest
-from conftest import REPO, SHARED, require_shared, run_freecad_gui
+from background import Job, folder
+from conftest import REPO, SHARED, freecad_gui_result, freecad_gui_run, require_freecad_gui, require_shared
 from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, aplan
-from real_models import real_bundles  # noqa: F401  (fixture: the truck exported once per session)
+from real_models import JOBS, real_bundles  # noqa: F401  (fixture: the truck exported once per session)
 
 ARTIFACTS = REPO / "tests" / "artifacts"
 TRUCK = SHARED / "models" / "toy_truck" / "asm_cement_mixer_truck.FCStd"
@@ -191,16 +192,30 @@ QtCore.QTimer.singleShot(1500, guarded(start))
 """
 
 
-@pytest.mark.freecad
-def test_truck_structure_in_the_workbench(tmp_path, real_bundles):  # noqa: F811
-    copy = tmp_path / "truck.FCStd"
-    shutil.copy(require_shared(TRUCK), copy)
+def _truck_in_the_window() -> tuple:
+    """The GUI script's run on a copy of the truck: (folder, FreeCAD's run); the workbench's bundle is in
+    folder/bundle, the script's result in folder/result.json."""
+    tmp = folder("gui-truck")
+    copy = tmp / "truck.FCStd"
+    shutil.copy(TRUCK, copy)
     ARTIFACTS.mkdir(exist_ok=True)
-    out, bundle = tmp_path / "result.json", tmp_path / "bundle"
-    script = tmp_path / "gui_truck.py"
-    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, layout_check=LAYOUT_CHECK, out=str(out), copy=str(copy),
-                                        bundle=str(bundle), artifacts=str(ARTIFACTS)))
-    data = run_freecad_gui(tmp_path, script, out)
+    script = tmp / "gui_truck.py"
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, layout_check=LAYOUT_CHECK, out=str(tmp / "result.json"), copy=str(copy),
+                                        bundle=str(tmp / "bundle"), artifacts=str(ARTIFACTS)))
+    return tmp, freecad_gui_run(tmp, script, display=150)
+
+
+#: The truck's export (for `aplan fasteners`) and the window's run, done in the background (tests/background.py).
+BACKGROUND = (*JOBS.values(), Job("the truck in the FreeCAD window", _truck_in_the_window))
+
+
+@pytest.mark.freecad
+def test_truck_structure_in_the_workbench(real_bundles):  # noqa: F811
+    require_freecad_gui()
+    require_shared(TRUCK)
+    tmp, done = BACKGROUND[-1].result()
+    data = freecad_gui_result(done, tmp / "result.json")
+    bundle = tmp / "bundle"
     # Detection stayed in the background: the command returned at once (the quick component check and a copy
     # of the document), the event loop kept running, the dialog showed the parts being tessellated.
     assert data["detect_returned"] < 10, data["detect_returned"]

@@ -1,13 +1,15 @@
 """Designer intent stored in the document (freecad_aplan.intent), in real FreeCAD, and used by batch export."""
 from __future__ import annotations
 
+import functools
 import json
 import shutil
 import subprocess
 
 import pytest
+from background import Job, folder, run
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
-from integration.freecad_tools import aplan, freecad_result
+from integration.freecad_tools import aplan, aplan_process, freecad_result, freecadcmd_job, succeeded
 
 from planner import load_product
 
@@ -77,15 +79,16 @@ print("APLAN-RESULT " + json.dumps(out))
 """
 
 
+ROUND_TRIP_JOB = freecadcmd_job("round_trip", lambda tmp: ROUND_TRIP.format(
+    repo=str(REPO), copy=str(tmp / "pen.FCStd"), newer=str(tmp / "newer.FCStd"), tag=TAG, constraint=CONSTRAINT),
+    {"pen.FCStd": PEN})
+
+
 @pytest.mark.freecad
-def test_intent_round_trip_undo_and_newer_format(tmp_path):
-    freecadcmd = require_freecadcmd()
-    copy = tmp_path / "pen.FCStd"
-    shutil.copy(require_shared(PEN), copy)
-    script = tmp_path / "round_trip.py"
-    script.write_text(ROUND_TRIP.format(repo=str(REPO), copy=str(copy), newer=str(tmp_path / "newer.FCStd"),
-                                        tag=TAG, constraint=CONSTRAINT))
-    data = freecad_result(subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300))
+def test_intent_round_trip_undo_and_newer_format():
+    require_freecadcmd()
+    require_shared(PEN)
+    data = freecad_result(ROUND_TRIP_JOB.result()[1])
     assert "already holds the APLAN analysis" in data["second"]
     assert data["undo_names"][:2] == ["APLAN: constraint", "APLAN: tag"]
     assert data["after_undo"] == [[], "mesh"]
@@ -126,29 +129,59 @@ def _store_intent(tmp_path, name: str, **changes) -> str:
     return str(path)
 
 
+#: Intents stored in the pen and exported, by name.
+INTENTS = {"tagged": {"tools": ["screwdriver"], "operations": [TAG], "technical_constraints": [CONSTRAINT]},
+           "grouped": {"groups": {"refill": ["b_ink_001_", "b_cartridge_001_"]}, "excluded": ["b_button_001_"],
+                       "engine": "occt", "contact": 0.05}}
+
+
+def _store_and_export(name: str) -> tuple:
+    """The pen with the intent ``INTENTS[name]`` stored (FreeCADCmd), then exported by `aplan export-freecad`:
+    (folder, the store's run, the export's run or None); the bundle in folder/b."""
+    tmp = folder(name)
+    path = tmp / f"{name}.FCStd"
+    shutil.copy(PEN, path)
+    script = tmp / f"store_{name}.py"
+    script.write_text(STORE.format(repo=str(REPO), path=str(path), changes=INTENTS[name]))
+    stored = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(script)])
+    exported = aplan_process("export-freecad", str(path), "-o", str(tmp / "b")) if "APLAN-RESULT" in stored.stdout \
+        else None
+    return tmp, stored, exported
+
+
+STORED = {name: Job(f"the pen's {name} intent stored and exported", functools.partial(_store_and_export, name))
+          for name in INTENTS}
+#: The FreeCAD runs the tests read, done in the background (tests/background.py).
+BACKGROUND = (ROUND_TRIP_JOB, *STORED.values())
+
+
 @pytest.mark.freecad
-def test_export_uses_the_stored_intent(tmp_path):
+def test_export_uses_the_stored_intent():
     """Tag and constrain in the document, save; `aplan export-freecad` carries them into product.json, and
     `aplan stats` gives the pen's figures with the technical constraint (README: 39 intentions) and one
     robot-capable operation fewer (the tagged one)."""
-    model = _store_intent(tmp_path, "tagged", tools=["screwdriver"], operations=[TAG],
-                          technical_constraints=[CONSTRAINT])
-    aplan("export-freecad", model, "-o", str(tmp_path / "b"))
-    data = json.loads((tmp_path / "b" / "product.json").read_text())
+    require_freecadcmd()
+    require_shared(PEN)
+    tmp, stored, exported = STORED["tagged"].result()
+    freecad_result(stored)
+    succeeded(exported)
+    data = json.loads((tmp / "b" / "product.json").read_text())
     assert data["technical_constraints"] == [CONSTRAINT]
     assert data["tools"] == [{"id": "screwdriver"}]
     assert data["operations"] == [TAG]
-    stats = json.loads(aplan("stats", str(tmp_path / "b"), "--json").stdout)
+    stats = json.loads(aplan("stats", str(tmp / "b"), "--json").stdout)
     assert (stats["subassemblies"], stats["states"], stats["intentions"], stats["sequences"]) == (17, 14, 39, 12)
     assert stats["actions"] == 18 - 1
 
 
 @pytest.mark.freecad
 def test_export_uses_stored_components_engine_and_rejects_bad_intent(tmp_path):
-    model = _store_intent(tmp_path, "grouped", groups={"refill": ["b_ink_001_", "b_cartridge_001_"]},
-                          excluded=["b_button_001_"], engine="occt", contact=0.05)
-    aplan("export-freecad", model, "-o", str(tmp_path / "b"))
-    product = load_product(tmp_path / "b" / "product.json")
+    require_freecadcmd()
+    require_shared(PEN)
+    grouped, stored, exported = STORED["grouped"].result()
+    freecad_result(stored)
+    succeeded(exported)
+    product = load_product(grouped / "b" / "product.json")
     assert sorted(product.part_ids) == ["body_001", "cap_001", "head_001", "refill"]
     assert product.geometry["analysis"]["engine"] == "occt"
     assert product.geometry["analysis"]["tolerances"]["contact"] == 0.05

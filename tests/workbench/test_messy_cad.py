@@ -14,11 +14,12 @@ One FreeCADCmd process builds the documents and runs everything (about 40 s):
 """
 from __future__ import annotations
 
+import shutil
 import subprocess
 
 import pytest
+from background import Job, folder, run
 from conftest import REPO, SHARED, require_freecadcmd, require_shared
-
 from integration.freecad_tools import freecad_result
 
 PUMP = SHARED / "models" / "diaphragm_pump" / "asm_diaphragm_pump.FCStd"
@@ -101,15 +102,22 @@ print("APLAN-RESULT " + json.dumps(out), flush=True)
 """
 
 
-@pytest.fixture(scope="module")
-def messy(tmp_path_factory):
-    freecadcmd = require_freecadcmd()
-    require_shared(PUMP)
-    tmp = tmp_path_factory.mktemp("messy")
+def _run_script() -> subprocess.CompletedProcess:
+    tmp = folder("messy")
     script = tmp / "messy.py"
     script.write_text(f"REPO = {str(REPO)!r}\nTMP = {str(tmp)!r}\nPUMP = {str(PUMP)!r}\n" + SCRIPT)
-    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=600)
-    return freecad_result(done)
+    return run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(script)])
+
+
+#: The FreeCADCmd run the fixture reads, done in the background (tests/background.py).
+BACKGROUND = (Job("messy CAD in FreeCAD", _run_script),)
+
+
+@pytest.fixture(scope="module")
+def messy():
+    require_freecadcmd()
+    require_shared(PUMP)
+    return freecad_result(BACKGROUND[0].result())
 
 
 @pytest.mark.freecad

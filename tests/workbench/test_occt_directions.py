@@ -4,16 +4,14 @@ test_designer_directions.py). The pegs cannot leave along any axis, leave freely
 and are blocked along the slots mirrored; the mesh engine's diagrams along both directions are the same."""
 from __future__ import annotations
 
-import json
+import functools
 import math
-import re
-import subprocess
 
 import numpy as np
 import pytest
+from background import Job, folder
 from conftest import REPO, require_freecadcmd
-
-from integration.freecad_tools import aplan
+from integration.freecad_tools import aplan_process, freecad_result, freecadcmd_job, succeeded
 
 from planner import load_product
 from planner.geometry import PartMesh, Tolerances, analyze_meshes
@@ -50,17 +48,33 @@ print("APLAN-RESULT " + json.dumps(analyze_shapes(parts, directions=DIRECTIONS))
 """
 
 
+PROBE = freecadcmd_job("occt_directions", lambda tmp: f"REPO = {str(REPO)!r}\nDIRECTIONS = {[SLOT, MIRROR]!r}\n"
+                                                      f"MODEL = {str(tmp / 'pegs.FCStd')!r}\n" + SCRIPT)
+OPTIONS = {"designer": ("--direction", ",".join(str(c) for c in SLOT), "--directions", "0"), "candidates": ()}
+
+
+def _analyze(options: tuple[str, ...]) -> tuple:
+    """`aplan export-freecad --engine none` of the probe's document, then `aplan analyze --engine occt OPTIONS`:
+    (bundle, the export's run, the analysis' run or None)."""
+    tmp, _ = PROBE.result()
+    bundle = folder("pegs") / "pegs"
+    exported = aplan_process("export-freecad", str(tmp / "pegs.FCStd"), "-o", str(bundle), "--engine", "none")
+    analyzed = aplan_process("analyze", str(bundle), "--engine", "occt", *options) if exported.returncode == 0 \
+        else None
+    return bundle, exported, analyzed
+
+
+ANALYSES = {name: Job(f"aplan analyze --engine occt of the pegs ({name})", functools.partial(_analyze, options))
+            for name, options in OPTIONS.items()}
+#: The FreeCAD runs the tests read, done in the background (tests/background.py).
+BACKGROUND = (PROBE, *ANALYSES.values())
+
+
 @pytest.fixture(scope="module")
-def occt(tmp_path_factory) -> dict:
-    freecadcmd = require_freecadcmd()
-    script = tmp_path_factory.mktemp("occt_dirs") / "occt_directions_probe.py"
-    script.write_text(f"REPO = {str(REPO)!r}\nDIRECTIONS = {[SLOT, MIRROR]!r}\n"
-                      f"MODEL = {str(script.parent / 'pegs.FCStd')!r}\n" + SCRIPT)
-    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=600,
-                          stdin=subprocess.DEVNULL)
-    found = re.search(r"APLAN-RESULT (.*)", done.stdout)
-    assert found, f"no result from FreeCAD:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
-    return {**json.loads(found.group(1)), "model": str(script.parent / "pegs.FCStd")}
+def occt() -> dict:
+    require_freecadcmd()
+    tmp, done = PROBE.result()
+    return {**freecad_result(done), "model": str(tmp / "pegs.FCStd")}
 
 
 @pytest.fixture(scope="module")
@@ -124,14 +138,13 @@ def test_planner_reads_the_directions_without_a_warning(occt):
 
 
 @pytest.mark.freecad
-@pytest.mark.parametrize("options", [("--direction", ",".join(str(c) for c in SLOT), "--directions", "0"), ()],
-                         ids=["designer", "candidates"])
-def test_analyze_with_the_occt_engine_tests_the_slots(occt, tmp_path, options):
+@pytest.mark.parametrize("options", list(OPTIONS))
+def test_analyze_with_the_occt_engine_tests_the_slots(occt, options):
     """aplan analyze --engine occt: the designer's direction, or the candidate directions the mesh engine
     finds on the bundle's meshes (the slots' direction among them), are swept exactly."""
-    bundle = tmp_path / "pegs"
-    aplan("export-freecad", occt["model"], "-o", str(bundle), "--engine", "none")
-    aplan("analyze", str(bundle), "--engine", "occt", *options)
+    bundle, exported, analyzed = ANALYSES[options].result()
+    succeeded(exported)
+    succeeded(analyzed)
     product = load_product(bundle / "product.json")
     along = {o.direction.name: o for o in product.obstructions if o.direction.name not in AXIS_DIRECTIONS}
     assert along[Direction.from_vector(SLOT).name].blocks == ()

@@ -7,9 +7,11 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 import subprocess
 
 import pytest
+from background import Job, folder, run
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
 
 VARIANTS = [(v, ext) for v in ("simplified", "complex") for ext in ("FCStd", "stp")]
@@ -75,16 +77,24 @@ def ground_truth(variant: str, axis: str) -> set[tuple[str, str]]:
     return {(link["source"], link["target"]) for link in json.loads(path.read_text())["links"]}
 
 
-@pytest.fixture(scope="module")
-def occt(tmp_path_factory):
-    freecadcmd = require_freecadcmd()
-    tmp = tmp_path_factory.mktemp("occt")
-    models = {f"{v}_{ext}": str(require_shared(PEN_MODELS / v / f"asm_bourjault_ballpoint.{ext}"))
-              for v, ext in VARIANTS}
+def _run_probe() -> subprocess.CompletedProcess:
+    tmp = folder("occt")
+    models = {f"{v}_{ext}": str(PEN_MODELS / v / f"asm_bourjault_ballpoint.{ext}") for v, ext in VARIANTS}
     script = tmp / "occt_probe.py"  # not a standard module's name: FreeCADCmd imports the script by its name
     script.write_text(f"REPO = {str(REPO)!r}\nTMP = {str(tmp)!r}\nMODELS = {models!r}\n" + SCRIPT)
-    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=600,
-                          stdin=subprocess.DEVNULL)
+    return run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(script)])
+
+
+#: The FreeCADCmd run the fixture reads, done in the background (tests/background.py).
+BACKGROUND = (Job("the OCCT engine on shapes and the pens", _run_probe),)
+
+
+@pytest.fixture(scope="module")
+def occt():
+    require_freecadcmd()
+    for v, ext in VARIANTS:
+        require_shared(PEN_MODELS / v / f"asm_bourjault_ballpoint.{ext}")
+    done = BACKGROUND[0].result()
     found = re.search(r"APLAN-RESULT (.*)", done.stdout)
     assert found, f"no result from FreeCAD:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
     return json.loads(found.group(1))

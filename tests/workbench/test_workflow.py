@@ -4,15 +4,15 @@ simulation with its belief plot."""
 from __future__ import annotations
 
 import json
-import shutil
-import subprocess
 
 import pytest
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
-from integration.freecad_tools import LIAISONS, aplan, freecad_result
+from integration.freecad_tools import LIAISONS, aplan, freecad_result, freecadcmd_job
 
 from planner import load_product, make_plan, plan_statistics
 from planner.api import load_model
+
+PEN = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
 
 SCRIPT = """
 import json, os, subprocess, sys
@@ -74,19 +74,18 @@ print("APLAN-RESULT " + json.dumps(out))
 
 
 @pytest.mark.freecad
-def test_workbench_workflow_without_gui(tmp_path):
-    freecadcmd = require_freecadcmd()
-    shutil.copy(require_shared(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"), tmp_path / "pen.FCStd")
-    script = tmp_path / "workflow_probe.py"
-    script.write_text(SCRIPT.format(repo=str(REPO), tmp=str(tmp_path)))
-    data = freecad_result(subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=600))
+def test_workbench_workflow_without_gui():
+    require_freecadcmd()
+    require_shared(PEN)
+    tmp, done = BACKGROUND[0].result()
+    data = freecad_result(done)
     assert "no APLAN analysis; create one first" in data["no_analysis"]
     assert "run APLAN > Detect contacts and obstructions first" in data["not_detected"]
     assert data["objects"]["ink_001"] == ["b_ink_001_"]
     assert data["mesh_job"][0].endswith("python") and data["mesh_result"]["contacts"] == 5
     assert data["solve_job"][0].endswith("freecadcmd")
     # The plan from the stored diagrams equals the plan of the bundle it writes, read by the planner.
-    bundle = load_product(tmp_path / "bundle" / "product.json")
+    bundle = load_product(tmp / "bundle" / "product.json")
     assert {frozenset(c) for c in bundle.contacts} == LIAISONS
     assert bundle.geometry["analysis"]["diagrams"] == "stored in the document"
     assert data["stats"] == plan_statistics(make_plan(bundle)).as_dict()
@@ -94,13 +93,13 @@ def test_workbench_workflow_without_gui(tmp_path):
     assert sorted(data["images"]) == ["andor", "intentions", "states"]
     # Decision model files: 69 intentions (states), 22 actions (README), both formats read back the same.
     assert (data["pomdpx"]["states"], data["pomdpx"]["actions"]) == (69, 22)
-    first, second = load_model(tmp_path / "pen.pomdpx"), load_model(tmp_path / "pen.pomdp")
+    first, second = load_model(tmp / "pen.pomdpx"), load_model(tmp / "pen.pomdp")
     assert (first.n_states, first.n_actions) == (second.n_states, second.n_actions) == (69, 22)
     assert data["solve"]["lower_bound"] <= data["solve"]["upper_bound"]
-    assert (tmp_path / "pen.policy").is_file()
+    assert (tmp / "pen.policy").is_file()
     simulate = data["simulate"]
     assert simulate["steps"] and all(p.endswith((".png", ".svg")) for p in simulate["plots"])
-    assert (tmp_path / "belief.png").stat().st_size > 1000
+    assert (tmp / "belief.png").stat().st_size > 1000
     assert data["bad_job"].startswith("APLAN-ERROR ") and "Traceback" not in data["bad_job"]
     if data["freecad_has_mesh"]:
         assert data["no_mesh"][0].endswith("freecadcmd")
@@ -156,6 +155,12 @@ BAD = {"unknown": ("contact", "ink_01", "body_001"), "self": ("contact", "ink_00
        "duplicate": ("contact", "cartridge_001", "ink_001"), "reverse": ("blocks -X", "body_001", "head_001")}
 
 
+#: The FreeCADCmd runs the tests read, done in the background (tests/background.py).
+BACKGROUND = (freecadcmd_job("workflow", lambda tmp: SCRIPT.format(repo=str(REPO), tmp=str(tmp)), {"pen.FCStd": PEN}),
+              freecadcmd_job("edit", lambda tmp: EDIT.format(repo=str(REPO), tmp=str(tmp), bad=BAD, added=ADDED,
+                                                             removed=REMOVED), {"pen.FCStd": PEN}))
+
+
 @pytest.mark.freecad
 def test_edited_diagrams_reach_batch_export(tmp_path):
     """Detect, add (validated, undone) and remove relations in the document; `aplan export-freecad` uses the
@@ -164,11 +169,10 @@ def test_edited_diagrams_reach_batch_export(tmp_path):
     from freecad_aplan.diagrams import edited_diagrams
     from planner.product import product_from_dict, product_to_dict
 
-    freecadcmd = require_freecadcmd()
-    shutil.copy(require_shared(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"), tmp_path / "pen.FCStd")
-    script = tmp_path / "edit_probe.py"
-    script.write_text(EDIT.format(repo=str(REPO), tmp=str(tmp_path), bad=BAD, added=ADDED, removed=REMOVED))
-    data = freecad_result(subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=600))
+    require_freecadcmd()
+    require_shared(PEN)
+    tmp, done = BACKGROUND[1].result()
+    data = freecad_result(done)
     detected = data["detected"]
     assert {frozenset(c) for c in detected["contacts"]} == LIAISONS
     bad = data["bad"]
@@ -184,7 +188,7 @@ def test_edited_diagrams_reach_batch_export(tmp_path):
     assert data["undo_name"] == "APLAN: add button_001 blocked by cap_001 along -Z"
     assert data["after_undo"] == detected
 
-    model = str(tmp_path / "pen.FCStd")
+    model = str(tmp / "pen.FCStd")  # edited and saved by the script
     done = aplan("export-freecad", model, "-o", str(tmp_path / "stored"))
     assert "(diagrams: stored in the document, edited)" in done.stdout
     stored = load_product(tmp_path / "stored" / "product.json")

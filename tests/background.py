@@ -1,0 +1,134 @@
+"""Slow FreeCAD work of the test session, done beside the tests instead of in front of them.
+
+A *job* is a function without arguments that runs one command (FreeCADCmd on a script, ``python -m planner
+export-freecad``, the FreeCAD window under Xvfb) through :func:`run` and returns what a fixture reads. A test
+module lists the jobs its fixtures read in a module attribute ``BACKGROUND``; tests/conftest.py runs those
+modules after the others, and starts their jobs when the session starts, one at a time in a thread of its
+own, in the order the modules will need them. FreeCAD then works in its own process on the machine's second
+core while the tests of the other modules run on the first (the suite itself runs on one core).
+
+Nothing is checked in the thread: a fixture calls :meth:`Job.result`, which waits for the job (or runs it at
+once, when it was not started or not begun yet), and makes the same checks as before on what it returns.
+``APLAN_TEST_BACKGROUND=0`` turns this off: every job runs when a fixture first asks for it, as before.
+"""
+from __future__ import annotations
+
+import atexit
+import concurrent.futures
+import os
+import shutil
+import signal
+import subprocess
+import tempfile
+import threading
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+__all__ = ["ENVIRONMENT", "WORKING_FOLDER", "Job", "enabled", "folder", "run", "start", "stop"]
+
+#: The environment and working folder of the session's start, for every command run here: a test may change
+#: its own for a while (a fault-injection variable, ``monkeypatch.chdir``) while a job starts.
+ENVIRONMENT = dict(os.environ)
+WORKING_FOLDER = os.getcwd()
+
+_executor: concurrent.futures.ThreadPoolExecutor | None = None
+_running: set[subprocess.Popen] = set()
+_lock = threading.Lock()
+
+
+def enabled() -> bool:
+    """False when ``APLAN_TEST_BACKGROUND=0``: jobs then run only when asked for, in the test's thread."""
+    return os.environ.get("APLAN_TEST_BACKGROUND", "1") != "0"
+
+
+class Job:
+    """A named piece of slow work (``work``: no arguments, returns the result), done once per session."""
+
+    def __init__(self, name: str, work: Callable[[], object]) -> None:
+        self.name, self.work = name, work
+        self._future: concurrent.futures.Future | None = None
+        self._lock = threading.Lock()
+
+    def __repr__(self) -> str:
+        return f"Job({self.name!r})"
+
+    def submit(self, executor: concurrent.futures.ThreadPoolExecutor) -> None:
+        with self._lock:
+            if self._future is None:
+                self._future = executor.submit(self.work)
+
+    def result(self) -> object:
+        """The job's result: waits for the background run, or does the work now when the job was not
+        started, or is still queued behind others (then it is taken off the queue). An exception of the
+        work is raised here, in the test."""
+        with self._lock:
+            mine = self._future is None or self._future.cancel()
+            if mine:  # this thread does the work; others asking meanwhile wait for it
+                self._future = concurrent.futures.Future()
+                self._future.set_running_or_notify_cancel()
+            future = self._future
+        if mine:
+            try:
+                future.set_result(self.work())
+            except Exception as exc:  # noqa: BLE001  (raised again by future.result(), in every waiting test)
+                future.set_exception(exc)
+        return future.result()
+
+
+def start(jobs: Iterable[Job]) -> None:
+    """Queue ``jobs`` (each once, in this order) on the session's single background thread."""
+    global _executor
+    if not enabled():
+        return
+    if _executor is None:
+        _executor = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="aplan-tests")
+    for job in jobs:
+        job.submit(_executor)
+
+
+def stop() -> None:
+    """End of the session: drop the queued jobs and end the command of the running one."""
+    global _executor
+    if _executor is not None:
+        _executor.shutdown(wait=False, cancel_futures=True)
+        _executor = None
+    with _lock:
+        for process in list(_running):
+            _kill(process)
+
+
+def _kill(process: subprocess.Popen) -> None:
+    """End ``process`` and what it started (xvfb-run starts Xvfb and FreeCAD): its whole process group."""
+    try:
+        os.killpg(process.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+
+
+def folder(name: str) -> Path:
+    """A new folder for a job's files (a job runs before pytest's ``tmp_path`` exists), removed at exit."""
+    path = Path(tempfile.mkdtemp(prefix=f"aplan-{name}-"))
+    atexit.register(shutil.rmtree, path, True)
+    return path
+
+
+def run(command: list[str], timeout: float = 600, **options) -> subprocess.CompletedProcess:
+    """``subprocess.run(command, capture_output=True, text=True, timeout=timeout, **options)``, with standard
+    input closed, the environment and working folder of the session's start (unless ``options`` give them),
+    in a process group of its own that :func:`stop` ends when the session ends first (and a
+    timeout ends, failing the test that reads the job)."""
+    options = {"env": ENVIRONMENT, "cwd": WORKING_FOLDER, **options}
+    with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
+                          text=True, start_new_session=True, **options) as process:
+        with _lock:
+            _running.add(process)
+        try:
+            stdout, stderr = process.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            _kill(process)
+            stdout, stderr = process.communicate()
+            raise AssertionError(f"{command[0]} ran longer than {timeout} s:\n{stdout[-3000:]}\n{stderr[-3000:]}")
+        finally:
+            with _lock:
+                _running.discard(process)
+    return subprocess.CompletedProcess(command, process.returncode, stdout, stderr)
