@@ -201,7 +201,8 @@ def _truck_in_the_window() -> tuple:
     ARTIFACTS.mkdir(exist_ok=True)
     script = tmp / "gui_truck.py"
     script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, layout_check=LAYOUT_CHECK,
-                                        out=str(tmp / "result.json"), copy=str(copy), bundle=str(tmp / "bundle"), artifacts=str(ARTIFACTS)))
+                                        out=str(tmp / "result.json"), copy=str(copy),
+                                        bundle=str(tmp / "bundle"), artifacts=str(ARTIFACTS)))
     return tmp, freecad_gui_run(tmp, script, display=150)
 
 
