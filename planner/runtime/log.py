@@ -34,10 +34,9 @@ from ..decision.belief import DiscreteUpdater
 from ..decision.factored_model import FactoredBelief, FactoredIntentionModel, factored_model
 from ..decision.factored_updater import FactoredUpdater
 from ..decision.intention_model import IntentionModel, intention_model
-from ..defaults import INPUT_FILE_LIMIT
 from ..errors import PlannerError
 from ..product import Product, product_from_dict
-from ..validation import InputError, json_loads
+from ..validation import INPUT_OPTION, InputError, InputLimits, json_loads
 
 __all__ = ["LOG_VERSION", "SessionError", "EventLog", "top_intentions", "belief_at", "updater_for", "Replay", "read_log", "replay"]
 
@@ -121,14 +120,15 @@ class Replay:
     events: list[dict]
 
 
-def read_log(path: str | os.PathLike) -> list[dict]:
+def read_log(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> list[dict]:
     """The events of the session log at ``path``, checked to be a log of this version; a last line cut
-    short (the one being written when the session died) is dropped. Raises :class:`SessionError`."""
+    short (the one being written when the session died) is dropped. ``limits``: the file's bytes and the
+    JSON nesting at most. Raises :class:`SessionError`."""
     path = Path(path)
     try:
-        if path.stat().st_size > INPUT_FILE_LIMIT:
+        if path.stat().st_size > limits.file_bytes:
             raise SessionError(f"{path}: {path.stat().st_size:,} bytes, more than the limit of "
-                               f"{INPUT_FILE_LIMIT:,} for a session log")
+                               f"{limits.file_bytes:,} for a session log ({INPUT_OPTION} raises it)")
         lines = path.read_text(encoding="utf-8").splitlines()
     except OSError as exc:
         raise SessionError(f"{path}: cannot read the log: {exc}") from None
@@ -139,7 +139,7 @@ def read_log(path: str | os.PathLike) -> list[dict]:
         if not line.strip():
             continue
         try:
-            event = json_loads(line, f"{path}: line {number}")
+            event = json_loads(line, f"{path}: line {number}", limits.json_depth)
         except json.JSONDecodeError as exc:
             if number == len(lines):  # the line being written when the session died
                 break
@@ -190,16 +190,16 @@ def _in_the_log(event) -> None:
     """A reset met again while replaying: the session logged it as a warning event already."""
 
 
-def replay(path: str | os.PathLike, tolerance: float = 1e-6) -> Replay:
+def replay(path: str | os.PathLike, tolerance: float = 1e-6, limits: InputLimits = InputLimits()) -> Replay:
     """Recompute the beliefs of the session logged at ``path`` (the product is stored in the log).
 
     Beliefs depend on the model's transitions and observations only, not on rewards or the policy. A logged
     belief whose top intentions differ from the recomputed ones by more than ``tolerance`` is a mismatch.
     Cost: one model build and one belief update per step. Raises :class:`SessionError` for a file that is
-    not a session log.
+    not a session log; ``limits``: :func:`read_log`'s.
     """
     path = Path(path)
-    events = read_log(path)
+    events = read_log(path, limits)
     product, model = _model_of(path, events[0])
     updater = updater_for(model, on_reset=_in_the_log)
     belief = updater.initialize()

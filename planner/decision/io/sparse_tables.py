@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...defaults import SPREAD_CELL_LIMIT
-from ...validation import InputLimitError
+from ...validation import CELLS_OPTION, InputLimitError
 
 __all__ = ["SparseTable", "split_rows"]
 
@@ -113,8 +113,8 @@ class SparseTable:
         if self.cell_limit is not None and self.spread_cells > self.cell_limit:
             raise InputLimitError(f"the entries so far spread over {self.spread_cells:,} cells of a table of shape "
                                   f"{' x '.join(map(str, self.shape))}, more than the limit of {self.cell_limit:,} "
-                                  "(about 150 bytes each while the table is built); list the non-zero entries "
-                                  "instead of '*', uniform or whole rows")
+                                  f"(about 150 bytes each while the table is built; {CELLS_OPTION} raises it); list "
+                                  "the non-zero entries instead of '*', uniform or whole rows")
 
     def _block(self, index, kind, axes, values) -> None:
         rest = int(np.prod([n for k, (i, n) in enumerate(zip(index, self.shape)) if i is None and k not in axes],
