@@ -21,6 +21,7 @@ being written; :func:`replay` ignores such a cut last line.
 """
 from __future__ import annotations
 
+import errno
 import json
 import os
 import time
@@ -35,6 +36,7 @@ from ..decision.factored_model import FactoredBelief, FactoredIntentionModel, fa
 from ..decision.factored_updater import FactoredUpdater
 from ..decision.intention_model import IntentionModel, intention_model
 from ..errors import PlannerError
+from ..files import with_faults
 from ..product import Product, product_from_dict
 from ..validation import INPUT_OPTION, InputError, InputLimits, json_loads
 
@@ -68,16 +70,22 @@ def belief_at(belief, index: int) -> float:
 class EventLog:
     """Session events as JSON lines. Each event is one line written with one ``write``, then flushed and
     fsynced. ``path`` None keeps the events in memory only (``events`` always holds them); ``on_event`` sees
-    every event as it is written. A log is never overwritten: an existing ``path`` is an error."""
+    every event as it is written. A log is never overwritten: an existing ``path`` is an error.
+
+    A write the system refuses (a full disk: ENOSPC, EIO, a quota) is a :class:`SessionError` naming the log;
+    the file is cut back to the last complete event, so ``aplan replay`` reads every event before it, and every
+    later write raises the same error (the session stops; its end cannot be logged)."""
 
     def __init__(self, path: str | os.PathLike | None = None, on_event: Callable[[dict], None] | None = None):
         self.path = Path(path) if path is not None else None
         self.events: list[dict] = []
         self.on_event = on_event
         self._handle = None
+        self._complete = 0  # bytes of the complete events written
+        self._failure: str | None = None  # why the log cannot be written any more
         if self.path is not None:
             try:
-                self._handle = open(self.path, "x", encoding="utf-8")
+                self._handle = with_faults(open(self.path, "xb"))
             except FileExistsError:
                 raise SessionError(f"{self.path}: the log exists already; choose another file name "
                                    "(a log is never overwritten)") from None
@@ -88,20 +96,46 @@ class EventLog:
         """Append the event ``event`` with ``fields`` (and the time); returns the record."""
         record = {"event": event, "time": round(time.time(), 3), **fields}
         self.events.append(record)
+        if self._failure is not None:
+            raise SessionError(self._failure)
         if self._handle is not None:
+            line = (json.dumps(record) + "\n").encode("utf-8")
             try:
-                self._handle.write(json.dumps(record) + "\n")
+                self._handle.write(line)
                 self._handle.flush()
                 os.fsync(self._handle.fileno())
             except OSError as exc:
-                raise SessionError(f"{self.path}: cannot write the log: {exc}") from None
+                raise SessionError(self._fail(exc)) from None
+            self._complete += len(line)
         if self.on_event is not None:
             self.on_event(record)
         return record
 
+    def _fail(self, exc: OSError) -> str:
+        """Cut the file back to its complete events, close it, and say why it failed (kept for later writes)."""
+        handle, self._handle = self._handle, None
+        try:
+            handle.truncate(self._complete)  # drop a partial line (a full disk leaves part of the write)
+        except OSError:
+            pass  # the file system refuses that too: replay drops a last line cut short anyway
+        try:
+            handle.close()
+        except OSError:
+            pass  # closing flushes what could not be written: the same refusal
+        fix = "free some space on that disk or log to another (--log FILE)" if exc.errno in (
+            errno.ENOSPC, errno.EDQUOT) else "check the disk, or log to another (--log FILE)"
+        kept = len(self.events) - 1  # the events before the one that failed
+        self._failure = (f"{self.path}: cannot write the session log ({exc.strerror or exc}); the session stopped. "
+                         f"The log keeps the {kept} event{'s' if kept != 1 else ''} before, which aplan replay "
+                         f"reads; {fix}")
+        return self._failure
+
     def close(self) -> None:
         if self._handle is not None:
-            self._handle.close()
+            try:
+                self._handle.close()
+            except OSError as exc:  # the last flush refused: nothing is buffered after a complete event
+                self._fail(exc)
             self._handle = None
 
 

@@ -124,3 +124,32 @@ def test_sweep_with_sparse_rows_equals_dense(pen, monkeypatch):
     sparse = sweep(m, beliefs, result.policy.alphas, q)
     assert np.array_equal(dense[2], sparse[2]) and np.array_equal(dense[1], sparse[1])
     assert np.allclose(dense[0], sparse[0])
+
+
+def test_sweep_over_beliefs_of_small_support_equals_dense(pen, monkeypatch):
+    """Reachable beliefs cover few states: on a large model the back-ups multiply over those states only
+    (no (S, Z K) projection); the same vectors as the dense product."""
+    import planner.decision.solvers.belief_set as belief_set
+
+    model = intention_pomdp(make_plan(pen, False))
+    m = Tables(model)
+    result = PointBasedSolver(max_iterations=20, time_limit=None).solve(model)
+    b0 = np.asarray(model.initial, dtype=float)
+    beliefs = np.vstack([b0, m.successors(b0)[3]])
+    beliefs = beliefs[4 * (beliefs != 0).sum(axis=1) < model.n_states]
+    assert len(beliefs) > 10
+    q = fast_informed_bound(m)
+    dense = sweep(m, beliefs, result.policy.alphas, q)
+    monkeypatch.setattr(belief_set, "SPARSE_STATES", 0)
+    calls = []
+    original = belief_set._projected
+
+    def projected(m, a, stepped, alphas, projections, table):
+        calls.append(4 * (stepped != 0).any(axis=0).sum() < m.S)
+        return original(m, a, stepped, alphas, projections, table)
+
+    monkeypatch.setattr(belief_set, "_projected", projected)
+    sparse = sweep(m, beliefs, result.policy.alphas, q)
+    assert any(calls)  # the restricted product was used
+    assert np.array_equal(dense[2], sparse[2]) and np.array_equal(dense[1], sparse[1])
+    assert np.allclose(dense[0], sparse[0])

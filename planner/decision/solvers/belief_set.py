@@ -112,6 +112,24 @@ def policy_successors(m: Tables, beliefs: np.ndarray, actions: np.ndarray, weigh
     return np.concatenate(out), np.concatenate(out_w)
 
 
+def _projected(m: Tables, a: int, stepped: np.ndarray, alphas: np.ndarray, projections: dict, table: int):
+    """``(b T_a) . (O_z,a * alpha_k)`` for the predicted beliefs ``stepped`` (n, S), every observation z and
+    vector k at once: (n, Z K). The projection (S, Z K) is built once per observation table (``projections``)
+    unless the beliefs cover under a quarter of the states on a large model: then over their states only, so a
+    large model (109,601 states, 18 observations, 123 vectors: a 1.9 GB projection, 25 s that no time limit
+    could stop) costs O(n s Z K) for s states covered."""
+    K = len(alphas)
+    if m.S > SPARSE_STATES:  # beliefs have small supports: multiply only their non-zero entries
+        cols = np.flatnonzero((stepped != 0).any(axis=0))
+        if 4 * cols.size < m.S and table not in projections:
+            part = (m.OZ[a][:, cols, None] * alphas[:, cols].T[None]).transpose(1, 0, 2).reshape(cols.size, m.Z * K)
+            return np.asarray(stepped[:, cols] @ part)
+        stepped = sp.csr_matrix(stepped)
+    if table not in projections:
+        projections[table] = (m.OZ[a][:, :, None] * alphas.T[None]).transpose(1, 0, 2).reshape(m.S, m.Z * K)
+    return np.asarray(stepped @ projections[table])
+
+
 def sweep(m: Tables, beliefs: np.ndarray, alphas: np.ndarray, q_upper: np.ndarray, tolerance: float = 1e-9,
           stop: Callable[[], bool] | None = None):
     """Back up every belief of ``beliefs`` (N, S) against the vectors ``alphas`` (K, S).
@@ -141,10 +159,7 @@ def sweep(m: Tables, beliefs: np.ndarray, alphas: np.ndarray, q_upper: np.ndarra
             continue
         if stop is not None and stop():
             break
-        # (b T_a) . (O_z,a * alpha_k) for every observation z and vector k at once; built once per table.
         table = int(m.observation_table[a])
-        if table not in projections:
-            projections[table] = (m.OZ[a][:, :, None] * alphas.T[None]).transpose(1, 0, 2).reshape(m.S, m.Z * K)
         for first in range(0, todo.size, block):
             if first and stop is not None and stop():
                 stopped = True
@@ -152,9 +167,7 @@ def sweep(m: Tables, beliefs: np.ndarray, alphas: np.ndarray, q_upper: np.ndarra
             rows = todo[first:first + block]
             backed_up += len(rows)
             stepped = m.step(beliefs[rows], a)
-            if m.S > SPARSE_STATES:  # beliefs have small supports: multiply only their non-zero entries
-                stepped = sp.csr_matrix(stepped)
-            values = np.asarray(stepped @ projections[table]).reshape(len(rows), m.Z, K)
+            values = _projected(m, a, stepped, alphas, projections, table).reshape(len(rows), m.Z, K)
             choice = values.argmax(axis=2)                                          # (n, Z)
             q = beliefs[rows] @ m.R[a] + m.gamma * np.take_along_axis(values, choice[:, :, None], 2).sum(axis=(1, 2))
             better = q > best_q[rows]
