@@ -193,3 +193,30 @@ def test_the_sweeps_stop_at_the_limit(slow_pen):
     before = next(readings)
     next(steps)
     assert next(readings) - before <= 3  # a stopped step reads the clock once or twice and returns
+
+
+def test_products_of_many_beliefs_stop_between_blocks_of_work(slow_pen, monkeypatch):
+    """Both bounds at many beliefs (a trial's successors on a large model: 7 s for the lower bound's products
+    at the 9-part chain's b0) are computed in blocks of about WORK multiply-adds, the limit checked between
+    them: the same values in blocks, and a limit passing midway stops the product."""
+    import planner.decision.solvers.tables as tables
+    import planner.decision.solvers.upper as upper_module
+    from planner.decision.solvers.tables import best_products
+
+    m, beliefs, vectors = _beliefs_of(slow_pen)
+    upper = UpperBound(mdp_upper_bound(m, max_sweeps=3), np.random.default_rng(0).random(m.S))
+    for b in beliefs[:5]:  # points for the sawtooth
+        upper.update(b, upper.value(b) - 0.1)
+    whole_lower, whole_upper = best_products(beliefs, vectors), upper.at(beliefs)
+    monkeypatch.setattr(tables, "WORK", 1)  # one belief per block
+    monkeypatch.setattr(upper_module, "WORK", 1)
+    readings = itertools.count()
+    blocked_lower = best_products(beliefs, vectors, stop=lambda: next(readings) < 0)
+    assert next(readings) == len(beliefs)  # checked before every block, one belief each
+    assert np.array_equal(blocked_lower[1], whole_lower[1]) and np.allclose(blocked_lower[0], whole_lower[0])
+    assert np.allclose(upper.at(beliefs, stop=lambda: False), whole_upper)
+    for product in (lambda stop: best_products(beliefs, vectors, stop), lambda stop: upper.at(beliefs, stop=stop)):
+        readings = itertools.count()
+        with pytest.raises(SolveStopped):
+            product(lambda: next(readings) >= 10)
+        assert next(readings) == 11  # stopped at the tenth block of 41, not after all of them

@@ -240,7 +240,10 @@ def _read(lines, source: str, limits: InputLimits = InputLimits()) -> POMDP:
     if header["discount"] is None:
         raise CassandraError(f"{source}: no discount")
     initial = _initial_belief(st, names, header["start"])
-    transition, observation = split_rows(tables["T"]), split_rows(tables["O"])
+    try:
+        transition, observation = split_rows(tables["T"]), split_rows(tables["O"])
+    except InputLimitError as exc:  # entries for some actions, others for '*': the spread counted per action
+        raise CassandraError(f"{source}: {exc}") from None
     try:
         reward = header["sign"] * expected_reward(transition, observation, tables["R"], limits.spread_cells)
     except InputLimitError as exc:

@@ -228,8 +228,11 @@ def _read(stream, source: str, limits: InputLimits) -> POMDP:
             raise _fail(source, root, f"no <{tag}><{child}>")
     S = len(names[roles["prev"]])
     initial = found["InitialStateBelief"].table.dense().reshape(S)
-    transition = split_rows(found["StateTransitionFunction"].table)
-    observation = split_rows(found["ObsFunction"].table)
+    try:
+        transition = split_rows(found["StateTransitionFunction"].table)
+        observation = split_rows(found["ObsFunction"].table)
+    except InputLimitError as exc:  # entries for some actions, others for '*': the spread counted per action
+        raise PomdpxError(f"{source}: {exc}") from None
     reward = found["RewardFunction"].table.dense()
     try:
         discount = float(text.get("Discount"))
