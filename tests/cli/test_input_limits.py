@@ -94,3 +94,31 @@ def test_limit_options_are_checked(tmp_path, option, value):
     done = run_aplan("solve", "pen", "-o", tmp_path / "p.policy", option, value)
     assert_refused(done.returncode, done.stderr, option)
     assert done.returncode == 2 and not (tmp_path / "p.policy").exists()
+
+
+@pytest.mark.parametrize("suffix", [".pomdp", ".pomdpx"])
+def test_aplan_reads_back_what_it_writes(tmp_path, suffix):
+    """aplan pomdp writes the observations once for '*' actions (they do not depend on the action); the reader
+    builds that table once and shares it, so its spread over the actions is not counted: the pen's file
+    (137 observation entries x 22 actions = 3,014 cells spread) reads back with --max-cells 2000, as a 9-part
+    chain's (about 150,000 entries x 121 actions, past the default 5,000,000) does by default. An entry that
+    names an action makes the table one per action: the spread is counted per action then, before it is
+    built, and refused past the limit."""
+    from planner import api
+
+    model = tmp_path / f"pen{suffix}"
+    assert run_aplan("pomdp", "pen", "-o", model).returncode == 0
+    text = model.read_text()
+    assert ("O: * : " in text) if suffix == ".pomdp" else ("<Instance>* " in text)
+    pen = api.tables(api.load_model("pen"))
+    shared = pen.observation[0].nnz
+    assert shared * pen.n_actions > 2000 > shared
+    done = run_aplan("solve", model, "-o", tmp_path / "p.policy", "--max-cells", "2000", "--time-limit", "1")
+    assert done.returncode == 0, done.stderr
+    read = api.load_model(model)
+    assert all(o is read.observation[0] for o in read.observation)  # one table, shared
+    assert all((a != b).nnz == 0 for a, b in zip(read.observation, pen.observation))
+    if suffix == ".pomdp":  # one more entry, for one action: the table is per action now
+        model.write_text(text + f"O: {text.split('actions: ')[1].split()[0]} : * : * 0\n")
+        done = run_aplan("solve", model, "-o", tmp_path / "q.policy", "--max-cells", "2000", "--time-limit", "1")
+        assert_refused(done.returncode, done.stderr, "pen.pomdp", "limit of 2,000", "--max-cells N")
