@@ -126,9 +126,12 @@ def test_sweep_with_sparse_rows_equals_dense(pen, monkeypatch):
     assert np.allclose(dense[0], sparse[0])
 
 
-def test_sweep_over_beliefs_of_small_support_equals_dense(pen, monkeypatch):
-    """Reachable beliefs cover few states: on a large model the back-ups multiply over those states only
-    (no (S, Z K) projection); the same vectors as the dense product."""
+def test_sweep_of_a_large_model_in_blocks_of_work(pen, monkeypatch):
+    """On a large model (past SPARSE_STATES) the back-ups multiply per observation over the beliefs' non-zero
+    entries, in blocks of about WORK multiply-adds with the time limit checked between them: the same vectors
+    as the dense product, one belief per block when WORK is tiny."""
+    import itertools
+
     import planner.decision.solvers.belief_set as belief_set
 
     model = intention_pomdp(make_plan(pen, False))
@@ -136,20 +139,12 @@ def test_sweep_over_beliefs_of_small_support_equals_dense(pen, monkeypatch):
     result = PointBasedSolver(max_iterations=20, time_limit=None).solve(model)
     b0 = np.asarray(model.initial, dtype=float)
     beliefs = np.vstack([b0, m.successors(b0)[3]])
-    beliefs = beliefs[4 * (beliefs != 0).sum(axis=1) < model.n_states]
-    assert len(beliefs) > 10
     q = fast_informed_bound(m)
     dense = sweep(m, beliefs, result.policy.alphas, q)
     monkeypatch.setattr(belief_set, "SPARSE_STATES", 0)
-    calls = []
-    original = belief_set._projected
-
-    def projected(m, a, stepped, alphas, projections, table):
-        calls.append(4 * (stepped != 0).any(axis=0).sum() < m.S)
-        return original(m, a, stepped, alphas, projections, table)
-
-    monkeypatch.setattr(belief_set, "_projected", projected)
-    sparse = sweep(m, beliefs, result.policy.alphas, q)
-    assert any(calls)  # the restricted product was used
-    assert np.array_equal(dense[2], sparse[2]) and np.array_equal(dense[1], sparse[1])
-    assert np.allclose(dense[0], sparse[0])
+    monkeypatch.setattr(belief_set, "WORK", 1)
+    readings = itertools.count()
+    blocked = sweep(m, beliefs, result.policy.alphas, q, stop=lambda: next(readings) < 0)
+    assert np.array_equal(dense[2], blocked[2]) and np.array_equal(dense[1], blocked[1])
+    assert np.allclose(dense[0], blocked[0]) and blocked[3] == dense[3]
+    assert next(readings) >= dense[3]  # a check before every block: one per (belief, action) pair backed up

@@ -29,7 +29,7 @@ from collections.abc import Callable
 import numpy as np
 import scipy.sparse as sp
 
-from .tables import BLOCK, Tables, best_products
+from .tables import BLOCK, WORK, Tables, best_products
 
 __all__ = ["BeliefSet", "policy_successors", "sweep"]
 
@@ -114,20 +114,20 @@ def policy_successors(m: Tables, beliefs: np.ndarray, actions: np.ndarray, weigh
 
 def _projected(m: Tables, a: int, stepped: np.ndarray, alphas: np.ndarray, projections: dict, table: int):
     """``(b T_a) . (O_z,a * alpha_k)`` for the predicted beliefs ``stepped`` (n, S), every observation z and
-    vector k at once: (n, Z K). The projection (S, Z K) is built once per observation table (``projections``)
-    unless the beliefs cover under a quarter of the states on a large model: then over their states only, so a
-    large model (109,601 states, 18 observations, 123 vectors: a 1.9 GB projection, 25 s that no time limit
-    could stop) costs O(n s Z K) for s states covered."""
+    vector k at once: (n, Z K). Small models: through the projection (S, Z K), built once per observation
+    table (``projections``). Large ones (above ``SPARSE_STATES``): per observation, over the beliefs' non-zero
+    entries only, never the projection (109,601 states, 18 observations and 123 vectors made it 1.9 GB, built
+    in one step that no time limit could stop). Cost: O(nnz(stepped) Z K)."""
     K = len(alphas)
-    if m.S > SPARSE_STATES:  # beliefs have small supports: multiply only their non-zero entries
-        cols = np.flatnonzero((stepped != 0).any(axis=0))
-        if 4 * cols.size < m.S and table not in projections:
-            part = (m.OZ[a][:, cols, None] * alphas[:, cols].T[None]).transpose(1, 0, 2).reshape(cols.size, m.Z * K)
-            return np.asarray(stepped[:, cols] @ part)
-        stepped = sp.csr_matrix(stepped)
+    if m.S > SPARSE_STATES:
+        rows = sp.csr_matrix(stepped)
+        out = np.empty((len(stepped), m.Z, K))
+        for z in range(m.Z):
+            out[:, z] = rows.multiply(m.OZ[a][z][None, :]).tocsr() @ alphas.T
+        return out.reshape(len(stepped), m.Z * K)
     if table not in projections:
         projections[table] = (m.OZ[a][:, :, None] * alphas.T[None]).transpose(1, 0, 2).reshape(m.S, m.Z * K)
-    return np.asarray(stepped @ projections[table])
+    return stepped @ projections[table]
 
 
 def sweep(m: Tables, beliefs: np.ndarray, alphas: np.ndarray, q_upper: np.ndarray, tolerance: float = 1e-9,
@@ -152,6 +152,9 @@ def sweep(m: Tables, beliefs: np.ndarray, alphas: np.ndarray, q_upper: np.ndarra
     best_choice = np.zeros((N, m.Z), dtype=np.int64)
     projections: dict[int, np.ndarray] = {}
     block = max(1, BLOCK // (m.Z * K))  # beliefs per product: (block, Z, K) values at most
+    if m.S > SPARSE_STATES:  # and about WORK multiply-adds (large beliefs: a time limit can stop between them)
+        support = int(np.count_nonzero(beliefs)) // max(1, N) + 1
+        block = max(1, min(block, WORK // (support * m.Z * K)))
     backed_up, stopped = 0, False
     for a in range(m.A):
         todo = np.flatnonzero(candidates[:, a])
