@@ -551,10 +551,14 @@ def tables(model: Model) -> POMDP:
     return model.pomdp if isinstance(model, (IntentionModel, LumpedModel)) else model
 
 
-def check_model_file(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT) -> int:
+def check_model_file(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT,
+                     read_budget: int | None = None) -> int:
     """The bytes :func:`save_model` would write to ``path`` (:func:`~planner.decision.io.size.model_file_bytes`),
     after checking them against ``max_bytes`` and the free space of the target's disk: past either,
-    :class:`~planner.errors.FileLimitError` with the estimate. Cost: O(non-zeros) in numpy."""
+    :class:`~planner.errors.FileLimitError` with the estimate. With ``read_budget`` (bytes of memory, as
+    :func:`load_model`'s ``limits.memory``): a file that :func:`load_model` would refuse to read back within it
+    is refused before it is written (:class:`~planner.errors.MemoryLimitError`), so aplan reads what it writes
+    with the same options. Cost: O(non-zeros) in numpy."""
     kind = _model_file_kind(path)
     if kind not in (".pomdpx", ".pomdp"):
         raise PlannerError(f"{path}: unknown model file type; use .pomdpx or .pomdp")
@@ -569,13 +573,22 @@ def check_model_file(model: Model, path: str | os.PathLike, max_bytes: int = FIL
         raise FileLimitError(f"{path}", needed, free, detail, hint, budget_name=f"the free space in {folder}")
     if needed > max_bytes:
         raise FileLimitError(f"{path}", needed, max_bytes, detail, hint, [FILE_OPTION, OPTIONS["base_part"]])
+    reading = _READ_BYTES_PER_FILE_BYTE * needed
+    if read_budget is not None and reading > read_budget:
+        raise MemoryLimitError(f"reading {path} back (aplan solve, evaluate)", reading, read_budget,
+                               f"{_READ_BYTES_PER_FILE_BYTE} x the {gib(needed)} it would take",
+                               "Refused before writing: aplan would not read the file it wrote. A POMDPX file (.pomdpx) "
+                               "is smaller than a .pomdp; fewer intentions make both smaller.",
+                               memory_options(reading) + [OPTIONS["base_part"]])
     return needed
 
 
-def save_model(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT) -> None:
+def save_model(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT,
+               read_budget: int | None = None) -> None:
     """Write POMDPX (``.pomdpx``) or Cassandra (``.pomdp``), by the file name (atomically), after estimating
-    its size (:func:`check_model_file`: refused past ``max_bytes`` or the free disk space)."""
-    check_model_file(model, path, max_bytes)
+    its size (:func:`check_model_file`: refused past ``max_bytes``, the free disk space or, with
+    ``read_budget``, what :func:`load_model` reads back within that memory)."""
+    check_model_file(model, path, max_bytes, read_budget)
     kind = _model_file_kind(path)
     if kind == ".pomdpx":
         write_pomdpx(tables(model), path)

@@ -111,7 +111,7 @@ def decision_maker_from(args: argparse.Namespace, product=None):
 
 def _pomdp(args: argparse.Namespace) -> int:
     model = model_from(args)
-    api.save_model(model, args.output, int(args.max_file * 2 ** 30))
+    api.save_model(model, args.output, int(args.max_file * 2 ** 30), limits_from(args).memory)
     tables = api.tables(model)
     print(f"{args.output}: {tables.n_states} states, {tables.n_actions} actions, {tables.n_observations} observations")
     return 0

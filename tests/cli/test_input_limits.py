@@ -24,7 +24,7 @@ def _cells_model(path: Path) -> Path:
     lines = ["discount: 0.9", "values: reward", f"states: {states}", "actions: 1", f"observations: {observations}",
              "start: uniform"]
     lines += [f"T: 0 : {s} : {(s + k) % states} 0.1" for s in range(states) for k in range(successors)]
-    lines += ["O: 0 uniform", "R: * : * : * : * 1"]
+    lines += ["O: 0 uniform", "R: * : * : * : 0 1"]  # a reward on observation 0 only
     path.write_text("\n".join(lines) + "\n")
     assert states * successors * observations > SPREAD_CELL_LIMIT
     return path
@@ -100,8 +100,9 @@ def test_limit_options_are_checked(tmp_path, option, value):
 def test_aplan_reads_back_what_it_writes(tmp_path, suffix):
     """aplan pomdp writes the observations once for '*' actions (they do not depend on the action); the reader
     builds that table once and shares it, so its spread over the actions is not counted: the pen's file
-    (137 observation entries x 22 actions = 3,014 cells spread) reads back with --max-cells 2000, as a 9-part
-    chain's (about 150,000 entries x 121 actions, past the default 5,000,000) does by default. An entry that
+    (137 observation entries x 22 actions = 3,014 cells spread) reads back with --max-cells 200, as a 9-part
+    chain's (about 150,000 entries x 121 actions, past the default 5,000,000) does by default. Rewards as
+    aplan writes them (R: a : s : * : *, POMDPX rows of the dense reward) are not spread either. An entry that
     names an action makes the table one per action: the spread is counted per action then, before it is
     built, and refused past the limit."""
     from planner import api
@@ -112,13 +113,34 @@ def test_aplan_reads_back_what_it_writes(tmp_path, suffix):
     assert ("O: * : " in text) if suffix == ".pomdp" else ("<Instance>* " in text)
     pen = api.tables(api.load_model("pen"))
     shared = pen.observation[0].nnz
-    assert shared * pen.n_actions > 2000 > shared
-    done = run_aplan("solve", model, "-o", tmp_path / "p.policy", "--max-cells", "2000", "--time-limit", "1")
+    assert shared * pen.n_actions > 200 > shared
+    done = run_aplan("solve", model, "-o", tmp_path / "p.policy", "--max-cells", "200", "--time-limit", "1")
     assert done.returncode == 0, done.stderr
     read = api.load_model(model)
     assert all(o is read.observation[0] for o in read.observation)  # one table, shared
     assert all((a != b).nnz == 0 for a, b in zip(read.observation, pen.observation))
     if suffix == ".pomdp":  # one more entry, for one action: the table is per action now
         model.write_text(text + f"O: {text.split('actions: ')[1].split()[0]} : * : * 0\n")
-        done = run_aplan("solve", model, "-o", tmp_path / "q.policy", "--max-cells", "2000", "--time-limit", "1")
-        assert_refused(done.returncode, done.stderr, "pen.pomdp", "limit of 2,000", "--max-cells N")
+        done = run_aplan("solve", model, "-o", tmp_path / "q.policy", "--max-cells", "200", "--time-limit", "1")
+        assert_refused(done.returncode, done.stderr, "pen.pomdp", "limit of 200", "--max-cells N")
+
+
+def test_pomdp_refuses_a_file_it_could_not_read_back(tmp_path):
+    """The memory budget that reading a model file is checked against (3 bytes per byte of file) is checked
+    when the file is written: aplan pomdp refuses, before writing, a file that aplan solve would refuse to
+    read with the same --max-memory (the 9-part chain's 1.5 GiB .pomdp at the default 4 GiB: 4.4 GiB), and
+    what it writes within a budget reads back within it."""
+    from planner import api
+
+    needed = api.check_model_file(api.load_model("pen"), tmp_path / "pen.pomdp")
+    low, high = str(3 * needed * 0.95 / GIB), str(3 * needed * 1.1 / GIB)
+    target = tmp_path / "pen.pomdp"
+    done = run_aplan("pomdp", "pen", "-o", target, "--max-memory", low)
+    assert_refused(done.returncode, done.stderr, "reading", "pen.pomdp back", "Refused before writing",
+                   "--max-memory GIB")
+    assert not target.exists()
+    assert run_aplan("pomdp", "pen", "-o", target, "--max-memory", high).returncode == 0
+    done = run_aplan("solve", target, "-o", tmp_path / "p.policy", "--max-memory", high, "--time-limit", "0.5")
+    assert done.returncode == 0, done.stderr
+    done = run_aplan("solve", target, "-o", tmp_path / "q.policy", "--max-memory", low)
+    assert_refused(done.returncode, done.stderr, "reading", "--max-memory GIB")

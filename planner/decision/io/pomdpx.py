@@ -289,6 +289,9 @@ def _start_section(source, parameter, names, roles, found, cell_limit: int) -> _
         if sorted(parents) != sorted([prev, act]):
             raise _fail(source, cond, f"reward must be R({prev}, {act})")
         axes, shape = {act: 0, prev: 1}, (A, S)
+        # The model holds the reward dense, A x S numbers, whatever the file says: its rows (as aplan writes
+        # them, a 9-part chain's 5,041,646 non-zero rewards) are bounded by that, not by the spread limit.
+        cell_limit = max(cell_limit, A * S)
     order = parents + [var] if tag != "RewardFunction" else parents
     index = {v: {n: i for i, n in enumerate(names[v])} for v in order}
     found[tag] = _Section(source, cond, order, axes, shape, index, cell_limit)

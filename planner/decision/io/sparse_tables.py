@@ -129,8 +129,13 @@ class SparseTable:
     def same_along_first(self) -> bool:
         """Whether every entry leaves the first axis free (``O: * : ...``): then every slice along it is the
         same, resolved once (:func:`split_rows`)."""
-        return all(not mask[0] for mask, group in self.groups.items() if len(group.keys)) and \
-            all(index[0] is None and 0 not in axes for index, _, axes, *_ in self.listed)
+        return self.leaves_free((0,))
+
+    def leaves_free(self, axes: tuple[int, ...]) -> bool:
+        """Whether every entry covers every value of each of ``axes`` with one number (``*``): the table is
+        then the same along them."""
+        return all(not any(mask[k] for k in axes) for mask, group in self.groups.items() if len(group.keys)) and \
+            all(all(index[k] is None and k not in listed for k in axes) for index, _, listed, *_ in self.listed)
 
     def check_spread(self) -> None:
         """Before resolving every slice along the first axis (entries fix it somewhere): refuse past
