@@ -139,8 +139,8 @@ def sweep(m: Tables, beliefs: np.ndarray, alphas: np.ndarray, q_upper: np.ndarra
     the beliefs whose value improved by more than ``tolerance``, their actions (n,), the boolean mask (N,)
     of those beliefs, and how many (belief, action) pairs were backed up.
 
-    ``stop`` (the solver's time limit) is checked before each block of back-ups: once true, the sweep ends
-    with the actions backed up so far (a back-up over some of the actions is still the value of a policy, so
+    ``stop`` (the solver's time limit) is checked before each block of back-ups and of the new vectors'
+    construction: once true, the sweep ends with the actions backed up (and the vectors made) so far (a back-up over some of the actions is still the value of a policy, so
     its vector is a valid lower bound), or raises :class:`~.tables.SolveStopped` before the first (in the
     current values' products). On a large model one sweep takes tens of seconds (a 9-part chain: 36 s).
     """
@@ -183,8 +183,15 @@ def sweep(m: Tables, beliefs: np.ndarray, alphas: np.ndarray, q_upper: np.ndarra
     # Beliefs that pick the same action and the same vector for every observation share their new vector.
     keys = np.unique(np.column_stack([best_a, best_choice])[improved], axis=0)
     vectors = np.empty((len(keys), m.S))
+    done = np.zeros(len(keys), dtype=bool)
+    step = max(1, BLOCK // (m.Z * m.S))  # vectors per product: (step, Z, S) numbers at most
     for a in np.unique(keys[:, 0]):
         mine = np.flatnonzero(keys[:, 0] == a)
-        inner = (m.OZ[a][None] * alphas[keys[mine, 1:]]).sum(axis=1)      # (n, S'): sum_z O_z * alpha_k(z)
-        vectors[mine] = m.R[a] + m.gamma * m.expect_one(int(a), inner)
+        for first in range(0, mine.size, step):
+            if done.any() and stop is not None and stop():  # the vectors made so far are each valid
+                return vectors[done], keys[done, 0], improved, backed_up
+            part = mine[first:first + step]
+            inner = (m.OZ[a][None] * alphas[keys[part, 1:]]).sum(axis=1)      # (n, S'): sum_z O_z * alpha_k(z)
+            vectors[part] = m.R[a] + m.gamma * m.expect_one(int(a), inner)
+            done[part] = True
     return vectors, keys[:, 0], improved, backed_up
