@@ -148,3 +148,38 @@ def test_sweep_of_a_large_model_in_blocks_of_work(pen, monkeypatch):
     assert np.array_equal(dense[2], blocked[2]) and np.array_equal(dense[1], blocked[1])
     assert np.allclose(dense[0], blocked[0]) and blocked[3] == dense[3]
     assert next(readings) >= dense[3]  # a check before every block: one per (belief, action) pair backed up
+
+
+def test_a_large_sweep_stops_inside_a_block(pen, monkeypatch):
+    """The limit passing between the observations of a block drops that block and keeps the ones before."""
+    import itertools
+
+    import planner.decision.solvers.belief_set as belief_set
+
+    model = intention_pomdp(make_plan(pen, False))
+    m = Tables(model)
+    alphas = PointBasedSolver(max_iterations=20, time_limit=None).solve(model).policy.alphas
+    b0 = np.asarray(model.initial, dtype=float)
+    beliefs = np.vstack([b0, m.successors(b0)[3]])
+    q = fast_informed_bound(m)
+    monkeypatch.setattr(belief_set, "SPARSE_STATES", 0)
+    whole = sweep(m, beliefs, alphas, q)
+    stopped_inside = []
+    original = belief_set._projected
+
+    def projected(*args):
+        try:
+            return original(*args)
+        except belief_set.SolveStopped:
+            stopped_inside.append(True)
+            raise
+
+    monkeypatch.setattr(belief_set, "_projected", projected)
+    for k in range(2, 1000):  # the first limit that leaves some back-ups done and stops inside a block
+        readings = itertools.count()
+        cut = sweep(m, beliefs, alphas, q, stop=lambda: next(readings) >= k)  # noqa: B023
+        if cut[3] and stopped_inside:
+            break
+        stopped_inside.clear()
+    assert stopped_inside and 0 < cut[3] < whole[3]
+    assert next(readings) == k + 1  # no reading after the one that stopped it
