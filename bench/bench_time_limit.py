@@ -32,7 +32,7 @@ def main() -> None:
         print("|---|---:|---:|---:|---:|---:|---:|---:|")
         for name, arguments, limit in CASES:
             command = [sys.executable, "-m", "planner", "solve", *[a.format(folder=folder) for a in arguments],
-                       "-o", str(Path(folder) / "p.policy"), "--time-limit", str(limit), "--json"]
+                       "-o", str(Path(folder) / "p.policy"), "--time-limit", str(limit), "--json", "--force"]
             start = time.perf_counter()
             done = subprocess.run(command, capture_output=True, text=True, check=True)
             wall = time.perf_counter() - start
