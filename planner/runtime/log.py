@@ -85,7 +85,8 @@ class EventLog:
         self._failure: str | None = None  # why the log cannot be written any more
         if self.path is not None:
             try:
-                self._handle = with_faults(open(self.path, "xb"))
+                # unbuffered: what the disk refused is never written later by a flush, and the cut below holds
+                self._handle = with_faults(open(self.path, "xb", buffering=0))
             except FileExistsError:
                 raise SessionError(f"{self.path}: the log exists already; choose another file name "
                                    "(a log is never overwritten)") from None
@@ -99,14 +100,15 @@ class EventLog:
         if self._failure is not None:
             raise SessionError(self._failure)
         if self._handle is not None:
-            line = (json.dumps(record) + "\n").encode("utf-8")
+            line = memoryview((json.dumps(record) + "\n").encode("utf-8"))
+            size = len(line)
             try:
-                self._handle.write(line)
-                self._handle.flush()
+                while line:  # an unbuffered write may take part of it
+                    line = line[self._handle.write(line):]
                 os.fsync(self._handle.fileno())
             except OSError as exc:
                 raise SessionError(self._fail(exc)) from None
-            self._complete += len(line)
+            self._complete += size
         if self.on_event is not None:
             self.on_event(record)
         return record
@@ -121,7 +123,7 @@ class EventLog:
         try:
             handle.close()
         except OSError:
-            pass  # closing flushes what could not be written: the same refusal
+            pass  # the file is gone bad: nothing is buffered (unbuffered), so nothing is lost here
         fix = "free some space on that disk or log to another (--log FILE)" if exc.errno in (
             errno.ENOSPC, errno.EDQUOT) else "check the disk, or log to another (--log FILE)"
         kept = len(self.events) - 1  # the events before the one that failed
@@ -134,7 +136,7 @@ class EventLog:
         if self._handle is not None:
             try:
                 self._handle.close()
-            except OSError as exc:  # the last flush refused: nothing is buffered after a complete event
+            except OSError as exc:  # a file system that reports a failure only at close (e.g. NFS)
                 self._fail(exc)
             self._handle = None
 
