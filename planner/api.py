@@ -85,6 +85,7 @@ from .product import (
 )
 from .product.examples import EXAMPLES, example_path
 from .runtime.logged_sequence import LoggedSequence, complete_sequence, logged_sequence
+from .validation import InputLimits
 
 __all__ = ["resolve_product", "fastener_report", "accept_fasteners", "FASTENER_MODES", "plan_of",
            "proposed_subassemblies", "structure_problems", "level_report", "level_table", "LEVEL_KEYS",
@@ -92,7 +93,7 @@ __all__ = ["resolve_product", "fastener_report", "accept_fasteners", "FASTENER_M
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
            "policy_for", "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner",
            "choose_planner", "decision_maker", "arranged", "levels_of", "level_product", "hierarchy_statistics_of",
-           "sequence_choices", "plan_in_3d", "sequence_from_log"]
+           "sequence_choices", "plan_in_3d", "sequence_from_log", "InputLimits"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
 FILE_OPTION = ("--max-file", "--max-file GIB raises the file size budget")
@@ -484,7 +485,8 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
                    rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                    decision_time: float | None = DECISION_TIME, expansions: int | None = None,
                    time_limit: float = POLICY_TIME_LIMIT, limit: int = INTENTION_LIMIT,
-                   base_part: str | None = None, limits: SizeLimits = SizeLimits()):
+                   base_part: str | None = None, limits: SizeLimits = SizeLimits(),
+                   inputs: InputLimits = InputLimits()):
     """The model, the policy and a note (what was chosen and why, or None) that a session, a simulation or an
     evaluation runs on:
 
@@ -494,17 +496,18 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
     - offline otherwise: the flat model of Alg. 3 (refused above ``limit`` intentions, naming ``--planner
       online``) and the policy file, or the built-in solver's policy after ``time_limit`` seconds.
 
-    ``base_part``: only the sequences that start from it (``"auto"``: the most connected part).
+    ``base_part``: only the sequences that start from it (``"auto"``: the most connected part); ``inputs``:
+    what the policy file may hold (:class:`~planner.validation.InputLimits`).
     """
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
     base_part = base_part_of(plan, base_part)
     choice, note = choose_planner(plan, planner, policy, limit, base_part, limits)
     if choice == "online":
         model = factored_model(plan, rewards, discount, base_part)
-        lower = read_policy(policy) if policy else None
+        lower = read_policy(policy, limits=inputs) if policy else None
         return model, online_planner(model, decision_time, expansions, lower), note
     intentions = count_intentions(plan.states, base_part=base_part)
-    vectors = read_policy(policy) if policy else None
+    vectors = read_policy(policy, limits=inputs) if policy else None
     if vectors is not None:
         classes = plan.states.n_edges + 1  # the factored model's classes: one per state edge, and finished
         length = vectors.alphas.shape[1]
@@ -544,8 +547,9 @@ def _model_file_kind(path: str | os.PathLike) -> str | None:
 
 def load_model(argument: str | os.PathLike | Product, technical: bool | None = None, rewards: Rewards = Rewards(),
                discount: float = DISCOUNT, base_part: str | None = None, limits: SizeLimits = SizeLimits(),
-               lumped: bool = False) -> Model:
-    """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`), else a PRODUCT
+               lumped: bool = False, inputs: InputLimits = InputLimits()) -> Model:
+    """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`, read within
+    ``inputs``: :class:`~planner.validation.InputLimits`), else a PRODUCT
     (its :class:`IntentionModel`, or with ``lumped`` its :class:`LumpedModel`; ``technical``, ``rewards``,
     ``discount``, ``base_part`` and ``limits`` apply to it only: a base part with a model file is a
     :class:`PlannerError`, since the file's intentions are fixed)."""
@@ -559,9 +563,9 @@ def load_model(argument: str | os.PathLike | Product, technical: bool | None = N
     if kind in (".pomdpx", ".pomdp") and os.path.isfile(argument):
         _check_model_read(argument, limits.memory)
     if kind in (".pomdpx", ".pomdpx.gz"):
-        return read_pomdpx(argument)
+        return read_pomdpx(argument, inputs)
     if kind == ".pomdp":
-        return read_cassandra(argument)
+        return read_cassandra(argument, inputs)
     if lumped:
         return lumped_model(argument, technical, rewards, discount, base_part, limits)
     return decision_model(argument, technical, rewards, discount, base_part, limits)
@@ -587,10 +591,14 @@ def tables(model: Model) -> POMDP:
     return model.pomdp if isinstance(model, (IntentionModel, LumpedModel)) else model
 
 
-def check_model_file(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT) -> int:
+def check_model_file(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT,
+                     read_budget: int | None = None) -> int:
     """The bytes :func:`save_model` would write to ``path`` (:func:`~planner.decision.io.size.model_file_bytes`),
     after checking them against ``max_bytes`` and the free space of the target's disk: past either,
-    :class:`~planner.errors.FileLimitError` with the estimate. Cost: O(non-zeros) in numpy."""
+    :class:`~planner.errors.FileLimitError` with the estimate. With ``read_budget`` (bytes of memory, as
+    :func:`load_model`'s ``limits.memory``): a file that :func:`load_model` would refuse to read back within it
+    is refused before it is written (:class:`~planner.errors.MemoryLimitError`), so aplan reads what it writes
+    with the same options. Cost: O(non-zeros) in numpy."""
     kind = _model_file_kind(path)
     if kind not in (".pomdpx", ".pomdp"):
         raise PlannerError(f"{path}: unknown model file type; use .pomdpx or .pomdp")
@@ -605,13 +613,22 @@ def check_model_file(model: Model, path: str | os.PathLike, max_bytes: int = FIL
         raise FileLimitError(f"{path}", needed, free, detail, hint, budget_name=f"the free space in {folder}")
     if needed > max_bytes:
         raise FileLimitError(f"{path}", needed, max_bytes, detail, hint, [FILE_OPTION, OPTIONS["base_part"]])
+    reading = _READ_BYTES_PER_FILE_BYTE * needed
+    if read_budget is not None and reading > read_budget:
+        raise MemoryLimitError(f"reading {path} back (aplan solve, evaluate)", reading, read_budget,
+                               f"{_READ_BYTES_PER_FILE_BYTE} x the {gib(needed)} it would take",
+                               "Refused before writing: aplan would not read the file it wrote. A POMDPX file (.pomdpx) "
+                               "is smaller than a .pomdp; fewer intentions make both smaller.",
+                               memory_options(reading) + [OPTIONS["base_part"]])
     return needed
 
 
-def save_model(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT) -> None:
+def save_model(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT,
+               read_budget: int | None = None) -> None:
     """Write POMDPX (``.pomdpx``) or Cassandra (``.pomdp``), by the file name (atomically), after estimating
-    its size (:func:`check_model_file`: refused past ``max_bytes`` or the free disk space)."""
-    check_model_file(model, path, max_bytes)
+    its size (:func:`check_model_file`: refused past ``max_bytes``, the free disk space or, with
+    ``read_budget``, what :func:`load_model` reads back within that memory)."""
+    check_model_file(model, path, max_bytes, read_budget)
     kind = _model_file_kind(path)
     if kind == ".pomdpx":
         write_pomdpx(tables(model), path)
@@ -643,12 +660,12 @@ def solve(model: Model, time_limit: float = SOLVE_TIME_LIMIT, precision: float =
     return solver.solve(tables(model), progress, upper, groups, started=started)
 
 
-def policy_for(model: Model, policy: str | os.PathLike | None = None,
-               time_limit: float = POLICY_TIME_LIMIT) -> tuple[AlphaVectorPolicy, SolveResult | None]:
-    """The policy in the file ``policy`` (checked against the model), or, without one, the built-in solver's
-    after ``time_limit`` seconds, with its result (bounds, time)."""
+def policy_for(model: Model, policy: str | os.PathLike | None = None, time_limit: float = POLICY_TIME_LIMIT,
+               inputs: InputLimits = InputLimits()) -> tuple[AlphaVectorPolicy, SolveResult | None]:
+    """The policy in the file ``policy`` (checked against the model; read within ``inputs``), or, without
+    one, the built-in solver's after ``time_limit`` seconds, with its result (bounds, time)."""
     if policy:
-        return read_policy(policy, tables(model)), None
+        return read_policy(policy, tables(model), inputs), None
     result = solve(model, time_limit, SOLVE_PRECISION)
     return result.policy, result
 

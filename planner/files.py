@@ -2,8 +2,9 @@
 so a failure (a full disk, an interrupt) never leaves a partial file behind; the operating system's refusals
 (no such folder, no permission, a full disk) become :class:`OutputError`s that say what to do.
 
-Fault injection (tests): with ``APLAN_FAULT_DISK_FULL=N`` in the environment, every file written here fails
-with ``ENOSPC`` once ``N`` bytes are written, as on a full disk (a small full tmpfs needs root).
+Fault injection (tests): with ``APLAN_FAULT_DISK_FULL=N`` in the environment, every file written here (and
+every session log: :func:`with_faults`) fails with ``ENOSPC`` once ``N`` bytes are written, as on a full disk
+(a small full tmpfs needs root): the write that passes ``N`` writes what fits, then fails.
 """
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ __all__ = [
     "make_folder_beside",
     "open_atomic",
     "save_figure",
+    "with_faults",
     "write_atomic",
 ]
 
@@ -94,7 +96,7 @@ def open_atomic(path: str | os.PathLike) -> Iterator[BinaryIO]:
         raise _explain(path, exc) from None
     try:
         with open(fd, "wb") as handle:
-            yield _FullDisk(handle, int(os.environ[FAULT_DISK_FULL])) if os.environ.get(FAULT_DISK_FULL) else handle
+            yield with_faults(handle)
         os.replace(tmp, path)
     except OSError as exc:
         tmp.unlink(missing_ok=True)
@@ -104,17 +106,28 @@ def open_atomic(path: str | os.PathLike) -> Iterator[BinaryIO]:
         raise
 
 
+def with_faults(handle: BinaryIO) -> BinaryIO:
+    """``handle`` as it is, or, with ``APLAN_FAULT_DISK_FULL=N`` set, a handle that fails with ``ENOSPC`` once
+    ``N`` bytes are written through it (the module docstring's fault injection)."""
+    room = os.environ.get(FAULT_DISK_FULL)
+    return _FullDisk(handle, int(room)) if room else handle
+
+
 class _FullDisk:
-    """A binary handle that fails with ``ENOSPC`` once ``room`` bytes are written (fault injection)."""
+    """A binary handle that fails with ``ENOSPC`` once ``room`` bytes are written (fault injection): the write
+    that passes it writes the bytes that fit first, as a real full disk leaves a partial write."""
 
     def __init__(self, handle: BinaryIO, room: int):
         self._handle, self._room = handle, room
 
     def write(self, data) -> int:
-        size = memoryview(data).nbytes
-        if size > self._room:
+        view = memoryview(data).cast("B")
+        if view.nbytes > self._room:
+            self._handle.write(view[:self._room])
+            self._handle.flush()
+            self._room = 0
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-        self._room -= size
+        self._room -= view.nbytes
         return self._handle.write(data)
 
     def __getattr__(self, name: str):

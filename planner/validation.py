@@ -12,16 +12,42 @@ import json
 import math
 import os
 import re
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .defaults import JSON_DEPTH_LIMIT
+from .defaults import DECLARED_LIMIT, INPUT_FILE_LIMIT, JSON_DEPTH_LIMIT, SPREAD_CELL_LIMIT
 from .errors import PlannerError
 from .files import check_output as check_writable
 
 __all__ = ["InputError", "InputLimitError", "OutputExistsError", "check_number", "check_finite_array",
-           "check_count", "check_output", "CappedReader", "json_loads", "describe_range"]
+           "check_count", "check_output", "CappedReader", "json_loads", "describe_range", "InputLimits",
+           "INPUT_OPTION", "DECLARED_OPTION", "CELLS_OPTION"]
+
+# The options that raise the input limits (on every command that reads a model, policy or session log file),
+# named in the refusals so that the fix is in the message.
+INPUT_OPTION = "--max-input GIB"
+DECLARED_OPTION = "--max-declared N"
+CELLS_OPTION = "--max-cells N"
+
+
+@dataclass(frozen=True)
+class InputLimits:
+    """What a file a command reads may hold before it is refused, checked before the memory is taken (README,
+    "Exit status"); defaults in :mod:`planner.defaults`.
+
+    ``file_bytes``: bytes read from a model, policy or session log file (a ``.gz`` counted decompressed;
+    ``--max-input GIB``); ``declared``: states, actions or observations a model file declares, and a policy's
+    vector length (``--max-declared N``); ``spread_cells``: cells a model file's entries may spread over per
+    table (``*``, uniform, rows, identities), and the combinations a next-state or observation dependent reward
+    is evaluated over per action (``--max-cells N``); ``json_depth``: nesting of JSON (products, logs), with
+    no option (a real product is a few levels deep)."""
+
+    file_bytes: int = INPUT_FILE_LIMIT
+    declared: int = DECLARED_LIMIT
+    spread_cells: int = SPREAD_CELL_LIMIT
+    json_depth: int = JSON_DEPTH_LIMIT
 
 
 class InputError(PlannerError):

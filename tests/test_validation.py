@@ -16,6 +16,7 @@ from planner.validation import (
     CappedReader,
     InputError,
     InputLimitError,
+    InputLimits,
     OutputExistsError,
     check_number,
     check_output,
@@ -80,15 +81,14 @@ def test_capped_reader_stops_at_the_limit():
         reader.read(50)
 
 
-def test_a_gzip_bomb_is_decompressed_only_up_to_the_limit(tmp_path, monkeypatch):
-    monkeypatch.setattr(pomdpx, "INPUT_FILE_LIMIT", 2 ** 20)
+def test_a_gzip_bomb_is_decompressed_only_up_to_the_limit(tmp_path):
     path = tmp_path / "bomb.pomdpx.gz"
     with gzip.open(path, "wb") as handle:
         # 4 MiB of comments (the parser drops them: neither an element limit nor memory stops them)
         handle.write(b"<pomdpx>" + (b"<!--" + b"x" * 1016 + b"-->") * 4096 + b"</pomdpx>")
     assert path.stat().st_size < 2 ** 16
     with pytest.raises(PomdpxError, match=r"bomb.pomdpx.gz: more than 1,048,576 bytes \(decompressed\)"):
-        pomdpx.read_pomdpx(path)
+        pomdpx.read_pomdpx(path, InputLimits(file_bytes=2 ** 20))
 
 
 def test_spread_cells_are_counted_before_anything_is_allocated():

@@ -10,9 +10,12 @@ from ..defaults import (
     CONTACT_CEILING_FRACTION,
     CUTS_PER_SUBASSEMBLY,
     DECISION_TIME,
+    DECLARED_LIMIT,
     DISCOUNT,
+    INPUT_FILE_LIMIT,
     POLICY_TIME_LIMIT,
     RESOLUTION_LIMIT,
+    SPREAD_CELL_LIMIT,
     SUBASSEMBLY_LIMIT,
 )
 from ..errors import LimitExceededError, PlannerError
@@ -20,7 +23,7 @@ from ..files import check_output as check_writable
 from ..geometry.mesh_engine import Tolerances
 from ..geometry.tolerances import AUTO
 from ..product.examples import EXAMPLES
-from ..validation import InputError, check_number, check_output
+from ..validation import InputError, InputLimits, check_number, check_output
 
 __all__ = ["PRODUCT_HELP", "number", "finite", "positive", "whole", "index", "add_force", "check_outputs",
            "add_technical", "add_base_part", "add_hierarchy", "add_fasteners", "add_model_options",
@@ -28,7 +31,8 @@ __all__ = ["PRODUCT_HELP", "number", "finite", "positive", "whole", "index", "ad
            "product_from", "add_decision_options", "rewards_from", "add_tolerance_options", "tolerances_from",
            "add_contact_options", "contact_tolerances_from", "contact_tolerance", "positive_length",
            "add_policy_options", "add_episode_options", "positive_seconds",
-           "online_budget", "add_size_options", "limits_from", "offer_options", "advice", "gibibytes"]
+           "online_budget", "add_size_options", "limits_from", "offer_options", "advice", "gibibytes",
+           "add_input_options", "inputs_from"]
 
 PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or STEP file (read through "
                 f"FreeCAD), or an embedded example ({', '.join(EXAMPLES)})")
@@ -176,6 +180,7 @@ def add_decision_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--reward-wait", type=finite, default=d.wait, metavar="R", help=f"wait (default {d.wait:g})")
     add_hierarchy(group)
     add_size_options(parser)
+    add_input_options(parser)
 
 
 def rewards_from(args: argparse.Namespace) -> Rewards:
@@ -347,6 +352,33 @@ def add_size_options(parser) -> None:
 
 def limits_from(args: argparse.Namespace) -> SizeLimits:
     return SizeLimits(args.max_subassemblies, int(args.max_memory * 2 ** 30))
+
+
+def add_input_options(parser) -> None:
+    """The input limits a model, policy or session log file is read within (README, "Exit status"), for the
+    user whose real file is larger: one option per limit that a real file may pass, named in the refusal.
+    (JSON nesting has none: a real product or log is a few levels deep.)"""
+    group = parser.add_argument_group("input limits (a model, policy or session log file past them is refused at "
+                                      "once, naming the option)")
+    group.add_argument("--max-input", type=gibibytes, default=INPUT_FILE_LIMIT / 2 ** 30, metavar="GIB",
+                       help=f"bytes read from a model, policy or session log file, a .gz counted decompressed "
+                            f"(default {INPUT_FILE_LIMIT / 2 ** 30:g} GiB)")
+    group.add_argument("--max-declared", type=number(1, 10 ** 9, integer=True), default=DECLARED_LIMIT, metavar="N",
+                       help=f"states, actions or observations a model file declares, and the length of a policy's "
+                            f"vectors (default {DECLARED_LIMIT:,}; about 60 bytes each)")
+    group.add_argument("--max-cells", type=number(1, 10 ** 10, integer=True), default=SPREAD_CELL_LIMIT,
+                       metavar="N", help=f"cells a model file's entries spread over per table ('*', uniform, rows, "
+                                         f"identity), and the combinations a reward depending on the next state or "
+                                         f"observation is evaluated over per action (default {SPREAD_CELL_LIMIT:,}; "
+                                         f"about 150 bytes each while the table is built)")
+
+
+def inputs_from(args: argparse.Namespace) -> InputLimits:
+    """The :class:`~planner.validation.InputLimits` of ``args`` (:func:`add_input_options`; defaults without)."""
+    d = InputLimits()
+    max_input = getattr(args, "max_input", None)
+    return InputLimits(int(max_input * 2 ** 30) if max_input is not None else d.file_bytes,
+                       getattr(args, "max_declared", d.declared), getattr(args, "max_cells", d.spread_cells))
 
 
 def offer_options(parser: argparse.ArgumentParser, commands) -> None:

@@ -19,8 +19,10 @@ from .options import (
     PRODUCT_HELP,
     add_decision_options,
     add_force,
+    add_input_options,
     add_policy_options,
     index,
+    inputs_from,
     number,
     online_budget,
     positive,
@@ -187,7 +189,7 @@ def _replay(args: argparse.Namespace) -> int:
     from ..decision.belief_plot import BeliefTrace, plot_beliefs, state_trace
     from ..runtime.log import replay, top_intentions
 
-    done = replay(args.log)
+    done = replay(args.log, limits=inputs_from(args))
     model = done.model
     factored = not isinstance(model, IntentionModel)
     steps = list(enumerate(zip(done.actions, done.observations, done.beliefs[1:]), start=1))
@@ -281,6 +283,7 @@ def add_commands(commands) -> None:
     replay_cmd.add_argument("--plot", metavar="STEM", help="write STEM.png and STEM.svg (belief heat map)")
     replay_cmd.add_argument("--json", action="store_true", help="one JSON line per step")
     add_force(replay_cmd, outputs=(), stems=("plot",))
+    add_input_options(replay_cmd)
     replay_cmd.set_defaults(run=_replay)
 
     markers = commands.add_parser("markers", help="print the tray's markers with part and tool names",

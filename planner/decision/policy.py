@@ -12,9 +12,10 @@ from pathlib import Path
 import numpy as np
 from lxml import etree
 
-from ..defaults import DECLARED_LIMIT, INPUT_FILE_LIMIT, MEMORY_LIMIT
+from ..defaults import MEMORY_LIMIT
 from ..errors import PlannerError
 from ..files import open_atomic
+from ..validation import DECLARED_OPTION, INPUT_OPTION, InputLimits
 from .io.pomdpx import safe_parser
 from .pomdp import POMDP
 
@@ -82,13 +83,14 @@ def write_policy(policy: AlphaVectorPolicy, path: str | Path, model_name: str = 
         handle.write(policy_text(policy, model_name).encode("latin-1", "xmlcharrefreplace"))
 
 
-def read_policy(path: str | Path, model: POMDP | None = None) -> AlphaVectorPolicy:
-    """Read a SARSOP ``.policy`` file; with ``model``, check that it fits."""
+def read_policy(path: str | Path, model: POMDP | None = None, limits: InputLimits = InputLimits()) -> AlphaVectorPolicy:
+    """Read a SARSOP ``.policy`` file; with ``model``, check that it fits. ``limits``: the file's bytes and
+    the vector length (the model's states) at most (:class:`~planner.validation.InputLimits`)."""
     source = str(path)
     try:
-        if Path(path).stat().st_size > INPUT_FILE_LIMIT:
+        if Path(path).stat().st_size > limits.file_bytes:
             raise PolicyError(f"{source}: {Path(path).stat().st_size:,} bytes, more than the limit of "
-                              f"{INPUT_FILE_LIMIT:,} for a policy file")
+                              f"{limits.file_bytes:,} for a policy file ({INPUT_OPTION} raises it)")
         root = etree.fromstring(Path(path).read_bytes(), safe_parser())
     except OSError as exc:
         raise PolicyError(f"{source}: cannot read the file: {exc}") from None
@@ -101,9 +103,9 @@ def read_policy(path: str | Path, model: POMDP | None = None) -> AlphaVectorPoli
         length = int(block.get("vectorLength"))
     except (TypeError, ValueError):
         raise PolicyError(f"{source}: line {block.sourceline}: <AlphaVector> needs an integer vectorLength") from None
-    if not 1 <= length <= DECLARED_LIMIT:
+    if not 1 <= length <= limits.declared:
         raise PolicyError(f"{source}: line {block.sourceline}: vectorLength {length:,}: must be from 1 to "
-                          f"{DECLARED_LIMIT:,} (the model's states)")
+                          f"{limits.declared:,} (the model's states; {DECLARED_OPTION} raises the limit)")
     alphas, actions = [], []
     for element in block:
         if element.tag not in ("Vector", "SparseVector"):

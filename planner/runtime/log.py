@@ -21,6 +21,7 @@ being written; :func:`replay` ignores such a cut last line.
 """
 from __future__ import annotations
 
+import errno
 import json
 import os
 import time
@@ -34,10 +35,10 @@ from ..decision.belief import DiscreteUpdater
 from ..decision.factored_model import FactoredBelief, FactoredIntentionModel, factored_model
 from ..decision.factored_updater import FactoredUpdater
 from ..decision.intention_model import IntentionModel, intention_model
-from ..defaults import INPUT_FILE_LIMIT
 from ..errors import PlannerError
+from ..files import with_faults
 from ..product import Product, product_from_dict
-from ..validation import InputError, json_loads
+from ..validation import INPUT_OPTION, InputError, InputLimits, json_loads
 
 __all__ = ["LOG_VERSION", "SessionError", "EventLog", "top_intentions", "belief_at", "updater_for", "Replay", "read_log", "replay"]
 
@@ -69,16 +70,23 @@ def belief_at(belief, index: int) -> float:
 class EventLog:
     """Session events as JSON lines. Each event is one line written with one ``write``, then flushed and
     fsynced. ``path`` None keeps the events in memory only (``events`` always holds them); ``on_event`` sees
-    every event as it is written. A log is never overwritten: an existing ``path`` is an error."""
+    every event as it is written. A log is never overwritten: an existing ``path`` is an error.
+
+    A write the system refuses (a full disk: ENOSPC, EIO, a quota) is a :class:`SessionError` naming the log;
+    the file is cut back to the last complete event, so ``aplan replay`` reads every event before it, and every
+    later write raises the same error (the session stops; its end cannot be logged)."""
 
     def __init__(self, path: str | os.PathLike | None = None, on_event: Callable[[dict], None] | None = None):
         self.path = Path(path) if path is not None else None
         self.events: list[dict] = []
         self.on_event = on_event
         self._handle = None
+        self._complete = 0  # bytes of the complete events written
+        self._failure: str | None = None  # why the log cannot be written any more
         if self.path is not None:
             try:
-                self._handle = open(self.path, "x", encoding="utf-8")
+                # unbuffered: what the disk refused is never written later by a flush, and the cut below holds
+                self._handle = with_faults(open(self.path, "xb", buffering=0))
             except FileExistsError:
                 raise SessionError(f"{self.path}: the log exists already; choose another file name "
                                    "(a log is never overwritten)") from None
@@ -89,20 +97,47 @@ class EventLog:
         """Append the event ``event`` with ``fields`` (and the time); returns the record."""
         record = {"event": event, "time": round(time.time(), 3), **fields}
         self.events.append(record)
+        if self._failure is not None:
+            raise SessionError(self._failure)
         if self._handle is not None:
+            line = memoryview((json.dumps(record) + "\n").encode("utf-8"))
+            size = len(line)
             try:
-                self._handle.write(json.dumps(record) + "\n")
-                self._handle.flush()
+                while line:  # an unbuffered write may take part of it
+                    line = line[self._handle.write(line):]
                 os.fsync(self._handle.fileno())
             except OSError as exc:
-                raise SessionError(f"{self.path}: cannot write the log: {exc}") from None
+                raise SessionError(self._fail(exc)) from None
+            self._complete += size
         if self.on_event is not None:
             self.on_event(record)
         return record
 
+    def _fail(self, exc: OSError) -> str:
+        """Cut the file back to its complete events, close it, and say why it failed (kept for later writes)."""
+        handle, self._handle = self._handle, None
+        try:
+            handle.truncate(self._complete)  # drop a partial line (a full disk leaves part of the write)
+        except OSError:
+            pass  # the file system refuses that too: replay drops a last line cut short anyway
+        try:
+            handle.close()
+        except OSError:
+            pass  # the file is gone bad: nothing is buffered (unbuffered), so nothing is lost here
+        fix = "free some space on that disk or log to another (--log FILE)" if exc.errno in (
+            errno.ENOSPC, errno.EDQUOT) else "check the disk, or log to another (--log FILE)"
+        kept = len(self.events) - 1  # the events before the one that failed
+        self._failure = (f"{self.path}: cannot write the session log ({exc.strerror or exc}); the session stopped. "
+                         f"The log keeps the {kept} event{'s' if kept != 1 else ''} before, which aplan replay "
+                         f"reads; {fix}")
+        return self._failure
+
     def close(self) -> None:
         if self._handle is not None:
-            self._handle.close()
+            try:
+                self._handle.close()
+            except OSError as exc:  # a file system that reports a failure only at close (e.g. NFS)
+                self._fail(exc)
             self._handle = None
 
 
@@ -121,14 +156,15 @@ class Replay:
     events: list[dict]
 
 
-def read_log(path: str | os.PathLike) -> list[dict]:
+def read_log(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> list[dict]:
     """The events of the session log at ``path``, checked to be a log of this version; a last line cut
-    short (the one being written when the session died) is dropped. Raises :class:`SessionError`."""
+    short (the one being written when the session died) is dropped. ``limits``: the file's bytes and the
+    JSON nesting at most. Raises :class:`SessionError`."""
     path = Path(path)
     try:
-        if path.stat().st_size > INPUT_FILE_LIMIT:
+        if path.stat().st_size > limits.file_bytes:
             raise SessionError(f"{path}: {path.stat().st_size:,} bytes, more than the limit of "
-                               f"{INPUT_FILE_LIMIT:,} for a session log")
+                               f"{limits.file_bytes:,} for a session log ({INPUT_OPTION} raises it)")
         lines = path.read_text(encoding="utf-8").splitlines()
     except OSError as exc:
         raise SessionError(f"{path}: cannot read the log: {exc}") from None
@@ -139,7 +175,7 @@ def read_log(path: str | os.PathLike) -> list[dict]:
         if not line.strip():
             continue
         try:
-            event = json_loads(line, f"{path}: line {number}")
+            event = json_loads(line, f"{path}: line {number}", limits.json_depth)
         except json.JSONDecodeError as exc:
             if number == len(lines):  # the line being written when the session died
                 break
@@ -190,16 +226,16 @@ def _in_the_log(event) -> None:
     """A reset met again while replaying: the session logged it as a warning event already."""
 
 
-def replay(path: str | os.PathLike, tolerance: float = 1e-6) -> Replay:
+def replay(path: str | os.PathLike, tolerance: float = 1e-6, limits: InputLimits = InputLimits()) -> Replay:
     """Recompute the beliefs of the session logged at ``path`` (the product is stored in the log).
 
     Beliefs depend on the model's transitions and observations only, not on rewards or the policy. A logged
     belief whose top intentions differ from the recomputed ones by more than ``tolerance`` is a mismatch.
     Cost: one model build and one belief update per step. Raises :class:`SessionError` for a file that is
-    not a session log.
+    not a session log; ``limits``: :func:`read_log`'s.
     """
     path = Path(path)
-    events = read_log(path)
+    events = read_log(path, limits)
     product, model = _model_of(path, events[0])
     updater = updater_for(model, on_reset=_in_the_log)
     belief = updater.initialize()

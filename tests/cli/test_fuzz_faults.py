@@ -282,6 +282,33 @@ def _alive(pid: int) -> bool:
         return False
 
 
+def test_session_log_on_a_full_disk(tmp_path, monkeypatch, capsys):
+    """A session whose log fills the disk (the seam fails the write that passes N bytes after writing what
+    fits, as a real full disk does): exit 1 with one line naming the log, no traceback; the log is cut back
+    to its last complete event, so aplan replay still reads the events before the failure."""
+    monkeypatch.chdir(tmp_path)
+    session = ["session", "pen", "--keyboard", "--expansions", "20", "--log"]
+    monkeypatch.setattr(sys, "stdin", io.StringIO(""))  # no operator input: the source ends at once
+    code, _, err = _run(capsys, [*session, "whole.jsonl"])
+    assert code == 1 and "Traceback" not in err  # the source ended: not assembled
+    whole = (tmp_path / "whole.jsonl").read_bytes().splitlines(keepends=True)
+    events = [line.split(b'"event": "')[1].split(b'"')[0] for line in whole]
+    assert events[:2] == [b"start", b"action"], events
+    # The disk fills 50 bytes into the second event (its 'action').
+    monkeypatch.setenv(FAULT_DISK_FULL, str(len(whole[0]) + 50))
+    monkeypatch.setattr(sys, "stdin", io.StringIO(""))
+    code, _, err = _run(capsys, [*session, "full.jsonl"])
+    _assert_clean_failure(code, err, "full.jsonl: cannot write the session log (No space left on device)")
+    assert "free some space" in err and "keeps the 1 event before" in err
+    assert (tmp_path / "full.jsonl").read_bytes().endswith(b"\n")
+    kept = (tmp_path / "full.jsonl").read_bytes().splitlines(keepends=True)
+    assert len(kept) == 1 and kept[0].startswith(b'{"event": "start"')
+    monkeypatch.delenv(FAULT_DISK_FULL)
+    code, out, err = _run(capsys, ["replay", "full.jsonl"])
+    assert code == 0 and "beliefs reproduced at all 0 steps" in out and "ended: no end event" in out, err
+    assert _tree(tmp_path) == {"whole.jsonl", "full.jsonl"}
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_interrupted_solve_keeps_the_best_policy(signum, tmp_path):
     target = tmp_path / "p.policy"

@@ -124,3 +124,62 @@ def test_sweep_with_sparse_rows_equals_dense(pen, monkeypatch):
     sparse = sweep(m, beliefs, result.policy.alphas, q)
     assert np.array_equal(dense[2], sparse[2]) and np.array_equal(dense[1], sparse[1])
     assert np.allclose(dense[0], sparse[0])
+
+
+def test_sweep_of_a_large_model_in_blocks_of_work(pen, monkeypatch):
+    """On a large model (past SPARSE_STATES) the back-ups multiply per observation over the beliefs' non-zero
+    entries, in blocks of about WORK multiply-adds with the time limit checked between them: the same vectors
+    as the dense product, one belief per block when WORK is tiny."""
+    import itertools
+
+    import planner.decision.solvers.belief_set as belief_set
+
+    model = intention_pomdp(make_plan(pen, False))
+    m = Tables(model)
+    result = PointBasedSolver(max_iterations=20, time_limit=None).solve(model)
+    b0 = np.asarray(model.initial, dtype=float)
+    beliefs = np.vstack([b0, m.successors(b0)[3]])
+    q = fast_informed_bound(m)
+    dense = sweep(m, beliefs, result.policy.alphas, q)
+    monkeypatch.setattr(belief_set, "SPARSE_STATES", 0)
+    monkeypatch.setattr(belief_set, "WORK", 1)
+    readings = itertools.count()
+    blocked = sweep(m, beliefs, result.policy.alphas, q, stop=lambda: next(readings) < 0)
+    assert np.array_equal(dense[2], blocked[2]) and np.array_equal(dense[1], blocked[1])
+    assert np.allclose(dense[0], blocked[0]) and blocked[3] == dense[3]
+    assert next(readings) >= dense[3]  # a check before every block: one per (belief, action) pair backed up
+
+
+def test_a_large_sweep_stops_inside_a_block(pen, monkeypatch):
+    """The limit passing between the observations of a block drops that block and keeps the ones before."""
+    import itertools
+
+    import planner.decision.solvers.belief_set as belief_set
+
+    model = intention_pomdp(make_plan(pen, False))
+    m = Tables(model)
+    alphas = PointBasedSolver(max_iterations=20, time_limit=None).solve(model).policy.alphas
+    b0 = np.asarray(model.initial, dtype=float)
+    beliefs = np.vstack([b0, m.successors(b0)[3]])
+    q = fast_informed_bound(m)
+    monkeypatch.setattr(belief_set, "SPARSE_STATES", 0)
+    whole = sweep(m, beliefs, alphas, q)
+    stopped_inside = []
+    original = belief_set._projected
+
+    def projected(*args):
+        try:
+            return original(*args)
+        except belief_set.SolveStopped:
+            stopped_inside.append(True)
+            raise
+
+    monkeypatch.setattr(belief_set, "_projected", projected)
+    for k in range(2, 1000):  # the first limit that leaves some back-ups done and stops inside a block
+        readings = itertools.count()
+        cut = sweep(m, beliefs, alphas, q, stop=lambda: next(readings) >= k)  # noqa: B023
+        if cut[3] and stopped_inside:
+            break
+        stopped_inside.clear()
+    assert stopped_inside and 0 < cut[3] < whole[3]
+    assert next(readings) == k + 1  # no reading after the one that stopped it

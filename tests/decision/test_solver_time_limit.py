@@ -131,3 +131,92 @@ def test_large_model_successors_are_the_same(slow_pen, monkeypatch):
         monkeypatch.undo()
         assert [np.array_equal(x, y) for x, y in zip(whole[:2], blocked[:2])] == [True, True]
         assert np.allclose(whole[2], blocked[2], rtol=1e-12) and np.allclose(whole[3], blocked[3], rtol=1e-12)
+
+
+def _beliefs_of(slow_pen, count: int = 40) -> tuple[Tables, np.ndarray, np.ndarray]:
+    """The pen's tables, ``count`` beliefs reachable from b0 (a trial's successors) and the blind vectors."""
+    m = Tables(slow_pen)
+    b0 = np.asarray(slow_pen.initial, dtype=float)
+    beliefs = m.successors(b0)[3][:count]
+    return m, np.vstack([b0, beliefs]), LowerBound.blind(m).vectors
+
+
+def test_a_sweep_stops_between_its_back_ups(slow_pen):
+    """A sweep of the belief set (36 s of one step on the flat chain of 9, the overshoot of --time-limit 60)
+    stops between blocks of back-ups: it returns the vectors of the actions backed up so far, each the value of
+    a policy (no higher than the full sweep's best at any of the beliefs), and backs up fewer pairs."""
+    from planner.decision.solvers.belief_set import sweep
+
+    m, beliefs, alphas = _beliefs_of(slow_pen)
+    q = mdp_upper_bound(m, max_sweeps=3)
+    full = sweep(m, beliefs, alphas, q)
+    assert full[3] > 0 and len(full[0]) > 0
+    with pytest.raises(SolveStopped):  # before the first back-up: the current values' products stop it
+        sweep(m, beliefs, alphas, q, stop=lambda: True)
+    readings = itertools.count()
+    # The limit passes at the 14th reading: the first actions (up to 12, the first that improves) backed up.
+    cut = sweep(m, beliefs, alphas, q, stop=lambda: next(readings) >= 14)
+    assert 0 < cut[3] < full[3] and cut[1].tolist() == [12] and sorted(full[1].tolist()) == [12, 13]
+    best_full = (full[0] @ beliefs.T).max(axis=0)
+    assert np.all((cut[0] @ beliefs.T).max(axis=0) <= best_full + 1e-9)
+
+
+def test_belief_growth_stops_at_the_limit(slow_pen):
+    from planner.decision.solvers.belief_set import policy_successors
+
+    m, beliefs, _ = _beliefs_of(slow_pen)
+    actions = np.arange(len(beliefs)) % m.A
+    weights = np.ones(len(beliefs))
+    whole = policy_successors(m, beliefs, actions, weights)
+    assert policy_successors(m, beliefs, actions, weights, stop=lambda: True)[0].shape == (0, m.S)
+    readings = itertools.count()
+    some = policy_successors(m, beliefs, actions, weights, stop=lambda: next(readings) >= 3)
+    assert 0 < len(some[0]) < len(whole[0])
+    assert np.array_equal(some[0], whole[0][:len(some[0])])  # the first products' successors, as they were
+
+
+def test_the_sweeps_stop_at_the_limit(slow_pen):
+    """The solver's lower-bound process under a limit that passes inside its steps: no step runs on past it
+    (with a counter clock, the readings after the limit are a handful of checks, not a step's thousands)."""
+    from planner.decision.solvers.belief_set import BeliefSet
+    from planner.decision.solvers.sweeps import sweep_rounds
+
+    m, beliefs, _ = _beliefs_of(slow_pen)
+    lower = LowerBound.blind(m)
+    q = mdp_upper_bound(m, max_sweeps=3)
+    belief_set = BeliefSet(m.S)
+    belief_set.add(beliefs, np.ones(len(beliefs)))
+    readings = itertools.count()
+    steps = sweep_rounds(m, lower, belief_set, q, stop=lambda: next(readings) >= 5)
+    work = [next(steps) for _ in range(6)]
+    assert work[-1] == 0.0  # stopped steps do no work
+    before = next(readings)
+    next(steps)
+    assert next(readings) - before <= 3  # a stopped step reads the clock once or twice and returns
+
+
+def test_products_of_many_beliefs_stop_between_blocks_of_work(slow_pen, monkeypatch):
+    """Both bounds at many beliefs (a trial's successors on a large model: 7 s for the lower bound's products
+    at the 9-part chain's b0) are computed in blocks of about WORK multiply-adds, the limit checked between
+    them: the same values in blocks, and a limit passing midway stops the product."""
+    import planner.decision.solvers.tables as tables
+    import planner.decision.solvers.upper as upper_module
+    from planner.decision.solvers.tables import best_products
+
+    m, beliefs, vectors = _beliefs_of(slow_pen)
+    upper = UpperBound(mdp_upper_bound(m, max_sweeps=3), np.random.default_rng(0).random(m.S))
+    for b in beliefs[:5]:  # points for the sawtooth
+        upper.update(b, upper.value(b) - 0.1)
+    whole_lower, whole_upper = best_products(beliefs, vectors), upper.at(beliefs)
+    monkeypatch.setattr(tables, "WORK", 1)  # one belief per block
+    monkeypatch.setattr(upper_module, "WORK", 1)
+    readings = itertools.count()
+    blocked_lower = best_products(beliefs, vectors, stop=lambda: next(readings) < 0)
+    assert next(readings) == len(beliefs)  # checked before every block, one belief each
+    assert np.array_equal(blocked_lower[1], whole_lower[1]) and np.allclose(blocked_lower[0], whole_lower[0])
+    assert np.allclose(upper.at(beliefs, stop=lambda: False), whole_upper)
+    for product in (lambda stop: best_products(beliefs, vectors, stop), lambda stop: upper.at(beliefs, stop=stop)):
+        readings = itertools.count()
+        with pytest.raises(SolveStopped):
+            product(lambda: next(readings) >= 10)
+        assert next(readings) == 11  # stopped at the tenth block of 41, not after all of them

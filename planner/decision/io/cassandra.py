@@ -19,10 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ...defaults import DECLARED_LIMIT, SPREAD_CELL_LIMIT
+from ...defaults import SPREAD_CELL_LIMIT
 from ...errors import PlannerError
 from ...files import open_atomic
-from ...validation import InputLimitError
+from ...validation import CELLS_OPTION, DECLARED_OPTION, INPUT_OPTION, InputLimitError, InputLimits
 from ..pomdp import POMDP, ModelError
 from .sparse_tables import SparseTable, split_rows
 
@@ -108,8 +108,9 @@ def _names_end(st: _Stream, stop: tuple[str, ...]) -> bool:
     return st.peek() is None or st.peek() in stop or st.peek(1) == ":"
 
 
-def _declaration(st: _Stream, key: str, names: dict[str, list[str]], header: dict) -> None:
-    """One preamble declaration ``key: ...`` (``key`` taken already) into ``names`` or ``header``."""
+def _declaration(st: _Stream, key: str, names: dict[str, list[str]], header: dict, limit: int) -> None:
+    """One preamble declaration ``key: ...`` (``key`` taken already) into ``names`` or ``header``; at most
+    ``limit`` names declared."""
     if key == "start" and st.peek() in ("include", "exclude"):
         mode = st.take()
         st.expect(":")
@@ -141,15 +142,17 @@ def _declaration(st: _Stream, key: str, names: dict[str, list[str]], header: dic
             count = int(tok)
             if count == 0:
                 raise st.fail(f"{key}: 0; a model needs at least one")
-            if count > DECLARED_LIMIT:
-                raise st.fail(f"{key}: {count:,}, more than the limit of {DECLARED_LIMIT:,} declared values")
+            if count > limit:
+                raise st.fail(f"{key}: {count:,}, more than the limit of {limit:,} declared values "
+                              f"({DECLARED_OPTION} raises it)")
             names[key] = [f"{prefix}{k}" for k in range(count)]
         else:
             items = [tok]
             while not _names_end(st, _KEYS + ("T", "O", "R")):
                 items.append(st.take())
-                if len(items) > DECLARED_LIMIT:
-                    raise st.fail(f"{key}: more than the limit of {DECLARED_LIMIT:,} declared values")
+                if len(items) > limit:
+                    raise st.fail(f"{key}: more than the limit of {limit:,} declared values "
+                                  f"({DECLARED_OPTION} raises it)")
             names[key] = items
 
 
@@ -174,21 +177,26 @@ def _initial_belief(st: _Stream, names: dict[str, list[str]], spec) -> np.ndarra
     return initial
 
 
-def read_cassandra(path: str | Path) -> POMDP:
+def read_cassandra(path: str | Path, limits: InputLimits = InputLimits()) -> POMDP:
     """Read a ``.pomdp`` file into a :class:`POMDP`.
 
     Memory: O(entries) for the entries the file lists (kept sparse) plus the dense (A, S) reward; never
     A x S x S. Time: O(tokens + nnz log nnz), the reward O(sum over actions a of nnz(T_a) x k log N), k the
-    mean non-zeros of an observation row, N the reward entries."""
+    mean non-zeros of an observation row, N the reward entries. ``limits``: the file's bytes, the values
+    declared and the cells spread per table (:class:`~planner.validation.InputLimits`)."""
     source = str(path)
     try:
+        size = Path(path).stat().st_size
+        if size > limits.file_bytes:
+            raise CassandraError(f"{source}: {size:,} bytes, more than the limit of {limits.file_bytes:,} for a "
+                                 f"model file ({INPUT_OPTION} raises it)")
         with open(path, encoding="utf-8", errors="strict") as lines:
-            return _read(lines, source)
+            return _read(lines, source, limits)
     except (OSError, UnicodeDecodeError) as exc:
         raise CassandraError(f"{source}: cannot read the file: {exc}") from None
 
 
-def _read(lines, source: str) -> POMDP:
+def _read(lines, source: str, limits: InputLimits = InputLimits()) -> POMDP:
     st = _Stream(lines, source)
     names: dict[str, list[str]] = {}
     header: dict = {"discount": None, "sign": 1.0, "start": None}
@@ -208,10 +216,11 @@ def _read(lines, source: str) -> POMDP:
             break
         key = st.take()
         if key in _KEYS:
-            _declaration(st, key, names, header)
+            _declaration(st, key, names, header, limits.declared)
             if all(k in names for k in ("states", "actions", "observations")) and tables is None:
                 S, A, Z = (len(names[k]) for k in ("states", "actions", "observations"))
-                tables = {"T": SparseTable((A, S, S)), "O": SparseTable((A, S, Z)),
+                tables = {"T": SparseTable((A, S, S), limits.spread_cells),
+                          "O": SparseTable((A, S, Z), limits.spread_cells),
                           "R": SparseTable((A, S, S, Z), cell_limit=None)}  # looked up only, never spread
                 positions = {k: {} for k in ("states", "actions", "observations")}
                 for k, table in positions.items():
@@ -231,9 +240,12 @@ def _read(lines, source: str) -> POMDP:
     if header["discount"] is None:
         raise CassandraError(f"{source}: no discount")
     initial = _initial_belief(st, names, header["start"])
-    transition, observation = split_rows(tables["T"]), split_rows(tables["O"])
     try:
-        reward = header["sign"] * expected_reward(transition, observation, tables["R"])
+        transition, observation = split_rows(tables["T"]), split_rows(tables["O"])
+    except InputLimitError as exc:  # entries for some actions, others for '*': the spread counted per action
+        raise CassandraError(f"{source}: {exc}") from None
+    try:
+        reward = header["sign"] * expected_reward(transition, observation, tables["R"], limits.spread_cells)
     except InputLimitError as exc:
         raise CassandraError(f"{source}: {exc}") from None
     try:
@@ -243,14 +255,19 @@ def _read(lines, source: str) -> POMDP:
         raise CassandraError(f"{source}: {exc}") from None
 
 
-def expected_reward(transition, observation, table: SparseTable) -> np.ndarray:
+def expected_reward(transition, observation, table: SparseTable, cell_limit: int = SPREAD_CELL_LIMIT) -> np.ndarray:
     """``R(s, a) = sum over s', z of T(s' | s, a) O(z | s', a) R(s, a, s', z)`` for the (A, S, S, Z) reward
     ``table``, evaluated only where ``T O`` is non-zero (never the dense A x S x S x Z array).
     Cost per action a: O(nnz(T_a) k log N) time and O(nnz(T_a) k) memory, k the mean non-zeros of an
-    observation row, N the reward entries."""
+    observation row, N the reward entries. Past ``cell_limit`` combinations for an action:
+    :class:`~planner.validation.InputLimitError`."""
     A, S, _, Z = table.shape
     reward = np.zeros((A, S))
     if not table.order:
+        return reward
+    if table.leaves_free((2, 3)):  # R: a : s : * : * only (as aplan writes them): R(s, a) is the entry itself,
+        for a in range(A):       # the rows of T O summing to 1; looked up at (a, s, 0, 0), O(A S log N)
+            reward[a] = table.values_at(((a * S + np.arange(S, dtype=np.int64)) * S) * Z)
         return reward
     for a, (t, o) in enumerate(zip(transition, observation)):
         coo = t.tocoo()
@@ -258,11 +275,11 @@ def expected_reward(transition, observation, table: SparseTable) -> np.ndarray:
         total = int(counts.sum())
         if not total:
             continue
-        if total > SPREAD_CELL_LIMIT:  # the temporaries below hold about 60 bytes per combination
+        if total > cell_limit:  # the temporaries below hold about 60 bytes per combination
             raise InputLimitError(f"the reward of action {a} would be evaluated over {total:,} (state, next state, "
                                   f"observation) combinations with non-zero probability, more than the limit of "
-                                  f"{SPREAD_CELL_LIMIT:,}; give rewards as R: a : s : * : * (they do not depend on "
-                                  "the next state or the observation), or make the tables sparser")
+                                  f"{cell_limit:,} ({CELLS_OPTION} raises it); give rewards as R: a : s : * : * (they "
+                                  "do not depend on the next state or the observation), or make the tables sparser")
         # every (s, s', z) with T(s' | s, a) O(z | s', a) > 0: each T entry repeated over its observation row
         position = np.repeat(o.indptr[coo.col] - (np.cumsum(counts) - counts), counts) + np.arange(total)
         s, s2 = np.repeat(coo.row, counts).astype(np.int64), np.repeat(coo.col, counts).astype(np.int64)

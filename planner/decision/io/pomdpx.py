@@ -24,10 +24,9 @@ from xml.sax.saxutils import escape
 import numpy as np
 from lxml import etree
 
-from ...defaults import DECLARED_LIMIT, INPUT_FILE_LIMIT
 from ...errors import PlannerError
 from ...files import open_atomic
-from ...validation import CappedReader, InputLimitError
+from ...validation import DECLARED_OPTION, INPUT_OPTION, CappedReader, InputLimitError, InputLimits
 from ..pomdp import POMDP, ModelError
 from .sparse_tables import SparseTable, split_rows
 
@@ -50,7 +49,7 @@ def _fail(source: str, element, problem: str) -> PomdpxError:
     return PomdpxError(f"{source}:{line}: {problem}")
 
 
-def _values(source, var, prefix):
+def _values(source, var, prefix, limit: int):
     enum = var.find("ValueEnum")
     if enum is not None and enum.text and enum.text.split():
         return enum.text.split()
@@ -60,20 +59,20 @@ def _values(source, var, prefix):
     number = int(count.text)
     if number == 0:
         raise _fail(source, count, f"<{var.tag}> declares 0 values; a model needs at least one")
-    if number > DECLARED_LIMIT:
-        raise _fail(source, count, f"<{var.tag}> declares {number:,} values, more than the limit of "
-                                   f"{DECLARED_LIMIT:,}")
+    if number > limit:
+        raise _fail(source, count, f"<{var.tag}> declares {number:,} values, more than the limit of {limit:,} "
+                                   f"({DECLARED_OPTION} raises it)")
     return [f"{prefix}{i}" for i in range(number)]
 
 
 class _Section:
     """One table being read: its variables in the file's order and their axes in the table."""
 
-    def __init__(self, source, cond, order, axes, shape, index):
+    def __init__(self, source, cond, order, axes, shape, index, cell_limit: int):
         self.source, self.cond, self.order, self.index = source, cond, order, index
         self.axes = [axes[v] for v in order]  # file position -> table axis
         self.sizes = [shape[a] for a in self.axes]
-        self.table = SparseTable(shape)
+        self.table = SparseTable(shape, cell_limit)
 
     def entry(self, entry) -> None:
         """Add one ``<Entry>`` to the table (APPL's semantics: ``*`` spreads one number, ``-`` lists them)."""
@@ -140,26 +139,27 @@ def _is_number(text: str) -> bool:
         return False
 
 
-def _open(path, source):
+def _open(path, source, limit: int):
     try:
-        return CappedReader(gzip.open(path) if source.endswith(".gz") else open(path, "rb"), INPUT_FILE_LIMIT,
-                            source)
+        return CappedReader(gzip.open(path) if source.endswith(".gz") else open(path, "rb"), limit, source,
+                            INPUT_OPTION)
     except OSError as exc:
         raise PomdpxError(f"{source}: cannot read the file: {exc}") from None
 
 
-def read_pomdpx(path: str | Path) -> POMDP:
+def read_pomdpx(path: str | Path, limits: InputLimits = InputLimits()) -> POMDP:
     """Read a flat POMDPX file (optionally gzip-compressed, ``.gz``) into a :class:`POMDP`.
 
     The XML is streamed: each ``<Entry>`` goes into its table and is dropped. Memory: O(nnz) for the
     transition and observation tables' non-zero entries (and the cells the file lists, zeros included), plus
-    the dense (A, S) reward; never A x S x S. Time: O(entries + nnz log nnz).
+    the dense (A, S) reward; never A x S x S. Time: O(entries + nnz log nnz). ``limits``: the bytes read
+    (decompressed), the values declared and the cells spread per table (:class:`~planner.validation.InputLimits`).
     """
     source = str(path)
-    stream = _open(path, source)
+    stream = _open(path, source, limits.file_bytes)
     try:
         with stream:
-            return _read(stream, source)
+            return _read(stream, source, limits)
     except (OSError, EOFError) as exc:
         raise PomdpxError(f"{source}: cannot read the file: {exc}") from None
     except InputLimitError as exc:
@@ -176,7 +176,7 @@ _ENTRY_PARTS = ("Entry", "Instance", "ProbTable", "ValueTable")
 _ELEMENT_LIMIT = 100_000  # elements other than entries: each is kept until the end of the file
 
 
-def _read(stream, source: str) -> POMDP:
+def _read(stream, source: str, limits: InputLimits) -> POMDP:
     root = variable = None
     names = {}  # variable name -> its values
     roles = {}  # 'prev', 'curr', 'obs', 'act' -> variable name
@@ -197,7 +197,7 @@ def _read(stream, source: str) -> POMDP:
                 section_of = parameter
                 section = None
                 if parameter is not None and parameter.tag == "Parameter":
-                    section = _start_section(source, parameter, names, roles, found)
+                    section = _start_section(source, parameter, names, roles, found, limits.spread_cells)
             if section is not None:
                 try:
                     section.entry(element)
@@ -213,10 +213,10 @@ def _read(stream, source: str) -> POMDP:
                 raise _fail(source, root, f"the root element is <{root.tag}>, not <pomdpx>")
         parent = element.getparent()
         if tag == "Parameter" and parent is not None and element is not section_of:
-            _start_section(source, element, names, roles, found)  # a table with no entries
+            _start_section(source, element, names, roles, found, limits.spread_cells)  # a table with no entries
         elif tag == "Variable" and parent is root:
             variable = element
-            _variables(source, variable, names, roles)
+            _variables(source, variable, names, roles, limits.declared)
         elif tag in ("Discount", "Description") and parent is root:
             text[tag] = element.text
     if root is None:
@@ -228,8 +228,11 @@ def _read(stream, source: str) -> POMDP:
             raise _fail(source, root, f"no <{tag}><{child}>")
     S = len(names[roles["prev"]])
     initial = found["InitialStateBelief"].table.dense().reshape(S)
-    transition = split_rows(found["StateTransitionFunction"].table)
-    observation = split_rows(found["ObsFunction"].table)
+    try:
+        transition = split_rows(found["StateTransitionFunction"].table)
+        observation = split_rows(found["ObsFunction"].table)
+    except InputLimitError as exc:  # entries for some actions, others for '*': the spread counted per action
+        raise PomdpxError(f"{source}: {exc}") from None
     reward = found["RewardFunction"].table.dense()
     try:
         discount = float(text.get("Discount"))
@@ -243,7 +246,7 @@ def _read(stream, source: str) -> POMDP:
         raise PomdpxError(f"{source}: {exc}") from None
 
 
-def _variables(source, variable, names, roles) -> None:
+def _variables(source, variable, names, roles, limit: int) -> None:
     """The flat model's variables from ``<Variable>``: their names into ``roles``, values into ``names``."""
     state_vars, obs_vars, action_vars = (variable.findall(t) for t in ("StateVar", "ObsVar", "ActionVar"))
     if len(state_vars) != 1 or len(obs_vars) != 1 or len(action_vars) != 1:
@@ -251,12 +254,12 @@ def _variables(source, variable, names, roles) -> None:
                                       f"{len(action_vars)} action variables) is not supported; flat models only")
     sv, ov, av = state_vars[0], obs_vars[0], action_vars[0]
     roles.update(prev=sv.get("vnamePrev"), curr=sv.get("vnameCurr"), obs=ov.get("vname"), act=av.get("vname"))
-    states = _values(source, sv, "s")
-    names.update({roles["prev"]: states, roles["curr"]: states, roles["obs"]: _values(source, ov, "o"),
-                  roles["act"]: _values(source, av, "a")})
+    states = _values(source, sv, "s", limit)
+    names.update({roles["prev"]: states, roles["curr"]: states, roles["obs"]: _values(source, ov, "o", limit),
+                  roles["act"]: _values(source, av, "a", limit)})
 
 
-def _start_section(source, parameter, names, roles, found) -> _Section | None:
+def _start_section(source, parameter, names, roles, found, cell_limit: int) -> _Section | None:
     """The table a ``<Parameter>`` fills, from its section's ``<Var>`` and ``<Parent>`` (read already)."""
     cond = parameter.getparent()
     tag = cond.getparent().tag if cond.getparent() is not None else None
@@ -286,9 +289,12 @@ def _start_section(source, parameter, names, roles, found) -> _Section | None:
         if sorted(parents) != sorted([prev, act]):
             raise _fail(source, cond, f"reward must be R({prev}, {act})")
         axes, shape = {act: 0, prev: 1}, (A, S)
+        # The model holds the reward dense, A x S numbers, whatever the file says: its rows (as aplan writes
+        # them, a 9-part chain's 5,041,646 non-zero rewards) are bounded by that, not by the spread limit.
+        cell_limit = max(cell_limit, A * S)
     order = parents + [var] if tag != "RewardFunction" else parents
     index = {v: {n: i for i, n in enumerate(names[v])} for v in order}
-    found[tag] = _Section(source, cond, order, axes, shape, index)
+    found[tag] = _Section(source, cond, order, axes, shape, index, cell_limit)
     return found[tag]
 
 

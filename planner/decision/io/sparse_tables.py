@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...defaults import SPREAD_CELL_LIMIT
-from ...validation import InputLimitError
+from ...validation import CELLS_OPTION, InputLimitError
 
 __all__ = ["SparseTable", "split_rows"]
 
@@ -49,12 +49,16 @@ class SparseTable:
     An entry's ``index`` has one item per axis: an ``int`` fixes the axis, ``None`` covers every value.
     ``cell_limit``: the most cells the entries may spread over (``*``, rows, identities), counted as each entry
     comes, before anything is allocated; past it :class:`~planner.validation.InputLimitError` (None: no limit,
-    for a table that is only looked up, never resolved: a ``.pomdp`` file's reward).
+    for a table that is only looked up, never resolved: a ``.pomdp`` file's reward). A spread over the first
+    axis (``O: * : s : z``, the action) is counted once as each entry comes, since a table whose entries all
+    leave that axis free is resolved once and shared (:func:`split_rows`); a table that needs it resolved for
+    every value is checked again, counting it, before it is (:meth:`check_spread`).
     """
 
     def __init__(self, shape: tuple[int, ...], cell_limit: int | None = SPREAD_CELL_LIMIT):
         self.cell_limit = cell_limit
-        self.spread_cells = 0
+        self.spread_cells = 0  # cells spread, a spread over the first axis counted once
+        self.spread_first = 0  # cells spread, a spread over the first axis counted for every value
         self.shape = tuple(int(n) for n in shape)
         self.size = int(np.prod(self.shape, dtype=np.int64))
         self.order = 0
@@ -89,7 +93,8 @@ class SparseTable:
             group.blocks.append(-1)
         else:
             if value != 0:
-                self._count(int(np.prod([n for i, n in zip(index, self.shape) if i is None], dtype=np.int64)))
+                self._count(int(np.prod([n for k, (i, n) in enumerate(zip(index, self.shape)) if i is None and k],
+                                        dtype=np.int64)), index)
             mask, key = self._key(index)
             group = self._group(mask)
             group.values.append(value)
@@ -107,20 +112,41 @@ class SparseTable:
         """Set the cells ``index`` covers to 1 where the coordinates on ``axes`` are equal, else 0."""
         self._block(index, "identity", axes, None)
 
-    def _count(self, cells: int) -> None:
-        """Add ``cells`` to the cells the entries spread over; refuse past ``cell_limit``."""
+    def _count(self, cells: int, index) -> None:
+        """Add ``cells`` (a spread over the first axis left out) to the cells the entries spread over; refuse
+        past ``cell_limit``."""
         self.spread_cells += cells
-        if self.cell_limit is not None and self.spread_cells > self.cell_limit:
-            raise InputLimitError(f"the entries so far spread over {self.spread_cells:,} cells of a table of shape "
+        self.spread_first += cells * (self.shape[0] if index[0] is None else 1)
+        self._refuse_past(self.spread_cells, "so far ")
+
+    def _refuse_past(self, cells: int, when: str) -> None:
+        if self.cell_limit is not None and cells > self.cell_limit:
+            raise InputLimitError(f"the entries {when}spread over {cells:,} cells of a table of shape "
                                   f"{' x '.join(map(str, self.shape))}, more than the limit of {self.cell_limit:,} "
-                                  "(about 150 bytes each while the table is built); list the non-zero entries "
-                                  "instead of '*', uniform or whole rows")
+                                  f"(about 150 bytes each while the table is built; {CELLS_OPTION} raises it); list "
+                                  "the non-zero entries instead of '*', uniform or whole rows")
+
+    def same_along_first(self) -> bool:
+        """Whether every entry leaves the first axis free (``O: * : ...``): then every slice along it is the
+        same, resolved once (:func:`split_rows`)."""
+        return self.leaves_free((0,))
+
+    def leaves_free(self, axes: tuple[int, ...]) -> bool:
+        """Whether every entry covers every value of each of ``axes`` with one number (``*``): the table is
+        then the same along them."""
+        return all(not any(mask[k] for k in axes) for mask, group in self.groups.items() if len(group.keys)) and \
+            all(all(index[k] is None and k not in listed for k in axes) for index, _, listed, *_ in self.listed)
+
+    def check_spread(self) -> None:
+        """Before resolving every slice along the first axis (entries fix it somewhere): refuse past
+        ``cell_limit`` counting a spread over that axis for each of its values."""
+        self._refuse_past(self.spread_first, "")
 
     def _block(self, index, kind, axes, values) -> None:
-        rest = int(np.prod([n for k, (i, n) in enumerate(zip(index, self.shape)) if i is None and k not in axes],
-                           dtype=np.int64))
+        rest = int(np.prod([n for k, (i, n) in enumerate(zip(index, self.shape)) if i is None and k not in axes
+                            and k], dtype=np.int64))
         listed = min(self.shape[axes[0]], self.shape[axes[1]]) if kind == "identity" else np.count_nonzero(values)
-        self._count(int(listed) * rest)
+        self._count(int(listed) * rest, index if 0 not in axes else (0,) + tuple(index[1:]))
         mask, key = self._key(index)
         group = self._group(mask)
         group.keys.append(key)
@@ -271,8 +297,17 @@ class SparseTable:
 
 def split_rows(table: SparseTable):
     """The CSR matrices ``M[k]`` (shape ``shape[1:]``) of a resolved 3-axis table, ``M[k][i, j] = table[k, i, j]``,
-    built from its non-zero cells (never dense). Cost: O(nnz + shape[0] x shape[1])."""
+    built from its non-zero cells (never dense). When every entry leaves the first axis free (an observation
+    table given for ``*`` actions) the slice is resolved once and the same matrix serves every ``k`` (as the
+    writers mean it, and as the solvers share it); otherwise :meth:`SparseTable.check_spread` first.
+    Cost: O(nnz + shape[0] x shape[1])."""
     K, R, C = table.shape
+    if K > 1 and table.same_along_first():
+        one = SparseTable((1, R, C), None)
+        one.groups, one.listed, one.order = table.groups, table.listed, table.order
+        one._full_group = one.groups.get(one._full, one._full_group)
+        return split_rows(one) * K
+    table.check_spread()
     lin, val = table.cells()
     bounds = np.searchsorted(lin, np.arange(K + 1, dtype=np.int64) * (R * C))
     out = []

@@ -63,11 +63,12 @@ class LowerBound:
         self._rows.extend(vectors)
         self.actions.extend(int(a) for a in actions)
 
-    def prune(self, beliefs: np.ndarray) -> None:
+    def prune(self, beliefs: np.ndarray, stop=None) -> None:
         """Keep the vectors that are best at some belief of ``beliefs`` (m, S), and the fixed ones: the bound
-        at each of those beliefs stays the same. Cost: O(m n S)."""
+        at each of those beliefs stays the same (``stop``: :meth:`at`'s; stopped, nothing is pruned).
+        Cost: O(m n S)."""
         mask = np.zeros(self.n, dtype=bool)
-        mask[np.unique(self.at(beliefs)[1])] = True
+        mask[np.unique(self.at(beliefs, stop)[1])] = True
         mask[:self.fixed] = True
         self._rows.keep(mask)
         self.actions[:] = [self.actions[i] for i in np.flatnonzero(mask)]

@@ -90,7 +90,8 @@ class PointBasedSolver:
     ``clock``: the time source of ``time_limit`` (tests inject a counter). The limit covers the whole solve
     but building the tables, the bounds' set-up included: the blind policies get an eighth of it (the rest of
     the actions then the floor ``min R / (1 - gamma)``), the upper bound's value iterations a quarter (they
-    stop inside a sweep), and a trial stops descending at the limit.
+    stop inside a sweep), a trial stops descending at the limit, and a sweep of the belief set or its growth
+    stops between blocks of back-ups (keeping the vectors backed up so far).
     """
 
     time_limit: float | None = 60.0
@@ -154,7 +155,7 @@ class PointBasedSolver:
         beliefs = BeliefSet(m.S)
         beliefs.add(b0[None], np.ones(1))
         sweeps = sweep_rounds(m, lower, beliefs, Q, self.theta, self.theta_factor, self.sweeps_per_round,
-                              self.chunk, self.belief_memory)
+                              self.chunk, self.belief_memory, stop=lambda: clock() - start >= limit)
         sharing = WorkSharing(self.min_share, self.rate_horizon)
         iterations, pruned_at = 0, 0  # pruned_at: upper-bound points after the last pruning
         lb, ub = lower.value(b0), upper.value(b0)

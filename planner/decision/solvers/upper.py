@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .tables import BLOCK, Rows, SolveStopped
+from .tables import BLOCK, WORK, Rows, SolveStopped
 
 __all__ = ["CornerGroups", "UpperBound"]
 
@@ -105,8 +105,18 @@ class UpperBound:
 
     def at(self, B: np.ndarray, allowed: np.ndarray | None = None, stop=None) -> np.ndarray:
         """The bound at the beliefs ``B`` (m, S); ``allowed`` (n, m): which points may serve which belief
-        (default: all); ``stop``: checked before each block of the sawtooth (:class:`~.tables.SolveStopped`).
+        (default: all); ``stop``: checked before each block of beliefs (about ``WORK`` multiply-adds for the
+        corner and Q products) and each block of the sawtooth (:class:`~.tables.SolveStopped`).
         Cost: O(m S (A + n)) (the sawtooth only over the pairs whose supports nest)."""
+        rows = max(1, WORK // max(1, B.shape[1] * (len(self.Q) + 1)))
+        if len(B) > rows:  # many beliefs over many states: in blocks, each bound on its own
+            parts = []
+            for first in range(0, len(B), rows):
+                if first and stop is not None and stop():
+                    raise SolveStopped
+                parts.append(self.at(B[first:first + rows], None if allowed is None else allowed[:, first:first + rows],
+                                     stop))
+            return np.concatenate(parts)
         base = B @ self.corner
         fit = None
         if self.groups is not None:
