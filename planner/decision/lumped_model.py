@@ -41,6 +41,7 @@ import scipy.sparse as sp
 
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
+from .delayed_reveal import DelayedReveal
 from .factored_model import FactoredIntentionModel, factored_model
 from .intention_model import Rewards
 from .online import revealed_state_values
@@ -148,23 +149,32 @@ def lumped_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DIS
     return LumpedModel(factored, lumped_pomdp(factored))
 
 
-def solver_bounds(model: FactoredIntentionModel) -> tuple[np.ndarray, CornerGroups | None]:
+def solver_bounds(model: FactoredIntentionModel, reveal: DelayedReveal | None = None
+                  ) -> tuple[np.ndarray, CornerGroups | None]:
     """What a point-based solver starts the lumped POMDP's upper bound from: the Q-values (A, classes) of
     :func:`~planner.decision.online.revealed_state_values` (the robot knows the class now and every later
     assembly state), and one corner group per assembly state with two or more classes out of it: the belief
     that spreads over them by ``class_fraction`` (every belief the model reaches holds such a spread, save
     for the classes a wrong robot action ruled out) with the value for a robot that knows the state but not
-    the next step (None when no state has two classes). Groups come in the states' order, the final level first, so that one pass of backups
-    carries values from the end of the assembly to its start. Cost: O(S + E) after the bound's backward pass.
+    the next step (None when no state has two classes). Groups come in the states' order, the final level
+    first, so that one pass of backups carries values from the end of the assembly to its start. With
+    ``reveal`` (:func:`~planner.decision.delayed_reveal.delayed_reveal_bound`), each Q-value and group value
+    is the lower of the two bounds (the minimum of two upper bounds is one; a class's relaxed value bounds
+    every action's Q-value there). Cost: O(S + E) after the bounds' own passes.
     """
     values = revealed_state_values(model)
+    Q = values.q_matrix(model)
+    if reveal is not None:
+        Q = np.minimum(Q, reveal.corner_values[None, :])
     start = model.state_class_start
     count = np.diff(start)
     states = np.flatnonzero(count >= 2)        # in index order: level by level from the final state
     if not states.size:
-        return values.q_matrix(model), None
+        return Q, None
     member = np.concatenate([model.state_classes[start[s]:start[s + 1]] for s in states])
     first = np.concatenate([[0], np.cumsum(count[states])[:-1]]).astype(np.int64)
-    groups = CornerGroups(member.astype(np.int64), model.class_fraction[member].astype(float), first,
-                          np.asarray(values.state)[states].astype(float))
-    return values.q_matrix(model), groups
+    group_values = np.asarray(values.state)[states].astype(float)
+    if reveal is not None:
+        group_values = np.minimum(group_values, reveal.spread_values(states))
+    groups = CornerGroups(member.astype(np.int64), model.class_fraction[member].astype(float), first, group_values)
+    return Q, groups

@@ -35,7 +35,42 @@ import numpy as np
 
 from .tables import BLOCK, Rows, SolveStopped
 
-__all__ = ["CornerGroups", "UpperBound"]
+__all__ = ["CornerGroups", "SparseRows", "UpperBound"]
+
+
+class SparseRows:
+    """Rows kept by their non-zeros (CSR, amortised appends): ``arrays()`` gives ``(ptr, cols, vals)``, row
+    ``i`` holding ``vals[ptr[i]:ptr[i+1]]`` at ``cols[ptr[i]:ptr[i+1]]``."""
+
+    def __init__(self, rows: np.ndarray | None = None):
+        self._ptr, self._cols, self._vals = np.zeros(65, dtype=np.int64), np.zeros(256, dtype=np.int64), np.zeros(256)
+        self.n = 0
+        for row in ([] if rows is None else rows):
+            self.append(row)
+
+    def append(self, row: np.ndarray) -> None:
+        cols = np.flatnonzero(row)
+        start, end = int(self._ptr[self.n]), int(self._ptr[self.n]) + len(cols)
+        if end > len(self._cols):
+            size = max(end, 2 * len(self._cols))
+            self._cols, self._vals = np.resize(self._cols, size), np.resize(self._vals, size)
+        if self.n + 2 > len(self._ptr):
+            self._ptr = np.resize(self._ptr, 2 * len(self._ptr))
+        self._cols[start:end], self._vals[start:end] = cols, row[cols]
+        self.n += 1
+        self._ptr[self.n] = end
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        end = int(self._ptr[self.n])
+        return self._ptr[:self.n + 1], self._cols[:end], self._vals[:end]
+
+
+def _flatten(starts: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For segments ``[starts[k], starts[k] + lengths[k])``: each element's segment and position, in order."""
+    total = int(lengths.sum())
+    segment = np.repeat(np.arange(len(lengths)), lengths)
+    offset = np.arange(total) - np.repeat(np.cumsum(lengths) - lengths, lengths)
+    return segment, np.repeat(starts, lengths) + offset
 
 
 @dataclass(frozen=True)
@@ -84,6 +119,8 @@ class UpperBound:
         self.corner = Q.max(axis=0)
         self.fingerprint = fingerprint
         self.points = Rows(Q.shape[1])
+        self._sparse = SparseRows()        # the points again, as sparse rows (the sawtooth's pairs)
+        self._sparse_reach = SparseRows()  # beta_g(b_i) > 0 of each point, sparse
         self._excess = np.zeros(64)
         self._key: dict[float, int] = {}   # fingerprint -> row of points
         self.groups = groups
@@ -119,29 +156,48 @@ class UpperBound:
         # them is inside none), so the product is only as wide as the beliefs' supports.
         cols = np.flatnonzero((B > 0).any(axis=0))
         support = self.points.support
-        covered = support[:, cols] @ (B[:, cols] > 0).T.astype(np.float32)
-        inside = covered == support.sum(axis=1, dtype=np.float32)[:, None]
+        covered = (B[:, cols] > 0).astype(np.float32) @ support[:, cols].T            # (m, n)
+        inside = covered == support.sum(axis=1, dtype=np.float32)[None, :]
         if allowed is not None:
-            inside &= allowed
-        i_idx, b_idx = np.nonzero(inside)
-        if i_idx.size:
-            # Sawtooth: the largest lambda with b - lambda b_i >= 0 is 1 / max_s b_i(s) / b(s).
-            Bc = B[:, cols]
-            inverse = np.divide(1.0, Bc, out=np.zeros_like(Bc), where=Bc > 0)
-            best_gain = np.zeros(len(B))
-            width = max(len(cols), 0 if fit is None else fit.shape[1], 1)
-            block = max(1, BLOCK // width)  # (point, belief) pairs per product
-            for first in range(0, i_idx.size, block):
-                if stop is not None and stop():
-                    raise SolveStopped
-                ii, bb = i_idx[first:first + block], b_idx[first:first + block]
-                ratio = 1.0 / (self.points.rows[np.ix_(ii, cols)] * inverse[bb]).max(axis=1)
-                gain = self.excess[ii] * ratio
-                if fit is not None:  # what the groups still cover once lambda b_i is taken out
-                    gain += np.minimum(fit[bb], ratio[:, None] * self._reach.rows[ii]) @ self._drop
-                np.minimum.at(best_gain, bb, gain)
+            inside &= allowed.T
+        b_idx, i_idx = np.nonzero(inside)                 # pairs sorted by belief
+        if b_idx.size:
+            best_gain = self._sawtooth_gains(B, fit, i_idx, b_idx, stop)
             bound = np.minimum(bound, base + best_gain)
         return bound
+
+    def _sawtooth_gains(self, B: np.ndarray, fit: np.ndarray | None, i_idx: np.ndarray, b_idx: np.ndarray,
+                        stop=None) -> np.ndarray:
+        """(m,): ``min_i lambda_i(b) e_i + sum_g min(alpha_g(b), lambda_i(b) beta_g(b_i)) D_g`` over the pairs
+        ``(i_idx, b_idx)`` (0 for beliefs in no pair), each pair touching only the non-zeros of its point and
+        the groups the point reaches (sparse rows). Cost: O(sum over pairs of nnz(b_i) + groups(b_i))."""
+        m, S = B.shape
+        inverse = np.divide(1.0, B, out=np.zeros_like(B), where=B > 0).reshape(-1)
+        ptr, cols, vals = self._sparse.arrays()
+        lens = ptr[i_idx + 1] - ptr[i_idx]
+        best_gain = np.zeros(m)
+        ends = np.cumsum(lens)
+        first = 0
+        while first < i_idx.size:
+            # a block of pairs whose non-zeros add up to at most BLOCK numbers
+            last = max(first + 1, int(np.searchsorted(ends, (ends[first - 1] if first else 0) + BLOCK, "right")))
+            if stop is not None and stop():
+                raise SolveStopped
+            ii, bb, ll = i_idx[first:last], b_idx[first:last], lens[first:last]
+            pair, pos = _flatten(ptr[ii], ll)
+            product = vals[pos] * inverse[bb[pair] * S + cols[pos]]
+            # Sawtooth: the largest lambda with b - lambda b_i >= 0 is 1 / max_s b_i(s) / b(s).
+            ratio = 1.0 / np.maximum.reduceat(product, np.cumsum(ll) - ll)
+            gain = self.excess[ii] * ratio
+            if fit is not None:  # what the groups still cover once lambda b_i is taken out
+                gptr, gidx, gval = self._sparse_reach.arrays()
+                gpair, gpos = _flatten(gptr[ii], gptr[ii + 1] - gptr[ii])
+                g = gidx[gpos]
+                term = np.minimum(fit[bb[gpair], g], ratio[gpair] * gval[gpos]) * self._drop[g]
+                gain += np.bincount(gpair, weights=term, minlength=len(ii))
+            np.minimum.at(best_gain, bb, gain)
+            first = last
+        return best_gain
 
     def value(self, b: np.ndarray) -> float:
         """The bound at one belief ``b`` (S,). Cost: O(S (A + n))."""
@@ -161,8 +217,11 @@ class UpperBound:
             self._excess = np.concatenate([self._excess, np.zeros_like(self._excess)])
         self._excess[self.points.n] = excess
         self.points.append(b)
+        self._sparse.append(b)
         if self.groups is not None:
-            self._reach.append(self.groups.reach(b[None])[0])
+            reach = self.groups.reach(b[None])[0]
+            self._reach.append(reach)
+            self._sparse_reach.append(reach)
 
     def lower_group(self, g: int, value: float) -> bool:
         """Lower group ``g``'s bound to ``value`` (an upper bound at its belief, e.g. a backup); whether it
@@ -187,7 +246,9 @@ class UpperBound:
             keep[query] &= self.at(B, others) > B @ self.corner + self.excess[query] + 1e-12
         excess = self.excess[keep]
         self.points.keep(keep)
+        self._sparse = SparseRows(self.points.rows)
         if self.groups is not None:
             self._reach.keep(keep)
+            self._sparse_reach = SparseRows(self._reach.rows)
         self._excess[:len(excess)] = excess
         self._key = {float(b @ self.fingerprint): i for i, b in enumerate(self.points.rows)}
