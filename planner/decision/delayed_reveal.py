@@ -41,7 +41,7 @@ import scipy.sparse as sp
 from .factored_model import FactoredIntentionModel
 from .pomdp import POMDP
 
-__all__ = ["RevealGraph", "DelayedReveal", "reveal_graph", "reveal_values", "delayed_reveal_bound"]
+__all__ = ["DelayedReveal", "RevealGraph", "delayed_reveal_bound", "reveal_graph", "reveal_values"]
 
 _DIGITS = 12  # beliefs equal to this many digits are one graph node
 
@@ -50,18 +50,20 @@ _DIGITS = 12  # beliefs equal to this many digits are one graph node
 class RevealGraph:
     """The relaxed problem's beliefs and their successor lists (module docstring). ``beliefs`` (N, n) CSR over
     the lumped model's classes; row ``k`` of ``successors`` (K, N) is one action at belief ``owner[k]``
-    (sorted, every belief owns at least one row) with expected reward ``reward[k]``; ``initial``: the node of
-    the initial belief, ``corner`` (n,): the node of each class known outright, ``spread`` (states,): the node
-    of each state's spread (-1 for a state with no class)."""
+    (sorted, every belief owns at least one row) with expected reward ``reward[k]``; a node is a belief and a
+    phase (the state is told after the action of phase ``every - 1``); ``initial`` (every,): the node of the
+    initial belief at each phase, ``corner`` (every, n): of each class known outright, ``spread`` (every,
+    states): of each state's spread (-1 for a state with no class)."""
 
     beliefs: sp.csr_matrix
     owner: np.ndarray
     reward: np.ndarray
     successors: sp.csr_matrix
     discount: float
-    initial: int
+    initial: np.ndarray
     corner: np.ndarray
     spread: np.ndarray
+    every: int = 1
 
     @property
     def n(self) -> int:
@@ -71,24 +73,24 @@ class RevealGraph:
 @dataclass(frozen=True)
 class DelayedReveal:
     """The relaxed values ``values`` (N,) at the graph's beliefs (upper bounds on the lumped model's
-    ``V*`` there) and the graph."""
+    ``V*`` there) and the graph; a belief's bound is the least over its phases."""
 
     graph: RevealGraph
     values: np.ndarray
 
     @property
     def initial_value(self) -> float:
-        return float(self.values[self.graph.initial])
+        return float(self.values[self.graph.initial].min())
 
     @property
     def corner_values(self) -> np.ndarray:
         """(n,): the bound at each class known outright (an upper bound on ``Q*(a, c)`` for every action)."""
-        return self.values[self.graph.corner]
+        return self.values[self.graph.corner].min(axis=0)
 
     def spread_values(self, states: np.ndarray) -> np.ndarray:
         """The bound at the spreads of ``states`` (``inf`` where a state has no spread node)."""
-        node = self.graph.spread[states]
-        return np.where(node >= 0, self.values[np.maximum(node, 0)], np.inf)
+        node = self.graph.spread[:, states]
+        return np.where(node >= 0, self.values[np.maximum(node, 0)], np.inf).min(axis=0)
 
     def points(self) -> tuple[np.ndarray, np.ndarray]:
         """(N, n) dense beliefs and their values: sawtooth points for the solver's upper bound."""
@@ -96,7 +98,8 @@ class DelayedReveal:
 
 
 class _Builder:
-    def __init__(self, model: FactoredIntentionModel, pomdp: POMDP):
+    def __init__(self, model: FactoredIntentionModel, pomdp: POMDP, every: int):
+        self.every = every
         self.n, self.A = pomdp.n_states, pomdp.n_actions
         self.wait = self.A - 1
         self.T = [t.tocsr() for t in pomdp.transition]
@@ -105,21 +108,21 @@ class _Builder:
         self.R = np.asarray(pomdp.reward, dtype=float)
         self.state_of = np.asarray(model.class_source, dtype=np.int64)
         self.act_of = np.asarray(model.class_action, dtype=np.int64)
-        self.nodes: list[tuple[np.ndarray, np.ndarray]] = []
-        self.keys: dict[bytes, int] = {}
-        self.posts: dict[tuple[bytes, int], tuple[np.ndarray, np.ndarray]] = {}
+        self.nodes: list[tuple[np.ndarray, np.ndarray, int]] = []
+        self.keys: dict[tuple[bytes, int], int] = {}
+        self.posts: dict[tuple[bytes, int, int], tuple[np.ndarray, np.ndarray]] = {}
 
-    def node(self, idx: np.ndarray, val: np.ndarray) -> int:
-        key = idx.tobytes() + np.round(val, _DIGITS).tobytes()
+    def node(self, idx: np.ndarray, val: np.ndarray, phase: int = 0) -> int:
+        key = (idx.tobytes() + np.round(val, _DIGITS).tobytes(), phase)
         k = self.keys.get(key)
         if k is None:
             k = self.keys[key] = len(self.nodes)
-            self.nodes.append((idx, val))
+            self.nodes.append((idx, val, phase))
         return k
 
-    def successors(self, idx: np.ndarray, val: np.ndarray, a: int) -> tuple[np.ndarray, np.ndarray]:
-        """The nodes ``post(pi, a, z)`` for the prior ``pi`` = (idx, val) and their probabilities."""
-        key = (idx.tobytes() + np.round(val, _DIGITS).tobytes(), a)
+    def successors(self, idx: np.ndarray, val: np.ndarray, a: int, phase: int) -> tuple[np.ndarray, np.ndarray]:
+        """The nodes ``post(pi, a, z)`` (at ``phase``) for the prior ``pi`` = (idx, val), and their probabilities."""
+        key = (idx.tobytes() + np.round(val, _DIGITS).tobytes(), a, phase)
         hit = self.posts.get(key)
         if hit is not None:
             return hit
@@ -130,30 +133,37 @@ class _Builder:
         children, probs = [], []
         for z in np.flatnonzero(pz > 1e-15):
             keep = joint[:, z] > 0
-            children.append(self.node(support[keep], joint[keep, z] / pz[z]))
+            children.append(self.node(support[keep], joint[keep, z] / pz[z], phase))
             probs.append(pz[z])
         out = (np.asarray(children, dtype=np.int64), np.asarray(probs))
         self.posts[key] = out
         return out
 
-    def rows(self, idx: np.ndarray, val: np.ndarray, corner: np.ndarray):
-        """(action, reward, children, probabilities) for each action that matters at the belief (idx, val)."""
+    def rows(self, idx: np.ndarray, val: np.ndarray, phase: int, corner: np.ndarray):
+        """(action, reward, children, probabilities) for each action that matters at the belief (idx, val) of
+        ``phase`` (the state is told after its action when ``phase == every - 1``); ``corner`` (phases, n)."""
+        after = (phase + 1) % self.every
         states = self.state_of[idx]
         children, probs = [], []
-        for s in np.unique(states):     # waiting: the state is told; the prior is that state's classes
-            mine = states == s
-            c, p = self.successors(idx[mine], val[mine] / val[mine].sum(), self.wait)
+        if phase == self.every - 1:      # waiting, then the state is told: the prior is that state's classes
+            for s in np.unique(states):
+                mine = states == s
+                c, p = self.successors(idx[mine], val[mine] / val[mine].sum(), self.wait, after)
+                children.append(c)
+                probs.append(p * val[mine].sum())
+        else:                            # waiting, nothing told
+            c, p = self.successors(idx, val, self.wait, after)
             children.append(c)
-            probs.append(p * val[mine].sum())
+            probs.append(p)
         yield self.wait, float(val @ self.R[self.wait, idx]), np.concatenate(children), np.concatenate(probs)
         acts = np.unique(self.act_of[idx])
         acts = acts[(acts >= 0) & (acts != self.wait)]
-        told = corner[idx]               # a robot action: every class is told (it stays where it is)
+        told = corner[after, idx]        # a robot action: every class is told (it stays where it is)
         for a in acts:
             right = np.flatnonzero(self.act_of[idx] == a)
             children, probs = [np.delete(told, right)], [np.delete(val, right)]
             for k in right:               # the classes it performs: their step, then stay or advance
-                c, p = self.successors(idx[k:k + 1], np.ones(1), int(a))
+                c, p = self.successors(idx[k:k + 1], np.ones(1), int(a), after)
                 children.append(c)
                 probs.append(p * val[k])
             yield int(a), float(val @ self.R[a, idx]), np.concatenate(children), np.concatenate(probs)
@@ -162,28 +172,30 @@ class _Builder:
             yield probe, float(val @ self.R[probe, idx]), told, val
 
 
-def reveal_graph(model: FactoredIntentionModel, pomdp: POMDP, deadline: float | None = None,
+def reveal_graph(model: FactoredIntentionModel, pomdp: POMDP, every: int = 1, deadline: float | None = None,
                  clock: Callable[[], float] | None = None) -> RevealGraph | None:
-    """The relaxed problem's belief graph for the lumped POMDP ``pomdp`` of ``model`` (module docstring); None
-    once ``clock()`` passes ``deadline`` (checked per belief). Cost: module docstring."""
-    b = _Builder(model, pomdp)
+    """The relaxed problem's belief graph for the lumped POMDP ``pomdp`` of ``model`` (module docstring), the
+    state told after every ``every``-th action (a node is a belief and its phase); None once ``clock()``
+    passes ``deadline`` (checked per belief). Cost: module docstring."""
+    b = _Builder(model, pomdp, every)
     initial = np.asarray(pomdp.initial, dtype=float)
     support = np.flatnonzero(initial > 0)
-    first = b.node(support, initial[support])
-    corner = np.array([b.node(np.array([c]), np.ones(1)) for c in range(b.n)], dtype=np.int64)
+    phases = range(every)
+    first = np.array([b.node(support, initial[support], p) for p in phases], dtype=np.int64)
+    corner = np.array([[b.node(np.array([c]), np.ones(1), p) for c in range(b.n)] for p in phases], dtype=np.int64)
     n_states = int(b.state_of.max()) + 1
-    spread = np.full(n_states, -1, dtype=np.int64)
+    spread = np.full((every, n_states), -1, dtype=np.int64)
     fraction = np.asarray(model.class_fraction, dtype=float)
     for s in np.unique(b.state_of):
         members = np.flatnonzero(b.state_of == s)
-        spread[s] = b.node(members, fraction[members] / fraction[members].sum())
+        spread[:, s] = [b.node(members, fraction[members] / fraction[members].sum(), p) for p in phases]
     owner, reward, rows, cols, probs = [], [], [], [], []
     done = 0
     while done < len(b.nodes):
         if deadline is not None and clock is not None and clock() >= deadline:
             return None
-        idx, val = b.nodes[done]
-        for _, r, c, p in b.rows(idx, val, corner):
+        idx, val, phase = b.nodes[done]
+        for _, r, c, p in b.rows(idx, val, phase, corner):
             rows.append(np.full(len(c), len(owner)))
             cols.append(c)
             probs.append(p)
@@ -192,11 +204,11 @@ def reveal_graph(model: FactoredIntentionModel, pomdp: POMDP, deadline: float | 
         done += 1
     N, K = len(b.nodes), len(owner)
     successors = sp.csr_matrix((np.concatenate(probs), (np.concatenate(rows), np.concatenate(cols))), shape=(K, N))
-    lengths = [len(i) for i, _ in b.nodes]
-    beliefs = sp.csr_matrix((np.concatenate([v for _, v in b.nodes]), np.concatenate([i for i, _ in b.nodes]),
+    lengths = [len(i) for i, _, _ in b.nodes]
+    beliefs = sp.csr_matrix((np.concatenate([v for _, v, _ in b.nodes]), np.concatenate([i for i, _, _ in b.nodes]),
                              np.concatenate([[0], np.cumsum(lengths)])), shape=(N, b.n))
     return RevealGraph(beliefs, np.asarray(owner, dtype=np.int64), np.asarray(reward), successors,
-                       float(pomdp.discount), first, corner, spread)
+                       float(pomdp.discount), first, corner, spread, every)
 
 
 def reveal_values(graph: RevealGraph, start: np.ndarray | float, sweeps: int, tolerance: float = 0.0,
@@ -216,13 +228,13 @@ def reveal_values(graph: RevealGraph, start: np.ndarray | float, sweeps: int, to
     return values
 
 
-def delayed_reveal_bound(model: FactoredIntentionModel, pomdp: POMDP, tolerance: float = 1e-9,
+def delayed_reveal_bound(model: FactoredIntentionModel, pomdp: POMDP, every: int = 1, tolerance: float = 1e-9,
                          max_sweeps: int = 2000, deadline: float | None = None,
                          clock: Callable[[], float] | None = None) -> DelayedReveal | None:
     """The relaxed values at every graph belief (module docstring): value iteration from ``R_max / (1 -
     gamma)`` until a sweep moves no value by more than ``tolerance`` (every iterate is an upper bound); None
     when the graph is not built by ``deadline`` (a ``clock()`` value). Cost: module docstring."""
-    graph = reveal_graph(model, pomdp, deadline, clock)
+    graph = reveal_graph(model, pomdp, every, deadline, clock)
     if graph is None:
         return None
     top = max(float(np.max(pomdp.reward)), 0.0) / (1 - graph.discount)

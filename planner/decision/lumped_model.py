@@ -34,6 +34,7 @@ product ``M M`` (the two-step advance), one row selection per action and a dense
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -41,7 +42,7 @@ import scipy.sparse as sp
 
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
-from .delayed_reveal import DelayedReveal
+from .delayed_reveal import DelayedReveal, delayed_reveal_bound
 from .factored_model import FactoredIntentionModel, factored_model
 from .intention_model import Rewards
 from .online import revealed_state_values
@@ -49,6 +50,7 @@ from .pomdp import POMDP
 from .solvers.upper import CornerGroups
 
 __all__ = ["LumpedModel", "lumped_model", "lumped_pomdp", "class_names", "advance_matrix", "solver_bounds",
+           "SolverStart", "solver_start",
            "LUMPED_SUFFIX"]
 
 LUMPED_SUFFIX = ":lumped"  # appended to the model's name: a policy file's ``model`` attribute tells it apart
@@ -178,3 +180,45 @@ def solver_bounds(model: FactoredIntentionModel, reveal: DelayedReveal | None = 
         group_values = np.minimum(group_values, reveal.spread_values(states))
     groups = CornerGroups(member.astype(np.int64), model.class_fraction[member].astype(float), first, group_values)
     return Q, groups
+
+
+@dataclass(frozen=True)
+class SolverStart:
+    """What :meth:`~planner.decision.solvers.PointBasedSolver.solve` takes to start a lumped model's upper
+    bound: ``upper`` (A, classes), ``groups``, ``points`` (beliefs (N, classes), values (N,)) and the
+    delayed-reveal bound they came from (None when none was built in time)."""
+
+    upper: np.ndarray
+    groups: CornerGroups | None
+    points: tuple[np.ndarray, np.ndarray] | None
+    reveal: DelayedReveal | None
+
+    @property
+    def solve_options(self) -> dict:
+        return {"upper": self.upper, "groups": self.groups, "points": self.points}
+
+
+def solver_start(model: LumpedModel, finest: int = 2, points: bool = True, deadline: float | None = None,
+                 clock: Callable[[], float] | None = None) -> SolverStart:
+    """The tightest start :func:`solver_bounds` can give within ``deadline`` (a ``clock()`` value): the
+    delayed-reveal bound (:mod:`~planner.decision.delayed_reveal`) with the state told after every action,
+    then after every second one, ... up to every ``finest``-th (each finer one is below the last: the robot is
+    told less), the last one built in time tightening the Q-values and the groups and, with ``points``,
+    giving the solver its beliefs as sawtooth points (the least value per belief over its phases). Cost: that
+    of the bounds (complete 6: about 3 s for every action, 10 s for every second one)."""
+    reveal = None
+    for every in range(1, finest + 1):
+        built = delayed_reveal_bound(model.factored, model.pomdp, every, deadline=deadline, clock=clock)
+        if built is None:
+            break
+        reveal = built
+    upper, groups = solver_bounds(model.factored, reveal)
+    return SolverStart(upper, groups, None if reveal is None or not points else _least_per_belief(reveal), reveal)
+
+
+def _least_per_belief(reveal: DelayedReveal) -> tuple[np.ndarray, np.ndarray]:
+    beliefs, values = reveal.points()
+    distinct, inverse = np.unique(beliefs, axis=0, return_inverse=True)
+    least = np.full(len(distinct), np.inf)
+    np.minimum.at(least, inverse.reshape(-1), values)
+    return distinct, least

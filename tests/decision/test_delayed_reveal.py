@@ -75,7 +75,7 @@ def test_the_graph_gives_the_relaxed_problems_finite_horizon_values(models):
     fact, pomdp = models
     graph = reveal_graph(fact, pomdp)
     for depth in (1, 2):
-        relaxed = reveal_values(graph, 0.0, depth)[graph.initial]
+        relaxed = reveal_values(graph, 0.0, depth)[graph.initial[0]]
         assert relaxed == pytest.approx(_relaxed_value(fact, pomdp, depth), abs=1e-9)
         assert relaxed >= _horizon_value(pomdp, depth) - 1e-9
 
@@ -87,8 +87,8 @@ def test_the_graph_is_closed_and_its_rows_are_distributions(models):
     assert np.allclose(np.asarray(graph.successors.sum(axis=1)).ravel(), 1.0)
     assert np.array_equal(np.unique(graph.owner), np.arange(graph.n))      # every belief has its rows
     dense = graph.beliefs.toarray()
-    assert np.allclose(dense[graph.initial], pomdp.initial)
-    assert np.array_equal(dense[graph.corner], np.eye(pomdp.n_states))
+    assert np.allclose(dense[graph.initial[0]], pomdp.initial)
+    assert np.array_equal(dense[graph.corner[0]], np.eye(pomdp.n_states))
 
 
 @pytest.mark.parametrize("name", ["pen-technical", "chain-5", "complete-4"])
