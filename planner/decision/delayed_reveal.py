@@ -40,6 +40,7 @@ import scipy.sparse as sp
 
 from .factored_model import FactoredIntentionModel
 from .pomdp import POMDP
+from .solvers.upper import RelaxedQ
 
 __all__ = ["DelayedReveal", "RevealGraph", "delayed_reveal_bound", "reveal_graph", "reveal_values"]
 
@@ -50,13 +51,17 @@ _DIGITS = 12  # beliefs equal to this many digits are one graph node
 class RevealGraph:
     """The relaxed problem's beliefs and their successor lists (module docstring). ``beliefs`` (N, n) CSR over
     the lumped model's classes; row ``k`` of ``successors`` (K, N) is one action at belief ``owner[k]``
-    (sorted, every belief owns at least one row) with expected reward ``reward[k]``; a node is a belief and a
+    (sorted, every belief owns at least one row, waiting first), action ``action[k]`` (``probe[k]``: the
+    probe, standing for every robot action that performs none of the belief's classes), with expected reward
+    ``reward[k]``; a node is a belief and a
     phase (the state is told after the action of phase ``every - 1``); ``initial`` (every,): the node of the
     initial belief at each phase, ``corner`` (every, n): of each class known outright, ``spread`` (every,
     states): of each state's spread (-1 for a state with no class)."""
 
     beliefs: sp.csr_matrix
     owner: np.ndarray
+    action: np.ndarray
+    probe: np.ndarray
     reward: np.ndarray
     successors: sp.csr_matrix
     discount: float
@@ -91,6 +96,31 @@ class DelayedReveal:
         """The bound at the spreads of ``states`` (``inf`` where a state has no spread node)."""
         node = self.graph.spread[:, states]
         return np.where(node >= 0, self.values[np.maximum(node, 0)], np.inf).min(axis=0)
+
+    def relaxed_q(self, states: np.ndarray) -> RelaxedQ:
+        """The relaxed Q-values at the phase after which the state is told (``every - 1``), as the linear
+        pieces of :class:`~planner.decision.solvers.upper.RelaxedQ`: per robot action and class (every class
+        is told after a robot action, so a belief's Q-value is linear in it: the row of the class's corner
+        node, the probe's for every action that does not perform it), and for waiting per class and at the
+        spread of each of ``states`` (the solver's corner groups, in their order). Cost: O(A n + rows)."""
+        g = self.graph
+        q = g.reward + g.discount * (g.successors @ self.values)
+        phase, wait = g.every - 1, int(g.action[0])          # every node's first row is its wait row
+        n = g.corner.shape[1]
+        robot = np.full((wait + 1, n), -np.inf)
+        waiting = q[np.searchsorted(g.owner, g.corner[phase])]
+        for c, node in enumerate(g.corner[phase]):
+            rows = np.arange(np.searchsorted(g.owner, node), np.searchsorted(g.owner, node, side="right"))[1:]
+            probe = rows[g.probe[rows]]
+            if probe.size:
+                robot[:wait, c] = q[probe[0]]
+            for row in rows[~g.probe[rows]]:
+                robot[g.action[row], c] = q[row]
+        spread_wait = q[np.searchsorted(g.owner, g.spread[phase, states])]
+        robot = robot[:wait]    # every (robot action, class) has its row: the action's own or the probe
+        if not np.all(np.isfinite(robot)):
+            raise ValueError("a robot action has no relaxed Q-value at some class")
+        return RelaxedQ(robot, waiting, spread_wait)
 
     def points(self) -> tuple[np.ndarray, np.ndarray]:
         """(N, n) dense beliefs and their values: sawtooth points for the solver's upper bound."""
@@ -140,7 +170,7 @@ class _Builder:
         return out
 
     def rows(self, idx: np.ndarray, val: np.ndarray, phase: int, corner: np.ndarray):
-        """(action, reward, children, probabilities) for each action that matters at the belief (idx, val) of
+        """(action, probe?, reward, children, probabilities) for each action that matters at the belief (idx, val) of
         ``phase`` (the state is told after its action when ``phase == every - 1``); ``corner`` (phases, n)."""
         after = (phase + 1) % self.every
         states = self.state_of[idx]
@@ -155,7 +185,7 @@ class _Builder:
             c, p = self.successors(idx, val, self.wait, after)
             children.append(c)
             probs.append(p)
-        yield self.wait, float(val @ self.R[self.wait, idx]), np.concatenate(children), np.concatenate(probs)
+        yield self.wait, False, float(val @ self.R[self.wait, idx]), np.concatenate(children), np.concatenate(probs)
         acts = np.unique(self.act_of[idx])
         acts = acts[(acts >= 0) & (acts != self.wait)]
         told = corner[after, idx]        # a robot action: every class is told (it stays where it is)
@@ -166,10 +196,10 @@ class _Builder:
                 c, p = self.successors(idx[k:k + 1], np.ones(1), int(a), after)
                 children.append(c)
                 probs.append(p * val[k])
-            yield int(a), float(val @ self.R[a, idx]), np.concatenate(children), np.concatenate(probs)
+            yield int(a), False, float(val @ self.R[a, idx]), np.concatenate(children), np.concatenate(probs)
         if len(acts) < self.A - 1:       # the probe: a robot action that performs none of the classes
             probe = int(np.setdiff1d(np.arange(self.A - 1), acts)[0])
-            yield probe, float(val @ self.R[probe, idx]), told, val
+            yield probe, True, float(val @ self.R[probe, idx]), told, val
 
 
 def reveal_graph(model: FactoredIntentionModel, pomdp: POMDP, every: int = 1, deadline: float | None = None,
@@ -189,13 +219,15 @@ def reveal_graph(model: FactoredIntentionModel, pomdp: POMDP, every: int = 1, de
     for s in np.unique(b.state_of):
         members = np.flatnonzero(b.state_of == s)
         spread[:, s] = [b.node(members, fraction[members] / fraction[members].sum(), p) for p in phases]
-    owner, reward, rows, cols, probs = [], [], [], [], []
+    owner, action, probe, reward, rows, cols, probs = [], [], [], [], [], [], []
     done = 0
     while done < len(b.nodes):
         if deadline is not None and clock is not None and clock() >= deadline:
             return None
         idx, val, phase = b.nodes[done]
-        for _, r, c, p in b.rows(idx, val, phase, corner):
+        for a, is_probe, r, c, p in b.rows(idx, val, phase, corner):
+            action.append(a)
+            probe.append(is_probe)
             rows.append(np.full(len(c), len(owner)))
             cols.append(c)
             probs.append(p)
@@ -207,7 +239,8 @@ def reveal_graph(model: FactoredIntentionModel, pomdp: POMDP, every: int = 1, de
     lengths = [len(i) for i, _, _ in b.nodes]
     beliefs = sp.csr_matrix((np.concatenate([v for _, v, _ in b.nodes]), np.concatenate([i for i, _, _ in b.nodes]),
                              np.concatenate([[0], np.cumsum(lengths)])), shape=(N, b.n))
-    return RevealGraph(beliefs, np.asarray(owner, dtype=np.int64), np.asarray(reward), successors,
+    return RevealGraph(beliefs, np.asarray(owner, dtype=np.int64), np.asarray(action, dtype=np.int64),
+                       np.asarray(probe, dtype=bool), np.asarray(reward), successors,
                        float(pomdp.discount), first, corner, spread, every)
 
 

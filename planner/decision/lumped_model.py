@@ -47,7 +47,7 @@ from .factored_model import FactoredIntentionModel, factored_model
 from .intention_model import Rewards
 from .online import revealed_state_values
 from .pomdp import POMDP
-from .solvers.upper import CornerGroups
+from .solvers.upper import CornerGroups, RelaxedQ
 
 __all__ = ["LumpedModel", "lumped_model", "lumped_pomdp", "class_names", "advance_matrix", "solver_bounds",
            "SolverStart", "solver_start",
@@ -185,17 +185,19 @@ def solver_bounds(model: FactoredIntentionModel, reveal: DelayedReveal | None = 
 @dataclass(frozen=True)
 class SolverStart:
     """What :meth:`~planner.decision.solvers.PointBasedSolver.solve` takes to start a lumped model's upper
-    bound: ``upper`` (A, classes), ``groups``, ``points`` (beliefs (N, classes), values (N,)) and the
-    delayed-reveal bound they came from (None when none was built in time)."""
+    bound: ``upper`` (A, classes), ``groups``, ``points`` (beliefs (N, classes), values (N,)), the relaxed
+    Q-values (:class:`~planner.decision.solvers.upper.RelaxedQ`) and the delayed-reveal bound they came
+    from (None when none was built in time)."""
 
     upper: np.ndarray
     groups: CornerGroups | None
     points: tuple[np.ndarray, np.ndarray] | None
+    relaxed: RelaxedQ | None
     reveal: DelayedReveal | None
 
     @property
     def solve_options(self) -> dict:
-        return {"upper": self.upper, "groups": self.groups, "points": self.points}
+        return {"upper": self.upper, "groups": self.groups, "points": self.points, "relaxed": self.relaxed}
 
 
 def solver_start(model: LumpedModel, finest: int = 2, points: bool = True, deadline: float | None = None,
@@ -203,8 +205,9 @@ def solver_start(model: LumpedModel, finest: int = 2, points: bool = True, deadl
     """The tightest start :func:`solver_bounds` can give within ``deadline`` (a ``clock()`` value): the
     delayed-reveal bound (:mod:`~planner.decision.delayed_reveal`) with the state told after every action,
     then after every second one, ... up to every ``finest``-th (each finer one is below the last: the robot is
-    told less), the last one built in time tightening the Q-values and the groups and, with ``points``,
-    giving the solver its beliefs as sawtooth points (the least value per belief over its phases). Cost: that
+    told less), the last one built in time tightening the Q-values and the groups, giving its relaxed
+    Q-values (a bound at every belief that takes one action for the whole belief) and, with ``points``, its
+    beliefs as sawtooth points (the least value per belief over its phases). Cost: that
     of the bounds (complete 6: about 3 s for every action, 10 s for every second one)."""
     reveal = None
     for every in range(1, finest + 1):
@@ -213,7 +216,11 @@ def solver_start(model: LumpedModel, finest: int = 2, points: bool = True, deadl
             break
         reveal = built
     upper, groups = solver_bounds(model.factored, reveal)
-    return SolverStart(upper, groups, None if reveal is None or not points else _least_per_belief(reveal), reveal)
+    relaxed = None
+    if reveal is not None:
+        relaxed = reveal.relaxed_q(np.flatnonzero(np.diff(model.factored.state_class_start) >= 2))
+    return SolverStart(upper, groups, None if reveal is None or not points else _least_per_belief(reveal), relaxed,
+                       reveal)
 
 
 def _least_per_belief(reveal: DelayedReveal) -> tuple[np.ndarray, np.ndarray]:

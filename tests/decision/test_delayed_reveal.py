@@ -8,7 +8,8 @@ import pytest
 from planner import chain_product, complete_product, make_plan
 from planner.decision import PointBasedSolver, factored_model, intention_model
 from planner.decision.delayed_reveal import delayed_reveal_bound, reveal_graph, reveal_values
-from planner.decision.lumped_model import lumped_pomdp, solver_bounds
+from planner.decision.lumped_model import LumpedModel, lumped_pomdp, solver_bounds, solver_start
+from planner.decision.solvers.upper import UpperBound
 from planner.decision.online import revealed_state_values
 
 
@@ -51,8 +52,9 @@ def _relaxed_value(fact, pomdp, depth: int) -> float:
     return value(np.asarray(pomdp.initial, dtype=float), depth)
 
 
-def _horizon_value(model, depth: int) -> float:
-    """The lumped model's own optimal ``depth``-step value (exact expectimax, unnormalised beliefs)."""
+def _horizon_value(model, depth: int, start: np.ndarray | None = None) -> np.ndarray | float:
+    """The lumped model's own optimal ``depth``-step value (exact expectimax, unnormalised beliefs) at the
+    initial belief, or at each row of ``start``."""
     T = [t.toarray() for t in model.transition]
     O = [o.toarray() for o in model.observation]
 
@@ -65,6 +67,8 @@ def _horizon_value(model, depth: int) -> float:
             q[:, a] = B @ model.reward[a] + model.discount * value(nxt.reshape(-1, model.n_states), d - 1).reshape(
                 len(B), -1).sum(axis=1)
         return q.max(axis=1)
+    if start is not None:
+        return value(start, depth)
     return float(value(model.initial[None], depth)[0])
 
 
@@ -106,8 +110,7 @@ def test_the_bound_lies_between_the_value_and_the_state_known_bound(pen, name):
     state_known = float(revealed_state_values(fact).q_matrix(fact).max(axis=0) @ b0)
     solver = PointBasedSolver(time_limit=None, max_iterations=60, precision=1e-6)
     plain = solver.solve(pomdp, upper=solver_bounds(fact)[0], groups=solver_bounds(fact)[1])
-    Q, groups = solver_bounds(fact, reveal)
-    started = solver.solve(pomdp, upper=Q, groups=groups, points=reveal.points())
+    started = solver.solve(pomdp, **solver_start(LumpedModel(fact, pomdp)).solve_options)
     assert plain.lower_bound - 1e-9 <= reveal.initial_value <= state_known + 1e-9
     assert max(plain.lower_bound, started.lower_bound) <= min(plain.upper_bound, started.upper_bound) + 1e-9
     assert started.upper_bound <= reveal.initial_value + 1e-9
@@ -129,3 +132,31 @@ def test_the_bound_is_far_below_the_state_known_one_on_larger_products():
 def test_a_deadline_gives_no_bound():
     fact = factored_model(make_plan(chain_product(5)))
     assert delayed_reveal_bound(fact, lumped_pomdp(fact), deadline=0.0, clock=lambda: 1.0) is None
+
+
+@pytest.mark.parametrize("finest", [1, 2])
+def test_relaxed_q_values_bound_every_belief(models, finest):
+    """The relaxed Q-values' bound (one action for the whole belief) equals the relaxed value at the initial
+    belief (a spread), and lies above the lumped model's exact 2-step value at random beliefs and at the
+    beliefs two steps from b0 (V* is at least that: waiting earns 0 from then on)."""
+    fact, pomdp = models
+    start = solver_start(LumpedModel(fact, pomdp), finest=finest, points=False)
+    n = pomdp.n_states
+    upper = UpperBound(start.upper, np.random.default_rng(0).random(n), start.groups, start.relaxed)
+    b0 = np.asarray(pomdp.initial, dtype=float)
+    assert upper.value(b0) == pytest.approx(start.reveal.initial_value, abs=1e-6)
+    rng = np.random.default_rng(3)
+    B = rng.random((40, n)) * (rng.random((40, n)) < 0.3)
+    B[:, 0] += 1e-3
+    B /= B.sum(axis=1, keepdims=True)
+    reached = b0[None]
+    for _ in range(2):  # every successor under every action and observation
+        T = [t.toarray() for t in pomdp.transition]
+        O = pomdp.observation[0].toarray()
+        nxt = np.concatenate([(reached @ T[a])[:, None, :] * O.T[None] for a in range(pomdp.n_actions)], axis=1)
+        nxt = nxt.reshape(-1, n)
+        nxt = nxt[nxt.sum(axis=1) > 1e-12]
+        reached = nxt / nxt.sum(axis=1, keepdims=True)
+        reached = np.unique(np.round(reached, 12), axis=0)[:200]
+    for beliefs in (B, reached):
+        assert np.all(upper.at(beliefs) >= _horizon_value(pomdp, 2, beliefs) - 1e-9)

@@ -35,7 +35,31 @@ import numpy as np
 
 from .tables import BLOCK, Rows, SolveStopped
 
-__all__ = ["CornerGroups", "SparseRows", "UpperBound"]
+__all__ = ["CornerGroups", "RelaxedQ", "SparseRows", "UpperBound"]
+
+
+@dataclass(frozen=True)
+class RelaxedQ:
+    """Q-values of a relaxed problem whose value bounds ``V*`` from above at every belief, in pieces that are
+    exact where the belief is linear in them (the lumped model's delayed reveal,
+    :meth:`~planner.decision.delayed_reveal.DelayedReveal.relaxed_q`): ``robot`` (A, S) per action and
+    state (robot actions only), ``wait`` (S,) per state and ``spread_wait`` (G,) at each corner group's
+    belief. The bound at ``b``::
+
+        max( max_a robot[a] . b,  wait . b - sum_g alpha_g(b) (wait . B_g - spread_wait[g]) )
+
+    The waiting term writes ``b`` as ``sum_g alpha_g(b) B_g`` plus a non-negative rest over single states
+    and uses that the relaxed continuation is convex and positively homogeneous in the (unnormalised)
+    belief, hence subadditive (the module docstring of :mod:`~planner.decision.delayed_reveal`)."""
+
+    robot: np.ndarray
+    wait: np.ndarray
+    spread_wait: np.ndarray
+
+    def __post_init__(self) -> None:
+        if not (np.all(np.isfinite(self.robot)) and np.all(np.isfinite(self.wait))
+                and np.all(np.isfinite(self.spread_wait))):
+            raise ValueError("relaxed Q-values must be finite")
 
 
 class SparseRows:
@@ -114,7 +138,8 @@ class UpperBound:
     """The informed bound ``Q`` (A, S) with sawtooth points and optional corner ``groups``; ``fingerprint``
     (S,): random weights that key beliefs (module docstring)."""
 
-    def __init__(self, Q: np.ndarray, fingerprint: np.ndarray, groups: CornerGroups | None = None):
+    def __init__(self, Q: np.ndarray, fingerprint: np.ndarray, groups: CornerGroups | None = None,
+                 relaxed: RelaxedQ | None = None):
         self.Q = Q
         self.corner = Q.max(axis=0)
         self.fingerprint = fingerprint
@@ -129,6 +154,10 @@ class UpperBound:
             self.group_value = np.minimum(groups.value, self.group_beliefs @ self.corner)
             self._drop = self.group_beliefs @ self.corner - self.group_value
             self._reach = Rows(groups.n)   # beta_g(b_i) of the points
+        self.relaxed = relaxed
+        if relaxed is not None:
+            drop = (self.group_beliefs @ relaxed.wait - relaxed.spread_wait) if groups is not None else np.zeros(0)
+            self._wait_drop = np.maximum(drop, 0.0)   # >= 0 by subadditivity; 0 keeps a rounding error safe
 
     @property
     def n(self) -> int:
@@ -150,17 +179,27 @@ class UpperBound:
             fit = self.groups.fit(B)
             base = base - fit @ self._drop
         bound = np.minimum((B @ self.Q.T).max(axis=1), base)
+        if self.relaxed is not None:
+            waiting = B @ self.relaxed.wait - (fit @ self._wait_drop if fit is not None else 0.0)
+            bound = np.minimum(bound, np.maximum((B @ self.relaxed.robot.T).max(axis=1), waiting))
         if not self.points.n:
             return bound
         # supp(point) within supp(b): counted over the columns some belief covers (a point reaching outside
         # them is inside none), so the product is only as wide as the beliefs' supports.
-        cols = np.flatnonzero((B > 0).any(axis=0))
-        support = self.points.support
-        covered = (B[:, cols] > 0).astype(np.float32) @ support[:, cols].T            # (m, n)
-        inside = covered == support.sum(axis=1, dtype=np.float32)[None, :]
+        covers = (B > 0).any(axis=0)
+        cols = np.flatnonzero(covers)
+        # Only the points whose support lies within that union can nest in a belief (counted on their
+        # non-zeros: O(nnz) for all points), and only those enter the (beliefs x points) product.
+        ptr, point_cols, _ = self._sparse.arrays()
+        lengths = np.diff(ptr)
+        candidates = np.flatnonzero(np.add.reduceat(covers[point_cols], ptr[:-1]) == lengths)
+        support = self.points.support[np.ix_(candidates, cols)]
+        covered = (B[:, cols] > 0).astype(np.float32) @ support.T                     # (m, candidates)
+        inside = covered == lengths[candidates].astype(np.float32)[None, :]
         if allowed is not None:
-            inside &= allowed.T
+            inside &= allowed[candidates].T
         b_idx, i_idx = np.nonzero(inside)                 # pairs sorted by belief
+        i_idx = candidates[i_idx]
         if b_idx.size:
             best_gain = self._sawtooth_gains(B, fit, i_idx, b_idx, stop)
             bound = np.minimum(bound, base + best_gain)
