@@ -155,6 +155,7 @@ class _Builder:
         self.nodes: list[tuple[np.ndarray, np.ndarray, int]] = []
         self.keys: dict[tuple[bytes, int], int] = {}
         self.posts: dict[tuple[bytes, int, int], tuple[np.ndarray, np.ndarray]] = {}
+        self.known: dict[tuple[int, int, int], tuple[np.ndarray, np.ndarray]] = {}
 
     def node(self, idx: np.ndarray, val: np.ndarray, phase: int = 0) -> int:
         key = (idx.tobytes() + np.round(val, _DIGITS).tobytes(), phase)
@@ -203,17 +204,28 @@ class _Builder:
         acts = np.unique(self.act_of[idx])
         acts = acts[(acts >= 0) & (acts != self.wait)]
         told = corner[after, idx]        # a robot action: every class is told (it stays where it is)
+        acting = self.act_of[idx]
         for a in acts:
-            right = np.flatnonzero(self.act_of[idx] == a)
-            children, probs = [np.delete(told, right)], [np.delete(val, right)]
-            for k in right:               # the classes it performs: their step, then stay or advance
-                c, p = self.successors(idx[k:k + 1], np.ones(1), int(a), after)
+            right = acting == a
+            children, probs = [told[~right]], [val[~right]]
+            for k in np.flatnonzero(right):   # the classes it performs: their step, then stay or advance
+                c, p = self.performed(int(idx[k]), int(a), after)
                 children.append(c)
                 probs.append(p * val[k])
             yield int(a), False, float(val @ self.R[a, idx]), np.concatenate(children), np.concatenate(probs)
         if len(acts) < self.A - 1:       # the probe: a robot action that performs none of the classes
-            probe = int(np.setdiff1d(np.arange(self.A - 1), acts)[0])
+            free = np.ones(self.A - 1, dtype=bool)
+            free[acts] = False
+            probe = int(np.argmax(free))
             yield probe, True, float(val @ self.R[probe, idx]), told, val
+
+    def performed(self, c: int, a: int, phase: int) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`successors` of the class ``c`` known outright (cached by integers, not by belief)."""
+        key = (c, a, phase)
+        hit = self.known.get(key)
+        if hit is None:
+            hit = self.known[key] = self.successors(np.array([c]), np.ones(1), a, phase)
+        return hit
 
 
 def reveal_graph(model: FactoredIntentionModel, pomdp: POMDP, every: int = 1, deadline: float | None = None,
