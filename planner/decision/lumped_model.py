@@ -209,8 +209,8 @@ def solver_start(model: LumpedModel, finest: int = 2, points: bool = True, deadl
     Q-values (a bound at every belief that takes one action for the whole belief) and, with ``points``, its
     beliefs as sawtooth points (the least value per belief over its phases). A finer graph is only tried when
     the last one's growth says it fits in ``max_nodes`` nodes and, with a deadline, in the time left (its
-    time times that growth). Cost: that of the bounds (chain 7: 0.5, 2.6 and 10 s; complete 6: 2.6 and 10 s
-    for the first two)."""
+    time times that growth). Cost: that of the bounds (chain 7: 0.24 s and 1.0 s for the first two; complete
+    6: 1.1 s and 4.9 s)."""
     reveal = None
     previous_nodes, previous_seconds = None, None
     for every in range(1, finest + 1):
