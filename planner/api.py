@@ -25,6 +25,7 @@ Front ends only parse their input and show results; the steps of the method live
 """
 from __future__ import annotations
 
+import math
 import os
 import shutil
 from contextlib import contextmanager
@@ -53,7 +54,7 @@ from .decision.intention_model import IntentionModel, Rewards, flat_model_fits, 
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
 from .decision.io.size import model_file_bytes
-from .decision.lumped_model import LumpedModel, solver_bounds
+from .decision.lumped_model import LumpedModel, solver_start
 from .decision.lumped_model import lumped_model as build_lumped_model
 from .decision.online import OnlinePlanner
 from .decision.policy import AlphaVectorPolicy, PolicyError, read_policy
@@ -654,10 +655,12 @@ def solve(model: Model, time_limit: float = SOLVE_TIME_LIMIT, precision: float =
         raise PlannerError(f"unknown solver engine {engine!r}; use one of {', '.join(SOLVER_ENGINES)}")
     solver = PointBasedSolver(time_limit=time_limit, precision=precision, max_iterations=iterations,
                               keep_on_interrupt=keep_on_interrupt)
-    started, upper, groups = solver.clock(), None, None  # the time limit counts the bounds' set-up too
-    if isinstance(model, LumpedModel):  # "states revealed" bounds start the upper bound far lower
-        upper, groups = solver_bounds(model.factored)
-    return solver.solve(tables(model), progress, upper, groups, started=started)
+    started, start = solver.clock(), {}  # the time limit counts the bounds' set-up too
+    if isinstance(model, LumpedModel):  # relaxed bounds (the state told, or told late) start the upper bound lower
+        finite = time_limit is not None and math.isfinite(time_limit)
+        start = solver_start(model, deadline=started + time_limit / 4 if finite else None,
+                             clock=solver.clock).solve_options
+    return solver.solve(tables(model), progress, started=started, **start)
 
 
 def policy_for(model: Model, policy: str | os.PathLike | None = None, time_limit: float = POLICY_TIME_LIMIT,

@@ -35,7 +35,7 @@ from .sweeps import sweep_rounds
 from .tables import Tables, fast_informed_bound
 from .threads import blas_threads, limited_blas
 from .trials import backup_groups, trial
-from .upper import CornerGroups, UpperBound
+from .upper import CornerGroups, RelaxedQ, UpperBound
 
 __all__ = ["PointBasedSolver", "SolveResult"]
 
@@ -119,30 +119,35 @@ class PointBasedSolver:
 
     def solve(self, model: POMDP, progress: Callable[[float, float, float], None] | None = None,
               upper: np.ndarray | None = None, groups: CornerGroups | None = None,
-              started: float | None = None) -> SolveResult:
+              started: float | None = None, points: tuple[np.ndarray, np.ndarray] | None = None,
+              relaxed: RelaxedQ | None = None) -> SolveResult:
         """Solve ``model``; ``progress(seconds, lower, upper)`` is called after each step; ``upper``: a known
         upper bound on Q* (actions x states) to start the informed bound from, ``groups``: corner groups of
         the upper bound (the lumped model's :func:`~planner.decision.lumped_model.solver_bounds` gives both);
-        ``started``: the ``clock()`` value the time limit counts from (default: now), e.g. before building them."""
+        ``started``: the ``clock()`` value the time limit counts from (default: now), e.g. before building them;
+        ``points``: beliefs (N, S) and upper values at them (N,), stored as sawtooth points where below the
+        bound; ``relaxed``: Q-values of a relaxed problem (:class:`~.upper.RelaxedQ`), one more upper bound
+        at every belief (the lumped model's :func:`~planner.decision.lumped_model.solver_start` gives all)."""
         start = self.clock() if started is None else started
         m = Tables(model)
         if upper is not None and np.shape(upper) != (m.A, m.S):
             raise ValueError(f"the starting upper bound is {np.shape(upper)}, the model needs {(m.A, m.S)}")
         with limited_blas(blas_threads(m, self.blas_threads)):
-            return self._solve(m, np.asarray(model.initial, dtype=float), start, progress, upper, groups)
+            return self._solve(m, np.asarray(model.initial, dtype=float), start, progress, upper, groups,
+                               (points, relaxed))
 
     def _solve(self, m: Tables, b0: np.ndarray, start: float, progress, start_upper=None,
-               groups: CornerGroups | None = None) -> SolveResult:
+               groups: CornerGroups | None = None, known=None) -> SolveResult:
         if not self.keep_on_interrupt:
-            return self._improve(m, b0, start, progress, start_upper, groups, self.clock)
+            return self._improve(m, b0, start, progress, start_upper, groups, self.clock, known)
         with deferred_interrupts() as pending:
             # An interrupt makes the clock run out: every stopping rule, in the set-up too, then holds at once.
             result = self._improve(m, b0, start, progress, start_upper, groups,
-                                   lambda: math.inf if pending() else self.clock())
+                                   lambda: math.inf if pending() else self.clock(), known)
             return replace(result, seconds=self.clock() - start, interrupted=pending())
 
     def _improve(self, m: Tables, b0: np.ndarray, start: float, progress, start_upper, groups,
-                 clock: Callable[[], float]) -> SolveResult:
+                 clock: Callable[[], float], known=None) -> SolveResult:
         """Set up both bounds, then trials and sweeps until a stopping rule holds (class docstring)."""
         limit = math.inf if self.time_limit is None else self.time_limit
         # The set-up gets a quarter of the limit: the blind policies an eighth (then constant floors), the
@@ -151,7 +156,15 @@ class PointBasedSolver:
         lower = LowerBound.blind(m, start + limit / 8 if math.isfinite(limit) else math.inf, clock)
         Q = fast_informed_bound(m, self.informed_tolerance, self.informed_sweeps, deadline, start=start_upper,
                                 clock=clock)
-        upper = UpperBound(Q, np.random.default_rng(self.seed).random(m.S), groups)
+        points, relaxed = known if known is not None else (None, None)  # what solve() was given
+        upper = UpperBound(Q, np.random.default_rng(self.seed).random(m.S), groups, relaxed)
+        if points is not None:  # known upper values at beliefs: kept where they lie below the bound
+            B, values = points
+            keep = values < upper.at(B) - 1e-12
+            for b, value in zip(B[keep], values[keep]):
+                upper.update(b, float(value))
+            if upper.n >= self.prune_points_at:
+                upper.prune()
         beliefs = BeliefSet(m.S)
         beliefs.add(b0[None], np.ones(1))
         sweeps = sweep_rounds(m, lower, beliefs, Q, self.theta, self.theta_factor, self.sweeps_per_round,

@@ -35,7 +35,66 @@ import numpy as np
 
 from .tables import BLOCK, WORK, Rows, SolveStopped
 
-__all__ = ["CornerGroups", "UpperBound"]
+__all__ = ["CornerGroups", "RelaxedQ", "SparseRows", "UpperBound"]
+
+
+@dataclass(frozen=True)
+class RelaxedQ:
+    """Q-values of a relaxed problem whose value bounds ``V*`` from above at every belief, in pieces that are
+    exact where the belief is linear in them (the lumped model's delayed reveal,
+    :meth:`~planner.decision.delayed_reveal.DelayedReveal.relaxed_q`): ``robot`` (A, S) per action and
+    state (robot actions only), ``wait`` (S,) per state and ``spread_wait`` (G,) at each corner group's
+    belief. The bound at ``b``::
+
+        max( max_a robot[a] . b,  wait . b - sum_g alpha_g(b) (wait . B_g - spread_wait[g]) )
+
+    The waiting term writes ``b`` as ``sum_g alpha_g(b) B_g`` plus a non-negative rest over single states
+    and uses that the relaxed continuation is convex and positively homogeneous in the (unnormalised)
+    belief, hence subadditive (the module docstring of :mod:`~planner.decision.delayed_reveal`)."""
+
+    robot: np.ndarray
+    wait: np.ndarray
+    spread_wait: np.ndarray
+
+    def __post_init__(self) -> None:
+        if not (np.all(np.isfinite(self.robot)) and np.all(np.isfinite(self.wait))
+                and np.all(np.isfinite(self.spread_wait))):
+            raise ValueError("relaxed Q-values must be finite")
+
+
+class SparseRows:
+    """Rows kept by their non-zeros (CSR, amortised appends): ``arrays()`` gives ``(ptr, cols, vals)``, row
+    ``i`` holding ``vals[ptr[i]:ptr[i+1]]`` at ``cols[ptr[i]:ptr[i+1]]``."""
+
+    def __init__(self, rows: np.ndarray | None = None):
+        self._ptr, self._cols, self._vals = np.zeros(65, dtype=np.int64), np.zeros(256, dtype=np.int64), np.zeros(256)
+        self.n = 0
+        for row in ([] if rows is None else rows):
+            self.append(row)
+
+    def append(self, row: np.ndarray) -> None:
+        cols = np.flatnonzero(row)
+        start, end = int(self._ptr[self.n]), int(self._ptr[self.n]) + len(cols)
+        if end > len(self._cols):
+            size = max(end, 2 * len(self._cols))
+            self._cols, self._vals = np.resize(self._cols, size), np.resize(self._vals, size)
+        if self.n + 2 > len(self._ptr):
+            self._ptr = np.resize(self._ptr, 2 * len(self._ptr))
+        self._cols[start:end], self._vals[start:end] = cols, row[cols]
+        self.n += 1
+        self._ptr[self.n] = end
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        end = int(self._ptr[self.n])
+        return self._ptr[:self.n + 1], self._cols[:end], self._vals[:end]
+
+
+def _flatten(starts: np.ndarray, lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For segments ``[starts[k], starts[k] + lengths[k])``: each element's segment and position, in order."""
+    total = int(lengths.sum())
+    segment = np.repeat(np.arange(len(lengths)), lengths)
+    offset = np.arange(total) - np.repeat(np.cumsum(lengths) - lengths, lengths)
+    return segment, np.repeat(starts, lengths) + offset
 
 
 @dataclass(frozen=True)
@@ -79,11 +138,14 @@ class UpperBound:
     """The informed bound ``Q`` (A, S) with sawtooth points and optional corner ``groups``; ``fingerprint``
     (S,): random weights that key beliefs (module docstring)."""
 
-    def __init__(self, Q: np.ndarray, fingerprint: np.ndarray, groups: CornerGroups | None = None):
+    def __init__(self, Q: np.ndarray, fingerprint: np.ndarray, groups: CornerGroups | None = None,
+                 relaxed: RelaxedQ | None = None):
         self.Q = Q
         self.corner = Q.max(axis=0)
         self.fingerprint = fingerprint
         self.points = Rows(Q.shape[1])
+        self._sparse = SparseRows()        # the points again, as sparse rows (the sawtooth's pairs)
+        self._sparse_reach = SparseRows()  # beta_g(b_i) > 0 of each point, sparse
         self._excess = np.zeros(64)
         self._key: dict[float, int] = {}   # fingerprint -> row of points
         self.groups = groups
@@ -92,6 +154,10 @@ class UpperBound:
             self.group_value = np.minimum(groups.value, self.group_beliefs @ self.corner)
             self._drop = self.group_beliefs @ self.corner - self.group_value
             self._reach = Rows(groups.n)   # beta_g(b_i) of the points
+        self.relaxed = relaxed
+        if relaxed is not None:
+            drop = (self.group_beliefs @ relaxed.wait - relaxed.spread_wait) if groups is not None else np.zeros(0)
+            self._wait_drop = np.maximum(drop, 0.0)   # >= 0 by subadditivity; 0 keeps a rounding error safe
 
     @property
     def n(self) -> int:
@@ -123,35 +189,64 @@ class UpperBound:
             fit = self.groups.fit(B)
             base = base - fit @ self._drop
         bound = np.minimum((B @ self.Q.T).max(axis=1), base)
+        if self.relaxed is not None:
+            waiting = B @ self.relaxed.wait - (fit @ self._wait_drop if fit is not None else 0.0)
+            bound = np.minimum(bound, np.maximum((B @ self.relaxed.robot.T).max(axis=1), waiting))
         if not self.points.n:
             return bound
         # supp(point) within supp(b): counted over the columns some belief covers (a point reaching outside
         # them is inside none), so the product is only as wide as the beliefs' supports.
-        cols = np.flatnonzero((B > 0).any(axis=0))
-        support = self.points.support
-        covered = support[:, cols] @ (B[:, cols] > 0).T.astype(np.float32)
-        inside = covered == support.sum(axis=1, dtype=np.float32)[:, None]
+        covers = (B > 0).any(axis=0)
+        cols = np.flatnonzero(covers)
+        # Only the points whose support lies within that union can nest in a belief (counted on their
+        # non-zeros: O(nnz) for all points), and only those enter the (beliefs x points) product.
+        ptr, point_cols, _ = self._sparse.arrays()
+        lengths = np.diff(ptr)
+        candidates = np.flatnonzero(np.add.reduceat(covers[point_cols], ptr[:-1]) == lengths)
+        support = self.points.support[np.ix_(candidates, cols)]
+        covered = (B[:, cols] > 0).astype(np.float32) @ support.T                     # (m, candidates)
+        inside = covered == lengths[candidates].astype(np.float32)[None, :]
         if allowed is not None:
-            inside &= allowed
-        i_idx, b_idx = np.nonzero(inside)
-        if i_idx.size:
-            # Sawtooth: the largest lambda with b - lambda b_i >= 0 is 1 / max_s b_i(s) / b(s).
-            Bc = B[:, cols]
-            inverse = np.divide(1.0, Bc, out=np.zeros_like(Bc), where=Bc > 0)
-            best_gain = np.zeros(len(B))
-            width = max(len(cols), 0 if fit is None else fit.shape[1], 1)
-            block = max(1, BLOCK // width)  # (point, belief) pairs per product
-            for first in range(0, i_idx.size, block):
-                if stop is not None and stop():
-                    raise SolveStopped
-                ii, bb = i_idx[first:first + block], b_idx[first:first + block]
-                ratio = 1.0 / (self.points.rows[np.ix_(ii, cols)] * inverse[bb]).max(axis=1)
-                gain = self.excess[ii] * ratio
-                if fit is not None:  # what the groups still cover once lambda b_i is taken out
-                    gain += np.minimum(fit[bb], ratio[:, None] * self._reach.rows[ii]) @ self._drop
-                np.minimum.at(best_gain, bb, gain)
+            inside &= allowed[candidates].T
+        b_idx, i_idx = np.nonzero(inside)                 # pairs sorted by belief
+        i_idx = candidates[i_idx]
+        if b_idx.size:
+            best_gain = self._sawtooth_gains(B, fit, i_idx, b_idx, stop)
             bound = np.minimum(bound, base + best_gain)
         return bound
+
+    def _sawtooth_gains(self, B: np.ndarray, fit: np.ndarray | None, i_idx: np.ndarray, b_idx: np.ndarray,
+                        stop=None) -> np.ndarray:
+        """(m,): ``min_i lambda_i(b) e_i + sum_g min(alpha_g(b), lambda_i(b) beta_g(b_i)) D_g`` over the pairs
+        ``(i_idx, b_idx)`` (0 for beliefs in no pair), each pair touching only the non-zeros of its point and
+        the groups the point reaches (sparse rows). Cost: O(sum over pairs of nnz(b_i) + groups(b_i))."""
+        m, S = B.shape
+        inverse = np.divide(1.0, B, out=np.zeros_like(B), where=B > 0).reshape(-1)
+        ptr, cols, vals = self._sparse.arrays()
+        lens = ptr[i_idx + 1] - ptr[i_idx]
+        best_gain = np.zeros(m)
+        ends = np.cumsum(lens)
+        first = 0
+        while first < i_idx.size:
+            # a block of pairs whose non-zeros add up to at most BLOCK numbers
+            last = max(first + 1, int(np.searchsorted(ends, (ends[first - 1] if first else 0) + BLOCK, "right")))
+            if stop is not None and stop():
+                raise SolveStopped
+            ii, bb, ll = i_idx[first:last], b_idx[first:last], lens[first:last]
+            pair, pos = _flatten(ptr[ii], ll)
+            product = vals[pos] * inverse[bb[pair] * S + cols[pos]]
+            # Sawtooth: the largest lambda with b - lambda b_i >= 0 is 1 / max_s b_i(s) / b(s).
+            ratio = 1.0 / np.maximum.reduceat(product, np.cumsum(ll) - ll)
+            gain = self.excess[ii] * ratio
+            if fit is not None:  # what the groups still cover once lambda b_i is taken out
+                gptr, gidx, gval = self._sparse_reach.arrays()
+                gpair, gpos = _flatten(gptr[ii], gptr[ii + 1] - gptr[ii])
+                g = gidx[gpos]
+                term = np.minimum(fit[bb[gpair], g], ratio[gpair] * gval[gpos]) * self._drop[g]
+                gain += np.bincount(gpair, weights=term, minlength=len(ii))
+            np.minimum.at(best_gain, bb, gain)
+            first = last
+        return best_gain
 
     def value(self, b: np.ndarray) -> float:
         """The bound at one belief ``b`` (S,). Cost: O(S (A + n))."""
@@ -171,8 +266,11 @@ class UpperBound:
             self._excess = np.concatenate([self._excess, np.zeros_like(self._excess)])
         self._excess[self.points.n] = excess
         self.points.append(b)
+        self._sparse.append(b)
         if self.groups is not None:
-            self._reach.append(self.groups.reach(b[None])[0])
+            reach = self.groups.reach(b[None])[0]
+            self._reach.append(reach)
+            self._sparse_reach.append(reach)
 
     def lower_group(self, g: int, value: float) -> bool:
         """Lower group ``g``'s bound to ``value`` (an upper bound at its belief, e.g. a backup); whether it
@@ -197,7 +295,9 @@ class UpperBound:
             keep[query] &= self.at(B, others) > B @ self.corner + self.excess[query] + 1e-12
         excess = self.excess[keep]
         self.points.keep(keep)
+        self._sparse = SparseRows(self.points.rows)
         if self.groups is not None:
             self._reach.keep(keep)
+            self._sparse_reach = SparseRows(self._reach.rows)
         self._excess[:len(excess)] = excess
         self._key = {float(b @ self.fingerprint): i for i, b in enumerate(self.points.rows)}
