@@ -15,14 +15,16 @@ The planner's exploded view (:func:`planner.api.plan_in_3d`) says which part goe
 """
 from __future__ import annotations
 
+from types import MappingProxyType
+
 import FreeCAD
 
 __all__ = ["COLOURS", "DIMMED", "SceneChanges", "bound_box", "component_objects", "extent", "face_materials",
            "relation_looks", "shown_transform", "step_looks"]
 
 #: Colours (RGB 0..1) and transparencies (percent) of the roles.
-COLOURS = {"moving": (1.0, 0.55, 0.0), "blocked": (0.85, 0.1, 0.1), "blocking": (0.1, 0.35, 0.9)}
-DIMMED = {"fixed": 55, "idle": 85, "blocking": 50}
+COLOURS = MappingProxyType({"moving": (1.0, 0.55, 0.0), "blocked": (0.85, 0.1, 0.1), "blocking": (0.1, 0.35, 0.9)})
+DIMMED = MappingProxyType({"fixed": 55, "idle": 85, "blocking": 50})
 
 
 def component_objects(document, diagrams: dict) -> dict[str, list]:
