@@ -394,12 +394,13 @@ def plan_in_3d(plan: Plan, sequence: int | Sequence[int], spacing: float = 1.0,
     return exploded_view(plan, operations, spacing, base)
 
 
-def sequence_from_log(path: str | os.PathLike, plan: Plan | None = None) -> tuple[list[int], LoggedSequence]:
+def sequence_from_log(path: str | os.PathLike, plan: Plan | None = None,
+                      inputs: InputLimits = InputLimits()) -> tuple[list[int], LoggedSequence]:
     """The sequence a session log recorded (:func:`~planner.runtime.logged_sequence.logged_sequence`), completed
     by the first continuation when the session stopped early, as operations of ``plan`` (default: the plan of
     the product the log stores). Raises :class:`PlannerError` when the log's operations are not operations
-    of ``plan`` (a log of another product)."""
-    logged = logged_sequence(path)
+    of ``plan`` (a log of another product). ``inputs``: the limits the log is read within."""
+    logged = logged_sequence(path, inputs)
     operations = complete_sequence(logged.plan, list(logged.operations))
     if plan is None:
         return operations, logged

@@ -27,12 +27,14 @@ from .options import (
     add_fasteners,
     add_force,
     add_hierarchy,
+    add_input_options,
     add_model_options,
     add_size_options,
     add_technical,
     advice,
     contact_tolerances_from,
     index,
+    inputs_from,
     limits_from,
     model_options_from,
     positive,
@@ -194,7 +196,7 @@ def _sequence(args: argparse.Namespace) -> int:
     plan = api.plan_of(product_from(args, args.product), args.technical, limits_from(args))
     title = f"sequence {args.rank}"
     if args.session_log:
-        operations, logged = api.sequence_from_log(args.session_log, plan)
+        operations, logged = api.sequence_from_log(args.session_log, plan, inputs_from(args))
         title = f"the sequence {args.session_log} recorded" + ("" if logged.complete else
                                                         f" ({len(logged.operations)} operations, then the first way to finish)")
         view = api.plan_in_3d(plan, operations, args.spacing, args.base_part)
@@ -325,6 +327,7 @@ def add_commands(commands) -> None:
     add_base_part(sequence)
     add_model_options(sequence)
     add_size_options(sequence)
+    add_input_options(sequence)
     sequence.set_defaults(run=_sequence)
 
     fasteners = commands.add_parser(

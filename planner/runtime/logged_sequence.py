@@ -18,6 +18,7 @@ from ..assembly.explode import SequenceError, check_sequence
 from ..assembly.plan import Plan
 from ..assembly.tags import BLANK
 from ..product import Product
+from ..validation import InputLimits
 from .log import SessionError, replay
 
 __all__ = ["LoggedSequence", "complete_sequence", "explain_steps", "logged_sequence", "logged_steps"]
@@ -105,13 +106,13 @@ def complete_sequence(plan: Plan, operations: list[int]) -> list[int]:
     return out
 
 
-def logged_sequence(path: str | os.PathLike) -> LoggedSequence:
+def logged_sequence(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> LoggedSequence:
     """The sequence the session log at ``path`` recorded (module docstring), over the plan of the product
-    the log stores. Raises :class:`~planner.runtime.log.SessionError` for a file that is not a session log
+    the log stores; ``limits``: what the log is read within (:func:`~planner.runtime.log.read_log`). Raises :class:`~planner.runtime.log.SessionError` for a file that is not a session log
     and when no sequence of that product explains it. Cost: the replay (one model build and one belief update
     per step) and :func:`explain_steps`."""
     path = Path(path)
-    done = replay(path)
+    done = replay(path, limits=limits)
     plan = done.model.plan
     steps = logged_steps(done.events, done.model)
     try:

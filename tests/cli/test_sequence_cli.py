@@ -45,6 +45,12 @@ def test_a_sequence_from_a_session_log(tmp_path):
     data = json.loads(run_aplan("sequence", "pen", "--log", log, "--json").stdout)
     assert [s["operation"] for s in data["steps"]] == operations and data["sequence"] is None
     assert f"the sequence {log} recorded, 5 operations" in run_aplan("sequence", "pen", "--log", log).stdout
+    # The log is read within the input limits, and the refusal names the option that raises them.
+    small = str(log.stat().st_size // 2 / 2 ** 30)
+    done = run_aplan("sequence", "pen", "--log", log, "--max-input", small)
+    assert done.returncode == 1 and "--max-input GIB" in done.stderr and "Traceback" not in done.stderr, done.stderr
+    bigger = str(2 * log.stat().st_size / 2 ** 30)
+    assert run_aplan("sequence", "pen", "--log", log, "--max-input", bigger).returncode == 0
 
 
 def test_bad_input_is_one_line():
