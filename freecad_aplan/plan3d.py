@@ -24,7 +24,7 @@ __all__ = ["COLOURS", "DIMMED", "SceneChanges", "bound_box", "component_objects"
 
 #: Colours (RGB 0..1) and transparencies (percent) of the roles.
 COLOURS = MappingProxyType({"moving": (1.0, 0.55, 0.0), "blocked": (0.85, 0.1, 0.1), "blocking": (0.1, 0.35, 0.9)})
-DIMMED = MappingProxyType({"fixed": 55, "idle": 85, "blocking": 50})
+DIMMED = MappingProxyType({"fixed": 55, "idle": 85, "blocking": 75})
 
 
 def component_objects(document, diagrams: dict) -> dict[str, list]:

@@ -321,7 +321,7 @@ def test_plan_and_relation_in_the_3d_view(tmp_path):
     relation = data["relation"]
     assert relation["row"] == ["blocks +X", "head_001", "body_001"]
     assert relation["looks"][_obj("head_001")][:2] == [pytest.approx(RED), 0]
-    assert relation["looks"][_obj("body_001")][:2] == [pytest.approx(BLUE), 50]  # see-through: it encloses the head
+    assert relation["looks"][_obj("body_001")][:2] == [pytest.approx(BLUE), 75]  # see-through: it encloses the head
     assert all(t == 85 for name, (_, t, _) in relation["looks"].items()
                if name not in (_obj("head_001"), _obj("body_001")))
     assert all(shift == pytest.approx([0, 0, 0], abs=1e-4) for _, _, shift in relation["looks"].values())
