@@ -197,15 +197,19 @@ class UpperBound:
         # supp(point) within supp(b): counted over the columns some belief covers (a point reaching outside
         # them is inside none), so the product is only as wide as the beliefs' supports.
         covers = (B > 0).any(axis=0)
-        cols = np.flatnonzero(covers)
         # Only the points whose support lies within that union can nest in a belief (counted on their
         # non-zeros: O(nnz) for all points), and only those enter the (beliefs x points) product.
         ptr, point_cols, _ = self._sparse.arrays()
         lengths = np.diff(ptr)
         candidates = np.flatnonzero(np.add.reduceat(covers[point_cols], ptr[:-1]) == lengths)
-        support = self.points.support[np.ix_(candidates, cols)]
-        covered = (B[:, cols] > 0).astype(np.float32) @ support.T                     # (m, candidates)
-        inside = covered == lengths[candidates].astype(np.float32)[None, :]
+        if not candidates.size:
+            return bound
+        # supp(b_i) within supp(b) for each (belief, candidate), over the candidates' non-zeros only (points
+        # are sparse: far fewer numbers than the (beliefs x candidates x covered columns) product).
+        starts = ptr[candidates]
+        _, flat = _flatten(starts, lengths[candidates])
+        inside = np.logical_and.reduceat((B > 0)[:, point_cols[flat]], np.cumsum(lengths[candidates])
+                                         - lengths[candidates], axis=1)               # (m, candidates)
         if allowed is not None:
             inside &= allowed[candidates].T
         b_idx, i_idx = np.nonzero(inside)                 # pairs sorted by belief
