@@ -59,9 +59,9 @@ class Rows:
     """A growing (n, width) float array (amortised appends); with ``columns``, also kept column by column
     (:attr:`columns`), so that a product over a few columns reads only those."""
 
-    def __init__(self, width: int, columns: bool = False):
-        self._data = np.zeros((64, width))
-        self._columns = np.zeros((width, 64)) if columns else None
+    def __init__(self, width: int, columns: bool = False, dtype=float):
+        self._data = np.zeros((64, width), dtype=dtype)
+        self._columns = np.zeros((width, 64), dtype=dtype) if columns else None
         self.n = 0
 
     def extend(self, rows: np.ndarray) -> None:
@@ -69,9 +69,10 @@ class Rows:
         need = self.n + len(rows)
         if need > self._data.shape[0]:
             size = max(need, 2 * self._data.shape[0])
-            self._data = np.concatenate([self._data, np.zeros((size - self._data.shape[0], self._data.shape[1]))])
+            self._data = np.concatenate([self._data, np.zeros((size - self._data.shape[0], self._data.shape[1]),
+                                                              dtype=self._data.dtype)])
             if self._columns is not None:
-                grown = np.zeros((self._data.shape[1], size))
+                grown = np.zeros((self._data.shape[1], size), dtype=self._data.dtype)
                 grown[:, :self.n] = self._columns[:, :self.n]
                 self._columns = grown
         self._data[self.n:need] = rows
