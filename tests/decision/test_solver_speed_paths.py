@@ -49,6 +49,10 @@ def test_rows_keep_their_column_mirror_through_appends_and_pruning():
     rows.keep(mask)
     assert np.array_equal(rows.rows, data[mask]) and np.array_equal(rows.columns, data[mask].T)
     assert Rows(7).columns is None
+    columns_only = Rows(7, columns=True, dtype=np.float32, by_row=False)
+    columns_only.extend(data[:100] > 0.5)
+    columns_only.keep(mask[:100])
+    assert columns_only.rows is None and np.array_equal(columns_only.columns, (data[:100][mask[:100]] > 0.5).T)
 
 
 def test_a_solve_gives_the_numbers_of_the_unoptimised_solver():

@@ -56,26 +56,30 @@ def best_products(B: np.ndarray, V: np.ndarray, stop: Callable[[], bool] | None 
 
 
 class Rows:
-    """A growing (n, width) float array (amortised appends); with ``columns``, also kept column by column
-    (:attr:`columns`), so that a product over a few columns reads only those."""
+    """A growing (n, width) array (amortised appends); with ``columns``, also kept column by column
+    (:attr:`columns`), so that a product over a few columns reads only those; ``by_row=False`` keeps only
+    that copy (:attr:`rows` is then None)."""
 
-    def __init__(self, width: int, columns: bool = False, dtype=float):
-        self._data = np.zeros((64, width), dtype=dtype)
+    def __init__(self, width: int, columns: bool = False, dtype=float, by_row: bool = True):
+        self.width, self._capacity, self.n = width, 64, 0
+        self._data = np.zeros((64, width), dtype=dtype) if by_row else None
         self._columns = np.zeros((width, 64), dtype=dtype) if columns else None
-        self.n = 0
 
     def extend(self, rows: np.ndarray) -> None:
         """Append the rows of ``rows`` (k, width)."""
         need = self.n + len(rows)
-        if need > self._data.shape[0]:
-            size = max(need, 2 * self._data.shape[0])
-            self._data = np.concatenate([self._data, np.zeros((size - self._data.shape[0], self._data.shape[1]),
-                                                              dtype=self._data.dtype)])
+        if need > self._capacity:
+            self._capacity = max(need, 2 * self._capacity)
+            if self._data is not None:
+                grown = np.zeros((self._capacity, self.width), dtype=self._data.dtype)
+                grown[:self.n] = self._data[:self.n]
+                self._data = grown
             if self._columns is not None:
-                grown = np.zeros((self._data.shape[1], size), dtype=self._data.dtype)
+                grown = np.zeros((self.width, self._capacity), dtype=self._columns.dtype)
                 grown[:, :self.n] = self._columns[:, :self.n]
                 self._columns = grown
-        self._data[self.n:need] = rows
+        if self._data is not None:
+            self._data[self.n:need] = rows
         if self._columns is not None:
             self._columns[:, self.n:need] = np.asarray(rows).T
         self.n = need
@@ -85,14 +89,15 @@ class Rows:
 
     def keep(self, mask: np.ndarray) -> None:
         kept = int(mask.sum())
-        self._data[:kept] = self._data[:self.n][mask]
+        if self._data is not None:
+            self._data[:kept] = self._data[:self.n][mask]
         if self._columns is not None:
             self._columns[:, :kept] = self._columns[:, :self.n][:, mask]
         self.n = kept
 
     @property
-    def rows(self) -> np.ndarray:
-        return self._data[:self.n]
+    def rows(self) -> np.ndarray | None:
+        return None if self._data is None else self._data[:self.n]
 
     @property
     def columns(self) -> np.ndarray | None:

@@ -145,7 +145,7 @@ class UpperBound:
         self.fingerprint = fingerprint
         self.points = Rows(Q.shape[1])
         self._sparse = SparseRows()        # the points again, as sparse rows (the sawtooth's pairs)
-        self._support = Rows(Q.shape[1], columns=True, dtype=np.float32)  # their supports, read by column
+        self._support = Rows(Q.shape[1], True, np.float32, by_row=False)  # their supports, by column
         self._sparse_reach = SparseRows()  # beta_g(b_i) > 0 of each point, sparse
         self._excess = np.zeros(64)
         self._key: dict[float, int] = {}   # fingerprint -> row of points
@@ -203,16 +203,19 @@ class UpperBound:
         ptr, point_cols, _ = self._sparse.arrays()
         lengths = np.diff(ptr)
         cols = np.flatnonzero(covers)
-        counts = np.ones(len(cols), dtype=np.float32) @ self._support.columns[cols]
-        candidates = np.flatnonzero(counts == lengths)
+        if len(cols) * self.n <= BLOCK:
+            support = self._support.columns[cols]                                       # (S', n) of 0 and 1
+            candidates = np.flatnonzero(np.ones(len(cols), dtype=np.float32) @ support == lengths)
+            support = support[:, candidates]
+        else:  # wide beliefs and many points: counted on the points' non-zeros instead, O(nnz)
+            candidates = np.flatnonzero(np.add.reduceat(covers[point_cols], ptr[:-1]) == lengths)
+            support = self._support.columns[np.ix_(cols, candidates)]
         if not candidates.size:
             return bound
-        # supp(b_i) within supp(b) for each (belief, candidate), over the candidates' non-zeros only (points
-        # are sparse: far fewer numbers than the (beliefs x candidates x covered columns) product).
-        starts = ptr[candidates]
-        _, flat = _flatten(starts, lengths[candidates])
-        inside = np.logical_and.reduceat((B > 0)[:, point_cols[flat]], np.cumsum(lengths[candidates])
-                                         - lengths[candidates], axis=1)               # (m, candidates)
+        # supp(b_i) within supp(b) for each (belief, candidate): counted over the covered columns (exact
+        # small integers in float32), in one product.
+        covered = (B[:, cols] > 0).astype(np.float32) @ support
+        inside = covered == lengths[candidates].astype(np.float32)                       # (m, candidates)
         if allowed is not None:
             inside &= allowed[candidates].T
         b_idx, i_idx = np.nonzero(inside)                 # pairs sorted by belief
