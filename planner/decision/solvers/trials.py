@@ -45,6 +45,7 @@ class Successors:
     low: np.ndarray
     best: np.ndarray
     high: np.ndarray
+    reward: np.ndarray | None = None   # (A,): R_a . b, kept by :func:`_q` (its belief's, computed once)
 
 
 @dataclass
@@ -83,10 +84,10 @@ def successors(m: Tables, b: np.ndarray, lower: LowerBound, upper: UpperBound,
 
 
 def _q(m: Tables, b: np.ndarray, s: Successors, values: np.ndarray) -> np.ndarray:
-    q = m.R @ b
-    q += np.bincount(s.action, m.gamma * s.probability * values, minlength=m.A)
-    q[np.bincount(s.action, minlength=m.A) == 0] = -np.inf  # actions left out (candidate_actions)
-    return q
+    if s.reward is None:  # a trial asks for the Q-values of a belief up to three times
+        s.reward = m.R @ b
+        s.reward[np.bincount(s.action, minlength=m.A) == 0] = -np.inf  # actions left out (candidate_actions)
+    return s.reward + np.bincount(s.action, m.gamma * s.probability * values, minlength=m.A)
 
 
 def q_upper(m: Tables, b: np.ndarray, s: Successors) -> np.ndarray:
