@@ -161,6 +161,8 @@ class Tables:
         models, :class:`SolveStopped`)."""
         if actions is None or len(actions) == self.A:
             predicted, actions = self.predict(b), np.arange(self.A)              # (A, S)
+        elif not self.dense and self.stacked_t.nnz <= 100_000:  # one small product beats one per action (same sums)
+            predicted = self.predict(b)[actions]
         else:
             predicted = np.stack([self.step(b[None], int(a))[0] for a in actions])
         if len(actions) * self.Z * self.S > SUCCESSOR_BLOCK:  # large: never the whole (A', Z, S) product
