@@ -58,7 +58,10 @@ def _sawtooth(upper: UpperBound, b: np.ndarray, allowed=None) -> float:
 
 
 @pytest.mark.parametrize("seed", range(5))
-def test_upper_bound_is_the_sawtooth_of_its_definition(seed):
+@pytest.mark.parametrize("block", [None, 0])
+def test_upper_bound_is_the_sawtooth_of_its_definition(seed, block, monkeypatch):
+    if block is not None:  # the path for wide beliefs over many points: candidates counted on non-zeros
+        monkeypatch.setattr("planner.decision.solvers.upper.BLOCK", block)
     rng = np.random.default_rng(seed)
     upper = _random_upper(rng)
     B = np.vstack([_random_beliefs(rng, 60, 5), upper.points.rows, np.eye(5)])

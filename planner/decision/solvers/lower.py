@@ -22,7 +22,7 @@ class LowerBound:
     """Alpha vectors (n, S) and their actions (n,); the first ``fixed`` vectors are never pruned."""
 
     def __init__(self, vectors: np.ndarray, actions: Iterable[int], fixed: int | None = None):
-        self._rows = Rows(vectors.shape[1])
+        self._rows = Rows(vectors.shape[1], columns=True)
         self._rows.extend(vectors)
         self.actions: list[int] = [int(a) for a in actions]
         self.fixed = len(vectors) if fixed is None else fixed
@@ -47,7 +47,7 @@ class LowerBound:
     def at(self, B: np.ndarray, stop=None) -> tuple[np.ndarray, np.ndarray]:
         """The bound at the beliefs ``B`` (m, S) and the index of the best vector at each (``stop``:
         :func:`~.tables.best_products`'). Cost: O(m n S)."""
-        return best_products(B, self._rows.rows, stop)
+        return best_products(B, self._rows.rows, stop, self._rows.columns)
 
     def value(self, b: np.ndarray) -> float:
         """The bound at one belief ``b`` (S,). Cost: O(n S)."""

@@ -34,7 +34,7 @@ from .scheduler import WorkSharing
 from .sweeps import sweep_rounds
 from .tables import Tables, fast_informed_bound
 from .threads import blas_threads, limited_blas
-from .trials import backup_groups, trial
+from .trials import backup_groups, bounds_at, trial
 from .upper import CornerGroups, RelaxedQ, UpperBound
 
 __all__ = ["PointBasedSolver", "SolveResult"]
@@ -173,6 +173,7 @@ class PointBasedSolver:
         iterations, pruned_at = 0, 0  # pruned_at: upper-bound points after the last pruning
         lb, ub = lower.value(b0), upper.value(b0)
         history = [(self.clock() - start, lb, ub)]
+        at_b0 = None  # the bounds at b0 as the trials need them (bounds_at), while still current
         for _ in range(self.group_passes if groups is not None else 0):
             if ub - lb <= self.precision or clock() - start >= limit:
                 break
@@ -191,14 +192,16 @@ class PointBasedSolver:
                 # Trials aim at a fraction of the current gap, so early trials stay shallow (HSVI's epsilon).
                 epsilon = max(self.precision, self.gap_fraction * (ub - lb))
                 work = trial(m, b0, lower, upper, beliefs, epsilon, iterations % self.lower_trial_every == 0,
-                             self.max_depth, stop=lambda: clock() - start >= limit)
+                             self.max_depth, stop=lambda: clock() - start >= limit, start=at_b0)
                 if groups is not None and iterations % self.group_every == 0:
                     work += backup_groups(m, lower, upper)
                 if upper.n >= max(self.prune_points_at, 2 * pruned_at):
                     upper.prune()
                     pruned_at = upper.n
             gap = ub - lb
-            lb, ub = lower.value(b0), upper.value(b0)
+            # The sweeps change only the lower bound: the upper one at b0 is the same number as before.
+            at_b0 = bounds_at(b0, lower, upper, None if process == "trials" else ub)
+            lb, ub = at_b0[0], at_b0[2]
             sharing.record(process, gap - (ub - lb), work)
             history.append((self.clock() - start, lb, ub))
             if progress is not None:

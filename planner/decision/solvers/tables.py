@@ -34,42 +34,54 @@ def _check(stop: Callable[[], bool] | None) -> None:
         raise SolveStopped
 
 
-def best_products(B: np.ndarray, V: np.ndarray,
-                  stop: Callable[[], bool] | None = None) -> tuple[np.ndarray, np.ndarray]:
+def best_products(B: np.ndarray, V: np.ndarray, stop: Callable[[], bool] | None = None,
+                  columns: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """For each row b of ``B`` (m, S): ``max_k V[k] . b`` and its ``k``, over ``V`` (n, S), computed
     ``BLOCK`` products and about ``WORK`` multiply-adds at a time (``stop``: checked before each block,
-    :class:`SolveStopped`). Cost: O(m n S) time, O(BLOCK) extra memory."""
+    :class:`SolveStopped`); ``columns``: ``V.T`` stored by column (:attr:`Rows.columns`), which lets
+    beliefs with small supports read only their columns of ``V``. Cost: O(m n S') time for the S' columns
+    some belief covers, O(BLOCK) extra memory."""
     values, best = np.empty(len(B)), np.empty(len(B), dtype=np.int64)
     cols = np.flatnonzero((B != 0).any(axis=0))
-    if 4 * len(cols) < 3 * B.shape[1] and len(B) >= 8:  # beliefs with small supports: only their columns
-        B, V = B[:, cols], V[:, cols]
+    VT = V.T
+    if 4 * len(cols) < 3 * B.shape[1] and (len(B) >= 8 or columns is not None):  # small supports: their columns
+        B, VT = B[:, cols], (V[:, cols].T if columns is None else columns[cols])
     step = max(1, min(BLOCK // max(1, len(V)), WORK // max(1, len(V) * B.shape[1])))
     for first in range(0, len(B), step):
         _check(stop)
-        products = B[first:first + step] @ V.T
+        products = B[first:first + step] @ VT
         best[first:first + step] = products.argmax(axis=1)
         values[first:first + step] = products[np.arange(len(products)), best[first:first + step]]
     return values, best
 
 
 class Rows:
-    """A growing (n, width) float array (amortised appends), with its support pattern as floats."""
+    """A growing (n, width) array (amortised appends); with ``columns``, also kept column by column
+    (:attr:`columns`), so that a product over a few columns reads only those; ``by_row=False`` keeps only
+    that copy (:attr:`rows` is then None)."""
 
-    def __init__(self, width: int):
-        self._data = np.zeros((64, width))
-        self._support = np.zeros((64, width), dtype=np.float32)
-        self.n = 0
+    def __init__(self, width: int, columns: bool = False, dtype=float, by_row: bool = True):
+        self.width, self._capacity, self.n = width, 64, 0
+        self._data = np.zeros((64, width), dtype=dtype) if by_row else None
+        self._columns = np.zeros((width, 64), dtype=dtype) if columns else None
 
     def extend(self, rows: np.ndarray) -> None:
         """Append the rows of ``rows`` (k, width)."""
         need = self.n + len(rows)
-        if need > self._data.shape[0]:
-            size = max(need, 2 * self._data.shape[0])
-            self._data = np.concatenate([self._data, np.zeros((size - self._data.shape[0], self._data.shape[1]))])
-            self._support = np.concatenate([self._support, np.zeros((size - self._support.shape[0],
-                                                                     self._support.shape[1]), dtype=np.float32)])
-        self._data[self.n:need] = rows
-        self._support[self.n:need] = rows > 0
+        if need > self._capacity:
+            self._capacity = max(need, 2 * self._capacity)
+            if self._data is not None:
+                grown = np.zeros((self._capacity, self.width), dtype=self._data.dtype)
+                grown[:self.n] = self._data[:self.n]
+                self._data = grown
+            if self._columns is not None:
+                grown = np.zeros((self.width, self._capacity), dtype=self._columns.dtype)
+                grown[:, :self.n] = self._columns[:, :self.n]
+                self._columns = grown
+        if self._data is not None:
+            self._data[self.n:need] = rows
+        if self._columns is not None:
+            self._columns[:, self.n:need] = np.asarray(rows).T
         self.n = need
 
     def append(self, row: np.ndarray) -> None:
@@ -77,17 +89,20 @@ class Rows:
 
     def keep(self, mask: np.ndarray) -> None:
         kept = int(mask.sum())
-        self._data[:kept] = self._data[:self.n][mask]
-        self._support[:kept] = self._support[:self.n][mask]
+        if self._data is not None:
+            self._data[:kept] = self._data[:self.n][mask]
+        if self._columns is not None:
+            self._columns[:, :kept] = self._columns[:, :self.n][:, mask]
         self.n = kept
 
     @property
-    def rows(self) -> np.ndarray:
-        return self._data[:self.n]
+    def rows(self) -> np.ndarray | None:
+        return None if self._data is None else self._data[:self.n]
 
     @property
-    def support(self) -> np.ndarray:
-        return self._support[:self.n]
+    def columns(self) -> np.ndarray | None:
+        """(width, n): the rows' transpose, contiguous by column (None unless asked for)."""
+        return None if self._columns is None else self._columns[:, :self.n]
 
 
 class Tables:
@@ -146,6 +161,8 @@ class Tables:
         models, :class:`SolveStopped`)."""
         if actions is None or len(actions) == self.A:
             predicted, actions = self.predict(b), np.arange(self.A)              # (A, S)
+        elif not self.dense and self.stacked_t.nnz <= 100_000:  # one small product beats one per action (same sums)
+            predicted = self.predict(b)[actions]
         else:
             predicted = np.stack([self.step(b[None], int(a))[0] for a in actions])
         if len(actions) * self.Z * self.S > SUCCESSOR_BLOCK:  # large: never the whole (A', Z, S) product

@@ -27,7 +27,7 @@ from .lower import LowerBound
 from .tables import SolveStopped, Tables
 from .upper import UpperBound
 
-__all__ = ["Successors", "candidate_actions", "successors", "q_upper", "q_lower", "backup", "backup_groups", "descend",
+__all__ = ["Successors", "candidate_actions", "successors", "q_upper", "q_lower", "backup", "backup_groups", "bounds_at", "descend",
            "trial"]
 
 Bounds = tuple[float, int, float]  # (lower bound, index of its best vector, upper bound) at one belief
@@ -45,6 +45,7 @@ class Successors:
     low: np.ndarray
     best: np.ndarray
     high: np.ndarray
+    reward: np.ndarray | None = None   # (A,): R_a . b, kept by :func:`_q` (its belief's, computed once)
 
 
 @dataclass
@@ -83,10 +84,10 @@ def successors(m: Tables, b: np.ndarray, lower: LowerBound, upper: UpperBound,
 
 
 def _q(m: Tables, b: np.ndarray, s: Successors, values: np.ndarray) -> np.ndarray:
-    q = m.R @ b
-    q += np.bincount(s.action, m.gamma * s.probability * values, minlength=m.A)
-    q[np.bincount(s.action, minlength=m.A) == 0] = -np.inf  # actions left out (candidate_actions)
-    return q
+    if s.reward is None:  # a trial asks for the Q-values of a belief up to three times
+        s.reward = m.R @ b
+        s.reward[np.bincount(s.action, minlength=m.A) == 0] = -np.inf  # actions left out (candidate_actions)
+    return s.reward + np.bincount(s.action, m.gamma * s.probability * values, minlength=m.A)
 
 
 def q_upper(m: Tables, b: np.ndarray, s: Successors) -> np.ndarray:
@@ -131,13 +132,21 @@ def backup(m: Tables, b: np.ndarray, s: Successors, known: Bounds, lower: LowerB
     return low, best_vector, high
 
 
+def bounds_at(b: np.ndarray, lower: LowerBound, upper: UpperBound, high: float | None = None) -> Bounds:
+    """Both bounds at one belief ``b`` and the index of the lower bound's best vector there (``high``: the
+    upper bound there when the caller knows it is current). Cost: O((K + N) S)."""
+    low, best_vector = (v[0] for v in lower.at(b[None]))
+    return float(low), int(best_vector), upper.value(b) if high is None else high
+
+
 def descend(m: Tables, b0: np.ndarray, lower: LowerBound, upper: UpperBound, epsilon: float,
-            follow_lower: bool = False, max_depth: int = 300, stop: Callable[[], bool] | None = None) -> list[Step]:
+            follow_lower: bool = False, max_depth: int = 300, stop: Callable[[], bool] | None = None,
+            start: Bounds | None = None) -> list[Step]:
     """The path of one trial from ``b0`` (module docstring), at most ``max_depth`` steps down, and none once
-    ``stop()`` is true (the solver's time limit: a deep trial can take seconds). Cost: one :func:`successors`
-    per step."""
-    low, best_vector = (float(v[0]) for v in lower.at(b0[None]))
-    b, depth, known = b0, 0, (low, int(best_vector), upper.value(b0))
+    ``stop()`` is true (the solver's time limit: a deep trial can take seconds); ``start``: the bounds at
+    ``b0`` if the caller has them (:func:`bounds_at`: the same numbers, not computed twice). Cost: one
+    :func:`successors` per step."""
+    b, depth, known = b0, 0, bounds_at(b0, lower, upper) if start is None else start
     path: list[Step] = []
     while depth < max_depth and not (depth and stop is not None and stop()):
         try:
@@ -163,12 +172,12 @@ def descend(m: Tables, b0: np.ndarray, lower: LowerBound, upper: UpperBound, eps
 
 def trial(m: Tables, b0: np.ndarray, lower: LowerBound, upper: UpperBound, beliefs: BeliefSet | None,
           epsilon: float, follow_lower: bool = False, max_depth: int = 300,
-          stop: Callable[[], bool] | None = None) -> float:
+          stop: Callable[[], bool] | None = None, start: Bounds | None = None) -> float:
     """One trial from ``b0``: :func:`descend`, then :func:`backup` at each belief of the path, deepest
     first. The beliefs it reached join ``beliefs`` (the sweeps back them up from then on) with their reach
-    weight ``gamma^t P(path)``; ``stop``: :func:`descend`'s. Returns its work in estimated multiply-adds (module
-    docstring)."""
-    path = descend(m, b0, lower, upper, epsilon, follow_lower, max_depth, stop)
+    weight ``gamma^t P(path)``; ``stop`` and ``start``: :func:`descend`'s. Returns its work in estimated
+    multiply-adds (module docstring)."""
+    path = descend(m, b0, lower, upper, epsilon, follow_lower, max_depth, stop, start)
     child = None
     for step in reversed(path):
         if step.next is not None and child is not None:

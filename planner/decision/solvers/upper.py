@@ -145,6 +145,7 @@ class UpperBound:
         self.fingerprint = fingerprint
         self.points = Rows(Q.shape[1])
         self._sparse = SparseRows()        # the points again, as sparse rows (the sawtooth's pairs)
+        self._support = Rows(Q.shape[1], True, np.float32, by_row=False)  # their supports, by column
         self._sparse_reach = SparseRows()  # beta_g(b_i) > 0 of each point, sparse
         self._excess = np.zeros(64)
         self._key: dict[float, int] = {}   # fingerprint -> row of points
@@ -197,15 +198,24 @@ class UpperBound:
         # supp(point) within supp(b): counted over the columns some belief covers (a point reaching outside
         # them is inside none), so the product is only as wide as the beliefs' supports.
         covers = (B > 0).any(axis=0)
-        cols = np.flatnonzero(covers)
-        # Only the points whose support lies within that union can nest in a belief (counted on their
-        # non-zeros: O(nnz) for all points), and only those enter the (beliefs x points) product.
+        # Only the points whose support lies within that union can nest in a belief (counted over the
+        # union's columns: O(n S') for S' covered states), and only those enter the (beliefs x points) product.
         ptr, point_cols, _ = self._sparse.arrays()
         lengths = np.diff(ptr)
-        candidates = np.flatnonzero(np.add.reduceat(covers[point_cols], ptr[:-1]) == lengths)
-        support = self.points.support[np.ix_(candidates, cols)]
-        covered = (B[:, cols] > 0).astype(np.float32) @ support.T                     # (m, candidates)
-        inside = covered == lengths[candidates].astype(np.float32)[None, :]
+        cols = np.flatnonzero(covers)
+        if len(cols) * self.n <= BLOCK:
+            support = self._support.columns[cols]                                       # (S', n) of 0 and 1
+            candidates = np.flatnonzero(np.ones(len(cols), dtype=np.float32) @ support == lengths)
+            support = support[:, candidates]
+        else:  # wide beliefs and many points: counted on the points' non-zeros instead, O(nnz)
+            candidates = np.flatnonzero(np.add.reduceat(covers[point_cols], ptr[:-1]) == lengths)
+            support = self._support.columns[np.ix_(cols, candidates)]
+        if not candidates.size:
+            return bound
+        # supp(b_i) within supp(b) for each (belief, candidate): counted over the covered columns (exact
+        # small integers in float32), in one product.
+        covered = (B[:, cols] > 0).astype(np.float32) @ support
+        inside = covered == lengths[candidates].astype(np.float32)                       # (m, candidates)
         if allowed is not None:
             inside &= allowed[candidates].T
         b_idx, i_idx = np.nonzero(inside)                 # pairs sorted by belief
@@ -244,7 +254,10 @@ class UpperBound:
                 g = gidx[gpos]
                 term = np.minimum(fit[bb[gpair], g], ratio[gpair] * gval[gpos]) * self._drop[g]
                 gain += np.bincount(gpair, weights=term, minlength=len(ii))
-            np.minimum.at(best_gain, bb, gain)
+            # the pairs come sorted by belief: each belief's least gain is one segment's minimum
+            starts = np.flatnonzero(np.concatenate(([True], bb[1:] != bb[:-1])))
+            mine = bb[starts]
+            best_gain[mine] = np.minimum(best_gain[mine], np.minimum.reduceat(gain, starts))
             first = last
         return best_gain
 
@@ -267,6 +280,7 @@ class UpperBound:
         self._excess[self.points.n] = excess
         self.points.append(b)
         self._sparse.append(b)
+        self._support.append(b > 0)
         if self.groups is not None:
             reach = self.groups.reach(b[None])[0]
             self._reach.append(reach)
@@ -295,6 +309,7 @@ class UpperBound:
             keep[query] &= self.at(B, others) > B @ self.corner + self.excess[query] + 1e-12
         excess = self.excess[keep]
         self.points.keep(keep)
+        self._support.keep(keep)
         self._sparse = SparseRows(self.points.rows)
         if self.groups is not None:
             self._reach.keep(keep)
