@@ -73,7 +73,8 @@ class PointBasedSolver:
     time limit, a quarter of it); ``prune_points_at``: the upper-bound points are pruned when their number
     reaches it, then whenever it doubles; ``seed`` draws the fingerprint that keys beliefs.
     Trials: ``max_depth``; ``gap_fraction``: each trial aims at this fraction of the current gap at b0 (at
-    least ``precision``); every ``lower_trial_every``-th trial follows the lower bound's policy.
+    least ``precision``; close to 1: shallow trials, more of them, which on the lumped models tightens the
+    upper bound faster: chain 7 at 60 CPU-s 0.263 / 0.308 with 0.99 against 0.264 / 0.323 with 0.9); every ``lower_trial_every``-th trial follows the lower bound's policy.
     Sweeps: ``theta`` is the first reach-weight threshold for growing the belief set, divided by
     ``theta_factor`` whenever no belief above it is left to grow; ``sweeps_per_round`` sweeps follow each
     growth, over ``chunk`` beliefs at a time; the set stops growing at ``belief_memory`` stored numbers
@@ -103,7 +104,7 @@ class PointBasedSolver:
     group_passes: int = 100
     group_every: int = 20
     max_depth: int = 300
-    gap_fraction: float = 0.9
+    gap_fraction: float = 0.99
     lower_trial_every: int = 2
     theta: float = 1e-3
     theta_factor: float = 3.0
