@@ -193,7 +193,8 @@ def _intentions(args: argparse.Namespace) -> int:
 
 def _sequence(args: argparse.Namespace) -> int:
     """``aplan sequence``: one full assembly sequence step by step, as the workbench's "Plan in 3D" shows it."""
-    plan = api.plan_of(product_from(args, args.product), args.technical, limits_from(args))
+    product = api.level_product(product_from(args, args.product), args.subassemblies, args.level, args.max_components)
+    plan = api.plan_of(product, args.technical, limits_from(args))
     title = f"sequence {args.rank}"
     if args.session_log:
         operations, logged = api.sequence_from_log(args.session_log, plan, inputs_from(args))
@@ -325,6 +326,8 @@ def add_commands(commands) -> None:
     sequence.add_argument("--json", action="store_true", help="print one JSON object with the steps and offsets")
     add_technical(sequence)
     add_base_part(sequence)
+    add_hierarchy(sequence)
+    add_fasteners(sequence)
     add_model_options(sequence)
     add_size_options(sequence)
     add_input_options(sequence)

@@ -135,3 +135,19 @@ def test_a_session_of_one_level_logs_it_and_replays(capsys, chains, tmp_path):
     assert start["settings"]["level"] == "top" and [p["id"] for p in start["product"]["parts"]] == ["A", "B"]
     done = replay(log)
     assert not done.mismatches and done.end["reason"] == "assembled"
+
+
+def test_a_sequence_per_level(capsys, chains):
+    """``aplan sequence`` plans one workstation as ``stats`` does: level A (a chain of 3: 2 sequences), the top
+    level (A + B: one operation), and a product of several levels without ``--level`` is an error naming them."""
+    code, out, _ = run(capsys, "sequence", chains, "--level", "A", "--rank", "1", "--json")
+    assert code == 0
+    steps = json.loads(out)["steps"]
+    assert len(steps) == 2 and set().union(*(s["moving"] + s["fixed"] for s in steps)) == {"a1", "a2", "a3"}
+    code, out, _ = run(capsys, "sequence", chains, "--level", "A", "--rank", "2")
+    assert code == 1
+    code, out, _ = run(capsys, "sequence", chains, "--level", "top", "--json")
+    assert code == 0 and [sorted(s["moving"] + s["fixed"]) for s in json.loads(out)["steps"]] == [["A", "B"]]
+    code, _, err = run(capsys, "sequence", chains)
+    assert code == 1 and "pick one with --level ID" in err and "A, B, top" in err
+
