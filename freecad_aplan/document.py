@@ -298,39 +298,56 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
         solids = [s for _, shape in members for s in shape.Solids]
         components.append(Component(group, group, Part.makeCompound(solids), [o.Name for o, _ in members]))
     if not components:
-        raise DocumentError(f"{document.FileName or document.Name}: the document has no solids to plan with")
+        raise DocumentError(_nothing_left(document, objects, excluded))
     _unique_ids(components, warnings)
     return ReadResult(components, warnings, document)
 
 
+def _nothing_left(document, objects: list, excluded: dict[str, str]) -> str:
+    """Why no component is left: the exclusions that left out every solid (each pattern, how many objects and
+    the first of them), or a document without solids."""
+    where = document.FileName or document.Name
+    left_out: dict[str, list[str]] = {}
+    for obj in objects:
+        if obj.Name in excluded and (obj.isDerivedFrom("Part::Feature") or obj.isDerivedFrom("App::Link")) \
+                and _holds_solid(obj):
+            left_out.setdefault(excluded[obj.Name], []).append(obj.Label)
+    if not left_out:
+        return f"{where}: the document has no solids to plan with"
+    said = "; ".join(f"--exclude {pattern!r} leaves out {len(labels)} ({', '.join(labels[:3])}"
+                     f"{', ...' if len(labels) > 3 else ''})" for pattern, labels in left_out.items())
+    return f"{where}: no solid is left to plan with: {said}; exclude fewer objects (patterns match labels)"
+
+
 def matching(objects: list, pattern: str) -> list:
-    """The objects whose label or name is ``pattern``, or else matches it as a shell-style pattern
-    (``wood_screw*``: :func:`fnmatch.fnmatchcase`, case-sensitive as labels are)."""
+    """The objects whose label or internal name is ``pattern``, or else whose label matches it as a shell-style
+    pattern (``wood_screw*``: :func:`fnmatch.fnmatchcase`, case-sensitive as labels are). Patterns never match
+    internal names: an A2plus document names its parts ``b_LABEL_``, so ``b*`` would match every part."""
     exact = [o for o in objects if pattern in (o.Label, o.Name)]
     if exact:
         return exact
-    return [o for o in objects if fnmatch.fnmatchcase(o.Label, pattern) or fnmatch.fnmatchcase(o.Name, pattern)]
+    return [o for o in objects if fnmatch.fnmatchcase(o.Label, pattern)]
 
 
 def _selection(document, objects: list, groups: dict[str, list[str]],
-               exclude: list[str]) -> tuple[set[str], dict[str, str]]:
-    """The names of the objects ``exclude`` matches, and object name -> its group; :class:`DocumentError` when
-    a pattern matches no object or an object matches two groups."""
+               exclude: list[str]) -> tuple[dict[str, str], dict[str, str]]:
+    """Object name -> the ``exclude`` pattern that leaves it out, and object name -> its group;
+    :class:`DocumentError` when a pattern matches no object or an object matches two groups."""
     where = document.FileName or document.Name
-    excluded: set[str] = set()
+    excluded: dict[str, str] = {}
     for pattern in exclude:
         found = matching(objects, pattern)
         if not found:
-            raise DocumentError(f"{where}: exclude {pattern!r} matches no object (labels or names; patterns such "
-                                "as 'wood_screw*' are shell-style)")
-        excluded.update(o.Name for o in found)
+            raise DocumentError(f"{where}: exclude {pattern!r} matches no object (labels, or an exact internal "
+                                "name; patterns such as 'wood_screw*' are shell-style)")
+        excluded.update((o.Name, pattern) for o in found if o.Name not in excluded)
     group_of: dict[str, str] = {}
     for group, members in groups.items():
         for member in members:
             found = matching(objects, member)
             if not found:
-                raise DocumentError(f"{where}: group {group!r}: {member!r} matches no object (labels or names; "
-                                    "patterns such as 'bolt_*' are shell-style)")
+                raise DocumentError(f"{where}: group {group!r}: {member!r} matches no object (labels, or an exact "
+                                    "internal name; patterns such as 'bolt_*' are shell-style)")
             for obj in found:
                 if group_of.get(obj.Name, group) != group:
                     raise DocumentError(f"{where}: {obj.Label!r} is in groups {group_of[obj.Name]!r} and {group!r} "

@@ -25,6 +25,7 @@ Front ends only parse their input and show results; the steps of the method live
 """
 from __future__ import annotations
 
+import logging
 import math
 import os
 import shutil
@@ -38,6 +39,7 @@ import numpy as np
 from .assembly.explode import ExplodedView, exploded_view, first_sequences, sequence_at
 from .assembly.guards import OPTIONS, SizeLimits, memory_options
 from .assembly.hierarchy import (
+    SUBASSEMBLY_MODES,
     Level,
     level_statistics,
     product_levels,
@@ -86,9 +88,10 @@ from .product import (
 )
 from .product.examples import EXAMPLES, example_path
 from .runtime.logged_sequence import LoggedSequence, complete_sequence, logged_sequence
+from .defaults import STRUCTURE_DEFAULT
 from .validation import InputLimits
 
-__all__ = ["resolve_product", "fastener_report", "accept_fasteners", "FASTENER_MODES", "plan_of",
+__all__ = ["resolve_product", "DEFAULT_MODE", "fastener_report", "accept_fasteners", "FASTENER_MODES", "plan_of",
            "proposed_subassemblies", "structure_problems", "level_report", "level_table", "LEVEL_KEYS",
            "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
@@ -104,9 +107,17 @@ PLANNERS = ("offline", "online")
 
 Model = IntentionModel | LumpedModel | POMDP
 
+log = logging.getLogger(__name__)
+
+
+#: ``--fasteners`` and ``--subassemblies`` left out: the product's own fastener groups and subassemblies, or the
+#: planner's proposals (``auto``) when it has neither (:func:`resolve_product`).
+DEFAULT_MODE = STRUCTURE_DEFAULT
+
 
 def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fasteners: str = "tagged",
-                    model_options: dict | None = None) -> Product:
+                    model_options: dict | None = None, subassemblies: str | None = None,
+                    max_components: int = 8) -> Product:
     """Load PRODUCT: a product file, a bundle folder, a CAD file a plugin reads (``.FCStd``, STEP: through
     FreeCAD), or the name of an embedded example (``pen``).
 
@@ -116,18 +127,49 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
     product's parts need meshes then.
     ``fasteners``: the fastener groups plans fold: ``tagged`` the product's own (its ``fasteners`` section),
     ``auto`` those and the planner's proposals (:func:`~planner.product.propose_fasteners`), ``none`` none.
+    ``subassemblies`` (None: left as the file has them): ``designer``, ``auto`` (at most ``max_components``
+    members each) or ``none``, as :func:`~planner.assembly.hierarchy.with_subassemblies`.
+    :data:`DEFAULT_MODE` for either (the command line's default): for a product drawn in CAD (every part has a
+    mesh: a CAD model, a bundle) that has neither fastener groups nor subassemblies, the planner's proposals
+    (``auto``), saying so in one note when they change the plan; else the product's own (``tagged``,
+    ``designer``).
     ``model_options``: how a CAD model is read (``{"groups": {NAME: [labels]}, "exclude": [labels]}``, as
     ``aplan export-freecad --group/--exclude``); only for a CAD model, an error for anything else.
     """
-    if fasteners not in FASTENER_MODES:
+    if fasteners not in FASTENER_MODES + (DEFAULT_MODE,):
         raise PlannerError(f"unknown fastener mode {fasteners!r}; use one of {', '.join(FASTENER_MODES)}")
+    if subassemblies not in SUBASSEMBLY_MODES + (DEFAULT_MODE, None):
+        raise PlannerError(f"unknown subassembly mode {subassemblies!r}; use one of {', '.join(SUBASSEMBLY_MODES)}")
     model_options = {k: v for k, v in (model_options or {}).items() if v}
     if model_options and not _is_model_file(argument):
         raise PlannerError(f"{argument}: --group and --exclude choose the components of a CAD model (.FCStd, "
                            "STEP); this product's parts are chosen already (export the model again with them)")
     product = argument if isinstance(argument, Product) else _load(argument, tolerances, model_options)
-    proposals = fastener_proposals(product).groups if fasteners == "auto" else ()
-    return with_fastener_mode(product, fasteners, proposals)
+    # The designer's structure, before any proposal; a product not drawn in CAD (no meshes: synthetic, written
+    # by hand) is planned as written, as the paper's products are.
+    own = bool(product.fasteners or product.subassemblies) or not all(p.mesh for p in product.parts)
+    fastener_mode = ("tagged" if own else "auto") if fasteners == DEFAULT_MODE else fasteners
+    proposals = fastener_proposals(product).groups if fastener_mode == "auto" else ()
+    resolved = with_fastener_mode(product, fastener_mode, proposals)
+    if subassemblies is not None:
+        mode = ("designer" if own else "auto") if subassemblies == DEFAULT_MODE else subassemblies
+        resolved = with_subassemblies(resolved, mode, max_components)
+    _note_proposals(product, resolved, fasteners == DEFAULT_MODE, subassemblies == DEFAULT_MODE)
+    return resolved
+
+
+def _note_proposals(product: Product, resolved: Product, fasteners: bool, subassemblies: bool) -> None:
+    """One note when the default modes (``fasteners``, ``subassemblies``: left to the default) planned
+    ``product`` with the planner's proposals: how many, and the options that plan it as the file has it."""
+    folded = len(resolved.fasteners) - len(product.fasteners) if fasteners else 0
+    proposed = len(resolved.subassemblies) - len(product.subassemblies) if subassemblies else 0
+    if not folded and not proposed:
+        return
+    found = ([f"{folded} fastener group{'s' if folded > 1 else ''}"] if folded else []) + \
+        ([f"{proposed} subassembl{'ies' if proposed > 1 else 'y'}"] if proposed else [])
+    off = " ".join((["--fasteners tagged"] if folded else []) + (["--subassemblies designer"] if proposed else []))
+    log.info("%s has no fastener groups or subassemblies of its own: planning with the planner's proposals (%s); "
+             "%s turns this off", product.name or "the product", ", ".join(found), off)
 
 
 def fastener_report(product: Product) -> tuple[tuple[FastenerGroup, ...], FastenerProposals]:

@@ -14,7 +14,7 @@ __all__ = [
     "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
     "CONFIDENCE", "DECISION_TIME", "ONLINE_EXPANSIONS", "ONLINE_DEPTH",
     "JSON_DEPTH_LIMIT", "INPUT_FILE_LIMIT", "SPREAD_CELL_LIMIT", "DECLARED_LIMIT", "RESOLUTION_LIMIT", "EPISODE_LIMIT",
-    "LINEAR_DEFLECTION_MIN",
+    "LINEAR_DEFLECTION_MIN", "STRUCTURE_DEFAULT", "MAX_COMPONENTS",
 ]
 
 # The product file (docs/product-format.md): its "format" and "version" keys, and its name in a bundle.
@@ -102,3 +102,8 @@ DECLARED_LIMIT = 10_000_000
 RESOLUTION_LIMIT = 16_384
 EPISODE_LIMIT = 10_000_000
 LINEAR_DEFLECTION_MIN = 1e-4  # finer tessellations run FreeCADCmd out of memory
+# --fasteners and --subassemblies left out: the product's own fastener groups and subassemblies, or, when it has
+# neither (a CAD model as most are drawn), the planner's proposals, so that a first `aplan stats` gives figures.
+STRUCTURE_DEFAULT = "default"
+# --subassemblies auto: members per proposed subassembly (at most 2^8 connected sets each); at least 2.
+MAX_COMPONENTS = 8

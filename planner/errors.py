@@ -24,7 +24,17 @@ __all__ = [
 
 
 class PlannerError(Exception):
-    """Base class of every error the planner raises on bad input or impossible requests."""
+    """Base class of every error the planner raises on bad input or impossible requests.
+
+    ``str(error)`` is the whole message; :attr:`summary` its one-line form (the command line prints it, and the
+    whole message with ``--verbose``). An error whose message is long sets ``self.brief``."""
+
+    brief: str = ""
+
+    @property
+    def summary(self) -> str:
+        """One line saying what is wrong, where, and the fix; the whole message when no shorter one was set."""
+        return self.brief or str(self)
 
 
 class ProductFormatError(PlannerError):
@@ -85,6 +95,11 @@ class DisconnectedProductError(PlannerError):
             message += (" Add the missing contacts between the groups, or exclude the parts that do not belong to "
                         "the product.")
         super().__init__(message)
+        sizes = ", ".join(str(len(g)) for g in groups[:6]) + (", ..." if len(groups) > 6 else "")
+        fix = (f"--contact {tolerance:g} joins them (or --contact auto)" if tolerance is not None else
+               "add the missing contacts or exclude the parts that do not belong")
+        self.brief = ((f"{source}: " if source else "") + f"the connection diagram is not connected: {len(groups)} "
+                      f"groups of {sizes} parts (the smallest: {{{', '.join(min(groups, key=len)[:3])}}}); {fix}")
 
 
 class NotDisassemblableError(PlannerError):
@@ -100,11 +115,20 @@ class NotDisassemblableError(PlannerError):
 
 class InterlockedPartsError(NotDisassemblableError):
     """Some parts block each other along every direction (:mod:`planner.assembly.feasibility`): found
-    before any enumeration."""
+    before any enumeration. ``pairs``: the interlocked pairs ``(first, second)``; ``directions``: the
+    directions tried, as the message shows them."""
 
-    def __init__(self, stuck: list[str], detail: str):
+    def __init__(self, stuck: list[str], detail: str, pairs: Sequence[tuple[str, str]] = (), directions: str = ""):
         self.stuck = stuck
+        self.pairs = tuple(pairs)
         PlannerError.__init__(self, f"the product cannot be disassembled: {detail}.")
+        if self.pairs:
+            listed = "; ".join(f"{a} and {b}" for a, b in self.pairs[:3]) + \
+                (f" (and {len(self.pairs) - 3} more)" if len(self.pairs) > 3 else "")
+            a, b = self.pairs[0]
+            self.brief = (f"cannot be disassembled: {listed} block each other along every direction tried "
+                          f"({directions}); make {'each pair' if len(self.pairs) > 1 else 'them'} one component "
+                          f"(--group NAME={a},{b} on the CAD model)")
 
 
 class LimitExceededError(PlannerError):
@@ -126,6 +150,10 @@ class LimitExceededError(PlannerError):
         self.options = tuple(options)
         size = f"{'at least ' if at_least else ''}{count:,}{' ' + noun if noun else ''}"
         super().__init__(self._message(size))
+        self.brief = self._brief(size)
+
+    def _brief(self, size: str) -> str:
+        return f"{self.what}: {size} would be enumerated, more than the limit of {self.limit:,}"
 
     def _message(self, size: str) -> str:
         return f"{self.what}: {size} would be enumerated, more than the limit of {self.limit:,}. {self.hint}"
@@ -144,6 +172,10 @@ class MemoryLimitError(LimitExceededError):
         return (f"{self.what} would need about {gib(self.count)} ({self.detail}), more than the memory budget "
                 f"of {gib(self.limit)}. {self.hint}")
 
+    def _brief(self, size: str) -> str:
+        counts = f" ({self.detail})" if len(self.detail) <= 60 else ""  # the counts, when they fit in one line
+        return f"{self.what} would need about {gib(self.count)}{counts}, more than the memory budget of {gib(self.limit)}"
+
 
 class FileLimitError(MemoryLimitError):
     """A file would be larger than allowed: more than the file budget, or than the free space of its disk
@@ -157,6 +189,9 @@ class FileLimitError(MemoryLimitError):
     def _message(self, size: str) -> str:
         return (f"{self.what} would take about {gib(self.count)} ({self.detail}), more than {self.budget_name} "
                 f"of {gib(self.limit)}. {self.hint}")
+
+    def _brief(self, size: str) -> str:
+        return f"{self.what} would take about {gib(self.count)}, more than {self.budget_name} of {gib(self.limit)}"
 
 
 def gib(size: int) -> str:

@@ -26,10 +26,10 @@ from dataclasses import dataclass, field
 from typing import Iterable
 
 from ..defaults import CUTS_PER_SUBASSEMBLY, SUBASSEMBLY_LIMIT
-from ..errors import DisconnectedProductError, InterlockedPartsError, LimitExceededError, NotDisassemblableError
+from ..errors import DisconnectedProductError, LimitExceededError, NotDisassemblableError
 from ..product import Product
 from .bitsets import bit_indices, components, connected_subsets, lowest_bit, mask_of
-from .feasibility import interlock_message, interlocked_pairs, released_interlocks
+from .feasibility import interlock_error, interlocked_pairs
 from .guards import OPTIONS, Progress, fewer_parts_hint
 
 __all__ = ["Operation", "AndOrGraph", "and_or_graph", "liaison_adjacency"]
@@ -147,8 +147,7 @@ def and_or_graph(product: Product, technical: bool | None = None, limit: int = S
 
     interlocked = interlocked_pairs(product)  # a proof in O(n^2 D), before the exponential search
     if interlocked:
-        stuck = sorted({p for pair in interlocked for p in (pair.first, pair.second)}, key=index.get)
-        raise InterlockedPartsError(stuck, interlock_message(interlocked, released=released_interlocks(product)))
+        raise interlock_error(product, interlocked)
 
     constraints = [(mask_of(index[p] for p in c.parts), 1 << index[c.requires])
                    for c in product.technical_constraints if c.active]

@@ -19,7 +19,8 @@ from dataclasses import dataclass, replace
 
 from ..product import Product
 
-__all__ = ["InterlockedPair", "interlocked_pairs", "interlock_message", "released_interlocks"]
+__all__ = ["InterlockedPair", "interlocked_pairs", "interlock_message", "interlock_error", "directions_tried",
+           "released_interlocks"]
 
 
 @dataclass(frozen=True)
@@ -76,8 +77,7 @@ def interlock_message(pairs: list[InterlockedPair], shown: int = 6, released: li
     :func:`released_interlocks`)."""
     if not pairs:
         return ""
-    directions = ", ".join(f"+/-{d.lstrip('+-')}" if d[:1] in "+-" else f"{d} and its reverse"
-                           for d in pairs[0].directions)
+    directions = directions_tried(pairs)
     listed = "; ".join(f"{p.first} and {p.second}" for p in pairs[:shown])
     more = f" (and {len(pairs) - shown} more pairs)" if len(pairs) > shown else ""
     return (f"{len(pairs)} pair(s) of parts block each other along every direction tried ({directions}), so no "
@@ -86,6 +86,23 @@ def interlock_message(pairs: list[InterlockedPair], shown: int = 6, released: li
             "--direction X,Y,Z, or the workbench's diagrams panel), mark a relation that does not block "
             "(--not-blocking BLOCKED BLOCKING DIRECTION), fold fasteners into operations, or make one "
             "component of each pair (--group)" + _released_note(released))
+
+
+def directions_tried(pairs: list[InterlockedPair]) -> str:
+    """The directions the pairs were tried along, as messages show them (``+/-X, +/-Y, +/-Z``)."""
+    return ", ".join(f"+/-{d.lstrip('+-')}" if d[:1] in "+-" else f"{d} and its reverse"
+                     for d in pairs[0].directions) if pairs else ""
+
+
+def interlock_error(product: Product, pairs: list[InterlockedPair]) -> "InterlockedPartsError":
+    """The :class:`~planner.errors.InterlockedPartsError` that ``pairs`` prove (one line in its summary, the
+    whole explanation in its message). Cost: O(n^2 D) for the pairs the designer's marks released."""
+    from ..errors import InterlockedPartsError
+
+    order = {p: i for i, p in enumerate(product.part_ids)}
+    stuck = sorted({p for pair in pairs for p in (pair.first, pair.second)}, key=order.get)
+    return InterlockedPartsError(stuck, interlock_message(pairs, released=released_interlocks(product)),
+                                 [(p.first, p.second) for p in pairs], directions_tried(pairs))
 
 
 def _released_note(released: list[InterlockedPair]) -> str:

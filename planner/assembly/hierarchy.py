@@ -428,7 +428,9 @@ def _repair(product: Product, rep: str, groups: dict[str, list[str]], links: dic
         if len(union) <= cap + cap // 2 and _stuck_parts(product, union) is None:
             merge(rep, other)
             return
-    log.warning("proposed subassembly {%s} cannot be built on its own: %s", ", ".join(groups[rep]), error)
+    log.warning("proposed subassembly {%s} cannot be built on its own: %s", ", ".join(groups[rep]), error.summary)
+    if error.summary != str(error):
+        log.debug("why: %s", error)  # the whole explanation (aplan --verbose)
 
 
 class ConstraintViolationError(PlannerError):

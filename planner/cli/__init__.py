@@ -22,11 +22,11 @@ import signal
 import sys
 from typing import Sequence
 
-from ..errors import LimitExceededError, PlannerError
+from ..errors import PlannerError
 from ..interrupts import exit_status, signal_number, signals_as_interrupts
 from ..plugins import registry
 from . import decision, geometry, plan, runtime
-from .options import add_tolerance_options, advice, check_outputs, offer_options, tolerances_from
+from .options import add_tolerance_options, add_verbose, check_outputs, explain, offer_options, tolerances_from
 
 __all__ = ["main", "build_parser", "add_tolerance_options", "tolerances_from"]
 
@@ -39,6 +39,8 @@ def build_parser() -> argparse.ArgumentParser:
         group.add_commands(commands)
     for add in registry().commands:
         add(commands)
+    for command in commands.choices.values():  # every command, the plugins' too
+        add_verbose(command)
     offer_options(parser, commands)
     return parser
 
@@ -51,13 +53,15 @@ class _Format(logging.Formatter):
         return f"aplan: {message}" if record.levelno < logging.WARNING else f"aplan: warning: {message}"
 
 
-def _configure_logging() -> logging.Handler:
+def _configure_logging(verbose: bool = False) -> logging.Handler:
+    """Notes and warnings to standard error; with ``verbose`` the details too (DEBUG: the whole explanation of
+    a warning the library gave in one line)."""
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(_Format())
     for name in ("planner", "freecad_aplan"):
         logger = logging.getLogger(name)
         logger.addHandler(handler)
-        logger.setLevel(logging.INFO)
+        logger.setLevel(logging.DEBUG if verbose else logging.INFO)
         logger.propagate = False
     return handler
 
@@ -72,14 +76,13 @@ def _restore_logging(handler: logging.Handler) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    handler = _configure_logging()  # undone at the end: main() also runs inside tests and other programs
+    handler = _configure_logging(getattr(args, "verbose", False))  # undone at the end: main() also runs inside tests and other programs
     try:
         with signals_as_interrupts():  # SIGTERM too unwinds: temporary files go, children are killed
             check_outputs(args)  # the overwrite rule and writable folders, before any work
             return args.run(args)
     except PlannerError as exc:
-        helps = advice(exc, args) if isinstance(exc, LimitExceededError) else ""
-        print(f"aplan: error: {exc}" + (f" {helps}" if helps else ""), file=sys.stderr)
+        print(f"aplan: error: {explain(exc, args)}", file=sys.stderr)
         return 1
     except BrokenPipeError:  # e.g. `aplan intentions pen | head`
         return 0

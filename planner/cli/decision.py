@@ -52,14 +52,13 @@ def product_argument(args: argparse.Namespace):
         if getattr(args, "level", None):
             raise PlannerError(f"{argument}: --level picks a subassembly of a PRODUCT; a model file is one model")
         return argument
-    return api.level_product(product_from(args, argument), args.subassemblies, args.level, args.max_components)
+    return api.level_product(product_from(args, argument), "designer", args.level)  # arranged by product_from
 
 
 def levels_from(args: argparse.Namespace) -> list:
     """The levels ``(id, product)`` a simulation or session runs through: the one ``--level`` names, else every
     level bottom-up (one, the product itself, when it is planned flat)."""
-    product = api.arranged(product_from(args, getattr(args, "model", None) or args.product), args.subassemblies,
-                           args.max_components)
+    product = product_from(args, getattr(args, "model", None) or args.product)  # its subassemblies chosen
     ids = [args.level] if args.level is not None else [level.id for level in api.levels_of(product)]
     if len(ids) == 1 and args.level is None:
         return [(ids[0], api.level_product(product))]

@@ -13,9 +13,11 @@ from ..defaults import (
     DECLARED_LIMIT,
     DISCOUNT,
     INPUT_FILE_LIMIT,
+    MAX_COMPONENTS,
     POLICY_TIME_LIMIT,
     RESOLUTION_LIMIT,
     SPREAD_CELL_LIMIT,
+    STRUCTURE_DEFAULT,
     SUBASSEMBLY_LIMIT,
 )
 from ..errors import LimitExceededError, PlannerError
@@ -31,7 +33,8 @@ __all__ = ["PRODUCT_HELP", "number", "finite", "positive", "whole", "index", "ad
            "product_from", "add_decision_options", "rewards_from", "add_tolerance_options", "tolerances_from",
            "add_contact_options", "contact_tolerances_from", "contact_tolerance", "positive_length",
            "add_policy_options", "add_episode_options", "positive_seconds",
-           "online_budget", "add_size_options", "limits_from", "offer_options", "advice", "gibibytes",
+           "online_budget", "add_size_options", "limits_from", "offer_options", "advice", "add_verbose", "explain",
+           "gibibytes",
            "add_input_options", "inputs_from"]
 
 PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or STEP file (read through "
@@ -105,12 +108,14 @@ def add_base_part(parser) -> None:
 
 def add_hierarchy(parser, level: bool = True) -> None:
     """``--subassemblies {designer,auto,none}``, ``--max-components N`` and (with ``level``) ``--level ID``."""
-    parser.add_argument("--subassemblies", choices=SUBASSEMBLY_MODES, default="designer",
-                        help="designer (default): plan each subassembly of the product file as a workstation of "
-                             "its own (flat when it has none); auto: the same, proposing subassemblies when it has "
-                             "none; none: plan the whole product flat")
-    parser.add_argument("--max-components", type=positive, default=8, metavar="N",
-                        help="--subassemblies auto: at most N members per proposed subassembly (default 8)")
+    parser.add_argument("--subassemblies", choices=SUBASSEMBLY_MODES, default=STRUCTURE_DEFAULT,
+                        help="designer: plan each subassembly of the product file as a workstation of its own (flat "
+                             "when it has none); auto: the same, proposing subassemblies when it has none; none: "
+                             "plan the whole product flat. Default: designer, or auto when a CAD model (a bundle) has neither "
+                             "fastener groups nor subassemblies of its own (a note says so)")
+    parser.add_argument("--max-components", type=number(2, integer=True), default=MAX_COMPONENTS, metavar="N",
+                        help=f"--subassemblies auto: at most N members per proposed subassembly, at least 2 "
+                             f"(default {MAX_COMPONENTS})")
     if level:
         parser.add_argument("--level", metavar="ID",
                             help="plan one subassembly (one workstation; 'top' for the top level): its members "
@@ -119,11 +124,12 @@ def add_hierarchy(parser, level: bool = True) -> None:
 
 def add_fasteners(parser) -> None:
     """``--fasteners {tagged,auto,none}``: the fastener groups a plan folds into the operations that install them."""
-    parser.add_argument("--fasteners", choices=("tagged", "auto", "none"), default="tagged",
-                        help="fold fasteners into the operations that install them: tagged (default): the groups of "
-                             "the product's 'fasteners' section; auto: those and the planner's proposals (names "
-                             "such as screw, bolt, nut; small parts joining two others: see aplan fasteners); "
-                             "none: plan every part")
+    parser.add_argument("--fasteners", choices=("tagged", "auto", "none"), default=STRUCTURE_DEFAULT,
+                        help="fold fasteners into the operations that install them: tagged: the groups of the "
+                             "product's 'fasteners' section; auto: those and the planner's proposals (names such "
+                             "as screw, bolt, nut; small parts joining two others: see aplan fasteners); none: plan "
+                             "every part. Default: tagged, or auto when a CAD model (a bundle) has neither fastener groups "
+                             "nor subassemblies of its own (a note says so)")
 
 
 def parse_group(text: str) -> tuple[str, list[str]]:
@@ -149,15 +155,17 @@ def model_options_from(args: argparse.Namespace) -> dict:
     return {"groups": dict(getattr(args, "group", None) or []), "exclude": list(getattr(args, "exclude", None) or [])}
 
 
-def product_from(args: argparse.Namespace, argument):
-    """PRODUCT resolved with ``--fasteners`` and the CAD model options (a Product); a decision model file's
-    name stays as it is."""
+def product_from(args: argparse.Namespace, argument, tolerances=None):
+    """PRODUCT resolved with ``--fasteners``, ``--subassemblies`` (``--max-components``) and the CAD model
+    options (a Product, its subassemblies chosen: plan it with the ``designer`` mode); a decision model file's
+    name stays as it is. ``tolerances``: the geometry analysed again with them (``--contact``)."""
     from .. import api
 
     if isinstance(argument, api.Product) or str(argument).lower().endswith(api.MODEL_SUFFIXES):
         return argument   # a product already resolved (a level: its fasteners were chosen with the whole)
-    return api.resolve_product(argument, fasteners=getattr(args, "fasteners", "tagged"),
-                               model_options=model_options_from(args))
+    return api.resolve_product(argument, tolerances, getattr(args, "fasteners", STRUCTURE_DEFAULT),
+                               model_options_from(args), getattr(args, "subassemblies", None),
+                               getattr(args, "max_components", MAX_COMPONENTS))
 
 
 def add_decision_options(parser: argparse.ArgumentParser) -> None:
@@ -406,3 +414,40 @@ def advice(error: LimitExceededError, args: argparse.Namespace) -> str:
             if others:
                 found.append(f"aplan {'/'.join(others)} {text}")
     return ("What helps: " + "; ".join(found) + ".") if found else ""
+
+
+def add_verbose(parser) -> None:
+    """``--verbose``: errors and refusals in full (by default one line each, :func:`explain`)."""
+    parser.add_argument("--verbose", action="store_true",
+                        help="explain errors and refusals in full: why, and what each option that helps does "
+                             "(by default one line each)")
+
+
+def _spelled(text: str) -> str:
+    """The option as an advice text spells it: ``--fasteners auto`` of "--fasteners auto folds ...",
+    ``--max-memory GIB`` of "--max-memory GIB raises ..." (the option and its value, without the verb)."""
+    words = text.split()
+    value = words[1] if len(words) > 1 else ""
+    return " ".join(words[:2]) if value and (not value.isalpha() or not value.islower() or
+                                             value in ("auto", "online", "none")) else words[0]
+
+
+#: A message longer than this (characters) is printed in its one-line form, the whole of it with --verbose.
+LONG_MESSAGE = 200
+
+
+def explain(error: PlannerError, args: argparse.Namespace, options: bool = True) -> str:
+    """``error`` as the command line prints it: its one line (:attr:`~planner.errors.PlannerError.summary`) and,
+    for a size limit, the options of this command that help, by name; with ``--verbose`` its whole message and
+    what each option does (:func:`advice`); without ``options``, no option is named (a figure only compared)."""
+    helps = advice(error, args) if options and isinstance(error, LimitExceededError) else ""
+    whole = f"{error} {helps}".strip()
+    if getattr(args, "verbose", False) or (len(whole) <= LONG_MESSAGE and "\n" not in whole):
+        return whole
+    text = error.summary
+    if options and isinstance(error, LimitExceededError):
+        here = getattr(args, "offered_options", {}).get(getattr(args, "command", None), frozenset())
+        names = [_spelled(said) for option, said in error.options if option in here]
+        if names:
+            text += f"; try {', '.join(names)}"
+    return text + (" (--verbose says why)" if error.summary != str(error) else "")

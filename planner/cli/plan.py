@@ -33,10 +33,10 @@ from .options import (
     add_technical,
     advice,
     contact_tolerances_from,
+    explain,
     index,
     inputs_from,
     limits_from,
-    model_options_from,
     positive,
     positive_length,
     product_from,
@@ -68,12 +68,11 @@ def _print_designer(product) -> None:
 
 
 def _stats(args: argparse.Namespace) -> int:
-    product = api.resolve_product(args.product, contact_tolerances_from(args), args.fasteners, model_options_from(args))
+    # Fasteners and subassemblies chosen once (the product's own, or proposed), then planned as they are.
+    product = product_from(args, args.product, contact_tolerances_from(args))
     if args.contact is not None:  # analysed again here: say what the analysis found, as aplan analyze does
         for warning in product.geometry.get("analysis", {}).get("warnings", []):
             log.warning("%s", warning)
-    # Subassemblies proposed once (--subassemblies auto), then the product's own.
-    product = api.arranged(product, args.subassemblies, args.max_components)
     if args.level is None and len(api.levels_of(product)) > 1:
         if args.base_part:
             raise PlannerError("--base-part picks the first part of one workstation's sequences: add --level ID")
@@ -81,7 +80,7 @@ def _stats(args: argparse.Namespace) -> int:
     product = api.level_product(product, "designer", args.level)
     plan, stats = api.plan_statistics_of(product, args.technical, args.base_part, limits_from(args), partial=True)
     refused = stats.refused
-    reason = f"{refused} {advice(refused, args)}".strip() if refused else None
+    reason = f"{refused} {advice(refused, args)}".strip() if refused else None  # in full: the JSON's
     if args.json:
         data = stats.as_dict()
         if refused:
@@ -109,7 +108,7 @@ def _stats(args: argparse.Namespace) -> int:
         _print_folded(stats)
     _print_designer(product)
     if refused:
-        print(f"  not computed: {', '.join(stats.not_computed)}: {reason}")
+        print(f"  not computed: {', '.join(stats.not_computed)}: {explain(refused, args)}")
         return PARTIAL
     if stats.base_part:
         print(f"  (only the sequences that start from the base part {stats.base_part!r}, whose first operation "
@@ -157,11 +156,16 @@ def _level_stats(args: argparse.Namespace, product) -> int:
     for level, stats in levels:
         print(f"  {level.id}: {', '.join(level.members)}")
     if flat_reason:
-        print(f"  flat: not counted: {flat_reason}")
+        flat_error = flat.refused if isinstance(flat, PlanStatistics) else flat
+        same = [name for name, error in failed if isinstance(flat_error, PlannerError) and
+                error.summary == flat_error.summary]  # said once, below
+        shown = f"as level {same[0]} (below)" if same else \
+            explain(flat_error, args, options=False) if isinstance(flat_error, PlannerError) else flat_reason
+        print(f"  flat: not counted: {shown}")
     for name, error in refused:
-        print(f"  {name}: not computed: {error} {advice(error, args)}".rstrip())
+        print(f"  {name}: not computed: {explain(error, args)}")
     for name, error in failed:
-        print(f"aplan: error: level {name}: {error}", file=sys.stderr)
+        print(f"aplan: error: level {name}: {explain(error, args)}", file=sys.stderr)
     return 1 if failed else PARTIAL if refused else 0
 
 
@@ -177,7 +181,7 @@ def _print_folded(stats) -> None:
 
 def _intentions(args: argparse.Namespace) -> int:
     limits = limits_from(args)
-    product = api.level_product(product_from(args, args.product), args.subassemblies, args.level, args.max_components)
+    product = api.level_product(product_from(args, args.product), "designer", args.level)
     plan = api.plan_of(product, args.technical, limits)
     graph = intention_graph(plan.states, limit=args.limit, base_part=api.base_part_of(plan, args.base_part),
                             max_bytes=limits.memory)
@@ -193,7 +197,7 @@ def _intentions(args: argparse.Namespace) -> int:
 
 def _sequence(args: argparse.Namespace) -> int:
     """``aplan sequence``: one full assembly sequence step by step, as the workbench's "Plan in 3D" shows it."""
-    product = api.level_product(product_from(args, args.product), args.subassemblies, args.level, args.max_components)
+    product = api.level_product(product_from(args, args.product), "designer", args.level)
     plan = api.plan_of(product, args.technical, limits_from(args))
     title = f"sequence {args.rank}"
     if args.session_log:

@@ -72,8 +72,29 @@ def fold(product: Product) -> Folding:
                      contacts=tuple(contacts + added), obstructions=obstructions,
                      technical_constraints=_constraints(product.technical_constraints, gone),
                      operations=_operations(product.operations, gone), markers=_markers(product.markers, gone),
-                     fasteners=())
+                     subassemblies=_structure(product, gone), fasteners=())
     return Folding(product, folded, groups, tuple(added))
+
+
+def _structure(product: Product, gone: frozenset[str]) -> tuple:
+    """The subassemblies without the fasteners folded (``gone``): a fastener a subassembly lists is installed by
+    the operation that joins its hosts, no member of its own. A subassembly left with fewer than two members is
+    an error naming the fastener and the fix."""
+    from ..errors import ProductFormatError
+
+    kept = []
+    for i, group in enumerate(product.subassemblies):
+        members = tuple(m for m in group.parts if m not in gone)
+        if len(members) < 2 <= len(group.parts):
+            folded = [m for m in group.parts if m in gone]
+            raise ProductFormatError(product.source, f"subassemblies[{i}].parts",
+                                     f"{', '.join(folded)} in subassembly {group.id!r} "
+                                     f"{'is a fastener' if len(folded) == 1 else 'are fasteners'}, folded into the "
+                                     f"operation that installs {'it' if len(folded) == 1 else 'them'}, which leaves "
+                                     f"{len(members)} member(s); list the parts it joins instead, or plan with "
+                                     "--fasteners none")
+        kept.append(replace(group, parts=members) if len(members) < len(group.parts) else group)
+    return tuple(kept)
 
 
 def fold_fasteners(product: Product) -> Product:

@@ -135,7 +135,7 @@ def test_pomdp_refuses_a_file_it_could_not_read_back(tmp_path):
     needed = api.check_model_file(api.load_model("pen"), tmp_path / "pen.pomdp")
     low, high = str(3 * needed * 0.95 / GIB), str(3 * needed * 1.1 / GIB)
     target = tmp_path / "pen.pomdp"
-    done = run_aplan("pomdp", "pen", "-o", target, "--max-memory", low)
+    done = run_aplan("pomdp", "pen", "-o", target, "--max-memory", low, "--verbose")
     assert_refused(done.returncode, done.stderr, "reading", "pen.pomdp back", "Refused before writing",
                    "--max-memory GIB")
     assert not target.exists()
