@@ -7,7 +7,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from conftest import REPO, require_freecadcmd
+from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
 from real_models import JOBS, real_bundle
 
 from integration.freecad_tools import aplan, freecad_result, freecadcmd_job
@@ -79,3 +79,16 @@ def test_the_first_command_on_the_truck_gives_figures():
     assert report["total"]["parts"] == 61 and report["total"]["intentions"] is not None
     asked = aplan("stats", bundle, "--json", "--fasteners", "auto", "--subassemblies", "auto")
     assert json.loads(asked.stdout) == report
+
+
+@pytest.mark.freecad
+def test_a_pattern_that_leaves_nothing_on_the_command_line(tmp_path):
+    """`aplan stats MODEL.FCStd --exclude '*'`: exit 1, one line naming the file, the pattern and the fix, no
+    traceback, nothing printed on standard output."""
+    require_freecadcmd()
+    pen = str(require_shared(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"))
+    done = aplan("stats", pen, "--exclude", "*", check=False)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 1 and "Traceback" not in done.stderr and len(lines) == 1, done.stderr
+    assert lines[0].startswith(f"aplan: error: {pen}: no solid is left to plan with: --exclude '*' leaves out 6")
+    assert "exclude fewer objects" in lines[0] and done.stdout == ""
