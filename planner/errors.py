@@ -174,7 +174,8 @@ class MemoryLimitError(LimitExceededError):
 
     def _brief(self, size: str) -> str:
         counts = f" ({self.detail})" if len(self.detail) <= 60 else ""  # the counts, when they fit in one line
-        return f"{self.what} would need about {gib(self.count)}{counts}, more than the memory budget of {gib(self.limit)}"
+        return (f"{self.what} would need about {gib(self.count)}{counts}, more than the memory budget of "
+                f"{gib(self.limit)}")
 
 
 class FileLimitError(MemoryLimitError):

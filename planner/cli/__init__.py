@@ -76,7 +76,8 @@ def _restore_logging(handler: logging.Handler) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    handler = _configure_logging(getattr(args, "verbose", False))  # undone at the end: main() also runs inside tests and other programs
+    # Undone at the end: main() also runs inside tests and other programs.
+    handler = _configure_logging(getattr(args, "verbose", False))
     try:
         with signals_as_interrupts():  # SIGTERM too unwinds: temporary files go, children are killed
             check_outputs(args)  # the overwrite rule and writable folders, before any work

@@ -111,8 +111,8 @@ def add_hierarchy(parser, level: bool = True) -> None:
     parser.add_argument("--subassemblies", choices=SUBASSEMBLY_MODES, default=STRUCTURE_DEFAULT,
                         help="designer: plan each subassembly of the product file as a workstation of its own (flat "
                              "when it has none); auto: the same, proposing subassemblies when it has none; none: "
-                             "plan the whole product flat. Default: designer, or auto when a CAD model (a bundle) has neither "
-                             "fastener groups nor subassemblies of its own (a note says so)")
+                             "plan the whole product flat. Default: designer, or auto when a CAD model (a bundle) "
+                             "has neither fastener groups nor subassemblies of its own (a note says so)")
     parser.add_argument("--max-components", type=number(2, integer=True), default=MAX_COMPONENTS, metavar="N",
                         help=f"--subassemblies auto: at most N members per proposed subassembly, at least 2 "
                              f"(default {MAX_COMPONENTS})")
@@ -128,8 +128,8 @@ def add_fasteners(parser) -> None:
                         help="fold fasteners into the operations that install them: tagged: the groups of the "
                              "product's 'fasteners' section; auto: those and the planner's proposals (names such "
                              "as screw, bolt, nut; small parts joining two others: see aplan fasteners); none: plan "
-                             "every part. Default: tagged, or auto when a CAD model (a bundle) has neither fastener groups "
-                             "nor subassemblies of its own (a note says so)")
+                             "every part. Default: tagged, or auto when a CAD model (a bundle) has neither fastener "
+                             "groups nor subassemblies of its own (a note says so)")
 
 
 def parse_group(text: str) -> tuple[str, list[str]]:

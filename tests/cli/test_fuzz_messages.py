@@ -81,7 +81,8 @@ def test_products_with_their_own_structure_or_no_cad_keep_it(tmp_path):
     assert done.returncode == 0 and NOTE not in done.stderr
     assert [row["level"] for row in json.loads(done.stdout)["levels"]] == ["u", "top"]
     pen = run_aplan("stats", "pen", "--json")
-    assert NOTE not in pen.stderr and (json.loads(pen.stdout)["intentions"], json.loads(pen.stdout)["states"]) == (69, 18)
+    figures = json.loads(pen.stdout)
+    assert NOTE not in pen.stderr and (figures["intentions"], figures["states"]) == (69, 18)
 
 
 @pytest.mark.parametrize("value", ["1", "0", "-3", "nan", "2.5"])
@@ -99,7 +100,8 @@ def test_a_fastener_listed_in_a_subassembly(tmp_path):
                     subassemblies=[{"id": "u", "parts": ["a", "screw_1", "b"]}])
     done = run_aplan("stats", kept, "--level", "u", "--json")
     assert done.returncode == 0, done.stderr
-    assert (json.loads(done.stdout)["parts"], json.loads(done.stdout)["sequences"]) == (2, 1)  # a and b, the screw installed by joining them
+    figures = json.loads(done.stdout)  # a and b, the screw installed by the operation joining them
+    assert (figures["parts"], figures["sequences"]) == (2, 1)
     alone = _product(tmp_path, "alone", *SCREWED, fasteners=fastened,
                      subassemblies=[{"id": "u", "parts": ["a", "screw_1"]}])
     before = sorted(p.name for p in tmp_path.iterdir())
