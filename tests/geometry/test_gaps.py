@@ -208,7 +208,10 @@ def test_a_product_that_falls_apart_names_the_gaps(tmp_path):
     assert done.returncode == 0 and "fall apart into 3 groups; joined by --contact 10.1" in done.stdout
     recorded = load_product(bundle / "product.json").geometry["analysis"]["gaps"]
     assert recorded["groups"] == [["base"], ["peg", "lid"], ["washer"]] and recorded["tolerance"] == 10.1
-    stats = aplan("stats", str(bundle))
+    stats = aplan("stats", str(bundle))  # one line: the groups' sizes and the tolerance that joins them
+    assert stats.returncode == 1 and "Traceback" not in stats.stderr and len(stats.stderr.splitlines()) == 1
+    assert "is not connected: 3 groups of 1, 2, 1 parts" in stats.stderr and "--contact 10.1 joins them" in stats.stderr
+    stats = aplan("stats", str(bundle), "--verbose")  # the whole message: every group's nearest gap
     assert stats.returncode == 1 and "Traceback" not in stats.stderr
     _expect_gaps_in(stats.stderr)
     # The record is enough: without the meshes the error still names the gaps.
