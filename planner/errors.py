@@ -9,6 +9,7 @@ from collections.abc import Sequence
 
 __all__ = [
     "PlannerError",
+    "UsageError",
     "ProductFormatError",
     "UnknownProductError",
     "DisconnectedProductError",
@@ -25,6 +26,11 @@ __all__ = [
 
 class PlannerError(Exception):
     """Base class of every error the planner raises on bad input or impossible requests."""
+
+
+class UsageError(PlannerError):
+    """Options that do not go together, or a value out of its range that argparse cannot see alone (one
+    option's range set by another): exit status 2, as argparse's usage errors. The message names the options."""
 
 
 class ProductFormatError(PlannerError):
