@@ -92,8 +92,8 @@ def run_session(model: IntentionModel | FactoredIntentionModel, policy, source: 
     Cost per step: one policy lookup and one belief update, plus what the source and the robot take.
     """
     run = _Run(model, log if log is not None else EventLog())
-    run.begin(settings or {})
     try:
+        run.begin(settings or {})
         action = run.decide(policy)
         for step in range(1, max_steps + 1):
             run.result.steps = step
