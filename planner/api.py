@@ -89,7 +89,7 @@ from .product import (
 from .product.examples import EXAMPLES, example_path
 from .runtime.logged_sequence import LoggedSequence, complete_sequence, logged_sequence
 from .defaults import STRUCTURE_DEFAULT
-from .validation import InputLimits
+from .validation import InputLimits, not_regular
 
 __all__ = ["resolve_product", "DEFAULT_MODE", "fastener_report", "accept_fasteners", "FASTENER_MODES", "plan_of",
            "proposed_subassemblies", "structure_problems", "level_report", "level_table", "LEVEL_KEYS",
@@ -216,6 +216,8 @@ def _load(argument: str | os.PathLike, tolerances=None, model_options: dict | No
     if str(argument) in EXAMPLES:
         product = load_product(example_path(str(argument)))
         return product if tolerances is None else analysed(product)
+    if path.exists():  # a device, a FIFO, a socket: reading it would never end or block
+        raise UnknownProductError(not_regular(path, "product") or f"{argument}: not a regular file")
     raise UnknownProductError(
         f"{argument}: no such file, and no embedded example of that name (embedded: {', '.join(EXAMPLES)})")
 

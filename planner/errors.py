@@ -9,6 +9,7 @@ from collections.abc import Sequence
 
 __all__ = [
     "PlannerError",
+    "UsageError",
     "ProductFormatError",
     "UnknownProductError",
     "DisconnectedProductError",
@@ -35,6 +36,11 @@ class PlannerError(Exception):
     def summary(self) -> str:
         """One line saying what is wrong, where, and the fix; the whole message when no shorter one was set."""
         return self.brief or str(self)
+
+
+class UsageError(PlannerError):
+    """Options that do not go together, or a value out of its range that argparse cannot see alone (one
+    option's range set by another): exit status 2, as argparse's usage errors. The message names the options."""
 
 
 class ProductFormatError(PlannerError):

@@ -12,6 +12,7 @@ import json
 import math
 import os
 import re
+import stat
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -21,7 +22,7 @@ from .defaults import DECLARED_LIMIT, INPUT_FILE_LIMIT, JSON_DEPTH_LIMIT, SPREAD
 from .errors import PlannerError
 from .files import check_output as check_writable
 
-__all__ = ["InputError", "InputLimitError", "OutputExistsError", "check_number", "check_finite_array",
+__all__ = ["InputError", "InputLimitError", "OutputExistsError", "not_regular", "check_number", "check_finite_array",
            "check_count", "check_output", "CappedReader", "json_loads", "describe_range", "InputLimits",
            "INPUT_OPTION", "DECLARED_OPTION", "CELLS_OPTION"]
 
@@ -130,6 +131,25 @@ def check_output(path: str | os.PathLike, force: bool = False, option: str = "-o
     return path
 
 
+_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a named pipe"), (stat.S_ISCHR, "a character device"),
+          (stat.S_ISBLK, "a block device"), (stat.S_ISSOCK, "a socket"))
+
+
+def not_regular(path: str | os.PathLike, what: str = "input") -> str | None:
+    """Why ``path`` cannot be read as an input file, when it exists but is not a regular file (a device such as
+    ``/dev/zero`` reads forever, a FIFO blocks, and both report size 0, so the input limits cannot see them):
+    ``"PATH: not a regular file (a character device); give the path of a WHAT file"``. None for a regular
+    file or a path that does not exist (the reader says so). Cost: one ``stat``."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return None
+    if stat.S_ISREG(mode):
+        return None
+    kind = next((name for test, name in _KINDS if test(mode)), "not a file")
+    return f"{path}: not a regular file ({kind}); give the path of a {what} file"
+
+
 class CappedReader(io.RawIOBase):
     """A readable stream over ``stream`` (e.g. a gzip file, decompressed as it is read) that raises
     :class:`InputLimitError` once more than ``limit`` bytes were read, so a compressed bomb never fills the disk,
@@ -193,18 +213,40 @@ def _no_constant(name: str):
     raise ValueError(f"{name} is not a number JSON allows")
 
 
+class _DuplicateKey(Exception):
+    def __init__(self, key: str, others: list[str]):
+        super().__init__(key)
+        self.key, self.others = key, others
+
+
+def _unique_keys(pairs: list[tuple[str, object]]) -> dict:
+    """A JSON object, refusing a key given twice (``json`` would keep the second value without a word)."""
+    data: dict = {}
+    for key, value in pairs:
+        if key in data:
+            raise _DuplicateKey(key, [k for k in data if k != key][:3])
+        data[key] = value
+    return data
+
+
 def json_loads(text: str, source: str, depth_limit: int = JSON_DEPTH_LIMIT):
     """Parse JSON ``text`` strictly: nesting at most ``depth_limit`` deep (checked before parsing, so never a
-    RecursionError), every number finite (``1e400``, ``NaN`` and ``Infinity`` are refused) and integers of at
-    most 300 digits. Raises :class:`InputError` naming ``source``; ``json.JSONDecodeError`` (a ``ValueError``)
+    RecursionError), every number finite (``1e400``, ``NaN`` and ``Infinity`` are refused), integers of at
+    most 300 digits and no key twice in one object (JSON itself would keep the last value silently). Raises
+    :class:`InputError` naming ``source``; ``json.JSONDecodeError`` (a ``ValueError``)
     for text that is not JSON, for the caller to place. O(len(text))."""
     depth = _nesting(text)
     if depth > depth_limit:
         raise InputLimitError(f"{source}: nested {depth} levels deep, more than the limit of {depth_limit}; "
                               "is it the right file?")
     try:
-        return json.loads(text, parse_float=_finite_float, parse_int=_bounded_int, parse_constant=_no_constant)
+        return json.loads(text, parse_float=_finite_float, parse_int=_bounded_int, parse_constant=_no_constant,
+                          object_pairs_hook=_unique_keys)
     except json.JSONDecodeError:
         raise
+    except _DuplicateKey as exc:
+        raise InputError(f"{source}: the key {exc.key!r} appears twice in one object (beside "
+                         f"{', '.join(map(repr, exc.others)) or 'no other key'}); JSON keeps only one of the two "
+                         "values: remove or rename the other") from None
     except (ValueError, RecursionError) as exc:
         raise InputError(f"{source}: {exc}; every number must be finite and of a sensible size") from None

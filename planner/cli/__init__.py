@@ -6,7 +6,8 @@ Each module only parses arguments and prints; the work is done by :mod:`planner.
 (notes, warnings) go through :mod:`logging` to standard error; results go to standard output.
 Exit status: 0 on success, 1 when the input is bad (the message says what, where and how to fix it) or
 what it would build exceeds a size limit (the message gives the estimate and the options that help), 2 on
-a usage error, 3 when ``aplan stats`` printed only some figures (the others would exceed a size limit),
+a usage error (argparse's, or :class:`~planner.errors.UsageError`: options that do not go together), 3 when
+``aplan stats`` printed only some figures (the others would exceed a size limit),
 128 + N when signal N ended it (130: Ctrl-C, 143: SIGTERM). Nothing is written when a command fails or is
 interrupted (output folders are checked before any work), except by ``aplan solve``, which writes the best
 policy so far on an interrupt and says so. A numeric option that is not finite or out of range is a usage
@@ -22,7 +23,7 @@ import signal
 import sys
 from typing import Sequence
 
-from ..errors import PlannerError
+from ..errors import PlannerError, UsageError
 from ..interrupts import exit_status, signal_number, signals_as_interrupts
 from ..plugins import registry
 from . import decision, geometry, plan, runtime
@@ -84,7 +85,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return args.run(args)
     except PlannerError as exc:
         print(f"aplan: error: {explain(exc, args)}", file=sys.stderr)
-        return 1
+        return 2 if isinstance(exc, UsageError) else 1
     except BrokenPipeError:  # e.g. `aplan intentions pen | head`
         return 0
     except OSError as exc:  # one no check foresaw (a file vanished, a device failed): a message, no traceback

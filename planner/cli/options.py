@@ -88,6 +88,8 @@ def check_outputs(args: argparse.Namespace) -> None:
     if getattr(args, "command", None) == "export-freecad":
         return
     for dest, suffix in (("output", ""), ("plot", ".png"), ("log", "")):
+        if dest == "log" and getattr(args, "command", None) != "session":
+            continue  # aplan replay's LOG is its input
         value = getattr(args, dest, None)
         if dest not in outputs and dest not in stems and isinstance(value, str) and value and value != "-":
             check_writable(value + suffix)

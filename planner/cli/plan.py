@@ -197,13 +197,21 @@ def _intentions(args: argparse.Namespace) -> int:
 
 def _sequence(args: argparse.Namespace) -> int:
     """``aplan sequence``: one full assembly sequence step by step, as the workbench's "Plan in 3D" shows it."""
-    product = api.level_product(product_from(args, args.product), "designer", args.level)
+    level = args.level
+    if args.session_log and level is None and args.subassemblies != "none":  # a level's log says which
+        from ..runtime.log import read_log
+
+        settings = read_log(args.session_log, inputs_from(args))[0].get("settings")
+        level = settings.get("level") if isinstance(settings, dict) and isinstance(settings.get("level"), str) else None
+    product = api.level_product(product_from(args, args.product), "designer", level)
     plan = api.plan_of(product, args.technical, limits_from(args))
+    args.rank = args.rank or 0
     title = f"sequence {args.rank}"
     if args.session_log:
         operations, logged = api.sequence_from_log(args.session_log, plan, inputs_from(args))
-        title = f"the sequence {args.session_log} recorded" + ("" if logged.complete else
-                                                        f" ({len(logged.operations)} operations, then the first way to finish)")
+        done = len(logged.operations)
+        title = f"the sequence {args.session_log} recorded" + ("" if logged.complete else (
+            f" ({done} operation{'s' if done != 1 else ''}, then the first way to finish)"))
         view = api.plan_in_3d(plan, operations, args.spacing, args.base_part)
     else:
         view = api.plan_in_3d(plan, args.rank, args.spacing, args.base_part)
@@ -321,7 +329,7 @@ def add_commands(commands) -> None:
                     "reverse), and with --json every part's exploded offset before the step.")
     sequence.add_argument("product", metavar="PRODUCT", help=PRODUCT_HELP)
     which = sequence.add_mutually_exclusive_group()
-    which.add_argument("--rank", type=index, default=0, metavar="K",
+    which.add_argument("--rank", type=index, default=None, metavar="K",  # None: argparse sees --rank 0 beside --log
                        help="the sequence of rank K (from 0; sequences in the order of the state graph's edges)")
     which.add_argument("--log", dest="session_log", metavar="LOG",  # not "log": that names an output to check
                        help="the sequence the session log LOG (aplan session --log) recorded")

@@ -11,7 +11,8 @@ from pathlib import Path
 from .. import api
 from ..decision.intention_model import IntentionModel
 from ..decision.policy import AlphaVectorPolicy
-from ..errors import PlannerError
+from ..errors import PlannerError, UsageError
+from ..interrupts import exit_status
 from ..product import DEFAULT_MARKER_DICTIONARY
 from ..validation import check_output
 from .decision import decision_maker_from, levels_from, model_from
@@ -90,9 +91,12 @@ class _Primed:
 def _demo_operations(model, k: int) -> list[int]:
     """The operations of full sequence ``k``: an intention number on the flat model, a rank on the factored one."""
     if isinstance(model, IntentionModel):
-        return model.sequence_operations(model.full_sequence(k, "--demo"))
+        try:
+            return model.sequence_operations(model.full_sequence(k, "--demo"))
+        except PlannerError as exc:  # a value out of the option's range: a usage error (README, exit status)
+            raise UsageError(str(exc)) from None
     if not 0 <= k < model.n_sequences:
-        raise PlannerError(f"--demo {k}: on the factored model (--planner online) sequences are numbered by rank, "
+        raise UsageError(f"--demo {k}: on the factored model (--planner online) sequences are numbered by rank, "
                            f"from 0 to {model.n_sequences - 1:,}")
     return model.sequence_operations(model.sequence(k))
 
@@ -101,16 +105,22 @@ def _session(args: argparse.Namespace) -> int:
     """One session per level (workstation), bottom-up; with several, each has its own log (``LOG`` with the
     level's id before the suffix), whose start event records the level."""
     if args.demo is not None and args.robot is not None:
-        raise PlannerError("--demo simulates the robot too; leave out --robot")
+        raise UsageError("--demo simulates the robot too; leave out --robot")
+    if args.keyboard is False and args.quiet_frames <= args.debounce:
+        raise UsageError(f"--quiet-frames {args.quiet_frames} must be more than --debounce {args.debounce} (a quiet "
+                         "period is counted in debounced frames); raise --quiet-frames or lower --debounce")
     if api._model_file_kind(args.product):
         model_from(args, product_only=True)  # the error that says a session needs a product
     if args.log:
         check_output(args.log, option="--log", replaceable=False, noun="log")  # before any work; never replaced
     levels = levels_from(args)
     log_path = args.log or f"session-{time.strftime('%Y%m%d-%H%M%S')}.jsonl"
+    paths = [log_path if len(levels) == 1 else str(Path(log_path).with_suffix("")) + f"-{level}.jsonl"
+             for level, _ in levels]
+    for path in paths:  # every level's log before the first level starts: a refusal has done nothing
+        check_output(path, option="--log", replaceable=False, noun="log")
     status = 0
-    for k, (level, product) in enumerate(levels, start=1):
-        path = log_path if len(levels) == 1 else str(Path(log_path).with_suffix("")) + f"-{level}.jsonl"
+    for k, ((level, product), path) in enumerate(zip(levels, paths), start=1):
         if len(levels) > 1:
             print(f"level {level} ({k} of {len(levels)}): {', '.join(product.part_ids)}")
         status = _session_level(args, product, path, level if args.level or len(levels) > 1 else None)
@@ -176,6 +186,8 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
         print(file=sys.stderr)
     print(f"{result.reason}: {result.message}")
     print(f"log: {log_path}")
+    if result.signal is not None:  # the log is complete up to the stop: the shell's 128 + N (README)
+        return exit_status(result.signal)
     return 0 if result.assembled else 1
 
 
@@ -199,12 +211,13 @@ def _replay(args: argparse.Namespace) -> int:
         print(f"  {'step':>4}  {'robot action':<44} {'observation':<28} belief (top 3)")
     for k, (a, z, b) in steps:
         best = top_intentions(b, 3)
+        seen = f"{done.ignored[k]} (ignored)" if k in done.ignored else str(model.observations[z])
         if args.json:
             print(json.dumps({"step": k, "action": model.actions[a], "observation": model.observations[z],
-                              "top": best}))
+                              "top": best, **({"ignored": done.ignored[k]} if k in done.ignored else {})}))
         else:
             top = " ".join(f"{'c' if factored else 'i'}{i} {p:.2f}" for i, p in best)
-            print(f"  {k:>4}  {model.actions[a]:<44} {model.observations[z]:<28} {top}")
+            print(f"  {k:>4}  {model.actions[a]:<44} {seen:<28} {top}")
     if args.plot:
         title = f"session {Path(args.log).name}: {len(done.actions)} steps"
         if factored:

@@ -15,7 +15,7 @@ from lxml import etree
 from ..defaults import MEMORY_LIMIT
 from ..errors import PlannerError
 from ..files import open_atomic
-from ..validation import DECLARED_OPTION, INPUT_OPTION, InputLimits
+from ..validation import DECLARED_OPTION, INPUT_OPTION, InputLimits, not_regular
 from .io.pomdpx import safe_parser
 from .pomdp import POMDP
 
@@ -87,6 +87,8 @@ def read_policy(path: str | Path, model: POMDP | None = None, limits: InputLimit
     """Read a SARSOP ``.policy`` file; with ``model``, check that it fits. ``limits``: the file's bytes and
     the vector length (the model's states) at most (:class:`~planner.validation.InputLimits`)."""
     source = str(path)
+    if not_regular(path, "policy"):
+        raise PolicyError(not_regular(path, "policy"))
     try:
         if Path(path).stat().st_size > limits.file_bytes:
             raise PolicyError(f"{source}: {Path(path).stat().st_size:,} bytes, more than the limit of "

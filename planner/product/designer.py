@@ -73,10 +73,14 @@ def unit_vector(values: Sequence[Any], where: str = "direction") -> tuple[float,
         raise GeometryError(f"{where}: expected three numbers X,Y,Z, got {len(vector)}: {values!r}")
     if not all(math.isfinite(c) for c in vector):
         raise GeometryError(f"{where}: the components must be finite numbers, got {values!r}")
-    length = math.sqrt(sum(c * c for c in vector))
-    if length < 1e-9:
+    # Scaled by the largest component first: the squares of 1e308 overflow to infinity (every component then
+    # divided to 0), those of 1e-200 underflow to 0; the scaled vector's length is from 1 to sqrt(3).
+    largest = max(abs(c) for c in vector)
+    if largest == 0:
         raise GeometryError(f"{where}: a zero vector {values!r} has no direction; give X,Y,Z with a length")
-    return tuple(c / length + 0.0 for c in vector)  # type: ignore[return-value]
+    scaled = tuple(c / largest for c in vector)
+    length = math.sqrt(sum(c * c for c in scaled))
+    return tuple(c / length + 0.0 for c in scaled)  # type: ignore[return-value]
 
 
 def parse_direction(text: str, where: str = "direction") -> tuple[float, float, float]:

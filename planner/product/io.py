@@ -16,7 +16,7 @@ from typing import Any
 
 from ..errors import ProductFormatError
 from ..files import write_atomic
-from ..validation import InputError, json_loads
+from ..validation import InputError, json_loads, not_regular
 from .constants import AXIS_DIRECTIONS, DEFAULT_MARKER_DICTIONARY, FORMAT, UNIT_TOLERANCE, VERSION
 from .model import (
     Direction,
@@ -213,6 +213,8 @@ def loads_product(text: str, source: str = "<memory>") -> Product:
 def load_product(path: str | os.PathLike) -> Product:
     """Read and check a product file (``*.json``). Mesh paths stay as written, relative to the file."""
     path = Path(path)
+    if not_regular(path, "product"):
+        raise ProductFormatError(str(path), "", not_regular(path, "product").removeprefix(f"{path}: "))
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:

@@ -8,7 +8,9 @@ seconds, to the millisecond):
   ``n_intentions``, ``actions`` and ``observations`` (the model's names), ``top``;
 - per step: ``action`` (``step``, ``action``, ``name``, ``instruction``, ``decision_ms``: the milliseconds the
   policy took to choose it), ``robot`` (``step``, ``ok``,
-  ``message``), ``observation`` (``step``, ``observation``, ``index``: null when no operation explains it),
+  ``message``), ``observation`` (``step``, ``observation``, ``index``: null when no operation of the product
+  shows it, ``ignored``: true when no operation explains it in the assembly state, so the belief was updated
+  with the blank observation),
   any ``warning`` (``step``, ``message``), ``belief`` (``step``, ``top``, ``p_finished``, ``operations``,
   ``reset``: null, or how an observation of probability 0 reset the belief);
 - ``end``: ``step``, ``reason``, ``message``, ``operations``, ``top``.
@@ -25,12 +27,13 @@ import errno
 import json
 import os
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
+from ..assembly.tags import BLANK
 from ..decision.belief import DiscreteUpdater
 from ..decision.factored_model import FactoredBelief, FactoredIntentionModel, factored_model
 from ..decision.factored_updater import FactoredUpdater
@@ -38,7 +41,7 @@ from ..decision.intention_model import IntentionModel, intention_model
 from ..errors import PlannerError
 from ..files import with_faults
 from ..product import Product, product_from_dict
-from ..validation import INPUT_OPTION, InputError, InputLimits, json_loads
+from ..validation import INPUT_OPTION, InputError, InputLimits, json_loads, not_regular
 
 __all__ = ["LOG_VERSION", "SessionError", "EventLog", "top_intentions", "belief_at", "updater_for", "Replay", "read_log", "replay"]
 
@@ -144,7 +147,8 @@ class EventLog:
 @dataclass
 class Replay:
     """A session log replayed: the product, the beliefs recomputed from its actions and observations (the
-    initial one first), and the steps whose logged belief differs from the recomputed one."""
+    initial one first), the steps whose logged belief differs from the recomputed one, and the steps whose
+    observation the session ignored (counted as blank: ``observations`` holds the blank one there)."""
 
     product: Product
     model: IntentionModel | FactoredIntentionModel
@@ -154,6 +158,7 @@ class Replay:
     end: dict | None
     mismatches: list[int]
     events: list[dict]
+    ignored: dict[int, str] = field(default_factory=dict)  # step (from 1) -> the observation counted as blank
 
 
 def read_log(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> list[dict]:
@@ -161,6 +166,8 @@ def read_log(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> li
     short (the one being written when the session died) is dropped. ``limits``: the file's bytes and the
     JSON nesting at most. Raises :class:`SessionError`."""
     path = Path(path)
+    if not_regular(path, "session log"):
+        raise SessionError(not_regular(path, "session log"))
     try:
         if path.stat().st_size > limits.file_bytes:
             raise SessionError(f"{path}: {path.stat().st_size:,} bytes, more than the limit of "
@@ -240,6 +247,7 @@ def replay(path: str | os.PathLike, tolerance: float = 1e-6, limits: InputLimits
     updater = updater_for(model, on_reset=_in_the_log)
     belief = updater.initialize()
     done = Replay(product, model, [], [], [belief], None, [], events)
+    blank = model.plan.observations.index(BLANK)
     pending: dict[int, int] = {}  # step -> the action logged for it
     for number, event in enumerate(events[1:], start=2):
         kind = event["event"]
@@ -248,9 +256,13 @@ def replay(path: str | os.PathLike, tolerance: float = 1e-6, limits: InputLimits
         try:
             if kind == "action":
                 pending[event["step"]] = _in_range(int(event["action"]), model.actions, "action")
-            elif kind == "observation" and event.get("index") is not None:
+            elif kind == "observation" and (event.get("index") is not None or event.get("ignored") is True):
                 action = pending[event["step"]]
-                observation = _in_range(int(event["index"]), model.observations, "observation")
+                if event.get("ignored") is True:  # no operation explained it: the session counted it as blank
+                    observation = blank
+                    done.ignored[len(done.actions) + 1] = str(event.get("observation", ""))
+                else:
+                    observation = _in_range(int(event["index"]), model.observations, "observation")
                 belief = updater.update(belief, action, observation)
                 done.actions.append(action)
                 done.observations.append(observation)

@@ -20,6 +20,7 @@ from ..assembly.tags import BLANK
 from ..product import Product
 from ..validation import InputLimits
 from .log import SessionError, replay
+from .progress import AssemblyProgress
 
 __all__ = ["LoggedSequence", "complete_sequence", "explain_steps", "logged_sequence", "logged_steps"]
 
@@ -39,18 +40,28 @@ class LoggedSequence:
 
 
 def logged_steps(events: list[dict], model) -> list[tuple[str, int]]:
-    """The log's events as ``("robot", operation)`` for each robot operation reported done and
-    ``("operator", observation index)`` for each observation, in order (a blank observation: the operator did
-    nothing, or an operation that needs no tool and takes no single part). Cost: O(events)."""
+    """The log's steps that changed the assembly state, as ``("robot", operation)`` for each robot operation
+    reported done and ``("operator", observation index)`` for each observation, in the order they were applied
+    (:class:`~planner.runtime.progress.AssemblyProgress`, the session's rule): an observation no operation
+    explains in the assembly state (the session ignored it and counted the step as blank; a log written before
+    that rule kept it) and a robot operation the state does not allow are left out. A blank observation: the
+    operator did nothing, or an operation that shows as blank. Cost: O(events E)."""
+    progress, blank = AssemblyProgress(model.plan), model.plan.observations.index(BLANK)
     steps, pending = [], {}
     for event in events:
         kind = event.get("event")
         if kind == "action":
-            pending[event.get("step")] = model.operation(int(event["action"]))
-        elif kind == "robot" and event.get("ok") and pending.get(event.get("step")) is not None:
-            steps.append(("robot", int(pending[event.get("step")])))
-        elif kind == "observation" and event.get("index") is not None:
-            steps.append(("operator", int(event["index"])))
+            pending[event.get("step")] = [model.operation(int(event["action"])), False]
+        elif kind == "robot" and event.get("ok") and event.get("step") in pending:
+            pending[event.get("step")][1] = True
+        elif kind == "observation":
+            operation, confirmed = pending.pop(event.get("step"), [None, False])
+            index = event.get("index")
+            observation = None if event.get("ignored") is True or index is None else int(index)
+            steps += progress.step(operation if confirmed else None, observation).applied
+    for operation, confirmed in pending.values():  # done, then the source ended before the step's observation
+        if confirmed and operation is not None:
+            steps += progress.step(operation, blank).applied[:1]
     return steps
 
 
@@ -87,9 +98,9 @@ def explain_steps(plan: Plan, steps: list[tuple[str, int]]) -> tuple[list[tuple[
             search(state, at + 1, done)
 
     search(states.initial, 0, [])
-    if not found:
-        raise SequenceError("no assembly sequence of the product explains the logged operations and observations; "
-                            "the log is damaged or was written for another product")
+    if not found:  # not for steps from logged_steps, whose every step the state it reached allows
+        raise SequenceError("no assembly sequence of the product explains the logged operations and observations "
+                            f"({', '.join(f'{who} {value}' for who, value in steps)})")
     chosen = next((ops for ops, finished in found if finished), found[0][0])
     return chosen, len({tuple(op for op, _ in ops) for ops, _ in found}) > 1
 

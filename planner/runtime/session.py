@@ -9,18 +9,25 @@ One decision step (as in :func:`planner.decision.simulate.simulate_episode` and 
    blank);
 4. the Bayes filter updates the belief with (action, observation).
 
-*Assembled*: every operation joins two subassemblies, so a product of N parts is assembled after N - 1
-operations; the loop counts the robot's confirmed operations and the operator's non-blank observations (an
-operation that joins two subassemblies without a tool looks like blank, so the loop also stops when the
-belief on the finished product reaches ``finished_belief``).
+*Assembled*: the session follows the assembly state from the operations actually done
+(:class:`~planner.runtime.progress.AssemblyProgress`: the robot's confirmed operations and the operator's
+observations that an operation explains) and stops when it is the finished product. A blank observation may
+hide an operation (one joining two subassemblies without a tool): when the finished product is one of the
+states it leaves open, the belief on the finished product (``finished_belief``) decides. The belief alone
+never ends a session.
+
+An observation that no operation explains in the assembly state (parts that cannot be joined now, a
+combination no operation shows) is logged as a warning naming the picks and what the operator could do, and
+counts as blank; the session goes on. So does a robot operation the assembly state does not allow.
 
 The source and the robot are the protocols of :mod:`planner.runtime.interfaces`. Every event goes to an
 :class:`~planner.runtime.log.EventLog` (format in :mod:`planner.runtime.log`). A robot failure, an
-observation no operation explains, or a source error ends the loop cleanly: the belief stays the last
+source error or a signal ends the loop cleanly: the belief stays the last
 consistent one, the log holds every event up to the stop, and the result says why.
 """
 from __future__ import annotations
 
+import signal
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -33,17 +40,19 @@ from ..decision.belief import UnexplainedObservation
 from ..decision.factored_model import FactoredBelief, FactoredIntentionModel
 from ..decision.intention_model import IntentionModel
 from ..errors import PlannerError
+from ..interrupts import signal_number
 from ..product import product_to_dict
 from .interfaces import Instruction, ObservationSource, Robot, instruction_for
 from .log import LOG_VERSION, EventLog, belief_at, top_intentions, updater_for
+from .progress import AssemblyProgress
 
 __all__ = ["SessionResult", "run_session", "status_line"]
 
 
 @dataclass
 class SessionResult:
-    """How a session ended. ``reason``: ``assembled``, ``source ended``, ``robot failed``, ``unexplained
-    observation``, ``error``, ``interrupted`` or ``step limit``; ``message`` says more."""
+    """How a session ended. ``reason``: ``assembled``, ``source ended``, ``robot failed``, ``error``,
+    ``interrupted`` (``signal``: the signal's number) or ``step limit``; ``message`` says more."""
 
     reason: str
     message: str
@@ -54,6 +63,7 @@ class SessionResult:
     actions: list[int] = field(default_factory=list)
     observations: list[int] = field(default_factory=list)
     decision_seconds: list[float] = field(default_factory=list)  # the time the policy took for each action
+    signal: int | None = None
 
     @property
     def assembled(self) -> bool:
@@ -77,19 +87,22 @@ def run_session(model: IntentionModel | FactoredIntentionModel, policy, source: 
     intentions) or factored (:func:`planner.decision.factored_model`, beliefs over classes); ``policy`` has
     ``action(belief)`` for that belief (an offline policy, or the online planner); ``status`` receives a :func:`status_line` after each step;
     ``settings`` (e.g. the policy file, rewards, discount) go into the log's start event. Never raises for a
-    robot failure, an unexplained observation or a source error: the result says what happened.
+    robot failure, a source error or an interrupt (Ctrl-C, or SIGTERM/SIGHUP under
+    :func:`planner.interrupts.signals_as_interrupts`): the result says what happened.
     Cost per step: one policy lookup and one belief update, plus what the source and the robot take.
     """
     run = _Run(model, log if log is not None else EventLog())
-    run.begin(settings or {})
     try:
+        run.begin(settings or {})
         action = run.decide(policy)
         for step in range(1, max_steps + 1):
             run.result.steps = step
-            run.perform(step, instruction_for(model, action, step), source, robot)
-            observation, z = run.observe(step, source)
+            operation = run.perform(step, instruction_for(model, action, step), source, robot)
+            observation, z = run.observe(step, source, operation)
             run.update(step, action, observation, z)
-            done = run.operations >= run.needed or run.finished() >= finished_belief
+            done = run.progress.finished or (run.progress.may_be_finished and run.finished() >= finished_belief)
+            if done:  # every operation joins two subassemblies: N - 1 were done, blank ones included
+                run.progress.operations = run.needed
             action = run.decide(policy)
             run.report(step, observation, "done" if done else model.actions[action], status)
             if done:
@@ -101,8 +114,10 @@ def run_session(model: IntentionModel | FactoredIntentionModel, policy, source: 
         return run.stop(stop.reason, stop.message)
     except PlannerError as exc:
         return run.stop("error", str(exc))
-    except KeyboardInterrupt:
-        return run.stop("interrupted", f"interrupted at step {run.result.steps}")
+    except KeyboardInterrupt as exc:  # the log is complete up to here; the command exits 128 + the signal
+        run.result.signal = signal_number(exc)
+        return run.stop("interrupted", f"interrupted ({signal.Signals(run.result.signal).name}) at step "
+                        f"{run.result.steps}")
 
 
 class _Stop(Exception):
@@ -122,6 +137,8 @@ class _Run:
         self.needed = len(model.plan.product.parts) - 1  # operations that assemble the product
         self.index = {o: k for k, o in enumerate(model.plan.observations)}
         self.resets: list[UnexplainedObservation] = []  # those of the current step, logged as warning events
+        self.progress = AssemblyProgress(model.plan)
+        self.blank = model.plan.observations.index(BLANK)
         self.updater = updater_for(model, on_reset=self.resets.append)
         self.factored = isinstance(model, FactoredIntentionModel)
         self.final = model.final_class if self.factored else model.final_state
@@ -130,7 +147,7 @@ class _Run:
 
     @property
     def operations(self) -> int:
-        return self.result.operations
+        return self.progress.operations
 
     def decide(self, policy) -> int:
         """The policy's action for the current belief, timed (the log's ``decision_ms``)."""
@@ -155,12 +172,14 @@ class _Run:
     def stop(self, reason: str, message: str) -> SessionResult:
         result = self.result
         result.reason, result.message, result.belief = reason, message, self.belief
+        result.operations = self.operations
         self.log.write("end", step=result.steps, reason=reason, message=message, operations=result.operations,
                        top=top_intentions(self.belief))
         return result
 
-    def perform(self, step: int, instruction: Instruction, source: ObservationSource, robot: Robot) -> None:
-        """Tell the source, then have the robot perform ``instruction``; a failure stops the loop."""
+    def perform(self, step: int, instruction: Instruction, source: ObservationSource, robot: Robot) -> int | None:
+        """Tell the source, then have the robot perform ``instruction``; a failure stops the loop. Returns the
+        AND/OR operation the robot confirmed (None for wait)."""
         self.log.write("action", step=step, action=instruction.action, name=instruction.name,
                        instruction=instruction.text, decision_ms=round(1000 * self.result.decision_seconds[-1], 3))
         source.robot_acting(instruction)
@@ -169,24 +188,34 @@ class _Run:
         if not report.ok:
             raise _Stop("robot failed", f"step {step}: the robot could not {instruction.text}: "
                         f"{report.message or 'no reason given'}; the belief is the one before this step")
-        if not instruction.is_wait:
-            self.result.operations += 1
+        return None if instruction.is_wait else self.model.operation(instruction.action)
 
-    def observe(self, step: int, source: ObservationSource) -> tuple[Observation, int]:
-        """The operator's observation for ``step`` and its index; the source ending or an observation that no
-        operation explains stops the loop."""
+    def observe(self, step: int, source: ObservationSource, operation: int | None) -> tuple[Observation, int]:
+        """The operator's observation for ``step`` and the index the belief is updated with, the step applied
+        to the assembly state with the robot's ``operation``. An observation no operation explains there is
+        logged (``ignored``), with a warning naming what the operator could do, and counts as blank; the source
+        ending stops the loop."""
         observation = source.observe()
         if observation is None:
             raise _Stop("source ended", f"the observations ended at step {step}, with {self.operations} of "
                         f"{self.needed} operations done")
         z = self.index.get(observation)
-        self.log.write("observation", step=step, observation=str(observation), index=z)
-        if z is None:
-            raise _Stop("unexplained observation",
-                        f"step {step}: the operator was seen picking {observation}, which no operation of "
-                        f"{self.model.plan.product.name or 'the product'} explains (an operation takes one part "
-                        "+ tool, two parts + tool, or the tool only); check the tray and that only one "
-                        "operation's items were taken; the belief is the one before this step")
+        before, possible = self.progress.describe(), self.progress.possible()
+        outcome = self.progress.step(operation, z)
+        self.log.write("observation", step=step, observation=str(observation), index=z,
+                       ignored=not outcome.explained)
+        if outcome.robot is False:
+            self.log.write("warning", step=step, message=(
+                f"the robot's operation {self.model.plan.andor.describe(operation)} is not possible in the "
+                f"assembly state ({before}); it does not count"))
+        if not outcome.explained:
+            why = ("no operation of the product shows these picks" if z is None else
+                   "no operation explains it in the assembly state")
+            could = ", ".join(possible) if possible else "nothing (only operations that show as blank)"
+            self.log.write("warning", step=step, message=(
+                f"{observation} ignored: {why} ({before}); the operator could pick: {could}. The step counts "
+                "as blank: check the tray and that only one operation's items were taken"))
+            return observation, self.blank
         return observation, z
 
     def update(self, step: int, action: int, observation: Observation, z: int) -> None:
@@ -199,8 +228,7 @@ class _Run:
         result.actions.append(action)
         result.observations.append(z)
         result.beliefs.append(self.belief)
-        if observation != BLANK:
-            result.operations += 1
+        result.operations = self.operations
 
     def report(self, step: int, observation: Observation, next_name: str,
                status: Callable[[str], None] | None) -> None:

@@ -139,29 +139,38 @@ class _Listed:
 
 
 def test_observation_no_operation_explains(setup):
+    """Picks no operation shows (two parts never joined directly) are ignored with a warning naming them and
+    what the operator could pick; the step counts as blank and the session goes on (README, decision loop)."""
     plan, model, policy, _ = setup
     source = _Listed([BLANK, Observation(("body", "ink"), "hammer")])
     log = EventLog()
     result = run_session(model, policy, source, ScriptedRobot(), log)
-    assert result.reason == "unexplained observation"
-    assert "body+ink+[hammer], which no operation of Bourjault ballpoint pen explains" in result.message
-    assert len(result.beliefs) == 2 and np.array_equal(result.belief, result.beliefs[-1])
-    assert log.events[-2]["event"] == "observation" and log.events[-2]["index"] is None
+    assert result.reason == "source ended" and "ended at step 3" in result.message
+    observation = [e for e in log.events if e["event"] == "observation"][1]
+    assert observation["index"] is None and observation["ignored"] is True
+    warnings = [e["message"] for e in log.events if e["event"] == "warning"]
+    assert len(warnings) == 1 and warnings[0].startswith("body+ink+[hammer] ignored: no operation of the product "
+                                                         "shows these picks")
+    assert "the operator could pick: body+button+[hammer]," in warnings[0]
+    assert result.observations == [0, 0]  # both counted as blank
+    assert all(abs(b.sum() - 1) < 1e-9 for b in result.beliefs)
 
 
-def test_impossible_observation_resets_the_belief_and_goes_on(setup, caplog):
+def test_impossible_observation_is_ignored_and_goes_on(setup, caplog):
     plan, model, policy, _ = setup
-    # The hammer alone joins two subassemblies: impossible before anything was built.
+    # The hammer alone joins two subassemblies: impossible before anything was built. No operation explains it
+    # in the initial assembly state, so it counts as blank: no belief reset.
     source = _Listed([Observation((), "hammer"), BLANK])
     log = EventLog()
     with caplog.at_level(logging.WARNING, logger="planner"):
         result = run_session(model, policy, source, ScriptedRobot(), log)
     assert result.reason == "source ended" and "ended at step 3" in result.message
     warnings = [e for e in log.events if e["event"] == "warning"]
-    assert len(warnings) == 1 and warnings[0]["message"].startswith("[hammer]: observation ")
-    assert "has probability 0 under the belief; belief reset to the" in warnings[0]["message"]
-    assert caplog.records == []  # the session's log holds the reset; no second report through logging
-    assert [e["reset"] for e in log.events if e["event"] == "belief"][0] is not None
+    assert len(warnings) == 1 and warnings[0]["message"].startswith(
+        "[hammer] ignored: no operation explains it in the assembly state ({ink} {cartridge} {head} {body} {cap} "
+        "{button})")
+    assert caplog.records == []  # the session's log holds the warning; no second report through logging
+    assert [e["reset"] for e in log.events if e["event"] == "belief"] == [None, None]
     assert all(abs(b.sum() - 1) < 1e-9 and np.isfinite(b).all() for b in result.beliefs)
 
 
@@ -188,7 +197,7 @@ def test_interrupt_and_step_limit_stop_cleanly(setup):
 
     log = EventLog()
     result = run_session(model, policy, Interrupted([BLANK]), ScriptedRobot(), log)
-    assert result.reason == "interrupted" and result.message == "interrupted at step 2"
+    assert result.reason == "interrupted" and result.message == "interrupted (SIGINT) at step 2" and result.signal == 2
     assert log.events[-1]["event"] == "end" and len(result.beliefs) == 2
     operator = ScriptedOperator.following(model, int(graph.full_sequences()[0]), acts=lambda step: False)
     result = run_session(model, policy, operator, ScriptedRobot(), max_steps=3)
@@ -341,25 +350,26 @@ def test_cli_session_errors(policy_file, tmp_path):
     assert exists.returncode == 1 and "the log exists already" in exists.stderr
     failed = _aplan("session", "pen", "--policy", policy_file, "--keyboard", "--log", tmp_path / "f.jsonl",
                     stdin="body ink hammer\n")
-    assert failed.returncode == 1 and failed.stdout.startswith("unexplained observation: step 1")
+    assert failed.returncode == 1 and failed.stdout.startswith("source ended: the observations ended at step 2")
+    assert "aplan: warning: step 1: body+ink+[hammer] ignored" in failed.stderr
     events = [json.loads(line)["event"] for line in (tmp_path / "f.jsonl").read_text().splitlines()]
     assert events[0] == "start" and events[-1] == "end"
     broken = _aplan("replay", tmp_path / "x.jsonl")
     assert broken.returncode == 1 and "not a session log" in broken.stderr
 
 
-def test_cli_reports_a_reset_once(policy_file, tmp_path):
-    """An observation of probability 0 (the hammer alone before anything was built) is a warning event in the
-    log, shown once on standard error; replaying the log reports nothing again."""
+def test_cli_reports_an_ignored_observation_once(policy_file, tmp_path):
+    """An observation no operation explains in the assembly state (the hammer alone before anything was built)
+    is a warning event in the log, shown once on standard error; replaying the log reports nothing again."""
     log = tmp_path / "r.jsonl"
     done = _aplan("session", "pen", "--policy", policy_file, "--keyboard", "--robot", "auto", "--log", log,
                   stdin="hammer\n")
     assert done.returncode == 1 and done.stdout.startswith("source ended")
-    shown = [line for line in done.stderr.splitlines() if "has probability 0" in line]
-    assert len(shown) == 1 and "aplan: warning: step 1: [hammer]: observation " in shown[0], done.stderr
+    shown = [line for line in done.stderr.splitlines() if "ignored" in line]
+    assert len(shown) == 1 and "aplan: warning: step 1: [hammer] ignored: " in shown[0], done.stderr
     assert [e["event"] for e in map(json.loads, log.read_text().splitlines())].count("warning") == 1
     replayed = _aplan("replay", log)
-    assert replayed.returncode == 0 and replayed.stderr == ""
+    assert replayed.returncode == 0 and replayed.stderr == "" and "[hammer] (ignored)" in replayed.stdout
 
 
 def test_cli_demo(policy_file, tmp_path):
@@ -368,9 +378,10 @@ def test_cli_demo(policy_file, tmp_path):
     assert done.returncode == 0 and done.stdout.startswith("assembled"), done.stderr
     assert replay(tmp_path / "d.jsonl").mismatches == []
     bad = _aplan("session", "pen", "--policy", policy_file, "--demo", 3, "--log", tmp_path / "e.jsonl")
-    assert bad.returncode == 1 and "--demo 3 is not a full assembly sequence" in bad.stderr
+    assert bad.returncode == 2 and "--demo 3 is not a full assembly sequence" in bad.stderr  # a usage error
+    assert not (tmp_path / "e.jsonl").exists()
     both = _aplan("session", "pen", "--policy", policy_file, "--demo", 57, "--robot", "auto")
-    assert both.returncode == 1 and "leave out --robot" in both.stderr
+    assert both.returncode == 2 and "leave out --robot" in both.stderr
 
 
 def test_cli_markers(tmp_path):

@@ -22,7 +22,7 @@ import numpy as np
 from ...defaults import SPREAD_CELL_LIMIT
 from ...errors import PlannerError
 from ...files import open_atomic
-from ...validation import CELLS_OPTION, DECLARED_OPTION, INPUT_OPTION, InputLimitError, InputLimits
+from ...validation import CELLS_OPTION, DECLARED_OPTION, INPUT_OPTION, InputLimitError, InputLimits, not_regular
 from ..pomdp import POMDP, ModelError
 from .sparse_tables import SparseTable, split_rows
 
@@ -185,6 +185,8 @@ def read_cassandra(path: str | Path, limits: InputLimits = InputLimits()) -> POM
     mean non-zeros of an observation row, N the reward entries. ``limits``: the file's bytes, the values
     declared and the cells spread per table (:class:`~planner.validation.InputLimits`)."""
     source = str(path)
+    if not_regular(path, "model"):
+        raise CassandraError(not_regular(path, "model"))
     try:
         size = Path(path).stat().st_size
         if size > limits.file_bytes:

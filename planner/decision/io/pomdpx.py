@@ -26,7 +26,7 @@ from lxml import etree
 
 from ...errors import PlannerError
 from ...files import open_atomic
-from ...validation import DECLARED_OPTION, INPUT_OPTION, CappedReader, InputLimitError, InputLimits
+from ...validation import DECLARED_OPTION, INPUT_OPTION, CappedReader, InputLimitError, InputLimits, not_regular
 from ..pomdp import POMDP, ModelError
 from .sparse_tables import SparseTable, split_rows
 
@@ -140,6 +140,8 @@ def _is_number(text: str) -> bool:
 
 
 def _open(path, source, limit: int):
+    if not_regular(path, "model"):
+        raise PomdpxError(not_regular(path, "model"))
     try:
         return CappedReader(gzip.open(path) if source.endswith(".gz") else open(path, "rb"), limit, source,
                             INPUT_OPTION)
