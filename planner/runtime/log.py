@@ -219,7 +219,7 @@ def updater_for(model: IntentionModel | FactoredIntentionModel, on_reset=None):
     """The exact Bayes filter of ``model``: over intentions, or over classes on the factored model."""
     if isinstance(model, FactoredIntentionModel):
         return FactoredUpdater(model, on_reset=on_reset)
-    return DiscreteUpdater(model.pomdp, on_reset=on_reset)
+    return DiscreteUpdater(model.pomdp, on_reset=on_reset, reset_weights=model.prior_weights)
 
 
 def _in_the_log(event) -> None:
