@@ -48,6 +48,7 @@ from ..assembly.intentions import allowed_edges, base_part_first_edges, paths_to
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
 from ..errors import PlannerError
+from .habits import weighted_fractions
 from .intention_model import WAIT, Rewards
 
 __all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model"]
@@ -394,34 +395,6 @@ def _counts_per_state(plan: Plan) -> np.ndarray:
     return counts
 
 
-def _weighted(states, source: np.ndarray, target: np.ndarray, fraction: np.ndarray, weights
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The weighted class fractions, the classes' weights (the final class 1) and ``log(w(c) R(target c))``
-    (module docstring, Weights), ``R(s) = W(s) / N(s)`` by one pass over the levels, the final state first:
-    ``R(s) = sum over e out of s of w(e) p0(e) R(target e)`` with ``p0`` the paper's fractions. O(S + E)."""
-    E = states.n_edges
-    w = np.asarray(weights, dtype=float)
-    if w.shape != (E,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
-        raise PlannerError(f"edge weights must be {E} finite numbers above 0 (one per state edge)")
-    edge_source, edge_target = states.edge_source, states.edge_target
-    start = states.level_start
-    relative = np.ones(states.n_states)
-    step = w * fraction[:E]
-    for k in range(1, len(start) - 1):  # the edges into level k - 1 come out of level k (sorted by target)
-        lo, hi = np.searchsorted(edge_target, [start[k - 1], start[k]])
-        size = int(start[k + 1] - start[k])
-        if size == 0:
-            break
-        relative[start[k]:start[k + 1]] = np.bincount(edge_source[lo:hi] - start[k],
-                                                      weights=step[lo:hi] * relative[edge_target[lo:hi]],
-                                                      minlength=size)
-    weighted = np.append(step * relative[edge_target] / relative[edge_source], 1.0)
-    class_weights = np.append(w, 1.0)
-    log_weight = np.log(class_weights) + np.log(relative[np.maximum(target, 0)])
-    log_weight[-1] = 0.0
-    return weighted, class_weights, log_weight
-
-
 def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                    base_part: str | None = None, weights: np.ndarray | None = None) -> FactoredIntentionModel:
     """The factored model of Alg. 3 over ``plan`` (module docstring), without enumerating intentions.
@@ -476,7 +449,7 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
                                "operation joins it); choose another base part, or check the technical constraints")
     class_weights = log_weight = None
     if weights is not None:
-        fraction, class_weights, log_weight = _weighted(states, source, target, fraction, weights)
+        fraction, class_weights, log_weight = weighted_fractions(states, target, fraction, weights)
     arrays = (action_operations, source, target, operation, fraction, log_size, order, start, counts, emit_weight,
               keys, class_action, match, initial)
     for a in arrays + tuple(a for a in (class_weights, log_weight) if a is not None):

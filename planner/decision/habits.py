@@ -44,7 +44,8 @@ from ..defaults import HABITS_PRIOR
 from ..errors import PlannerError
 
 __all__ = ["Habits", "HabitsError", "state_graph_fingerprint", "edge_keys", "habits_from_counts", "edge_counts",
-           "add_sequence", "choice_probabilities", "habit_weights", "habit_weights_from", "check_prior"]
+           "add_sequence", "choice_probabilities", "habit_weights", "habit_weights_from", "check_prior",
+           "weighted_fractions"]
 
 
 class HabitsError(PlannerError):
@@ -135,9 +136,9 @@ def edge_counts(plan: Plan, habits: Habits) -> np.ndarray:
                           + _fix(habits))
     fingerprint = state_graph_fingerprint(plan)
     if habits.fingerprint != fingerprint:
-        raise HabitsError(f"{where}: habits of another version of {habits.product!r} (state graph {habits.fingerprint}, "
-                          f"this one {fingerprint}: its parts, operations or technical constraints differ); "
-                          + _fix(habits))
+        raise HabitsError(f"{where}: habits of another version of {habits.product!r} (state graph "
+                          f"{habits.fingerprint}, this one {fingerprint}: its parts, operations or technical "
+                          "constraints differ); " + _fix(habits))
     index = {key: e for e, key in enumerate(edge_keys(plan))}
     out = np.zeros(plan.states.n_edges)
     for k, (state, operation, count) in enumerate(habits.counts):
@@ -155,10 +156,13 @@ def edge_counts(plan: Plan, habits: Habits) -> np.ndarray:
     return out
 
 
-def add_sequence(plan: Plan, counts: np.ndarray, operations: list[int], start: int | None = None) -> int:
+def add_sequence(plan: Plan, counts: np.ndarray, operations: list[int], start: int | None = None,
+                 counted: list[bool] | None = None) -> int:
     """Add one to ``counts`` (E,) for each state edge that ``operations`` (AND/OR indices, in order) take from
-    ``start`` (default: the initial state); returns the state reached. Cost: O(1) per step after finding the
-    edge among the state's out-edges. Raises :class:`HabitsError` when an operation is not possible there."""
+    ``start`` (default: the initial state), only where ``counted`` is true if given (steps the robot did are
+    walked, not counted: they are not the operator's choice); returns the state reached. Cost: O(1) per step
+    after finding the edge among the state's out-edges. Raises :class:`HabitsError` when an operation is not
+    possible there."""
     states = plan.states
     state = states.initial if start is None else int(start)
     for k, operation in enumerate(operations):
@@ -166,7 +170,8 @@ def add_sequence(plan: Plan, counts: np.ndarray, operations: list[int], start: i
         if out.size == 0:
             raise HabitsError(f"step {k + 1}: {plan.andor.describe(int(operation))} is not an operation of the state "
                               f"{states.describe(state)}")
-        counts[out[0]] += 1
+        if counted is None or counted[k]:
+            counts[out[0]] += 1
         state = int(states.edge_target[out[0]])
     return state
 
@@ -210,3 +215,33 @@ def habit_weights(plan: Plan, habits: Habits | None) -> np.ndarray | None:
     if not counts.any():
         return None
     return habit_weights_from(plan, counts, check_prior(habits.prior, habits.name))
+
+
+def weighted_fractions(states, target: np.ndarray, fraction: np.ndarray, weights
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The factored model's class fractions weighted by the edge ``weights`` (module docstring of
+    :mod:`~planner.decision.factored_model`, Weights), the classes' weights (the final class 1) and
+    ``log(w(c) R(target c))``, from the paper's ``fraction`` and the ``target`` (-1: the final class) per class.
+    ``R(s) = W(s) / N(s)`` comes from one pass over the levels, the final state first: ``R(s) = sum over e out
+    of s of w(e) p0(e) R(target e)``, ``p0`` the paper's fractions. Cost: O(S + E)."""
+    E = states.n_edges
+    w = np.asarray(weights, dtype=float)
+    if w.shape != (E,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
+        raise HabitsError(f"edge weights must be {E} finite numbers above 0 (one per state edge)")
+    edge_source, edge_target = states.edge_source, states.edge_target
+    start = states.level_start
+    relative = np.ones(states.n_states)
+    step = w * fraction[:E]
+    for k in range(1, len(start) - 1):  # the edges into level k - 1 come out of level k (sorted by target)
+        lo, hi = np.searchsorted(edge_target, [start[k - 1], start[k]])
+        size = int(start[k + 1] - start[k])
+        if size == 0:
+            break
+        relative[start[k]:start[k + 1]] = np.bincount(edge_source[lo:hi] - start[k],
+                                                      weights=step[lo:hi] * relative[edge_target[lo:hi]],
+                                                      minlength=size)
+    weighted = np.append(step * relative[edge_target] / relative[edge_source], 1.0)
+    class_weights = np.append(w, 1.0)
+    log_weight = np.log(class_weights) + np.log(relative[np.maximum(target, 0)])
+    log_weight[-1] = 0.0
+    return weighted, class_weights, log_weight

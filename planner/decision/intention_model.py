@@ -294,7 +294,8 @@ def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
     else:
         weights = np.asarray(weights, dtype=float)
         if weights.shape != (plan.states.n_edges,) or not np.all(np.isfinite(weights)) or np.any(weights <= 0):
-            raise PlannerError(f"edge weights must be {plan.states.n_edges} finite numbers above 0 (one per state edge)")
+            raise PlannerError(f"edge weights must be {plan.states.n_edges} finite numbers above 0 (one per state "
+                               "edge)")
         prior = intention_weights(graph, weights)
         initial[starts] = prior[starts] / prior[starts].sum()
         prior.flags.writeable = False
