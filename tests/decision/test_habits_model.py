@@ -165,3 +165,51 @@ def test_counted_sequence_dominates_the_prior(pen):
     ops = [flat.sequence_operations(int(i)) for i in flat.full_sequences()]
     top = int(np.argmax(initial))
     assert ops[top] == chosen and initial[top] > 0.5 and np.all(initial > 0)
+
+
+def _horizon_value(model, depth: int) -> float:
+    """The exact optimal value of ``depth`` decisions at the initial belief (expectimax over every action and
+    observation; beliefs kept unnormalised, since the value is linear in them)."""
+    T = [t.toarray() for t in model.transition]
+    O = [o.toarray() for o in model.observation]
+    R = model.reward
+
+    def value(B, d):  # B (n, S) unnormalised beliefs -> (n,) values
+        if d == 1:
+            return (B @ R.T).max(axis=1)
+        q = np.empty((len(B), model.n_actions))
+        for a in range(model.n_actions):
+            nxt = (B @ T[a])[:, None, :] * O[a].T[None]
+            q[:, a] = B @ R[a] + model.discount * value(nxt.reshape(-1, model.n_states), d - 1).reshape(
+                len(B), -1).sum(axis=1)
+        return q.max(axis=1)
+    return float(value(model.initial[None], depth)[0])
+
+
+def test_planners_run_on_the_weighted_models_with_the_same_values(pen):
+    """The offline solver on the weighted flat and lumped POMDPs (the same work): the certified intervals of
+    V*(b0) overlap; the exact three-step values are equal; the online planner and the lumped model's bounds
+    (which read the weighted fractions) start from the same belief."""
+    from planner.decision import PointBasedSolver
+    from planner.decision.lumped_model import solver_bounds
+    from planner.decision.online import OnlinePlanner
+
+    plan = make_plan(pen, True)
+    counts = _random_counts(plan, np.random.default_rng(4), 0.7)
+    for _ in range(3):  # a strong habit on top: the robot then acts early
+        add_sequence(plan, counts, factored_model(plan).sequence_operations(factored_model(plan).sequence(3)))
+    counts *= 10
+    weights = habit_weights_from(plan, counts, 1.0)
+    flat, fact = intention_model(plan, weights=weights).pomdp, factored_model(plan, weights=weights)
+    lumped = lumped_pomdp(fact)
+    paper = intention_model(plan).pomdp
+    value = _horizon_value(flat, 3)
+    assert value > 0 and _horizon_value(lumped, 3) == pytest.approx(value, abs=1e-9)
+    solver = PointBasedSolver(time_limit=None, max_iterations=60, precision=1e-6)
+    Q, groups = solver_bounds(fact)
+    a, b = solver.solve(flat), solver.solve(lumped, upper=Q, groups=groups)
+    assert max(a.lower_bound, b.lower_bound) <= min(a.upper_bound, b.upper_bound) + 1e-9
+    c = solver.solve(paper)  # the habits raise the value: the robot knows the operator's order sooner
+    assert min(a.lower_bound, b.lower_bound) > c.upper_bound
+    planner = OnlinePlanner(fact, 50, None)
+    assert 0 <= planner.action(fact.initial_belief()) < len(fact.actions)
