@@ -185,15 +185,15 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
 
 
 def _update_habits(args: argparse.Namespace, plan, log_path: str) -> None:
-    """``--habits-out``: the habits the session used (none: empty counts) plus the steps its log recorded."""
+    """``--habits-out``: the counts of ``--habits`` (none: empty counts; read even with ``--model paper``, so
+    that updating the file in place never loses them) plus the operator's steps the session's log recorded."""
     import numpy as np
 
     from ..decision.habits import edge_counts, habits_from_counts
-    from ..decision.io.habits_file import write_habits
+    from ..decision.io.habits_file import read_habits, write_habits
     from ..runtime.habits_logs import count_log
-    from .habits import habits_from
 
-    habits = habits_from(args)
+    habits = read_habits(args.habits, inputs_from(args)) if args.habits else None
     counts = edge_counts(plan, habits) if habits is not None else np.zeros(plan.states.n_edges)
     steps = count_log(plan, counts, log_path, args.technical, inputs_from(args))
     if not counts.any():

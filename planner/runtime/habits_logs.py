@@ -53,9 +53,11 @@ def count_log(plan: Plan, counts: np.ndarray, path: str | os.PathLike, technical
     name = plan.product.name or "the product"
     if mine != theirs:
         what = "another product" if (logged.product.name or "") != (plan.product.name or "") else "another version"
+        fix = ("learn habits from the logs of one product at a time" if what == "another product" else
+               "learn habits from logs of one version only, giving that version as --product")
         raise HabitsError(f"{path}: a log of {what} ({logged.product.name or 'unnamed'!r}, state graph {mine}; the "
                           f"habits are of {name!r}, state graph {theirs}: parts, operations or technical constraints "
-                          "differ); learn habits from logs of one version only, giving that version as --product")
+                          f"differ); {fix}")
     operations = _on_plan(plan, logged, path)
     operator = [who == "operator" for who in logged.by]
     try:
