@@ -51,6 +51,7 @@ from .assembly.intentions import base_part_first_edges, count_intentions, most_c
 from .assembly.plan import Plan, make_plan
 from .assembly.stats import STAT_KEYS, PlanStatistics, plan_statistics, statistics_within
 from .decision.factored_model import FactoredIntentionModel, factored_model
+from .decision.habits import Habits, habit_weights
 from .decision.factored_simulate import FactoredEpisode, evaluate_factored, simulate_factored_episode
 from .decision.intention_model import IntentionModel, Rewards, flat_model_fits, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
@@ -478,21 +479,25 @@ def plan_statistics_of(product: str | os.PathLike | Product | Plan, technical: b
 
 def decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                    rewards: Rewards = Rewards(), discount: float = DISCOUNT,
-                   base_part: str | None = None, limits: SizeLimits = SizeLimits()) -> IntentionModel:
+                   base_part: str | None = None, limits: SizeLimits = SizeLimits(),
+                   habits: Habits | None = None) -> IntentionModel:
     """The decision model of Alg. 3 of a product, PRODUCT argument or plan; ``base_part``: only the sequences
     that start from it (``"auto"``: the most connected part, :func:`base_part_of`); refused, with the estimate,
     past ``limits`` (the plan's, and the flat model's memory:
-    :func:`~planner.decision.intention_model.flat_model_bytes`)."""
+    :func:`~planner.decision.intention_model.flat_model_bytes`). ``habits``: the operator's habits in place of
+    the uniform choice (:mod:`~planner.decision.habits`; checked to be this product's), None for the paper's."""
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
-    return intention_model(plan, rewards, discount, base_part=base_part_of(plan, base_part), max_bytes=limits.memory)
+    return intention_model(plan, rewards, discount, base_part=base_part_of(plan, base_part), max_bytes=limits.memory,
+                           weights=habit_weights(plan, habits))
 
 
 def factored_decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                             rewards: Rewards = Rewards(), discount: float = DISCOUNT,
-                            base_part: str | None = None, limits: SizeLimits = SizeLimits()) -> FactoredIntentionModel:
+                            base_part: str | None = None, limits: SizeLimits = SizeLimits(),
+                            habits: Habits | None = None) -> FactoredIntentionModel:
     """The same decision model without enumerating intentions (paper Sec. V): beliefs over classes."""
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
-    return factored_model(plan, rewards, discount, base_part_of(plan, base_part))
+    return factored_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits))
 
 
 def online_planner(model: FactoredIntentionModel, decision_time: float | None = DECISION_TIME,
@@ -532,7 +537,7 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
                    decision_time: float | None = DECISION_TIME, expansions: int | None = None,
                    time_limit: float = POLICY_TIME_LIMIT, limit: int = INTENTION_LIMIT,
                    base_part: str | None = None, limits: SizeLimits = SizeLimits(),
-                   inputs: InputLimits = InputLimits()):
+                   inputs: InputLimits = InputLimits(), habits: Habits | None = None):
     """The model, the policy and a note (what was chosen and why, or None) that a session, a simulation or an
     evaluation runs on:
 
@@ -543,13 +548,15 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
       online``) and the policy file, or the built-in solver's policy after ``time_limit`` seconds.
 
     ``base_part``: only the sequences that start from it (``"auto"``: the most connected part); ``inputs``:
-    what the policy file may hold (:class:`~planner.validation.InputLimits`).
+    what the policy file may hold (:class:`~planner.validation.InputLimits`); ``habits``: the operator's habits
+    in every model (:mod:`~planner.decision.habits`), None for the paper's model.
     """
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
     base_part = base_part_of(plan, base_part)
+    weights = habit_weights(plan, habits)
     choice, note = choose_planner(plan, planner, policy, limit, base_part, limits)
     if choice == "online":
-        model = factored_model(plan, rewards, discount, base_part)
+        model = factored_model(plan, rewards, discount, base_part, weights)
         lower = read_policy(policy, limits=inputs) if policy else None
         return model, online_planner(model, decision_time, expansions, lower), note
     intentions = count_intentions(plan.states, base_part=base_part)
@@ -562,11 +569,12 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
                               f"intentions (flat) and {classes:,} classes (lumped): the policy belongs to "
                               "another model (check the product, --technical and --base-part)")
         if length == classes and length != intentions:
-            lumped = factored_model(plan, rewards, discount, base_part)
+            lumped = factored_model(plan, rewards, discount, base_part, weights)
             vectors.check_sizes(lumped.n_classes, len(lumped.actions), str(policy))
             return lumped, vectors, None
     # Past the limits this raises, with the estimate and the options (--planner online among them).
-    model = intention_model(plan, rewards, discount, limit=limit, base_part=base_part, max_bytes=limits.memory)
+    model = intention_model(plan, rewards, discount, limit=limit, base_part=base_part, max_bytes=limits.memory,
+                            weights=weights)
     if vectors is not None:
         vectors.check(model.pomdp, str(policy))
         return model, vectors, note
@@ -578,12 +586,12 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
 
 def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                  rewards: Rewards = Rewards(), discount: float = DISCOUNT, base_part: str | None = None,
-                 limits: SizeLimits = SizeLimits()) -> LumpedModel:
+                 limits: SizeLimits = SizeLimits(), habits: Habits | None = None) -> LumpedModel:
     """The decision model of Alg. 3 lumped onto the factored model's classes (state edges and the finished
     product; :mod:`~planner.decision.lumped_model`): the same value as the flat model, far fewer states.
     ``.factored`` filters beliefs over classes, ``.pomdp`` (named ``<product>:lumped``) is what solvers take."""
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
-    return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part))
+    return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits))
 
 
 def _model_file_kind(path: str | os.PathLike) -> str | None:
@@ -593,7 +601,7 @@ def _model_file_kind(path: str | os.PathLike) -> str | None:
 
 def load_model(argument: str | os.PathLike | Product, technical: bool | None = None, rewards: Rewards = Rewards(),
                discount: float = DISCOUNT, base_part: str | None = None, limits: SizeLimits = SizeLimits(),
-               lumped: bool = False, inputs: InputLimits = InputLimits()) -> Model:
+               lumped: bool = False, inputs: InputLimits = InputLimits(), habits: Habits | None = None) -> Model:
     """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`, read within
     ``inputs``: :class:`~planner.validation.InputLimits`), else a PRODUCT
     (its :class:`IntentionModel`, or with ``lumped`` its :class:`LumpedModel`; ``technical``, ``rewards``,
@@ -603,6 +611,9 @@ def load_model(argument: str | os.PathLike | Product, technical: bool | None = N
     if kind is not None and base_part:
         raise PlannerError(f"{argument}: a base part applies to products only, and this is a model file whose "
                            "intentions are fixed; leave out the base part (--base-part), or give the PRODUCT")
+    if kind is not None and habits is not None:
+        raise PlannerError(f"{argument}: --habits applies to a PRODUCT; a model file's initial belief and "
+                           "transitions are fixed (give the PRODUCT, or leave out --habits)")
     if kind is not None and lumped:
         raise PlannerError(f"{argument}: --lumped builds the lumped model of a PRODUCT; a model file is solved "
                            "as it is (write the lumped model with aplan pomdp PRODUCT --lumped -o FILE)")
@@ -613,8 +624,8 @@ def load_model(argument: str | os.PathLike | Product, technical: bool | None = N
     if kind == ".pomdp":
         return read_cassandra(argument, inputs)
     if lumped:
-        return lumped_model(argument, technical, rewards, discount, base_part, limits)
-    return decision_model(argument, technical, rewards, discount, base_part, limits)
+        return lumped_model(argument, technical, rewards, discount, base_part, limits, habits)
+    return decision_model(argument, technical, rewards, discount, base_part, limits, habits)
 
 
 # Reading a model file peaks at about 3 bytes of memory per byte of file (bench/README.md, model files).
@@ -734,8 +745,9 @@ def simulate(model: IntentionModel | FactoredIntentionModel, policy, sequences: 
     rng = np.random.default_rng(seed)
     if every:
         chosen = starts
-    elif random:
-        chosen = [int(s) for s in rng.choice(starts, size=random)]
+    elif random:  # from the initial belief: uniform, or the operator's habits
+        prior = None if model.prior_weights is None else model.pomdp.initial[starts]
+        chosen = [int(s) for s in rng.choice(starts, size=random, p=prior)]
     else:
         chosen = [model.full_sequence(s, what) for s in (sequences or [starts[0]])]
     return [simulate_episode(model.pomdp, policy, start, rng, max_steps, model.graph.successor, model.final_state,

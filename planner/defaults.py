@@ -14,7 +14,7 @@ __all__ = [
     "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
     "CONFIDENCE", "DECISION_TIME", "ONLINE_EXPANSIONS", "ONLINE_DEPTH",
     "JSON_DEPTH_LIMIT", "INPUT_FILE_LIMIT", "SPREAD_CELL_LIMIT", "DECLARED_LIMIT", "RESOLUTION_LIMIT", "EPISODE_LIMIT",
-    "LINEAR_DEFLECTION_MIN", "STRUCTURE_DEFAULT", "MAX_COMPONENTS",
+    "LINEAR_DEFLECTION_MIN", "STRUCTURE_DEFAULT", "MAX_COMPONENTS", "HABITS_FORMAT", "HABITS_VERSION", "HABITS_PRIOR",
 ]
 
 # The product file (docs/product-format.md): its "format" and "version" keys, and its name in a bundle.
@@ -76,6 +76,13 @@ SOLVE_PRECISION = 1e-3             # target gap between the bounds at the initia
 DECISION_TIME = 0.1                # seconds per decision (--decision-time)
 ONLINE_EXPANSIONS = 1000           # expansions per decision at most (--expansions sets it and drops the clock)
 ONLINE_DEPTH = 8                   # the deepest belief the search expands
+
+# Operator habits (planner.decision.habits): the habits file's "format" and "version", and the prior alpha:
+# pseudo-observations per state edge, spread as the paper's model chooses (1: one session's worth of
+# evidence at each state before the operator's own choices dominate).
+HABITS_FORMAT = "aplan-habits"
+HABITS_VERSION = 1
+HABITS_PRIOR = 1.0
 
 # The belief on the true intention above which the robot counts as confident (paper's Fig. 7 discussion).
 CONFIDENCE = 0.9

@@ -189,8 +189,19 @@ def add_decision_options(parser: argparse.ArgumentParser) -> None:
                        help=f"robot does another operation: its eagerness (default {d.wrong:g})")
     group.add_argument("--reward-wait", type=finite, default=d.wait, metavar="R", help=f"wait (default {d.wait:g})")
     add_hierarchy(group)
+    add_habits_options(group)
     add_size_options(parser)
     add_input_options(parser)
+
+
+def add_habits_options(group) -> None:
+    """``--habits FILE`` and ``--model paper|habits`` (operator habits, docs/habits.md)."""
+    group.add_argument("--habits", metavar="FILE",
+                       help="the operator's habits (aplan habits LOG... -o FILE) in place of the uniform choice "
+                            "of Alg. 3, in every model and planner (docs/habits.md)")
+    group.add_argument("--model", dest="habit_model", choices=("paper", "habits"), default=None,
+                       help="paper: the paper's model, ignoring --habits; habits (the default with --habits): "
+                            "the habits' model")
 
 
 def rewards_from(args: argparse.Namespace) -> Rewards:

@@ -11,6 +11,7 @@ from pathlib import Path
 from .. import api
 from ..decision.intention_model import IntentionModel
 from ..decision.policy import AlphaVectorPolicy
+from ..defaults import HABITS_PRIOR
 from ..errors import PlannerError, UsageError
 from ..interrupts import exit_status
 from ..product import DEFAULT_MARKER_DICTIONARY
@@ -114,6 +115,8 @@ def _session(args: argparse.Namespace) -> int:
     if args.log:
         check_output(args.log, option="--log", replaceable=False, noun="log")  # before any work; never replaced
     levels = levels_from(args)
+    if args.habits_out and len(levels) > 1:
+        raise PlannerError("--habits-out: habits are of one workstation's plan; give --level ID")
     log_path = args.log or f"session-{time.strftime('%Y%m%d-%H%M%S')}.jsonl"
     paths = [log_path if len(levels) == 1 else str(Path(log_path).with_suffix("")) + f"-{level}.jsonl"
              for level, _ in levels]
@@ -175,7 +178,7 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
                 "technical": args.technical, "base_part": model.base_part, "discount": args.discount,
                 "rewards": vars(model.rewards), "robot": args.robot, "source": _source_name(args),
                 "debounce": args.debounce, "quiet_frames": args.quiet_frames,
-                "robot_own_tools": args.robot_own_tools, "level": level}
+                "robot_own_tools": args.robot_own_tools, "level": level, "habits": _habits_setting(args)}
     try:
         result = run_session(model, policy, source, robot, events, status, args.max_steps, settings=settings)
     finally:
@@ -186,9 +189,40 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
         print(file=sys.stderr)
     print(f"{result.reason}: {result.message}")
     print(f"log: {log_path}")
+    if args.habits_out:
+        _update_habits(args, plan, log_path)
     if result.signal is not None:  # the log is complete up to the stop: the shell's 128 + N (README)
         return exit_status(result.signal)
     return 0 if result.assembled else 1
+
+
+def _update_habits(args: argparse.Namespace, plan, log_path: str) -> None:
+    """``--habits-out``: the counts of ``--habits`` (none: empty counts; read even with ``--model paper``, so
+    that updating the file in place never loses them) plus the operator's steps the session's log recorded."""
+    import numpy as np
+
+    from ..decision.habits import edge_counts, habits_from_counts
+    from ..decision.io.habits_file import read_habits, write_habits
+    from ..runtime.habits_logs import count_log
+
+    habits = read_habits(args.habits, inputs_from(args)) if args.habits else None
+    counts = edge_counts(plan, habits) if habits is not None else np.zeros(plan.states.n_edges)
+    steps = count_log(plan, counts, log_path, args.technical, inputs_from(args))
+    if not counts.any():
+        log.warning("--habits-out %s: the session did no step and there were no habits: nothing written",
+                    args.habits_out)
+        return
+    write_habits(args.habits_out, habits_from_counts(plan, counts, habits.prior if habits else args.habits_prior))
+    print(f"habits: {args.habits_out} ({steps} step{'s' if steps != 1 else ''} of this session added)")
+
+
+def _habits_setting(args: argparse.Namespace) -> dict | None:
+    """The habits the session's model used (the file's content: replay rebuilds the same model), or None."""
+    from ..decision.io.habits_file import habits_to_dict
+    from .habits import habits_from
+
+    habits = habits_from(args)
+    return None if habits is None else {**habits_to_dict(habits), "file": args.habits}
 
 
 def _current_step(events) -> int:
@@ -282,6 +316,12 @@ def _add_session(commands) -> None:
                          help="the robot has tools of its own: every tool taken from the tray is the operator's "
                               "(default: the robot takes its tool from the tray too, as in the paper)")
     session.add_argument("--max-steps", type=positive, default=500)
+    session.add_argument("--habits-out", metavar="FILE",
+                         help="at the end, write the habits (--habits, or none) plus the steps of this session "
+                              "(docs/habits.md); an existing file is replaced only with --force")
+    session.add_argument("--habits-prior", type=number(0, low_open=True), default=HABITS_PRIOR, metavar="ALPHA",
+                         help=f"the prior of --habits-out when there is no --habits (default {HABITS_PRIOR:g})")
+    add_force(session, outputs=("habits_out",))
     add_decision_options(session)
     session.set_defaults(run=_session)
 

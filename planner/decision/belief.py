@@ -3,7 +3,7 @@
 ``update(b, a, z)``: ``b'(s') ~ O(z | s', a) * sum_s T(s' | s, a) b(s)``. An observation that no state
 explains (probability 0) never produces NaN: the update reports an :class:`UnexplainedObservation` and
 resets the belief to the states that are reachable from the previous belief's support and can emit ``z``
-(uniform), else to every state that can emit ``z``, else to the uniform belief. The report goes to the
+(uniform, or by the updater's ``reset_weights``), else to every state that can emit ``z``, else to the uniform belief. The report goes to the
 updater's ``on_reset`` (default: a warning on this module's logger) and its ``events`` list.
 """
 from __future__ import annotations
@@ -64,9 +64,11 @@ class DiscreteUpdater:
     (default: a warning on the ``planner.decision.belief`` logger); ``events`` keeps them all.
     """
 
-    def __init__(self, model: POMDP, on_reset: Callable[[UnexplainedObservation], None] | None = None):
+    def __init__(self, model: POMDP, on_reset: Callable[[UnexplainedObservation], None] | None = None,
+                 reset_weights: np.ndarray | None = None):
         self.model = model
         self.on_reset = on_reset or _log_reset
+        self.reset_weights = reset_weights  # a reset spreads by these (operator habits), else uniformly
         self._transposed = [t.T.tocsr() for t in model.transition]
         # O(z | s', a) as dense rows per observation, once per distinct table (actions often share one), when
         # they fit in DENSE_LIMIT numbers; else sparse columns.
@@ -102,7 +104,8 @@ class DiscreteUpdater:
     def _reset(self, belief, action, observation, likelihood) -> np.ndarray:
         mask = reset_support(likelihood > 0, self._reachable(belief > 0), action, observation, self.events,
                              self.on_reset)
-        return mask / mask.sum()
+        weight = mask if self.reset_weights is None else mask * self.reset_weights
+        return weight / weight.sum()
 
     def _reachable(self, support: np.ndarray) -> np.ndarray:
         if self._reach is None:

@@ -24,6 +24,15 @@ only (``initial_classes``, in proportion to their sizes), every class reachable 
 ``N(target)`` intentions as before, and a state's observations are those of its *allowed* in-edges only
 (:func:`~planner.assembly.intentions.allowed_edges`), as Alg. 3 on the restricted intention graph gives them.
 
+Weights (operator habits, :mod:`~planner.decision.habits`): with a positive weight ``w(e)`` per state edge, an
+intention's prior is proportional to the product of the weights along its path (the paper's model: every
+weight 1). Counts become weighted path sums, ``W(s) = sum over the edges e out of s of w(e) W(target e)``
+(``W(final) = 1``), the same dynamic programme; the model keeps ``R(s) = W(s) / N(s)`` (no overflow, and 1
+everywhere for habit weights, which keep ``W = N``), a class's mass spreads over its completions in
+proportion to their weights, and advancing moves it to the classes at ``t`` in proportion ``w(c2) W(target
+c2) / W(t)`` (``class_fraction``). Nothing else changes, so the online planner, the lumped model and its
+bounds, which read ``class_fraction``, work on the weighted model unchanged.
+
 The Bayes filter is :class:`~planner.decision.factored_updater.FactoredUpdater`. Beliefs are sparse (:class:`FactoredBelief`: sorted classes and their positive masses); an update costs
 O(k log k) for the k classes the belief reaches after the action's steps (support, its out-edges and,
 after the robot's action, their out-edges).
@@ -39,6 +48,7 @@ from ..assembly.intentions import allowed_edges, base_part_first_edges, paths_to
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
 from ..errors import PlannerError
+from .habits import weighted_fractions
 from .intention_model import WAIT, Rewards
 
 __all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model"]
@@ -88,7 +98,9 @@ class FactoredIntentionModel:
     int64 or Python ints), ``emit_weight`` (``1 / (k + 1/4)``, ``k`` distinct non-blank observations into the
     state), ``emit_keys`` (sorted ``state * Z + z`` of those observations). ``initial_classes``: the classes
     the full sequences may start with (sorted; all the initial state's out-edges unless ``base_part`` is set).
-    Build with :func:`factored_model`.
+    ``weights`` (per class, 1 for the final class) and ``class_log_weight`` (``log(w(c) R(target c))``, so
+    that ``class_log_size + class_log_weight`` is the log of the class's total prior weight): None for the
+    paper's model (module docstring, Weights). Build with :func:`factored_model`.
     """
 
     plan: Plan
@@ -109,6 +121,8 @@ class FactoredIntentionModel:
     class_match_reward: np.ndarray
     initial_classes: np.ndarray
     base_part: str | None = None
+    weights: np.ndarray | None = None
+    class_log_weight: np.ndarray | None = None
 
     @property
     def name(self) -> str:
@@ -246,12 +260,31 @@ class FactoredIntentionModel:
 
     # --- the tables, per class ------------------------------------------------------------------------
 
+    def class_log_mass(self, classes: np.ndarray) -> np.ndarray:
+        """The log of each class's total prior weight: ``log N(target)`` (its intentions), plus the log of its
+        weighted share with weights. Cost: O(k)."""
+        log_size = self.class_log_size[classes]
+        return log_size if self.class_log_weight is None else log_size + self.class_log_weight[classes]
+
+    def intention_log_share(self, path: list[int], position: int) -> float:
+        """The log of the share of the intention ``path[position:]`` in its class's mass (the flat model's
+        belief in it is the class's mass times that share): ``-log N(target)`` without weights. Cost: O(len)."""
+        c = path[position] if position < len(path) else self.final_class
+        if self.weights is None:
+            return -float(self.class_log_size[c])
+        own = float(np.log(self.weights[np.asarray(path[position:], dtype=np.int64)]).sum())
+        return own - float(self.class_log_mass(np.array([c]))[0])
+
     def initial_belief(self) -> FactoredBelief:
         """Uniform over the full sequences: class ``c`` of :attr:`initial_classes` gets ``N(target(c))`` over
-        their total (``N(initial)`` without a base part)."""
+        their total (``N(initial)`` without a base part); with weights, their weighted shares."""
         classes = self.initial_classes
         if self.base_part is None or self.plan.states.initial == self.final_state:
             return FactoredBelief(classes.astype(np.int64), self.class_fraction[classes].copy())
+        if self.weights is not None:
+            log_mass = self.class_log_mass(classes)
+            mass = np.exp(log_mass - log_mass.max())
+            return FactoredBelief(classes.astype(np.int64), mass / mass.sum())
         # Ratios of exact counts (Python ints where they pass 2**52): correctly rounded, never overflowing.
         total = self.n_sequences
         mass = np.array([int(x) / total for x in self.paths[self.class_target[classes]]], dtype=float)
@@ -363,11 +396,12 @@ def _counts_per_state(plan: Plan) -> np.ndarray:
 
 
 def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
-                   base_part: str | None = None) -> FactoredIntentionModel:
+                   base_part: str | None = None, weights: np.ndarray | None = None) -> FactoredIntentionModel:
     """The factored model of Alg. 3 over ``plan`` (module docstring), without enumerating intentions.
 
     ``base_part``: only the sequences that start from this part (paper Sec. V); :class:`PlannerError` when it
-    is not a part or no sequence starts from it.
+    is not a part or no sequence starts from it. ``weights``: a positive weight per state edge (operator
+    habits, :func:`~planner.decision.habits.habit_weights`; module docstring), None for the paper's model.
 
     Cost: O(S + E log E) time and O(S + E) memory for S states and E state edges (one sort of the edges by
     source, one of the (state, observation) pairs); Python-int arithmetic only where the counts pass 2**52.
@@ -413,8 +447,12 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
         elif initial.size == 0:
             raise PlannerError(f"no assembly sequence starts from the base part {base_part!r} (no first "
                                "operation joins it); choose another base part, or check the technical constraints")
+    class_weights = log_weight = None
+    if weights is not None:
+        fraction, class_weights, log_weight = weighted_fractions(states, target, fraction, weights)
     arrays = (action_operations, source, target, operation, fraction, log_size, order, start, counts, emit_weight,
               keys, class_action, match, initial)
-    for a in arrays:
+    for a in arrays + tuple(a for a in (class_weights, log_weight) if a is not None):
         a.flags.writeable = False
-    return FactoredIntentionModel(plan, rewards, discount, *arrays, base_part=base_part)
+    return FactoredIntentionModel(plan, rewards, discount, *arrays, base_part=base_part, weights=class_weights,
+                                  class_log_weight=log_weight)

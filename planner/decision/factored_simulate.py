@@ -64,7 +64,7 @@ def true_intention_probability(model: FactoredIntentionModel, belief: FactoredBe
     at = np.searchsorted(belief.classes, c)
     if at >= belief.classes.size or belief.classes[at] != c or belief.mass[at] <= 0:
         return 0.0
-    return math.exp(math.log(float(belief.mass[at])) - float(model.class_log_size[c]))
+    return math.exp(math.log(float(belief.mass[at])) + model.intention_log_share(path, position))
 
 
 def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[int], rng: np.random.Generator,

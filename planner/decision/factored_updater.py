@@ -9,6 +9,7 @@ import numpy as np
 from ..assembly.intentions import IntentionGraph
 from .belief import UnexplainedObservation, _log_reset, reset_support
 from .factored_model import FactoredBelief, FactoredIntentionModel
+from .intention_model import intention_weights
 
 __all__ = ["FactoredUpdater", "to_flat"]
 
@@ -51,16 +52,22 @@ class FactoredUpdater:
         if model.base_part is not None:  # the flat model's states are the base part's intentions only
             mask &= model.reachable(model.initial_classes)
         classes = np.flatnonzero(mask)
-        log_size = model.class_log_size[classes]
-        weight = np.exp(log_size - log_size.max())  # uniform over intentions: mass ~ class size
+        log_size = model.class_log_mass(classes)
+        weight = np.exp(log_size - log_size.max())  # uniform over intentions (by weight): mass ~ class size
         return FactoredBelief(classes, weight / weight.sum())
 
 
-def to_flat(belief: FactoredBelief, graph: IntentionGraph) -> np.ndarray:
+def to_flat(belief: FactoredBelief, graph: IntentionGraph, weights: np.ndarray | None = None) -> np.ndarray:
     """The flat belief over ``graph``'s intentions: ``mass[class] / size(class)``, intention ``i``'s class being
-    its first state edge (the final class for the final intention). Cost: O(I) (for tests and small models)."""
+    its first state edge (the final class for the final intention). With ``weights`` (per state edge: operator
+    habits), ``mass[class]`` times the intention's share of its class's weight (:func:`~planner.decision.intention_model.intention_weights`).
+    Cost: O(I x length) (for tests and small models)."""
     E = graph.states.n_edges
     of = np.where(graph.step_edge >= 0, graph.step_edge, E)
-    size = np.bincount(of, minlength=E + 1).astype(float)
     mass = belief.dense(E + 1)
-    return mass[of] / size[of]
+    if weights is None:
+        size = np.bincount(of, minlength=E + 1).astype(float)
+        return mass[of] / size[of]
+    prior = intention_weights(graph, weights)
+    return mass[of] * prior / np.bincount(of, weights=prior, minlength=E + 1)[of]
+

@@ -17,6 +17,13 @@ Definitions (these match the authors' code, checked against the POMDPX files it 
   -50 (all four configurable: the paper's "eagerness").
 - Initial belief: uniform over the full sequences.
 
+With operator habits (:mod:`~planner.decision.habits`: a weight per state edge), the initial belief is
+proportional to the product of the weights along each full sequence instead, and a reset (an unexplained
+observation, :class:`~planner.decision.belief.DiscreteUpdater`) spreads by the same prior weights
+(``intention_weights``). The transitions do not change: an intention is a whole path, so the operator's choices
+are in the intention itself, and the habits say which paths are likely (in the factored and lumped models,
+whose classes sum over completions, they enter the transitions).
+
 With a base part (paper Sec. V), the states are the intentions of the sequences that start from it
 (:func:`~planner.assembly.intentions.intention_graph` with ``base_part``) and the same definitions apply to
 that graph: the observations of an intention are those of its predecessors *in it*, and the initial belief is
@@ -38,7 +45,7 @@ from ..errors import LimitExceededError, MemoryLimitError, PlannerError
 from .pomdp import POMDP
 
 __all__ = ["Rewards", "WAIT", "IntentionModel", "intention_model", "intention_pomdp", "flat_model_bytes",
-           "check_flat_model", "flat_model_fits"]
+           "check_flat_model", "flat_model_fits", "intention_weights"]
 
 WAIT = "wait"
 
@@ -63,7 +70,8 @@ class IntentionModel:
     ``pomdp``: the tables (the *model* that solvers, policies and belief updaters work on); its state ``i``
     is intention ``i`` of ``graph`` (0 is the finished product) and its action ``k`` performs the AND/OR
     operation ``action_operations[k]`` of ``plan`` (-1: wait, the last action). ``rewards``: those the
-    tables were built with. Build it with :func:`intention_model`.
+    tables were built with. ``prior_weights``: each intention's prior weight under operator habits (what a
+    reset spreads by), None for the paper's model. Build it with :func:`intention_model`.
     """
 
     plan: Plan
@@ -71,6 +79,7 @@ class IntentionModel:
     pomdp: POMDP
     action_operations: np.ndarray
     rewards: Rewards
+    prior_weights: np.ndarray | None = None
 
     @property
     def name(self) -> str:
@@ -181,6 +190,20 @@ def _rewards(plan: Plan, graph: IntentionGraph, robot_ops: np.ndarray, rewards: 
     return reward
 
 
+def intention_weights(graph: IntentionGraph, weights: np.ndarray) -> np.ndarray:
+    """Each intention's prior weight: the product of the edge ``weights`` (one per state edge) along its path
+    (1 for the final intention), scaled so that the largest is 1 (exactly 1 everywhere when every weight is 1).
+    Cost: O(I x length): intentions are numbered by length, a successor before its intention."""
+    log_w = np.log(np.append(np.asarray(weights, dtype=float), 1.0))  # the last entry: no step (final intention)
+    step = np.where(graph.step_edge >= 0, graph.step_edge, len(log_w) - 1)
+    has_next = graph.successor >= 0
+    after = np.maximum(graph.successor, 0)
+    total = np.zeros(graph.n_intentions)
+    for _ in range(len(graph.states.andor.parts)):  # a path has fewer steps than the product has parts
+        total = log_w[step] + np.where(has_next, total[after], 0.0)
+    return np.exp(total - total.max())
+
+
 # Bytes per intention and action (a transition row of 1.02 entries on average: float64 + int32 column, an
 # int32 row pointer; a float64 reward) and per intention (the intention graph, its names, the initial belief).
 # Measured peaks (chain 7-9, complete 5-6): 25 to 34 bytes per intention and action in all.
@@ -239,8 +262,10 @@ def flat_model_fits(plan: Plan, max_bytes: int | None = None, limit: int | None 
 
 def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                      graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT,
-                     base_part: str | None = None, max_bytes: int | None = None) -> IntentionModel:
+                     base_part: str | None = None, max_bytes: int | None = None,
+                     weights: np.ndarray | None = None) -> IntentionModel:
     """The decision model of Alg. 3 over the intentions of ``plan`` (definitions in the module docstring).
+    ``weights``: a positive weight per state edge (operator habits, module docstring), None for the paper's.
 
     ``graph``: the plan's intention graph when it was built already. Before anything is built the model's
     size is estimated (:func:`check_flat_model`): more than ``limit`` intentions (when ``graph`` is to be
@@ -263,7 +288,17 @@ def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
     observation = tuple(table for _ in transition)  # one object: solvers and updaters share its products
     initial = np.zeros(graph.n_intentions)
     starts = graph.full_sequences()
-    initial[starts] = 1.0 / len(starts)
+    prior = None
+    if weights is None:
+        initial[starts] = 1.0 / len(starts)
+    else:
+        weights = np.asarray(weights, dtype=float)
+        if weights.shape != (plan.states.n_edges,) or not np.all(np.isfinite(weights)) or np.any(weights <= 0):
+            raise PlannerError(f"edge weights must be {plan.states.n_edges} finite numbers above 0 (one per state "
+                               "edge)")
+        prior = intention_weights(graph, weights)
+        initial[starts] = prior[starts] / prior[starts].sum()
+        prior.flags.writeable = False
     names = tuple(f"i{i}" for i in range(graph.n_intentions))
     actions = tuple(f"a{k}:" + plan.andor.describe(int(op)).replace(" ", "") for k, op in enumerate(robot_ops))
     pomdp = POMDP(names, actions + (WAIT,), tuple(str(o) for o in plan.observations), tuple(transition),
@@ -271,11 +306,12 @@ def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
                   name=plan.product.name or "aplan")
     action_operations = np.append(robot_ops, -1)
     action_operations.flags.writeable = False
-    return IntentionModel(plan, graph, pomdp, action_operations, rewards)
+    return IntentionModel(plan, graph, pomdp, action_operations, rewards, prior)
 
 
 def intention_pomdp(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                     graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT,
-                    base_part: str | None = None, max_bytes: int | None = None) -> POMDP:
+                    base_part: str | None = None, max_bytes: int | None = None,
+                    weights: np.ndarray | None = None) -> POMDP:
     """The tables alone of :func:`intention_model` (for solvers, files and comparisons with other planners)."""
-    return intention_model(plan, rewards, discount, graph, limit, base_part, max_bytes).pomdp
+    return intention_model(plan, rewards, discount, graph, limit, base_part, max_bytes, weights).pomdp

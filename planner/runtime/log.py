@@ -4,7 +4,8 @@ Format, version :data:`LOG_VERSION`: one JSON object per line, each with ``event
 seconds, to the millisecond):
 
 - ``start``: ``version``, ``product`` (the product itself, in the product file format), ``settings``
-  (``base_part``: the part the model's sequences start from, or null; replay rebuilds the same model),
+  (``base_part``: the part the model's sequences start from, or null; ``habits``: the operator habits the model
+  used, as the habits file holds them, or null; replay rebuilds the same model),
   ``n_intentions``, ``actions`` and ``observations`` (the model's names), ``top``;
 - per step: ``action`` (``step``, ``action``, ``name``, ``instruction``, ``decision_ms``: the milliseconds the
   policy took to choose it), ``robot`` (``step``, ``ok``,
@@ -200,6 +201,17 @@ def read_log(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> li
     return events
 
 
+def _habit_weights(path: Path, plan, recorded) -> np.ndarray | None:
+    """The edge weights of the operator habits a session's model used (its start event's ``settings.habits``:
+    the habits file's content), or None (the paper's model)."""
+    from ..decision.habits import habit_weights
+    from ..decision.io.habits_file import habits_from_dict
+
+    if recorded is None:
+        return None
+    return habit_weights(plan, habits_from_dict(recorded, f"{path} (start event, settings.habits)"))
+
+
 def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel | FactoredIntentionModel]:
     """The product stored in the start event and its decision model (flat, or factored when the session's
     beliefs were over classes), checked against the logged names."""
@@ -214,8 +226,9 @@ def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel | Factor
     if base_part is not None and not isinstance(base_part, str):
         raise SessionError(f"{path}: the start event's base part {base_part!r} is not a part name; the log is damaged")
     plan = make_plan(product)
-    model = (factored_model(plan, base_part=base_part) if start.get("belief_over") == "classes"
-             else intention_model(plan, base_part=base_part))
+    weights = _habit_weights(path, plan, settings.get("habits"))
+    model = (factored_model(plan, base_part=base_part, weights=weights) if start.get("belief_over") == "classes"
+             else intention_model(plan, base_part=base_part, weights=weights))
     if list(model.observations) != start.get("observations") or list(model.actions) != start.get("actions"):
         raise SessionError(f"{path}: the product in the log no longer gives the logged actions and observations "
                            "(the log was written by another planner version)")
@@ -226,7 +239,7 @@ def updater_for(model: IntentionModel | FactoredIntentionModel, on_reset=None):
     """The exact Bayes filter of ``model``: over intentions, or over classes on the factored model."""
     if isinstance(model, FactoredIntentionModel):
         return FactoredUpdater(model, on_reset=on_reset)
-    return DiscreteUpdater(model.pomdp, on_reset=on_reset)
+    return DiscreteUpdater(model.pomdp, on_reset=on_reset, reset_weights=model.prior_weights)
 
 
 def _in_the_log(event) -> None:

@@ -1,0 +1,72 @@
+"""``aplan habits LOG... -o habits.json``: the operator's habits learned from session logs (issue 23,
+docs/habits.md), and ``--habits FILE`` / ``--model paper|habits`` for the commands that build a model."""
+from __future__ import annotations
+
+import argparse
+import json
+
+from ..decision.habits import Habits, HabitsError
+from ..decision.io.habits_file import read_habits, write_habits
+from ..defaults import HABITS_PRIOR
+from ..errors import PlannerError
+from .options import add_fasteners, add_force, add_input_options, add_technical, inputs_from, number, product_from
+
+__all__ = ["add_commands", "habits_from"]
+
+
+def habits_from(args: argparse.Namespace) -> Habits | None:
+    """The habits a model-building command is to use: ``--habits`` read and checked, or None (``--model paper``,
+    or no ``--habits``). ``--model habits`` without ``--habits`` is an error."""
+    chosen, path = getattr(args, "habit_model", None), getattr(args, "habits", None)
+    if chosen == "paper":
+        return None
+    if path is None:
+        if chosen == "habits":
+            raise PlannerError("--model habits needs the habits: --habits FILE (aplan habits LOG... -o FILE)")
+        return None
+    return read_habits(path, inputs_from(args))
+
+
+def _habits(args: argparse.Namespace) -> int:
+    from ..api import _decidable, plan_of
+    from ..runtime.habits_logs import habits_from_logs
+
+    plan = None
+    if args.product is not None:
+        plan = _decidable(plan_of(product_from(args, args.product), args.technical))
+    start = read_habits(args.add, inputs_from(args)) if args.add else None
+    if start is not None and plan is None:
+        raise HabitsError(f"--add {args.add}: give the product too (--product PRODUCT), to check the counts against it")
+    habits, steps = habits_from_logs(plan, args.logs, args.prior, args.technical, start, inputs_from(args))
+    write_habits(args.output, habits, len(args.logs))
+    if args.json:
+        print(json.dumps({"product": habits.product, "fingerprint": habits.fingerprint, "prior": habits.prior,
+                          "logs": len(args.logs), "steps": steps, "edges": len(habits.counts)}))
+    else:
+        print(f"{habits.product}: {steps} steps from {len(args.logs)} log{'s' if len(args.logs) != 1 else ''}, "
+              f"{len(habits.counts)} state edges counted (prior {habits.prior:g}; state graph {habits.fingerprint})")
+        print(f"habits: {args.output}")
+    return 0
+
+
+def add_commands(commands) -> None:
+    habits = commands.add_parser(
+        "habits", help="learn the operator's habits (their choice at each assembly state) from session logs",
+        description="Count, from session logs, how often the operator took each next operation at each assembly "
+                    "state, and write the habits file that --habits FILE puts into the decision model in place of "
+                    "the uniform choice of Alg. 3 (docs/habits.md). Logs of another product version are refused.")
+    habits.add_argument("logs", nargs="+", metavar="LOG", help="session logs (.jsonl) of one product version")
+    habits.add_argument("-o", "--output", required=True, metavar="FILE", help="the habits file (JSON)")
+    habits.add_argument("--product", metavar="PRODUCT",
+                        help="the product the habits are for (default: the one the first log stores); every log "
+                             "must be of its version")
+    habits.add_argument("--prior", type=number(0, low_open=True), default=None, metavar="ALPHA",
+                        help=f"pseudo-observations per state edge, spread as the paper's model chooses "
+                             f"(default {HABITS_PRIOR:g}; above 0)")
+    habits.add_argument("--add", metavar="HABITS", help="a habits file whose counts the logs' are added to")
+    habits.add_argument("--json", action="store_true", help="print product, fingerprint, prior, logs, steps, edges")
+    add_technical(habits)
+    add_fasteners(habits)
+    add_force(habits)
+    add_input_options(habits)
+    habits.set_defaults(run=_habits)

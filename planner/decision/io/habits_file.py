@@ -1,0 +1,102 @@
+"""The habits file (``aplan habits LOG... -o habits.json``; docs/habits.md): JSON, read strictly, written atomically.
+
+    {"format": "aplan-habits", "version": 1, "product": "Bourjault ballpoint pen",
+     "fingerprint": "3f0c...", "prior": 1.0, "sessions": 20,
+     "counts": [{"state": "{ink} {cartridge} {head} {body} {cap} {button}",
+                 "operation": "{ink} + {cartridge}", "count": 16}, ...]}
+
+``product`` and ``fingerprint`` (:func:`~planner.decision.habits.state_graph_fingerprint`) name the plan the
+counts belong to; ``prior`` is alpha (finite, above 0); ``sessions`` the logs counted (for the reader; never
+used in the model); ``counts`` the state edges counted at least once, each a state and an operation as
+``aplan stats``/``intentions`` write them and a finite count of at least 0. Whether the keys are state edges of
+the product is checked when the habits are used (:func:`~planner.decision.habits.edge_counts`).
+"""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+from ...defaults import HABITS_FORMAT, HABITS_VERSION
+from ...files import write_atomic
+from ...validation import InputError, InputLimits, json_loads
+from ..habits import Habits, HabitsError, check_prior
+
+__all__ = ["read_habits", "write_habits", "habits_to_dict", "habits_from_dict"]
+
+_REWRITE = "write it again with aplan habits LOG... -o FILE"
+
+
+def habits_to_dict(habits: Habits, sessions: int | None = None) -> dict:
+    """The file's content (module docstring)."""
+    return {"format": HABITS_FORMAT, "version": HABITS_VERSION, "product": habits.product,
+            "fingerprint": habits.fingerprint, "prior": habits.prior, "sessions": sessions,
+            "counts": [{"state": s, "operation": o, "count": int(c) if float(c).is_integer() else c}
+                       for s, o, c in habits.counts]}
+
+
+def _count(value, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value or value in (
+            float("inf"), float("-inf")) or value < 0:
+        raise HabitsError(f"{where}: count {value!r} is not a finite number of at least 0; fix the entry or "
+                          + _REWRITE)
+    return float(value)
+
+
+def habits_from_dict(data, source: str) -> Habits:
+    """:class:`Habits` from the file's content, every field checked (module docstring); a
+    :class:`HabitsError` names ``source``, the place and the fix."""
+    if not isinstance(data, dict) or data.get("format") != HABITS_FORMAT:
+        raise HabitsError(f"{source}: not a habits file (no \"format\": \"{HABITS_FORMAT}\"); {_REWRITE}")
+    if data.get("version") != HABITS_VERSION:
+        raise HabitsError(f"{source}: habits file version {data.get('version')!r}; this planner reads version "
+                          f"{HABITS_VERSION}; {_REWRITE}")
+    for key in ("product", "fingerprint"):
+        if not isinstance(data.get(key), str) or not data[key]:
+            raise HabitsError(f"{source}: \"{key}\" must be a non-empty string; {_REWRITE}")
+    prior = check_prior(data.get("prior"), f"{source}: prior")
+    counts = data.get("counts")
+    if not isinstance(counts, list):
+        raise HabitsError(f"{source}: \"counts\" must be a list of {{state, operation, count}}; {_REWRITE}")
+    if not counts:
+        raise HabitsError(f"{source}: the file holds no counts (it would be the paper's model); learn habits from "
+                          "session logs that record operations, or leave out --habits")
+    out = []
+    for k, entry in enumerate(counts):
+        where = f"{source}: counts[{k}]"
+        if not isinstance(entry, dict) or not isinstance(entry.get("state"), str) or \
+                not isinstance(entry.get("operation"), str) or "count" not in entry:
+            raise HabitsError(f"{where}: must be an object with a \"state\" and an \"operation\" (text) and a "
+                              f"\"count\"; fix the entry or {_REWRITE}")
+        out.append((entry["state"], entry["operation"], _count(entry["count"], where)))
+    return Habits(data["product"], data["fingerprint"], prior, tuple(out), source)
+
+
+def read_habits(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> Habits:
+    """The habits in the file at ``path``, checked (:func:`habits_from_dict`); within ``limits``' bytes and
+    nesting. Raises :class:`HabitsError` naming the file and the fix."""
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        if size > limits.file_bytes:
+            raise HabitsError(f"{path}: {size:,} bytes, more than the limit of {limits.file_bytes:,} for a habits "
+                              "file; is it the right file?")
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise HabitsError(f"{path}: cannot read the habits file: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise HabitsError(f"{path}: not a habits file (not UTF-8 text); {_REWRITE}") from None
+    if not text.strip():
+        raise HabitsError(f"{path}: the habits file is empty; {_REWRITE}")
+    try:
+        data = json_loads(text, str(path), limits.json_depth)
+    except json.JSONDecodeError as exc:
+        raise HabitsError(f"{path}: not JSON ({exc.msg} at line {exc.lineno}); {_REWRITE}") from None
+    except InputError as exc:  # NaN, infinity, nested too deep
+        raise HabitsError(f"{exc}; {_REWRITE}") from None
+    return habits_from_dict(data, str(path))
+
+
+def write_habits(path: str | os.PathLike, habits: Habits, sessions: int | None = None) -> None:
+    """Write ``habits`` to ``path`` atomically (nothing is left behind on a failure)."""
+    write_atomic(path, json.dumps(habits_to_dict(habits, sessions), indent=1, allow_nan=False) + "\n")
