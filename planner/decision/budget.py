@@ -1,0 +1,116 @@
+"""The memory budget of the decision layer: what each model, the online planner and the solver would take,
+estimated from counts and checked against ``--max-memory`` before anything large is built.
+
+The budget covers everything a command holds at once: the plan (its state graph), then what is built on it
+(the factored model and the online planner's values, or the lumped model, or a solver's tables). Each check
+adds the bytes already held to the estimate of the next step and raises
+:class:`~planner.errors.MemoryLimitError` with the estimate, the counts it comes from and the options that
+help. The reserves (:func:`online_limits`, :func:`lumped_limits`) let the plan itself stop as soon as it
+and what comes after would not fit (:class:`~planner.assembly.guards.SizeLimits`), so that a refusal costs
+little: the states are counted before they are built where they can be.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+from ..assembly.guards import OPTIONS, SizeLimits, memory_options
+from ..assembly.plan import Plan
+from ..assembly.states import state_graph_bytes
+from ..errors import MemoryLimitError, gib
+from .factored_model import factored_model_bytes
+from .intention_model import flat_model_bytes
+from .lumped_model import lumped_pomdp_bytes
+from .online import online_planner_bytes
+from .pomdp import POMDP
+from .solvers.tables import pomdp_bytes, solver_bytes
+
+__all__ = ["plan_bytes", "online_bytes", "lumped_bytes", "online_limits", "lumped_limits", "check_online_memory",
+           "check_lumped_memory", "check_solver_memory", "check_flat_solver_memory"]
+
+_HINT = "Plan with fewer parts (fold or group the fasteners), or one subassembly (one workstation) at a time."
+
+
+def plan_bytes(plan: Plan) -> int:
+    """The bytes a plan holds: its state graph's arrays and about 300 bytes of Python objects per subassembly
+    and operation of its AND/OR graph. Cost: O(1)."""
+    states = plan.states
+    return state_graph_bytes(states.n_states, states.n_edges, len(plan.andor.parts)) + \
+        300 * (len(plan.andor.subassemblies) + len(plan.andor.operations))
+
+
+def online_bytes(states: int, edges: int, actions: int = 1) -> int:
+    """What the factored model and the online planner's values take on top of the plan
+    (:func:`~planner.decision.online.online_planner_bytes`); ``actions`` does not matter."""
+    return online_planner_bytes(states, edges)
+
+
+def lumped_bytes(states: int, edges: int, actions: int) -> int:
+    """What the factored model and its lumped POMDP take on top of the plan: the model's building peak, or
+    the model held and the lumped tables' (:func:`~planner.decision.lumped_model.lumped_pomdp_bytes`)."""
+    held, peak = factored_model_bytes(states, edges)
+    return max(peak, held + lumped_pomdp_bytes(edges + 1, actions))
+
+
+def online_limits(limits: SizeLimits) -> SizeLimits:
+    """``limits`` with the factored model and the online planner's values reserved."""
+    return limits if limits.reserve is not None else \
+        replace(limits, reserve=online_bytes, reserve_for="the online planner (its factored model and values)")
+
+
+def lumped_limits(limits: SizeLimits) -> SizeLimits:
+    """``limits`` with the lumped model reserved."""
+    return limits if limits.reserve is not None else replace(limits, reserve=lumped_bytes, reserve_for="the lumped model")
+
+
+def _check(what: str, needed: int, budget: int, detail: str, hint: str, options=()) -> None:
+    if needed > budget:
+        raise MemoryLimitError(what, needed, budget, detail, f"{hint} {_HINT}",
+                               list(options) + memory_options(needed)
+                               + [OPTIONS[k] for k in ("fasteners", "exclude", "group")])
+
+
+def check_online_memory(plan: Plan, budget: int) -> None:
+    """Refuse the factored model and the online planner's values of ``plan`` when, with the plan held, they
+    would not fit in ``budget`` bytes. Cost: O(1)."""
+    held = plan_bytes(plan)
+    S, E = plan.states.n_states, plan.states.n_edges
+    _check("online planner (factored model and values)", held + online_bytes(S, E), budget,
+           f"{E + 1:,} classes over {S:,} assembly states, with the plan's {gib(held)}",
+           "The factored model and the planner's bounds hold a few numbers per state edge.")
+
+
+def check_lumped_memory(plan: Plan, budget: int) -> None:
+    """Refuse the lumped model of ``plan`` when, with the plan held, it would not fit in ``budget`` bytes.
+    Cost: O(1)."""
+    held = plan_bytes(plan)
+    S, E, A = plan.states.n_states, plan.states.n_edges, int(plan.tags.robot.sum()) + 1
+    _check("lumped model", held + lumped_bytes(S, E, A), budget,
+           f"{E + 1:,} classes x {A:,} actions, with the plan's {gib(held)}",
+           "The lumped model has a transition entry and a reward per class and action; the online planner needs "
+           "neither (aplan simulate/session --planner online).")
+
+
+def check_solver_memory(pomdp: POMDP, budget: int, plan: Plan | None = None) -> None:
+    """Refuse to solve ``pomdp`` when the solver's tables and bounds
+    (:func:`~planner.decision.solvers.tables.solver_bytes`), with the model (and ``plan``, the lumped model's)
+    held, would not fit in ``budget`` bytes. Cost: O(actions)."""
+    held = pomdp_bytes(pomdp) + (plan_bytes(plan) if plan is not None else 0)
+    lumped = plan is not None
+    _check(f"the solver on {pomdp.name or 'the model'}", held + solver_bytes(pomdp), budget,
+           f"{pomdp.n_states:,} states x {pomdp.n_actions:,} actions, with the model's {gib(held)}",
+           "The solver keeps a few tables of one number per state and action."
+           + ("" if lumped else " The lumped model (--lumped) solves the same problem over far fewer states."),
+           [] if lumped else [("--lumped", "--lumped solves the lumped model (the same value over the state edges)")])
+
+
+def check_flat_solver_memory(plan: Plan, intentions: int, budget: int) -> None:
+    """Refuse, before the flat model is built, to solve it when the model and the solver would not fit in
+    ``budget`` bytes: :func:`~planner.decision.intention_model.flat_model_bytes` and
+    :func:`~planner.decision.solvers.tables.solver_bytes` with one transition entry per intention and action
+    (what Alg. 3's tables hold, the robot's actions moving a few): about ``128 I A`` bytes. Cost: O(1)."""
+    A, Z = int(plan.tags.robot.sum()) + 1, len(plan.observations)
+    needed = plan_bytes(plan) + flat_model_bytes(plan, intentions) + 128 * intentions * A + 8 * Z * intentions
+    _check("the solver on the flat decision model", needed, budget, f"{intentions:,} intentions x {A:,} actions",
+           "The solver keeps a few tables of one number per intention and action. The lumped model (--lumped) "
+           "solves the same problem over far fewer states.",
+           [("--lumped", "--lumped solves the lumped model (the same value over the state edges)")])
