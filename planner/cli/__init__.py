@@ -70,6 +70,15 @@ def _restore_logging(handler: logging.Handler) -> None:
         logger.propagate = True
 
 
+def _named(error: PlannerError, args) -> str:
+    """A refusal past a size limit with the PRODUCT (or MODEL) it concerns first, unless it names it already."""
+    argument = getattr(args, "model", None) or getattr(args, "product", None)
+    text = str(error)
+    if isinstance(error, LimitExceededError) and isinstance(argument, str) and argument not in text:
+        return f"{argument}: {text}"
+    return text
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     handler = _configure_logging()  # undone at the end: main() also runs inside tests and other programs
@@ -79,7 +88,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return args.run(args)
     except PlannerError as exc:
         helps = advice(exc, args) if isinstance(exc, LimitExceededError) else ""
-        print(f"aplan: error: {exc}" + (f" {helps}" if helps else ""), file=sys.stderr)
+        print(f"aplan: error: {_named(exc, args)}" + (f" {helps}" if helps else ""), file=sys.stderr)
         return 1
     except BrokenPipeError:  # e.g. `aplan intentions pen | head`
         return 0

@@ -106,7 +106,7 @@ def class_values_bytes(n_classes: int, n_states: int) -> tuple[int, int]:
     ones, the class values they start from (one float64 a class is kept) and the temporaries of one block
     of :data:`VALUE_BLOCK` classes (about 14 float64 each). Measured within 10 % above (chain 16 and 20,
     complete 9 and 10: tests/decision/test_memory_estimates.py)."""
-    held = 32 * n_classes + 8 * n_states
+    held = 32 * n_classes + 8 * n_states + 16384  # and the arrays' headers, the model's caches
     return held, held + 8 * n_classes + 16 * n_states + 112 * min(n_classes, VALUE_BLOCK)
 
 

@@ -108,3 +108,17 @@ def test_pomdp_file_budget(capsys, tmp_path):
     code, _, err = run(capsys, "pomdp", str(product), "-o", str(target), "--max-file", str(1 / 1024))
     assert code == 1 and "chain7.pomdpx would take about 10." in err and "--max-file GIB raises" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["chain7.json"]
+
+
+def test_the_online_note_names_the_limit_passed():
+    """Chain 10: 986,410 intentions, under the intention limit; it is the flat model's memory that is passed."""
+    from planner import api
+    from planner.assembly import make_plan
+    from planner.assembly.guards import SizeLimits
+    from planner.product.synthetic import chain_product
+
+    plan = make_plan(chain_product(10))
+    _, note = api.choose_planner(plan, None, None, limits=SizeLimits(memory=4 * 2 ** 30))
+    assert "986,410 intentions" in note and "past the memory budget of 4.0 GiB" in note and "1,000,000" not in note
+    _, note = api.choose_planner(plan, None, None, limit=1000, limits=SizeLimits(memory=2 ** 50))
+    assert "past the intention limit of 1,000" in note and "memory" not in note
