@@ -59,6 +59,7 @@ from .decision.budget import (
     check_lumped_memory,
     check_online_memory,
     check_solver_memory,
+    flat_limits,
     lumped_limits,
     online_limits,
 )
@@ -444,12 +445,13 @@ def decision_model(product: str | os.PathLike | Product | Plan, technical: bool 
                    rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                    base_part: str | None = None, limits: SizeLimits = SizeLimits(),
                    solving: bool = False) -> IntentionModel:
-    """The decision model of Alg. 3 of a product, PRODUCT argument or plan (``solving``: refused at once when
-    the solver would not fit beside it, :func:`~planner.decision.budget.check_flat_solver_memory`); ``base_part``: only the sequences
+    """The decision model of Alg. 3 of a product, PRODUCT argument or plan; ``base_part``: only the sequences
     that start from it (``"auto"``: the most connected part, :func:`base_part_of`); refused, with the estimate,
     past ``limits`` (the plan's, and the flat model's memory:
-    :func:`~planner.decision.intention_model.flat_model_bytes`)."""
-    plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
+    :func:`~planner.decision.intention_model.flat_model_bytes`); with ``solving``, also when the solver would
+    not fit beside it (:func:`~planner.decision.budget.check_flat_solver_memory`), before it is built."""
+    plan = product if isinstance(product, Plan) else \
+        _decidable(plan_of(product, technical, flat_limits(limits, solving) if base_part is None else limits))
     base = base_part_of(plan, base_part)
     if solving:  # refused before the flat model is built when the solver would not fit beside it
         check_flat_solver_memory(plan, count_intentions(plan.states, base_part=base), limits.memory)

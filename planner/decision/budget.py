@@ -18,13 +18,14 @@ from ..assembly.plan import Plan
 from ..assembly.states import state_graph_bytes
 from ..errors import MemoryLimitError, gib
 from .factored_model import factored_model_bytes
-from .intention_model import flat_model_bytes
+from .intention_model import _BYTES_PER_INTENTION, _BYTES_PER_INTENTION_ACTION, flat_model_bytes
 from .lumped_model import lumped_pomdp_bytes
-from .online import online_planner_bytes
+from .online import VALUE_BLOCK
 from .pomdp import POMDP
 from .solvers.tables import pomdp_bytes, solver_bytes
 
-__all__ = ["plan_bytes", "online_bytes", "lumped_bytes", "online_limits", "lumped_limits", "check_online_memory",
+__all__ = ["class_values_bytes", "online_planner_bytes", "plan_bytes", "online_bytes", "lumped_bytes", "online_limits",
+           "lumped_limits", "flat_limits", "check_online_memory",
            "check_lumped_memory", "check_solver_memory", "check_flat_solver_memory"]
 
 _HINT = "Plan with fewer parts (fold or group the fasteners), or one subassembly (one workstation) at a time."
@@ -36,6 +37,26 @@ def plan_bytes(plan: Plan) -> int:
     states = plan.states
     return state_graph_bytes(states.n_states, states.n_edges, len(plan.andor.parts)) + \
         300 * (len(plan.andor.subassemblies) + len(plan.andor.operations))
+
+
+def class_values_bytes(n_classes: int, n_states: int) -> tuple[int, int]:
+    """``(held, peak)``: the bytes the online planner's values hold
+    (:func:`~planner.decision.online.revealed_state_values`: four float64 per class, one per state) and the most
+    they take while computed, on top of the model: the held ones, the class values they start from (one
+    float64 a class is kept) and the temporaries of one block of :data:`~planner.decision.online.VALUE_BLOCK`
+    classes (about 14 float64 each). Held within 10 % above what is measured (chain 11, complete 7:
+    tests/decision/test_memory_estimates.py; 32.8 bytes a class on chain 16 and 20, complete 9 and 10)."""
+    held = 32 * n_classes + 8 * n_states + 16384  # and the arrays' headers, the model's caches
+    return held, held + 8 * n_classes + 16 * n_states + 112 * min(n_classes, VALUE_BLOCK)
+
+
+def online_planner_bytes(n_states: int, n_edges: int) -> int:
+    """The most the factored model and the online planner's values take together, on top of the plan, for
+    ``n_states`` states and ``n_edges`` state edges (the model's peak while built, or the model held and the
+    values' peak: :func:`~planner.decision.factored_model.factored_model_bytes`, :func:`class_values_bytes`).
+    From counts alone."""
+    model_held, model_peak = factored_model_bytes(n_states, n_edges)
+    return max(model_peak, model_held + class_values_bytes(n_edges + 1, n_states)[1])
 
 
 def online_bytes(states: int, edges: int, actions: int = 1) -> int:
@@ -59,7 +80,27 @@ def online_limits(limits: SizeLimits) -> SizeLimits:
 
 def lumped_limits(limits: SizeLimits) -> SizeLimits:
     """``limits`` with the lumped model reserved."""
-    return limits if limits.reserve is not None else replace(limits, reserve=lumped_bytes, reserve_for="the lumped model")
+    return limits if limits.reserve is not None else \
+        replace(limits, reserve=lumped_bytes, reserve_for="the lumped model")
+
+
+def flat_limits(limits: SizeLimits, solving: bool = False) -> SizeLimits:
+    """``limits`` with the flat model reserved (and, ``solving``, the solver beside it), counted from below:
+    each of the E state edges' classes holds at least one intention, so the model holds at least E + 1."""
+    if limits.reserve is not None:
+        return limits
+
+    def reserve(states: int, edges: int, actions: int) -> int:
+        per_action = _BYTES_PER_INTENTION_ACTION + (_SOLVER_BYTES_PER_INTENTION_ACTION if solving else 0)
+        return (edges + 1) * (per_action * actions + _BYTES_PER_INTENTION)
+
+    return replace(limits, reserve=reserve, reserve_for="the flat decision model" + (" and the solver" if solving
+                                                                                      else ""))
+
+
+# The solver's tables and bounds per intention and action (solver_bytes with one transition entry per
+# intention and action: three sparse copies, the block diagonal's triplets, seven dense (A, S) tables).
+_SOLVER_BYTES_PER_INTENTION_ACTION = 128
 
 
 def _check(what: str, needed: int, budget: int, detail: str, hint: str, options=()) -> None:
@@ -109,7 +150,8 @@ def check_flat_solver_memory(plan: Plan, intentions: int, budget: int) -> None:
     :func:`~planner.decision.solvers.tables.solver_bytes` with one transition entry per intention and action
     (what Alg. 3's tables hold, the robot's actions moving a few): about ``128 I A`` bytes. Cost: O(1)."""
     A, Z = int(plan.tags.robot.sum()) + 1, len(plan.observations)
-    needed = plan_bytes(plan) + flat_model_bytes(plan, intentions) + 128 * intentions * A + 8 * Z * intentions
+    needed = plan_bytes(plan) + flat_model_bytes(plan, intentions) + \
+        _SOLVER_BYTES_PER_INTENTION_ACTION * intentions * A + 8 * Z * intentions
     _check("the solver on the flat decision model", needed, budget, f"{intentions:,} intentions x {A:,} actions",
            "The solver keeps a few tables of one number per intention and action. The lumped model (--lumped) "
            "solves the same problem over far fewer states.",

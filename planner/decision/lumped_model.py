@@ -49,7 +49,8 @@ from .online import revealed_state_values
 from .pomdp import POMDP
 from .solvers.upper import CornerGroups, RelaxedQ
 
-__all__ = ["LumpedModel", "lumped_model", "lumped_pomdp", "lumped_pomdp_bytes", "class_names", "advance_matrix", "solver_bounds",
+__all__ = ["LumpedModel", "lumped_model", "lumped_pomdp", "lumped_pomdp_bytes", "class_names", "advance_matrix",
+           "solver_bounds",
            "SolverStart", "solver_start",
            "LUMPED_SUFFIX"]
 

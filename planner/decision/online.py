@@ -39,11 +39,11 @@ import numpy as np
 
 from ..defaults import ONLINE_DEPTH, ONLINE_EXPANSIONS
 from ..errors import PlannerError
-from .factored_model import FactoredBelief, FactoredIntentionModel, factored_model_bytes
+from .factored_model import FactoredBelief, FactoredIntentionModel
 from .policy import AlphaVectorPolicy
 
-__all__ = ["ClassValues", "class_values", "class_values_bytes", "online_planner_bytes",
-           "revealed_state_values", "observation_split", "OnlinePlanner", "SearchReport"]
+__all__ = ["ClassValues", "class_values", "revealed_state_values", "VALUE_BLOCK", "observation_split", "OnlinePlanner",
+           "SearchReport"]
 
 
 @dataclass(frozen=True)
@@ -98,24 +98,6 @@ def _level_blocks(model: FactoredIntentionModel, block: int = VALUE_BLOCK):
             end = min(hi, max(end, lo + 1))
             yield lo, end
             lo = end
-
-
-def class_values_bytes(n_classes: int, n_states: int) -> tuple[int, int]:
-    """``(held, peak)``: the bytes the online planner's values hold (:func:`revealed_state_values`: four
-    float64 per class, one per state) and the most they take while computed, on top of the model: the held
-    ones, the class values they start from (one float64 a class is kept) and the temporaries of one block
-    of :data:`VALUE_BLOCK` classes (about 14 float64 each). Measured within 10 % above (chain 16 and 20,
-    complete 9 and 10: tests/decision/test_memory_estimates.py)."""
-    held = 32 * n_classes + 8 * n_states + 16384  # and the arrays' headers, the model's caches
-    return held, held + 8 * n_classes + 16 * n_states + 112 * min(n_classes, VALUE_BLOCK)
-
-
-def online_planner_bytes(n_states: int, n_edges: int) -> int:
-    """The most the factored model and the online planner's values take together, on top of the plan, for
-    ``n_states`` states and ``n_edges`` state edges (:func:`factored_model_bytes`, :func:`class_values_bytes`:
-    the model's peak while built, or the model held and the values' peak). From counts alone."""
-    model_held, model_peak = factored_model_bytes(n_states, n_edges)
-    return max(model_peak, model_held + class_values_bytes(n_edges + 1, n_states)[1])
 
 
 def class_values(model: FactoredIntentionModel) -> ClassValues:

@@ -15,7 +15,8 @@ from planner.assembly.state_count import count_states, count_unconstrained
 from planner.decision import online
 from planner.decision.factored_model import factored_model, factored_model_bytes
 from planner.decision.lumped_model import lumped_pomdp, lumped_pomdp_bytes
-from planner.decision.online import class_values_bytes, revealed_state_values
+from planner.decision.budget import class_values_bytes
+from planner.decision.online import revealed_state_values
 from planner.decision.solvers.tables import Tables, mdp_upper_bound, solver_bytes
 from planner.product.examples import example_path
 from planner.product import load_product

@@ -11,7 +11,8 @@ import scipy.sparse.linalg as spla
 
 from ..pomdp import POMDP
 
-__all__ = ["pomdp_bytes", "solver_bytes", "BLOCK", "SolveStopped", "best_products", "Rows", "Tables", "blind_lower_bound", "mdp_upper_bound", "moving_rows", "fast_informed_bound"]
+__all__ = ["pomdp_bytes", "solver_bytes",
+           "BLOCK", "SolveStopped", "best_products", "Rows", "Tables", "blind_lower_bound", "mdp_upper_bound", "moving_rows", "fast_informed_bound"]
 
 SUCCESSOR_BLOCK = 10_000_000  # numbers of the (actions, observations, states) product built at once, at most
 DENSE_LIMIT = 20_000_000  # A * S * S entries up to which transitions may be kept dense
