@@ -61,6 +61,7 @@ from .decision.budget import (
     check_solver_memory,
     flat_limits,
     lumped_limits,
+    lumped_start_fits,
     online_limits,
 )
 from .decision.lumped_model import LumpedModel, solver_start
@@ -677,15 +678,18 @@ def solve(model: Model, time_limit: float = SOLVE_TIME_LIMIT, precision: float =
         return solve_with_sarsop(tables(model), time_limit, precision)
     if engine != "builtin":
         raise PlannerError(f"unknown solver engine {engine!r}; use one of {', '.join(SOLVER_ENGINES)}")
-    check_solver_memory(tables(model), default_memory_budget() if max_bytes is None else max_bytes,
-                        model.factored.plan if isinstance(model, LumpedModel) else None)
+    budget = default_memory_budget() if max_bytes is None else max_bytes
+    check_solver_memory(tables(model), budget, model.factored.plan if isinstance(model, LumpedModel) else None)
     solver = PointBasedSolver(time_limit=time_limit, precision=precision, max_iterations=iterations,
                               keep_on_interrupt=keep_on_interrupt)
     started, start = solver.clock(), {}  # the time limit counts the bounds' set-up too
     if isinstance(model, LumpedModel):  # relaxed bounds (the state told, or told late) start the upper bound lower
         finite = time_limit is not None and math.isfinite(time_limit)
-        start = solver_start(model, deadline=started + time_limit / 4 if finite else None,
+        groups, points = lumped_start_fits(model.pomdp, model.factored.plan, budget)  # optional: left out past it
+        start = solver_start(model, points=points, deadline=started + time_limit / 4 if finite else None,
                              clock=solver.clock).solve_options
+        if not groups:
+            start["groups"] = None
     return solver.solve(tables(model), progress, started=started, **start)
 
 

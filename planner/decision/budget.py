@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
+
 from ..assembly.guards import OPTIONS, SizeLimits, memory_options
 from ..assembly.plan import Plan
 from ..assembly.states import state_graph_bytes
@@ -26,7 +28,7 @@ from .solvers.tables import pomdp_bytes, solver_bytes
 
 __all__ = ["class_values_bytes", "online_planner_bytes", "plan_bytes", "online_bytes", "lumped_bytes", "online_limits",
            "lumped_limits", "flat_limits", "check_online_memory",
-           "check_lumped_memory", "check_solver_memory", "check_flat_solver_memory"]
+           "check_lumped_memory", "check_solver_memory", "check_flat_solver_memory", "lumped_start_fits"]
 
 _HINT = "Plan with fewer parts (fold or group the fasteners), or one subassembly (one workstation) at a time."
 
@@ -131,11 +133,31 @@ def check_lumped_memory(plan: Plan, budget: int) -> None:
            "neither (aplan simulate/session --planner online).")
 
 
+def _lumped_start_bytes(pomdp: POMDP, plan: Plan) -> tuple[int, int, int]:
+    """What a lumped model's solver start takes besides the solver: the delayed-reveal graph (a row per class
+    and action at least: its relaxed Q-values and rewards, about three (A, classes) float64 tables), the dense
+    beliefs of its corner groups (one per state with two classes or more) and its sawtooth points (a dense
+    belief per graph node, at least one per class, and their distinct copy)."""
+    n, A = pomdp.n_states, pomdp.n_actions
+    groups = int((np.bincount(plan.states.edge_source, minlength=plan.states.n_states) >= 2).sum())
+    return 3 * 8 * A * n, 8 * groups * n, 16 * n * n
+
+
+def lumped_start_fits(pomdp: POMDP, plan: Plan, budget: int) -> tuple[bool, bool]:
+    """Whether the solver's corner groups and the delayed-reveal points of a lumped model fit in ``budget``
+    beside the model, the plan and the solver (:func:`check_solver_memory`): each is an optional tightening
+    of the upper bound, left out when it does not fit (the points first)."""
+    held = pomdp_bytes(pomdp) + plan_bytes(plan) + solver_bytes(pomdp)
+    graph, groups, points = _lumped_start_bytes(pomdp, plan)
+    with_groups = held + graph + groups <= budget
+    return with_groups, with_groups and held + graph + groups + points <= budget
+
+
 def check_solver_memory(pomdp: POMDP, budget: int, plan: Plan | None = None) -> None:
     """Refuse to solve ``pomdp`` when the solver's tables and bounds
     (:func:`~planner.decision.solvers.tables.solver_bytes`), with the model (and ``plan``, the lumped model's)
     held, would not fit in ``budget`` bytes. Cost: O(actions)."""
-    held = pomdp_bytes(pomdp) + (plan_bytes(plan) if plan is not None else 0)
+    held = pomdp_bytes(pomdp) + (plan_bytes(plan) + _lumped_start_bytes(pomdp, plan)[0] if plan is not None else 0)
     lumped = plan is not None
     _check(f"the solver on {pomdp.name or 'the model'}", held + solver_bytes(pomdp), budget,
            f"{pomdp.n_states:,} states x {pomdp.n_actions:,} actions, with the model's {gib(held)}",

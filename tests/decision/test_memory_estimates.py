@@ -101,3 +101,19 @@ def test_constrained_products_are_not_counted():
 
 def test_the_count_stops_at_its_work():
     assert count_unconstrained(liaison_adjacency(complete_product(8)), work=100) is None
+
+
+def test_the_lumped_start_leaves_out_what_does_not_fit():
+    """The corner groups and the delayed-reveal points are optional: left out (points first) past the budget."""
+    from planner.decision.budget import _lumped_start_bytes, lumped_start_fits, plan_bytes
+    from planner.decision.lumped_model import lumped_model
+    from planner.decision.solvers.tables import pomdp_bytes
+
+    model = lumped_model(make_plan(chain_product(7)))
+    plan, pomdp = model.factored.plan, model.pomdp
+    held = pomdp_bytes(pomdp) + plan_bytes(plan) + solver_bytes(pomdp)
+    graph, groups, points = _lumped_start_bytes(pomdp, plan)
+    assert points == 16 * 193 ** 2  # a dense belief per class (193 classes), and their distinct copy
+    assert lumped_start_fits(pomdp, plan, held + graph + groups + points) == (True, True)
+    assert lumped_start_fits(pomdp, plan, held + graph + groups) == (True, False)
+    assert lumped_start_fits(pomdp, plan, held + graph) == (False, False)
