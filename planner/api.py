@@ -679,7 +679,8 @@ def solve(model: Model, time_limit: float = SOLVE_TIME_LIMIT, precision: float =
     if engine != "builtin":
         raise PlannerError(f"unknown solver engine {engine!r}; use one of {', '.join(SOLVER_ENGINES)}")
     budget = default_memory_budget() if max_bytes is None else max_bytes
-    check_solver_memory(tables(model), budget, model.factored.plan if isinstance(model, LumpedModel) else None)
+    check_solver_memory(tables(model), budget, model.factored.plan if isinstance(model, LumpedModel) else None,
+                        isinstance(model, IntentionModel))
     solver = PointBasedSolver(time_limit=time_limit, precision=precision, max_iterations=iterations,
                               keep_on_interrupt=keep_on_interrupt)
     started, start = solver.clock(), {}  # the time limit counts the bounds' set-up too

@@ -153,12 +153,13 @@ def lumped_start_fits(pomdp: POMDP, plan: Plan, budget: int) -> tuple[bool, bool
     return with_groups, with_groups and held + graph + groups + points <= budget
 
 
-def check_solver_memory(pomdp: POMDP, budget: int, plan: Plan | None = None) -> None:
+def check_solver_memory(pomdp: POMDP, budget: int, plan: Plan | None = None, from_product: bool = True) -> None:
     """Refuse to solve ``pomdp`` when the solver's tables and bounds
     (:func:`~planner.decision.solvers.tables.solver_bytes`), with the model (and ``plan``, the lumped model's)
-    held, would not fit in ``budget`` bytes. Cost: O(actions)."""
+    held, would not fit in ``budget`` bytes; ``from_product``: the model is a product's flat model (the lumped
+    one is offered then), not a model file. Cost: O(actions)."""
     held = pomdp_bytes(pomdp) + (plan_bytes(plan) + _lumped_start_bytes(pomdp, plan)[0] if plan is not None else 0)
-    lumped = plan is not None
+    lumped = plan is not None or not from_product  # no lumped model to offer
     _check(f"the solver on {pomdp.name or 'the model'}", held + solver_bytes(pomdp), budget,
            f"{pomdp.n_states:,} states x {pomdp.n_actions:,} actions, with the model's {gib(held)}",
            "The solver keeps a few tables of one number per state and action."
