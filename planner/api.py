@@ -37,7 +37,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from .assembly.explode import ExplodedView, exploded_view, first_sequences, sequence_at
-from .assembly.guards import OPTIONS, SizeLimits, memory_options
+from .assembly.guards import OPTIONS, SizeLimits, default_memory_budget, memory_options
 from .assembly.hierarchy import (
     SUBASSEMBLY_MODES,
     Level,
@@ -53,10 +53,20 @@ from .assembly.stats import STAT_KEYS, PlanStatistics, plan_statistics, statisti
 from .decision.factored_model import FactoredIntentionModel, factored_model
 from .decision.habits import Habits, habit_weights
 from .decision.factored_simulate import FactoredEpisode, evaluate_factored, simulate_factored_episode
-from .decision.intention_model import IntentionModel, Rewards, flat_model_fits, intention_model
+from .decision.intention_model import IntentionModel, Rewards, flat_model_bytes, flat_model_fits, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
 from .decision.io.size import model_file_bytes
+from .decision.budget import (
+    check_flat_solver_memory,
+    check_lumped_memory,
+    check_online_memory,
+    check_solver_memory,
+    flat_limits,
+    lumped_limits,
+    lumped_start_fits,
+    online_limits,
+)
 from .decision.lumped_model import LumpedModel, solver_start
 from .decision.lumped_model import lumped_model as build_lumped_model
 from .decision.online import OnlinePlanner
@@ -480,14 +490,20 @@ def plan_statistics_of(product: str | os.PathLike | Product | Plan, technical: b
 def decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                    rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                    base_part: str | None = None, limits: SizeLimits = SizeLimits(),
-                   habits: Habits | None = None) -> IntentionModel:
+                   habits: Habits | None = None, solving: bool = False) -> IntentionModel:
     """The decision model of Alg. 3 of a product, PRODUCT argument or plan; ``base_part``: only the sequences
     that start from it (``"auto"``: the most connected part, :func:`base_part_of`); refused, with the estimate,
     past ``limits`` (the plan's, and the flat model's memory:
-    :func:`~planner.decision.intention_model.flat_model_bytes`). ``habits``: the operator's habits in place of
-    the uniform choice (:mod:`~planner.decision.habits`; checked to be this product's), None for the paper's."""
-    plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
-    return intention_model(plan, rewards, discount, base_part=base_part_of(plan, base_part), max_bytes=limits.memory,
+    :func:`~planner.decision.intention_model.flat_model_bytes`); with ``solving``, also when the solver would
+    not fit beside it (:func:`~planner.decision.budget.check_flat_solver_memory`), before it is built.
+    ``habits``: the operator's habits in place of the uniform choice (:mod:`~planner.decision.habits`; checked
+    to be this product's), None for the paper's."""
+    plan = product if isinstance(product, Plan) else \
+        _decidable(plan_of(product, technical, flat_limits(limits, solving) if base_part is None else limits))
+    base = base_part_of(plan, base_part)
+    if solving:  # refused before the flat model is built when the solver would not fit beside it
+        check_flat_solver_memory(plan, count_intentions(plan.states, base_part=base), limits.memory)
+    return intention_model(plan, rewards, discount, base_part=base, max_bytes=limits.memory,
                            weights=habit_weights(plan, habits))
 
 
@@ -526,8 +542,11 @@ def choose_planner(plan: Plan, planner: str | None, policy: str | os.PathLike | 
         return "offline", None
     intentions = count_intentions(plan.states, base_part=base_part)
     if not flat_model_fits(plan, limits.memory, limit, intentions):
-        return "online", (f"the flat model would hold {intentions:,} intentions (past the limit of {limit:,} or "
-                          f"the memory budget) and no --policy was given: using the online planner")
+        needed = flat_model_bytes(plan, intentions)
+        passed = (f"about {gib(needed)}, past the memory budget of {gib(limits.memory)}" if needed > limits.memory
+                  else f"past the intention limit of {limit:,}")
+        return "online", (f"the flat model would hold {intentions:,} intentions ({passed}) and no --policy was "
+                          "given: using the online planner")
     return "online", "no --policy: using the online planner"
 
 
@@ -551,11 +570,12 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
     what the policy file may hold (:class:`~planner.validation.InputLimits`); ``habits``: the operator's habits
     in every model (:mod:`~planner.decision.habits`), None for the paper's model.
     """
-    plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
+    plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, online_limits(limits)))
     base_part = base_part_of(plan, base_part)
     weights = habit_weights(plan, habits)
     choice, note = choose_planner(plan, planner, policy, limit, base_part, limits)
     if choice == "online":
+        check_online_memory(plan, limits.memory)
         model = factored_model(plan, rewards, discount, base_part, weights)
         lower = read_policy(policy, limits=inputs) if policy else None
         return model, online_planner(model, decision_time, expansions, lower), note
@@ -569,6 +589,7 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
                               f"intentions (flat) and {classes:,} classes (lumped): the policy belongs to "
                               "another model (check the product, --technical and --base-part)")
         if length == classes and length != intentions:
+            check_online_memory(plan, limits.memory)
             lumped = factored_model(plan, rewards, discount, base_part, weights)
             vectors.check_sizes(lumped.n_classes, len(lumped.actions), str(policy))
             return lumped, vectors, None
@@ -590,7 +611,8 @@ def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | 
     """The decision model of Alg. 3 lumped onto the factored model's classes (state edges and the finished
     product; :mod:`~planner.decision.lumped_model`): the same value as the flat model, far fewer states.
     ``.factored`` filters beliefs over classes, ``.pomdp`` (named ``<product>:lumped``) is what solvers take."""
-    plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
+    plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, lumped_limits(limits)))
+    check_lumped_memory(plan, limits.memory)
     return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits))
 
 
@@ -601,7 +623,8 @@ def _model_file_kind(path: str | os.PathLike) -> str | None:
 
 def load_model(argument: str | os.PathLike | Product, technical: bool | None = None, rewards: Rewards = Rewards(),
                discount: float = DISCOUNT, base_part: str | None = None, limits: SizeLimits = SizeLimits(),
-               lumped: bool = False, inputs: InputLimits = InputLimits(), habits: Habits | None = None) -> Model:
+               lumped: bool = False, inputs: InputLimits = InputLimits(), habits: Habits | None = None,
+               solving: bool = False) -> Model:
     """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`, read within
     ``inputs``: :class:`~planner.validation.InputLimits`), else a PRODUCT
     (its :class:`IntentionModel`, or with ``lumped`` its :class:`LumpedModel`; ``technical``, ``rewards``,
@@ -625,7 +648,7 @@ def load_model(argument: str | os.PathLike | Product, technical: bool | None = N
         return read_cassandra(argument, inputs)
     if lumped:
         return lumped_model(argument, technical, rewards, discount, base_part, limits, habits)
-    return decision_model(argument, technical, rewards, discount, base_part, limits, habits)
+    return decision_model(argument, technical, rewards, discount, base_part, limits, habits, solving)
 
 
 # Reading a model file peaks at about 3 bytes of memory per byte of file (bench/README.md, model files).
@@ -697,25 +720,33 @@ def save_model(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMI
 
 def solve(model: Model, time_limit: float = SOLVE_TIME_LIMIT, precision: float = SOLVE_PRECISION,
           engine: str = "builtin", progress: Callable[[float, float, float], None] | None = None,
-          iterations: int | None = None, keep_on_interrupt: bool = False) -> SolveResult:
+          iterations: int | None = None, keep_on_interrupt: bool = False, max_bytes: int | None = None) -> SolveResult:
     """Solve ``model`` offline: ``engine`` ``builtin`` (:class:`PointBasedSolver`, ``progress(seconds,
     lower, upper)`` after each step) or ``sarsop`` (APPL's ``pomdpsol``, when it is on PATH). The solver
     stops at ``time_limit`` seconds (its set-up included), at a gap of ``precision``, or after ``iterations``
     trials (builtin only: a fixed amount of work gives the same policy on any machine). ``keep_on_interrupt``
-    (builtin only): Ctrl-C or SIGTERM stops it with the policy so far (``SolveResult.interrupted``)."""
+    (builtin only): Ctrl-C or SIGTERM stops it with the policy so far (``SolveResult.interrupted``).
+    ``max_bytes`` (builtin only; default the machine's budget): the memory the model and the solver may take
+    together, estimated before the solver starts (:func:`~planner.decision.solvers.tables.solver_bytes`)."""
     if engine == "sarsop":
         from .decision.solvers.sarsop import solve_with_sarsop
 
         return solve_with_sarsop(tables(model), time_limit, precision)
     if engine != "builtin":
         raise PlannerError(f"unknown solver engine {engine!r}; use one of {', '.join(SOLVER_ENGINES)}")
+    budget = default_memory_budget() if max_bytes is None else max_bytes
+    check_solver_memory(tables(model), budget, model.factored.plan if isinstance(model, LumpedModel) else None,
+                        isinstance(model, IntentionModel))
     solver = PointBasedSolver(time_limit=time_limit, precision=precision, max_iterations=iterations,
                               keep_on_interrupt=keep_on_interrupt)
     started, start = solver.clock(), {}  # the time limit counts the bounds' set-up too
     if isinstance(model, LumpedModel):  # relaxed bounds (the state told, or told late) start the upper bound lower
         finite = time_limit is not None and math.isfinite(time_limit)
-        start = solver_start(model, deadline=started + time_limit / 4 if finite else None,
+        groups, points = lumped_start_fits(model.pomdp, model.factored.plan, budget)  # optional: left out past it
+        start = solver_start(model, points=points, deadline=started + time_limit / 4 if finite else None,
                              clock=solver.clock).solve_options
+        if not groups:
+            start["groups"] = None
     return solver.solve(tables(model), progress, started=started, **start)
 
 

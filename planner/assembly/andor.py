@@ -32,7 +32,7 @@ from .bitsets import bit_indices, components, connected_subsets, lowest_bit, mas
 from .feasibility import interlock_error, interlocked_pairs
 from .guards import OPTIONS, Progress, fewer_parts_hint
 
-__all__ = ["Operation", "AndOrGraph", "and_or_graph", "liaison_adjacency"]
+__all__ = ["Operation", "AndOrGraph", "and_or_graph", "liaison_adjacency", "connected_sets_bound"]
 
 log = logging.getLogger(__name__)
 
@@ -60,6 +60,10 @@ class AndOrGraph:
     subassemblies: tuple[int, ...]
     operations: tuple[Operation, ...]
     index: dict[int, int] = field(repr=False, compare=False)
+    #: every connected part set is a subassembly and every cut of one into two connected halves an operation
+    #: (no constraint removed any): then every partition of the parts into connected sets is an assembly
+    #: state, and :func:`~planner.assembly.state_count.count_states` counts them before they are built.
+    every_cut: bool = field(default=False, compare=False)
 
     def parts_of(self, subassembly: int) -> frozenset[str]:
         """The part ids of subassembly number ``subassembly``."""
@@ -161,6 +165,7 @@ def and_or_graph(product: Product, technical: bool | None = None, limit: int = S
     splits: dict[int, list[tuple[int, int]]] = {1 << i: [] for i in range(n)}
     cuts_left = CUTS_PER_SUBASSEMBLY * limit  # a set's cuts are connected sets too: at most `limit` per set
     progress = Progress(log)
+    every_cut = True  # no kept pair of halves was inseparable (with every set kept: no constraint acted)
     for done, subset in enumerate(connected):
         if done & 0xFFF == 0:
             progress.report("AND/OR graph: %s of %s connected part sets split, %s cuts examined", f"{done:,}",
@@ -172,8 +177,11 @@ def and_or_graph(product: Product, technical: bool | None = None, limit: int = S
         for first in connected_subsets(adjacency, subset, root):
             cuts_left -= 1
             second = subset ^ first
-            if second and first in splits and second in splits and separable(first, second):
-                found.append((first, second))
+            if second and first in splits and second in splits:
+                if separable(first, second):
+                    found.append((first, second))
+                else:
+                    every_cut = False
         if cuts_left < 0:
             raise _too_many(product, "cuts (splits of a connected part set into two connected halves)",
                             CUTS_PER_SUBASSEMBLY * limit - cuts_left, CUTS_PER_SUBASSEMBLY * limit,
@@ -189,7 +197,14 @@ def and_or_graph(product: Product, technical: bool | None = None, limit: int = S
     position = {m: i for i, m in enumerate(subassemblies)}
     operations = tuple(Operation(position[s], (position[a], position[b]))
                        for s in subassemblies for a, b in sorted(splits[s]))
-    return AndOrGraph(parts, subassemblies, operations, position)
+    every_cut = every_cut and len(splits) == len(connected)  # and every connected set was kept
+    return AndOrGraph(parts, subassemblies, operations, position, every_cut)
+
+
+def connected_sets_bound(adjacency: list[int]) -> int:
+    """A lower bound on the connected part sets: ``sum over parts of 2^(its later neighbours)`` (a part with
+    any set of its later neighbours is connected; such sets differ by their lowest part). Cost: O(n)."""
+    return sum(1 << (adjacency[v] >> (v + 1)).bit_count() for v in range(len(adjacency)))
 
 
 def _connected_sets(product: Product, adjacency: list[int], limit: int) -> list[int]:
@@ -198,7 +213,7 @@ def _connected_sets(product: Product, adjacency: list[int], limit: int) -> list[
     A part with any set of its later neighbours is connected, and such sets differ by their lowest part, so
     ``sum over parts of 2^(later neighbours)`` connected sets exist: past the limit, refused before any work.
     """
-    bound = sum(1 << (adjacency[v] >> (v + 1)).bit_count() for v in range(len(adjacency)))
+    bound = connected_sets_bound(adjacency)
     if bound > limit:
         hub = max(range(len(adjacency)), key=lambda v: adjacency[v].bit_count())
         raise _too_many(product, "connected part sets (candidate subassemblies)", bound, limit,

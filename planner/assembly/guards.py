@@ -13,6 +13,7 @@ import logging
 import os
 import re
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from ..defaults import MEMORY_LIMIT, SUBASSEMBLY_LIMIT
@@ -47,10 +48,15 @@ def memory_options(needed: int) -> list[tuple[str, str]]:
 @dataclass(frozen=True)
 class SizeLimits:
     """``subassemblies``: connected part sets the AND/OR build may enumerate (and
-    ``CUTS_PER_SUBASSEMBLY`` times as many cuts); ``memory``: bytes a graph or a model may take."""
+    ``CUTS_PER_SUBASSEMBLY`` times as many cuts); ``memory``: bytes the plan and what a command builds on it
+    may take together; ``reserve(states, edges, actions)``: the bytes the command builds on the plan (its
+    decision model, its planner's values), from the plan's counts, named by ``reserve_for``: the plan is
+    refused as soon as it and they would not fit (None: the plan alone)."""
 
     subassemblies: int = SUBASSEMBLY_LIMIT
     memory: int = field(default_factory=default_memory_budget)
+    reserve: Callable[[int, int, int], int] | None = None
+    reserve_for: str = ""
 
 
 #: Command-line options that help when a limit is passed, by name: ``(option, advice)``.

@@ -6,12 +6,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..product import FastenerGroup, Product, fold
-from .andor import AndOrGraph, and_or_graph
+from .andor import AndOrGraph, and_or_graph, connected_sets_bound, liaison_adjacency
 from .guards import SizeLimits
-from .states import AssemblyStateGraph, assembly_state_graph
+from .state_count import StateCount, count_states, count_unconstrained, is_unconstrained
+from .states import AssemblyStateGraph, assembly_state_graph, check_counted
 from .tags import Observation, OperationTags, fastener_installs, observation_table, operation_tags
 
-__all__ = ["Plan", "make_plan"]
+__all__ = ["Plan", "make_plan", "count_before_andor", "check_before_andor", "guarded_state_graph"]
 
 
 @dataclass(frozen=True)
@@ -52,10 +53,50 @@ def make_plan(product: Product, technical: bool | None = None, limits: SizeLimit
     """
     folding = fold(product.with_technical(technical))
     product, groups = folding.product, folding.groups
+    check_before_andor(product, limits)
     andor = and_or_graph(product, limit=limits.subassemblies)
-    states = assembly_state_graph(andor, limits.memory)
     installs = fastener_installs(andor, groups)
     tags = operation_tags(andor, product, groups, installs)
     observations, operation_observation = observation_table(andor, tags, groups, installs)
+    counted = count_states(andor, liaison_adjacency(product))
+    states = guarded_state_graph(andor, limits, int(tags.robot.sum()) + 1, counted)
     return Plan(product, andor, states, tags, observations, operation_observation, groups, installs,
                 folding.original)
+
+
+def _reserve(limits: SizeLimits, actions: int):
+    return None if limits.reserve is None else (lambda states, edges: limits.reserve(states, edges, actions))
+
+
+def count_before_andor(product: Product, limits: SizeLimits) -> StateCount | None:
+    """The states (exact) and state edges (from below) of an unconstrained product, counted on its connection
+    diagram (:func:`~planner.assembly.state_count.count_unconstrained`) before the AND/OR graph; None for a
+    constrained product, or one whose connected part sets the AND/OR graph refuses at once anyway. Cost: at
+    most :data:`~planner.assembly.state_count.COUNT_WORK` subsets."""
+    if not is_unconstrained(product) or len(product.parts) < 2:
+        return None
+    adjacency = liaison_adjacency(product)
+    if connected_sets_bound(adjacency) > limits.subassemblies:
+        return None
+    return count_unconstrained(adjacency)
+
+
+def check_before_andor(product: Product, limits: SizeLimits, counted: StateCount | None = None) -> None:
+    """Refuse at once, before the AND/OR graph, a product whose counted states (``counted``, by default
+    :func:`count_before_andor`) would not fit in ``limits`` with what the command builds on them (counted
+    with one action: a bound from below)."""
+    counted = count_before_andor(product, limits) if counted is None else counted
+    if counted is not None:
+        check_counted(counted, len(product.parts), limits.memory, _reserve(limits, 1), limits.reserve_for)
+
+
+def guarded_state_graph(andor: AndOrGraph, limits: SizeLimits, actions: int,
+                        counted: StateCount | None) -> AssemblyStateGraph:
+    """The assembly state graph of ``andor`` within ``limits``: refused at once past the budget when its
+    states were counted (``counted``: :func:`~planner.assembly.state_count.count_states`, None where it cannot
+    count), else built level by level with each level guarded; ``actions``: the model's actions, for
+    ``limits.reserve``."""
+    reserve = _reserve(limits, actions)
+    if counted is not None:
+        check_counted(counted, len(andor.parts), limits.memory, reserve, limits.reserve_for)
+    return assembly_state_graph(andor, limits.memory, reserve, limits.reserve_for)

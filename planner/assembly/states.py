@@ -22,6 +22,7 @@ which each operation changes by a constant, so a level costs one sort of its edg
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,7 +32,7 @@ from .andor import AndOrGraph
 from .bitsets import bit_indices
 from .guards import OPTIONS, Progress, default_memory_budget, memory_options
 
-__all__ = ["AssemblyStateGraph", "assembly_state_graph", "state_table_bytes"]
+__all__ = ["AssemblyStateGraph", "assembly_state_graph", "state_table_bytes", "state_graph_bytes", "check_counted"]
 
 log = logging.getLogger(__name__)
 
@@ -147,16 +148,49 @@ def _level_bytes(edges: int, words: int) -> int:
     return edges * (96 + 32 * words)
 
 
-def _refuse(andor: AndOrGraph, needed: int, budget: int, detail: str) -> MemoryLimitError:
-    return MemoryLimitError(
-        "assembly state graph", needed, budget, detail,
-        "Its states are the ways the parts can be partitioned into subassemblies, which grow about as the "
-        "Bell numbers for strongly connected products. Plan with fewer parts (leave fasteners out, or group "
-        "parts that are always assembled together), or plan one subassembly at a time.",
-        memory_options(needed) + [OPTIONS[k] for k in ("exclude", "group")])
+def state_graph_bytes(n_states: int, n_edges: int, n_parts: int) -> int:
+    """The bytes the finished state graph holds: a block per part and state (int32), three int32 per edge.
+    The build holds them twice at its end (the levels and their concatenation)."""
+    return 4 * n_states * n_parts + 12 * n_edges
 
 
-def assembly_state_graph(andor: AndOrGraph, max_bytes: int | None = None) -> AssemblyStateGraph:
+_HINT = ("Its states are the partitions of the parts into subassemblies that the product can be taken apart "
+         "into, and they multiply with every part that can join the others in several ways. Plan with fewer "
+         "parts: fold the fasteners into the operations that install them, leave out or group parts that are "
+         "always assembled together, or plan one subassembly (one workstation) at a time.")
+
+
+def _refuse(needed: int, budget: int, detail: str, what: str = "assembly state graph") -> MemoryLimitError:
+    return MemoryLimitError(what, needed, budget, detail, _HINT,
+                            memory_options(needed) + [OPTIONS[k] for k in ("fasteners", "exclude", "group")])
+
+
+def check_counted(count, n_parts: int, max_bytes: int, reserve: Callable[[int, int], int] | None = None,
+                  reserve_for: str = "") -> None:
+    """Refuse at once (:class:`~planner.errors.MemoryLimitError`) a state graph whose counted states and edges
+    (a :class:`~planner.assembly.state_count.StateCount`: edges exact or from below) would not fit in
+    ``max_bytes``: the build's end holds :func:`state_graph_bytes` twice; ``reserve(states, edges)``: the
+    bytes the command builds on the plan afterwards (``reserve_for`` names it), with the plan held."""
+    held = state_graph_bytes(count.states, count.edges, n_parts)
+    after = reserve(count.states, count.edges) if reserve is not None else 0
+    needed = max(2 * held, held + after)
+    if needed <= max_bytes:
+        return
+    edges = f"{count.edges:,}" if count.exact else f"at least {count.edges:,}"
+    detail = (f"{count.states:,} states and {edges} state edges over {n_parts} parts, counted before "
+              "building: with no constraint between them every partition of the parts into connected sets is "
+              "a state")
+    if 2 * held >= held + after:
+        raise _refuse(needed, max_bytes, detail)
+    raise MemoryLimitError(f"the plan and {reserve_for}", needed, max_bytes, detail + f"; the plan alone "
+                           f"{gib(held)}", "What is built on the plan grows with its state edges (and, for a "
+                           "model over actions, with the robot's actions). " + _HINT.split(". ", 1)[1],
+                           memory_options(needed) + [OPTIONS[k] for k in ("fasteners", "exclude", "group")])
+
+
+def assembly_state_graph(andor: AndOrGraph, max_bytes: int | None = None,
+                         reserve: Callable[[int, int], int] | None = None, reserve_for: str = ""
+                         ) -> AssemblyStateGraph:
     """Build the assembly state graph of ``andor`` (Alg. 1), with the map from edges to operations.
 
     ``max_bytes``: the memory budget (default :func:`~planner.assembly.guards.default_memory_budget`). The
@@ -164,6 +198,9 @@ def assembly_state_graph(andor: AndOrGraph, max_bytes: int | None = None) -> Ass
     counted first, its new states after deduplication); when the estimate passes the budget it raises
     :class:`~planner.errors.MemoryLimitError` with the states and edges built so far, having used at most
     the budget. Estimates are within about 20 % of the measured peak (complete 10 and 11, chain 16).
+    ``reserve(states, edges)``: bytes the command builds on the plan afterwards (``reserve_for`` names it,
+    e.g. the factored model), counted from the states and edges so far, so that the plan stops where what
+    comes after would not fit either.
 
     Cost: O(E log E + S n) time and O(E + S n) memory for S states and E state edges over n parts (each
     level is built with vectorised splits and deduplicated with one sort of its edges' keys).
@@ -172,7 +209,7 @@ def assembly_state_graph(andor: AndOrGraph, max_bytes: int | None = None) -> Ass
     max_bytes = default_memory_budget() if max_bytes is None else max_bytes
     tables = state_table_bytes(n, len(andor.subassemblies), len(andor.operations))
     if tables > max_bytes:
-        raise _refuse(andor, tables, max_bytes, f"tables of {len(andor.operations):,} operations over {n} parts, "
+        raise _refuse(tables, max_bytes, f"tables of {len(andor.operations):,} operations over {n} parts, "
                                                 "before any state")
     member, lowest, first, second, op_start, op_count = _subassembly_tables(andor)
     parts = np.arange(n)
@@ -202,11 +239,14 @@ def assembly_state_graph(andor: AndOrGraph, max_bytes: int | None = None) -> Ass
         if total == 0:
             break
         # Refused before the level's arrays exist: its temporaries, or the final concatenation, would not fit.
-        needed = tables + max(held + _level_bytes(total, words), 2 * (held + 12 * total))
+        edges_so_far = sum(map(len, sources)) + total
+        after = reserve(offset + rows.shape[0], edges_so_far) if reserve is not None else 0
+        needed = tables + max(held + _level_bytes(total, words), 2 * (held + 12 * total), held + 12 * total + after)
         if needed > max_bytes:
-            raise _refuse(andor, needed, max_bytes, f"{offset + rows.shape[0]:,} states and "
+            raise _refuse(needed, max_bytes, f"{offset + rows.shape[0]:,} states and "
                           f"{sum(map(len, sources)):,} state edges with at most {level} subassemblies, and "
-                          f"{total:,} more edges to states of {level + 1}")
+                          f"{total:,} more edges to states of {level + 1}",
+                          "assembly state graph" + (f" and {reserve_for}" if after else ""))
         split_of = np.repeat(state, count)
         ends = np.cumsum(count)
         operation = np.repeat(op_start[block] - ends + count, count) + np.arange(total)
@@ -215,7 +255,7 @@ def assembly_state_graph(andor: AndOrGraph, max_bytes: int | None = None) -> Ass
         new_rows = 4 * n * first_row.shape[0]  # int32 per part; _split makes two temporaries of that size
         needed = tables + max(held + 12 * total + 3 * new_rows, 2 * (held + 12 * total + new_rows))
         if needed > max_bytes:
-            raise _refuse(andor, needed, max_bytes, f"{offset + levels[-1].shape[0]:,} states with at most "
+            raise _refuse(needed, max_bytes, f"{offset + levels[-1].shape[0]:,} states with at most "
                           f"{level} subassemblies, and {first_row.shape[0]:,} more states of {level + 1} "
                           f"subassemblies with {total:,} edges")
         keys = new_keys[first_row]

@@ -6,11 +6,11 @@ from dataclasses import dataclass, field
 
 from ..errors import LimitExceededError, PlannerError
 from ..product import FastenerGroup, Product, fold
-from .andor import and_or_graph
+from .andor import and_or_graph, liaison_adjacency
 from .guards import SizeLimits
 from .intentions import count_intentions, count_sequences, paths_to_final
-from .plan import Plan
-from .states import assembly_state_graph
+from .plan import Plan, check_before_andor, count_before_andor, guarded_state_graph
+from .state_count import count_states
 from .tags import fastener_installs, observation_table, operation_tags
 
 __all__ = ["STAT_KEYS", "PlanStatistics", "plan_statistics", "statistics_within"]
@@ -109,13 +109,20 @@ def statistics_within(product: Product, technical: bool | None = None, base_part
     n = len(product.parts)
     figures = {"parts": n, "contacts": len(product.contacts), "complexity": round(2 * len(product.contacts) / n, 2)}
     try:
+        early = count_before_andor(product, limits)
+        if early is not None:  # its states are counted exactly: printed even when refused
+            figures.update(states=early.states)
+            check_before_andor(product, limits, early)
         andor = and_or_graph(product, limit=limits.subassemblies)
         installs = fastener_installs(andor, groups)
         tags = operation_tags(andor, product, groups, installs)
         observations, operation_observation = observation_table(andor, tags, groups, installs)
         figures.update(subassemblies=len(andor.subassemblies), operations=len(andor.operations),
                        actions=int(tags.robot.sum()) + 1, observations=len(observations))
-        states = assembly_state_graph(andor, limits.memory)
+        counted = count_states(andor, liaison_adjacency(product))
+        if counted is not None:  # exact: printed even when the graph itself is refused
+            figures.update(states=counted.states, state_edges=counted.edges)
+        states = guarded_state_graph(andor, limits, figures["actions"], counted)
     except LimitExceededError as refused:
         return None, PlanStatistics(**{key: figures.get(key) for key in STAT_KEYS}, base_part=base_part,
                                     refused=refused, fasteners=groups)

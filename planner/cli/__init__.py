@@ -75,6 +75,15 @@ def _restore_logging(handler: logging.Handler) -> None:
         logger.propagate = True
 
 
+def _named(error: PlannerError, args, text: str) -> str:
+    """``text`` (the error as printed) of a refusal past a size limit with the PRODUCT (or MODEL) it concerns
+    first, unless it names it already."""
+    argument = getattr(args, "model", None) or getattr(args, "product", None)
+    if isinstance(error, LimitExceededError) and isinstance(argument, str) and argument not in text:
+        return f"{argument}: {text}"
+    return text
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     # Undone at the end: main() also runs inside tests and other programs.
@@ -84,7 +93,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             check_outputs(args)  # the overwrite rule and writable folders, before any work
             return args.run(args)
     except PlannerError as exc:
-        print(f"aplan: error: {explain(exc, args)}", file=sys.stderr)
+        text = explain(exc, args)
+        print(f"aplan: error: {_named(exc, args, text)}", file=sys.stderr)
         return 2 if isinstance(exc, UsageError) else 1
     except BrokenPipeError:  # e.g. `aplan intentions pen | head`
         return 0

@@ -66,7 +66,7 @@ def levels_from(args: argparse.Namespace) -> list:
     return [(level, api.level_product(product, "designer", level)) for level in ids]
 
 
-def model_from(args: argparse.Namespace, product_only: bool = False):
+def model_from(args: argparse.Namespace, product_only: bool = False, solving: bool = False):
     """The model of ``args.model`` (or ``args.product``): a PRODUCT's decision model, or a model file."""
     raw = getattr(args, "model", None) or args.product
     argument = raw if product_only and str(raw).lower().endswith(api.MODEL_SUFFIXES) else product_argument(args)
@@ -79,7 +79,7 @@ def model_from(args: argparse.Namespace, product_only: bool = False):
                                   args.base_part, limits_from(args), habits_from(args))
     return api.load_model(product_from(args, argument), args.technical, rewards_from(args), args.discount,
                           args.base_part, limits_from(args), getattr(args, "lumped", False), inputs_from(args),
-                          habits_from(args))
+                          habits_from(args), solving)
 
 
 def policy_from(args: argparse.Namespace, model):
@@ -122,7 +122,7 @@ def _solve(args: argparse.Namespace) -> int:
     # --time-limit covers the solver (its set-up included); reading or building the model before it and
     # writing the policy after it come on top and are reported apart (bench/README.md: the time limit).
     began = time.perf_counter()
-    model = model_from(args)
+    model = model_from(args, solving=args.engine == "builtin")
     built = time.perf_counter() - began
     show = not args.json and not args.quiet and args.engine == "builtin"
 
@@ -131,7 +131,7 @@ def _solve(args: argparse.Namespace) -> int:
               end="", file=sys.stderr, flush=True)
 
     result = api.solve(model, args.time_limit, args.precision, args.engine, progress if show else None,
-                       keep_on_interrupt=True)
+                       keep_on_interrupt=True, max_bytes=limits_from(args).memory)
     if show:
         print(file=sys.stderr)
     began = time.perf_counter()

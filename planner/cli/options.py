@@ -413,6 +413,16 @@ def offer_options(parser: argparse.ArgumentParser, commands) -> None:
 _ELSEWHERE = ("--exclude", "--group", "--planner")
 
 
+_CAD_ONLY = ("--exclude", "--group")
+_CAD_SUFFIXES = (".fcstd", ".step", ".stp")
+
+
+def _reads_cad(args: argparse.Namespace) -> bool:
+    """Whether the command's PRODUCT (or MODEL) is a CAD model (a FreeCAD document or STEP file), or unknown."""
+    argument = getattr(args, "model", None) or getattr(args, "product", None)
+    return argument is None or str(argument).lower().endswith(_CAD_SUFFIXES)
+
+
 def advice(error: LimitExceededError, args: argparse.Namespace) -> str:
     """The options of ``error`` that help, as one sentence: those of this command, then those of other
     commands that do the job another way (``--planner online`` in simulate, ...), with their command."""
@@ -420,6 +430,8 @@ def advice(error: LimitExceededError, args: argparse.Namespace) -> str:
     here = offered.get(getattr(args, "command", None), frozenset())
     found = []
     for option, text in error.options:
+        if option in _CAD_ONLY and not _reads_cad(args):  # they choose a CAD model's parts: nothing else has any
+            continue
         if option in here:
             found.append(text)
         elif option in _ELSEWHERE:

@@ -11,14 +11,14 @@ from dataclasses import replace
 from pathlib import Path
 
 from .. import api
-from ..assembly.guards import SizeLimits
+from ..assembly.guards import SizeLimits, default_memory_budget
 from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, intention_graph
 from ..assembly.stats import STAT_KEYS, PlanStatistics
 from ..defaults import SUBASSEMBLY_LIMIT
-from ..errors import PlannerError
+from ..errors import MemoryLimitError, PlannerError
 from ..files import write_atomic
 from ..product import product_to_dict, save_product
-from ..product.synthetic import SYNTHETIC
+from ..product.synthetic import SYNTHETIC, synthetic_bytes, synthetic_contacts
 from .geometry import contact_choice
 from .options import (
     PRODUCT_HELP,
@@ -277,6 +277,11 @@ def _group_json(group) -> dict:
 
 
 def _synth(args: argparse.Namespace) -> int:
+    needed, budget = synthetic_bytes(args.kind, args.parts), default_memory_budget()
+    if needed > budget:  # refused before any part is made
+        raise MemoryLimitError(f"aplan synth {args.kind} {args.parts}", needed, budget,
+                               f"{synthetic_contacts(args.kind, args.parts):,} contacts",
+                               "Choose a smaller N (the planner refuses far smaller products anyway).")
     text = json.dumps(product_to_dict(SYNTHETIC[args.kind](args.parts)), indent=1) + "\n"
     if args.output:
         write_atomic(args.output, text)

@@ -42,7 +42,8 @@ from ..errors import PlannerError
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .policy import AlphaVectorPolicy
 
-__all__ = ["ClassValues", "class_values", "revealed_state_values", "observation_split", "OnlinePlanner", "SearchReport"]
+__all__ = ["ClassValues", "class_values", "revealed_state_values", "VALUE_BLOCK", "observation_split", "OnlinePlanner",
+           "SearchReport"]
 
 
 @dataclass(frozen=True)
@@ -78,6 +79,27 @@ class ClassValues:
         return out
 
 
+VALUE_BLOCK = 1_000_000  # classes per block of the backward passes: bounds their temporaries (about 100 MB)
+
+
+def _level_blocks(model: FactoredIntentionModel, block: int = VALUE_BLOCK):
+    """Ranges ``[lo, hi)`` of states, level by level from the one next to the final state, each inside one
+    level and with at most ``block`` classes (a state with more is a range alone). A level's states depend
+    only on earlier levels, so the backward passes give the same values over any split of a level, and
+    their temporaries stay within a block's size."""
+    level_start = model.plan.states.level_start
+    start = model.state_class_start
+    for k in range(1, len(level_start) - 1):
+        lo, hi = int(level_start[k]), int(level_start[k + 1])
+        if lo >= hi:
+            return
+        while lo < hi:
+            end = int(np.searchsorted(start, start[lo] + block, side="right")) - 1  # the most that fit
+            end = min(hi, max(end, lo + 1))
+            yield lo, end
+            lo = end
+
+
 def class_values(model: FactoredIntentionModel) -> ClassValues:
     """QMDP on the classes, by one backward pass over the assembly states (fewest blocks first).
 
@@ -105,11 +127,7 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
     fc = model.final_class
     value[fc], wait[fc], wrong[fc] = final_value, r.wait + g * final_value, r.wrong + g * final_value
     match[fc] = -np.inf
-    level_start = model.plan.states.level_start
-    for k in range(1, len(level_start) - 1):  # states with k + 1 blocks: their targets are done already
-        lo, hi = int(level_start[k]), int(level_start[k + 1])
-        if lo >= hi:
-            break
+    for lo, hi in _level_blocks(model):  # states with k + 1 blocks: their targets are done already
         classes = model.state_classes[model.state_class_start[lo]:model.state_class_start[hi]]
         target, source = model.class_target[classes], model.class_source[classes]
         w, w2 = arrive[target], later[target]
@@ -145,7 +163,8 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
     ``Q_wrong(c) = R_wrong + g V(c)``, ``V(c)`` the largest (self-loops in closed form). One backward pass over
     the assembly states: O(S + E).
     """
-    known = known if known is not None else class_values(model)
+    # Only the class values of ``known`` are read: its other tables are dropped at once (24 bytes a class less).
+    known_value = (known if known is not None else class_values(model)).value
     g, r = model.discount, model.rewards
     n, S = model.n_classes, len(model.paths)
     has_robot = len(model.action_operations) > 1
@@ -157,17 +176,13 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
     value, wait, match, wrong = (np.empty(n) for _ in range(4))
     fc = model.final_class
     value[fc], wait[fc], wrong[fc], match[fc] = final_value, r.wait + g * final_value, r.wrong + g * final_value, -np.inf
-    level_start = model.plan.states.level_start
-    for k in range(1, len(level_start) - 1):
-        lo, hi = int(level_start[k]), int(level_start[k + 1])
-        if lo >= hi:
-            break
+    for lo, hi in _level_blocks(model):
         classes = model.state_classes[model.state_class_start[lo]:model.state_class_start[hi]]
         target, source, f = model.class_target[classes], model.class_source[classes] - lo, model.class_fraction[classes]
         can = model.class_action[classes] >= 0
         m = np.where(can, model.class_match_reward[classes] + g * (revealed[target] + arrive[target]) / 2, -np.inf)
         arrive[lo:hi] = np.bincount(source, weights=f * revealed[target], minlength=hi - lo)
-        others = np.bincount(source, weights=f * known.value[classes], minlength=hi - lo)[source] - f * known.value[classes]
+        others = np.bincount(source, weights=f * known_value[classes], minlength=hi - lo)[source] - f * known_value[classes]
         rest = 1 - f
         tried = np.where(rest > 1e-12, f * m + rest * r.wrong + g * others, m)  # others already carries the weights
         tried = np.where(can, tried, -np.inf)

@@ -14,7 +14,8 @@ from __future__ import annotations
 from ..errors import PlannerError
 from .model import Part, Product
 
-__all__ = ["chain_product", "complete_product", "fastened_product", "SYNTHETIC"]
+__all__ = ["chain_product", "complete_product", "fastened_product", "SYNTHETIC", "synthetic_contacts",
+           "synthetic_bytes"]
 
 
 def _parts(n: int) -> tuple[Part, ...]:
@@ -53,3 +54,15 @@ def fastened_product(parts: int, screws: int) -> Product:
 
 
 SYNTHETIC = {"chain": chain_product, "complete": complete_product}
+
+
+def synthetic_contacts(kind: str, n: int) -> int:
+    """The contacts of the synthetic product ``kind`` of ``n`` parts: ``n - 1`` (chain), ``n (n - 1) / 2``
+    (complete)."""
+    return n - 1 if kind == "chain" else n * (n - 1) // 2
+
+
+def synthetic_bytes(kind: str, n: int) -> int:
+    """The most memory writing the synthetic product takes (its objects and their JSON text): about 400 bytes a
+    contact and 1,000 a part (measured 391 a contact on complete 300)."""
+    return 400 * synthetic_contacts(kind, n) + 1000 * n

@@ -78,7 +78,7 @@ def test_state_graph_memory_budget():
                                                "budget of 0.1 MiB") as info:
         assembly_state_graph(andor, max_bytes=100_000)
     assert info.value.count > info.value.limit == 100_000
-    assert [option for option, _ in info.value.options] == ["--max-memory", "--exclude", "--group"]
+    assert [option for option, _ in info.value.options] == ["--max-memory", "--fasteners", "--exclude", "--group"]
     # Refused within a level: the states built so far are named.
     with pytest.raises(MemoryLimitError, match=r"\d states"):
         assembly_state_graph(andor, max_bytes=400_000)
@@ -92,8 +92,10 @@ def test_statistics_within_limits():
     assert full.refused is None and full == plan_statistics(make_plan(product))
     plan, partial = statistics_within(product, limits=SizeLimits(memory=2 ** 20))
     assert plan is None and isinstance(partial.refused, MemoryLimitError)
-    assert (partial.parts, partial.contacts, partial.subassemblies, partial.operations) == (9, 36, 511, 9330)
-    assert partial.not_computed == ("states", "state_edges", "intentions", "sequences")
+    # Refused before the AND/OR graph: no constraint, so its states (Bell(9)) are counted on the diagram.
+    assert (partial.parts, partial.contacts, partial.states, partial.subassemblies) == (9, 36, 21147, None)
+    assert partial.not_computed == ("subassemblies", "operations", "actions", "state_edges", "intentions",
+                                    "observations", "sequences")
     _, early = statistics_within(fastened_product(2, 30), limits=SizeLimits(subassemblies=100))
     assert early.not_computed == ("subassemblies", "operations", "actions", "states", "state_edges",
                                   "intentions", "observations", "sequences")

@@ -417,3 +417,28 @@ def test_random_damage_is_named_or_harmless(tmp_path):
         assert all(d.name and d.problem for d in found)
 
     damage()
+
+
+# Issue 22: under an address-space limit of 5 GiB (a machine with little memory), each command that would pass
+# the memory budget is refused at once with its estimate: no MemoryError traceback, nothing written.
+ADDRESS_SPACE_CASES = {
+    "simulate complete 12": (["simulate", "{product}", "--sequence", "0"], "online planner"),
+    "pomdp --lumped complete 12": (["pomdp", "{product}", "--lumped", "-o", "m.pomdpx"], "lumped model"),
+}
+
+
+@pytest.mark.parametrize("name", list(ADDRESS_SPACE_CASES))
+def test_refused_under_an_address_space_limit(name, tmp_path, capsys):
+    import resource
+
+    product = tmp_path / "complete12.json"
+    assert _run(capsys, ["synth", "complete", "12", "-o", str(product)])[0] == 0
+    arguments, expected = ADDRESS_SPACE_CASES[name]
+    before = _tree(tmp_path)
+    limit = 5 * 2 ** 30
+    done = subprocess.run([sys.executable, "-m", "planner", *[a.format(product=product) for a in arguments]],
+                          capture_output=True, text=True, cwd=tmp_path, timeout=600,
+                          preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (limit, limit)))
+    _assert_clean_failure(done.returncode, done.stderr, expected)
+    assert "complete12.json" in done.stderr and "memory budget" in done.stderr
+    assert _tree(tmp_path) == before, "a file was left behind"

@@ -141,6 +141,12 @@ def _chain(parts: int):
     return make
 
 
+def _synth(kind: str, parts: int):
+    def make(work: Path) -> None:
+        assert aplan("synth", kind, parts, "-o", f"{kind}{parts}.json")[0] == 0
+    return make
+
+
 def _pomdpx_declaring(states: int, transition: str = "uniform"):
     """A POMDPX declaring ``states`` states whose transition spreads one ``transition`` over all of them."""
     def make(work: Path) -> None:
@@ -326,6 +332,23 @@ CASES = [
     ("8 output folder missing", None, ["pomdp", "pen", "-o", "nodir/m.pomdpx"], 1, ["nodir", "create the folder"]),
     ("8 markers folder missing", None, ["markers", "pen", "-o", "nodir/s.pdf"], 1, ["nodir", "create the folder"]),
     ("8 output is a folder", _write("folder/x", "x"), ["synth", "chain", "3", "-o", "folder"], 1, ["folder"]),
+    # issue 22: the memory budget on every path, refused at once (the states counted before they are built)
+    ("22 simulate chain 23 online", _synth("chain", 23), ["simulate", "chain23.json", "--random", "5",
+                                                          "--max-memory", "4"], 1,
+     ["chain23.json", "online planner", "4,194,304 states", "memory budget of 4.0 GiB", "--fasteners"]),
+    ("22 simulate chain 30", _synth("chain", 30), ["simulate", "chain30.json", "--sequence", "0", "--max-memory", "4"],
+     1, ["chain30.json", "online planner", "536,870,912 states"]),
+    ("22 session complete 13", _synth("complete", 13), ["session", "complete13.json", "--demo", "0", "--log",
+                                                        "s.jsonl", "--max-memory", "4"], 1,
+     ["complete13.json", "27,644,437 states", "memory budget"]),
+    ("22 pomdp --lumped complete 12", _synth("complete", 12), ["pomdp", "complete12.json", "--lumped", "-o",
+                                                               "m.pomdpx", "--max-memory", "4"], 1,
+     ["complete12.json", "lumped model", "4,213,597 states"]),
+    ("22 solve the flat complete 7", _synth("complete", 7), ["solve", "complete7.json", "-o", "p.policy",
+                                                             "--max-memory", "4"], 1,
+     ["complete7.json", "solver", "145,867 intentions", "--lumped"]),
+    ("22 synth complete 30000", None, ["synth", "complete", "30000", "-o", "c.json"], 1,
+     ["synth complete 30000", "449,985,000 contacts", "smaller N"]),
 ]
 
 

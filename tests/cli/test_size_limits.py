@@ -39,7 +39,8 @@ def test_stats_of_an_exploding_product(capsys, screwed):
     reason = data["not_computed"]["reason"]
     assert "AND/OR graph: at least 3,298,534,883,368 connected part sets" in reason
     assert "40 part(s) look like fasteners by name (screw_01, screw_02" in reason
-    assert "--max-subassemblies N raises" in reason and "--exclude LABEL leaves a part (a fastener) out of a CAD model" in reason
+    assert "--max-subassemblies N raises" in reason
+    assert "--exclude" not in reason and "--group" not in reason  # CAD options: the product is a JSON file
 
     code, out, _ = run(capsys, "stats", screwed)
     assert code == 3
@@ -49,17 +50,19 @@ def test_stats_of_an_exploding_product(capsys, screwed):
 
 
 def test_stats_within_the_memory_budget(capsys, tmp_path):
-    """Complete 9 with a 1 MiB budget: the AND/OR graph's figures (closed forms), not the state graph's."""
+    """Complete 9 with a 1 MiB budget: refused before the AND/OR graph, its states counted on the connection
+    diagram (Bell(9): no constraint, so every partition into connected sets is a state)."""
     path = tmp_path / "complete9.json"
     assert run(capsys, "synth", "complete", "9", "-o", str(path))[0] == 0
     code, out, _ = run(capsys, "stats", str(path), "--json", "--max-memory", str(1 / 1024))
     data = json.loads(out)
     assert code == 3
-    assert (data["subassemblies"], data["operations"], data["observations"]) == (2 ** 9 - 1, (3 ** 9 + 1) // 2 - 2 ** 9,
-                                                                                  1 + 9 + 36)
-    assert data["not_computed"]["figures"] == ["states", "state_edges", "intentions", "sequences"]
-    assert "assembly state graph would need about" in data["not_computed"]["reason"]
-    assert "--max-memory GIB raises the memory budget" in data["not_computed"]["reason"]
+    assert data["states"] == 21147 and data["subassemblies"] is None
+    assert data["not_computed"]["figures"] == ["subassemblies", "operations", "actions", "state_edges",
+                                               "intentions", "observations", "sequences"]
+    reason = data["not_computed"]["reason"]
+    assert "assembly state graph would need about" in reason and "21,147 states and at least" in reason
+    assert "--max-memory GIB raises the memory budget" in reason and "Bell" not in reason
     code, out, _ = run(capsys, "stats", str(path), "--json")
     assert code == 0 and json.loads(out)["states"] == 21147  # Bell(9)
 
@@ -105,3 +108,17 @@ def test_pomdp_file_budget(capsys, tmp_path):
     code, _, err = run(capsys, "pomdp", str(product), "-o", str(target), "--max-file", str(1 / 1024))
     assert code == 1 and "chain7.pomdpx would take about 10." in err and "--max-file GIB" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["chain7.json"]
+
+
+def test_the_online_note_names_the_limit_passed():
+    """Chain 10: 986,410 intentions, under the intention limit; it is the flat model's memory that is passed."""
+    from planner import api
+    from planner.assembly import make_plan
+    from planner.assembly.guards import SizeLimits
+    from planner.product.synthetic import chain_product
+
+    plan = make_plan(chain_product(10))
+    _, note = api.choose_planner(plan, None, None, limits=SizeLimits(memory=4 * 2 ** 30))
+    assert "986,410 intentions" in note and "past the memory budget of 4.0 GiB" in note and "1,000,000" not in note
+    _, note = api.choose_planner(plan, None, None, limit=1000, limits=SizeLimits(memory=2 ** 50))
+    assert "past the intention limit of 1,000" in note and "memory" not in note

@@ -1,0 +1,119 @@
+"""The memory estimators against what the structures take (tracemalloc, which numpy reports to), and the
+state counts against the state graphs built: each estimate is at least the measured peak and within the
+stated factor of it. No clock."""
+from __future__ import annotations
+
+import gc
+import tracemalloc
+
+import numpy as np
+import pytest
+
+from planner.assembly import make_plan
+from planner.assembly.andor import and_or_graph, liaison_adjacency
+from planner.assembly.state_count import count_states, count_unconstrained
+from planner.decision import online
+from planner.decision.factored_model import factored_model, factored_model_bytes
+from planner.decision.lumped_model import lumped_pomdp, lumped_pomdp_bytes
+from planner.decision.budget import class_values_bytes
+from planner.decision.online import revealed_state_values
+from planner.decision.solvers.tables import Tables, mdp_upper_bound, solver_bytes
+from planner.product.examples import example_path
+from planner.product import load_product
+from planner.product.synthetic import chain_product, complete_product
+
+
+def _peak(build):
+    """(the result of ``build()``, bytes it still holds, the most it took above what was held before)."""
+    gc.collect()
+    tracemalloc.start()
+    try:
+        before = tracemalloc.get_traced_memory()[0]
+        tracemalloc.reset_peak()
+        result = build()
+        held, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    return result, held - before, peak - before
+
+
+PRODUCTS = [chain_product(11), complete_product(7)]
+
+
+@pytest.mark.parametrize("product", PRODUCTS, ids=["chain11", "complete7"])
+def test_factored_model_and_values_estimates(product):
+    plan = make_plan(product)
+    S, E = plan.states.n_states, plan.states.n_edges
+    model, held, peak = _peak(lambda: factored_model(plan))
+    held_estimate, peak_estimate = factored_model_bytes(S, E)
+    assert held <= held_estimate <= 2 * held
+    assert peak <= peak_estimate <= 2 * peak
+    values, held, peak = _peak(lambda: revealed_state_values(model))
+    held_estimate, peak_estimate = class_values_bytes(model.n_classes, S)
+    assert held <= held_estimate <= 1.5 * held
+    # The block temporaries are budgeted at a full block's size: small models take far less than that.
+    assert peak <= peak_estimate
+
+
+def test_lumped_and_solver_estimates():
+    plan = make_plan(chain_product(7))
+    model = factored_model(plan)
+    pomdp, held, peak = _peak(lambda: lumped_pomdp(model))
+    estimate = lumped_pomdp_bytes(model.n_classes, len(model.action_operations))
+    assert peak <= estimate <= 3 * peak
+    (tables, bound), _, peak = _peak(lambda: (lambda m: (m, mdp_upper_bound(m, max_sweeps=2)))(Tables(pomdp)))
+    assert peak <= solver_bytes(pomdp) <= 4 * peak
+
+
+def test_values_in_blocks_are_the_same(monkeypatch):
+    """The backward passes split a level into blocks of states: any split gives the same values."""
+    model = factored_model(make_plan(complete_product(6)))
+    whole = revealed_state_values(model)
+    monkeypatch.setattr(online, "VALUE_BLOCK", 7)
+    monkeypatch.setattr(online._level_blocks, "__defaults__", (7,))
+    assert len(list(online._level_blocks(model))) > len(model.plan.states.level_start)  # split indeed
+    split = revealed_state_values(model)
+    for a, b in zip((whole.value, whole.wait, whole.match, whole.wrong, whole.state),
+                    (split.value, split.wait, split.match, split.wrong, split.state)):
+        assert np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("product", [chain_product(9), complete_product(6), chain_product(2)],
+                         ids=["chain9", "complete6", "chain2"])
+def test_states_counted_before_they_are_built(product):
+    """No constraint: the partitions into connected sets are the states (exactly: Bell(6) = 203, 2^8 = 256)."""
+    andor = and_or_graph(product)
+    assert andor.every_cut
+    plan = make_plan(product)
+    counted = count_states(andor, liaison_adjacency(product))
+    assert (counted.states, counted.edges) == (plan.states.n_states, plan.states.n_edges)
+    early = count_unconstrained(liaison_adjacency(product))
+    assert early.states == plan.states.n_states and early.edges <= plan.states.n_edges and not early.exact
+
+
+def test_constrained_products_are_not_counted():
+    """The pen's obstructions remove cuts: its partitions into subassemblies only bound its states, so none
+    is claimed."""
+    pen = load_product(example_path("pen"))
+    andor = and_or_graph(pen)
+    assert not andor.every_cut and count_states(andor, liaison_adjacency(pen)) is None
+
+
+def test_the_count_stops_at_its_work():
+    assert count_unconstrained(liaison_adjacency(complete_product(8)), work=100) is None
+
+
+def test_the_lumped_start_leaves_out_what_does_not_fit():
+    """The corner groups and the delayed-reveal points are optional: left out (points first) past the budget."""
+    from planner.decision.budget import _lumped_start_bytes, lumped_start_fits, plan_bytes
+    from planner.decision.lumped_model import lumped_model
+    from planner.decision.solvers.tables import pomdp_bytes
+
+    model = lumped_model(make_plan(chain_product(7)))
+    plan, pomdp = model.factored.plan, model.pomdp
+    held = pomdp_bytes(pomdp) + plan_bytes(plan) + solver_bytes(pomdp)
+    graph, groups, points = _lumped_start_bytes(pomdp, plan)
+    assert points == 16 * 193 ** 2  # a dense belief per class (193 classes), and their distinct copy
+    assert lumped_start_fits(pomdp, plan, held + graph + groups + points) == (True, True)
+    assert lumped_start_fits(pomdp, plan, held + graph + groups) == (True, False)
+    assert lumped_start_fits(pomdp, plan, held + graph) == (False, False)
