@@ -23,7 +23,7 @@ import signal
 import sys
 from typing import Sequence
 
-from ..errors import PlannerError, UsageError
+from ..errors import LimitExceededError, PlannerError, UsageError
 from ..interrupts import exit_status, signal_number, signals_as_interrupts
 from ..plugins import registry
 from . import decision, geometry, habits, plan, runtime
