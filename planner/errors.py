@@ -5,6 +5,8 @@ object at fault, shows the offending values and says how to fix it, so the CLI c
 """
 from __future__ import annotations
 
+import re
+
 from collections.abc import Sequence
 
 __all__ = [
@@ -179,7 +181,9 @@ class MemoryLimitError(LimitExceededError):
                 f"of {gib(self.limit)}. {self.hint}")
 
     def _brief(self, size: str) -> str:
-        counts = f" ({self.detail})" if len(self.detail) <= 60 else ""  # the counts, when they fit in one line
+        # The counts, when they fit in one line: the detail's first clause (before its reasons and parts).
+        first = re.split(r"[:;(]", self.detail, maxsplit=1)[0].strip().rstrip(",")
+        counts = f" ({first})" if first and len(first) <= 100 else ""
         return (f"{self.what} would need about {gib(self.count)}{counts}, more than the memory budget of "
                 f"{gib(self.limit)}")
 

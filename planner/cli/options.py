@@ -472,7 +472,8 @@ def explain(error: PlannerError, args: argparse.Namespace, options: bool = True)
     text = error.summary
     if options and isinstance(error, LimitExceededError):
         here = getattr(args, "offered_options", {}).get(getattr(args, "command", None), frozenset())
-        names = [_spelled(said) for option, said in error.options if option in here]
+        names = [_spelled(said) for option, said in error.options
+                 if option in here and (option not in _CAD_ONLY or _reads_cad(args))]
         if names:
             text += f"; try {', '.join(names)}"
     return text + (" (--verbose says why)" if error.summary != str(error) else "")
