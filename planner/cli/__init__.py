@@ -23,7 +23,7 @@ import sys
 from typing import Sequence
 
 from ..errors import LimitExceededError, PlannerError
-from ..interrupts import exit_status, signal_number, signals_as_interrupts
+from ..interrupts import Interrupted, delivered, exit_status, signal_number, signals_as_interrupts, swallowed
 from ..plugins import registry
 from . import decision, geometry, plan, runtime
 from .options import add_tolerance_options, advice, check_outputs, offer_options, tolerances_from
@@ -76,7 +76,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         with signals_as_interrupts():  # SIGTERM too unwinds: temporary files go, children are killed
             check_outputs(args)  # the overwrite rule and writable folders, before any work
-            return args.run(args)
+            status = args.run(args)
+            if swallowed():  # caught and ignored on the way (outputs refuse to commit after one): still an interrupt
+                raise Interrupted(swallowed())
+            return status
     except PlannerError as exc:
         helps = advice(exc, args) if isinstance(exc, LimitExceededError) else ""
         print(f"aplan: error: {exc}" + (f" {helps}" if helps else ""), file=sys.stderr)
@@ -88,7 +91,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"aplan: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP: what was unfinished was removed
-        print(f"aplan: interrupted ({signal.Signals(signal_number(exc)).name}): nothing was written",
+        delivered()
+        kept = getattr(exc, "kept", None)  # what a command keeps on an interrupt (a session's log)
+        print(f"aplan: interrupted ({signal.Signals(signal_number(exc)).name}): {kept or 'nothing was written'}",
               file=sys.stderr)
         return exit_status(signal_number(exc))
     finally:

@@ -168,6 +168,9 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
                 "robot_own_tools": args.robot_own_tools, "level": level}
     try:
         result = run_session(model, policy, source, robot, events, status, args.max_steps, settings=settings)
+    except KeyboardInterrupt as exc:  # the log holds the session up to the interrupt: say so, exit 128 + N
+        exc.kept = f"the session log {log_path} holds every step before it"
+        raise
     finally:
         events.close()
         if stream is not None:

@@ -43,7 +43,8 @@ __all__ = ["SessionResult", "run_session", "status_line"]
 @dataclass
 class SessionResult:
     """How a session ended. ``reason``: ``assembled``, ``source ended``, ``robot failed``, ``unexplained
-    observation``, ``error``, ``interrupted`` or ``step limit``; ``message`` says more."""
+    observation``, ``error`` or ``step limit``; ``message`` says more. (An interrupt has no result: the log's
+    end event says ``interrupted`` and the interrupt is raised again.)"""
 
     reason: str
     message: str
@@ -77,7 +78,8 @@ def run_session(model: IntentionModel | FactoredIntentionModel, policy, source: 
     intentions) or factored (:func:`planner.decision.factored_model`, beliefs over classes); ``policy`` has
     ``action(belief)`` for that belief (an offline policy, or the online planner); ``status`` receives a :func:`status_line` after each step;
     ``settings`` (e.g. the policy file, rewards, discount) go into the log's start event. Never raises for a
-    robot failure, an unexplained observation or a source error: the result says what happened.
+    robot failure, an unexplained observation or a source error: the result says what happened. An interrupt
+    (Ctrl-C, SIGTERM) ends the log with an ``interrupted`` end event and is raised again.
     Cost per step: one policy lookup and one belief update, plus what the source and the robot take.
     """
     run = _Run(model, log if log is not None else EventLog())
@@ -101,8 +103,9 @@ def run_session(model: IntentionModel | FactoredIntentionModel, policy, source: 
         return run.stop(stop.reason, stop.message)
     except PlannerError as exc:
         return run.stop("error", str(exc))
-    except KeyboardInterrupt:
-        return run.stop("interrupted", f"interrupted at step {run.result.steps}")
+    except KeyboardInterrupt:  # the log ends with it, then the interrupt goes on (the command exits 128 + N)
+        run.stop("interrupted", f"interrupted at step {run.result.steps}")
+        raise
 
 
 class _Stop(Exception):

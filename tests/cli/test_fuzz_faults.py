@@ -390,6 +390,59 @@ def test_sigterm_on_export_removes_the_partial_bundle(tmp_path):
     assert not _alive(child)
 
 
+#: ``aplan ARGS`` that stops inside trimesh's ``try: from . import voxel / except BaseException`` (an optional
+#: import that swallows everything), says so on standard error and goes on when a line comes on standard input.
+_PAUSED_IN_TRIMESH = r"""
+import sys
+from importlib.abc import MetaPathFinder
+
+
+class PauseInTrimesh(MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name == "trimesh.voxel":
+            print("paused in trimesh's guarded import", file=sys.stderr, flush=True)
+            sys.stdin.readline()
+        return None
+
+
+sys.meta_path.insert(0, PauseInTrimesh())
+from planner.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def _pending_signals(pid: int) -> int:
+    """The signals sent to ``pid`` and not yet delivered (its own and its thread group's)."""
+    with open(f"/proc/{pid}/status") as handle:
+        fields = dict(line.split(":", 1) for line in handle if ":" in line)
+    return int(fields["SigPnd"], 16) | int(fields["ShdPnd"], 16)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_during_an_import_that_swallows_everything_is_not_lost(signum, tmp_path):
+    """Issue 22: trimesh guards its optional imports with ``except BaseException``; a Ctrl-C or SIGTERM that
+    came then was swallowed and the command ran to its end (exit 0, the output written). Now it ends with
+    128 + N, one line, no traceback, no output: the signal is sent while the import is paused there, and the
+    import goes on only once the signal has been delivered (/proc: nothing pending)."""
+    target = tmp_path / "out.json"
+    process = subprocess.Popen([sys.executable, "-c", _PAUSED_IN_TRIMESH, "analyze",
+                                str(REPO / "resources" / "examples" / "pen" / "pen.json"), "-o", str(target)],
+                               cwd=REPO, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    seen = b""
+    while b"guarded import\n" not in seen:  # the whole line: a signal in the middle of print() would cut it
+        chunk = process.stderr.read1(256)
+        assert chunk, f"the command ended before it reached trimesh's import: {seen.decode()}"
+        seen += chunk
+    process.send_signal(signum)
+    _wait_for(lambda: not _pending_signals(process.pid), "the signal delivered")
+    out, err = process.communicate(b"\n", timeout=120)
+    message = (seen + err).decode()
+    assert process.returncode == 128 + signum, message
+    assert "Traceback" not in message
+    assert message.splitlines()[-1] == f"aplan: interrupted ({signal.Signals(signum).name}): nothing was written"
+    assert _tree(tmp_path) == set() and out == b""  # no output, no temporary file
+
+
 def test_random_damage_is_named_or_harmless(tmp_path):
     """Property: bytes overwritten anywhere in the archive, and maybe a truncation, give a list of damaged
     objects or a DamagedDocumentError, never another exception (hypothesis draws the places, the bytes and the
