@@ -71,6 +71,7 @@ def signals_as_interrupts() -> Iterator[None]:
     try:
         yield
     finally:
+        _RAISED.clear()  # what the block did not take is not for the code after it
         for s, handler in previous.items():
             signal.signal(s, handler)
 
@@ -103,13 +104,14 @@ def held_interrupts() -> Iterator[None]:
         yield
         return
     held: list[int] = []
-    chosen = (signal.SIGINT, *_TERMINATING)
+    # A handler set outside Python (None) cannot be put back from Python: such a signal is left alone.
+    chosen = [s for s in (signal.SIGINT, *_TERMINATING) if signal.getsignal(s) is not None]
     previous = {s: signal.signal(s, lambda signum, frame: held.append(signum)) for s in chosen}
     try:
         yield
     finally:
         for s, handler in previous.items():
-            signal.signal(s, handler if handler is not None else signal.SIG_DFL)  # None: set outside Python
+            signal.signal(s, handler)
         if held:
             signal.raise_signal(held[0])  # the previous handler runs now: it raises, or ends the process
 

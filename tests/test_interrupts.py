@@ -144,3 +144,20 @@ def test_an_ignored_interrupt_still_ends_the_command_with_128_plus_n(tmp_path, m
     err = capsys.readouterr().err
     assert code == 128 + signal.SIGTERM and err == "aplan: interrupted (SIGTERM): nothing was written\n"
     assert interrupts.swallowed() == 0
+
+
+def test_a_failure_after_an_ignored_interrupt_is_the_interrupt(monkeypatch, capsys):
+    """What follows a swallowed interrupt (trimesh leaves a placeholder for the module it did not import, which
+    fails when used) is reported as the interrupt, not as that failure."""
+    from planner.cli import plan
+    from planner.errors import PlannerError
+
+    def stats(args) -> int:
+        _swallows(KeyboardInterrupt)
+        raise PlannerError("the placeholder module failed")
+
+    monkeypatch.setattr(plan, "_stats", stats)
+    assert main(["stats", "pen"]) == 128 + signal.SIGTERM
+    assert capsys.readouterr().err == "aplan: interrupted (SIGTERM): nothing was written\n"
+    monkeypatch.setattr(plan, "_stats", lambda args: (_ for _ in ()).throw(PlannerError("a plain failure")))
+    assert main(["stats", "pen"]) == 1 and "a plain failure" in capsys.readouterr().err

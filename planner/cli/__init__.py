@@ -75,8 +75,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     handler = _configure_logging()  # undone at the end: main() also runs inside tests and other programs
     try:
         with signals_as_interrupts():  # SIGTERM too unwinds: temporary files go, children are killed
-            check_outputs(args)  # the overwrite rule and writable folders, before any work
-            status = args.run(args)
+            try:
+                check_outputs(args)  # the overwrite rule and writable folders, before any work
+                status = args.run(args)
+            except (PlannerError, OSError):
+                if swallowed():  # a failure after an interrupt that was caught and ignored: the interrupt it is
+                    raise Interrupted(swallowed()) from None
+                raise
             if swallowed():  # caught and ignored on the way (outputs refuse to commit after one): still an interrupt
                 raise Interrupted(swallowed())
             return status
