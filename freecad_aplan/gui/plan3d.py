@@ -15,7 +15,8 @@ import FreeCADGui
 from PySide import QtCore, QtGui
 
 from ..diagrams import relation_direction
-from ..plan3d import COLOURS, DIMMED, SceneChanges, bound_box, component_objects, extent, relation_looks, step_looks
+from ..plan3d import (COLOURS, DIMMED, SceneChanges, bound_box, component_objects, extent, orthographic_fit,
+                      relation_looks, step_looks)
 from .layout import button_rows, narrow_combo, panel_layout
 
 __all__ = ["ARROW_NAME", "PARTS_TAB_LIMIT", "SEQUENCE_LIST_LIMIT", "Plan3DPanel", "PlanView", "add_parts_tab",
@@ -141,10 +142,9 @@ class PlanView:
 
     def fit(self, offsets: dict[str, tuple], parts=None, points=()) -> None:
         """Fit the 3D view to ``parts`` (default: all) moved by ``offsets`` and to ``points`` (FreeCAD vectors),
-        keeping the view's direction: an orthographic camera centred on their projected extent, its height the
-        larger of that extent's height and its width over the view's aspect ratio, 10 % more (a perspective
-        camera: Coin's ``viewBoundingBox``, the bounding sphere). The user's camera is kept for
-        :meth:`restore_camera`. Cost: eight corners per part."""
+        keeping the view's direction: an orthographic camera by :func:`~freecad_aplan.plan3d.orthographic_fit`
+        (their projected extent, 10 % more), a perspective one by Coin's ``viewBoundingBox`` (the bounding
+        sphere). The user's camera is kept for :meth:`restore_camera`. Cost: eight corners per part."""
         from pivy import coin
 
         view = _view(self.document)
@@ -171,17 +171,9 @@ class PlanView:
         rotation = camera.orientation.getValue()
         axes = [FreeCAD.Vector(*rotation.multVec(coin.SbVec3f(*a)).getValue())
                 for a in ((1, 0, 0), (0, 1, 0), (0, 0, 1))]  # right, up, towards the viewer
-        low = [min(c.dot(a) for c in corners) for a in axes]
-        high = [max(c.dot(a) for c in corners) for a in axes]
-        depth = max(high[2] - low[2], 1e-6)
-        centre = [0.5 * (a + b) for a, b in zip(low, high)]
-        # The camera stands in front of everything, looking at the middle; the viewer sets its clipping planes.
-        position = axes[0] * centre[0] + axes[1] * centre[1] + axes[2] * (high[2] + depth)
-        camera.position.setValue(*position)
-        camera.focalDistance = 1.5 * depth
-        # Coin maps the height onto the view's shorter side (ADJUST_CAMERA).
-        spans = max(high[1] - low[1], (high[0] - low[0]) / aspect) * min(1.0, aspect)
-        camera.height = 1.1 * max(spans, 1e-6)
+        position, focal, height = orthographic_fit(axes, corners, aspect)
+        camera.position.setValue(*position)  # the viewer sets the clipping planes at every redraw
+        camera.focalDistance, camera.height = focal, height
 
     def restore_camera(self) -> None:
         """The user's camera back, if :meth:`fit` changed it."""
