@@ -9,7 +9,7 @@ what it would build exceeds a size limit (the message gives the estimate and the
 a usage error, 3 when ``aplan stats`` printed only some figures (the others would exceed a size limit),
 128 + N when signal N ended it (130: Ctrl-C, 143: SIGTERM). Nothing is written when a command fails or is
 interrupted (output folders are checked before any work), except by ``aplan solve``, which writes the best
-policy so far on an interrupt and says so. A numeric option that is not finite or out of range is a usage
+policy so far on an interrupt and says so, and ``aplan session``, whose log keeps the steps before it. A numeric option that is not finite or out of range is a usage
 error naming the option. The overwrite rule: outputs are checked before any work
 (:func:`.options.check_outputs`): their folder must exist and be writable, and an existing output is
 replaced only with ``--force`` (atomically).

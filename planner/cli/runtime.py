@@ -169,6 +169,7 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
     try:
         result = run_session(model, policy, source, robot, events, status, args.max_steps, settings=settings)
     except KeyboardInterrupt as exc:  # the log holds the session up to the interrupt: say so, exit 128 + N
+        print(file=sys.stderr)  # off the prompt or the status line the interrupt came in
         exc.kept = f"the session log {log_path} holds every step before it"
         raise
     finally:

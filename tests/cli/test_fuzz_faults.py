@@ -11,6 +11,7 @@ refuse root, so under root the write permission check is monkeypatched. Interrup
 from __future__ import annotations
 
 import io
+import json
 import os
 import signal
 import subprocess
@@ -441,6 +442,31 @@ def test_a_signal_during_an_import_that_swallows_everything_is_not_lost(signum, 
     assert "Traceback" not in message
     assert message.splitlines()[-1] == f"aplan: interrupted ({signal.Signals(signum).name}): nothing was written"
     assert _tree(tmp_path) == set() and out == b""  # no output, no temporary file
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_an_interrupted_session_keeps_its_log_and_exits_128_plus_n(signum, tmp_path):
+    """A keyboard session signalled while it waits for the operator: 128 + N (it used to exit 1: the session
+    caught the interrupt and returned), one line saying the log is kept, the log ended by an interrupted event,
+    nothing else written."""
+    log = tmp_path / "s.jsonl"
+    process = subprocess.Popen([sys.executable, "-m", "planner", "session", "pen", "--keyboard", "--log", str(log),
+                                "--expansions", "20"], cwd=REPO, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE)
+    seen = b""
+    while b"operator picked" not in seen:  # the first prompt: the session waits for a line
+        chunk = process.stderr.read1(256)
+        assert chunk, f"the session ended before it asked: {seen.decode()}"
+        seen += chunk
+    process.send_signal(signum)
+    out, err = process.communicate(timeout=120)
+    message = (seen + err).decode()
+    assert process.returncode == 128 + signum and "Traceback" not in message, message
+    assert message.splitlines()[-1] == (f"aplan: interrupted ({signal.Signals(signum).name}): the session log "
+                                        f"{log} holds every step before it")
+    events = [json.loads(line) for line in log.read_text().splitlines()]
+    assert events[0]["event"] == "start" and events[-1]["event"] == "end"
+    assert events[-1]["reason"] == "interrupted" and _tree(tmp_path) == {"s.jsonl"}
 
 
 def test_random_damage_is_named_or_harmless(tmp_path):
