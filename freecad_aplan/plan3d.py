@@ -20,7 +20,7 @@ from types import MappingProxyType
 import FreeCAD
 
 __all__ = ["COLOURS", "DIMMED", "SceneChanges", "bound_box", "component_objects", "extent", "face_materials",
-           "relation_looks", "shown_transform", "step_looks"]
+           "orthographic_fit", "relation_looks", "shown_transform", "step_looks"]
 
 #: Colours (RGB 0..1) and transparencies (percent) of the roles.
 COLOURS = MappingProxyType({"moving": (1.0, 0.55, 0.0), "blocked": (0.85, 0.1, 0.1), "blocking": (0.1, 0.35, 0.9)})
@@ -55,6 +55,22 @@ def extent(objects) -> float:
     """The diagonal of :func:`bound_box` (1.0 when nothing has a shape): how far an exploded part sits away."""
     box = bound_box(objects)
     return float(box.DiagonalLength) if box.isValid() and box.DiagonalLength > 0 else 1.0
+
+
+def orthographic_fit(axes, corners, aspect: float, margin: float = 1.1) -> tuple[FreeCAD.Vector, float, float]:
+    """An orthographic camera looking along ``-axes[2]`` (``axes``: its right, up and towards-the-viewer unit
+    vectors) that shows every point of ``corners``: ``(position, focal distance, height)``. Centred on their
+    extent projected on right and up, in front of all of them; the height the larger of the projected height
+    and the projected width over ``aspect`` (width / height of the view), times ``margin``; on a view higher
+    than wide Coin puts the height on the width (``ADJUST_CAMERA``), hence the factor ``min(1, aspect)``.
+    Cost: O(len(corners))."""
+    low = [min(c.dot(a) for c in corners) for a in axes]
+    high = [max(c.dot(a) for c in corners) for a in axes]
+    depth = max(high[2] - low[2], 1e-6)
+    centre = [0.5 * (a + b) for a, b in zip(low, high)]
+    position = axes[0] * centre[0] + axes[1] * centre[1] + axes[2] * (high[2] + depth)
+    spans = max(high[1] - low[1], (high[0] - low[0]) / aspect) * min(1.0, aspect)
+    return position, 1.5 * depth, margin * max(spans, 1e-6)
 
 
 def step_looks(roles: dict[str, str]) -> dict[str, tuple]:

@@ -25,6 +25,7 @@ from planner.errors import PlannerError
 from planner.files import make_folder_beside
 from planner.geometry import GeometryReport, Tolerances
 from planner.geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
+from planner.interrupts import raise_if_swallowed
 from planner.product import Product, save_product
 from planner.product.designer import add_directions
 
@@ -100,6 +101,7 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
         if engine != "none" and (not answer.get("diagrams") or directions):  # no stored diagrams that fit: detect
             product = apply_report(product, analyze_product(product, engine, tolerances))
             save_product(product, work / PRODUCT_FILE)
+        raise_if_swallowed()  # an interrupt some code caught and ignored: the bundle is not committed
         if bundle.exists():
             old = bundle.with_name(f".{bundle.name}.old")
             bundle.rename(old)

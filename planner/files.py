@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import BinaryIO
 
 from .errors import PlannerError
+from .interrupts import raise_if_swallowed
 
 __all__ = [
     "FAULT_DISK_FULL",
@@ -97,6 +98,7 @@ def open_atomic(path: str | os.PathLike) -> Iterator[BinaryIO]:
     try:
         with open(fd, "wb") as handle:
             yield with_faults(handle)
+        raise_if_swallowed()  # an interrupt some code caught and ignored: no output after it
         os.replace(tmp, path)
     except OSError as exc:
         tmp.unlink(missing_ok=True)

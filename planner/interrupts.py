@@ -1,9 +1,14 @@
 """Interrupts in one place: SIGINT (Ctrl-C), SIGTERM and SIGHUP end a command cleanly.
 
-- :func:`signals_as_interrupts`: SIGTERM and SIGHUP raise :class:`Interrupted` (a ``KeyboardInterrupt``, as
-  SIGINT does), so every ``finally`` and ``except BaseException`` runs on the way out: temporary files and
-  folders are removed (:mod:`planner.files`), child processes are killed (:func:`child_options` and the
-  callers' ``kill`` on the way out), partial outputs never appear.
+- :func:`signals_as_interrupts`: SIGINT, SIGTERM and SIGHUP raise :class:`Interrupted` (a
+  ``KeyboardInterrupt``), so every ``finally`` and every ``except BaseException`` that cleans up and re-raises
+  runs on the way out: temporary files and folders are removed (:mod:`planner.files`), child processes are
+  killed (:func:`child_options` and the callers' ``kill`` on the way out), partial outputs never appear.
+  Each signal is also recorded until the command's top level takes it (:func:`delivered`): code that catches
+  ``BaseException`` and carries on cannot lose it, since :func:`raise_if_swallowed` raises it again before
+  an output is committed and the command still ends with ``128 + N``.
+- :func:`held_interrupts`: around third-party code that swallows ``BaseException`` (trimesh guards its
+  optional imports so), the signals are held and delivered as soon as the block ends.
 - :func:`deferred_interrupts`: in an anytime computation (the solver), SIGINT and SIGTERM only set a flag
   that the computation checks between steps, so it can stop with a consistent result and keep it; a second
   signal interrupts at once.
@@ -19,10 +24,12 @@ import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
-__all__ = ["Interrupted", "child_options", "deferred_interrupts", "exit_status", "signal_number",
-           "signals_as_interrupts"]
+__all__ = ["Interrupted", "child_options", "deferred_interrupts", "delivered", "exit_status", "held_interrupts",
+           "raise_if_swallowed", "signal_number", "signals_as_interrupts", "swallowed"]
 
 _TERMINATING = tuple(s for s in (getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None)) if s)
+#: The signals :func:`signals_as_interrupts` raised and no top level has taken yet (:func:`delivered`).
+_RAISED: list[int] = []
 
 
 class Interrupted(KeyboardInterrupt):
@@ -49,20 +56,64 @@ def _main_thread() -> bool:
 
 @contextmanager
 def signals_as_interrupts() -> Iterator[None]:
-    """Within the block, SIGTERM and SIGHUP raise :class:`Interrupted`; the previous handlers come back after."""
+    """Within the block, SIGINT, SIGTERM and SIGHUP raise :class:`Interrupted`, each recorded until
+    :func:`delivered`; the previous handlers come back after."""
     if not _main_thread():
         yield
         return
 
     def interrupt(signum, frame) -> None:
+        _RAISED.append(signum)
         raise Interrupted(signum)
 
-    previous = {s: signal.signal(s, interrupt) for s in _TERMINATING}
+    _RAISED.clear()
+    previous = {s: signal.signal(s, interrupt) for s in (signal.SIGINT, *_TERMINATING)}
+    try:
+        yield
+    finally:
+        _RAISED.clear()  # what the block did not take is not for the code after it
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+def delivered() -> None:
+    """The top level has taken the interrupt (it ends the command with ``128 + N``): forget the signals."""
+    _RAISED.clear()
+
+
+def swallowed() -> int:
+    """The first signal raised as an interrupt and not yet :func:`delivered` (0: none): past a point where an
+    interrupt would have ended the command, one that is still recorded was caught and ignored on the way."""
+    return _RAISED[0] if _RAISED else 0
+
+
+def raise_if_swallowed() -> None:
+    """Raise :class:`Interrupted` again for a signal some code caught and ignored (:func:`swallowed`): called
+    before an output is committed, so an ignored interrupt never ends in a finished output."""
+    if _RAISED:
+        raise Interrupted(_RAISED[0])
+
+
+@contextmanager
+def held_interrupts() -> Iterator[None]:
+    """Within the block, SIGINT, SIGTERM and SIGHUP are held; the first one is delivered to the previous
+    handler (raised again) as soon as the block ends, even when it ends with an error. For third-party code
+    that catches ``BaseException`` and carries on (trimesh's optional imports), which would lose the
+    interrupt. Outside the main thread it does nothing."""
+    if not _main_thread():
+        yield
+        return
+    held: list[int] = []
+    # A handler set outside Python (None) cannot be put back from Python: such a signal is left alone.
+    chosen = [s for s in (signal.SIGINT, *_TERMINATING) if signal.getsignal(s) is not None]
+    previous = {s: signal.signal(s, lambda signum, frame: held.append(signum)) for s in chosen}
     try:
         yield
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
+        if held:
+            signal.raise_signal(held[0])  # the previous handler runs now: it raises, or ends the process
 
 
 @contextmanager

@@ -448,8 +448,10 @@ class Simulate(_Command):
         stem = os.path.join(tempfile.mkdtemp(prefix="aplan-simulate-"), "belief")
         result = workflow.simulate_sequence(product, policy, stem, None if sequence < 0 else sequence,
                                             base_part=workflow.analysis_base_part(analysis))
-        caption = (f"Sequence {result['sequence']}: belief on the true intention first above {CONFIDENCE:g} after "
-                   f"{result['confident_after']} operator operation(s). Steps: "
+        from planner.decision.simulate import confidence_text
+
+        said = confidence_text(result["confident_after"], CONFIDENCE)
+        caption = (f"Sequence {result['sequence']}: {said}. Steps: "
                    + "; ".join(f"{a} / {o} / {p}" for a, o, p in result["steps"]))
         self.state.belief_dialog = ImageDialog("APLAN belief", caption, result["plots"][0], FreeCADGui.getMainWindow())
         self.state.belief_dialog.show()

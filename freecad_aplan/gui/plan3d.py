@@ -15,7 +15,8 @@ import FreeCADGui
 from PySide import QtCore, QtGui
 
 from ..diagrams import relation_direction
-from ..plan3d import COLOURS, DIMMED, SceneChanges, bound_box, component_objects, extent, relation_looks, step_looks
+from ..plan3d import (COLOURS, DIMMED, SceneChanges, bound_box, component_objects, extent, orthographic_fit,
+                      relation_looks, step_looks)
 from .layout import button_rows, narrow_combo, panel_layout
 
 __all__ = ["ARROW_NAME", "PARTS_TAB_LIMIT", "SEQUENCE_LIST_LIMIT", "Plan3DPanel", "PlanView", "add_parts_tab",
@@ -102,18 +103,25 @@ class PlanView:
 
     def show_step(self, exploded, k: int) -> None:
         """Step ``k`` of an :class:`~planner.assembly.explode.ExplodedView`: every part at its offset, the moving
-        ones highlighted, the rest dimmed, an arrow along the insertion direction; after the last step the
-        assembled product as it is."""
+        ones highlighted, the rest dimmed, an arrow along the insertion direction, the view fitted to the
+        operation (the moving side, the side it joins and the arrow); after the last step the assembled product
+        as it is, fitted whole."""
         done = k >= len(exploded.steps)  # the assembled product, in its own colours
         looks = {p: (None, None) for p in self.objects} if done else step_looks(exploded.roles(k))
         self._begin().apply(self.objects, exploded.offsets[k], looks)
-        if k < len(exploded.steps):
-            step = exploded.steps[k]
-            # The moving parts sit together (they were joined before), shifted by one offset from where their
-            # shapes are.
-            shift = FreeCAD.Vector(*exploded.offsets[k][next(iter(step.moving))])
-            reverse = tuple(-c * 0.8 * exploded.spacing for c in step.direction.vector)
-            self._add_arrow(self._centre(step.moving) + shift, reverse, COLOURS["moving"])
+        if done:
+            self.fit(exploded.offsets[k])
+            return
+        step = exploded.steps[k]
+        # The moving parts sit together (they were joined before), shifted by one offset from where their
+        # shapes are.
+        shift = FreeCAD.Vector(*exploded.offsets[k][next(iter(step.moving))])
+        start = self._centre(step.moving) + shift
+        reverse = FreeCAD.Vector(*(-c * 0.8 * exploded.spacing for c in step.direction.vector))
+        self._add_arrow(start, tuple(reverse), COLOURS["moving"])
+        # Fitted to what the step is about: fitted to every part, the exploded product is a long thin line in
+        # which the moving part is a few pixels (issue 22); the dimmed idle parts may leave the view.
+        self.fit(exploded.offsets[k], set(step.moving) | set(step.fixed), [start, start + reverse])
 
     def show_relation(self, kind: str, first: str, second: str) -> None:
         """A row of the diagrams table: ``first`` (blocked, red) and ``second`` (blocking, blue), the others
@@ -132,25 +140,40 @@ class PlanView:
             looks.update({p: (colour, 0) for p in group})
         self._begin().apply(self.objects, None, looks)
 
-    def fit(self, offsets: dict[str, tuple]) -> None:
-        """Fit the 3D view to the parts moved by ``offsets`` (an exploded view is larger than the product); the
-        user's camera is kept for :meth:`restore_camera`."""
+    def fit(self, offsets: dict[str, tuple], parts=None, points=()) -> None:
+        """Fit the 3D view to ``parts`` (default: all) moved by ``offsets`` and to ``points`` (FreeCAD vectors),
+        keeping the view's direction: an orthographic camera by :func:`~freecad_aplan.plan3d.orthographic_fit`
+        (their projected extent, 10 % more), a perspective one by Coin's ``viewBoundingBox`` (the bounding
+        sphere). The user's camera is kept for :meth:`restore_camera`. Cost: eight corners per part."""
         from pivy import coin
 
         view = _view(self.document)
-        box = FreeCAD.BoundBox()
-        for part, members in self.objects.items():
-            moved = FreeCAD.BoundBox(bound_box(members))
-            if moved.isValid():
-                moved.move(FreeCAD.Vector(*offsets.get(part, (0.0, 0.0, 0.0))))
-                box.add(moved)
-        if view is None or not box.isValid():
+        corners = list(points)
+        for part in self.objects if parts is None else parts:
+            box = bound_box(self.objects.get(part, []))
+            if box.isValid():
+                shift = FreeCAD.Vector(*offsets.get(part, (0.0, 0.0, 0.0)))
+                corners += [box.getPoint(i) + shift for i in range(8)]
+        if view is None or not corners:
             return
         if self.camera is None:
             self.camera = view.getCamera()
         width, height = view.getSize()
-        view.getCameraNode().viewBoundingBox(coin.SbBox3f(box.XMin, box.YMin, box.ZMin, box.XMax, box.YMax, box.ZMax),
-                                             width / max(height, 1), 1.0)
+        aspect = width / max(height, 1)
+        camera = view.getCameraNode()
+        if not camera.isOfType(coin.SoOrthographicCamera.getClassTypeId()):
+            box = FreeCAD.BoundBox()
+            for corner in corners:
+                box.add(corner)
+            camera.viewBoundingBox(coin.SbBox3f(box.XMin, box.YMin, box.ZMin, box.XMax, box.YMax, box.ZMax),
+                                   aspect, 1.0)
+            return
+        rotation = camera.orientation.getValue()
+        axes = [FreeCAD.Vector(*rotation.multVec(coin.SbVec3f(*a)).getValue())
+                for a in ((1, 0, 0), (0, 1, 0), (0, 0, 1))]  # right, up, towards the viewer
+        position, focal, height = orthographic_fit(axes, corners, aspect)
+        camera.position.setValue(*position)  # the viewer sets the clipping planes at every redraw
+        camera.focalDistance, camera.height = focal, height
 
     def restore_camera(self) -> None:
         """The user's camera back, if :meth:`fit` changed it."""
@@ -287,8 +310,7 @@ class Plan3DPanel:
     def use(self, exploded, title: str) -> None:
         self.timer.stop()
         self.exploded, self.title = exploded, title
-        self.show(0)
-        self.view.fit(exploded.offsets[0])  # the first step is the most exploded: the later ones stay in view
+        self.show(0)  # each step fits the view to its operation
 
     def load_log(self, path: str) -> bool:
         """Show the sequence the session log ``path`` recorded; say why not in the panel otherwise."""

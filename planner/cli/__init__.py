@@ -10,7 +10,7 @@ a usage error (argparse's, or :class:`~planner.errors.UsageError`: options that 
 ``aplan stats`` printed only some figures (the others would exceed a size limit),
 128 + N when signal N ended it (130: Ctrl-C, 143: SIGTERM). Nothing is written when a command fails or is
 interrupted (output folders are checked before any work), except by ``aplan solve``, which writes the best
-policy so far on an interrupt and says so. A numeric option that is not finite or out of range is a usage
+policy so far on an interrupt and says so, and ``aplan session``, whose log keeps the steps before it. A numeric option that is not finite or out of range is a usage
 error naming the option. The overwrite rule: outputs are checked before any work
 (:func:`.options.check_outputs`): their folder must exist and be writable, and an existing output is
 replaced only with ``--force`` (atomically).
@@ -24,7 +24,7 @@ import sys
 from typing import Sequence
 
 from ..errors import LimitExceededError, PlannerError, UsageError
-from ..interrupts import exit_status, signal_number, signals_as_interrupts
+from ..interrupts import Interrupted, delivered, exit_status, signal_number, signals_as_interrupts, swallowed
 from ..plugins import registry
 from . import decision, geometry, habits, plan, runtime
 from .options import add_tolerance_options, add_verbose, check_outputs, explain, offer_options, tolerances_from
@@ -90,8 +90,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     handler = _configure_logging(getattr(args, "verbose", False))
     try:
         with signals_as_interrupts():  # SIGTERM too unwinds: temporary files go, children are killed
-            check_outputs(args)  # the overwrite rule and writable folders, before any work
-            return args.run(args)
+            try:
+                check_outputs(args)  # the overwrite rule and writable folders, before any work
+                status = args.run(args)
+            except (PlannerError, OSError):
+                if swallowed():  # a failure after an interrupt that was caught and ignored: the interrupt it is
+                    raise Interrupted(swallowed()) from None
+                raise
+            if swallowed():  # caught and ignored on the way (outputs refuse to commit after one): still an interrupt
+                raise Interrupted(swallowed())
+            return status
     except PlannerError as exc:
         text = explain(exc, args)
         print(f"aplan: error: {_named(exc, args, text)}", file=sys.stderr)
@@ -103,7 +111,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"aplan: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt as exc:  # Ctrl-C, SIGTERM, SIGHUP: what was unfinished was removed
-        print(f"aplan: interrupted ({signal.Signals(signal_number(exc)).name}): nothing was written",
+        delivered()
+        kept = getattr(exc, "kept", None)  # what a command keeps on an interrupt (a session's log)
+        print(f"aplan: interrupted ({signal.Signals(signal_number(exc)).name}): {kept or 'nothing was written'}",
               file=sys.stderr)
         return exit_status(signal_number(exc))
     finally:

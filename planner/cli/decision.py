@@ -9,13 +9,12 @@ import signal
 import sys
 import time
 
-import numpy as np
-
 from .. import api
 from ..decision.belief_plot import episode_trace, plot_beliefs, state_trace
 from ..decision.intention_model import IntentionModel
 from ..decision.online import OnlinePlanner
 from ..decision.policy import write_policy
+from ..decision.simulate import confidence_text, decision_times
 from ..defaults import CONFIDENCE, EPISODE_LIMIT, FILE_LIMIT, SOLVE_PRECISION, SOLVE_TIME_LIMIT
 from ..errors import PlannerError
 from ..interrupts import exit_status
@@ -154,16 +153,37 @@ def _simulate(args: argparse.Namespace) -> int:
     if api._model_file_kind(args.model):
         raise PlannerError("simulate needs a PRODUCT (the intention graph names the sequences), not a model file")
     levels = levels_from(args)
+    played = []
     for k, (level, product) in enumerate(levels, start=1):
         if len(levels) > 1 and not args.json:
             print(f"level {level} ({k} of {len(levels)}): {', '.join(product.part_ids)}")
         if args.plot and len(levels) > 1:
             raise PlannerError("--plot draws one product's beliefs: pick one subassembly with --level ID")
-        _simulate_level(args, product)
+        played += _simulate_level(args, product)
+    _print_run(played, args)
     return 0
 
 
-def _simulate_level(args: argparse.Namespace, product) -> int:
+def _print_run(episodes, args: argparse.Namespace) -> None:
+    """The whole run's line: episodes, decisions, the decision time's median, 95th percentile and maximum, and
+    how many episodes were confident before the product was finished."""
+    seconds = [s.decision_seconds for e in episodes for s in e.steps]
+    times = decision_times(seconds)
+    confident = sum(e.first_confident(CONFIDENCE) is not None for e in episodes)
+    if args.json:
+        print(json.dumps({"run": {"episodes": len(episodes), "decisions": len(seconds), **times,
+                                  "confident_episodes": confident}}))
+    elif seconds:
+        print(f"run: {len(episodes)} episode(s), {confident} confident before the product was finished; "
+              f"{_times_text(times)} over {len(seconds)} decisions")
+
+
+def _times_text(times: dict) -> str:
+    return (f"decision time median {1000 * times['decision_seconds_median']:.1f} ms, 95th percentile "
+            f"{1000 * times['decision_seconds_p95']:.1f} ms, max {1000 * times['decision_seconds_max']:.1f} ms")
+
+
+def _simulate_level(args: argparse.Namespace, product) -> list:
     model, policy = decision_maker_from(args, product)
     episodes = api.simulate(model, policy, args.sequence, args.all, args.random, args.seed, args.max_steps,
                             args.operator)
@@ -171,23 +191,23 @@ def _simulate_level(args: argparse.Namespace, product) -> int:
         return _print_factored(model, episodes, args)
     for episode in episodes:
         operations = model.describe_operations(episode.start)
+        times = decision_times(s.decision_seconds for s in episode.steps)
         if args.json:
             print(json.dumps({"sequence": episode.start, "operations": operations,
                               "confident_after_operations": episode.first_confident(CONFIDENCE),
-                              "discounted_return": round(episode.discounted_return, 6)}))
+                              "discounted_return": round(episode.discounted_return, 6), **times}))
             continue
         print(f"sequence {episode.start}: " + " ; ".join(operations))
         _print_steps(model, episode.steps)
-        print(f"  belief on the true intention first above {CONFIDENCE:g} after "
-              f"{episode.first_confident(CONFIDENCE)} operator operation(s); discounted return "
-              f"{episode.discounted_return:.3f}")
+        print(f"  {confidence_text(episode.first_confident(CONFIDENCE))}; discounted return "
+              f"{episode.discounted_return:.3f}" + (f"; {_times_text(times)}" if episode.steps else ""))
     if not args.json:
         _say_sampled(model, episodes)
     if args.plot:
         traces = [episode_trace(model, e, f"sequence {e.start}: " + " ; ".join(model.describe_operations(e.start)))
                   for e in episodes]
         _write_plot(args, traces, model.plan.product.name or model.name)
-    return 0
+    return episodes
 
 
 def _say_sampled(model, episodes) -> None:
@@ -213,25 +233,21 @@ def _print_steps(model, steps) -> None:
               f"{step.p_true:7.3f}  {step.operator_operations}")
 
 
-def _print_factored(model, episodes, args: argparse.Namespace) -> int:
+def _print_factored(model, episodes, args: argparse.Namespace) -> list:
     """Episodes on the factored model (online planner, or a policy over classes): the same report, sequences
     named by their operations; the plot shows the belief summed over assembly states."""
     for episode in episodes:
         operations = model.describe_operations(episode.path)
-        times = [s.decision_seconds for s in episode.steps]
+        times = decision_times(s.decision_seconds for s in episode.steps)
         if args.json:
             print(json.dumps({"operations": operations, "finished": episode.finished,
                               "confident_after_operations": episode.first_confident(CONFIDENCE),
-                              "discounted_return": round(episode.discounted_return, 6),
-                              "decision_seconds_median": round(float(np.median(times)), 6) if times else None,
-                              "decision_seconds_max": round(max(times), 6) if times else None}))
+                              "discounted_return": round(episode.discounted_return, 6), **times}))
             continue
         print("sequence: " + " ; ".join(operations))
         _print_steps(model, episode.steps)
-        print(f"  belief on the true intention first above {CONFIDENCE:g} after "
-              f"{episode.first_confident(CONFIDENCE)} operator operation(s); discounted return "
-              f"{episode.discounted_return:.3f}; decision time median {1000 * float(np.median(times)):.1f} ms, "
-              f"max {1000 * max(times):.1f} ms" if times else "  no step")
+        print(f"  {confidence_text(episode.first_confident(CONFIDENCE))}; discounted return "
+              f"{episode.discounted_return:.3f}; {_times_text(times)}" if episode.steps else "  no step")
     if not args.json:
         _say_sampled(model, episodes)
     if args.plot:
@@ -239,7 +255,7 @@ def _print_factored(model, episodes, args: argparse.Namespace) -> int:
                               [s.action for s in e.steps], [s.observation for s in e.steps],
                               "sequence: " + " ; ".join(model.describe_operations(e.path))) for e in episodes]
         _write_plot(args, traces, model.plan.product.name or model.name)
-    return 0
+    return episodes
 
 
 def _true_state(model, path: list[int], step) -> int:
@@ -316,7 +332,8 @@ def add_commands(commands) -> None:
                                "turns: it acts whenever the model lets it, taking turns with the robot as in the "
                                "paper's experiment")
     simulate.add_argument("--json", action="store_true",
-                          help="one JSON line per episode: sequence, confident_after_operations, discounted_return")
+                          help="one JSON line per episode (sequence, confident_after_operations, discounted_return, "
+                               "decision_seconds_median, _p95, _max), then one for the run (README)")
     add_episode_options(simulate)
     add_force(simulate, outputs=(), stems=("plot",))
     simulate.set_defaults(run=_simulate)

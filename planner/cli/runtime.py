@@ -13,7 +13,6 @@ from ..decision.intention_model import IntentionModel
 from ..decision.policy import AlphaVectorPolicy
 from ..defaults import HABITS_PRIOR
 from ..errors import PlannerError, UsageError
-from ..interrupts import exit_status
 from ..product import DEFAULT_MARKER_DICTIONARY
 from ..validation import check_output
 from .decision import decision_maker_from, levels_from, model_from
@@ -181,6 +180,10 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
                 "robot_own_tools": args.robot_own_tools, "level": level, "habits": _habits_setting(args)}
     try:
         result = run_session(model, policy, source, robot, events, status, args.max_steps, settings=settings)
+    except KeyboardInterrupt as exc:  # the log holds the session up to the interrupt: say so, exit 128 + N
+        print(file=sys.stderr)  # off the prompt or the status line the interrupt came in
+        exc.kept = f"the session log {log_path} holds every step before it"
+        raise
     finally:
         events.close()
         if stream is not None:
@@ -191,8 +194,6 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
     print(f"log: {log_path}")
     if args.habits_out:
         _update_habits(args, plan, log_path)
-    if result.signal is not None:  # the log is complete up to the stop: the shell's 128 + N (README)
-        return exit_status(result.signal)
     return 0 if result.assembled else 1
 
 

@@ -49,12 +49,15 @@ class FactoredEpisode:
         return bool(self.steps) and self.steps[-1].position == len(self.path) or not self.path
 
     def first_confident(self, threshold: float) -> int | None:
-        """Operator operations done when the belief on the true intention first exceeds ``threshold``."""
-        return next((s.operator_operations for s in self.steps if s.p_true > threshold), None)
+        """Operator operations done when the belief on the true intention first exceeds ``threshold`` before
+        the product is finished (after a step that leaves some of the sequence to do); None if it never does.
+        Once the product is assembled the belief is on it trivially, so that step does not count."""
+        return next((s.operator_operations for s in self.steps if s.p_true > threshold
+                     and s.position < len(self.path)), None)
 
     def confident_before_finished(self, threshold: float) -> bool:
-        """True when the belief on the true intention passed ``threshold`` before the last step."""
-        return any(s.p_true > threshold for s in self.steps if s.position < len(self.path))
+        """True when the belief on the true intention passed ``threshold`` before the product was finished."""
+        return self.first_confident(threshold) is not None
 
 
 def true_intention_probability(model: FactoredIntentionModel, belief: FactoredBelief, path: list[int],

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..defaults import PRODUCT_FILE
 from ..errors import GeometryError
+from ..interrupts import held_interrupts
 from ..product import AXIS_DIRECTIONS, Direction, Obstruction, Product, load_product
 from ..product.designer import designer_geometry, release_marked
 from .clearances import analyze_with_clearances
@@ -38,8 +39,11 @@ def _base(product: Product) -> Path:
 
 
 def load_part_meshes(product: Product) -> list[PartMesh]:
-    """Read the mesh of every part (paths relative to the product file); errors name the part and file."""
-    import trimesh
+    """Read the mesh of every part (paths relative to the product file); errors name the part and file.
+    trimesh runs with interrupts held (:func:`planner.interrupts.held_interrupts`): it guards its optional
+    imports and some computations with ``except BaseException``, which would swallow a Ctrl-C or a SIGTERM."""
+    with held_interrupts():
+        import trimesh
 
     meshes = []
     for part in product.parts:
@@ -50,7 +54,8 @@ def load_part_meshes(product: Product) -> list[PartMesh]:
         if not path.is_file():
             raise GeometryError(f"{product.source}: part {part.id!r}: mesh file {path} does not exist")
         try:
-            mesh = trimesh.load(path, force="mesh", process=False)  # processing would drop NaN vertices silently
+            with held_interrupts():
+                mesh = trimesh.load(path, force="mesh", process=False)  # processing would drop NaN vertices silently
         except Exception as exc:  # trimesh raises many types for corrupt files
             # an unreadable header sends trimesh looking for optional modules (charset_normalizer): not the cause
             why = "not a mesh file it can read (a damaged header?)" if isinstance(exc, ImportError) else exc
@@ -61,7 +66,8 @@ def load_part_meshes(product: Product) -> list[PartMesh]:
         if not np.isfinite(np.asarray(mesh.vertices)).all():
             raise GeometryError(f"{product.source}: part {part.id!r}: mesh {path} has coordinates that are not "
                                 "finite numbers (NaN or infinity); re-export the part")
-        mesh.process()  # merge the vertices the facets share, as trimesh.load does by default
+        with held_interrupts():
+            mesh.process()  # merge the vertices the facets share, as trimesh.load does by default
         meshes.append(PartMesh(part.id, np.asarray(mesh.vertices, dtype=np.float64),
                                np.asarray(mesh.faces, dtype=np.int64)))
     return meshes

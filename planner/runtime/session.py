@@ -21,13 +21,13 @@ combination no operation shows) is logged as a warning naming the picks and what
 counts as blank; the session goes on. So does a robot operation the assembly state does not allow.
 
 The source and the robot are the protocols of :mod:`planner.runtime.interfaces`. Every event goes to an
-:class:`~planner.runtime.log.EventLog` (format in :mod:`planner.runtime.log`). A robot failure, an
-source error or a signal ends the loop cleanly: the belief stays the last
-consistent one, the log holds every event up to the stop, and the result says why.
+:class:`~planner.runtime.log.EventLog` (format in :mod:`planner.runtime.log`). A robot failure or a
+source error ends the loop cleanly: the belief stays the last consistent one, the log holds every event up to
+the stop, and the result says why. A signal ends the log with an ``interrupted`` end event and is raised
+again (the command exits 128 + N).
 """
 from __future__ import annotations
 
-import signal
 import time
 from dataclasses import dataclass, field
 from typing import Callable
@@ -40,7 +40,6 @@ from ..decision.belief import UnexplainedObservation
 from ..decision.factored_model import FactoredBelief, FactoredIntentionModel
 from ..decision.intention_model import IntentionModel
 from ..errors import PlannerError
-from ..interrupts import signal_number
 from ..product import product_to_dict
 from .interfaces import Instruction, ObservationSource, Robot, instruction_for
 from .log import LOG_VERSION, EventLog, belief_at, top_intentions, updater_for
@@ -51,8 +50,9 @@ __all__ = ["SessionResult", "run_session", "status_line"]
 
 @dataclass
 class SessionResult:
-    """How a session ended. ``reason``: ``assembled``, ``source ended``, ``robot failed``, ``error``,
-    ``interrupted`` (``signal``: the signal's number) or ``step limit``; ``message`` says more."""
+    """How a session ended. ``reason``: ``assembled``, ``source ended``, ``robot failed``, ``error`` or
+    ``step limit``; ``message`` says more. (An interrupt has no result: the log's
+    end event says ``interrupted`` and the interrupt is raised again.)"""
 
     reason: str
     message: str
@@ -63,7 +63,6 @@ class SessionResult:
     actions: list[int] = field(default_factory=list)
     observations: list[int] = field(default_factory=list)
     decision_seconds: list[float] = field(default_factory=list)  # the time the policy took for each action
-    signal: int | None = None
 
     @property
     def assembled(self) -> bool:
@@ -87,8 +86,8 @@ def run_session(model: IntentionModel | FactoredIntentionModel, policy, source: 
     intentions) or factored (:func:`planner.decision.factored_model`, beliefs over classes); ``policy`` has
     ``action(belief)`` for that belief (an offline policy, or the online planner); ``status`` receives a :func:`status_line` after each step;
     ``settings`` (e.g. the policy file, rewards, discount) go into the log's start event. Never raises for a
-    robot failure, a source error or an interrupt (Ctrl-C, or SIGTERM/SIGHUP under
-    :func:`planner.interrupts.signals_as_interrupts`): the result says what happened.
+    robot failure or a source error: the result says what happened. An interrupt
+    (Ctrl-C, SIGTERM) ends the log with an ``interrupted`` end event and is raised again.
     Cost per step: one policy lookup and one belief update, plus what the source and the robot take.
     """
     run = _Run(model, log if log is not None else EventLog())
@@ -114,10 +113,9 @@ def run_session(model: IntentionModel | FactoredIntentionModel, policy, source: 
         return run.stop(stop.reason, stop.message)
     except PlannerError as exc:
         return run.stop("error", str(exc))
-    except KeyboardInterrupt as exc:  # the log is complete up to here; the command exits 128 + the signal
-        run.result.signal = signal_number(exc)
-        return run.stop("interrupted", f"interrupted ({signal.Signals(run.result.signal).name}) at step "
-                        f"{run.result.steps}")
+    except KeyboardInterrupt:  # the log ends with it, then the interrupt goes on (the command exits 128 + N)
+        run.stop("interrupted", f"interrupted at step {run.result.steps}")
+        raise
 
 
 class _Stop(Exception):

@@ -11,6 +11,7 @@ refuse root, so under root the write permission check is monkeypatched. Interrup
 from __future__ import annotations
 
 import io
+import json
 import os
 import signal
 import subprocess
@@ -388,6 +389,84 @@ def test_sigterm_on_export_removes_the_partial_bundle(tmp_path):
     assert process.returncode == 128 + signal.SIGTERM and "Traceback" not in err.decode()
     assert _tree(tmp_path) == {"pen.FCStd"}
     assert not _alive(child)
+
+
+#: ``aplan ARGS`` that stops inside trimesh's ``try: from . import voxel / except BaseException`` (an optional
+#: import that swallows everything), says so on standard error and goes on when a line comes on standard input.
+_PAUSED_IN_TRIMESH = r"""
+import sys
+from importlib.abc import MetaPathFinder
+
+
+class PauseInTrimesh(MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name == "trimesh.voxel":
+            print("paused in trimesh's guarded import", file=sys.stderr, flush=True)
+            sys.stdin.readline()
+        return None
+
+
+sys.meta_path.insert(0, PauseInTrimesh())
+from planner.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def _pending_signals(pid: int) -> int:
+    """The signals sent to ``pid`` and not yet delivered (its own and its thread group's)."""
+    with open(f"/proc/{pid}/status") as handle:
+        fields = dict(line.split(":", 1) for line in handle if ":" in line)
+    return int(fields["SigPnd"], 16) | int(fields["ShdPnd"], 16)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_during_an_import_that_swallows_everything_is_not_lost(signum, tmp_path):
+    """Issue 22: trimesh guards its optional imports with ``except BaseException``; a Ctrl-C or SIGTERM that
+    came then was swallowed and the command ran to its end (exit 0, the output written). Now it ends with
+    128 + N, one line, no traceback, no output: the signal is sent while the import is paused there, and the
+    import goes on only once the signal has been delivered (/proc: nothing pending)."""
+    target = tmp_path / "out.json"
+    process = subprocess.Popen([sys.executable, "-c", _PAUSED_IN_TRIMESH, "analyze",
+                                str(REPO / "resources" / "examples" / "pen" / "pen.json"), "-o", str(target)],
+                               cwd=REPO, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    seen = b""
+    while b"guarded import\n" not in seen:  # the whole line: a signal in the middle of print() would cut it
+        chunk = process.stderr.read1(256)
+        assert chunk, f"the command ended before it reached trimesh's import: {seen.decode()}"
+        seen += chunk
+    process.send_signal(signum)
+    _wait_for(lambda: not _pending_signals(process.pid), "the signal delivered")
+    out, err = process.communicate(b"\n", timeout=120)
+    message = (seen + err).decode()
+    assert process.returncode == 128 + signum, message
+    assert "Traceback" not in message
+    assert message.splitlines()[-1] == f"aplan: interrupted ({signal.Signals(signum).name}): nothing was written"
+    assert _tree(tmp_path) == set() and out == b""  # no output, no temporary file
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_an_interrupted_session_keeps_its_log_and_exits_128_plus_n(signum, tmp_path):
+    """A keyboard session signalled while it waits for the operator: 128 + N (it used to exit 1: the session
+    caught the interrupt and returned), one line saying the log is kept, the log ended by an interrupted event,
+    nothing else written."""
+    log = tmp_path / "s.jsonl"
+    process = subprocess.Popen([sys.executable, "-m", "planner", "session", "pen", "--keyboard", "--log", str(log),
+                                "--expansions", "20"], cwd=REPO, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE)
+    seen = b""
+    while b"operator picked" not in seen:  # the first prompt: the session waits for a line
+        chunk = process.stderr.read1(256)
+        assert chunk, f"the session ended before it asked: {seen.decode()}"
+        seen += chunk
+    process.send_signal(signum)
+    out, err = process.communicate(timeout=120)
+    message = (seen + err).decode()
+    assert process.returncode == 128 + signum and "Traceback" not in message, message
+    assert message.splitlines()[-1] == (f"aplan: interrupted ({signal.Signals(signum).name}): the session log "
+                                        f"{log} holds every step before it")
+    events = [json.loads(line) for line in log.read_text().splitlines()]
+    assert events[0]["event"] == "start" and events[-1]["event"] == "end"
+    assert events[-1]["reason"] == "interrupted" and _tree(tmp_path) == {"s.jsonl"}
 
 
 def test_random_damage_is_named_or_harmless(tmp_path):

@@ -393,6 +393,39 @@ def test_no_command_writes_a_non_finite_number(work, option, value):
     assert not [p for p in files_in(work) if p.endswith(".tmp")]
 
 
+def _strict_json(line: str):
+    """``line`` as JSON, refusing NaN and infinity (Python's reader takes them; a strict one does not)."""
+    def refuse(token):
+        raise AssertionError(f"{token} in {line}")
+
+    return json.loads(line, parse_constant=refuse)
+
+
+@settings(max_examples=6, derandomize=True, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(steps=st.integers(1, 8), seed=st.integers(0, 2 ** 16), json_out=st.booleans())
+def test_simulate_reports_only_what_happened(work, steps, seed, json_out):
+    """Issue 22, item 9: episodes cut short anywhere (``--max-steps``) and any seed: strict JSON (no NaN), the
+    decision times ordered, confidence only before the finish and never "None" in the text; the run's line
+    sums the episodes up."""
+    argv = ["simulate", "pen", "--random", "2", "--expansions", "5", "--max-steps", steps, "--seed", seed]
+    code, out, err = aplan(*argv, *(["--json"] if json_out else []))
+    assert code == 0 and "Traceback" not in err, err
+    if not json_out:
+        assert "None" not in out and "nan" not in out.lower() and out.splitlines()[-1].startswith("run: 2 episode(s)")
+        return
+    *episodes, run_line = [_strict_json(line) for line in out.splitlines()]
+    assert len(episodes) == 2 and set(run_line) == {"run"}
+    for episode in episodes:
+        times = [episode[f"decision_seconds_{k}"] for k in ("median", "p95", "max")]
+        assert 0 <= times[0] <= times[1] <= times[2]
+        confident = episode["confident_after_operations"]
+        assert confident is None or 0 <= confident < len(episode["operations"])  # the last one finishes it
+    summary = run_line["run"]
+    assert summary["episodes"] == 2 and 2 <= summary["decisions"] <= 2 * steps
+    assert summary["confident_episodes"] == sum(e["confident_after_operations"] is not None for e in episodes)
+
+
 def _damaged_text(data, text: str) -> str:
     """``text`` with one to three damages: cut short, a number replaced, a line dropped or doubled, bytes
     replaced, deep nesting inserted."""

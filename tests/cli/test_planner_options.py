@@ -25,8 +25,8 @@ def test_online_by_default_without_a_policy():
     done = _aplan("simulate", "pen", "--random", 2, "--expansions", 5, "--json")
     assert done.returncode == 0, done.stderr
     assert "no --policy: using the online planner" in done.stderr
-    lines = [json.loads(line) for line in done.stdout.splitlines()]
-    assert len(lines) == 2 and all(line["finished"] for line in lines)
+    *lines, run_line = [json.loads(line) for line in done.stdout.splitlines()]
+    assert len(lines) == 2 and all(line["finished"] for line in lines) and run_line["run"]["episodes"] == 2
     assert all(len(line["operations"]) == 5 for line in lines)  # the pen's 6 parts take 5 operations
 
 
@@ -34,7 +34,7 @@ def test_online_by_itself_beyond_the_flat_model(chain11):
     done = _aplan("simulate", chain11, "--random", 1, "--expansions", 3, "--json")
     assert done.returncode == 0, done.stderr
     assert "9,864,101 intentions" in done.stderr and "using the online planner" in done.stderr
-    assert json.loads(done.stdout)["finished"]
+    assert json.loads(done.stdout.splitlines()[0])["finished"]
     offline = _aplan("evaluate", chain11, "--planner", "offline", "--episodes", 2)
     assert offline.returncode == 1 and "9,864,101 intentions" in offline.stderr
     assert "--planner online" in offline.stderr and "Traceback" not in offline.stderr
@@ -43,7 +43,7 @@ def test_online_by_itself_beyond_the_flat_model(chain11):
 def test_sequences_by_rank_on_the_factored_model():
     done = _aplan("simulate", "pen", "--planner", "online", "--sequence", 0, 23, "--expansions", 2, "--json")
     assert done.returncode == 0, done.stderr
-    first, last = (json.loads(line)["operations"] for line in done.stdout.splitlines())
+    first, last = (json.loads(line)["operations"] for line in done.stdout.splitlines()[:-1])  # then the run's line
     assert first != last
     bad = _aplan("simulate", "pen", "--planner", "online", "--sequence", 24, "--expansions", 2)
     assert bad.returncode == 1 and "numbered by rank, from 0 to 23" in bad.stderr
@@ -87,7 +87,7 @@ def test_a_policy_over_classes_runs_on_the_factored_model(tmp_path):
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["episodes"] == 30
     done = _aplan("simulate", "pen", "--policy", policy, "--sequence", 0, "--json")
-    assert done.returncode == 0 and json.loads(done.stdout)["finished"], done.stderr
+    assert done.returncode == 0 and json.loads(done.stdout.splitlines()[0])["finished"], done.stderr
     done = _aplan("simulate", "pen", "--planner", "online", "--policy", policy, "--expansions", 5, "--random", 1,
                   "--json")
-    assert done.returncode == 0 and json.loads(done.stdout)["finished"], done.stderr
+    assert done.returncode == 0 and json.loads(done.stdout.splitlines()[0])["finished"], done.stderr

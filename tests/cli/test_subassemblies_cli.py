@@ -105,8 +105,8 @@ def test_models_need_a_level(capsys, chains, tmp_path):
 
 def test_simulate_goes_through_the_levels(capsys, chains):
     code, out, _ = run(capsys, "simulate", chains, "--expansions", "20", "--json")
-    episodes = [json.loads(line) for line in out.splitlines()]
-    assert code == 0 and len(episodes) == 3
+    *episodes, run_line = [json.loads(line) for line in out.splitlines()]
+    assert code == 0 and len(episodes) == 3 and run_line["run"]["episodes"] == 3  # the run's line: every level
     assert [len(e["operations"]) for e in episodes] == [2, 2, 1]  # n - 1 operations per level
     assert all(e["finished"] for e in episodes)
     code, out, _ = run(capsys, "simulate", chains, "--expansions", "20")

@@ -11,7 +11,8 @@ from figure_support import pyplot_untouched
 from planner import make_plan
 from planner.decision import intention_model
 from planner.decision.belief_plot import episode_trace, plot_beliefs
-from planner.decision.simulate import evaluate_policy, simulate_episode
+from planner.decision.factored_simulate import FactoredEpisode, FactoredStep
+from planner.decision.simulate import Episode, Step, confidence_text, decision_times, evaluate_policy, simulate_episode
 from planner.decision.solvers import PointBasedSolver
 
 
@@ -79,11 +80,86 @@ def test_cli_simulate_and_evaluate(tmp_path):
     run = run_aplan
     assert run("solve", "pen", "--technical", "-o", str(policy), "--time-limit", "3", "--quiet").returncode == 0
     done = run("simulate", "pen", "--technical", "--policy", str(policy), "--all", "--json")
-    lines = [json.loads(l) for l in done.stdout.splitlines()]
+    *lines, run_line = [json.loads(l) for l in done.stdout.splitlines()]
     assert done.returncode == 0 and len(lines) == 12  # the 12 sequences with the technical constraint
-    assert all(set(l) == {"sequence", "operations", "confident_after_operations", "discounted_return"} for l in lines)
+    assert all(set(l) == {"sequence", "operations", "confident_after_operations", "discounted_return",
+                          "decision_seconds_median", "decision_seconds_p95", "decision_seconds_max"} for l in lines)
+    confident = [l["confident_after_operations"] for l in lines]
+    assert all(c is None or 0 <= c <= 4 for c in confident)  # five operations; the fifth finishes the pen
+    assert all(0 <= l["decision_seconds_median"] <= l["decision_seconds_p95"] <= l["decision_seconds_max"]
+               for l in lines)
+    summary = run_line["run"]
+    assert summary["episodes"] == 12 and summary["confident_episodes"] == sum(c is not None for c in confident)
+    assert summary["decision_seconds_max"] == max(l["decision_seconds_max"] for l in lines)
+    assert summary["decision_seconds_median"] <= summary["decision_seconds_p95"] <= summary["decision_seconds_max"]
     done = run("evaluate", "pen", "--technical", "--policy", str(policy), "--episodes", "200", "--json")
     data = json.loads(done.stdout)
     assert set(data) == {"mean_return", "ci95", "episodes"} and data["episodes"] == 200
     bad = run("simulate", "pen", "--technical", "--policy", str(policy), "--sequence", "3")
     assert bad.returncode == 1 and "is not a full assembly sequence" in bad.stderr
+
+
+def _flat(p_true: list[float], states: list[int]) -> Episode:
+    return Episode(9, [Step(0, 0, state, p, k + 1, 0.0) for k, (p, state) in enumerate(zip(p_true, states))],
+                   final=0)
+
+
+def _factored(p_true: list[float], positions: list[int]) -> FactoredEpisode:
+    return FactoredEpisode([4, 5, 6], [FactoredStep(0, 0, position, p, k + 1, 0.0, 0.0)
+                                       for k, (p, position) in enumerate(zip(p_true, positions))])
+
+
+def test_confident_only_before_the_product_is_finished():
+    """Issue 22: the belief on the true intention passing 0.9 at the last operation (the product assembled,
+    the belief on it trivially 1) is not being confident; before it, the operator operations done then."""
+    assert _flat([0.5, 0.95, 1.0], [3, 2, 0]).first_confident(0.9) == 2
+    assert _flat([0.5, 0.6, 1.0], [3, 2, 0]).first_confident(0.9) is None  # only once assembled: never
+    assert _flat([0.5, 0.9, 1.0], [3, 2, 0]).first_confident(0.9) is None  # above, not at
+    assert _factored([0.5, 0.95, 1.0], [1, 2, 3]).first_confident(0.9) == 2
+    assert _factored([0.5, 0.6, 1.0], [1, 2, 3]).first_confident(0.9) is None
+    assert not _factored([0.5, 0.6, 1.0], [1, 2, 3]).confident_before_finished(0.9)
+    assert confidence_text(None) == "belief on the true intention never above 0.9 before the product was finished"
+    assert confidence_text(1).endswith("after 1 operator operation") and confidence_text(3).endswith("operations")
+
+
+def test_decision_times_closed_form():
+    """1 to 20 ms: median 10.5 ms, 95th percentile 19 + 0.05 ms (rank 0.95 x 19 = 18.05, linear), max 20 ms."""
+    times = decision_times(k / 1000 for k in range(1, 21))
+    assert times == {"decision_seconds_median": 0.0105, "decision_seconds_p95": 0.01905, "decision_seconds_max": 0.02}
+    assert decision_times([]) == dict.fromkeys(times)
+
+
+def test_the_pen_robot_is_confident_within_the_papers_range():
+    """The online planner on the pen (work-bounded: 100 expansions per decision), the operator taking turns as in
+    the paper's experiment, every sequence: confident after 2 to 4 operator operations (the paper's three runs:
+    2, 2 and 4), or never before the finish (the fifth operation finishes the pen)."""
+    from planner import api
+    from planner.decision.factored_model import factored_model
+
+    model = factored_model(make_plan(api.resolve_product("pen")))
+    episodes = api.simulate(model, api.online_planner(model, None, 100), every=True, operator="turns")
+    confident = [e.first_confident(0.9) for e in episodes]
+    assert len(episodes) == 24 and all(e.finished for e in episodes)
+    assert {c for c in confident if c is not None} <= {2, 3, 4} and 2 in confident and 4 in confident
+    for episode, operations in zip(episodes, confident):  # the step it names: the first above 0.9, unfinished
+        first = next((s for s in episode.steps if s.p_true > 0.9 and s.position < 5), None)
+        assert operations == (None if first is None else first.operator_operations)
+
+
+def test_cli_simulate_online_reports_decision_times_and_never_none():
+    """The factored model's JSON lines carry the decision times too, the run's line sums them up, and the text
+    says "never above 0.9 before the product was finished" rather than "after None operator operation(s)"."""
+    args = ["simulate", "pen", "--sequence", "0", "1", "--expansions", "50", "--operator", "turns"]
+    done = run_aplan(*args, "--json")
+    *lines, run_line = [json.loads(line) for line in done.stdout.splitlines()]
+    assert done.returncode == 0 and len(lines) == 2 and set(run_line) == {"run"}
+    assert all({"decision_seconds_median", "decision_seconds_p95", "decision_seconds_max", "finished"} <= set(line)
+               for line in lines)
+    text = run_aplan(*args)
+    assert text.returncode == 0 and "None" not in text.stdout
+    rows = [line for line in text.stdout.splitlines() if line[:6].strip().isdigit()]  # one per step: a decision
+    assert run_line["run"]["episodes"] == 2 and run_line["run"]["decisions"] == len(rows) > 0
+    said = [line for line in text.stdout.splitlines() if "belief on the true intention" in line]
+    assert len(said) == 2 and all("first above 0.9 after" in line or "never above 0.9 before the product was "
+                                  "finished" in line for line in said)
+    assert "95th percentile" in said[0] and text.stdout.splitlines()[-1].startswith("run: 2 episode(s), ")

@@ -77,6 +77,11 @@ out["restored"] = placements() == before
 out["undo_after"] = len(doc.UndoNames) - steps
 out["touched"] = [o.Name for o in doc.Objects if hasattr(o, "isTouched") and o.isTouched()]
 out["before"] = before
+from freecad_aplan.plan3d import orthographic_fit
+V = FreeCAD.Vector
+corners = [V(x, y, z) for x in (0, 4) for y in (0, 1) for z in (0, 2)]  # 4 wide, 1 high, 2 deep
+fits = [orthographic_fit([V(1, 0, 0), V(0, 1, 0), V(0, 0, 1)], corners, aspect) for aspect in (2, 0.5, 8)]
+out["fits"] = [[list(position), focal, height] for position, focal, height in fits]
 print("APLAN-RESULT " + json.dumps(out))
 """
 
@@ -103,3 +108,9 @@ def test_a_step_moves_the_parts_and_restore_puts_them_back(tmp_path):
     assert any(any(abs(c) > 1 for c in v) for v in data["offsets"].values())
     assert data["undo_while_shown"] == 0 and data["undo_after"] == 0
     assert data["restored"] is True and data["touched"] == [] and data["status_kept"] is True
+    # The camera fit, closed form on a box 4 x 1 x 2 seen along -z: centred, in front, the larger projected side
+    # fitting (width 4 over aspect 2 = 2 > height 1; on a view twice as high the height goes on the width: 4).
+    wide, tall, flat = data["fits"]
+    assert wide[0] == pytest.approx([2, 0.5, 4]) and wide[1:] == pytest.approx([3, 2.2])
+    assert tall[2] == pytest.approx(4.4)
+    assert flat[2] == pytest.approx(1.1)  # aspect 8: the height 1 decides
