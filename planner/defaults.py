@@ -14,7 +14,8 @@ __all__ = [
     "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
     "CONFIDENCE", "DECISION_TIME", "ONLINE_EXPANSIONS", "ONLINE_DEPTH",
     "JSON_DEPTH_LIMIT", "INPUT_FILE_LIMIT", "SPREAD_CELL_LIMIT", "DECLARED_LIMIT", "RESOLUTION_LIMIT", "EPISODE_LIMIT",
-    "LINEAR_DEFLECTION_MIN",
+    "LINEAR_DEFLECTION_MIN", "TIME_LIMIT_MAX", "DECISION_TIME_MAX", "EXPANSION_LIMIT", "TRIAL_LIMIT", "STEP_LIMIT",
+    "ONLINE_TREE_NUMBERS",
 ]
 
 # The product file (docs/product-format.md): its "format" and "version" keys, and its name in a bundle.
@@ -76,6 +77,19 @@ SOLVE_PRECISION = 1e-3             # target gap between the bounds at the initia
 DECISION_TIME = 0.1                # seconds per decision (--decision-time)
 ONLINE_EXPANSIONS = 1000           # expansions per decision at most (--expansions sets it and drops the clock)
 ONLINE_DEPTH = 8                   # the deepest belief the search expands
+# The search tree of one decision holds at most this many numbers (its beliefs and per-action bounds, about
+# 12 bytes each: 600 MB); past it the search stops with the best action so far, whatever --expansions says.
+ONLINE_TREE_NUMBERS = 50_000_000
+
+# Work and time options (checked when parsed, exit 2 past them): --time-limit (solve, and the offline solve
+# of simulate, evaluate and session) at most 1,000,000 s (11.6 days); --decision-time at most 60 s;
+# --expansions per decision at most 1,000,000 (the pen: about 0.4 ms each, so 7 minutes); --trials of solve;
+# --max-steps per episode or session.
+TIME_LIMIT_MAX = 1_000_000
+DECISION_TIME_MAX = 60
+EXPANSION_LIMIT = 1_000_000
+TRIAL_LIMIT = 1_000_000_000
+STEP_LIMIT = 1_000_000
 
 # The belief on the true intention above which the robot counts as confident (paper's Fig. 7 discussion).
 CONFIDENCE = 0.9

@@ -199,15 +199,18 @@ def trial(m: Tables, b0: np.ndarray, lower: LowerBound, upper: UpperBound, belie
     return float(len(path) * m.A * m.Z * m.S + distinct * m.S * (lower.n + upper.n))
 
 
-def backup_groups(m: Tables, lower: LowerBound, upper: UpperBound) -> float:
+def backup_groups(m: Tables, lower: LowerBound, upper: UpperBound, stop: Callable[[], bool] | None = None) -> float:
     """Back up both bounds at every corner group's belief (:class:`~.upper.CornerGroups`), in the groups'
     order (put the ones nearer the end first, so one pass carries values back); an upper value that is lower
-    than the group's replaces it. Returns the work, counted as :func:`trial` counts it. Cost: one
+    than the group's replaces it. ``stop``: checked before each group (the pass ends there; every group
+    backed up so far keeps its values). Returns the work, counted as :func:`trial` counts it. Cost: one
     :func:`successors` and one :func:`backup` per group."""
     if upper.groups is None:
         return 0.0
     work = 0.0
     for g, b in enumerate(upper.group_beliefs):
+        if stop is not None and stop():
+            break
         low, best = (float(v[0]) for v in lower.at(b[None]))
         s = successors(m, b, lower, upper, low)
         high = float(upper.group_value[g])
