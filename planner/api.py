@@ -93,7 +93,7 @@ from .product import (
     load_product,
     with_fastener_mode,
 )
-from .interrupts import deferred_interrupts
+from .interrupts import Interrupted, deferred_interrupts
 from .product.examples import EXAMPLES, example_path
 from .runtime.logged_sequence import LoggedSequence, complete_sequence, logged_sequence
 from .validation import InputLimits
@@ -682,6 +682,8 @@ def solve(model: Model, time_limit: float = SOLVE_TIME_LIMIT, precision: float =
             left = started + time_limit - solver.clock() if finite else math.inf
             start = solver_start(model, deadline=solver.clock() + left / 4 if finite else math.inf,
                                  clock=lambda: math.inf if pending() else solver.clock()).solve_options
+            if pending():  # before the solver had anything: nothing to keep, so stop at once
+                raise Interrupted(pending())
         return solver.solve(tables(model), progress, started=started, **start)
 
 

@@ -330,7 +330,8 @@ class OnlinePlanner:
         longest = 2 * (time.perf_counter() - start)  # the longest expansion so far (at first: twice the root's time)
         while (not too_large and done < self.expansions and root.upper - root.lower > self.precision
                and self._numbers < self.max_numbers):
-            # Stop when one more expansion as long as the longest so far would pass the deadline.
+            # Stop when one more expansion as long as the longest so far (at most a quarter of the budget: each
+            # step's own estimate, in _expand_best, catches the large ones) would pass the deadline.
             now = time.perf_counter()
             if deadline is not None and now + min(longest, 0.25 * self.decision_time) >= deadline:
                 break

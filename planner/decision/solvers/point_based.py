@@ -212,7 +212,7 @@ class PointBasedSolver:
                 if groups is not None and iterations % self.group_every == 0:
                     work += backup_groups(m, lower, upper, out_of_time)
                 if upper.n >= max(self.prune_points_at, 2 * pruned_at):
-                    upper.prune()
+                    upper.prune(stop=out_of_time)
                     pruned_at = upper.n
             gap = ub - lb
             # The sweeps change only the lower bound: the upper one at b0 is the same number as before.
@@ -237,5 +237,5 @@ def _add_points(upper: UpperBound, B: np.ndarray, values: np.ndarray, prune_at: 
         keep = known < upper.at(part) - 1e-12
         for b, value in zip(part[keep], known[keep]):
             upper.update(b, float(value))
-    if upper.n >= prune_at and not late():
-        upper.prune()
+    if upper.n >= prune_at:
+        upper.prune(stop=late)
