@@ -238,6 +238,11 @@ class _Split:
         return _posterior(self.classes, self.mass * likelihood[self.inverse])
 
 
+# What a tree node costs besides its arrays (the Python objects: the node, its lists and array headers, about
+# 1 KB), counted in numbers against the tree's cap: on the pen they outweigh the beliefs.
+_NODE_NUMBERS = 128
+
+
 @dataclass
 class _Node:
     """A belief in the search tree; ``children[a]``: ``(reward, [(P(z), child), ...])`` once ``a`` is expanded.
@@ -363,7 +368,7 @@ class OnlinePlanner:
 
     def _count(self, node: _Node) -> None:
         """Add a node's belief and per-action bounds to the tree's size."""
-        self._numbers += 2 * node.belief.classes.size + 2 * node.action_upper.size
+        self._numbers += 2 * node.belief.classes.size + 2 * node.action_upper.size + _NODE_NUMBERS
 
     def _bound(self, node: _Node) -> None:
         """The per-action bounds of a node whose belief is known: QMDP above, "act, then wait" below."""
@@ -437,7 +442,8 @@ class OnlinePlanner:
         model = self.model
         reward = float(model.expected_rewards(node.belief)[action])
         split = _Split(model, model.predict(node.belief, action), self.values.value)
-        self._numbers += 6 * split.classes.size  # the split's arrays (classes, masses, their states and keys)
+        # the split's arrays (classes, masses, their states and keys) and a node per observation
+        self._numbers += 6 * split.classes.size + _NODE_NUMBERS * len(split.branches)
         wait_forever = self._after_now / model.discount
         branches = []
         for z, p, upper in split.branches:
