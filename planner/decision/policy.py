@@ -64,10 +64,11 @@ class AlphaVectorPolicy:
                               f"numbered 0 to {n_actions - 1}")
 
 
-# Seconds per number that writing a policy takes (policy_text and the atomic write): 0.45 to 0.93 us measured
-# on chain 11's lumped policies (684 vectors of 5,121 numbers in 1.56 s; 394 in 1.9 s, load average 9);
-# aplan solve keeps this much of its time limit per number of the policy so far, so the command ends in time.
-WRITE_SECONDS = 1e-6
+# Seconds per number that writing a policy takes (policy_text and the atomic write): 0.45 to 2.2 us measured
+# on lumped policies (chain 11: 684 vectors of 5,121 numbers in 1.56 s, 394 in 1.9 s at load average 9;
+# complete 7: 968 of 4,803 in 10.3 s at load 12); aplan solve keeps this much of its time limit per number
+# of the policy so far, so that the command ends in time on a loaded machine.
+WRITE_SECONDS = 2e-6
 
 
 def policy_text(policy: AlphaVectorPolicy, model_name: str = "aplan") -> str:
