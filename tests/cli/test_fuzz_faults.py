@@ -61,7 +61,7 @@ OUTPUT_CASES = {
     "output under a file": (["pomdp", "pen", "-o", "afile/m.pomdpx"], {}, "is not a folder"),
     "pomdpx on a full disk": (["pomdp", "pen", "-o", "m.pomdpx"], {FAULT_DISK_FULL: "4096"}, "the disk is full"),
     ".pomdp on a full disk": (["pomdp", "pen", "-o", "m.pomdp"], {FAULT_DISK_FULL: "4096"}, "the disk is full"),
-    "policy on a full disk": (["solve", "pen", "-o", "p.policy", "--force", "--quiet", "--time-limit", "0.3"],
+    "policy on a full disk": (["solve", "pen", "-o", "p.policy", "--force", "--quiet", "--trials", "20"],
                               {FAULT_DISK_FULL: "4096"}, "the disk is full"),
     "marker sheet (pdf) on a full disk": (["markers", "pen", "-o", "s.pdf"], {FAULT_DISK_FULL: "1000"},
                                           "the disk is full"),
@@ -80,7 +80,7 @@ OUTPUT_CASES = {
 def pen_policy(tmp_path_factory) -> Path:
     """A small policy for the pen (a few solver steps), for commands that need one."""
     folder = tmp_path_factory.mktemp("policy")
-    assert main(["solve", "pen", "-o", str(folder / "p.policy"), "--quiet", "--time-limit", "0.3"]) == 0
+    assert main(["solve", "pen", "-o", str(folder / "p.policy"), "--quiet", "--trials", "20"]) == 0
     return folder / "p.policy"
 
 
