@@ -82,6 +82,7 @@ from .errors import (
     UnknownProductError,
     gib,
 )
+from .interrupts import Interrupted, deferred_interrupts
 from .product import (
     FASTENER_MODES,
     FastenerGroup,
@@ -93,7 +94,6 @@ from .product import (
     load_product,
     with_fastener_mode,
 )
-from .interrupts import Interrupted, deferred_interrupts
 from .product.examples import EXAMPLES, example_path
 from .runtime.logged_sequence import LoggedSequence, complete_sequence, logged_sequence
 from .validation import InputLimits
@@ -698,7 +698,8 @@ def check_solved(result: SolveResult, precision: float, time_limit: float, what:
         return None
     more = (f"Give it more time ({what} {_more_time(time_limit)}), or a smaller model ({smaller})")
     if not result.improved(1e-9 * max(1.0, abs(result.blind_lower))):
-        raise SolveTimeError(f"no policy written: after {result.seconds:.1f} s of the {time_limit:g} s limit the "
+        limit = f"of the {time_limit:g} s limit " if time_limit is not None else ""
+        raise SolveTimeError(f"no policy written: after {result.seconds:.1f} s {limit}the "
                              f"solver's lower bound at the initial belief is still the blind policies' "
                              f"({result.lower_bound:.6f}; {result.iterations} trials): such a policy repeats one "
                              f"action whatever it observes. {more}")
@@ -707,8 +708,8 @@ def check_solved(result: SolveResult, precision: float, time_limit: float, what:
             f"after {result.seconds:.1f} s): it does little better than one action repeated. {more}")
 
 
-def _more_time(limit: float) -> str:
-    return f"{max(2 * limit, limit + 30):g}"
+def _more_time(limit: float | None) -> str:
+    return f"{max(2 * limit, limit + 30):g}" if limit is not None and math.isfinite(limit) else "larger"
 
 
 def policy_for(model: Model, policy: str | os.PathLike | None = None, time_limit: float = POLICY_TIME_LIMIT,
