@@ -446,9 +446,13 @@ def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE
 
     model = api.decision_model(product, technical, base_part=base_part)
     result = api.solve(model, time_limit, precision, progress=progress)
+    # A policy no better than the blind ones is refused (a PlannerError naming the bound and what helps);
+    # one barely better is written with the warning.
+    warning = api.check_solved(result, precision, time_limit, what="the solve time limit (SolveTimeLimit)")
     write_policy(result.policy, output, model.name)
     return {"lower_bound": result.lower_bound, "upper_bound": result.upper_bound,
-            "alpha_vectors": int(result.policy.alphas.shape[0]), "seconds": round(result.seconds, 2)}
+            "alpha_vectors": int(result.policy.alphas.shape[0]), "seconds": round(result.seconds, 2),
+            **({"warning": warning} if warning else {})}
 
 
 def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None = None, seed: int = 0,

@@ -15,6 +15,7 @@ __all__ = [
     "CONFIDENCE", "DECISION_TIME", "ONLINE_EXPANSIONS", "ONLINE_DEPTH",
     "JSON_DEPTH_LIMIT", "INPUT_FILE_LIMIT", "SPREAD_CELL_LIMIT", "DECLARED_LIMIT", "RESOLUTION_LIMIT", "EPISODE_LIMIT",
     "LINEAR_DEFLECTION_MIN", "STRUCTURE_DEFAULT", "MAX_COMPONENTS", "HABITS_FORMAT", "HABITS_VERSION", "HABITS_PRIOR",
+    "TIME_LIMIT_MAX", "DECISION_TIME_MAX", "EXPANSION_LIMIT", "TRIAL_LIMIT", "STEP_LIMIT", "ONLINE_TREE_NUMBERS",
 ]
 
 # The product file (docs/product-format.md): its "format" and "version" keys, and its name in a bundle.
@@ -76,6 +77,20 @@ SOLVE_PRECISION = 1e-3             # target gap between the bounds at the initia
 DECISION_TIME = 0.1                # seconds per decision (--decision-time)
 ONLINE_EXPANSIONS = 1000           # expansions per decision at most (--expansions sets it and drops the clock)
 ONLINE_DEPTH = 8                   # the deepest belief the search expands
+# The search tree of one decision holds at most this many numbers (its beliefs, splits and per-action bounds,
+# about 8 to 12 bytes each: 200 MB); past it the search stops with the best action so far, whatever
+# --expansions says (the pen grew about 6.5 MB/s without it).
+ONLINE_TREE_NUMBERS = 20_000_000
+
+# Work and time options (checked when parsed, exit 2 past them): --time-limit (solve, and the offline solve
+# of simulate, evaluate and session) at most 1,000,000 s (11.6 days); --decision-time at most 60 s;
+# --expansions per decision at most 1,000,000 (the pen: about 0.4 ms each, so 7 minutes); --trials of solve;
+# --max-steps per episode or session.
+TIME_LIMIT_MAX = 1_000_000
+DECISION_TIME_MAX = 60
+EXPANSION_LIMIT = 1_000_000
+TRIAL_LIMIT = 1_000_000_000
+STEP_LIMIT = 1_000_000
 
 # Operator habits (planner.decision.habits): the habits file's "format" and "version", and the prior alpha:
 # pseudo-observations per state edge, spread as the paper's model chooses (1: one session's worth of

@@ -18,6 +18,7 @@ __all__ = [
     "NotDisassemblableError",
     "InterlockedPartsError",
     "LimitExceededError",
+    "SolveTimeError",
     "MemoryLimitError",
     "FileLimitError",
     "gib",
@@ -57,6 +58,11 @@ class ProductFormatError(PlannerError):
         self.problem = problem
         where = f"{source}: {location}" if location else source
         super().__init__(f"{where}: {problem}")
+
+
+class SolveTimeError(PlannerError):
+    """The solver's time limit passed before it had a policy worth keeping (no better than the blind policies
+    it starts from) or before it could start; nothing is written, and the message says what helps."""
 
 
 class UnknownProductError(PlannerError):

@@ -116,11 +116,19 @@ def held_interrupts() -> Iterator[None]:
             signal.raise_signal(held[0])  # the previous handler runs now: it raises, or ends the process
 
 
+_deferring: list[Callable[[], int]] = []  # the pending() of the deferred_interrupts blocks open, innermost last
+
+
 @contextmanager
 def deferred_interrupts() -> Iterator[Callable[[], int]]:
     """Within the block, the first SIGINT or SIGTERM sets a flag instead of interrupting, and puts the
     previous handlers back (so a second one interrupts at once). Yields ``pending()``: the signal received,
-    0 while none was. Outside the main thread, ``pending()`` stays 0 and nothing is deferred."""
+    0 while none was. Outside the main thread, ``pending()`` stays 0 and nothing is deferred. Nested in
+    another such block, it yields the outer block's ``pending()`` (one flag for the whole computation: the
+    solver's set-up and its main loop in :func:`planner.api.solve`)."""
+    if _deferring:  # nested (the solver inside api.solve): the outer block's flag, its handlers stay
+        yield _deferring[-1]
+        return
     received: list[int] = []
     if not _main_thread():
         yield lambda: 0
@@ -135,9 +143,12 @@ def deferred_interrupts() -> Iterator[Callable[[], int]]:
 
     for s in chosen:
         signal.signal(s, defer)
+    pending = lambda: received[0] if received else 0  # noqa: E731
+    _deferring.append(pending)
     try:
-        yield lambda: received[0] if received else 0
+        yield pending
     finally:
+        _deferring.pop()
         for s, handler in previous.items():
             signal.signal(s, handler)
 

@@ -10,15 +10,19 @@ from ..defaults import (
     CONTACT_CEILING_FRACTION,
     CUTS_PER_SUBASSEMBLY,
     DECISION_TIME,
+    DECISION_TIME_MAX,
     DECLARED_LIMIT,
     DISCOUNT,
+    EXPANSION_LIMIT,
     INPUT_FILE_LIMIT,
     MAX_COMPONENTS,
     POLICY_TIME_LIMIT,
     RESOLUTION_LIMIT,
     SPREAD_CELL_LIMIT,
+    STEP_LIMIT,
     STRUCTURE_DEFAULT,
     SUBASSEMBLY_LIMIT,
+    TIME_LIMIT_MAX,
 )
 from ..errors import LimitExceededError, PlannerError
 from ..files import check_output as check_writable
@@ -33,8 +37,8 @@ __all__ = ["PRODUCT_HELP", "number", "finite", "positive", "whole", "index", "ad
            "product_from", "add_decision_options", "rewards_from", "add_tolerance_options", "tolerances_from",
            "add_contact_options", "contact_tolerances_from", "contact_tolerance", "positive_length",
            "add_policy_options", "add_episode_options", "positive_seconds",
-           "online_budget", "add_size_options", "limits_from", "offer_options", "advice", "add_verbose", "explain",
-           "gibibytes",
+           "decision_seconds", "online_budget", "add_size_options", "limits_from", "offer_options", "advice",
+           "add_verbose", "explain", "gibibytes",
            "add_input_options", "inputs_from"]
 
 PRODUCT_HELP = (f"a product file (.json), a bundle folder, a FreeCAD document or STEP file (read through "
@@ -309,15 +313,20 @@ def tolerances_from(args: argparse.Namespace) -> Tolerances:
                       contact_ceiling=args.contact_ceiling, pair_budget=args.pair_budget)
 
 
-def positive_seconds(text: str) -> float:
-    """A finite number of seconds above 0 (an argparse type)."""
+def positive_seconds(text: str, high: float = TIME_LIMIT_MAX) -> float:
+    """A finite number of seconds above 0 and at most ``high`` (an argparse type)."""
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"must be a number of seconds, got {text!r}") from None
-    if not (value > 0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"must be a positive, finite number of seconds, got {text}")
+    if not (value > 0 and value <= high):
+        raise argparse.ArgumentTypeError(f"must be a number of seconds above 0 and at most {high:,}, got {text}")
     return value
+
+
+def decision_seconds(text: str) -> float:
+    """Seconds per online decision: above 0, at most :data:`~planner.defaults.DECISION_TIME_MAX`."""
+    return positive_seconds(text, DECISION_TIME_MAX)
 
 
 def add_policy_options(parser: argparse.ArgumentParser) -> None:
@@ -334,12 +343,13 @@ def add_policy_options(parser: argparse.ArgumentParser) -> None:
                             "from")
     group.add_argument("--time-limit", type=positive_seconds, default=POLICY_TIME_LIMIT,
                        help=f"offline solver seconds when --planner offline and no --policy "
-                            f"(default {POLICY_TIME_LIMIT:g})")
-    group.add_argument("--decision-time", type=positive_seconds, default=None, metavar="S",
-                       help=f"online planner: seconds per decision (default {DECISION_TIME:g})")
-    group.add_argument("--expansions", type=positive, default=None, metavar="N",
-                       help="online planner: expansions per decision; alone, a fixed amount of work without a "
-                            "clock (the same actions on any machine)")
+                            f"(default {POLICY_TIME_LIMIT:g}; at most {TIME_LIMIT_MAX:,})")
+    group.add_argument("--decision-time", type=decision_seconds, default=None, metavar="S",
+                       help=f"online planner: seconds per decision (default {DECISION_TIME:g}; at most "
+                            f"{DECISION_TIME_MAX:g})")
+    group.add_argument("--expansions", type=number(1, EXPANSION_LIMIT, integer=True), default=None, metavar="N",
+                       help=f"online planner: expansions per decision, 1 to {EXPANSION_LIMIT:,}; alone, a fixed amount "
+                            "of work without a clock (the same actions on any machine)")
 
 
 def online_budget(args: argparse.Namespace) -> tuple[float | None, int | None]:
@@ -352,7 +362,8 @@ def online_budget(args: argparse.Namespace) -> tuple[float | None, int | None]:
 def add_episode_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by simulate and evaluate."""
     parser.add_argument("--seed", type=whole, default=0)
-    parser.add_argument("--max-steps", type=positive, default=100)
+    parser.add_argument("--max-steps", type=number(1, STEP_LIMIT, integer=True), default=100, metavar="N",
+                        help=f"steps per episode at most, 1 to {STEP_LIMIT:,} (default 100)")
     add_decision_options(parser)
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 from .. import api
 from ..decision.intention_model import IntentionModel
 from ..decision.policy import AlphaVectorPolicy
-from ..defaults import HABITS_PRIOR
+from ..defaults import HABITS_PRIOR, STEP_LIMIT
 from ..errors import PlannerError, UsageError
 from ..product import DEFAULT_MARKER_DICTIONARY
 from ..validation import check_output
@@ -30,6 +30,8 @@ from .options import (
 )
 
 __all__ = ["add_commands"]
+
+FRAME_LIMIT = 108_000  # an hour of frames at 30 fps: --debounce and --quiet-frames past it would never fire
 
 log = logging.getLogger(__name__)
 
@@ -308,15 +310,17 @@ def _add_session(commands) -> None:
                               "robot and wait for Enter; auto: confirm every instruction at once (dry runs)")
     session.add_argument("--log", metavar="FILE", help="the JSON-lines log (default: session-DATE-TIME.jsonl; "
                                                        "never overwritten)")
-    session.add_argument("--debounce", type=positive, default=3, metavar="F",
-                         help="frames a marker must stay seen or unseen before it counts (default 3)")
-    session.add_argument("--quiet-frames", type=positive, default=45, metavar="F",
-                         help="frames without any marker change that make a blank observation (default 45: "
-                              "1.5 s at 30 fps)")
+    session.add_argument("--debounce", type=number(1, FRAME_LIMIT, integer=True), default=3, metavar="F",
+                         help=f"frames a marker must stay seen or unseen before it counts, 1 to {FRAME_LIMIT:,} "
+                              "(default 3)")
+    session.add_argument("--quiet-frames", type=number(1, FRAME_LIMIT, integer=True), default=45, metavar="F",
+                         help=f"frames without any marker change that make a blank observation, 1 to {FRAME_LIMIT:,} "
+                              "(default 45: 1.5 s at 30 fps)")
     session.add_argument("--robot-own-tools", action="store_true",
                          help="the robot has tools of its own: every tool taken from the tray is the operator's "
                               "(default: the robot takes its tool from the tray too, as in the paper)")
-    session.add_argument("--max-steps", type=positive, default=500)
+    session.add_argument("--max-steps", type=number(1, STEP_LIMIT, integer=True), default=500, metavar="N",
+                         help=f"robot decisions at most, 1 to {STEP_LIMIT:,} (default 500)")
     session.add_argument("--habits-out", metavar="FILE",
                          help="at the end, write the habits (--habits, or none) plus the steps of this session "
                               "(docs/habits.md); an existing file is replaced only with --force")

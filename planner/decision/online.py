@@ -37,9 +37,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..defaults import ONLINE_DEPTH, ONLINE_EXPANSIONS
+from ..defaults import ONLINE_DEPTH, ONLINE_EXPANSIONS, ONLINE_TREE_NUMBERS
 from ..errors import PlannerError
 from .factored_model import FactoredBelief, FactoredIntentionModel
+from .online_steps import StepTimes
 from .policy import AlphaVectorPolicy
 
 __all__ = ["ClassValues", "class_values", "revealed_state_values", "VALUE_BLOCK", "observation_split", "OnlinePlanner",
@@ -252,6 +253,11 @@ class _Split:
         return _posterior(self.classes, self.mass * likelihood[self.inverse])
 
 
+# What a tree node costs besides its arrays (the Python objects: the node, its lists and array headers, about
+# 1 KB), counted in numbers against the tree's cap: on the pen they outweigh the beliefs.
+_NODE_NUMBERS = 128
+
+
 @dataclass
 class _Node:
     """A belief in the search tree; ``children[a]``: ``(reward, [(P(z), child), ...])`` once ``a`` is expanded.
@@ -293,7 +299,8 @@ class OnlinePlanner:
 
     def __init__(self, model: FactoredIntentionModel, expansions: int = ONLINE_EXPANSIONS,
                  decision_time: float | None = None, max_depth: int = ONLINE_DEPTH, precision: float = 1e-3,
-                 values: ClassValues | None = None, lower: AlphaVectorPolicy | None = None):
+                 values: ClassValues | None = None, lower: AlphaVectorPolicy | None = None,
+                 max_numbers: int = ONLINE_TREE_NUMBERS):
         if not (isinstance(expansions, int) and expansions >= 1):
             raise PlannerError(f"the online planner's expansions must be a positive integer, got {expansions!r}")
         if decision_time is not None and not (np.isfinite(decision_time) and decision_time > 0):
@@ -313,6 +320,10 @@ class OnlinePlanner:
         r, g = model.rewards, model.discount
         self._after_now = g * r.wait / (1 - g)  # then wait for ever
         self.last: SearchReport | None = None
+        self.max_numbers = max_numbers
+        self._numbers = 0  # what the current tree holds (beliefs, splits, per-action bounds), in numbers
+        self._steps = StepTimes(model)  # with a deadline: which steps still fit (online_steps)
+        self._top = float(self.values.value.max())  # the largest class value: an upper bound at every belief
 
     # --- the policy interface ----------------------------------------------------------------------------
 
@@ -325,18 +336,27 @@ class OnlinePlanner:
         return self.search(belief).lower
 
     def search(self, belief: FactoredBelief) -> SearchReport:
+        """Search from ``belief`` (module docstring) within ``expansions``, ``decision_time`` and the tree's
+        ``max_numbers``; with a decision time, a step whose estimated time (its size times the learnt rate)
+        would pass the deadline is not started, and a root too large to bound in time gets only its lower
+        bounds (and the cheap upper bound ``sum_c b(c) V(c)``)."""
         start = time.perf_counter()
         # 5 % of the budget is kept for the work after the search (choosing, returning, the caller's bookkeeping).
         deadline = None if self.decision_time is None else start + 0.95 * self.decision_time
-        root = self._node(belief, 0)
+        self._numbers = 0
+        steps = self._steps
+        too_large = deadline is not None and not steps.fits("bound", belief.classes.size, deadline)
+        root = self._lower_only(belief) if too_large else steps.timed("bound", belief.classes.size, self._node, belief, 0)
         done = 0
         longest = 2 * (time.perf_counter() - start)  # the longest expansion so far (at first: twice the root's time)
-        while done < self.expansions and root.upper - root.lower > self.precision:
-            # Stop when one more expansion as long as the longest so far would pass the deadline.
+        while (not too_large and done < self.expansions and root.upper - root.lower > self.precision
+               and self._numbers < self.max_numbers):
+            # Stop when one more expansion as long as the longest so far (at most a quarter of the budget: each
+            # step's own estimate, in _expand_best, catches the large ones) would pass the deadline.
             now = time.perf_counter()
-            if deadline is not None and now + longest >= deadline:
+            if deadline is not None and now + min(longest, 0.25 * self.decision_time) >= deadline:
                 break
-            if not self._expand_best(root):
+            if not self._expand_best(root, deadline):
                 break
             longest = max(longest, time.perf_counter() - now)
             done += 1
@@ -344,12 +364,28 @@ class OnlinePlanner:
         self.last = SearchReport(best, root.lower, root.upper, done, time.perf_counter() - start)
         return self.last
 
+    def _lower_only(self, belief: FactoredBelief) -> _Node:
+        """A root with its lower bounds ("act, then wait") and the upper bound ``max_c V(c)`` (no gather: on
+        chain 23 each gather over a belief of 2 million classes took 0.2-0.3 s): for a belief too large to
+        bound per action in time."""
+        node = _Node(belief, 0.0, 0.0, 0)
+        node.action_lower = self.model.expected_rewards(belief) + self._after_now
+        if self.lower is not None:
+            np.maximum.at(node.action_lower, self.lower.actions, self.lower.values(belief))
+        node.action_upper = np.full(node.action_lower.size, self._top * float(belief.mass.sum()))
+        _refresh(node)
+        return node
+
     # --- the tree ----------------------------------------------------------------------------------------
 
     def _node(self, belief: FactoredBelief, depth: int) -> _Node:
         node = _Node(belief, 0.0, 0.0, depth)
         self._bound(node)
         return node
+
+    def _count(self, node: _Node) -> None:
+        """Add a node's belief and per-action bounds to the tree's size."""
+        self._numbers += 2 * node.belief.classes.size + 2 * node.action_upper.size + _NODE_NUMBERS
 
     def _bound(self, node: _Node) -> None:
         """The per-action bounds of a node whose belief is known: QMDP above, "act, then wait" below."""
@@ -360,6 +396,7 @@ class OnlinePlanner:
             np.maximum.at(node.action_lower, self.lower.actions, values)
         _refresh(node)
         node.closed = node.upper - node.lower <= self.precision
+        self._count(node)
 
     def _enter(self, node: _Node) -> None:
         """Make a child's posterior belief and its per-action bounds (the cheap bounds were its only ones)."""
@@ -370,30 +407,42 @@ class OnlinePlanner:
         node.action_upper = np.minimum(node.action_upper, upper)
         _refresh(node)
 
-    def _expand_best(self, root: _Node) -> bool:
+    def _expand_best(self, root: _Node, deadline: float | None = None) -> bool:
         """Follow the best upper bounds down to an unexpanded action, expand it and back up the bounds; False
-        when nothing is left to expand (every open path ends at ``max_depth`` or is exact)."""
+        when nothing is left to expand (every open path ends at ``max_depth`` or is exact), or when the next
+        step (entering a child, or the expansion) is estimated to pass ``deadline`` (nothing is started then)."""
         path, node = [], root
+        in_time = True
         while True:
             action = self._open_action(node)
             if action is None:  # nothing to learn below this node: close it and back up
                 node.closed = True
                 break
-            path.append((node, action))
             if action not in node.children:
-                self._expand(node, action)
+                size = self._steps.predicted_size(node.belief, action)
+                if not self._steps.fits("expand", size, deadline):
+                    in_time = False
+                    break
+                path.append((node, action))
+                self._steps.timed("expand", size, self._expand, node, action)
                 break
+            path.append((node, action))
             _, branches = node.children[action]
             open_branches = [(p, c) for p, c in branches if not c.closed]
             if not open_branches:
                 node.closed_actions.add(action)
                 continue
-            node = max(open_branches, key=lambda pc: pc[0] * (pc[1].upper - pc[1].lower))[1]
-            if node.belief is None:
-                self._enter(node)
+            child = max(open_branches, key=lambda pc: pc[0] * (pc[1].upper - pc[1].lower))[1]
+            if child.belief is None:
+                size = child.origin[0].classes.size
+                if not self._steps.fits("bound", size, deadline):
+                    in_time = False
+                    break
+                self._steps.timed("bound", size, self._enter, child)
+            node = child
         for node, action in reversed(path):
             self._backup(node, action)
-        return not root.closed
+        return in_time and not root.closed
 
     def _open_action(self, node: _Node) -> int | None:
         """The action with the highest upper bound that could still beat the node's lower bound."""
@@ -410,6 +459,8 @@ class OnlinePlanner:
         model = self.model
         reward = float(model.expected_rewards(node.belief)[action])
         split = _Split(model, model.predict(node.belief, action), self.values.value)
+        # the split's arrays (classes, masses, their states and keys) and a node per observation
+        self._numbers += 6 * split.classes.size + _NODE_NUMBERS * len(split.branches)
         wait_forever = self._after_now / model.discount
         branches = []
         for z, p, upper in split.branches:

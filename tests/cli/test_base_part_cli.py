@@ -84,7 +84,7 @@ def test_pomdp_solve_simulate_evaluate(capsys, tmp_path, body_model, body_policy
     code, out, _ = run(capsys, "pomdp", "pen", "--base-part", "-o", tmp_path / "pen.pomdp")
     assert code == 0 and f"{n} states" in out
     code, out, _ = run(capsys, "solve", "pen", "--base-part", "body", "-o", tmp_path / "pen.policy", "--json",
-                       "--time-limit", "2", "--precision", "1000")
+                       "--trials", "20", "--precision", "1000")
     assert code == 0 and "lower_bound" in out
     code, out, _ = run(capsys, "simulate", "pen", "--base-part", "--policy", body_policy, "--all", "--json")
     episodes = [json.loads(line) for line in out.splitlines()[:-1]]  # then the run's line

@@ -13,6 +13,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -61,7 +62,7 @@ OUTPUT_CASES = {
     "output under a file": (["pomdp", "pen", "-o", "afile/m.pomdpx"], {}, "is not a folder"),
     "pomdpx on a full disk": (["pomdp", "pen", "-o", "m.pomdpx"], {FAULT_DISK_FULL: "4096"}, "the disk is full"),
     ".pomdp on a full disk": (["pomdp", "pen", "-o", "m.pomdp"], {FAULT_DISK_FULL: "4096"}, "the disk is full"),
-    "policy on a full disk": (["solve", "pen", "-o", "p.policy", "--force", "--quiet", "--time-limit", "0.3"],
+    "policy on a full disk": (["solve", "pen", "-o", "p.policy", "--force", "--quiet", "--trials", "20"],
                               {FAULT_DISK_FULL: "4096"}, "the disk is full"),
     "marker sheet (pdf) on a full disk": (["markers", "pen", "-o", "s.pdf"], {FAULT_DISK_FULL: "1000"},
                                           "the disk is full"),
@@ -80,7 +81,7 @@ OUTPUT_CASES = {
 def pen_policy(tmp_path_factory) -> Path:
     """A small policy for the pen (a few solver steps), for commands that need one."""
     folder = tmp_path_factory.mktemp("policy")
-    assert main(["solve", "pen", "-o", str(folder / "p.policy"), "--quiet", "--time-limit", "0.3"]) == 0
+    assert main(["solve", "pen", "-o", str(folder / "p.policy"), "--quiet", "--trials", "20"]) == 0
     return folder / "p.policy"
 
 
@@ -310,6 +311,11 @@ def test_session_log_on_a_full_disk(tmp_path, monkeypatch, capsys):
     assert _tree(tmp_path) == {"whole.jsonl", "full.jsonl"}
 
 
+def _progress_lower(seen: bytes) -> list[float]:
+    """The lower bounds of the solver's complete progress lines so far."""
+    return [float(x) for x in re.findall(r"lower (-?\d+\.\d+)  upper", seen.decode())]
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_interrupted_solve_keeps_the_best_policy(signum, tmp_path):
     target = tmp_path / "p.policy"
@@ -317,7 +323,8 @@ def test_interrupted_solve_keeps_the_best_policy(signum, tmp_path):
                                 "--time-limit", "600", "--precision", "0"], cwd=REPO, stderr=subprocess.PIPE,
                                stdout=subprocess.PIPE)
     seen = b""
-    while b"lower" not in seen:  # the first progress line: the solver is under way
+    # the lower bound has moved (a policy better than the blind ones, which would not be written)
+    while len(set(_progress_lower(seen))) < 2:
         chunk = process.stderr.read1(256)
         assert chunk, "the solver ended before it was interrupted"
         seen += chunk
@@ -331,6 +338,51 @@ def test_interrupted_solve_keeps_the_best_policy(signum, tmp_path):
 
     policy = read_policy(target, api.tables(api.load_model("pen")))
     assert policy.alphas.shape[0] >= 22  # at least the blind policies, one per action
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_interrupted_lumped_solve_bounded_by_trials(signum, tmp_path):
+    """Issue 22 item 4: a solve bounded by trials (far more than it can do before the signal), interrupted once
+    its lower bound has left the blind policies' value: the policy so far is written, valid for the lumped
+    model, and the exit status is 128 + the signal."""
+    from planner import api
+    from planner.product.synthetic import chain_product
+
+    product = tmp_path / "chain6.json"
+    assert main(["synth", "chain", "6", "-o", str(product)]) == 0
+    target = tmp_path / "p.policy"
+    process = subprocess.Popen([sys.executable, "-m", "planner", "solve", str(product), "--lumped", "-o", str(target),
+                                "--trials", "100000000", "--time-limit", "1000000", "--precision", "0"], cwd=REPO,
+                               stderr=subprocess.PIPE, stdout=subprocess.PIPE)
+    seen = b""
+    while len(set(_progress_lower(seen))) < 2:  # the lower bound has moved: better than the blind policies
+        chunk = process.stderr.read1(256)
+        assert chunk, "the solver ended before it was interrupted: " + seen.decode()
+        seen += chunk
+    process.send_signal(signum)
+    out, err = process.communicate(timeout=300)
+    message = (seen + err).decode()
+    assert process.returncode == 128 + signum, message
+    assert "Traceback" not in message and "wrote the best policy so far" in message
+    assert _tree(tmp_path) == {"chain6.json", "p.policy"}
+    model = api.lumped_model(chain_product(6))
+    read_policy(target, model.pomdp).check(model.pomdp)
+
+
+def test_deferred_interrupts_nest():
+    """One flag for a computation made of parts (api.solve's warm start, then the solver): a nested block
+    shares the outer one's flag and handlers, and the first signal is deferred, not raised."""
+    from planner.interrupts import deferred_interrupts
+
+    with deferred_interrupts() as outer:
+        with deferred_interrupts() as inner:
+            assert inner is outer
+            os.kill(os.getpid(), signal.SIGINT)
+            for _ in range(1000):  # the handler runs between bytecodes
+                if inner():
+                    break
+            assert inner() == signal.SIGINT
+        assert outer() == signal.SIGINT
 
 
 def test_deferred_interrupt_in_process():

@@ -349,6 +349,27 @@ CASES = [
      ["complete7.json", "solver", "145,867 intentions", "--lumped"]),
     ("22 synth complete 30000", None, ["synth", "complete", "30000", "-o", "c.json"], 1,
      ["synth complete 30000", "449,985,000 contacts", "smaller N"]),
+    # issue 22, item 4: work and time options have upper bounds, checked when parsed; a time limit that the
+    # model's building alone passes writes nothing (1 microsecond: no model is built that fast)
+    ("22.4 --expansions past the maximum", None,
+     ["simulate", "pen", "--planner", "online", "--expansions", "1000000000000", "--sequence", "0"], 2,
+     ["--expansions", "1,000,000"]),
+    ("22.4 --expansions 0", None, ["simulate", "pen", "--planner", "online", "--expansions", "0"], 2, ["--expansions"]),
+    ("22.4 --time-limit past the maximum", None, ["solve", "pen", "-o", "p.policy", "--time-limit", "1e7"], 2,
+     ["--time-limit", "1,000,000"]),
+    ("22.4 evaluate --time-limit inf", None, ["evaluate", "pen", "--planner", "offline", "--time-limit", "inf"], 2,
+     ["--time-limit"]),
+    ("22.4 --decision-time an hour", None, ["session", "pen", "--keyboard", "--decision-time", "3600"], 2,
+     ["--decision-time", "at most 60"]),
+    ("22.4 --trials 0", None, ["solve", "pen", "-o", "p.policy", "--trials", "0"], 2, ["--trials"]),
+    ("22.4 --max-steps past the maximum", None, ["simulate", "pen", "--max-steps", "1e9"], 2, ["--max-steps"]),
+    ("22.4 session --max-steps past the maximum", None, ["session", "pen", "--keyboard", "--max-steps", "10000000"],
+     2, ["--max-steps", "1,000,000"]),
+    ("22.4 --quiet-frames past the maximum", None, ["session", "pen", "--keyboard", "--quiet-frames", "1000000"], 2,
+     ["--quiet-frames"]),
+    ("22.4 the model's building passes --time-limit", None,
+     ["solve", "pen", "-o", "p.policy", "--time-limit", "0.000001"], 1,
+     ["pen", "no policy written", "building the model took", "--time-limit"]),
 ]
 
 

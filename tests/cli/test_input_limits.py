@@ -114,14 +114,14 @@ def test_aplan_reads_back_what_it_writes(tmp_path, suffix):
     pen = api.tables(api.load_model("pen"))
     shared = pen.observation[0].nnz
     assert shared * pen.n_actions > 200 > shared
-    done = run_aplan("solve", model, "-o", tmp_path / "p.policy", "--max-cells", "200", "--time-limit", "1")
+    done = run_aplan("solve", model, "-o", tmp_path / "p.policy", "--max-cells", "200", "--trials", "20")
     assert done.returncode == 0, done.stderr
     read = api.load_model(model)
     assert all(o is read.observation[0] for o in read.observation)  # one table, shared
     assert all((a != b).nnz == 0 for a, b in zip(read.observation, pen.observation))
     if suffix == ".pomdp":  # one more entry, for one action: the table is per action now
         model.write_text(text + f"O: {text.split('actions: ')[1].split()[0]} : * : * 0\n")
-        done = run_aplan("solve", model, "-o", tmp_path / "q.policy", "--max-cells", "200", "--time-limit", "1")
+        done = run_aplan("solve", model, "-o", tmp_path / "q.policy", "--max-cells", "200", "--trials", "20")
         assert_refused(done.returncode, done.stderr, "pen.pomdp", "limit of 200", "--max-cells N")
 
 
@@ -143,7 +143,7 @@ def test_pomdp_refuses_a_file_it_could_not_read_back(tmp_path):
     # Read back within the same budget; the solver's own tables and bounds come on top (checked apart).
     from planner.decision.solvers.tables import solver_bytes
     solving = str(float(high) + 1.1 * solver_bytes(api.load_model(target)) / GIB)
-    done = run_aplan("solve", target, "-o", tmp_path / "p.policy", "--max-memory", solving, "--time-limit", "0.5")
+    done = run_aplan("solve", target, "-o", tmp_path / "p.policy", "--max-memory", solving, "--trials", "20")
     assert done.returncode == 0, done.stderr
     done = run_aplan("solve", target, "-o", tmp_path / "q.policy", "--max-memory", low)
     assert_refused(done.returncode, done.stderr, "reading", "--max-memory GIB")

@@ -55,11 +55,11 @@ def test_evaluate_online_and_offline():
     assert json.loads(online.stdout)["episodes"] == 20
 
 
-@pytest.mark.parametrize("bad", ["0", "-1", "nan", "inf", "soon"])
+@pytest.mark.parametrize("bad", ["0", "-1", "nan", "inf", "soon", "61"])
 def test_bad_decision_time(bad):
     done = _aplan("simulate", "pen", "--decision-time", bad)
     assert done.returncode == 2 and "--decision-time" in done.stderr
-    assert "positive, finite number of seconds" in done.stderr or "must be a number of seconds" in done.stderr
+    assert "above 0 and at most 60" in done.stderr or "must be a number of seconds" in done.stderr
 
 
 def test_the_online_planner_needs_a_product(tmp_path):
@@ -72,7 +72,7 @@ def test_the_online_planner_needs_a_product(tmp_path):
 def test_a_policy_of_another_model_is_refused(tmp_path):
     """A policy solved for the pen without the technical constraint does not fit the model with it."""
     policy = tmp_path / "pen.policy"
-    assert _aplan("solve", "pen", "-o", policy, "--time-limit", 1, "--quiet").returncode == 0
+    assert _aplan("solve", "pen", "-o", policy, "--trials", 20, "--quiet").returncode == 0
     done = _aplan("evaluate", "pen", "--technical", "--policy", policy, "--episodes", 2)
     assert done.returncode == 1 and "vectors of length 69" in done.stderr
     assert "belongs to another model" in done.stderr and "Traceback" not in done.stderr
@@ -82,7 +82,7 @@ def test_a_policy_over_classes_runs_on_the_factored_model(tmp_path):
     """`aplan solve --lumped` writes a policy over the classes; simulate, evaluate and the online planner (as its
     lower bound) take it on the factored model."""
     policy = tmp_path / "lumped.policy"
-    assert _aplan("solve", "pen", "--lumped", "-o", policy, "--time-limit", 2, "--quiet").returncode == 0
+    assert _aplan("solve", "pen", "--lumped", "-o", policy, "--trials", 20, "--quiet").returncode == 0
     done = _aplan("evaluate", "pen", "--policy", policy, "--episodes", 30, "--json")
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["episodes"] == 30

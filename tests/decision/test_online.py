@@ -146,3 +146,45 @@ def test_revealed_state_bound_is_an_upper_bound_below_qmdp(pen):
         matrix = revealed.q_matrix(lumped.factored)
         assert np.allclose((matrix @ start.dense(lumped.factored.n_classes)),
                            revealed.q_values(lumped.factored, start))
+
+
+def test_a_deadline_already_past_gives_the_best_lower_bound_at_once(pen_factored):
+    """Issue 22 item 4: with no time left for any step, the root gets only its lower bounds ("act, then wait")
+    and the action is their best (ties to wait); nothing is expanded."""
+    from planner.decision.online import _argmax_prefer_last
+
+    planner = OnlinePlanner(pen_factored, decision_time=1e-9)
+    belief = pen_factored.initial_belief()
+    report = planner.search(belief)
+    g, r = pen_factored.discount, pen_factored.rewards
+    lower = pen_factored.expected_rewards(belief) + g * r.wait / (1 - g)
+    assert report.expansions == 0 and report.action == _argmax_prefer_last(lower)
+    assert report.lower == pytest.approx(lower.max()) and report.upper >= report.lower
+
+
+def test_the_search_tree_is_capped(pen_factored):
+    """The tree holds at most about ``max_numbers`` numbers whatever ``expansions`` says (the search stops
+    with the best action so far), by work: the same action and bounds each time."""
+    belief = pen_factored.initial_belief()
+    capped = [OnlinePlanner(pen_factored, expansions=1_000_000, max_numbers=20_000).search(belief) for _ in range(2)]
+    first, second = ((r.action, r.lower, r.upper, r.expansions) for r in capped)
+    assert first == second
+    assert 0 < capped[0].expansions < 1_000_000
+    planner = OnlinePlanner(pen_factored, expansions=capped[0].expansions + 50, max_numbers=10 ** 9)
+    assert planner.search(belief).expansions > capped[0].expansions  # the cap, not the work, stopped it
+
+
+def test_a_predicted_size_bounds_the_waiting_prediction():
+    """The estimate a step is timed by: for waiting it is at least the prediction's support (each class
+    moving to the classes out of its target, counted with repeats)."""
+    from planner.decision.online_steps import StepTimes
+
+    model = factored_model(make_plan(chain_product(6)))
+    steps = StepTimes(model)
+    updater = FactoredUpdater(model, on_reset=lambda event: None)
+    belief = updater.initialize()
+    for _ in range(4):
+        assert steps.predicted_size(belief, model.wait) >= model.predict(belief, model.wait).classes.size
+        for action in range(len(model.action_operations) - 1):
+            assert steps.predicted_size(belief, action) >= belief.classes.size
+        belief = updater.update(belief, model.wait, 0)

@@ -152,7 +152,7 @@ def test_cli_pomdp_and_solve(tmp_path):
     model = tmp_path / "pen.pomdpx"
     done = run_aplan("pomdp", "pen", "--technical", "-o", model)
     assert done.returncode == 0 and "39 states, 18 actions, 10 observations" in done.stdout
-    done = run_aplan("solve", model, "-o", tmp_path / "p.policy", "--time-limit", "2", "--json")
+    done = run_aplan("solve", model, "-o", tmp_path / "p.policy", "--trials", "20", "--json")
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout)
     assert {"lower_bound", "upper_bound", "alpha_vectors", "seconds"} <= set(result)

@@ -78,7 +78,7 @@ def test_plot_files(tmp_path, solved, decision, monkeypatch):
 def test_cli_simulate_and_evaluate(tmp_path):
     policy = tmp_path / "p.policy"
     run = run_aplan
-    assert run("solve", "pen", "--technical", "-o", str(policy), "--time-limit", "3", "--quiet").returncode == 0
+    assert run("solve", "pen", "--technical", "-o", str(policy), "--trials", "20", "--quiet").returncode == 0
     done = run("simulate", "pen", "--technical", "--policy", str(policy), "--all", "--json")
     *lines, run_line = [json.loads(l) for l in done.stdout.splitlines()]
     assert done.returncode == 0 and len(lines) == 12  # the 12 sequences with the technical constraint

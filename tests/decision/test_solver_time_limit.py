@@ -220,3 +220,34 @@ def test_products_of_many_beliefs_stop_between_blocks_of_work(slow_pen, monkeypa
         with pytest.raises(SolveStopped):
             product(lambda: next(readings) >= 10)
         assert next(readings) == 11  # stopped at the tenth block of 41, not after all of them
+
+
+def test_a_policy_no_better_than_blind_is_refused(slow_pen):
+    """Issue 22 item 4: a limit the set-up uses up leaves the blind policies (or their floor); the result says
+    so (``improved``) and :func:`planner.api.check_solved` refuses it, naming the bound and what helps."""
+    from planner.errors import SolveTimeError
+
+    result = PointBasedSolver(time_limit=4, clock=Counter()).solve(slow_pen)
+    assert result.iterations == 0 and not result.improved()
+    with pytest.raises(SolveTimeError, match=r"blind policies.*--time-limit 34"):
+        api.check_solved(result, 1e-3, 4)
+    # work-bounded, the same model improves on them, and the policy is kept
+    done = PointBasedSolver(time_limit=None, max_iterations=5).solve(api.tables(api.load_model("pen")))
+    assert done.improved(1e-3) and api.check_solved(done, 1e-3, 60) is None
+
+
+def test_known_points_stop_at_the_set_up_deadline(slow_pen):
+    """The warm start's points are optional: past the set-up's deadline none is added (the bound holds without
+    them), before it every one that lies below the bound is."""
+    from planner.decision.solvers.point_based import _add_points
+
+    m = Tables(slow_pen)
+    Q = mdp_upper_bound(m, max_sweeps=3)
+    B = np.random.default_rng(1).dirichlet(np.ones(m.S), 300)
+    values = UpperBound(Q, np.ones(m.S)).at(B) - 1.0  # one below the bound: every point is worth storing
+    late = UpperBound(Q, np.random.default_rng(0).random(m.S))
+    _add_points(late, B, values, 10 ** 9, lambda: True)
+    assert late.n == 0
+    kept = UpperBound(Q, np.random.default_rng(0).random(m.S))
+    _add_points(kept, B, values, 10 ** 9, lambda: False)
+    assert kept.n == len(B)

@@ -51,6 +51,13 @@ class SolveResult:
     iterations: int
     history: list = field(default_factory=list)  # (seconds, lower, upper) after each trial or sweep
     interrupted: int = 0  # the signal (SIGINT: Ctrl-C) that stopped the solver early, 0 when none did
+    blind_lower: float = -math.inf  # the lower bound at b0 after the set-up: the blind policies' (or the floor)
+
+    def improved(self, by: float = 0.0) -> bool:
+        """Whether the policy is better at b0, by more than ``by``, than the blind policies the solver starts
+        from (each repeats one action whatever it observes; the floor ``min R / (1 - gamma)`` where their
+        time ran out)."""
+        return self.lower_bound - self.blind_lower > by
 
     @property
     def gap(self) -> float:
@@ -89,10 +96,13 @@ class PointBasedSolver:
     the end of the step under way (:func:`planner.interrupts.deferred_interrupts`), so the bounds stay
     consistent. Otherwise an interrupt propagates.
     ``clock``: the time source of ``time_limit`` (tests inject a counter). The limit covers the whole solve
-    but building the tables, the bounds' set-up included: the blind policies get an eighth of it (the rest of
-    the actions then the floor ``min R / (1 - gamma)``), the upper bound's value iterations a quarter (they
-    stop inside a sweep), a trial stops descending at the limit, and a sweep of the belief set or its growth
-    stops between blocks of back-ups (keeping the vectors backed up so far).
+    but building the tables, the bounds' set-up included, from ``solve``'s ``started`` (what came before it
+    counts too): of the time then left, the blind policies get an eighth (the rest of the actions then the
+    floor ``min R / (1 - gamma)``), the upper bound's value iterations and the known points a quarter (they
+    stop inside a sweep; the points left out are optional), a trial stops descending at the limit, and a
+    sweep of the belief set or its growth stops between blocks of back-ups (keeping the vectors backed up so
+    far). ``write_seconds``: seconds per number of the policy so far kept before the limit for writing it
+    after the solve (0: none; the command line's estimate of its writing speed).
     """
 
     time_limit: float | None = 60.0
@@ -116,6 +126,7 @@ class PointBasedSolver:
     seed: int = 0
     blas_threads: int | None = None
     keep_on_interrupt: bool = False
+    write_seconds: float = 0.0
     clock: Callable[[], float] = field(default=time.perf_counter, repr=False, compare=False)
 
     def solve(self, model: POMDP, progress: Callable[[float, float, float], None] | None = None,
@@ -151,39 +162,43 @@ class PointBasedSolver:
                  clock: Callable[[], float], known=None) -> SolveResult:
         """Set up both bounds, then trials and sweeps until a stopping rule holds (class docstring)."""
         limit = math.inf if self.time_limit is None else self.time_limit
-        # The set-up gets a quarter of the limit: the blind policies an eighth (then constant floors), the
-        # informed bound the rest (any of its iterates is an upper bound).
-        deadline = start + limit / 4 if math.isfinite(limit) else math.inf
-        lower = LowerBound.blind(m, start + limit / 8 if math.isfinite(limit) else math.inf, clock)
+        lower: LowerBound | None = None
+
+        def out_of_time() -> bool:  # the limit, less the time writing the policy so far will take
+            kept = self.write_seconds * (lower.n * m.S if lower is not None else 0)
+            return clock() - start + kept >= limit
+
+        # The set-up gets a quarter of the time left (what came before, a warm start, counted): the blind
+        # policies an eighth (then constant floors), the informed bound the rest (any iterate is an upper bound).
+        now = self.clock()
+        left = start + limit - now if math.isfinite(limit) else math.inf
+        deadline = now + left / 4 if math.isfinite(limit) else math.inf
+        lower = LowerBound.blind(m, now + left / 8 if math.isfinite(limit) else math.inf, clock)
         Q = fast_informed_bound(m, self.informed_tolerance, self.informed_sweeps, deadline, start=start_upper,
                                 clock=clock)
         points, relaxed = known if known is not None else (None, None)  # what solve() was given
         upper = UpperBound(Q, np.random.default_rng(self.seed).random(m.S), groups, relaxed)
         if points is not None:  # known upper values at beliefs: kept where they lie below the bound
-            B, values = points
-            keep = values < upper.at(B) - 1e-12
-            for b, value in zip(B[keep], values[keep]):
-                upper.update(b, float(value))
-            if upper.n >= self.prune_points_at:
-                upper.prune()
+            _add_points(upper, *points, self.prune_points_at, lambda: clock() >= deadline)
         beliefs = BeliefSet(m.S)
         beliefs.add(b0[None], np.ones(1))
         sweeps = sweep_rounds(m, lower, beliefs, Q, self.theta, self.theta_factor, self.sweeps_per_round,
-                              self.chunk, self.belief_memory, stop=lambda: clock() - start >= limit)
+                              self.chunk, self.belief_memory, stop=out_of_time)
         sharing = WorkSharing(self.min_share, self.rate_horizon)
         iterations, pruned_at = 0, 0  # pruned_at: upper-bound points after the last pruning
         lb, ub = lower.value(b0), upper.value(b0)
+        blind = lb  # the blind policies' value at b0 (or the floor): what a policy must beat to be worth keeping
         history = [(self.clock() - start, lb, ub)]
         at_b0 = None  # the bounds at b0 as the trials need them (bounds_at), while still current
         for _ in range(self.group_passes if groups is not None else 0):
-            if ub - lb <= self.precision or clock() - start >= limit:
+            if ub - lb <= self.precision or clock() >= deadline:
                 break
-            backup_groups(m, lower, upper)
+            backup_groups(m, lower, upper, lambda: clock() >= deadline)  # within the set-up's quarter
             before, (lb, ub) = ub, (lower.value(b0), upper.value(b0))
             history.append((self.clock() - start, lb, ub))
             if before - ub < self.informed_tolerance:
                 break
-        while (ub - lb > self.precision and clock() - start < limit
+        while (ub - lb > self.precision and not out_of_time()
                and (self.max_iterations is None or iterations < self.max_iterations)):
             process = sharing.choose()
             if process == "sweeps":
@@ -193,11 +208,11 @@ class PointBasedSolver:
                 # Trials aim at a fraction of the current gap, so early trials stay shallow (HSVI's epsilon).
                 epsilon = max(self.precision, self.gap_fraction * (ub - lb))
                 work = trial(m, b0, lower, upper, beliefs, epsilon, iterations % self.lower_trial_every == 0,
-                             self.max_depth, stop=lambda: clock() - start >= limit, start=at_b0)
+                             self.max_depth, stop=out_of_time, start=at_b0)
                 if groups is not None and iterations % self.group_every == 0:
-                    work += backup_groups(m, lower, upper)
+                    work += backup_groups(m, lower, upper, out_of_time)
                 if upper.n >= max(self.prune_points_at, 2 * pruned_at):
-                    upper.prune()
+                    upper.prune(stop=out_of_time)
                     pruned_at = upper.n
             gap = ub - lb
             # The sweeps change only the lower bound: the upper one at b0 is the same number as before.
@@ -207,4 +222,20 @@ class PointBasedSolver:
             history.append((self.clock() - start, lb, ub))
             if progress is not None:
                 progress(*history[-1])
-        return SolveResult(lower.policy(), lb, ub, self.clock() - start, iterations, history)
+        return SolveResult(lower.policy(), lb, ub, self.clock() - start, iterations, history, blind_lower=blind)
+
+
+def _add_points(upper: UpperBound, B: np.ndarray, values: np.ndarray, prune_at: int, late: Callable[[], bool],
+                block: int = 256) -> None:
+    """Store the known upper values at the beliefs ``B`` (N, S) where they lie below ``upper``, ``block`` beliefs
+    at a time until ``late()``: the points are optional (the bound holds without them), so the rest are left
+    out once the set-up's time is up. Cost: O(N S (A + points)) for the bounds at B."""
+    for first in range(0, len(B), block):
+        if late():
+            break
+        part, known = B[first:first + block], values[first:first + block]
+        keep = known < upper.at(part) - 1e-12
+        for b, value in zip(part[keep], known[keep]):
+            upper.update(b, float(value))
+    if upper.n >= prune_at:
+        upper.prune(stop=late)

@@ -209,18 +209,19 @@ class Tables:
 
 def blind_lower_bound(m: Tables, deadline: float | None = None,
                       clock: Callable[[], float] = time.perf_counter) -> np.ndarray:
-    """(A, S): for each action, the value of repeating it forever: (I - gamma T_a) alpha = R_a. Once ``clock()``
-    passes ``deadline``, the remaining actions get the value every policy reaches, ``min R / (1 - gamma)``
-    (a lower bound too). Cost: one sparse solve of size S per action (seconds each past 100,000 states)."""
+    """(A, S): for each action, the value of repeating it forever: (I - gamma T_a) alpha = R_a, the actions with
+    the best mean reward first. Once ``clock()`` passes ``deadline``, the remaining actions get the value every
+    policy reaches, ``min R / (1 - gamma)`` (a lower bound too). Cost: one sparse solve of size S per action (seconds each past 100,000 states)."""
     identity = sp.identity(m.S, format="csc")
     floor = float(m.R.min()) / (1 - m.gamma)
-    rows = []
-    for a in range(m.A):
+    rows = np.full((m.A, m.S), floor)
+    # The actions with the best mean reward first (waiting, on the intention models): when the deadline cuts
+    # the list short, the vectors most likely to matter are done.
+    for a in np.argsort(-m.R.mean(axis=1), kind="stable"):
         if deadline is not None and clock() >= deadline:
-            rows.append(np.full(m.S, floor))
-        else:
-            rows.append(spla.spsolve((identity - m.gamma * m.T[a]).tocsc(), m.R[a]))
-    return np.array(rows)
+            break
+        rows[a] = spla.spsolve((identity - m.gamma * m.T[a]).tocsc(), m.R[a])
+    return rows
 
 
 def mdp_upper_bound(m: Tables, tolerance: float = 1e-6, max_sweeps: int = 100_000, deadline: float | None = None,

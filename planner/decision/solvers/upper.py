@@ -295,13 +295,16 @@ class UpperBound:
         self._drop[g] = float(self.group_beliefs[g] @ self.corner) - value
         return True
 
-    def prune(self, chunk: int = 64) -> None:
+    def prune(self, chunk: int = 64, stop=None) -> None:
         """Drop the points that the others (and the informed bound) already bound as tightly at their own
         belief (HSVI2's pruning), ``chunk`` points at a time. The bound anywhere stays the same (up to
         1e-12 per dropped point): if ``V^_{-i}(b_i) <= v_i``, point ``i``'s sawtooth term is implied at every
-        belief by the terms that bound it. Cost: O(n^2 S)."""
+        belief by the terms that bound it. ``stop``: checked before each chunk; the points not examined yet
+        are kept. Cost: O(n^2 S)."""
         keep = np.ones(self.points.n, dtype=bool)
         for first in range(0, self.points.n, chunk):
+            if stop is not None and stop():
+                break
             query = np.arange(first, min(first + chunk, self.points.n))
             B = self.points.rows[query]
             others = np.repeat(keep[:, None], len(query), axis=1)
