@@ -60,7 +60,11 @@ def decision_times(command: str, stdout: str, folder: Path) -> tuple[float, floa
         return statistics.median(times), times[min(len(times) - 1, int(0.95 * len(times)))], times[-1]
     if command != "simulate":
         return None
-    episodes = [json.loads(line) for line in stdout.splitlines() if line.startswith("{")]
+    lines = [json.loads(line) for line in stdout.splitlines() if line.startswith("{")]
+    run_line = next((line["run"] for line in lines if "run" in line), None)
+    if run_line is not None and run_line.get("decision_seconds_median") is not None:  # every decision of the run
+        return tuple(1000 * run_line[f"decision_seconds_{k}"] for k in ("median", "p95", "max"))
+    episodes = [line for line in lines if "run" not in line]
     medians = [e["decision_seconds_median"] for e in episodes if e.get("decision_seconds_median") is not None]
     if not medians:
         return None
