@@ -16,6 +16,7 @@ import numpy as np
 from ..assembly.guards import Progress
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .factored_updater import FactoredUpdater
+from .operators import switch_path
 
 __all__ = ["FactoredStep", "FactoredEpisode", "simulate_factored_episode", "evaluate_factored",
            "true_intention_probability"]
@@ -34,6 +35,8 @@ class FactoredStep:
     operator_operations: int  # operations the operator has performed so far
     reward: float
     decision_seconds: float   # the time the policy took to choose ``action``
+    robot_operation: bool = False  # the robot's action was the intention's next step (it helped)
+    wrong_action: bool = False     # the robot did an operation that is not the intention's next step
 
 
 @dataclass
@@ -43,6 +46,7 @@ class FactoredEpisode:
     discounted_return: float = 0.0
     resets: int = 0                                    # unexplained observations (never with the model's world)
     beliefs: list[FactoredBelief] = field(default_factory=list)  # before the first step, then after each (sparse)
+    switched_at: int | None = None                     # the decision step (from 1) the operator changed its mind
 
     @property
     def finished(self) -> bool:
@@ -68,10 +72,12 @@ def true_intention_probability(model: FactoredIntentionModel, belief: FactoredBe
 
 
 def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[int], rng: np.random.Generator,
-                              max_steps: int = 100, operator: str = "model") -> FactoredEpisode:
+                              max_steps: int = 100, operator: str = "model", switch=None) -> FactoredEpisode:
     """One episode along ``path`` (state edges from the initial state) until the product is finished or
     ``max_steps``. ``operator``: ``model`` (it acts with probability 1/2 per step, as the model says) or
-    ``turns`` (it acts whenever the model lets it). ``policy.action(belief)`` picks the robot's actions."""
+    ``turns`` (it acts whenever the model lets it). ``policy.action(belief)`` picks the robot's actions.
+    ``switch`` (a :class:`~planner.decision.operators.Switch`): the operator changes its mind once, after that
+    many operations, to another completion of its assembly state (``episode.path`` is then the one done)."""
     if operator not in OPERATORS:
         raise ValueError(f"operator must be one of {OPERATORS}, got {operator!r}")
     updater = FactoredUpdater(model, on_reset=lambda event: None)
@@ -81,6 +87,9 @@ def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[
     for _ in range(max_steps):
         if position >= len(path):
             break
+        if switch is not None and episode.switched_at is None and position >= switch.after:
+            path = episode.path = switch_path(model, path, position, switch.draw)
+            episode.switched_at = len(episode.steps) + 1
         started = time.perf_counter()
         action = int(policy.action(belief))
         seconds = time.perf_counter() - started
@@ -95,7 +104,8 @@ def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[
         discount *= model.discount
         position = nxt
         episode.steps.append(FactoredStep(action, z, position, true_intention_probability(model, belief, path, position),
-                                          operations, reward, seconds))
+                                          operations, reward, seconds, robot_steps == 1,
+                                          action != model.wait and robot_steps == 0))
         episode.beliefs.append(belief)
     episode.resets = len(updater.events)
     return episode

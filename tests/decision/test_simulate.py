@@ -14,6 +14,9 @@ from planner.decision.belief_plot import episode_trace, plot_beliefs
 from planner.decision.simulate import evaluate_policy, simulate_episode
 from planner.decision.solvers import PointBasedSolver
 
+MEASURES = {"robot_operations", "operator_operations", "wrong_robot_actions", "first_help_step", "confident_step",
+            "robot_share", "switched_at_step"}  # planner.decision.episode_measures
+
 
 @pytest.fixture(scope="module")
 def decision(pen):
@@ -81,7 +84,8 @@ def test_cli_simulate_and_evaluate(tmp_path):
     done = run("simulate", "pen", "--technical", "--policy", str(policy), "--all", "--json")
     lines = [json.loads(l) for l in done.stdout.splitlines()]
     assert done.returncode == 0 and len(lines) == 12  # the 12 sequences with the technical constraint
-    assert all(set(l) == {"sequence", "operations", "confident_after_operations", "discounted_return"} for l in lines)
+    assert all(set(l) == {"sequence", "operations", "confident_after_operations", "discounted_return"} | MEASURES
+               for l in lines)
     done = run("evaluate", "pen", "--technical", "--policy", str(policy), "--episodes", "200", "--json")
     data = json.loads(done.stdout)
     assert set(data) == {"mean_return", "ci95", "episodes"} and data["episodes"] == 200
