@@ -60,6 +60,7 @@ from .decision.io.size import model_file_bytes
 from .decision.lumped_model import LumpedModel, solver_start
 from .decision.lumped_model import lumped_model as build_lumped_model
 from .decision.online import OnlinePlanner
+from .decision.operators import mistake_stream
 from .decision.policy import AlphaVectorPolicy, PolicyError, read_policy
 from .decision.pomdp import POMDP
 from .decision.simulate import Episode, evaluate_policy, simulate_episode
@@ -767,11 +768,14 @@ def _simulate_operator(model, policy, operator_model, random, seed, max_steps, o
                            "(not --sequence or --all)")
     rng = np.random.default_rng(seed)  # the plans first, as the default draws, then the episodes
     plans = operator_model.plans(model, random, rng, np.random.default_rng([seed, 1]))
+    rate = operator_model.mistakes
+    mistakes = [(rate, mistake_stream(seed, k)) if rate > 0 else None for k in range(len(plans))]
     if isinstance(model, FactoredIntentionModel):
-        return [simulate_factored_episode(model, policy, p.sequence, rng, max_steps, operator, p.switch)
-                for p in plans]
+        return [simulate_factored_episode(model, policy, p.sequence, rng, max_steps, operator, p.switch, m)
+                for p, m in zip(plans, mistakes)]
     return [simulate_episode(model.pomdp, policy, p.sequence, rng, max_steps, model.graph.successor,
-                             model.final_state, operator, p.switch, model.graph.first_state) for p in plans]
+                             model.final_state, operator, p.switch, model.graph.first_state, m)
+            for p, m in zip(plans, mistakes)]
 
 
 def evaluate_operator(model: Model | FactoredIntentionModel, policy, operator_model, episodes: int, seed: int = 0,

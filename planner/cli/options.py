@@ -360,7 +360,9 @@ def add_episode_options(parser: argparse.ArgumentParser) -> None:
                              "habitual:K:STRENGTH (sequence K, numbered as --sequence numbers them, with "
                              "probability STRENGTH in [0, 1], else uniform); changing:P (with probability P in "
                              "[0, 1) per episode it switches once, after a uniformly drawn number of operations, "
-                             "to another completion; after habitual:K:S, as habitual:K:S,changing:P); drawn from "
+                             "to another completion; after habitual:K:S, as habitual:K:S,changing:P); "
+                             ",mistakes:Q last: with probability Q in [0, 1) per step a wrong part is taken and "
+                             "put back (the camera sees another observation); drawn from "
                              "--seed before any episode, so two planners face the same operators. Default: the "
                              "model's initial belief (with --habits, the habits)")
     add_decision_options(parser)

@@ -5,8 +5,9 @@ Per episode: ``robot_operations`` (the robot's actions that were the intention's
 ``operator_operations`` (the operator's), ``wrong_robot_actions`` (the robot's operations that were not: the
 reward table's ``wrong`` entries), ``first_help_step`` (the decision step, from 1, of the robot's first
 operation; None if it never did one), ``confident_step`` (the decision step, from 1, after which the belief on
-the true intention first exceeded ``CONFIDENCE``; None if never) and ``robot_share`` (robot operations over all
-operations; None without any). A finished episode's operations add up to its sequence's length. Cost: O(steps).
+the true intention first exceeded ``CONFIDENCE``; None if never), ``robot_share`` (robot operations over all
+operations; None without any), ``switched_at_step`` (when the operator changed its mind) and
+``operator_mistakes`` (wrong parts taken). A finished episode's operations add up to its sequence's length. Cost: O(steps).
 """
 from __future__ import annotations
 
@@ -26,7 +27,8 @@ def episode_measures(episode, threshold: float = CONFIDENCE) -> dict:
             "first_help_step": next((k for k, s in enumerate(steps, 1) if s.robot_operation), None),
             "confident_step": next((k for k, s in enumerate(steps, 1) if s.p_true > threshold), None),
             "robot_share": round(robot / (robot + operator), 6) if robot + operator else None,
-            "switched_at_step": episode.switched_at}
+            "switched_at_step": episode.switched_at,
+            "operator_mistakes": sum(getattr(s, "mistake", False) for s in steps)}
 
 
 def run_totals(measures: list[dict]) -> dict:
@@ -39,5 +41,6 @@ def run_totals(measures: list[dict]) -> dict:
             "wrong_robot_actions": wrong,
             "robot_share": round(robot / (robot + operator), 6) if robot + operator else None,
             "wrong_share": round(wrong / (robot + wrong), 6) if robot + wrong else None,
+            "operator_mistakes": sum(m["operator_mistakes"] for m in measures),
             "never_helped": sum(m["first_help_step"] is None for m in measures),
             "never_confident": sum(m["confident_step"] is None for m in measures)}

@@ -17,6 +17,7 @@ from ..assembly.guards import Progress
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .factored_updater import FactoredUpdater
 from .operators import switch_path
+from .simulate import operator_mistake
 
 __all__ = ["FactoredStep", "FactoredEpisode", "simulate_factored_episode", "evaluate_factored",
            "true_intention_probability"]
@@ -37,6 +38,7 @@ class FactoredStep:
     decision_seconds: float   # the time the policy took to choose ``action``
     robot_operation: bool = False  # the robot's action was the intention's next step (it helped)
     wrong_action: bool = False     # the robot did an operation that is not the intention's next step
+    mistake: bool = False          # the operator took a wrong part (the observation is that pick)
 
 
 @dataclass
@@ -72,12 +74,14 @@ def true_intention_probability(model: FactoredIntentionModel, belief: FactoredBe
 
 
 def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[int], rng: np.random.Generator,
-                              max_steps: int = 100, operator: str = "model", switch=None) -> FactoredEpisode:
+                              max_steps: int = 100, operator: str = "model", switch=None,
+                              mistakes=None) -> FactoredEpisode:
     """One episode along ``path`` (state edges from the initial state) until the product is finished or
     ``max_steps``. ``operator``: ``model`` (it acts with probability 1/2 per step, as the model says) or
     ``turns`` (it acts whenever the model lets it). ``policy.action(belief)`` picks the robot's actions.
     ``switch`` (a :class:`~planner.decision.operators.Switch`): the operator changes its mind once, after that
-    many operations, to another completion of its assembly state (``episode.path`` is then the one done)."""
+    many operations, to another completion of its assembly state (``episode.path`` is then the one done).
+    ``mistakes``: as :func:`~planner.decision.simulate.simulate_episode`'s (the wrong parts' observations)."""
     if operator not in OPERATORS:
         raise ValueError(f"operator must be one of {OPERATORS}, got {operator!r}")
     updater = FactoredUpdater(model, on_reset=lambda event: None)
@@ -99,13 +103,14 @@ def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[
         nxt = max(p for p, _ in options) if operator == "turns" else model.sample_position(path, position, action, rng)
         operations += nxt - position - robot_steps
         z = model.sample_observation(path, nxt, rng)
+        z, mistake = operator_mistake(z, len(model.observations), mistakes)
         belief = updater.update(belief, action, z)
         episode.discounted_return += discount * reward
         discount *= model.discount
         position = nxt
         episode.steps.append(FactoredStep(action, z, position, true_intention_probability(model, belief, path, position),
                                           operations, reward, seconds, robot_steps == 1,
-                                          action != model.wait and robot_steps == 0))
+                                          action != model.wait and robot_steps == 0, mistake))
         episode.beliefs.append(belief)
     episode.resets = len(updater.events)
     return episode

@@ -12,6 +12,10 @@ observations stay the model's).
 - :class:`ChangingOperator`: a base operator that, with probability ``p`` per episode, switches once, after a
   uniformly drawn number of operations (1 to the length - 1), to another completion of the state it is in,
   uniformly among those other than its own.
+- Any of them with ``mistakes`` = q > 0 (``...,mistakes:Q``): at each decision step, with probability q, it
+  takes a wrong part and puts it back: the camera sees another non-blank observation than the world's, drawn
+  uniformly (:func:`mistaken_observation`), and the assembly does not change. These draws come from a stream
+  per episode (:func:`mistake_stream`), so q = 0 plays the same episodes as no mistakes.
 
 Every plan is drawn before the first episode, from the seeded stream (the switches from a stream of their
 own, so ``changing:0`` equals its base operator): the operator does not depend on the robot, and two planners
@@ -26,9 +30,10 @@ import numpy as np
 from ..errors import PlannerError
 
 __all__ = ["Switch", "OperatorPlan", "UniformOperator", "HabitualOperator", "ChangingOperator", "parse_operator",
-           "switch_intention", "switch_path", "OPERATOR_SPELLING"]
+           "switch_intention", "switch_path", "mistaken_observation", "mistake_stream", "OPERATOR_SPELLING"]
 
-OPERATOR_SPELLING = "uniform, habitual:K:STRENGTH, changing:P or habitual:K:STRENGTH,changing:P"
+OPERATOR_SPELLING = ("uniform, habitual:K:STRENGTH, changing:P, mistakes:Q, or a base (uniform or habitual) "
+                     "followed by changing and mistakes, comma-separated (habitual:5:0.8,changing:0.1,mistakes:0.05)")
 
 
 @dataclass(frozen=True)
@@ -78,12 +83,14 @@ def _uniform_completion(model, state: int, rng: np.random.Generator) -> list[int
 class UniformOperator:
     """Every full sequence equally likely, whatever the robot's model assumes."""
 
+    mistakes = 0.0  # the probability per decision step of a wrong part taken (module docstring)
+
     def plans(self, model, count: int, rng: np.random.Generator, switch_rng: np.random.Generator
               ) -> list[OperatorPlan]:
         return [OperatorPlan(s) for s in _uniform_sequences(model, count, rng)]
 
     def __repr__(self) -> str:
-        return "uniform"
+        return "uniform" + _mistakes(self)
 
 
 class HabitualOperator:
@@ -94,7 +101,7 @@ class HabitualOperator:
     def __init__(self, sequence: int, strength: float):
         if not 0.0 <= strength <= 1.0:
             raise PlannerError(f"habitual operator: strength {strength!r} is not in [0, 1]")
-        self.sequence, self.strength = int(sequence), float(strength)
+        self.sequence, self.strength, self.mistakes = int(sequence), float(strength), 0.0
 
     def plans(self, model, count: int, rng: np.random.Generator, switch_rng: np.random.Generator
               ) -> list[OperatorPlan]:
@@ -112,7 +119,7 @@ class HabitualOperator:
         return model.sequence(self.sequence)
 
     def __repr__(self) -> str:
-        return f"habitual:{self.sequence}:{self.strength:g}"
+        return f"habitual:{self.sequence}:{self.strength:g}" + _mistakes(self)
 
 
 class ChangingOperator:
@@ -122,6 +129,7 @@ class ChangingOperator:
         if not 0.0 <= p < 1.0:
             raise PlannerError(f"changing operator: probability {p!r} is not in [0, 1)")
         self.p, self.base = float(p), base if base is not None else UniformOperator()
+        self.mistakes = 0.0  # its own (parse_operator sets them on the outermost operator, which plays them)
 
     def plans(self, model, count: int, rng: np.random.Generator, switch_rng: np.random.Generator
               ) -> list[OperatorPlan]:
@@ -136,7 +144,23 @@ class ChangingOperator:
         return out
 
     def __repr__(self) -> str:
-        return f"{self.base!r},changing:{self.p:g}"
+        return f"{self.base!r},changing:{self.p:g}" + _mistakes(self)
+
+
+def _mistakes(operator) -> str:
+    return f",mistakes:{operator.mistakes:g}" if operator.mistakes else ""
+
+
+def mistake_stream(seed: int, episode: int) -> np.random.Generator:
+    """The stream of an episode's mistakes: its own, so that they change nothing else."""
+    return np.random.default_rng([seed, 2, episode])
+
+
+def mistaken_observation(observation: int, n_observations: int, draw: float) -> int:
+    """The wrong part's observation: a non-blank one (observation 0 is blank) other than ``observation``,
+    picked by ``draw`` in [0, 1); ``observation`` itself when there is no other."""
+    others = [z for z in range(1, n_observations) if z != observation]
+    return observation if not others else others[min(int(draw * len(others)), len(others) - 1)]
 
 
 def _length(model, sequence) -> int:
@@ -192,26 +216,35 @@ def _completion(model, state: int, rank: int) -> list[int]:
 
 def parse_operator(text: str):
     """The operator ``text`` spells (:data:`OPERATOR_SPELLING`); a :class:`PlannerError` saying what is wrong."""
-    base, changing = None, None
+    base, changing, mistakes = None, None, None
     for term in str(text).split(","):
         name, *values = term.strip().split(":")
         try:
             numbers = [float(v) for v in values]
         except ValueError:
             numbers = None
-        if name == "uniform" and not values and base is None:
+        in_order = changing is None and mistakes is None  # the base first, then changing, then mistakes
+        if name == "uniform" and not values and base is None and in_order:
             base = UniformOperator()
-        elif name == "habitual" and numbers is not None and len(numbers) == 2 and base is None:
+        elif name == "habitual" and numbers is not None and len(numbers) == 2 and base is None and in_order:
             rank, strength = numbers
             if not (np.isfinite(rank) and rank >= 0 and rank == int(rank)):
                 raise PlannerError(f"operator {text!r}: the sequence K of habitual:K:STRENGTH is a number from 0")
             if not (np.isfinite(strength) and 0 <= strength <= 1):
                 raise PlannerError(f"operator {text!r}: STRENGTH must be in [0, 1], got {values[1]}")
             base = HabitualOperator(int(rank), strength)
-        elif name == "changing" and numbers is not None and len(numbers) == 1 and changing is None:
+        elif name == "changing" and numbers is not None and len(numbers) == 1 and in_order:
             if not (np.isfinite(numbers[0]) and 0 <= numbers[0] < 1):
                 raise PlannerError(f"operator {text!r}: P of changing:P must be in [0, 1), got {values[0]}")
             changing = numbers[0]
+        elif name == "mistakes" and numbers is not None and len(numbers) == 1 and mistakes is None:
+            if not (np.isfinite(numbers[0]) and 0 <= numbers[0] < 1):
+                raise PlannerError(f"operator {text!r}: Q of mistakes:Q must be in [0, 1), got {values[0]}")
+            mistakes = numbers[0]
         else:
             raise PlannerError(f"operator {text!r}: use {OPERATOR_SPELLING}")
-    return base if changing is None else ChangingOperator(changing, base)
+    operator = base if base is not None else UniformOperator()
+    operator = operator if changing is None else ChangingOperator(changing, operator)
+    if mistakes is not None:
+        operator.mistakes = mistakes
+    return operator

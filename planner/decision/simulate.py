@@ -15,11 +15,11 @@ import numpy as np
 
 from ..defaults import CONFIDENCE
 from .belief import DiscreteUpdater
-from .operators import switch_intention
+from .operators import mistaken_observation, switch_intention
 from .policy import AlphaVectorPolicy
 from .pomdp import POMDP
 
-__all__ = ["Step", "Episode", "simulate_episode", "evaluate_policy"]
+__all__ = ["Step", "Episode", "simulate_episode", "evaluate_policy", "operator_mistake"]
 
 
 @dataclass(frozen=True)
@@ -32,6 +32,7 @@ class Step:
     reward: float
     robot_operation: bool = False  # the robot's action was the intention's next step (it helped)
     wrong_action: bool = False     # the robot did an operation that is not the intention's next step
+    mistake: bool = False          # the operator took a wrong part (the observation is that pick)
 
 
 @dataclass
@@ -54,7 +55,7 @@ OPERATORS = ("turns", "model")
 def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: np.random.Generator,
                      max_steps: int = 100, successor: np.ndarray | None = None,
                      final: int | None = None, operator: str = "model", switch=None,
-                     first_state: np.ndarray | None = None) -> Episode:
+                     first_state: np.ndarray | None = None, mistakes=None) -> Episode:
     """One episode from the true intention ``start`` until ``final`` (the finished product) or ``max_steps``.
 
     ``operator``: ``"model"`` draws the operator's timing from the model (it acts with probability 1/2 per
@@ -64,10 +65,12 @@ def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: n
     move of the true intention that the robot's own action does not explain. ``switch`` (an
     :class:`~planner.decision.operators.Switch`; needs ``successor`` and the graph's ``first_state``): the
     operator changes its mind once, after that many operations, to another intention of its assembly state.
+    ``mistakes`` (rate, generator): at each step, with that probability, the observation is a wrong part's
+    (:func:`~planner.decision.operators.mistaken_observation`); its draws come from that generator alone.
     """
     if operator not in OPERATORS:
         raise ValueError(f"operator must be one of {OPERATORS}, got {operator!r}")
-    updater = DiscreteUpdater(model)
+    updater = DiscreteUpdater(model) if mistakes is None else DiscreteUpdater(model, on_reset=lambda event: None)
     belief = updater.initialize()
     episode = Episode(start, beliefs=[belief])
     wait = model.actions.index("wait") if "wait" in model.actions else -1
@@ -93,14 +96,27 @@ def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: n
             operations += _moves(successor, state, nxt) - (1 if robot_did_step else 0)
         orow = observation[action].getrow(nxt)
         z = int(rng.choice(orow.indices, p=orow.data / orow.data.sum()))
+        z, mistake = operator_mistake(z, len(model.observations), mistakes)
         belief = updater.update(belief, action, z)
         episode.discounted_return += discount * reward
         discount *= model.discount
         state = nxt
         episode.steps.append(Step(action, z, state, float(belief[state]), operations, reward, robot_did_step,
-                                  action != wait and not robot_did_step))
+                                  action != wait and not robot_did_step, mistake))
         episode.beliefs.append(belief)
     return episode
+
+
+def operator_mistake(observation: int, n_observations: int, mistakes) -> tuple[int, bool]:
+    """The observation the camera sees when the operator may take a wrong part (``mistakes``: rate, generator;
+    two draws per step whatever happens), and whether it did."""
+    if mistakes is None:
+        return observation, False
+    rate, stream = mistakes
+    happens, pick = stream.random(2)
+    if happens >= rate:
+        return observation, False
+    return mistaken_observation(observation, n_observations, float(pick)), True
 
 
 def _moves_intention(model: POMDP, action: int, state: int) -> bool:

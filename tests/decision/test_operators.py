@@ -54,6 +54,14 @@ class RandomActions:
         return int(self.rng.integers(self.n))
 
 
+class Waiting:
+    def __init__(self, wait: int):
+        self.wait = wait
+
+    def action(self, belief) -> int:
+        return self.wait
+
+
 def _trace(episodes) -> list:
     return [[(s.action, s.observation, s.operator_operations, s.reward) for s in e.steps] for e in episodes]
 
@@ -166,13 +174,37 @@ def test_measures_add_up(kind, flat, factored):
                                                   abs=1e-6)
 
 
+@pytest.mark.parametrize("kind", ["flat", "factored"])
+def test_mistakes_change_only_the_observations(kind, flat, factored):
+    """q = 0 plays the base's episodes; with q > 0 the mistaken steps see another non-blank observation, the
+    assembly goes on by the same draws until the robot acts otherwise, and the operations still add up."""
+    model, policy = flat if kind == "flat" else factored
+    base = api.simulate(model, policy, random=4, seed=9, operator_model=parse_operator("uniform"))
+    assert _trace(api.simulate(model, policy, random=4, seed=9, operator_model=parse_operator("mistakes:0"))) == \
+        _trace(base)
+    waiting = Waiting(model.actions.index("wait"))  # the robot never acts: the world's draws stay aligned
+    calm = api.simulate(model, waiting, random=4, seed=9, operator_model=parse_operator("uniform"))
+    mistaken = api.simulate(model, waiting, random=4, seed=9, operator_model=parse_operator("mistakes:0.3"))
+    made = 0
+    for a, b in zip(calm, mistaken):
+        assert [s.operator_operations for s in a.steps] == [s.operator_operations for s in b.steps]
+        for s, t in zip(a.steps, b.steps):
+            assert (s.observation == t.observation) != t.mistake and (not t.mistake or t.observation != 0)
+        made += episode_measures(b)["operator_mistakes"]
+        assert episode_measures(b)["operator_operations"] == PEN_OPERATIONS
+    assert made > 0
+
+
 def test_parse_operator_spellings():
     assert repr(parse_operator("uniform")) == "uniform"
     assert repr(parse_operator("habitual:4:0.8")) == "habitual:4:0.8"
     assert repr(parse_operator("habitual:4:0.8,changing:0.1")) == "habitual:4:0.8,changing:0.1"
     assert repr(parse_operator("changing:0")) == "uniform,changing:0"
+    assert repr(parse_operator("habitual:4:0.8,changing:0.1,mistakes:0.05")) == "habitual:4:0.8,changing:0.1,mistakes:0.05"
+    assert parse_operator("mistakes:0.2").mistakes == 0.2
     for bad in ("habitual:4:1.5", "habitual:4:nan", "habitual:-1:0.5", "habitual:1.5:0.5", "changing:1",
-                "changing:-0.1", "uniform:3", "sometimes", "habitual:4", "uniform,uniform", "changing:0.1,changing:0.2"):
+                "changing:-0.1", "uniform:3", "sometimes", "habitual:4", "uniform,uniform", "changing:0.1,changing:0.2",
+                "mistakes:1", "mistakes:0.1,changing:0.1", "changing:0.1,uniform"):
         with pytest.raises(PlannerError):
             parse_operator(bad)
 

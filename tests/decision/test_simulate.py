@@ -15,7 +15,7 @@ from planner.decision.simulate import evaluate_policy, simulate_episode
 from planner.decision.solvers import PointBasedSolver
 
 MEASURES = {"robot_operations", "operator_operations", "wrong_robot_actions", "first_help_step", "confident_step",
-            "robot_share", "switched_at_step"}  # planner.decision.episode_measures
+            "robot_share", "switched_at_step", "operator_mistakes"}  # planner.decision.episode_measures
 
 
 @pytest.fixture(scope="module")
