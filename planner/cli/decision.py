@@ -280,6 +280,8 @@ def _true_state(model, path: list[int], step) -> int:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
+    if args.operator_model is not None and api._model_file_kind(args.model):  # refused before any solving
+        raise PlannerError(f"{args.model}: --operator-sequence needs a PRODUCT (its full sequences), not a model file")
     model, policy = decision_maker_from(args)
     if isinstance(policy, OnlinePlanner) and policy.decision_time is not None:
         log.info("the online planner takes up to %g s per decision: %d episodes can take minutes (progress below); "

@@ -64,7 +64,7 @@ def _uniform_sequences(model, count: int, rng: np.random.Generator) -> list:
     return [_uniform_completion(model, model.plan.states.initial, rng) for _ in range(count)]
 
 
-def _paper_fractions(model, options: np.ndarray, state: int) -> np.ndarray:
+def _paper_fractions(model, options: np.ndarray) -> np.ndarray:
     """The paper's choice N(target) / N(state) among ``options`` (normalised: a base part may drop some)."""
     sizes = np.array([float(model.paths[model.class_target[c]]) for c in options])
     return sizes / sizes.sum()
@@ -74,7 +74,7 @@ def _uniform_completion(model, state: int, rng: np.random.Generator) -> list[int
     edges = []
     while state != model.final_state:
         options = model._sequence_options(state)
-        c = int(rng.choice(options, p=_paper_fractions(model, options, state)))
+        c = int(rng.choice(options, p=_paper_fractions(model, options)))
         edges.append(c)
         state = int(model.class_target[c])
     return edges

@@ -215,6 +215,8 @@ def test_cli_operator_sequence(tmp_path):
     fixed = run_aplan("simulate", "pen", "--sequence", "0", "--operator-sequence", "uniform", "--planner", "online",
                       "--expansions", "5")
     assert fixed.returncode == 1 and "give --random N" in fixed.stderr and "Traceback" not in fixed.stderr
+    model_file = run_aplan("evaluate", str(tmp_path / "m.pomdp"), "--operator-sequence", "uniform")
+    assert model_file.returncode == 1 and "needs a PRODUCT" in model_file.stderr  # refused before reading it
     out = run_aplan("simulate", "pen", "--random", "3", "--seed", "4", "--json", "--planner", "online",
                     "--expansions", "5", "--operator-sequence", "habitual:2:1")
     assert out.returncode == 0, out.stderr
