@@ -232,3 +232,11 @@ def test_cli_operator_sequence(tmp_path):
     summary = json.loads(evaluated.stdout)  # the same episodes as simulate --random 3
     assert summary["robot_operations"] == totals["robot_operations"]
     assert summary["mean_return"] == pytest.approx(np.mean([e["discounted_return"] for e in episodes]), abs=1e-5)
+
+
+def test_a_habit_that_is_no_sequence_is_refused(flat, factored):
+    with pytest.raises(PlannerError, match="numbered by rank, from 0 to 11"):  # the technical pen: 12 sequences
+        HabitualOperator(12, 0.5).plans(factored[0], 3, np.random.default_rng(0), np.random.default_rng(1))
+    with pytest.raises(PlannerError, match="is not a full assembly sequence"):
+        HabitualOperator(int(flat[0].final_state), 0.5).plans(flat[0], 3, np.random.default_rng(0),
+                                                               np.random.default_rng(1))
