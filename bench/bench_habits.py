@@ -5,7 +5,8 @@ model and the habits' model, each with the online planner (a fixed number of exp
 actions on any machine), on the same seeded episodes drawn from that operator.
 
 Run: ``.venv/bin/python bench/bench_habits.py [--episodes 300] [--logs 20] [--expansions 200]`` (about a minute
-per 100 episodes on one core).
+per 100 episodes on one core). ``--write-habits FILE`` also writes the learned habits (for ``aplan evaluate
+--habits FILE --operator-sequence habitual:5:0.8``; ``--episodes 0``: only that).
 """
 from __future__ import annotations
 
@@ -26,6 +27,7 @@ from planner.decision.factored_model import factored_model  # noqa: E402
 from planner.decision.factored_simulate import simulate_factored_episode  # noqa: E402
 from planner.decision.habits import habit_weights  # noqa: E402
 from planner.decision.intention_model import intention_model  # noqa: E402
+from planner.decision.io.habits_file import write_habits  # noqa: E402
 from planner.runtime.habits_logs import habits_from_logs  # noqa: E402
 from planner.runtime.log import EventLog  # noqa: E402
 from planner.runtime.scripted import ScriptedOperator, ScriptedRobot  # noqa: E402
@@ -74,6 +76,7 @@ def main() -> None:
     parser.add_argument("--share", type=float, default=0.8, help="how often the operator takes its favourite")
     parser.add_argument("--favourite", type=int, default=5, help="the favourite sequence's rank (0 to 23)")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--write-habits", metavar="FILE", help="write the learned habits to FILE")
     args = parser.parse_args()
 
     plan = api.plan_of("pen", technical=False)
@@ -86,6 +89,9 @@ def main() -> None:
         logs = _write_logs(plan, learned_ranks, Path(folder))
         habits, steps = habits_from_logs(plan, logs)
         learned = time.perf_counter() - began
+    if args.write_habits:
+        write_habits(args.write_habits, habits, len(logs))
+        print(f"wrote {args.write_habits}")
     print(f"pen: {n} sequences; {args.logs} logs ({learned_ranks.count(args.favourite)} of the favourite "
           f"sequence {args.favourite}), {steps} steps counted, {len(habits.counts)} state edges, "
           f"{learned:.1f} s to write and learn them")
@@ -94,6 +100,8 @@ def main() -> None:
     print(f"prior of the favourite sequence: paper {1 / n:.4f}, habits "
           f"{math.exp(sum(math.log(weighted.class_fraction[e]) for e in start)):.4f}")
 
+    if args.episodes < 1:
+        return
     episode_rng = np.random.default_rng(args.seed + 1)
     ranks = [_operator_rank(episode_rng, args.favourite, n, args.share) for _ in range(args.episodes)]
     seeds = episode_rng.integers(2 ** 32, size=args.episodes)

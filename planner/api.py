@@ -70,6 +70,7 @@ from .decision.budget import (
 from .decision.lumped_model import LumpedModel, solver_start
 from .decision.lumped_model import lumped_model as build_lumped_model
 from .decision.online import OnlinePlanner
+from .decision.operators import mistake_stream
 from .decision.policy import AlphaVectorPolicy, PolicyError, read_policy
 from .decision.pomdp import POMDP
 from .decision.simulate import Episode, evaluate_policy, simulate_episode
@@ -115,7 +116,7 @@ __all__ = ["resolve_product", "DEFAULT_MODE", "fastener_report", "accept_fastene
            "proposed_subassemblies", "structure_problems", "level_report", "level_table", "LEVEL_KEYS",
            "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
-           "check_solved",
+           "check_solved", "evaluate_operator",
            "policy_for", "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner",
            "choose_planner", "decision_maker", "arranged", "levels_of", "level_product", "hierarchy_statistics_of",
            "sequence_choices", "plan_in_3d", "sequence_from_log", "InputLimits"]
@@ -813,14 +814,20 @@ def policy_for(model: Model, policy: str | os.PathLike | None = None, time_limit
 
 def simulate(model: IntentionModel | FactoredIntentionModel, policy, sequences: Sequence[int] | None = None,
              every: bool = False, random: int | None = None, seed: int = 0, max_steps: int = 100,
-             operator: str = "model", what: str = "--sequence") -> list[Episode] | list[FactoredEpisode]:
+             operator: str = "model", what: str = "--sequence", operator_model=None
+             ) -> list[Episode] | list[FactoredEpisode]:
     """One episode per full sequence played (``Episode.start``): ``every`` one, ``random`` ones drawn at
     random, the listed ``sequences`` (each checked), or by default the first. The operator follows its
     sequence (``operator``: ``model`` or ``turns``, see :func:`~planner.decision.simulate.simulate_episode`);
     one random stream, seeded by ``seed``, draws the sequences and then every episode.
 
     On a :class:`FactoredIntentionModel` the sequences are numbered by rank (0 to the number of sequences - 1,
-    :meth:`~FactoredIntentionModel.sequence`) and random ones are drawn uniformly without enumerating them."""
+    :meth:`~FactoredIntentionModel.sequence`) and random ones are drawn uniformly without enumerating them.
+
+    ``operator_model`` (:mod:`planner.decision.operators`; with ``random`` only) draws the ``random`` plans
+    (sequences and switches) instead of the model's initial belief, before any episode."""
+    if operator_model is not None:
+        return _simulate_operator(model, policy, operator_model, random, seed, max_steps, operator)
     if isinstance(model, FactoredIntentionModel):
         return _simulate_factored(model, policy, sequences, every, random, seed, max_steps, operator, what)
     starts = [int(s) for s in model.full_sequences()]
@@ -834,6 +841,36 @@ def simulate(model: IntentionModel | FactoredIntentionModel, policy, sequences: 
         chosen = [model.full_sequence(s, what) for s in (sequences or [starts[0]])]
     return [simulate_episode(model.pomdp, policy, start, rng, max_steps, model.graph.successor, model.final_state,
                              operator) for start in chosen]
+
+
+def _simulate_operator(model, policy, operator_model, random, seed, max_steps, operator) -> list:
+    if not random:
+        raise PlannerError("--operator-sequence draws the sequences the operator does: give --random N "
+                           "(not --sequence or --all)")
+    rng = np.random.default_rng(seed)  # the plans first, as the default draws, then the episodes
+    plans = operator_model.plans(model, random, rng, np.random.default_rng([seed, 1]))
+    rate = operator_model.mistakes
+    mistakes = [(rate, mistake_stream(seed, k)) if rate > 0 else None for k in range(len(plans))]
+    if isinstance(model, FactoredIntentionModel):
+        return [simulate_factored_episode(model, policy, p.sequence, rng, max_steps, operator, p.switch, m)
+                for p, m in zip(plans, mistakes)]
+    return [simulate_episode(model.pomdp, policy, p.sequence, rng, max_steps, model.graph.successor,
+                             model.final_state, operator, p.switch, model.graph.first_state, m)
+            for p, m in zip(plans, mistakes)]
+
+
+def evaluate_operator(model: Model | FactoredIntentionModel, policy, operator_model, episodes: int, seed: int = 0,
+                      max_steps: int = 100) -> tuple[float, float, list]:
+    """:func:`evaluate` against ``operator_model``: the episodes of :func:`simulate` with ``random=episodes``
+    (the same ones, for the same seed), their mean discounted return, its 95 % half-width and the episodes."""
+    if isinstance(model, LumpedModel):
+        model = model.factored
+    if not isinstance(model, (IntentionModel, FactoredIntentionModel)):
+        raise PlannerError("--operator-sequence needs a PRODUCT (its sequences), not a model file")
+    played = simulate(model, policy, random=episodes, seed=seed, max_steps=max_steps, operator_model=operator_model)
+    returns = [e.discounted_return for e in played]
+    half = 1.96 * float(np.std(returns, ddof=1)) / math.sqrt(episodes) if episodes > 1 else float("nan")
+    return float(np.mean(returns)), half, played
 
 
 def _simulate_factored(model: FactoredIntentionModel, policy, sequences, every, random, seed, max_steps, operator,

@@ -11,6 +11,7 @@ import time
 
 from .. import api
 from ..decision.belief_plot import episode_trace, plot_beliefs, state_trace
+from ..decision.episode_measures import episode_measures, run_totals
 from ..decision.intention_model import IntentionModel
 from ..decision.online import OnlinePlanner
 from ..decision.policy import WRITE_SECONDS, write_policy
@@ -212,21 +213,26 @@ def _times_text(times: dict) -> str:
 def _simulate_level(args: argparse.Namespace, product) -> list:
     model, policy = decision_maker_from(args, product)
     episodes = api.simulate(model, policy, args.sequence, args.all, args.random, args.seed, args.max_steps,
-                            args.operator)
+                            args.operator, operator_model=args.operator_model)
     if not isinstance(model, IntentionModel):
         return _print_factored(model, episodes, args)
     for episode in episodes:
         operations = model.describe_operations(episode.start)
         times = decision_times(s.decision_seconds for s in episode.steps)
+        if episode.switched_to is not None:  # the operations done: the start's up to the switch, then the new
+            after = model.describe_operations(episode.switched_to)
+            operations = operations[:len(operations) - len(after)] + after
         if args.json:
             print(json.dumps({"sequence": episode.start, "operations": operations,
                               "confident_after_operations": episode.first_confident(CONFIDENCE),
-                              "discounted_return": round(episode.discounted_return, 6), **times}))
+                              "discounted_return": round(episode.discounted_return, 6), **times,
+                              **episode_measures(episode)}))
             continue
         print(f"sequence {episode.start}: " + " ; ".join(operations))
-        _print_steps(model, episode.steps)
+        _print_steps(model, episode.steps, episode.switched_at)
         print(f"  {confidence_text(episode.first_confident(CONFIDENCE))}; discounted return "
               f"{episode.discounted_return:.3f}" + (f"; {_times_text(times)}" if episode.steps else ""))
+    _print_totals(args, episodes)
     if not args.json:
         _say_sampled(model, episodes)
     if args.plot:
@@ -234,6 +240,26 @@ def _simulate_level(args: argparse.Namespace, product) -> list:
                   for e in episodes]
         _write_plot(args, traces, model.plan.product.name or model.name)
     return episodes
+
+
+def _print_totals(args: argparse.Namespace, episodes) -> None:
+    """With --operator-sequence, the run's totals: one last JSON line ``{"totals": ...}``, or one text line."""
+    if args.operator_model is None:
+        return
+    totals = run_totals([episode_measures(e) for e in episodes])
+    if args.json:
+        print(json.dumps({"totals": {"operator": repr(args.operator_model), **totals}}))
+    else:
+        print(_totals_line(args.operator_model, totals))
+
+
+def _totals_line(operator, totals: dict) -> str:
+    share = "-" if totals["robot_share"] is None else f"{100 * totals['robot_share']:.1f} %"
+    wrong = "-" if totals["wrong_share"] is None else f"{100 * totals['wrong_share']:.1f} %"
+    return (f"operator {operator!r}, {totals['episodes']} episodes: the robot did {share} of the operations "
+            f"({totals['robot_operations']} of {totals['robot_operations'] + totals['operator_operations']}); "
+            f"wrong robot actions {totals['wrong_robot_actions']} ({wrong} of its actions); never helped in "
+            f"{totals['never_helped']}, never confident in {totals['never_confident']}")
 
 
 def _say_sampled(model, episodes) -> None:
@@ -251,12 +277,15 @@ def _write_plot(args: argparse.Namespace, traces, title: str) -> None:
         print("wrote " + ", ".join(written))
 
 
-def _print_steps(model, steps) -> None:
-    """The per-step table of an episode (flat or factored): action, observation, belief on the truth."""
+def _print_steps(model, steps, switched_at: int | None = None) -> None:
+    """The per-step table of an episode (flat or factored): action, observation, belief on the truth; the step
+    before which the operator changed its mind (--operator-sequence changing:P), if it did."""
     print(f"  {'step':>4}  {'robot action':<44} {'observation':<28} {'p(true)':>7}  operator ops")
     for k, step in enumerate(steps, start=1):
         print(f"  {k:>4}  {model.actions[step.action]:<44} {model.observations[step.observation]:<28} "
               f"{step.p_true:7.3f}  {step.operator_operations}")
+    if switched_at is not None:
+        print(f"  the operator changed its mind before step {switched_at} (the sequence shown is the one it did)")
 
 
 def _print_factored(model, episodes, args: argparse.Namespace) -> list:
@@ -268,12 +297,14 @@ def _print_factored(model, episodes, args: argparse.Namespace) -> list:
         if args.json:
             print(json.dumps({"operations": operations, "finished": episode.finished,
                               "confident_after_operations": episode.first_confident(CONFIDENCE),
-                              "discounted_return": round(episode.discounted_return, 6), **times}))
+                              "discounted_return": round(episode.discounted_return, 6), **times,
+                              **episode_measures(episode)}))
             continue
         print("sequence: " + " ; ".join(operations))
-        _print_steps(model, episode.steps)
+        _print_steps(model, episode.steps, episode.switched_at)
         print(f"  {confidence_text(episode.first_confident(CONFIDENCE))}; discounted return "
               f"{episode.discounted_return:.3f}; {_times_text(times)}" if episode.steps else "  no step")
+    _print_totals(args, episodes)
     if not args.json:
         _say_sampled(model, episodes)
     if args.plot:
@@ -291,15 +322,25 @@ def _true_state(model, path: list[int], step) -> int:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
+    if args.operator_model is not None and api._model_file_kind(args.model):  # refused before any solving
+        raise PlannerError(f"{args.model}: --operator-sequence needs a PRODUCT (its full sequences), not a model file")
     model, policy = decision_maker_from(args)
     if isinstance(policy, OnlinePlanner) and policy.decision_time is not None:
         log.info("the online planner takes up to %g s per decision: %d episodes can take minutes (progress below); "
                  "--expansions N bounds the work per decision instead", policy.decision_time, args.episodes)
-    mean, half = api.evaluate(model, policy, args.episodes, args.seed, args.max_steps)
+    if args.operator_model is not None:
+        mean, half, played = api.evaluate_operator(model, policy, args.operator_model, args.episodes, args.seed,
+                                                   args.max_steps)
+        totals = run_totals([episode_measures(e) for e in played])
+    else:
+        (mean, half), totals = api.evaluate(model, policy, args.episodes, args.seed, args.max_steps), None
     if args.json:
-        print(json.dumps({"mean_return": mean, "ci95": half, "episodes": args.episodes}))
+        extra = {} if totals is None else {"operator": repr(args.operator_model), **totals}
+        print(json.dumps({"mean_return": mean, "ci95": half, "episodes": args.episodes, **extra}))
     else:
         print(f"mean discounted return {mean:.4f} +- {half:.4f} (95 % confidence, {args.episodes} episodes)")
+        if totals is not None:
+            print(_totals_line(args.operator_model, totals))
     return 0
 
 

@@ -6,6 +6,7 @@ import argparse
 from ..assembly.guards import SizeLimits, default_memory_budget
 from ..assembly.hierarchy import SUBASSEMBLY_MODES
 from ..decision.intention_model import Rewards
+from ..decision.operators import parse_operator
 from ..defaults import (
     CONTACT_CEILING_FRACTION,
     CUTS_PER_SUBASSEMBLY,
@@ -364,7 +365,26 @@ def add_episode_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=whole, default=0)
     parser.add_argument("--max-steps", type=number(1, STEP_LIMIT, integer=True), default=100, metavar="N",
                         help=f"steps per episode at most, 1 to {STEP_LIMIT:,} (default 100)")
+    parser.add_argument("--operator-sequence", type=operator_model, metavar="SPEC", dest="operator_model",
+                        help="which sequences the simulated operator does (needs --random N with simulate): "
+                             "uniform (every full sequence equally likely, whatever the robot's model); "
+                             "habitual:K:STRENGTH (sequence K, numbered as --sequence numbers them, with "
+                             "probability STRENGTH in [0, 1], else uniform); changing:P (with probability P in "
+                             "[0, 1) per episode it switches once, after a uniformly drawn number of operations, "
+                             "to another completion; after habitual:K:S, as habitual:K:S,changing:P); "
+                             ",mistakes:Q last: with probability Q in [0, 1) per step a wrong part is taken and "
+                             "put back (the camera sees another observation); drawn from "
+                             "--seed before any episode, so two planners face the same operators. Default: the "
+                             "model's initial belief (with --habits, the habits)")
     add_decision_options(parser)
+
+
+def operator_model(text: str):
+    """``--operator-sequence``: the operator model (:func:`planner.decision.operators.parse_operator`)."""
+    try:
+        return parse_operator(text)
+    except PlannerError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 gibibytes = number(0, 2 ** 20, low_open=True)  # a positive, finite number of GiB (at most 1 PiB)

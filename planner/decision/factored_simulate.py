@@ -16,6 +16,8 @@ import numpy as np
 from ..assembly.guards import Progress
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .factored_updater import FactoredUpdater
+from .operators import switch_path
+from .simulate import operator_mistake
 
 __all__ = ["FactoredStep", "FactoredEpisode", "simulate_factored_episode", "evaluate_factored",
            "true_intention_probability"]
@@ -34,6 +36,9 @@ class FactoredStep:
     operator_operations: int  # operations the operator has performed so far
     reward: float
     decision_seconds: float   # the time the policy took to choose ``action``
+    robot_operation: bool = False  # the robot's action was the intention's next step (it helped)
+    wrong_action: bool = False     # the robot did an operation that is not the intention's next step
+    mistake: bool = False          # the operator took a wrong part (the observation is that pick)
 
 
 @dataclass
@@ -43,6 +48,7 @@ class FactoredEpisode:
     discounted_return: float = 0.0
     resets: int = 0                                    # unexplained observations (never with the model's world)
     beliefs: list[FactoredBelief] = field(default_factory=list)  # before the first step, then after each (sparse)
+    switched_at: int | None = None                     # the decision step (from 1) the operator changed its mind
 
     @property
     def finished(self) -> bool:
@@ -71,10 +77,14 @@ def true_intention_probability(model: FactoredIntentionModel, belief: FactoredBe
 
 
 def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[int], rng: np.random.Generator,
-                              max_steps: int = 100, operator: str = "model") -> FactoredEpisode:
+                              max_steps: int = 100, operator: str = "model", switch=None,
+                              mistakes=None) -> FactoredEpisode:
     """One episode along ``path`` (state edges from the initial state) until the product is finished or
     ``max_steps``. ``operator``: ``model`` (it acts with probability 1/2 per step, as the model says) or
-    ``turns`` (it acts whenever the model lets it). ``policy.action(belief)`` picks the robot's actions."""
+    ``turns`` (it acts whenever the model lets it). ``policy.action(belief)`` picks the robot's actions.
+    ``switch`` (a :class:`~planner.decision.operators.Switch`): the operator changes its mind once, after that
+    many operations, to another completion of its assembly state (``episode.path`` is then the one done).
+    ``mistakes``: as :func:`~planner.decision.simulate.simulate_episode`'s (the wrong parts' observations)."""
     if operator not in OPERATORS:
         raise ValueError(f"operator must be one of {OPERATORS}, got {operator!r}")
     updater = FactoredUpdater(model, on_reset=lambda event: None)
@@ -84,6 +94,9 @@ def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[
     for _ in range(max_steps):
         if position >= len(path):
             break
+        if switch is not None and episode.switched_at is None and position >= switch.after:
+            path = episode.path = switch_path(model, path, position, switch.draw)
+            episode.switched_at = len(episode.steps) + 1
         started = time.perf_counter()
         action = int(policy.action(belief))
         seconds = time.perf_counter() - started
@@ -93,12 +106,14 @@ def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[
         nxt = max(p for p, _ in options) if operator == "turns" else model.sample_position(path, position, action, rng)
         operations += nxt - position - robot_steps
         z = model.sample_observation(path, nxt, rng)
+        z, mistake = operator_mistake(z, len(model.observations), mistakes)
         belief = updater.update(belief, action, z)
         episode.discounted_return += discount * reward
         discount *= model.discount
         position = nxt
         episode.steps.append(FactoredStep(action, z, position, true_intention_probability(model, belief, path, position),
-                                          operations, reward, seconds))
+                                          operations, reward, seconds, robot_steps == 1,
+                                          action != model.wait and robot_steps == 0, mistake))
         episode.beliefs.append(belief)
     episode.resets = len(updater.events)
     return episode

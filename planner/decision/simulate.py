@@ -17,10 +17,12 @@ import numpy as np
 
 from ..defaults import CONFIDENCE
 from .belief import DiscreteUpdater
+from .operators import mistaken_observation, switch_intention
 from .policy import AlphaVectorPolicy
 from .pomdp import POMDP
 
-__all__ = ["Step", "Episode", "confidence_text", "decision_times", "evaluate_policy", "simulate_episode"]
+__all__ = ["Step", "Episode", "confidence_text", "decision_times", "evaluate_policy", "simulate_episode",
+           "operator_mistake"]
 
 
 @dataclass(frozen=True)
@@ -32,6 +34,9 @@ class Step:
     operator_operations: int  # operations the operator has performed so far
     reward: float
     decision_seconds: float = 0.0  # the time the policy took to choose ``action``
+    robot_operation: bool = False  # the robot's action was the intention's next step (it helped)
+    wrong_action: bool = False     # the robot did an operation that is not the intention's next step
+    mistake: bool = False          # the operator took a wrong part (the observation is that pick)
 
 
 @dataclass
@@ -41,6 +46,8 @@ class Episode:
     beliefs: list[np.ndarray] = field(default_factory=list)  # before the first step, then after each
     discounted_return: float = 0.0
     final: int | None = None  # the finished product's intention, when the episode knows it
+    switched_at: int | None = None  # the decision step (from 1) at which the operator changed its mind
+    switched_to: int | None = None  # the intention it took then (``start``'s steps before it, then these)
 
     def first_confident(self, threshold: float = CONFIDENCE) -> int | None:
         """Operator operations done when the belief on the true intention first exceeds ``threshold`` before
@@ -76,27 +83,35 @@ OPERATORS = ("turns", "model")
 
 def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: np.random.Generator,
                      max_steps: int = 100, successor: np.ndarray | None = None,
-                     final: int | None = None, operator: str = "model") -> Episode:
+                     final: int | None = None, operator: str = "model", switch=None,
+                     first_state: np.ndarray | None = None, mistakes=None) -> Episode:
     """One episode from the true intention ``start`` until ``final`` (the finished product) or ``max_steps``.
 
     ``operator``: ``"model"`` draws the operator's timing from the model (it acts with probability 1/2 per
     step); ``"turns"`` makes it act whenever the model lets it (human and robot take turns, as in the
     paper's experiment; needs ``successor``). Observations are always drawn from the model.
     ``successor`` (the intention graph's successor array) lets the episode count operator operations: a
-    move of the true intention that the robot's own action does not explain.
+    move of the true intention that the robot's own action does not explain. ``switch`` (an
+    :class:`~planner.decision.operators.Switch`; needs ``successor`` and the graph's ``first_state``): the
+    operator changes its mind once, after that many operations, to another intention of its assembly state.
+    ``mistakes`` (rate, generator): at each step, with that probability, the observation is a wrong part's
+    (:func:`~planner.decision.operators.mistaken_observation`); its draws come from that generator alone.
     """
     if operator not in OPERATORS:
         raise ValueError(f"operator must be one of {OPERATORS}, got {operator!r}")
-    updater = DiscreteUpdater(model)
+    updater = DiscreteUpdater(model) if mistakes is None else DiscreteUpdater(model, on_reset=lambda event: None)
     belief = updater.initialize()
     episode = Episode(start, beliefs=[belief], final=final)
     wait = model.actions.index("wait") if "wait" in model.actions else -1
-    state, operations, discount = start, 0, 1.0
+    state, operations, discount, done = start, 0, 1.0, 0
     transition = [t.tocsr() for t in model.transition]
     observation = [o.tocsr() for o in model.observation]
     for _ in range(max_steps):
         if final is not None and state == final:
             break
+        if switch is not None and episode.switched_at is None and done >= switch.after:
+            state = episode.switched_to = switch_intention(first_state, state, switch.draw)
+            episode.switched_at = len(episode.steps) + 1
         started = time.perf_counter()
         action = policy.action(belief)
         seconds = time.perf_counter() - started
@@ -106,18 +121,34 @@ def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: n
             nxt = int(max(row.indices, key=lambda t: _moves(successor, state, int(t))))
         else:
             nxt = int(rng.choice(row.indices, p=row.data / row.data.sum()))
+        robot_did_step = action != wait and _moves_intention(model, action, state)
         if successor is not None and nxt != state:
-            robot_did_step = action != wait and _moves_intention(model, action, state)
+            done += _moves(successor, state, nxt)
             operations += _moves(successor, state, nxt) - (1 if robot_did_step else 0)
         orow = observation[action].getrow(nxt)
         z = int(rng.choice(orow.indices, p=orow.data / orow.data.sum()))
+        z, mistake = operator_mistake(z, len(model.observations), mistakes)
         belief = updater.update(belief, action, z)
         episode.discounted_return += discount * reward
         discount *= model.discount
         state = nxt
-        episode.steps.append(Step(action, z, state, float(belief[state]), operations, reward, seconds))
+        episode.steps.append(Step(action, z, state, float(belief[state]), operations, reward, seconds,
+                                  robot_operation=robot_did_step, wrong_action=action != wait and not robot_did_step,
+                                  mistake=mistake))
         episode.beliefs.append(belief)
     return episode
+
+
+def operator_mistake(observation: int, n_observations: int, mistakes) -> tuple[int, bool]:
+    """The observation the camera sees when the operator may take a wrong part (``mistakes``: rate, generator;
+    two draws per step whatever happens), and whether it did."""
+    if mistakes is None:
+        return observation, False
+    rate, stream = mistakes
+    happens, pick = stream.random(2)
+    if happens >= rate:
+        return observation, False
+    return mistaken_observation(observation, n_observations, float(pick)), True
 
 
 def _moves_intention(model: POMDP, action: int, state: int) -> bool:

@@ -15,6 +15,9 @@ from planner.decision.factored_simulate import FactoredEpisode, FactoredStep
 from planner.decision.simulate import Episode, Step, confidence_text, decision_times, evaluate_policy, simulate_episode
 from planner.decision.solvers import PointBasedSolver
 
+MEASURES = {"robot_operations", "operator_operations", "wrong_robot_actions", "first_help_step", "confident_step",
+            "robot_share", "switched_at_step", "operator_mistakes"}  # planner.decision.episode_measures
+
 
 @pytest.fixture(scope="module")
 def decision(pen):
@@ -83,7 +86,8 @@ def test_cli_simulate_and_evaluate(tmp_path):
     *lines, run_line = [json.loads(l) for l in done.stdout.splitlines()]
     assert done.returncode == 0 and len(lines) == 12  # the 12 sequences with the technical constraint
     assert all(set(l) == {"sequence", "operations", "confident_after_operations", "discounted_return",
-                          "decision_seconds_median", "decision_seconds_p95", "decision_seconds_max"} for l in lines)
+                          "decision_seconds_median", "decision_seconds_p95", "decision_seconds_max"} | MEASURES
+               for l in lines)
     confident = [l["confident_after_operations"] for l in lines]
     assert all(c is None or 0 <= c <= 4 for c in confident)  # five operations; the fifth finishes the pen
     assert all(0 <= l["decision_seconds_median"] <= l["decision_seconds_p95"] <= l["decision_seconds_max"]

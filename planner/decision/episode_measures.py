@@ -1,0 +1,46 @@
+"""What an episode says about the collaboration: who did the operations, the robot's wrong actions, when it
+first helped and when it was sure of the operator's intention (flat and factored episodes alike).
+
+Per episode: ``robot_operations`` (the robot's actions that were the intention's next step),
+``operator_operations`` (the operator's), ``wrong_robot_actions`` (the robot's operations that were not: the
+reward table's ``wrong`` entries), ``first_help_step`` (the decision step, from 1, of the robot's first
+operation; None if it never did one), ``confident_step`` (the decision step, from 1, after which the belief on
+the true intention first exceeded ``CONFIDENCE``; None if never), ``robot_share`` (robot operations over all
+operations; None without any), ``switched_at_step`` (when the operator changed its mind) and
+``operator_mistakes`` (wrong parts taken). A finished episode's operations add up to its sequence's length. Cost: O(steps).
+"""
+from __future__ import annotations
+
+from ..defaults import CONFIDENCE
+
+__all__ = ["episode_measures", "run_totals"]
+
+
+def episode_measures(episode, threshold: float = CONFIDENCE) -> dict:
+    """The per-episode measures (module docstring) of an :class:`~.simulate.Episode` or a
+    :class:`~.factored_simulate.FactoredEpisode`."""
+    steps = episode.steps
+    robot = sum(s.robot_operation for s in steps)
+    operator = steps[-1].operator_operations if steps else 0
+    return {"robot_operations": robot, "operator_operations": operator,
+            "wrong_robot_actions": sum(s.wrong_action for s in steps),
+            "first_help_step": next((k for k, s in enumerate(steps, 1) if s.robot_operation), None),
+            "confident_step": next((k for k, s in enumerate(steps, 1) if s.p_true > threshold), None),
+            "robot_share": round(robot / (robot + operator), 6) if robot + operator else None,
+            "switched_at_step": episode.switched_at,
+            "operator_mistakes": sum(getattr(s, "mistake", False) for s in steps)}
+
+
+def run_totals(measures: list[dict]) -> dict:
+    """A run's totals: the robot's share of all operations, and its wrong actions as a share of its actions
+    (operations it did plus wrong ones; None when it never acted)."""
+    robot = sum(m["robot_operations"] for m in measures)
+    operator = sum(m["operator_operations"] for m in measures)
+    wrong = sum(m["wrong_robot_actions"] for m in measures)
+    return {"episodes": len(measures), "robot_operations": robot, "operator_operations": operator,
+            "wrong_robot_actions": wrong,
+            "robot_share": round(robot / (robot + operator), 6) if robot + operator else None,
+            "wrong_share": round(wrong / (robot + wrong), 6) if robot + wrong else None,
+            "operator_mistakes": sum(m["operator_mistakes"] for m in measures),
+            "never_helped": sum(m["first_help_step"] is None for m in measures),
+            "never_confident": sum(m["confident_step"] is None for m in measures)}
