@@ -221,7 +221,8 @@ def test_cli_operator_sequence(tmp_path):
                     "--expansions", "5", "--operator-sequence", "habitual:2:1")
     assert out.returncode == 0, out.stderr
     lines = [json.loads(line) for line in out.stdout.splitlines()]
-    episodes, totals = lines[:-1], lines[-1]["totals"]
+    episodes = [line for line in lines if "totals" not in line and "run" not in line]
+    totals = next(line["totals"] for line in lines if "totals" in line)
     assert len(episodes) == 3 and totals["episodes"] == 3 and totals["operator"] == "habitual:2:1"
     assert len({tuple(e["operations"]) for e in episodes}) == 1  # strength 1: one sequence
     assert totals["robot_operations"] == sum(e["robot_operations"] for e in episodes)
