@@ -5,7 +5,8 @@ Per episode: ``robot_operations`` (the robot's actions that were the intention's
 ``operator_operations`` (the operator's), ``wrong_robot_actions`` (the robot's operations that were not: the
 reward table's ``wrong`` entries), ``first_help_step`` (the decision step, from 1, of the robot's first
 operation; None if it never did one), ``confident_step`` (the decision step, from 1, after which the belief on
-the true intention first exceeded ``CONFIDENCE``; None if never), ``robot_share`` (robot operations over all
+the true intention first exceeded ``CONFIDENCE`` while the product was not yet finished, as
+``confident_after_operations`` counts it; None if never), ``robot_share`` (robot operations over all
 operations; None without any), ``switched_at_step`` (when the operator changed its mind) and
 ``operator_mistakes`` (wrong parts taken). A finished episode's operations add up to its sequence's length. Cost: O(steps).
 """
@@ -25,10 +26,18 @@ def episode_measures(episode, threshold: float = CONFIDENCE) -> dict:
     return {"robot_operations": robot, "operator_operations": operator,
             "wrong_robot_actions": sum(s.wrong_action for s in steps),
             "first_help_step": next((k for k, s in enumerate(steps, 1) if s.robot_operation), None),
-            "confident_step": next((k for k, s in enumerate(steps, 1) if s.p_true > threshold), None),
+            "confident_step": next((k for k, s in enumerate(steps, 1) if s.p_true > threshold
+                                    and not _finished(episode, s)), None),
             "robot_share": round(robot / (robot + operator), 6) if robot + operator else None,
             "switched_at_step": episode.switched_at,
             "operator_mistakes": sum(getattr(s, "mistake", False) for s in steps)}
+
+
+def _finished(episode, step) -> bool:
+    """Whether ``step`` assembled the product (then the belief is on the truth trivially: it does not count)."""
+    if hasattr(step, "position"):  # a factored episode: the sequence's steps done
+        return step.position >= len(episode.path)
+    return episode.final is not None and step.state == episode.final
 
 
 def run_totals(measures: list[dict]) -> dict:
