@@ -158,6 +158,7 @@ class PlanView:
             return
         if self.camera is None:
             self.camera = view.getCamera()
+        _end_camera_animation(view)
         width, height = view.getSize()
         aspect = width / max(height, 1)
         camera = view.getCameraNode()
@@ -172,8 +173,12 @@ class PlanView:
         axes = [FreeCAD.Vector(*rotation.multVec(coin.SbVec3f(*a)).getValue())
                 for a in ((1, 0, 0), (0, 1, 0), (0, 0, 1))]  # right, up, towards the viewer
         position, focal, height = orthographic_fit(axes, corners, aspect)
-        camera.position.setValue(*position)  # the viewer sets the clipping planes at every redraw
+        camera.position.setValue(*position)
         camera.focalDistance, camera.height = focal, height
+        # The viewer sets the clipping planes at its next redraw; until then (a picture saved at once) the old
+        # ones would clip what the camera now looks at. The fitted parts lie from 2/3 to 4/3 of the focal
+        # distance in front of it: planes far around them.
+        camera.nearDistance, camera.farDistance = 1e-3 * focal, 1e3 * focal
 
     def restore_camera(self) -> None:
         """The user's camera back, if :meth:`fit` changed it."""
@@ -444,3 +449,19 @@ def add_parts_tab(dialog, plan, analysis) -> QtGui.QTableWidget:
     restore_when_gone(table, view)
     dialog.plan_view = view  # kept with the dialog
     return table
+
+
+def _end_camera_animation(view) -> None:
+    """End a camera animation still running (a standard view just chosen turns the camera over a few tenths of
+    a second): it would go on moving the camera after a fit. Setting the orientation it has reached with the
+    animation off stops it there (FreeCAD's navigation unschedules a running turn first)."""
+    try:
+        if not view.isAnimationEnabled():
+            return
+        view.setAnimationEnabled(False)
+        try:
+            view.setCameraOrientation(view.getCameraOrientation())
+        finally:
+            view.setAnimationEnabled(True)
+    except (AttributeError, RuntimeError):  # a view without animations (another FreeCAD): nothing runs
+        return

@@ -26,7 +26,7 @@ ARTIFACTS = REPO / "tests" / "artifacts"
 PEN = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
 
 GUI_SCRIPT = r"""
-import json, os, sys, traceback
+import json, os, sys, time, traceback
 from PySide import QtCore, QtGui
 import FreeCAD, FreeCADGui
 
@@ -109,7 +109,10 @@ def start():
     FreeCADGui.runCommand("Std_Save")
     QtGui.QApplication.processEvents()
     FreeCADGui.SendMsgToActiveView("ViewFit")
-    FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
+    FreeCADGui.ActiveDocument.ActiveView.viewIsometric()  # turned over a few tenths of a second (animated)
+    turned = time.monotonic() + 2.0  # let the turn end, as a person does before opening the panel
+    while time.monotonic() < turned:
+        QtGui.QApplication.processEvents()
     result["before"] = snapshot()
     result["before_looks"] = looks()
     result["before_flags"] = undo_and_modified()
