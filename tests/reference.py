@@ -1,7 +1,9 @@
 """A deliberately naive, literal reference implementation used to cross-check the planner on small products.
 
 It tries every subset of parts (no cut enumeration, no bitmask tricks, no numpy), builds the assembly
-state graph with Python sets exactly as Alg. 1 reads, and enumerates intentions as Alg. 2 reads.
+state graph with Python sets exactly as Alg. 1 reads, and enumerates intentions as Alg. 2 reads. For the
+decision models, :func:`horizon_value` is the exact finite-horizon value by expectimax (every action and
+observation), which the flat, lumped and weighted models must share.
 """
 from __future__ import annotations
 
@@ -113,3 +115,24 @@ def intentions(states, edges):
             found.add(new)
             todo.append(new)
     return found
+
+
+def horizon_value(model, depth: int) -> float:
+    """The optimal value of ``depth`` decisions at the initial belief, by exact expectimax over every action and
+    observation (beliefs kept unnormalised: the value is linear in them)."""
+    import numpy as np  # the only numpy here: the decision model's tables are arrays
+
+    T = [t.toarray() for t in model.transition]
+    O = [o.toarray() for o in model.observation]
+    R = model.reward
+
+    def value(B, d):  # B (n, S) unnormalised beliefs -> (n,) values
+        if d == 1:
+            return (B @ R.T).max(axis=1)
+        q = np.empty((len(B), model.n_actions))
+        for a in range(model.n_actions):
+            nxt = (B @ T[a])[:, None, :] * O[a].T[None]               # (n, Z, S)
+            q[:, a] = B @ R[a] + model.discount * value(nxt.reshape(-1, model.n_states), d - 1).reshape(
+                len(B), -1).sum(axis=1)
+        return q.max(axis=1)
+    return float(value(model.initial[None], depth)[0])

@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 from aplan_runner import run_aplan
 from conftest import REPO
+from listed_source import ListedSource
 
 from planner import BLANK, Observation, chain_product, make_plan
 from planner.decision import intention_model
@@ -82,17 +83,6 @@ class _Waits:
         return self.wait
 
 
-class _Listed:
-    def __init__(self, observations):
-        self.observations = list(observations)
-
-    def observe(self):
-        return self.observations.pop(0) if self.observations else None
-
-    def robot_acting(self, instruction):
-        pass
-
-
 def test_the_session_ends_when_the_assembly_state_is_finished(pen):
     """The operator's five operations of one pen sequence, with ignored picks between them: assembled exactly
     at the fifth explained operation (N - 1 for N parts), never before."""
@@ -102,7 +92,7 @@ def test_the_session_ends_when_the_assembly_state_is_finished(pen):
              Observation(("ink",), "hammer"), Observation((), "hammer"), BLANK, Observation(("cap",), "hammer"),
              BLANK]
     log = EventLog()
-    result = run_session(model, _Waits(model), _Listed(steps), ScriptedRobot(), log)
+    result = run_session(model, _Waits(model), ListedSource(steps), ScriptedRobot(), log)
     assert result.reason == "assembled" and result.steps == 8 and result.operations == 5, result.message
     observed = [e for e in log.events if e["event"] == "observation"]
     assert [e["step"] for e in observed if e["ignored"]] == [2, 4]
@@ -114,12 +104,12 @@ def test_a_last_operation_that_shows_as_blank(tmp_path):
     open whether it was done; the belief on the finished product decides, within what the state allows."""
     model = intention_model(make_plan(chain_product(4)))
     steps = [Observation(("p1", "p2"), None), Observation(("p3", "p4"), None)] + [BLANK] * 10
-    result = run_session(model, _Waits(model), _Listed(steps), ScriptedRobot(), EventLog())
+    result = run_session(model, _Waits(model), ListedSource(steps), ScriptedRobot(), EventLog())
     assert result.reason == "assembled" and result.operations == 3
     assert result.steps > 3  # the first blank gives the finished product 1/2, not 0.99
     # A blank before those two subassemblies exist cannot be the last operation: the state is not finished.
     early = [Observation(("p1", "p2"), None)] + [BLANK] * 10
-    result = run_session(model, _Waits(model), _Listed(early), ScriptedRobot(), EventLog())
+    result = run_session(model, _Waits(model), ListedSource(early), ScriptedRobot(), EventLog())
     assert result.reason == "source ended"
 
 

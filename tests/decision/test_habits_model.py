@@ -12,6 +12,7 @@ from planner.decision import (DiscreteUpdater, FactoredUpdater, factored_model, 
                               to_flat)
 from planner.decision.habits import (add_sequence, choice_probabilities, habit_weights, habit_weights_from,
                                      habits_from_counts)
+from reference import horizon_value
 
 TOLERANCE = 1e-9
 
@@ -167,23 +168,6 @@ def test_counted_sequence_dominates_the_prior(pen):
     assert ops[top] == chosen and initial[top] > 0.5 and np.all(initial > 0)
 
 
-def _horizon_value(model, depth: int) -> float:
-    """The exact optimal value of ``depth`` decisions at the initial belief (expectimax over every action and
-    observation; beliefs kept unnormalised, since the value is linear in them)."""
-    T = [t.toarray() for t in model.transition]
-    O = [o.toarray() for o in model.observation]
-    R = model.reward
-
-    def value(B, d):  # B (n, S) unnormalised beliefs -> (n,) values
-        if d == 1:
-            return (B @ R.T).max(axis=1)
-        q = np.empty((len(B), model.n_actions))
-        for a in range(model.n_actions):
-            nxt = (B @ T[a])[:, None, :] * O[a].T[None]
-            q[:, a] = B @ R[a] + model.discount * value(nxt.reshape(-1, model.n_states), d - 1).reshape(
-                len(B), -1).sum(axis=1)
-        return q.max(axis=1)
-    return float(value(model.initial[None], depth)[0])
 
 
 def test_planners_run_on_the_weighted_models_with_the_same_values(pen):
@@ -203,8 +187,8 @@ def test_planners_run_on_the_weighted_models_with_the_same_values(pen):
     flat, fact = intention_model(plan, weights=weights).pomdp, factored_model(plan, weights=weights)
     lumped = lumped_pomdp(fact)
     paper = intention_model(plan).pomdp
-    value = _horizon_value(flat, 3)
-    assert value > 0 and _horizon_value(lumped, 3) == pytest.approx(value, abs=1e-9)
+    value = horizon_value(flat, 3)
+    assert value > 0 and horizon_value(lumped, 3) == pytest.approx(value, abs=1e-9)
     solver = PointBasedSolver(time_limit=None, max_iterations=60, precision=1e-6)
     Q, groups = solver_bounds(fact)
     a, b = solver.solve(flat), solver.solve(lumped, upper=Q, groups=groups)

@@ -8,6 +8,7 @@ import pytest
 from planner import chain_product, complete_product, make_plan
 from planner.decision import FactoredBelief, PointBasedSolver, factored_model, intention_model
 from planner.decision.lumped_model import LUMPED_SUFFIX, advance_matrix, lumped_pomdp
+from reference import horizon_value
 
 TOLERANCE = 1e-12
 
@@ -94,23 +95,6 @@ def test_flat_beliefs_lump_to_lumped_beliefs(pen):
             c = pc * lumped.observation[a][:, z].toarray().ravel() / zc[z]
 
 
-def _horizon_value(model, depth: int) -> float:
-    """The optimal value of ``depth`` decisions at the initial belief, by exact expectimax over every action and
-    observation (beliefs kept unnormalised: the value is linear in them)."""
-    T = [t.toarray() for t in model.transition]
-    O = [o.toarray() for o in model.observation]
-    R = model.reward
-
-    def value(B, d):  # B (n, S) unnormalised beliefs -> (n,) values
-        if d == 1:
-            return (B @ R.T).max(axis=1)
-        q = np.empty((len(B), model.n_actions))
-        for a in range(model.n_actions):
-            nxt = (B @ T[a])[:, None, :] * O[a].T[None]               # (n, Z, S)
-            q[:, a] = B @ R[a] + model.discount * value(nxt.reshape(-1, model.n_states), d - 1).reshape(
-                len(B), -1).sum(axis=1)
-        return q.max(axis=1)
-    return float(value(model.initial[None], depth)[0])
 
 
 @pytest.mark.parametrize("technical", [True, False])
@@ -118,7 +102,7 @@ def test_finite_horizon_values_equal_the_flat_model(pen, technical):
     plan = make_plan(pen, technical)
     flat, lumped = intention_model(plan).pomdp, lumped_pomdp(factored_model(plan))
     for depth in (1, 2, 3):
-        assert _horizon_value(lumped, depth) == pytest.approx(_horizon_value(flat, depth), abs=1e-9)
+        assert horizon_value(lumped, depth) == pytest.approx(horizon_value(flat, depth), abs=1e-9)
 
 
 def test_solver_bounds_agree_with_the_flat_model(pen):

@@ -8,6 +8,7 @@ import logging
 import numpy as np
 import pytest
 from aplan_runner import run_aplan
+from listed_source import ListedSource
 from pictures import assert_belief_plot
 
 from planner import BLANK, Observation, make_plan
@@ -128,22 +129,11 @@ def test_robot_failure_stops_cleanly(setup, tmp_path):
     assert replay(tmp_path / "fail.jsonl").mismatches == []
 
 
-class _Listed:
-    def __init__(self, observations):
-        self.observations = list(observations)
-
-    def observe(self):
-        return self.observations.pop(0) if self.observations else None
-
-    def robot_acting(self, instruction):
-        pass
-
-
 def test_observation_no_operation_explains(setup):
     """Picks no operation shows (two parts never joined directly) are ignored with a warning naming them and
     what the operator could pick; the step counts as blank and the session goes on (README, decision loop)."""
     plan, model, policy, _ = setup
-    source = _Listed([BLANK, Observation(("body", "ink"), "hammer")])
+    source = ListedSource([BLANK, Observation(("body", "ink"), "hammer")])
     log = EventLog()
     result = run_session(model, policy, source, ScriptedRobot(), log)
     assert result.reason == "source ended" and "ended at step 3" in result.message
@@ -161,7 +151,7 @@ def test_impossible_observation_is_ignored_and_goes_on(setup, caplog):
     plan, model, policy, _ = setup
     # The hammer alone joins two subassemblies: impossible before anything was built. No operation explains it
     # in the initial assembly state, so it counts as blank: no belief reset.
-    source = _Listed([Observation((), "hammer"), BLANK])
+    source = ListedSource([Observation((), "hammer"), BLANK])
     log = EventLog()
     with caplog.at_level(logging.WARNING, logger="planner"):
         result = run_session(model, policy, source, ScriptedRobot(), log)
@@ -190,7 +180,7 @@ def test_source_error_stops_cleanly(setup):
 def test_interrupt_and_step_limit_stop_cleanly(setup):
     plan, model, policy, graph = setup
 
-    class Interrupted(_Listed):
+    class Interrupted(ListedSource):
         def observe(self):
             if not self.observations:
                 raise KeyboardInterrupt
