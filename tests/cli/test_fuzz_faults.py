@@ -316,22 +316,27 @@ def _progress_lower(seen: bytes) -> list[float]:
     return [float(x) for x in re.findall(r"lower (-?\d+\.\d+)  upper", seen.decode())]
 
 
+def _solve_interrupted(argv: list[str], signum: int, timeout: float) -> tuple[int, str]:
+    """``aplan solve ARGV`` in a process of its own, sent ``signum`` once its lower bound has moved (a policy
+    better than the blind ones, which would not be written): its exit status and everything it printed."""
+    process = subprocess.Popen([sys.executable, "-m", "planner", "solve", *argv], cwd=REPO, stderr=subprocess.PIPE,
+                               stdout=subprocess.PIPE)
+    seen = b""
+    while len(set(_progress_lower(seen))) < 2:
+        chunk = process.stderr.read1(256)
+        assert chunk, "the solver ended before it was interrupted: " + seen.decode()
+        seen += chunk
+    process.send_signal(signum)
+    out, err = process.communicate(timeout=timeout)
+    return process.returncode, (seen + err).decode()
+
+
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_interrupted_solve_keeps_the_best_policy(signum, tmp_path):
     target = tmp_path / "p.policy"
-    process = subprocess.Popen([sys.executable, "-m", "planner", "solve", "pen", "-o", str(target),
-                                "--time-limit", "600", "--precision", "0"], cwd=REPO, stderr=subprocess.PIPE,
-                               stdout=subprocess.PIPE)
-    seen = b""
-    # the lower bound has moved (a policy better than the blind ones, which would not be written)
-    while len(set(_progress_lower(seen))) < 2:
-        chunk = process.stderr.read1(256)
-        assert chunk, "the solver ended before it was interrupted"
-        seen += chunk
-    process.send_signal(signum)
-    out, err = process.communicate(timeout=120)
-    message = (seen + err).decode()
-    assert process.returncode == 128 + signum, message
+    code, message = _solve_interrupted(["pen", "-o", str(target), "--time-limit", "600", "--precision", "0"], signum,
+                                       timeout=120)
+    assert code == 128 + signum, message
     assert "Traceback" not in message and "wrote the best policy so far" in message
     assert _tree(tmp_path) == {"p.policy"}  # renamed into place, no temporary file
     from planner import api
@@ -351,18 +356,9 @@ def test_interrupted_lumped_solve_bounded_by_trials(signum, tmp_path):
     product = tmp_path / "chain6.json"
     assert main(["synth", "chain", "6", "-o", str(product)]) == 0
     target = tmp_path / "p.policy"
-    process = subprocess.Popen([sys.executable, "-m", "planner", "solve", str(product), "--lumped", "-o", str(target),
-                                "--trials", "100000000", "--time-limit", "1000000", "--precision", "0"], cwd=REPO,
-                               stderr=subprocess.PIPE, stdout=subprocess.PIPE)
-    seen = b""
-    while len(set(_progress_lower(seen))) < 2:  # the lower bound has moved: better than the blind policies
-        chunk = process.stderr.read1(256)
-        assert chunk, "the solver ended before it was interrupted: " + seen.decode()
-        seen += chunk
-    process.send_signal(signum)
-    out, err = process.communicate(timeout=300)
-    message = (seen + err).decode()
-    assert process.returncode == 128 + signum, message
+    code, message = _solve_interrupted([str(product), "--lumped", "-o", str(target), "--trials", "100000000",
+                                        "--time-limit", "1000000", "--precision", "0"], signum, timeout=300)
+    assert code == 128 + signum, message
     assert "Traceback" not in message and "wrote the best policy so far" in message
     assert _tree(tmp_path) == {"chain6.json", "p.policy"}
     model = api.lumped_model(chain_product(6))
