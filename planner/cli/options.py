@@ -454,15 +454,24 @@ def _reads_cad(args: argparse.Namespace) -> bool:
     return argument is None or str(argument).lower().endswith(_CAD_SUFFIXES)
 
 
+def _applying(error: LimitExceededError, args: argparse.Namespace) -> list[tuple[str, str]]:
+    """``error.options`` that apply to this command's PRODUCT: ``--exclude`` and ``--group`` choose a CAD
+    model's parts, so only for a CAD model."""
+    return [(option, text) for option, text in error.options if option not in _CAD_ONLY or _reads_cad(args)]
+
+
+def _offered_here(args: argparse.Namespace) -> frozenset:
+    """The options this command has."""
+    return getattr(args, "offered_options", {}).get(getattr(args, "command", None), frozenset())
+
+
 def advice(error: LimitExceededError, args: argparse.Namespace) -> str:
     """The options of ``error`` that help, as one sentence: those of this command, then those of other
     commands that do the job another way (``--planner online`` in simulate, ...), with their command."""
     offered = getattr(args, "offered_options", {})
-    here = offered.get(getattr(args, "command", None), frozenset())
+    here = _offered_here(args)
     found = []
-    for option, text in error.options:
-        if option in _CAD_ONLY and not _reads_cad(args):  # they choose a CAD model's parts: nothing else has any
-            continue
+    for option, text in _applying(error, args):
         if option in here:
             found.append(text)
         elif option in _ELSEWHERE:
@@ -502,9 +511,8 @@ def explain(error: PlannerError, args: argparse.Namespace, options: bool = True)
         return whole
     text = error.summary
     if options and isinstance(error, LimitExceededError):
-        here = getattr(args, "offered_options", {}).get(getattr(args, "command", None), frozenset())
-        names = [_spelled(said) for option, said in error.options
-                 if option in here and (option not in _CAD_ONLY or _reads_cad(args))]
+        here = _offered_here(args)
+        names = [_spelled(said) for option, said in _applying(error, args) if option in here]
         if names:
             text += f"; try {', '.join(names)}"
     return text + (" (--verbose says why)" if error.summary != str(error) else "")
