@@ -27,17 +27,10 @@ def episode_measures(episode, threshold: float = CONFIDENCE) -> dict:
             "wrong_robot_actions": sum(s.wrong_action for s in steps),
             "first_help_step": next((k for k, s in enumerate(steps, 1) if s.robot_operation), None),
             "confident_step": next((k for k, s in enumerate(steps, 1) if s.p_true > threshold
-                                    and not _finished(episode, s)), None),
+                                    and episode.unfinished(s)), None),
             "robot_share": round(robot / (robot + operator), 6) if robot + operator else None,
             "switched_at_step": episode.switched_at,
             "operator_mistakes": sum(getattr(s, "mistake", False) for s in steps)}
-
-
-def _finished(episode, step) -> bool:
-    """Whether ``step`` assembled the product (then the belief is on the truth trivially: it does not count)."""
-    if hasattr(step, "position"):  # a factored episode: the sequence's steps done
-        return step.position >= len(episode.path)
-    return episode.final is not None and step.state == episode.final
 
 
 def run_totals(measures: list[dict]) -> dict:

@@ -58,8 +58,12 @@ class FactoredEpisode:
         """Operator operations done when the belief on the true intention first exceeds ``threshold`` before
         the product is finished (after a step that leaves some of the sequence to do); None if it never does.
         Once the product is assembled the belief is on it trivially, so that step does not count."""
-        return next((s.operator_operations for s in self.steps if s.p_true > threshold
-                     and s.position < len(self.path)), None)
+        return next((s.operator_operations for s in self.steps if s.p_true > threshold and self.unfinished(s)),
+                    None)
+
+    def unfinished(self, step: FactoredStep) -> bool:
+        """Whether some of the sequence was still to do after ``step``."""
+        return step.position < len(self.path)
 
     def confident_before_finished(self, threshold: float) -> bool:
         """True when the belief on the true intention passed ``threshold`` before the product was finished."""

@@ -53,8 +53,12 @@ class Episode:
         """Operator operations done when the belief on the true intention first exceeds ``threshold`` before
         the product is finished (after a step whose true intention is not ``final``); None if it never does.
         Once the product is assembled the belief is on it trivially, so that step does not count."""
-        return next((s.operator_operations for s in self.steps if s.p_true > threshold and s.state != self.final),
+        return next((s.operator_operations for s in self.steps if s.p_true > threshold and self.unfinished(s)),
                     None)
+
+    def unfinished(self, step: Step) -> bool:
+        """Whether the product was still unfinished after ``step`` (always, when ``final`` is not known)."""
+        return self.final is None or step.state != self.final
 
 
 def confidence_text(operations: int | None, threshold: float = CONFIDENCE) -> str:
