@@ -31,7 +31,7 @@ from .model import (
     TechnicalConstraint,
     Tool,
 )
-from .schema import check_document
+from .schema import WITHOUT_JSONSCHEMA, check_document, schema_checks
 
 __all__ = ["product_from_dict", "product_to_dict", "loads_product", "load_product", "save_product"]
 
@@ -44,6 +44,18 @@ def product_from_dict(data: Any, source: str = "<memory>") -> Product:
     Raises :class:`~planner.errors.ProductFormatError` naming ``source`` and the JSON path at fault.
     """
     check_document(data, source)
+    if schema_checks():
+        return _product(data, source)
+    try:  # without jsonschema the structure is checked only in outline: a wrong type shows up here
+        return _product(data, source)
+    except ProductFormatError:
+        raise
+    except (KeyError, TypeError, ValueError, AttributeError, IndexError) as exc:
+        raise ProductFormatError(source, "", f"malformed product file ({type(exc).__name__}: {exc}); "
+                                 f"{WITHOUT_JSONSCHEMA}") from None
+
+
+def _product(data: dict, source: str) -> Product:
     defaults = data.get("defaults", {})
     product = Product(
         parts=tuple(_part(item) for item in data["parts"]),

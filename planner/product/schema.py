@@ -16,13 +16,19 @@ import re
 from pathlib import Path
 from typing import Any
 
-import jsonschema
+try:
+    import jsonschema
+except ImportError:  # FreeCAD's Python from the Addon Manager may lack it (not on FreeCAD's allowed list)
+    jsonschema = None
 
 from ..errors import ProductFormatError
 from .constants import FORMAT, VERSION
 from .messages import describe, json_path, suggest
 
-__all__ = ["SCHEMA_PATH", "product_schema", "check_document"]
+__all__ = ["SCHEMA_PATH", "product_schema", "check_document", "schema_checks"]
+
+#: Said when a product file is refused without jsonschema, whose checks name the place of the mistake.
+WITHOUT_JSONSCHEMA = "install jsonschema (pip install jsonschema) for the JSON path of the mistake"
 
 SCHEMA_PATH = Path(__file__).with_name("schema.json")
 
@@ -46,10 +52,38 @@ def check_document(data: Any, source: str = "<memory>") -> None:
     """Raise :class:`~planner.errors.ProductFormatError` when ``data`` (parsed JSON) is not a product file
     of this version, naming ``source``, the JSON path of the first mistake and how to fix it."""
     _check_header(data, source)
+    if not schema_checks():
+        _check_outline(data, source)
+        return
     errors = sorted(_validator().iter_errors(data), key=_order)
     if errors:
         location, problem = _explain(errors[0])
         raise ProductFormatError(source, location, problem)
+
+
+def schema_checks() -> bool:
+    """True when jsonschema is installed: :func:`check_document` checks the whole structure and names the JSON
+    path of the first mistake. Without it (FreeCAD's Python, say) the outline is checked and the rest by the
+    planner's own checks (:func:`planner.product.io.product_from_dict`), which refuse a malformed file with a
+    less precise message."""
+    return jsonschema is not None
+
+
+def _check_outline(data: Any, source: str) -> None:
+    """Without jsonschema: the top level is an object of the schema's keys (or ``x-`` extensions) whose
+    ``parts`` and ``contacts`` are arrays."""
+    if not isinstance(data, dict):
+        raise ProductFormatError(source, "top level", f"expected an object, got {describe(data)}")
+    allowed = list(product_schema()["properties"])
+    for key in data:
+        if key not in allowed and not str(key).startswith("x-"):
+            raise ProductFormatError(source, json_path([key]), f"unknown key{suggest(key, allowed)}; allowed keys: "
+                                     f"{', '.join(allowed)} (keys starting with 'x-' are kept as extensions)")
+    for key in ("parts", "contacts"):
+        if key not in data:
+            raise ProductFormatError(source, "top level", f"missing required key {key!r}")
+        if not isinstance(data[key], list):
+            raise ProductFormatError(source, key, f"expected an array, got {describe(data[key])}")
 
 
 def _check_header(data: Any, source: str) -> None:
