@@ -18,6 +18,12 @@ class AplanWorkbench(FreeCADGui.Workbench):
         # Commands are imported here, when the workbench is first activated, not at FreeCAD start-up.
         from freecad_aplan.gui import commands
 
+        # The Addon Manager installs only the packages on FreeCAD's allowed list: name the optional ones missing
+        # once, and what the workbench does without each. (FreeCAD runs this file without keeping its globals:
+        # everything a method uses is imported in it.)
+        from freecad_aplan.dependencies import warn_missing
+
+        warn_missing()
         self.state = commands.WorkbenchState()  # what the commands keep between them (panels, jobs, ...)
         names = commands.register(self.state)
         self.appendToolbar("APLAN", names)

@@ -115,8 +115,7 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
     runs in :func:`_mesh_python`, else in FreeCADCmd when FreeCAD's Python has them. Raises
     :class:`~freecad_aplan.runner.FreeCADError` saying what to install when none can.
     """
-    import importlib.util
-
+    from .dependencies import MESH_ENGINE, installed
     from .runner import FreeCADError, find_freecadcmd
 
     if action == "level-stats" and _mesh_python() is not None:  # the planner alone: no FreeCAD to start
@@ -125,7 +124,7 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
         python = _mesh_python()
         if python is not None:
             return [python, BATCH_SCRIPT]
-        if any(importlib.util.find_spec(m) is None for m in ("trimesh", "manifold3d")):
+        if not all(installed(m) for m in MESH_ENGINE):
             raise FreeCADError("the mesh engine needs the Python packages trimesh and manifold3d, which FreeCAD's "
                                "Python does not have: install them for FreeCAD (pip), set APLAN_PYTHON to a Python "
                                "that has them, or choose the occt engine (analysis property Engine)")

@@ -181,12 +181,16 @@ class Detect(_Command):
                "(engine and tolerances: the analysis' properties); the parts are not moved")
 
     def run(self):
+        from ..dependencies import detection_engine
         from .jobs import BackgroundJob
 
         document = _document()
         analysis = workflow.require_analysis(document)
         intent = read_intent(analysis)
-        command = workflow.worker_command("analyze", intent.engine)
+        engine, note = detection_engine(intent.engine, workflow._mesh_python())  # occt without manifold3d
+        if note:
+            _message(f"warning: {note}", error=False)
+        command = workflow.worker_command("analyze", engine)
         folder = tempfile.mkdtemp(prefix="aplan-detect-")
         try:  # quick checks here (no solids, a bad intent); the export itself runs in the background too
             copy, count = workflow.detection_copy(document, folder)
@@ -211,9 +215,9 @@ class Detect(_Command):
                 finally:
                     shutil.rmtree(folder, ignore_errors=True)
 
-            job = {"action": "analyze", "folder": bundle, "engine": intent.engine, "contact": intent.contact,
+            job = {"action": "analyze", "folder": bundle, "engine": engine, "contact": intent.contact,
                    "interference": intent.interference, "depth": intent.depth}
-            BackgroundJob(f"Detecting contacts and obstructions of {result['parts']} parts ({intent.engine} engine)",
+            BackgroundJob(f"Detecting contacts and obstructions of {result['parts']} parts ({engine} engine)",
                           command, job, done, failed, self.state.jobs, parent).start()
 
         job = {"action": "export", "model": copy, "folder": bundle, "redetect": True, "notes": True}

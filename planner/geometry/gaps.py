@@ -139,7 +139,10 @@ def fcl_available() -> bool:
     """True when python-fcl can be imported (FreeCAD's own Python may lack it)."""
     import importlib.util
 
-    return importlib.util.find_spec("fcl") is not None
+    try:
+        return importlib.util.find_spec("fcl") is not None
+    except (ImportError, ValueError):  # a finder that refuses it (an import hook, a broken install)
+        return False
 
 
 def _bvh(part: PartMesh):

@@ -106,7 +106,11 @@ _FARTHEST = 1e7
 
 
 def _manifold(part: PartMesh):
-    import manifold3d
+    try:
+        import manifold3d
+    except ImportError:  # FreeCAD's Python, installed by the Addon Manager, may lack it: not on its allowed list
+        raise GeometryError("the mesh engine needs the Python package manifold3d: pip install manifold3d, or use "
+                            "the occt engine (aplan export-freecad --engine occt; in FreeCAD, Engine = occt)") from None
 
     if not np.isfinite(part.vertices).all():
         raise GeometryError(f"part {part.id!r}: its mesh has coordinates that are not finite numbers (NaN or "
