@@ -10,8 +10,8 @@ from PySide import QtCore, QtGui
 
 from .. import structure
 from ..intent import IntentError, read_intent
-from .layout import button_rows, fit_columns, narrow_combo, panel_layout, wrapped_label
-from .panels import _check, _checked, _item, _table
+from .layout import button_rows, fit_columns, narrow_combo, panel_layout, stacked_field, wrapped_label
+from .panels import _item, _table
 
 __all__ = ["FastenersPanel", "SubassembliesPanel", "LevelsDialog", "level_rows"]
 
@@ -31,12 +31,28 @@ def _selected_names(analysis) -> list[str]:
     return [o.Name for o in FreeCADGui.Selection.getSelection() if o is not analysis]
 
 
+def _names(names) -> str:
+    """Names one per line: a label wraps at spaces only, so a name is never broken inside (``cabin_door_001``)."""
+    return "\n".join(names) or "none"
+
+
+def _entry(group) -> str:
+    """A group's entry in the list: the parts it joins, one per line (what the designer recognises; a proposed
+    group's id, ``fasteners_HOST+HOST``, is wider than the default task view: it is the entry's tooltip), or
+    its id when it joins none yet."""
+    return "\n+ ".join(sorted(group.hosts)) if group.hosts else group.id
+
+
+_HEADINGS = {"designer": "Tagged by the designer", "proposed": "Proposed by the planner"}
+
+
 class FastenersPanel:
-    """The designer's fastener groups and the planner's proposals (the call behind ``aplan fasteners``) in one
-    table: a ticked row is kept (tagged) or accepted (proposed) on OK, with the tool typed in its row, in one
-    undo step. "Tag selected"
-    makes the selected objects one group (with the tool typed beside it) and "Untag selected" takes them out,
-    each at once and undoable."""
+    """The designer's fastener groups and the planner's proposals (the call behind ``aplan fasteners``): a list
+    of the groups, ticked to keep (tagged) or accept (proposed) on OK, and below it the selected group's parts,
+    the parts it joins, its tool (typed in) and why it is there, each name on a line of its own so that the
+    panel reads at the task view's default width (a six-column table broke names inside words there). OK
+    stores the ticked groups with their tools in one undo step. "Tag selected" makes the selected objects one
+    group (with the tool typed beside it) and "Untag selected" takes them out, each at once and undoable."""
 
     def __init__(self, analysis):
         self.analysis = analysis
@@ -46,11 +62,27 @@ class FastenersPanel:
         layout = panel_layout(self.form)
         self.summary = wrapped_label()
         layout.addWidget(self.summary)
-        self.table = _table(["use", "group", "parts", "joins", "tool", "why"], "AplanFastenersTable", fit=(0,),
-                            tips={0: "ticked: kept (tagged) or accepted (proposed) on OK", 2: "the fasteners of the group",
-                                  3: "the parts the group joins", 5: "designer (tagged) or why the planner proposes it"})
-        self.table.setMinimumHeight(280)  # six columns in a narrow panel make tall rows: show a few of them
-        layout.addWidget(self.table)
+        self.groups = QtGui.QListWidget()
+        self.groups.setObjectName("AplanFastenersList")
+        self.groups.setToolTip("ticked: kept (tagged) or accepted (proposed) on OK; select one to see it below")
+        self.groups.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarAlwaysOff)
+        self.groups.setMinimumHeight(150)  # a few groups at a time; the list scrolls
+        self.groups.currentRowChanged.connect(self.show_group)
+        layout.addWidget(self.groups)
+        details = QtGui.QGroupBox("selected group")
+        details.setObjectName("AplanFastenerDetails")
+        inner = QtGui.QVBoxLayout(details)
+        self.parts, self.hosts, self.why = (wrapped_label("", name) for name in
+                                            ("AplanFastenerParts", "AplanFastenerHosts", "AplanFastenerWhy"))
+        self.group_tool = QtGui.QLineEdit()
+        self.group_tool.setObjectName("AplanFastenerGroupTool")
+        self.group_tool.setPlaceholderText("none (e.g. screwdriver)")
+        self.group_tool.textEdited.connect(self._tool_typed)
+        for text, widget in (("fasteners:", self.parts), ("joins:", self.hosts), ("tool:", self.group_tool),
+                             ("why:", self.why)):
+            stacked_field(inner, text, widget)
+        layout.addWidget(details)
+        layout.addWidget(wrapped_label("New group from the objects selected in the 3D view, with this tool:"))
         self.tool = QtGui.QLineEdit()
         self.tool.setObjectName("AplanFastenerTool")
         self.tool.setPlaceholderText("tool (e.g. screwdriver)")
@@ -62,24 +94,73 @@ class FastenersPanel:
         self.refresh()
 
     def refresh(self) -> None:
-        """Fill the table from the analysis' tags and the planner's proposals for the other components."""
+        """Fill the list from the analysis' tags and the planner's proposals for the other components: a heading
+        for each source, then its groups."""
         designed, proposals = structure.fastener_report(self.analysis)
         tagged = {g["id"]: g for g in read_intent(self.analysis).fasteners}
-        self.rows: list[tuple[str, str]] = []
-        self.table.setRowCount(0)
+        # (designer or proposed, the group, its list entry), in the list's order; tools typed, by group
+        self.rows: list[tuple[str, object, QtGui.QListWidgetItem]] = []
+        self.tools: dict[int, str] = {}
+        self.groups.blockSignals(True)
+        self.groups.clear()
         for source, groups in (("designer", designed), ("proposed", proposals.groups)):
+            if not groups:
+                continue
+            heading = QtGui.QListWidgetItem(_HEADINGS[source])
+            heading.setFlags(QtCore.Qt.ItemIsEnabled)  # not selectable, no check box
+            font = heading.font()
+            font.setBold(True)
+            heading.setFont(font)
+            self.groups.addItem(heading)
             for group in groups:
-                k = self.table.rowCount()
-                self.table.insertRow(k)
-                self.table.setItem(k, 0, _check(True))
-                for column, text in enumerate((group.id, ", ".join(group.parts), ", ".join(sorted(group.hosts)),
-                                               group.tool or "", source if source == "designer" else group.reason),
-                                              start=1):
-                    self.table.setItem(k, column, _item(text, editable=column == 4))  # the tool can be typed in
-                self.rows.append((source, group.id))
+                item = QtGui.QListWidgetItem(_entry(group))
+                item.setToolTip(group.id)
+                item.setFlags(item.flags() | QtCore.Qt.ItemIsUserCheckable)
+                item.setCheckState(QtCore.Qt.Checked)
+                item.setData(QtCore.Qt.UserRole, len(self.rows))
+                self.groups.addItem(item)
+                self.tools[len(self.rows)] = group.tool or ""
+                self.rows.append((source, group, item))
+        self.groups.blockSignals(False)
         self.summary.setText(f"{len(tagged)} tagged groups; {len(proposals.groups)} proposed by the planner "
                              f"({sum(len(g.parts) for g in proposals.groups)} parts); untick a proposal to reject it"
                              + "".join(f"\nnot proposed: {p}: {r}" for p, r in proposals.left_out))
+        if self.rows:
+            self.groups.setCurrentItem(self.rows[0][2])
+        self.show_group(self.groups.currentRow())
+
+    def _group_at(self, row: int) -> int | None:
+        """The index in :attr:`rows` of the group at list row ``row`` (None: a heading, or no row)."""
+        item = self.groups.item(row) if row >= 0 else None
+        value = item.data(QtCore.Qt.UserRole) if item is not None else None
+        return None if value is None else int(value)
+
+    def show_group(self, row: int) -> None:
+        """Show the group at list row ``row`` below the list (nothing for a heading or no row)."""
+        k = self._group_at(row)
+        if k is None:
+            for label in (self.parts, self.hosts, self.why):
+                label.setText("")
+            self.group_tool.setText("")
+            self.group_tool.setEnabled(False)
+            return
+        source, group, _ = self.rows[k]
+        self.parts.setText(_names(group.parts))
+        self.hosts.setText(_names(sorted(group.hosts)))
+        self.why.setText("tagged by the designer" if source == "designer" else group.reason)
+        self.group_tool.setEnabled(True)
+        self.group_tool.setText(self.tools[k])
+
+    def _tool_typed(self, text: str) -> None:
+        k = self._group_at(self.groups.currentRow())
+        if k is not None:
+            self.tools[k] = text
+
+    def set_tool(self, k: int, tool: str) -> None:
+        """Type ``tool`` for group ``k`` (of :attr:`rows`) as a designer does: select it, type in its tool field."""
+        self.groups.setCurrentItem(self.rows[k][2])
+        self.group_tool.setText(tool)
+        self.group_tool.textEdited.emit(tool)
 
     def tag_selected(self) -> None:
         try:
@@ -100,8 +181,8 @@ class FastenersPanel:
         self.refresh()
 
     def accept(self) -> bool:
-        rows = [(source, g, _checked(self.table.item(k, 0)), self.table.item(k, 4).text().strip())
-                for k, (source, g) in enumerate(self.rows)]
+        rows = [(source, group.id, item.checkState() == QtCore.Qt.Checked, self.tools[k].strip())
+                for k, (source, group, item) in enumerate(self.rows)]
         keep = [g for source, g, use, _ in rows if source == "designer" and use]
         accepted = [g for source, g, use, _ in rows if source == "proposed" and use]
         tools = {g: tool for source, g, use, tool in rows if source == "proposed" and use and tool}

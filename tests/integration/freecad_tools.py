@@ -181,6 +181,36 @@ def cut_off(root):
     return problems
 
 
+def broken_words(root):
+    """What a person would read broken or cut in ``root``'s labels and lists (a task view's viewport or a
+    dialog): a word (text between spaces) wider than its label's text width (Qt breaks it inside, the
+    "cabi / n_d / oor_ / 001" of a narrow column), a zero-width break opportunity inside a name, a list entry
+    (check box and text) wider than its list."""
+    problems = []
+    for widget in root.findChildren(QtGui.QWidget):
+        if not widget.isVisibleTo(root) or widget.width() <= 0 or _inside_nested_scroll(widget, root):
+            continue
+        name = _widget_name(widget)
+        if isinstance(widget, QtGui.QLabel) and widget.text() and widget.pixmap() is None:
+            text, width = widget.text(), widget.contentsRect().width()
+            if "\u200b" in text:
+                problems.append(f"{name}: break opportunities inside names")
+            for word in text.split():
+                if widget.fontMetrics().horizontalAdvance(word) > width:
+                    problems.append(f"{name}: {word!r} needs {widget.fontMetrics().horizontalAdvance(word)} px, "
+                                    f"the label is {width} px wide: it breaks inside the word")
+        if isinstance(widget, QtGui.QListView):
+            option = QtGui.QStyleOptionViewItem()
+            option.initFrom(widget.viewport())
+            for row in range(widget.model().rowCount()):
+                index = widget.model().index(row, 0)
+                needed = widget.itemDelegate(index).sizeHint(option, index).width()
+                if needed > widget.viewport().width():
+                    problems.append(f"{name}: entry {index.data()!r} needs {needed} px, the list shows "
+                                    f"{widget.viewport().width()}")
+    return problems
+
+
 def task_view_viewport():
     """The visible part of the combo view's task panel (FreeCAD's TaskView is a QScrollArea)."""
     views = [w for w in FreeCADGui.getMainWindow().findChildren(QtGui.QScrollArea)

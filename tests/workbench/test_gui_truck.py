@@ -85,8 +85,24 @@ def wait_detection():
     FreeCADGui.runCommand("Aplan_Fasteners")
     panel = state().panel
     result["fasteners_cut_off"] = at_default_width("fasteners")
-    table = FreeCADGui.getMainWindow().findChild(QtGui.QTableWidget, "AplanFastenersTable")
-    result["fastener_rows"] = [[table.item(r, c).text() for c in range(1, 4)] for r in range(table.rowCount())]
+    window = FreeCADGui.getMainWindow()
+    groups = window.findChild(QtGui.QListWidget, "AplanFastenersList")
+    shown, broken = [], broken_words(task_view_viewport())
+    headings = []
+    for r in range(groups.count()):  # each group as a designer reads it: clicked in the list, shown below it
+        if not groups.item(r).flags() & QtCore.Qt.ItemIsUserCheckable:
+            headings.append(groups.item(r).text())
+            continue
+        groups.setCurrentRow(r)
+        QtGui.QApplication.processEvents()
+        labels = [window.findChild(QtGui.QLabel, n).text() for n in ("AplanFastenerParts", "AplanFastenerHosts",
+                                                                      "AplanFastenerWhy")]
+        shown.append([groups.item(r).text(), groups.item(r).toolTip(), *labels])  # the id: the entry's tooltip
+        broken += broken_words(task_view_viewport())
+    result["fastener_shown"], result["fasteners_broken"] = shown, sorted(set(broken))
+    result["fastener_headings"] = headings
+    result["fasteners_width"] = task_view_viewport().width()
+    groups.setCurrentRow(0)
     # Bad input in the panel: wood_screw_004 touches one part only; tagging it is refused with a message.
     steps = len(doc.UndoNames)
     FreeCADGui.Selection.clearSelection()
@@ -95,8 +111,8 @@ def wait_detection():
     result["tag_one_part"] = [FreeCADGui.getMainWindow().findChild(QtGui.QLabel, "AplanFastenersMessage").text(),
                               len(doc.UndoNames) - steps]
     FreeCADGui.Selection.clearSelection()
-    for r in range(table.rowCount()):  # wood screws: a screwdriver, typed in each row
-        table.item(r, 4).setText("screwdriver")
+    for k in range(len(panel.rows)):  # wood screws: a screwdriver, typed in each group's tool field
+        panel.set_tool(k, "screwdriver")
     result["fastener_accepted"] = panel.accept()
     intent = read_intent(analysis)
     result["tagged"] = [len(intent.fasteners), doc.UndoNames[0], len(doc.UndoNames) - steps]
@@ -227,7 +243,26 @@ def test_truck_structure_in_the_workbench(real_bundles):  # noqa: F811
     # The fastener groups the panel listed and accepted are those `aplan fasteners` proposes for the truck.
     proposals = json.loads(aplan("fasteners", str(real_bundles["toy_truck"]), "--json").stdout)["proposed"]
     expected = sorted([g["id"], ", ".join(g["parts"]), ", ".join(g["hosts"])] for g in proposals)
-    assert sorted(data["fastener_rows"]) == expected and len(expected) == 22
+    assert data["fastener_headings"] == ["Proposed by the planner"]  # nothing tagged yet
+    rows = [[name.replace("\n+ ", "+"), parts.replace("\n", ", "), hosts.replace("\n", ", ")]
+            for _, name, parts, hosts, _ in data["fastener_shown"]]
+    assert sorted(rows) == expected and len(expected) == 22
+    # the list names each group by the parts it joins, one per line
+    assert [entry.replace("\n+ ", ", ") for entry, *_ in data["fastener_shown"]] == [", ".join(g["hosts"])
+                                                                                    for g in proposals]
+    assert [why for *_, why in data["fastener_shown"]] == [g["reason"] for g in proposals]
+    # The panel reads at the default width (the six-column table broke names as "cabi / n_d / oor_ / 001"): one
+    # name per line, no word wider than its label, no entry wider than the list, for every group selected.
+    assert data["fasteners_broken"] == [], data["fasteners_broken"]
+    panel = read_picture(ARTIFACTS / "gui_panel_fasteners_truck.png")
+    width, height = panel.size  # the panel's widget: a few pixels wider than the task view's visible part
+    assert 200 <= data["fasteners_width"] <= 300, data["fasteners_width"]
+    text = panel.dark()
+    x0, y0, x1, y1 = panel.box(text)
+    assert x1 < data["fasteners_width"] - 4, (x1, data["fasteners_width"])  # measured: 220 of 244 px
+    # text in the list and in the group shown below it: dark pixels in both halves (measured: 5.0 % and 2.7 %)
+    assert panel.share(text[:height // 2]) >= 0.01
+    assert panel.share(text[height // 2:]) >= 0.01
     message, steps = data["tag_one_part"]
     assert message.startswith("the fasteners wood_screw_004 join only ") and "joins nothing or only one part" in message
     assert steps == 0
