@@ -39,6 +39,7 @@ after the robot's action, their out-edges).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -50,6 +51,7 @@ from ..defaults import DISCOUNT
 from ..errors import PlannerError
 from .habits import weighted_fractions
 from .intention_model import WAIT, Rewards
+from .parallel import ParallelTable, parallel_table
 
 __all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model", "factored_model_bytes"]
 
@@ -123,6 +125,7 @@ class FactoredIntentionModel:
     base_part: str | None = None
     weights: np.ndarray | None = None
     class_log_weight: np.ndarray | None = None
+    parallel: ParallelTable | None = None  # the parallel model's pairs (docs/parallel.md); None: the paper's
 
     @property
     def name(self) -> str:
@@ -325,6 +328,14 @@ class FactoredIntentionModel:
         parts = [(classes[~performs], mass[~performs])]
         if performs.any():
             parts += self._wait_step(*self.advance(classes[performs], mass[performs]))
+        if self.parallel is not None:  # a right parallel action: to e', then stay or advance; wrong: stay
+            k, p = self.parallel.find(classes, action)
+            if k.size:
+                right = mass[k] * self.parallel.fraction[p]
+                stay = mass.copy()
+                stay[k] -= right
+                parts[0] = (classes[~performs], stay[~performs])
+                parts += self._wait_step(self.parallel.target[p].astype(np.int64), right)
         return self._combine(*map(np.concatenate, zip(*parts)))
 
     def observation_likelihood(self, observation: int, classes: np.ndarray | None = None) -> np.ndarray:
@@ -352,7 +363,11 @@ class FactoredIntentionModel:
         """R(class, action): the class's next step (un)favorable, any other operation wrong, wait."""
         if action == self.wait:
             return np.full(len(classes), self.rewards.wait)
-        return np.where(self.class_action[classes] == action, self.class_match_reward[classes], self.rewards.wrong)
+        out = np.where(self.class_action[classes] == action, self.class_match_reward[classes], self.rewards.wrong)
+        if self.parallel is not None:  # R = wrong + q (r(o) - wrong) on the parallel pairs
+            k, p = self.parallel.find(classes, action)
+            out[k] = self.rewards.wrong + self.parallel.fraction[p] * (self.parallel.reward[p] - self.rewards.wrong)
+        return out
 
     def expected_rewards(self, belief: FactoredBelief) -> np.ndarray:
         """R(b, a) = sum over classes of mass x R(class, a), for every action at once. Cost: O(support + A)."""
@@ -363,6 +378,10 @@ class FactoredIntentionModel:
         hit = act >= 0
         out[:-1] += np.bincount(act[hit], weights=belief.mass[hit] * (self.class_match_reward[belief.classes[hit]]
                                                                       - self.rewards.wrong), minlength=out.size - 1)
+        if self.parallel is not None:
+            k, p = self.parallel.of_classes(belief.classes)
+            gain = belief.mass[k] * self.parallel.fraction[p] * (self.parallel.reward[p] - self.rewards.wrong)
+            out[:-1] += np.bincount(self.parallel.action[p], weights=gain, minlength=out.size - 1)
         return out
 
     def expected_reward(self, belief: FactoredBelief, action: int) -> float:
@@ -407,12 +426,14 @@ def _counts_per_state(plan: Plan) -> np.ndarray:
 
 
 def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
-                   base_part: str | None = None, weights: np.ndarray | None = None) -> FactoredIntentionModel:
+                   base_part: str | None = None, weights: np.ndarray | None = None,
+                   parallel: bool = False) -> FactoredIntentionModel:
     """The factored model of Alg. 3 over ``plan`` (module docstring), without enumerating intentions.
 
     ``base_part``: only the sequences that start from this part (paper Sec. V); :class:`PlannerError` when it
     is not a part or no sequence starts from it. ``weights``: a positive weight per state edge (operator
     habits, :func:`~planner.decision.habits.habit_weights`; module docstring), None for the paper's model.
+    ``parallel``: the parallel model (:mod:`~planner.decision.parallel`: the robot may do the step after next).
 
     Cost: O(S + E log E) time and O(S + E) memory for S states and E state edges (one sort of the edges by
     source, one of the (state, observation) pairs); Python-int arithmetic only where the counts pass 2**52.
@@ -465,5 +486,6 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
               keys, class_action, match, initial)
     for a in arrays + tuple(a for a in (class_weights, log_weight) if a is not None):
         a.flags.writeable = False
-    return FactoredIntentionModel(plan, rewards, discount, *arrays, base_part=base_part, weights=class_weights,
-                                  class_log_weight=log_weight)
+    model = FactoredIntentionModel(plan, rewards, discount, *arrays, base_part=base_part, weights=class_weights,
+                                   class_log_weight=log_weight)
+    return dataclasses.replace(model, parallel=parallel_table(model)) if parallel else model
