@@ -1,0 +1,79 @@
+"""Help before the last step (issue 23, item 2): the parallel model (docs/parallel.md) against the paper's, with a
+uniform operator (``--operator-sequence uniform``) and the online planner (a fixed number of expansions per
+decision: the same actions on any machine), on the same seeded episodes. Per product: the robot's share of the
+operations, its wrong actions as a share of its actions, and the mean discounted return.
+
+Run: ``.venv/bin/python bench/bench_parallel.py [--episodes 20] [--expansions 100] [--products pen,chain9,complete7]
+[--truck BUNDLE]`` (``BUNDLE``: ``aplan export-freecad ../shared/models/toy_truck/asm_cement_mixer_truck.FCStd -o
+BUNDLE``; its levels as ``aplan session BUNDLE --fasteners auto --subassemblies auto`` plans them).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+
+from planner import api, chain_product, complete_product, make_plan  # noqa: E402
+from planner.decision.episode_measures import episode_measures, run_totals  # noqa: E402
+from planner.decision.factored_model import factored_model  # noqa: E402
+from planner.decision.online import OnlinePlanner  # noqa: E402
+from planner.decision.operators import parse_operator  # noqa: E402
+
+
+def _products(names: list[str], truck: str | None):
+    for name in names:
+        if name == "pen":
+            yield "pen", api.resolve_product("pen")
+        elif name.startswith("chain"):
+            yield name, chain_product(int(name[5:]))
+        elif name.startswith("complete"):
+            yield name, complete_product(int(name[8:]))
+        else:
+            raise SystemExit(f"unknown product {name!r}")
+    if truck:
+        product = api.resolve_product(truck, None, "auto", {"groups": {}, "exclude": []}, "auto", 8)
+        for level in api.levels_of(product, "designer"):
+            yield f"truck:{level.id}", level.product
+
+
+def _run(plan, parallel: bool, episodes: int, expansions: int, seed: int):
+    model = factored_model(plan, parallel=parallel)
+    planner = OnlinePlanner(model, expansions, None)
+    began = time.perf_counter()
+    mean, half, played = api.evaluate_operator(model, planner, parse_operator("uniform"), episodes, seed)
+    totals = run_totals([episode_measures(e) for e in played])
+    pairs = model.parallel.size if parallel else 0
+    return mean, half, totals, pairs, time.perf_counter() - began
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--episodes", type=int, default=20)
+    parser.add_argument("--expansions", type=int, default=100)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--products", default="pen,chain9,complete7")
+    parser.add_argument("--truck", metavar="BUNDLE")
+    args = parser.parse_args()
+    print("| product | model | pairs | robot share | wrong / robot actions | mean return (95 %) | seconds |")
+    print("|---|---|---|---|---|---|---|")
+    for name, product in _products([p for p in args.products.split(",") if p], args.truck):
+        plan = make_plan(product)
+        for parallel in (False, True):
+            mean, half, t, pairs, seconds = _run(plan, parallel, args.episodes, args.expansions, args.seed)
+            share = "-" if t["robot_share"] is None else f"{100 * t['robot_share']:.1f} % ({t['robot_operations']})"
+            wrong = "-" if t["wrong_share"] is None else f"{100 * t['wrong_share']:.1f} % ({t['wrong_robot_actions']})"
+            interval = f"{mean:.3f} +- {half:.3f}" if math.isfinite(half) else f"{mean:.3f}"
+            print(f"| {name} | {'parallel' if parallel else 'paper'} | {pairs:,} | {share} | {wrong} | {interval} | "
+                  f"{seconds:.0f} |", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
