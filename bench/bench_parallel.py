@@ -4,8 +4,11 @@ decision: the same actions on any machine), on the same seeded episodes. Per pro
 operations, its wrong actions as a share of its actions, and the mean discounted return.
 
 Run: ``.venv/bin/python bench/bench_parallel.py [--episodes 20] [--expansions 100] [--products pen,chain9,complete7]
-[--truck BUNDLE]`` (``BUNDLE``: ``aplan export-freecad ../shared/models/toy_truck/asm_cement_mixer_truck.FCStd -o
-BUNDLE``; its levels as ``aplan session BUNDLE --fasteners auto --subassemblies auto`` plans them).
+[--truck BUNDLE] [--habitual K] [--rewards U,F,W]`` (``BUNDLE``: ``aplan export-freecad
+../shared/models/toy_truck/asm_cement_mixer_truck.FCStd -o BUNDLE``; its levels as ``aplan session BUNDLE
+--fasteners auto --subassemblies auto`` plans them). ``--habitual K``: instead, an operator who does sequence ``K``
+80 % of the time (``habitual:K:0.8``), both models with the habits counted from 20 other plans of that operator
+(counted directly, as ``aplan habits`` counts logs).
 """
 from __future__ import annotations
 
@@ -23,6 +26,8 @@ import numpy as np  # noqa: E402
 from planner import api, chain_product, complete_product, make_plan  # noqa: E402
 from planner.decision.episode_measures import episode_measures, run_totals  # noqa: E402
 from planner.decision.factored_model import factored_model  # noqa: E402
+from planner.decision.habits import add_sequence, habit_weights_from  # noqa: E402
+from planner.decision.intention_model import Rewards  # noqa: E402
 from planner.decision.online import OnlinePlanner  # noqa: E402
 from planner.decision.operators import parse_operator  # noqa: E402
 
@@ -43,13 +48,27 @@ def _products(names: list[str], truck: str | None):
             yield f"truck:{level.id}", level.product
 
 
-def _run(plan, parallel: bool, episodes: int, expansions: int, seed: int):
-    model = factored_model(plan, parallel=parallel)
+def _habits(plan, operator, seed: int, sessions: int = 20):
+    model = factored_model(plan)
+    counts = np.zeros(plan.states.n_edges)
+    for p in operator.plans(model, sessions, np.random.default_rng([seed, 99]), np.random.default_rng([seed, 98])):
+        add_sequence(plan, counts, model.sequence_operations(p.sequence))
+    return habit_weights_from(plan, counts, 1.0)
+
+
+def _run(plan, parallel: bool, episodes: int, expansions: int, seed: int, habitual: int | None, rewards: Rewards):
+    operator = parse_operator("uniform" if habitual is None else f"habitual:{habitual}:0.8")
+    weights = None if habitual is None else _habits(plan, operator, seed)
+    model = factored_model(plan, rewards, weights=weights, parallel=parallel)
     planner = OnlinePlanner(model, expansions, None)
     began = time.perf_counter()
-    mean, half, played = api.evaluate_operator(model, planner, parse_operator("uniform"), episodes, seed)
+    mean, half, played = api.evaluate_operator(model, planner, operator, episodes, seed)
     totals = run_totals([episode_measures(e) for e in played])
-    pairs = model.parallel.size if parallel else 0
+    pairs = "0"
+    if parallel:  # and those whose expected reward beats waiting's (q r + (1 - q) wrong > wait)
+        par = model.parallel
+        worth = int((rewards.wrong + par.fraction * (par.reward - rewards.wrong) > rewards.wait).sum())
+        pairs = f"{par.size:,} ({worth:,})"
     return mean, half, totals, pairs, time.perf_counter() - began
 
 
@@ -60,17 +79,22 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--products", default="pen,chain9,complete7")
     parser.add_argument("--truck", metavar="BUNDLE")
+    parser.add_argument("--habitual", type=int, metavar="K")
+    parser.add_argument("--rewards", default="10,-2,-50", metavar="U,F,W",
+                        help="unfavorable, favorable and wrong rewards (default the paper's 10,-2,-50)")
     args = parser.parse_args()
-    print("| product | model | pairs | robot share | wrong / robot actions | mean return (95 %) | seconds |")
+    rewards = Rewards(*(float(x) for x in args.rewards.split(",")), 0.0)
+    print("| product | model | pairs (worth a try) | robot share | wrong / robot actions | mean return (95 %) | seconds |")
     print("|---|---|---|---|---|---|---|")
     for name, product in _products([p for p in args.products.split(",") if p], args.truck):
         plan = make_plan(product)
         for parallel in (False, True):
-            mean, half, t, pairs, seconds = _run(plan, parallel, args.episodes, args.expansions, args.seed)
+            mean, half, t, pairs, seconds = _run(plan, parallel, args.episodes, args.expansions, args.seed,
+                                                     args.habitual, rewards)
             share = "-" if t["robot_share"] is None else f"{100 * t['robot_share']:.1f} % ({t['robot_operations']})"
             wrong = "-" if t["wrong_share"] is None else f"{100 * t['wrong_share']:.1f} % ({t['wrong_robot_actions']})"
             interval = f"{mean:.3f} +- {half:.3f}" if math.isfinite(half) else f"{mean:.3f}"
-            print(f"| {name} | {'parallel' if parallel else 'paper'} | {pairs:,} | {share} | {wrong} | {interval} | "
+            print(f"| {name} | {'parallel' if parallel else 'paper'} | {pairs} | {share} | {wrong} | {interval} | "
                   f"{seconds:.0f} |", flush=True)
     return 0
 
