@@ -56,6 +56,29 @@ def _habits(plan, operator, seed: int, sessions: int = 20):
     return habit_weights_from(plan, counts, 1.0)
 
 
+def _later_q(model) -> float:
+    """The largest chance, over the pairs, that the robot's operation ``o`` is right under a wider rule: ``o``
+    comes at *any* later step of the operator's sequence, every step before it leaving ``o``'s subassemblies alone
+    (so the sequence stays feasible with ``o`` done now). By one pass over the state edges ``(x, o)``, the final
+    level first: ``g(x, o) = sum over e out of x of f(e) [op(e) = o] + f(e) g(target e, o) [o still possible
+    there]``; a pair's chance is ``g(target e, o)``. Diagnostic only (the model is the step after next)."""
+    E = model.final_class
+    source, target = model.class_source[:E].astype(int), model.class_target[:E].astype(int)
+    operation = model.class_operation[:E].astype(int)
+    edge = {(int(s), int(o)): k for k, (s, o) in enumerate(zip(source, operation))}
+    g = np.zeros(E)
+    for f in np.argsort(source, kind="stable"):  # states are numbered from the final one: targets come first
+        x, o = int(source[f]), int(operation[f])
+        for e in model.classes_from(x).tolist():
+            if operation[e] == o:
+                g[f] += model.class_fraction[e]
+            elif (int(target[e]), o) in edge:
+                g[f] += model.class_fraction[e] * g[edge[int(target[e]), o]]
+    par = model.parallel
+    chances = [g[edge[int(target[c]), int(model.action_operations[a])]] for c, a in zip(par.pair_class, par.action)]
+    return max(chances, default=0.0)
+
+
 def _run(plan, parallel: bool, episodes: int, expansions: int, seed: int, habitual: int | None, rewards: Rewards):
     operator = parse_operator("uniform" if habitual is None else f"habitual:{habitual}:0.8")
     weights = None if habitual is None else _habits(plan, operator, seed)
@@ -64,11 +87,11 @@ def _run(plan, parallel: bool, episodes: int, expansions: int, seed: int, habitu
     began = time.perf_counter()
     mean, half, played = api.evaluate_operator(model, planner, operator, episodes, seed)
     totals = run_totals([episode_measures(e) for e in played])
-    pairs = "0"
+    pairs = "0 | - | -"
     if parallel:  # and those whose expected reward beats waiting's (q r + (1 - q) wrong > wait)
         par = model.parallel
         worth = int((rewards.wrong + par.fraction * (par.reward - rewards.wrong) > rewards.wait).sum())
-        pairs = f"{par.size:,} ({worth:,})"
+        pairs = f"{par.size:,} ({worth:,}) | {par.fraction.max(initial=0.0):.3f} | {_later_q(model):.3f}"
     return mean, half, totals, pairs, time.perf_counter() - began
 
 
@@ -84,8 +107,9 @@ def main() -> int:
                         help="unfavorable, favorable and wrong rewards (default the paper's 10,-2,-50)")
     args = parser.parse_args()
     rewards = Rewards(*(float(x) for x in args.rewards.split(",")), 0.0)
-    print("| product | model | pairs (worth a try) | robot share | wrong / robot actions | mean return (95 %) | seconds |")
-    print("|---|---|---|---|---|---|---|")
+    print("| product | model | pairs (worth a try) | max q | max q, any later step | robot share | wrong / robot actions | "
+          "mean return (95 %) | seconds |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for name, product in _products([p for p in args.products.split(",") if p], args.truck):
         plan = make_plan(product)
         for parallel in (False, True):
