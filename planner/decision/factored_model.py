@@ -55,7 +55,8 @@ from ..defaults import DISCOUNT
 from ..errors import PlannerError
 from .habits import weighted_fractions
 from .intention_model import WAIT, Rewards
-from .parallel import ParallelTable, parallel_table
+from .parallel import (ParallelTable, parallel_expected_rewards, parallel_predict, parallel_rewards,
+                       parallel_table)
 
 __all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model", "factored_model_bytes"]
 
@@ -333,13 +334,7 @@ class FactoredIntentionModel:
         if performs.any():
             parts += self._wait_step(*self.advance(classes[performs], mass[performs]))
         if self.parallel is not None:  # a right parallel action: to e', then stay or advance; wrong: stay
-            k, p = self.parallel.find(classes, action)
-            if k.size:
-                right = mass[k] * self.parallel.fraction[p]
-                stay = mass.copy()
-                stay[k] -= right
-                parts[0] = (classes[~performs], stay[~performs])
-                parts += self._wait_step(self.parallel.target[p].astype(np.int64), right)
+            parts = parallel_predict(self, classes, mass, action, performs, parts)
         return self._combine(*map(np.concatenate, zip(*parts)))
 
     def observation_likelihood(self, observation: int, classes: np.ndarray | None = None) -> np.ndarray:
@@ -368,10 +363,7 @@ class FactoredIntentionModel:
         if action == self.wait:
             return np.full(len(classes), self.rewards.wait)
         out = np.where(self.class_action[classes] == action, self.class_match_reward[classes], self.rewards.wrong)
-        if self.parallel is not None:  # R = wrong + q (r(o) - wrong) on the parallel pairs
-            k, p = self.parallel.find(classes, action)
-            out[k] = self.rewards.wrong + self.parallel.fraction[p] * (self.parallel.reward[p] - self.rewards.wrong)
-        return out
+        return out if self.parallel is None else parallel_rewards(self, classes, action, out)
 
     def expected_rewards(self, belief: FactoredBelief) -> np.ndarray:
         """R(b, a) = sum over classes of mass x R(class, a), for every action at once. Cost: O(support + A)."""
@@ -382,11 +374,7 @@ class FactoredIntentionModel:
         hit = act >= 0
         out[:-1] += np.bincount(act[hit], weights=belief.mass[hit] * (self.class_match_reward[belief.classes[hit]]
                                                                       - self.rewards.wrong), minlength=out.size - 1)
-        if self.parallel is not None:
-            k, p = self.parallel.of_classes(belief.classes)
-            gain = belief.mass[k] * self.parallel.fraction[p] * (self.parallel.reward[p] - self.rewards.wrong)
-            out[:-1] += np.bincount(self.parallel.action[p], weights=gain, minlength=out.size - 1)
-        return out
+        return out if self.parallel is None else parallel_expected_rewards(self, belief, out)
 
     def expected_reward(self, belief: FactoredBelief, action: int) -> float:
         return float(belief.mass @ self.rewards_of(belief.classes, action))

@@ -29,7 +29,8 @@ import numpy as np
 
 from ..assembly.intentions import allowed_edges
 
-__all__ = ["ParallelTable", "parallel_table", "pairs_of", "parallel_rewrite", "parallel_bytes"]
+__all__ = ["ParallelTable", "parallel_table", "parallel_rewrite", "parallel_bytes", "parallel_predict",
+           "parallel_rewards", "parallel_expected_rewards"]
 
 
 @dataclass(frozen=True)
@@ -129,12 +130,34 @@ def parallel_table(model) -> ParallelTable:
     return ParallelTable(A, *arrays)
 
 
-def pairs_of(model, classes: np.ndarray, action: int) -> tuple[np.ndarray, np.ndarray]:
-    """:meth:`ParallelTable.find` of ``model``'s table (none without the parallel model)."""
-    if model.parallel is None:
-        empty = np.zeros(0, dtype=np.int64)
-        return empty, empty
-    return model.parallel.find(classes, action)
+def parallel_predict(model, classes: np.ndarray, mass: np.ndarray, action: int, performs: np.ndarray,
+                     parts: list) -> list:
+    """The factored prediction's ``parts`` (``parts[0]``: the classes ``action`` leaves where they are) with the
+    parallel pairs: each pair's class keeps ``1 - q`` of its mass (wrong), ``q`` goes to ``e'`` and then stays or
+    advances (right). Cost: O(k log P) plus the advance of the right mass."""
+    k, p = model.parallel.find(classes, action)
+    if not k.size:
+        return parts
+    right = mass[k] * model.parallel.fraction[p]
+    stay = mass.copy()
+    stay[k] -= right
+    return [(classes[~performs], stay[~performs])] + parts[1:] + \
+        model._wait_step(model.parallel.target[p].astype(np.int64), right)
+
+
+def parallel_rewards(model, classes: np.ndarray, action: int, out: np.ndarray) -> np.ndarray:
+    """``out`` (the paper's R(class, action) of ``classes``) with ``R = wrong + q (r(o) - wrong)`` on the pairs."""
+    k, p = model.parallel.find(classes, action)
+    out[k] = model.rewards.wrong + model.parallel.fraction[p] * (model.parallel.reward[p] - model.rewards.wrong)
+    return out
+
+
+def parallel_expected_rewards(model, belief, out: np.ndarray) -> np.ndarray:
+    """``out`` (the paper's R(b, a) per action) with the pairs' rewards in place of ``wrong``. Cost: O(k + pairs)."""
+    k, p = model.parallel.of_classes(belief.classes)
+    gain = belief.mass[k] * model.parallel.fraction[p] * (model.parallel.reward[p] - model.rewards.wrong)
+    out[:-1] += np.bincount(model.parallel.action[p], weights=gain, minlength=out.size - 1)
+    return out
 
 
 def parallel_rewrite(model, path: list[int], position: int, action: int) -> list[int]:
