@@ -52,6 +52,7 @@ from .assembly.plan import Plan, make_plan
 from .assembly.stats import STAT_KEYS, PlanStatistics, plan_statistics, statistics_within
 from .decision.factored_model import FactoredIntentionModel, factored_model
 from .decision.habits import Habits, habit_weights
+from .decision.parallel import check_parallel_memory
 from .decision.factored_simulate import FactoredEpisode, evaluate_factored, simulate_factored_episode
 from .decision.intention_model import IntentionModel, Rewards, flat_model_bytes, flat_model_fits, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
@@ -527,6 +528,8 @@ def factored_decision_model(product: str | os.PathLike | Product | Plan, technic
     """The same decision model without enumerating intentions (paper Sec. V): beliefs over classes;
     ``parallel``: the parallel model (docs/parallel.md)."""
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
+    if parallel:
+        check_parallel_memory(plan, limits.memory)
     return factored_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits),
                           parallel)
 
@@ -592,6 +595,8 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
     choice, note = choose_planner(plan, planner, policy, limit, base_part, limits)
     if choice == "online":
         check_online_memory(plan, limits.memory)
+        if parallel:
+            check_parallel_memory(plan, limits.memory)
         model = factored_model(plan, rewards, discount, base_part, weights, parallel)
         lower = read_policy(policy, limits=inputs) if policy else None
         return model, online_planner(model, decision_time, expansions, lower), note
@@ -606,6 +611,8 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
                               "another model (check the product, --technical and --base-part)")
         if length == classes and length != intentions:
             check_online_memory(plan, limits.memory)
+            if parallel:
+                check_parallel_memory(plan, limits.memory)
             lumped = factored_model(plan, rewards, discount, base_part, weights, parallel)
             vectors.check_sizes(lumped.n_classes, len(lumped.actions), str(policy))
             return lumped, vectors, None
@@ -631,6 +638,8 @@ def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | 
     ``.factored`` filters beliefs over classes, ``.pomdp`` (named ``<product>:lumped``) is what solvers take."""
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, lumped_limits(limits)))
     check_lumped_memory(plan, limits.memory)
+    if parallel:
+        check_parallel_memory(plan, limits.memory)
     return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits),
                               parallel)
 

@@ -18,8 +18,9 @@ becomes ``e'`` (the robot did ``o``, the operator still does ``e``), followed by
 class unchanged, as in the paper. So ``R(c, a) = wrong + q (r(o) - wrong)``. Everything else is the paper's.
 
 ``(c, a)`` determines ``f``, ``e2`` and ``e'`` (an operation applied to a state has one result), so the pairs are
-a sparse table keyed by ``c * A + a`` (:class:`ParallelTable`). Cost of :func:`parallel_table`: O(P log E) time
-and about 48 bytes a pair, P <= nnz(M) (the pairs (class, class out of its target) of the advance matrix).
+a sparse table keyed by ``c * A + a`` (:class:`ParallelTable`). Cost of :func:`parallel_table`: O(C log E) time
+for the C = nnz(M) candidates (class, class out of its target) of the advance matrix, at most 100 bytes a
+candidate at its peak, about 66 bytes a pair held (:func:`check_parallel_memory` refuses past the budget).
 """
 from __future__ import annotations
 
@@ -29,8 +30,8 @@ import numpy as np
 
 from ..assembly.intentions import allowed_edges
 
-__all__ = ["ParallelTable", "parallel_table", "parallel_rewrite", "parallel_bytes", "parallel_predict",
-           "parallel_rewards", "parallel_expected_rewards"]
+__all__ = ["ParallelTable", "parallel_table", "parallel_rewrite", "parallel_bytes", "check_parallel_memory",
+           "parallel_candidates", "parallel_predict", "parallel_rewards", "parallel_expected_rewards"]
 
 
 @dataclass(frozen=True)
@@ -76,9 +77,36 @@ class ParallelTable:
         return np.repeat(np.arange(len(classes)), count), np.repeat(lo - ends + count, count) + np.arange(total)
 
 
-def parallel_bytes(n_pairs: int) -> int:
-    """The bytes a :class:`ParallelTable` of ``n_pairs`` pairs holds: eight numbers of 8 bytes or less a pair."""
-    return 52 * n_pairs
+# parallel_table's peak per candidate (class, class out of its target): measured 85-89 bytes on chain 13 and
+# complete 8 (tracemalloc), the table held within it (about 66 bytes a pair: eight 8-byte numbers)
+CANDIDATE_BYTES = 100
+
+
+def parallel_candidates(states) -> int:
+    """The (class, class out of its target) candidates :func:`parallel_table` looks at: ``nnz(M)``. Cost: O(E)."""
+    return int(np.bincount(states.edge_source, minlength=states.n_states)[states.edge_target].sum())
+
+
+def parallel_bytes(states) -> int:
+    """The most :func:`parallel_table` takes on a plan's state graph ``states``, from counts alone."""
+    return CANDIDATE_BYTES * parallel_candidates(states)
+
+
+def check_parallel_memory(plan, budget: int) -> None:
+    """Refuse the parallel model of ``plan`` when the factored model, the online planner's values and the
+    pairs, with the plan held, would not fit in ``budget`` bytes (:class:`~planner.errors.MemoryLimitError`, with
+    the estimate and the options). Cost: O(E)."""
+    from ..assembly.guards import memory_options
+    from ..errors import MemoryLimitError, gib
+    from .budget import online_bytes, plan_bytes
+
+    states = plan.states
+    pairs = parallel_bytes(states)
+    needed = plan_bytes(plan) + online_bytes(states.n_states, states.n_edges) + pairs
+    if needed > budget:
+        raise MemoryLimitError("parallel model (its pairs)", needed, budget,
+                               f"{parallel_candidates(states):,} candidate pairs ({gib(pairs)}) beside the factored "
+                               "model", "Leave out --parallel, or plan a smaller product.", memory_options(needed))
 
 
 def parallel_table(model) -> ParallelTable:

@@ -217,3 +217,18 @@ def test_a_simulated_step_after_next_the_operator_does_not_take_is_wrong(pen):
     first = episode.steps[0]
     assert first.wrong_action and not first.robot_operation and first.reward == model.rewards.wrong
     assert episode.path == path and first.position == 0
+
+
+def test_the_pairs_memory_is_estimated_from_counts_and_refused_past_the_budget(pen):
+    """The candidates are nnz(M) of the advance matrix (counted independently); past the budget, a clear
+    refusal before anything is built."""
+    from planner.decision.lumped_model import advance_matrix
+    from planner.decision.parallel import check_parallel_memory, parallel_bytes, parallel_candidates
+    from planner.errors import MemoryLimitError
+
+    plan = make_plan(chain_product(6))
+    model = factored_model(plan)
+    assert parallel_candidates(plan.states) == advance_matrix(model)[:-1, :-1].nnz  # to classes, not finished
+    check_parallel_memory(plan, 2 ** 31)
+    with pytest.raises(MemoryLimitError, match="parallel model"):
+        check_parallel_memory(plan, parallel_bytes(plan.states))
