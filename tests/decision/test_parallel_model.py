@@ -232,3 +232,33 @@ def test_the_pairs_memory_is_estimated_from_counts_and_refused_past_the_budget(p
     check_parallel_memory(plan, 2 ** 31)
     with pytest.raises(MemoryLimitError, match="parallel model"):
         check_parallel_memory(plan, parallel_bytes(plan.states))
+
+
+@pytest.mark.parametrize("base_part", ["body", "button"])
+def test_pairs_with_a_base_part_keep_the_sequences_allowed(pen, base_part):
+    """With a base part, the pairs of the classes on the allowed full sequences are those whose swap is an allowed
+    full sequence too (at the initial state: the robot's edge must join the base part); the lumped and factored
+    filters still agree."""
+    plan = make_plan(pen, True)
+    model = factored_model(plan, base_part=base_part, parallel=True)
+    paths = [model.sequence(r) for r in range(model.n_sequences)]
+    ops = {tuple(model.sequence_operations(p)) for p in paths}
+    action_of = {int(o): a for a, o in enumerate(model.action_operations[:-1])}
+    expected, seen = set(), set()
+    for p in paths:
+        seq = model.sequence_operations(p)
+        for k in range(len(p) - 1):
+            seen.add(p[k])
+            swapped = tuple(seq[:k] + [seq[k + 1], seq[k]] + seq[k + 2:])
+            if swapped in ops and seq[k + 1] in action_of:
+                expected.add((p[k], action_of[seq[k + 1]]))
+    par = model.parallel
+    found = {(int(c), int(a)) for c, a in zip(par.pair_class, par.action) if int(c) in seen}
+    assert found == expected
+    lumped = lumped_pomdp(model)
+    up_fact, up_lump = FactoredUpdater(model), DiscreteUpdater(lumped)
+    belief, c = up_fact.initialize(), up_lump.initialize()
+    for a in par.action[np.isin(par.pair_class, list(seen))][:6]:
+        z = 0
+        belief, c = up_fact.update(belief, int(a), z), up_lump.update(c, int(a), z)
+        assert np.abs(belief.dense(model.n_classes) - c).max() <= TOLERANCE
