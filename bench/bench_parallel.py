@@ -107,8 +107,8 @@ def main() -> int:
                         help="unfavorable, favorable and wrong rewards (default the paper's 10,-2,-50)")
     args = parser.parse_args()
     rewards = Rewards(*(float(x) for x in args.rewards.split(",")), 0.0)
-    print("| product | model | pairs (worth a try) | max q | max q, any later step | robot share | wrong / robot actions | "
-          "mean return (95 %) | seconds |")
+    print("| product | model | pairs (worth a try) | max q | max q, any later step | robot share | "
+          "wrong / robot actions | mean return (95 %) | seconds |")
     print("|---|---|---|---|---|---|---|---|---|")
     for name, product in _products([p for p in args.products.split(",") if p], args.truck):
         plan = make_plan(product)

@@ -18,9 +18,9 @@ leaves at every state, since the observations depend on the state only) or from 
 again a spread or a single class: waiting moves a spread into spreads at the targets, a known class stays or
 spreads at its target; the robot performing a class's step spreads it over the target and beyond; any other
 robot action moves nothing, and its class is told (in the parallel model, :mod:`~planner.decision.parallel`, an
-action with a pair at the class moves it too, through the lumped table, as a performing one). So the relaxed beliefs form a finite graph: ``O(states +
-classes)`` priors times the actions that can move them times the observations (chain of 7: 617 nodes with
-``k = 1``, 2,576 with ``k = 2``; complete 6: 2,625 and 10,135).
+action with a pair at the class moves it too, through the lumped table, as a performing one). So the relaxed
+beliefs form a finite graph: ``O(states + classes)`` priors times the actions that can move them times the
+observations (chain of 7: 617 nodes with ``k = 1``, 2,576 with ``k = 2``; complete 6: 2,625 and 10,135).
 
 Values. On that graph ``V_d`` is the fixed point of the Bellman operator ``V(b) = max_a R(b, a) + gamma
 sum P(b' | b, a) V(b')``, with one successor list per action that matters at ``b``: waiting, each robot

@@ -69,7 +69,8 @@ def parallel_tries(model, classes: np.ndarray, source: np.ndarray, size: int, m:
     base = np.bincount(source, weights=f * miss, minlength=size)
     hit = np.flatnonzero(can)
     k, p = model.parallel.of_classes(classes)
-    keys = np.concatenate([source[hit] * A + model.class_action[classes[hit]], source[k] * A + model.parallel.action[p]])
+    keys = np.concatenate([source[hit] * A + model.class_action[classes[hit]],
+                           source[k] * A + model.parallel.action[p]])
     gains = np.concatenate([f[hit] * (m[hit] - miss[hit]), f[k] * (pair_q[p] - miss[k])])
     best = np.full(size, -np.inf)
     if keys.size:
