@@ -52,6 +52,7 @@ from .assembly.plan import Plan, make_plan
 from .assembly.stats import STAT_KEYS, PlanStatistics, plan_statistics, statistics_within
 from .decision.factored_model import FactoredIntentionModel, factored_model
 from .decision.habits import Habits, habit_weights
+from .decision.parallel import check_parallel_memory
 from .decision.factored_simulate import FactoredEpisode, evaluate_factored, simulate_factored_episode
 from .decision.intention_model import IntentionModel, Rewards, flat_model_bytes, flat_model_fits, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
@@ -523,10 +524,14 @@ def decision_model(product: str | os.PathLike | Product | Plan, technical: bool 
 def factored_decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                             rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                             base_part: str | None = None, limits: SizeLimits = SizeLimits(),
-                            habits: Habits | None = None) -> FactoredIntentionModel:
-    """The same decision model without enumerating intentions (paper Sec. V): beliefs over classes."""
+                            habits: Habits | None = None, parallel: bool = False) -> FactoredIntentionModel:
+    """The same decision model without enumerating intentions (paper Sec. V): beliefs over classes;
+    ``parallel``: the parallel model (docs/parallel.md)."""
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
-    return factored_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits))
+    if parallel:
+        check_parallel_memory(plan, limits.memory)
+    return factored_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits),
+                          parallel)
 
 
 def online_planner(model: FactoredIntentionModel, decision_time: float | None = DECISION_TIME,
@@ -569,7 +574,7 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
                    decision_time: float | None = DECISION_TIME, expansions: int | None = None,
                    time_limit: float = POLICY_TIME_LIMIT, limit: int = INTENTION_LIMIT,
                    base_part: str | None = None, limits: SizeLimits = SizeLimits(),
-                   inputs: InputLimits = InputLimits(), habits: Habits | None = None):
+                   inputs: InputLimits = InputLimits(), habits: Habits | None = None, parallel: bool = False):
     """The model, the policy and a note (what was chosen and why, or None) that a session, a simulation or an
     evaluation runs on:
 
@@ -581,7 +586,8 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
 
     ``base_part``: only the sequences that start from it (``"auto"``: the most connected part); ``inputs``:
     what the policy file may hold (:class:`~planner.validation.InputLimits`); ``habits``: the operator's habits
-    in every model (:mod:`~planner.decision.habits`), None for the paper's model.
+    in every model (:mod:`~planner.decision.habits`), None for the paper's model; ``parallel``: the parallel model
+    (docs/parallel.md), on the classes only: with it the flat model is refused (:func:`check_parallel_flat`).
     """
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, online_limits(limits)))
     base_part = base_part_of(plan, base_part)
@@ -589,7 +595,9 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
     choice, note = choose_planner(plan, planner, policy, limit, base_part, limits)
     if choice == "online":
         check_online_memory(plan, limits.memory)
-        model = factored_model(plan, rewards, discount, base_part, weights)
+        if parallel:
+            check_parallel_memory(plan, limits.memory)
+        model = factored_model(plan, rewards, discount, base_part, weights, parallel)
         lower = read_policy(policy, limits=inputs) if policy else None
         return model, online_planner(model, decision_time, expansions, lower), note
     intentions = count_intentions(plan.states, base_part=base_part)
@@ -603,9 +611,12 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
                               "another model (check the product, --technical and --base-part)")
         if length == classes and length != intentions:
             check_online_memory(plan, limits.memory)
-            lumped = factored_model(plan, rewards, discount, base_part, weights)
+            if parallel:
+                check_parallel_memory(plan, limits.memory)
+            lumped = factored_model(plan, rewards, discount, base_part, weights, parallel)
             vectors.check_sizes(lumped.n_classes, len(lumped.actions), str(policy))
             return lumped, vectors, None
+    check_parallel_flat(parallel, "--planner offline")
     # Past the limits this raises, with the estimate and the options (--planner online among them).
     model = intention_model(plan, rewards, discount, limit=limit, base_part=base_part, max_bytes=limits.memory,
                             weights=weights)
@@ -620,13 +631,28 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
 
 def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                  rewards: Rewards = Rewards(), discount: float = DISCOUNT, base_part: str | None = None,
-                 limits: SizeLimits = SizeLimits(), habits: Habits | None = None) -> LumpedModel:
+                 limits: SizeLimits = SizeLimits(), habits: Habits | None = None,
+                 parallel: bool = False) -> LumpedModel:
     """The decision model of Alg. 3 lumped onto the factored model's classes (state edges and the finished
     product; :mod:`~planner.decision.lumped_model`): the same value as the flat model, far fewer states.
     ``.factored`` filters beliefs over classes, ``.pomdp`` (named ``<product>:lumped``) is what solvers take."""
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, lumped_limits(limits)))
     check_lumped_memory(plan, limits.memory)
-    return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits))
+    if parallel:
+        check_parallel_memory(plan, limits.memory)
+    return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits),
+                              parallel)
+
+
+def check_parallel_flat(parallel: bool, where: str) -> None:
+    """The parallel model lives on the classes (docs/parallel.md): the flat model over intentions cannot hold
+    it (a wrong parallel action would condition the distribution within a class), so ``where`` with it is a
+    :class:`PlannerError` naming what helps."""
+    if parallel:
+        raise PlannerError(f"--parallel is a model over the factored model's classes, and {where} would build the "
+                           "flat model over intentions, which cannot hold it: use the online planner (--planner "
+                           "online), or a policy over the classes (aplan solve PRODUCT --parallel -o P.policy), or "
+                           "leave out --parallel")
 
 
 def _model_file_kind(path: str | os.PathLike) -> str | None:
@@ -637,12 +663,13 @@ def _model_file_kind(path: str | os.PathLike) -> str | None:
 def load_model(argument: str | os.PathLike | Product, technical: bool | None = None, rewards: Rewards = Rewards(),
                discount: float = DISCOUNT, base_part: str | None = None, limits: SizeLimits = SizeLimits(),
                lumped: bool = False, inputs: InputLimits = InputLimits(), habits: Habits | None = None,
-               solving: bool = False) -> Model:
+               solving: bool = False, parallel: bool = False) -> Model:
     """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`, read within
     ``inputs``: :class:`~planner.validation.InputLimits`), else a PRODUCT
     (its :class:`IntentionModel`, or with ``lumped`` its :class:`LumpedModel`; ``technical``, ``rewards``,
     ``discount``, ``base_part`` and ``limits`` apply to it only: a base part with a model file is a
-    :class:`PlannerError`, since the file's intentions are fixed)."""
+    :class:`PlannerError`, since the file's intentions are fixed). ``parallel``: the parallel model
+    (docs/parallel.md), which is on the classes: it builds the :class:`LumpedModel` as ``lumped`` does."""
     kind = None if isinstance(argument, Product) else _model_file_kind(argument)
     if kind is not None and base_part:
         raise PlannerError(f"{argument}: a base part applies to products only, and this is a model file whose "
@@ -650,6 +677,9 @@ def load_model(argument: str | os.PathLike | Product, technical: bool | None = N
     if kind is not None and habits is not None:
         raise PlannerError(f"{argument}: --habits applies to a PRODUCT; a model file's initial belief and "
                            "transitions are fixed (give the PRODUCT, or leave out --habits)")
+    if kind is not None and parallel:
+        raise PlannerError(f"{argument}: --parallel applies to a PRODUCT; a model file's transitions are fixed "
+                           "(give the PRODUCT, or leave out --parallel)")
     if kind is not None and lumped:
         raise PlannerError(f"{argument}: --lumped builds the lumped model of a PRODUCT; a model file is solved "
                            "as it is (write the lumped model with aplan pomdp PRODUCT --lumped -o FILE)")
@@ -659,8 +689,8 @@ def load_model(argument: str | os.PathLike | Product, technical: bool | None = N
         return read_pomdpx(argument, inputs)
     if kind == ".pomdp":
         return read_cassandra(argument, inputs)
-    if lumped:
-        return lumped_model(argument, technical, rewards, discount, base_part, limits, habits)
+    if lumped or parallel:
+        return lumped_model(argument, technical, rewards, discount, base_part, limits, habits, parallel)
     return decision_model(argument, technical, rewards, discount, base_part, limits, habits, solving)
 
 

@@ -40,6 +40,7 @@ from .options import (
     limits_from,
     number,
     online_budget,
+    parallel_from,
     positive_seconds,
     product_from,
     rewards_from,
@@ -87,7 +88,7 @@ def model_from(args: argparse.Namespace, product_only: bool = False, solving: bo
                                   args.base_part, limits_from(args), habits_from(args))
     return api.load_model(product_from(args, argument), args.technical, rewards_from(args), args.discount,
                           args.base_part, limits_from(args), getattr(args, "lumped", False), inputs_from(args),
-                          habits_from(args), solving)
+                          habits_from(args), solving, parallel_from(args))
 
 
 def policy_from(args: argparse.Namespace, model):
@@ -112,7 +113,8 @@ def decision_maker_from(args: argparse.Namespace, product=None):
     model, policy, note = api.decision_maker(product_from(args, argument), args.planner, args.policy, args.technical,
                                              rewards_from(args), args.discount, decision_time, expansions, args.time_limit,
                                              base_part=args.base_part, limits=limits_from(args),
-                                             inputs=inputs_from(args), habits=habits_from(args))
+                                             inputs=inputs_from(args), habits=habits_from(args),
+                                             parallel=parallel_from(args))
     if note:
         log.info("%s", note)
     return model, policy

@@ -195,6 +195,7 @@ def add_decision_options(parser: argparse.ArgumentParser) -> None:
     group.add_argument("--reward-wait", type=finite, default=d.wait, metavar="R", help=f"wait (default {d.wait:g})")
     add_hierarchy(group)
     add_habits_options(group)
+    add_parallel_options(group)
     add_size_options(parser)
     add_input_options(parser)
 
@@ -207,6 +208,19 @@ def add_habits_options(group) -> None:
     group.add_argument("--model", dest="habit_model", choices=("paper", "habits"), default=None,
                        help="paper: the paper's model, ignoring --habits; habits (the default with --habits): "
                             "the habits' model")
+
+
+def add_parallel_options(group) -> None:
+    """``--parallel``: the parallel model (docs/parallel.md); ``--model paper`` turns it off."""
+    group.add_argument("--parallel", action="store_true",
+                       help="the parallel model: the robot may do the operator's step after next now, when that "
+                            "keeps the operator's next step possible (docs/parallel.md; on the classes: the online "
+                            "planner or a lumped policy); --model paper turns it off")
+
+
+def parallel_from(args: argparse.Namespace) -> bool:
+    """Whether ``args`` ask for the parallel model (``--parallel`` without ``--model paper``)."""
+    return bool(getattr(args, "parallel", False)) and getattr(args, "habit_model", None) != "paper"
 
 
 def rewards_from(args: argparse.Namespace) -> Rewards:

@@ -26,6 +26,7 @@ from .options import (
     inputs_from,
     number,
     online_budget,
+    parallel_from,
     positive,
 )
 
@@ -179,7 +180,8 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
                 "technical": args.technical, "base_part": model.base_part, "discount": args.discount,
                 "rewards": vars(model.rewards), "robot": args.robot, "source": _source_name(args),
                 "debounce": args.debounce, "quiet_frames": args.quiet_frames,
-                "robot_own_tools": args.robot_own_tools, "level": level, "habits": _habits_setting(args)}
+                "robot_own_tools": args.robot_own_tools, "level": level, "habits": _habits_setting(args),
+                "parallel": parallel_from(args)}
     try:
         result = run_session(model, policy, source, robot, events, status, args.max_steps, settings=settings)
     except KeyboardInterrupt as exc:  # the log holds the session up to the interrupt: say so, exit 128 + N

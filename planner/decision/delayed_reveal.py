@@ -17,9 +17,10 @@ state's classes spread by their path fractions (``class_fraction``: the initial 
 leaves at every state, since the observations depend on the state only) or from one class, every prior is
 again a spread or a single class: waiting moves a spread into spreads at the targets, a known class stays or
 spreads at its target; the robot performing a class's step spreads it over the target and beyond; any other
-robot action moves nothing, and its class is told. So the relaxed beliefs form a finite graph: ``O(states +
-classes)`` priors times the actions that can move them times the observations (chain of 7: 617 nodes with
-``k = 1``, 2,576 with ``k = 2``; complete 6: 2,625 and 10,135).
+robot action moves nothing, and its class is told (in the parallel model, :mod:`~planner.decision.parallel`, an
+action with a pair at the class moves it too, through the lumped table, as a performing one). So the relaxed
+beliefs form a finite graph: ``O(states + classes)`` priors times the actions that can move them times the
+observations (chain of 7: 617 nodes with ``k = 1``, 2,576 with ``k = 2``; complete 6: 2,625 and 10,135).
 
 Values. On that graph ``V_d`` is the fixed point of the Bellman operator ``V(b) = max_a R(b, a) + gamma
 sum P(b' | b, a) V(b')``, with one successor list per action that matters at ``b``: waiting, each robot
@@ -152,6 +153,7 @@ class _Builder:
         self.R = np.asarray(pomdp.reward, dtype=float)
         self.state_of = np.asarray(model.class_source, dtype=np.int64)
         self.act_of = np.asarray(model.class_action, dtype=np.int64)
+        self.parallel = model.parallel
         self.nodes: list[tuple[np.ndarray, np.ndarray, int]] = []
         self.keys: dict[tuple[bytes, int], int] = {}
         self.posts: dict[tuple[bytes, int, int], tuple[np.ndarray, np.ndarray]] = {}
@@ -202,11 +204,15 @@ class _Builder:
             probs.append(p)
         yield self.wait, False, float(val @ self.R[self.wait, idx]), np.concatenate(children), np.concatenate(probs)
         acts = np.unique(self.act_of[idx])
+        if self.parallel is not None:    # the parallel model: an action with a pair moves its class too
+            acts = np.union1d(acts, self.parallel.action[self.parallel.of_classes(idx)[1]])
         acts = acts[(acts >= 0) & (acts != self.wait)]
         told = corner[after, idx]        # a robot action: every class is told (it stays where it is)
         acting = self.act_of[idx]
         for a in acts:
             right = acting == a
+            if self.parallel is not None:
+                right[self.parallel.find(idx, int(a))[0]] = True
             children, probs = [told[~right]], [val[~right]]
             for k in np.flatnonzero(right):   # the classes it performs: their step, then stay or advance
                 c, p = self.performed(int(idx[k]), int(a), after)

@@ -33,12 +33,17 @@ proportion to their weights, and advancing moves it to the classes at ``t`` in p
 c2) / W(t)`` (``class_fraction``). Nothing else changes, so the online planner, the lumped model and its
 bounds, which read ``class_fraction``, work on the weighted model unchanged.
 
+The parallel model (``parallel=True``, :mod:`~planner.decision.parallel`, docs/parallel.md) is a Markov model on
+these classes: a robot action may also do the operator's step after next (``parallel``: the pairs), right with
+the operator's chance of taking it then; :meth:`predict` and the rewards read the pairs, nothing else changes.
+
 The Bayes filter is :class:`~planner.decision.factored_updater.FactoredUpdater`. Beliefs are sparse (:class:`FactoredBelief`: sorted classes and their positive masses); an update costs
 O(k log k) for the k classes the belief reaches after the action's steps (support, its out-edges and,
 after the robot's action, their out-edges).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -50,6 +55,8 @@ from ..defaults import DISCOUNT
 from ..errors import PlannerError
 from .habits import weighted_fractions
 from .intention_model import WAIT, Rewards
+from .parallel import (ParallelTable, parallel_expected_rewards, parallel_predict, parallel_rewards,
+                       parallel_table)
 
 __all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model", "factored_model_bytes"]
 
@@ -123,6 +130,7 @@ class FactoredIntentionModel:
     base_part: str | None = None
     weights: np.ndarray | None = None
     class_log_weight: np.ndarray | None = None
+    parallel: ParallelTable | None = None  # the parallel model's pairs (docs/parallel.md); None: the paper's
 
     @property
     def name(self) -> str:
@@ -325,6 +333,8 @@ class FactoredIntentionModel:
         parts = [(classes[~performs], mass[~performs])]
         if performs.any():
             parts += self._wait_step(*self.advance(classes[performs], mass[performs]))
+        if self.parallel is not None:  # a right parallel action: to e', then stay or advance; wrong: stay
+            parts = parallel_predict(self, classes, mass, action, performs, parts)
         return self._combine(*map(np.concatenate, zip(*parts)))
 
     def observation_likelihood(self, observation: int, classes: np.ndarray | None = None) -> np.ndarray:
@@ -352,7 +362,8 @@ class FactoredIntentionModel:
         """R(class, action): the class's next step (un)favorable, any other operation wrong, wait."""
         if action == self.wait:
             return np.full(len(classes), self.rewards.wait)
-        return np.where(self.class_action[classes] == action, self.class_match_reward[classes], self.rewards.wrong)
+        out = np.where(self.class_action[classes] == action, self.class_match_reward[classes], self.rewards.wrong)
+        return out if self.parallel is None else parallel_rewards(self, classes, action, out)
 
     def expected_rewards(self, belief: FactoredBelief) -> np.ndarray:
         """R(b, a) = sum over classes of mass x R(class, a), for every action at once. Cost: O(support + A)."""
@@ -363,7 +374,7 @@ class FactoredIntentionModel:
         hit = act >= 0
         out[:-1] += np.bincount(act[hit], weights=belief.mass[hit] * (self.class_match_reward[belief.classes[hit]]
                                                                       - self.rewards.wrong), minlength=out.size - 1)
-        return out
+        return out if self.parallel is None else parallel_expected_rewards(self, belief, out)
 
     def expected_reward(self, belief: FactoredBelief, action: int) -> float:
         return float(belief.mass @ self.rewards_of(belief.classes, action))
@@ -407,12 +418,14 @@ def _counts_per_state(plan: Plan) -> np.ndarray:
 
 
 def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
-                   base_part: str | None = None, weights: np.ndarray | None = None) -> FactoredIntentionModel:
+                   base_part: str | None = None, weights: np.ndarray | None = None,
+                   parallel: bool = False) -> FactoredIntentionModel:
     """The factored model of Alg. 3 over ``plan`` (module docstring), without enumerating intentions.
 
     ``base_part``: only the sequences that start from this part (paper Sec. V); :class:`PlannerError` when it
     is not a part or no sequence starts from it. ``weights``: a positive weight per state edge (operator
     habits, :func:`~planner.decision.habits.habit_weights`; module docstring), None for the paper's model.
+    ``parallel``: the parallel model (:mod:`~planner.decision.parallel`: the robot may do the step after next).
 
     Cost: O(S + E log E) time and O(S + E) memory for S states and E state edges (one sort of the edges by
     source, one of the (state, observation) pairs); Python-int arithmetic only where the counts pass 2**52.
@@ -465,5 +478,6 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
               keys, class_action, match, initial)
     for a in arrays + tuple(a for a in (class_weights, log_weight) if a is not None):
         a.flags.writeable = False
-    return FactoredIntentionModel(plan, rewards, discount, *arrays, base_part=base_part, weights=class_weights,
-                                  class_log_weight=log_weight)
+    model = FactoredIntentionModel(plan, rewards, discount, *arrays, base_part=base_part, weights=class_weights,
+                                   class_log_weight=log_weight)
+    return dataclasses.replace(model, parallel=parallel_table(model)) if parallel else model

@@ -3,6 +3,9 @@ by any policy on the factored Bayes filter's belief (the online planner, or alph
 
 The world is the flat model's (the same transitions, observations and rewards, :mod:`planner.decision.
 factored_model`), played along the sequence's edges by position, so an episode never enumerates intentions.
+In the parallel model (:mod:`planner.decision.parallel`) a robot action that does the operator's step after
+next is right when the sequence takes it there: the sequence then continues with it done (the robot's step,
+then the operator's next one, then the rest), and the step counts as the robot's operation.
 """
 from __future__ import annotations
 
@@ -17,6 +20,7 @@ from ..assembly.guards import Progress
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .factored_updater import FactoredUpdater
 from .operators import switch_path
+from .parallel import parallel_rewrite
 from .simulate import operator_mistake
 
 __all__ = ["FactoredStep", "FactoredEpisode", "simulate_factored_episode", "evaluate_factored",
@@ -104,8 +108,11 @@ def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[
         started = time.perf_counter()
         action = int(policy.action(belief))
         seconds = time.perf_counter() - started
-        reward = float(model.rewards_of(np.array([path[position]]), action)[0])
+        # The parallel model's right action: the robot's step comes first in the sequence (then it matches)
+        path = episode.path = parallel_rewrite(model, path, position, action)
         robot_steps = 1 if action != model.wait and model.class_action[path[position]] == action else 0
+        reward = float(model.class_match_reward[path[position]] if robot_steps else
+                       model.rewards.wait if action == model.wait else model.rewards.wrong)
         options = model.position_transition(path, position, action)
         nxt = max(p for p, _ in options) if operator == "turns" else model.sample_position(path, position, action, rng)
         operations += nxt - position - robot_steps

@@ -28,6 +28,9 @@ flat belief per class, or keep the factored model's belief). The flat model is n
 sense (an intention's successor is one intention, not a class), so the lumped model says nothing about flat
 beliefs that are not uniform within classes; none is ever reached from the initial belief.
 
+The parallel model (:mod:`~planner.decision.parallel`, docs/parallel.md) is defined on these classes: a right
+parallel action moves class ``c`` to ``e'`` then by ``W`` (with probability ``q``), a wrong one leaves it.
+
 With operator habits (edge weights, :mod:`~planner.decision.habits`) the same holds with "uniform within
 classes" read as "in proportion to the intentions' prior weights within classes": the factored model's weighted
 ``class_fraction`` is then ``M``, and nothing else changes.
@@ -51,6 +54,7 @@ from .delayed_reveal import DelayedReveal, delayed_reveal_bound
 from .factored_model import FactoredIntentionModel, factored_model
 from .intention_model import Rewards
 from .online import revealed_state_values
+from .parallel_values import parallel_rows
 from .pomdp import POMDP
 from .solvers.upper import CornerGroups, RelaxedQ
 
@@ -90,9 +94,14 @@ def _transitions(model: FactoredIntentionModel) -> tuple[sp.csr_matrix, ...]:
     wait = ((identity + advance) * 0.5).tocsr()
     performed = (advance @ wait).tocsr()        # the robot's step, then the operator's stay-or-advance
     tables = []
+    extra = parallel_rows(model, wait)  # the parallel model's right actions (None: the paper's)
     for a in range(A - 1):
         performs = (model.class_action == a).astype(float)
-        tables.append((sp.diags(performs) @ performed + sp.diags(1.0 - performs)).tocsr())
+        if extra is None:
+            tables.append((sp.diags(performs) @ performed + sp.diags(1.0 - performs)).tocsr())
+        else:
+            right, taken = extra[a]
+            tables.append((sp.diags(performs) @ performed + sp.diags(1.0 - performs - taken) + right).tocsr())
     tables.append(wait)
     for table in tables:
         table.sum_duplicates()
@@ -122,6 +131,9 @@ def _rewards(model: FactoredIntentionModel) -> np.ndarray:
     reward[-1] = model.rewards.wait
     doing = np.flatnonzero(model.class_action >= 0)
     reward[model.class_action[doing], doing] = model.class_match_reward[doing]
+    if model.parallel is not None:  # R = wrong + q (r(o) - wrong) on the parallel pairs
+        par = model.parallel
+        reward[par.action, par.pair_class] = model.rewards.wrong + par.fraction * (par.reward - model.rewards.wrong)
     return reward
 
 
@@ -162,10 +174,12 @@ class LumpedModel:
 
 
 def lumped_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
-                 base_part: str | None = None, weights: np.ndarray | None = None) -> LumpedModel:
-    """The factored model of ``plan`` (from ``base_part`` if given; ``weights``: operator habits, per state edge)
-    and its lumped POMDP. Cost: that of :func:`factored_model` plus :func:`lumped_pomdp`."""
-    factored = factored_model(plan, rewards, discount, base_part, weights)
+                 base_part: str | None = None, weights: np.ndarray | None = None,
+                 parallel: bool = False) -> LumpedModel:
+    """The factored model of ``plan`` (from ``base_part`` if given; ``weights``: operator habits, per state edge;
+    ``parallel``: the parallel model, docs/parallel.md) and its lumped POMDP. Cost: that of
+    :func:`factored_model` plus :func:`lumped_pomdp`."""
+    factored = factored_model(plan, rewards, discount, base_part, weights, parallel)
     return LumpedModel(factored, lumped_pomdp(factored))
 
 

@@ -41,6 +41,7 @@ from ..defaults import ONLINE_DEPTH, ONLINE_EXPANSIONS, ONLINE_TREE_NUMBERS
 from ..errors import PlannerError
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .online_steps import StepTimes
+from .parallel_values import parallel_level, parallel_q_matrix, parallel_q_values, parallel_tries
 from .policy import AlphaVectorPolicy
 
 __all__ = ["ClassValues", "class_values", "revealed_state_values", "VALUE_BLOCK", "observation_split", "OnlinePlanner",
@@ -58,6 +59,7 @@ class ClassValues:
     match: np.ndarray
     wrong: np.ndarray
     state: np.ndarray | None = None  # per assembly state, where known: the value when the robot knows the state
+    parallel: np.ndarray | None = None  # per parallel pair (the parallel model): its Q-value
 
     def q_values(self, model: FactoredIntentionModel, belief: FactoredBelief) -> np.ndarray:
         """``sum_c b(c) Q(c, a)`` for every action (an upper bound on each action's value). Cost: O(k + A)."""
@@ -68,6 +70,7 @@ class ClassValues:
         hit = act >= 0
         out[:-1] += np.bincount(act[hit], weights=mass[hit] * (self.match[classes[hit]] - self.wrong[classes[hit]]),
                                 minlength=out.size - 1)
+        parallel_q_values(model, self, classes, mass, out)
         return out
 
 
@@ -77,6 +80,7 @@ class ClassValues:
         out[-1] = self.wait
         hit = np.flatnonzero(model.class_action >= 0)
         out[model.class_action[hit], hit] = self.match[hit]
+        parallel_q_matrix(model, self, out)
         return out
 
 
@@ -128,6 +132,7 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
     fc = model.final_class
     value[fc], wait[fc], wrong[fc] = final_value, r.wait + g * final_value, r.wrong + g * final_value
     match[fc] = -np.inf
+    pair_q = np.empty(model.parallel.size) if model.parallel is not None else None
     for lo, hi in _level_blocks(model):  # states with k + 1 blocks: their targets are done already
         classes = model.state_classes[model.state_class_start[lo]:model.state_class_start[hi]]
         target, source = model.class_target[classes], model.class_source[classes]
@@ -137,6 +142,7 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
         can = model.class_action[classes] >= 0
         m = np.where(can, model.class_match_reward[classes] + g * (w + w2) / 2, -np.inf)
         v = np.maximum(np.maximum(stay_wait, stall), m)
+        parallel_level(model, classes, v, value, arrive, pair_q)
         value[classes], match[classes] = v, m
         wait[classes] = r.wait + g * (v + w) / 2
         wrong[classes] = r.wrong + g * v
@@ -146,7 +152,7 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
         later[lo:hi] = np.bincount(source - lo, weights=fraction * w, minlength=size)
     for array in (value, wait, match, wrong):
         array.flags.writeable = False
-    return ClassValues(value, wait, match, wrong)
+    return ClassValues(value, wait, match, wrong, parallel=pair_q)
 
 
 def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | None = None) -> ClassValues:
@@ -177,6 +183,7 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
     value, wait, match, wrong = (np.empty(n) for _ in range(4))
     fc = model.final_class
     value[fc], wait[fc], wrong[fc], match[fc] = final_value, r.wait + g * final_value, r.wrong + g * final_value, -np.inf
+    pair_q = np.empty(model.parallel.size) if model.parallel is not None else None
     for lo, hi in _level_blocks(model):
         classes = model.state_classes[model.state_class_start[lo]:model.state_class_start[hi]]
         target, source, f = model.class_target[classes], model.class_source[classes] - lo, model.class_fraction[classes]
@@ -189,14 +196,17 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
         tried = np.where(can, tried, -np.inf)
         best = np.full(hi - lo, -np.inf)
         np.maximum.at(best, source, tried)
-        revealed[lo:hi] = np.maximum(np.maximum((r.wait + g * arrive[lo:hi] / 2) / (1 - g / 2), stall), best)
         v = np.maximum(np.maximum((r.wait + g * revealed[target] / 2) / (1 - g / 2), stall), m)
+        if pair_q is not None:  # the parallel model: the pairs in V(c), and every try (a match or a pair) at t
+            parallel_level(model, classes, v, value, revealed, pair_q)
+            best = parallel_tries(model, classes, source, hi - lo, m, can, pair_q, known_value)
+        revealed[lo:hi] = np.maximum(np.maximum((r.wait + g * arrive[lo:hi] / 2) / (1 - g / 2), stall), best)
         value[classes], match[classes] = v, m
         wait[classes] = r.wait + g * (v + revealed[target]) / 2
         wrong[classes] = r.wrong + g * v
     for array in (value, wait, match, wrong, revealed):
         array.flags.writeable = False
-    return ClassValues(value, wait, match, wrong, revealed)
+    return ClassValues(value, wait, match, wrong, revealed, pair_q)
 
 
 def observation_split(model: FactoredIntentionModel, predicted: FactoredBelief

@@ -57,4 +57,7 @@ class StepTimes:
             return int(classes.size + self._out[m.class_target[moving]].sum())
         performs = classes[m.class_action[classes] == action]
         fan = int(self._out[m.class_target[performs]].sum()) if performs.size else 0
+        if m.parallel is not None:  # a right parallel action: to e', then its target's classes
+            k, p = m.parallel.find(classes, action)
+            fan += k.size + int(self._out[m.class_target[m.parallel.target[p]]].sum())
         return int(classes.size + fan * (2 + self._fan_out))

@@ -5,7 +5,8 @@ seconds, to the millisecond):
 
 - ``start``: ``version``, ``product`` (the product itself, in the product file format), ``settings``
   (``base_part``: the part the model's sequences start from, or null; ``habits``: the operator habits the model
-  used, as the habits file holds them, or null; replay rebuilds the same model),
+  used, as the habits file holds them, or null; ``parallel``: the parallel model, docs/parallel.md; replay
+  rebuilds the same model),
   ``n_intentions``, ``actions`` and ``observations`` (the model's names), ``top``;
 - per step: ``action`` (``step``, ``action``, ``name``, ``instruction``, ``decision_ms``: the milliseconds the
   policy took to choose it), ``robot`` (``step``, ``ok``,
@@ -227,8 +228,12 @@ def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel | Factor
         raise SessionError(f"{path}: the start event's base part {base_part!r} is not a part name; the log is damaged")
     plan = make_plan(product)
     weights = _habit_weights(path, plan, settings.get("habits"))
-    model = (factored_model(plan, base_part=base_part, weights=weights) if start.get("belief_over") == "classes"
-             else intention_model(plan, base_part=base_part, weights=weights))
+    parallel = settings.get("parallel", False)  # logs before the parallel model have none: the paper's
+    if not isinstance(parallel, bool):
+        raise SessionError(f"{path}: the start event's 'parallel' setting {parallel!r} is not true or false; the log "
+                           "is damaged")
+    model = (factored_model(plan, base_part=base_part, weights=weights, parallel=parallel)
+             if start.get("belief_over") == "classes" else intention_model(plan, base_part=base_part, weights=weights))
     if list(model.observations) != start.get("observations") or list(model.actions) != start.get("actions"):
         raise SessionError(f"{path}: the product in the log no longer gives the logged actions and observations "
                            "(the log was written by another planner version)")
