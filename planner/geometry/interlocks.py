@@ -167,7 +167,7 @@ def apply_interlock_mode(product: Product, mode: str = "resolve", meshes: list[P
     resolved, decisions, unresolved = resolve_interlocks(product, meshes)
     unresolved = tuple(u for u in unresolved if "no meshes" not in u.why)
     pairs = [(d.parts[0], d.parts[1]) for d in decisions] + [(u.pair.first, u.pair.second) for u in unresolved]
-    where = f"{product.source}: " if product.source != "<memory>" else ""
+    where = f"{product.name}: " if product.name else ""
     if unresolved:
         error = InterlockedPartsError(sorted({p for pair in pairs for p in pair}), "; ".join(u.line for u in unresolved),
                                       pairs, ", ".join(unresolved[0].tried))
@@ -302,7 +302,9 @@ def _overlap_axes(shape: PartMesh | None) -> list[np.ndarray]:
         return []
     scatter = (normals * areas[:, None]).T @ normals / areas.sum()
     axes = [np.linalg.eigh(scatter)[1][:, 0]]
-    centres = shape.triangles.mean(axis=1)
+    t = shape.triangles
+    keep = np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1) > 0  # as _facet_normals
+    centres = t[keep].mean(axis=1)
     mean = (centres * areas[:, None]).sum(axis=0) / areas.sum()
     spread = ((centres - mean) * areas[:, None]).T @ (centres - mean) / areas.sum()
     values, vectors = np.linalg.eigh(spread)
