@@ -161,7 +161,7 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
     ``aplan export-freecad --group/--exclude``); only for a CAD model, an error for anything else.
     ``interlocks``: pairs of parts that block each other along every direction, in a product drawn in CAD,
     are resolved from its meshes (``resolve``: one note per decision), refused (``error``) or left to the
-    planner (``keep``), as :func:`~planner.geometry.interlocks.apply_interlock_mode`; before the proposals.
+    planner (``keep``), as :func:`~planner.assembly.interlocks.apply_interlock_mode`; before the proposals.
     """
     if fasteners not in FASTENER_MODES + (DEFAULT_MODE,):
         raise PlannerError(f"unknown fastener mode {fasteners!r}; use one of {', '.join(FASTENER_MODES)}")
@@ -171,7 +171,7 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
     if model_options and not _is_model_file(argument):
         raise PlannerError(f"{argument}: --group and --exclude choose the components of a CAD model (.FCStd, "
                            "STEP); this product's parts are chosen already (export the model again with them)")
-    from .geometry.interlocks import INTERLOCK_MODES, apply_interlock_mode, drawn_in_cad
+    from .assembly.interlocks import INTERLOCK_MODES, apply_interlock_mode, drawn_in_cad
 
     if interlocks not in INTERLOCK_MODES:
         raise PlannerError(f"unknown interlock mode {interlocks!r}; use one of {', '.join(INTERLOCK_MODES)}")

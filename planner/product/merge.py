@@ -1,5 +1,5 @@
 """Several parts made one component of a product, after its diagrams are known (what ``--group`` does on export,
-done on the product: the interlock rules' last resort, :mod:`planner.geometry.interlocks`).
+done on the product: the interlock rules' last resort, :mod:`planner.assembly.interlocks`).
 
 Definition. Merging parts ``M`` into component ``c``: ``c`` replaces every member of ``M`` wherever a part id
 appears (contacts, obstruction pairs, technical constraints, operation tags, subassembly members, fastener

@@ -32,12 +32,12 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import GeometryError
-from ..assembly.feasibility import InterlockedPair, interlocked_pairs
+from .feasibility import InterlockedPair, interlocked_pairs
 from ..product import Direction, Obstruction, Product
 from ..product.merge import merge_parts
-from .mesh_engine import (_MERGE_ANGLE, _PATCH_SHARE, PartMesh, _blocking_pairs, _canonical,
+from ..geometry.mesh_engine import (_MERGE_ANGLE, _PATCH_SHARE, PartMesh, _blocking_pairs, _canonical,
                           _facet_normals, _frame, _manifold, candidate_directions)
-from .tolerances import Tolerances
+from ..geometry.tolerances import Tolerances
 
 __all__ = ["InterlockDecision", "Unresolved", "resolve_interlocks", "apply_interlock_mode", "RULES", "INTERLOCK_MODES",
            "drawn_in_cad"]
@@ -383,7 +383,7 @@ def _names(directions: tuple[str, ...]) -> tuple[str, ...]:
 
 
 def _meshes(product: Product) -> list[PartMesh] | None:
-    from .bundle import load_part_meshes
+    from ..geometry.bundle import load_part_meshes
 
     if not product.parts or not all(p.mesh for p in product.parts):
         return None

@@ -1,4 +1,4 @@
-"""Interlocked pairs resolved from the meshes (planner.geometry.interlocks): a press fit and a spline modelled
+"""Interlocked pairs resolved from the meshes (planner.assembly.interlocks): a press fit and a spline modelled
 overlapping are inserted along their axis, a captured part becomes one component with its cover, a ball in a
 closed cage is refused in one line. Expected directions and volumes in closed form."""
 from __future__ import annotations
@@ -12,7 +12,7 @@ from planner.assembly.feasibility import interlocked_pairs
 from planner.errors import InterlockedPartsError, PlannerError
 from planner.geometry import PartMesh, Tolerances, analyze_meshes
 from planner.geometry.bundle import apply_report
-from planner.geometry.interlocks import apply_interlock_mode, resolve_interlocks
+from planner.assembly.interlocks import apply_interlock_mode, resolve_interlocks
 from planner.product import FastenerGroup, Obstruction, Direction, Part, Product
 from planner.product.merge import merge_parts
 
