@@ -81,6 +81,21 @@ def test_a_spline_modelled_overlapping_slides_along_its_inclined_axis():
     assert not interlocked_pairs(resolved) and plan_statistics(make_plan(resolved)).sequences == 1
 
 
+def test_a_peg_in_an_inclined_slot_leaves_along_a_direction_found_on_the_pair():
+    """No overlap, and the diagrams have the axes only: the pair's own faces give the slot's direction, tested
+    on the pair, then added to the product as a whole diagram."""
+    turned = trimesh.transformations.rotation_matrix(TURN, [1, 0, 0])
+    block = trimesh.creation.box(extents=(30, 30, 30)).difference(trimesh.creation.box((10, 10, 80), turned))
+    product, parts = _analysed({"block": block, "peg": trimesh.creation.box((10, 10, 60), turned)})
+    assert [o.direction.name for o in product.obstructions] == ["+X", "+Y", "+Z"] and interlocked_pairs(product)
+    resolved, decisions, unresolved = resolve_interlocks(product, parts)
+    assert unresolved == () and [d.rule for d in decisions] == ["direction"]
+    assert abs(abs(float(np.dot(decisions[0].direction.vector, AXIS))) - 1) < 1e-6
+    added = resolved.obstructions[-1]
+    assert added.direction == decisions[0].direction and added.blocks == ()   # sliding out: nothing blocks
+    assert plan_statistics(make_plan(resolved)).sequences == 1
+
+
 def _captured():
     """A knob whose collar lies under a cover and whose head sits on it, the cover on a housing."""
     housing = _box((0, 0, 0), (60, 60, 20)).difference(_box((10, 10, 10), (50, 50, 21)))
