@@ -214,8 +214,9 @@ def fastener_report(product: Product) -> tuple[tuple[FastenerGroup, ...], Fasten
 
 
 def accept_fasteners(product: Product) -> Product:
-    """``product`` with the proposed fastener groups added to its ``fasteners`` section."""
-    return resolve_product(product, fasteners="auto")
+    """``product`` with the proposed fastener groups added to its ``fasteners`` section (its diagrams as they are:
+    the interlock rules are left to the planning)."""
+    return resolve_product(product, fasteners="auto", interlocks="keep")
 
 
 def _is_model_file(argument) -> bool:

@@ -247,6 +247,10 @@ def _component_refused(product: Product, pair: InterlockedPair) -> str:
         return f"{fasteners[0]} is a fastener"
     if len(product.parts) <= 2:
         return "one component of them would be the whole product"
+    owners = {m: g.id for g in product.subassemblies for m in g.parts}
+    if owners.get(pair.first) != owners.get(pair.second):
+        return (f"they are in different subassemblies of the document ({owners.get(pair.first, 'the top level')} and "
+                f"{owners.get(pair.second, 'the top level')})")
     return ""
 
 
