@@ -87,8 +87,8 @@ class Unresolved:
                 f"(--not-blocking {a} {b} DIRECTION)")
 
 
-def resolve_interlocks(product: Product, meshes: list[PartMesh] | None = None,
-                       components: bool = True) -> tuple[Product, tuple[InterlockDecision, ...], tuple[Unresolved, ...]]:
+def resolve_interlocks(product: Product, meshes: list[PartMesh] | None = None, components: bool = True) \
+        -> tuple[Product, tuple[InterlockDecision, ...], tuple[Unresolved, ...]]:
     """``product`` with its interlocked pairs resolved by the rules of the module docstring, the decisions
     taken, and the pairs no rule resolves (or every pair, untouched, when the parts have no meshes to read).
     ``meshes``: the parts' meshes (default: read from the product's mesh files); ``components``: whether rule 3
@@ -153,12 +153,12 @@ def resolve_interlocks(product: Product, meshes: list[PartMesh] | None = None,
 
 def apply_interlock_mode(product: Product, mode: str = "resolve", meshes: list[PartMesh] | None = None) -> Product:
     """``product`` as ``--interlocks MODE`` plans it (:data:`INTERLOCK_MODES`): ``resolve`` applies the rules
-    and logs one line per decision, ``error`` raises :class:`~planner.errors.InterlockedPartsError` naming what
+    and logs one line per decision, ``error`` raises :class:`~planner.errors.InterlockRefusedError` naming what
     the rules would do, ``keep`` returns it untouched (the planner names the pairs). A pair no rule frees,
-    in a product drawn in CAD, is an :class:`~planner.errors.InterlockedPartsError` in one line
+    in a product drawn in CAD, is an :class:`~planner.errors.InterlockRefusedError` in one line
     (:attr:`Unresolved.line`) in both of the first modes; a product without meshes is planned as written.
     Cost: that of :func:`resolve_interlocks`."""
-    from ..errors import InterlockedPartsError, PlannerError
+    from ..errors import InterlockRefusedError, PlannerError
 
     if mode not in INTERLOCK_MODES:
         raise PlannerError(f"unknown interlock mode {mode!r}; use one of {', '.join(INTERLOCK_MODES)}")
@@ -169,18 +169,15 @@ def apply_interlock_mode(product: Product, mode: str = "resolve", meshes: list[P
     pairs = [(d.parts[0], d.parts[1]) for d in decisions] + [(u.pair.first, u.pair.second) for u in unresolved]
     where = f"{product.name}: " if product.name else ""
     if unresolved:
-        error = InterlockedPartsError(sorted({p for pair in pairs for p in pair}), "; ".join(u.line for u in unresolved),
-                                      pairs, ", ".join(unresolved[0].tried))
-        error.brief = where + unresolved[0].line + (f" (and {len(unresolved) - 1} more pairs)" if len(unresolved) > 1
-                                                    else "")
-        raise error
+        others = ", ".join(f"{u.pair.first} and {u.pair.second}" for u in unresolved[1:])
+        more = f" (and {len(unresolved) - 1} more pairs: {others})" if others else ""
+        raise InterlockRefusedError(where + unresolved[0].line + more, pairs)
     if mode == "error" and decisions:
         listed = "; ".join(d.text.split(" (")[0] if d.rule == "component" else d.text for d in decisions)
-        error = InterlockedPartsError(sorted({p for pair in pairs for p in pair}), listed, pairs, "")
-        error.brief = (f"{where}{len(decisions)} interlocked pair(s), refused by --interlocks error; the rules "
-                       f"would resolve them so: {listed}. Leave out --interlocks error to apply this, or resolve "
-                       "them in the CAD model (the workbench's diagrams panel)")
-        raise error
+        raise InterlockRefusedError(
+            f"{where}{len(decisions)} interlocked pair(s), refused by --interlocks error; the rules would resolve "
+            f"them so: {listed}. Leave out --interlocks error to apply this, or resolve them in the CAD model (the "
+            "workbench's diagrams panel)", pairs)
     for decision in decisions:
         log.info("interlock: %s", decision.text)
     return resolved
