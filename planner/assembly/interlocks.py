@@ -194,7 +194,10 @@ def drawn_in_cad(product: Product) -> bool:
 
 def _overlap_rule(product, x: PartMesh, y: PartMesh, tol: Tolerances, pixel: float, meshes):
     """(product, decision) when the pair overlaps and a direction frees it without the overlap; else a note."""
-    sx, sy = _manifold(x), _manifold(y)
+    try:
+        sx, sy = _manifold(x), _manifold(y)
+    except GeometryError as error:  # no boolean on an open mesh: the other rules still apply
+        return f"their overlap cannot be measured ({error})"
     common = sx ^ sy
     volume = float(common.volume())
     if volume <= tol.interference:
@@ -229,7 +232,7 @@ def _direction_rule(product, x: PartMesh, y: PartMesh, tol: Tolerances, pixel: f
         tried.append(f"{name} and its reverse")
         relation = _pair_relation(x, y, direction, pixel, tol)
         if len(relation) < 2:
-            product = _with_relation(product, x.id, y.id, direction, None, meshes, pixel, tol)
+            product = _with_relation(product, x.id, y.id, direction, relation, meshes, pixel, tol)
             return product, InterlockDecision(
                 "direction", (x.id, y.id),
                 f"{x.id} and {y.id}: tested direction {name} found on their geometry (an axis, a face or a slot): "
