@@ -183,6 +183,18 @@ def test_truck_and_pump(model, parts, contacts, interferences, shells, planned):
 
 
 @pytest.mark.freecad
+def test_the_pump_plans_every_level_with_no_flag():
+    """With the default flags the pump's three interlocked pairs (above), all overlaps in the model, are inserted
+    along their overlaps' axes, one line each, and every workstation plans (before, level sa3 stopped on 21_001
+    and 26_001 unless --group outlet=21_001,26_001 was given)."""
+    done = aplan("stats", str(real_bundle("diaphragm_pump")), "--json")
+    figures = json.loads(done.stdout)
+    assert figures["total"]["parts"] == 53 and all(level["sequences"] >= 1 for level in figures["levels"])
+    for pair in ("1_001 and 8_002", "1_001 and 8_007", "21_001 and 26_001"):
+        assert f"interlock: {pair} overlap by" in done.stderr
+
+
+@pytest.mark.freecad
 def test_bad_models_leave_nothing(tmp_path):
     require_freecadcmd()
     missing = aplan("export-freecad", str(tmp_path / "nope.FCStd"), "-o", str(tmp_path / "b"), check=False)
