@@ -29,12 +29,12 @@ MODELS = REPO.parent / "shared" / "models"
 APLAN = [sys.executable, "-m", "planner"]
 PLAN = ["--fasteners", "auto", "--subassemblies", "auto"]
 
-# name: (document, export options): the defaults, as a new user runs it, and the flags the README gives. The
-# pump's manifold shell 21_001 and its part 26_001 overlap by 1,434 mm^3 in the model and block each other along
-# every direction: made one component, the outlet manifold (README, "Real products").
+# name: (document, export options): the defaults, as a new user runs it. The pump's manifold shell 21_001 and its
+# part 26_001 overlap by 1,434 mm^3 in the model and block each other along every axis: the interlock rules insert
+# 26_001 along the overlap's axis (README, "Real products"; before, --group outlet=21_001,26_001 was needed).
 PRODUCTS = {
     "truck": (MODELS / "toy_truck" / "asm_cement_mixer_truck.FCStd", []),
-    "pump": (MODELS / "diaphragm_pump" / "asm_diaphragm_pump.FCStd", ["--group", "outlet=21_001,26_001"]),
+    "pump": (MODELS / "diaphragm_pump" / "asm_diaphragm_pump.FCStd", []),
 }
 
 

@@ -116,12 +116,14 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
 
 
 def _load_model(path: Path, tolerances: Tolerances | None = None, groups: dict[str, list[str]] | None = None,
-                exclude: list[str] | None = None) -> Product:
+                exclude: list[str] | None = None, prepare=None) -> Product:
     """PRODUCT given as a CAD model: export it to a temporary bundle and analyse its meshes (with
-    ``tolerances`` when given, e.g. ``contact="auto"``); ``groups`` and ``exclude`` as export-freecad's."""
+    ``tolerances`` when given, e.g. ``contact="auto"``); ``groups`` and ``exclude`` as export-freecad's.
+    ``prepare(product)``, when given, runs while the bundle's meshes exist (the interlock rules read them)."""
     with tempfile.TemporaryDirectory(prefix="aplan-") as folder:
-        return export_bundle(path, Path(folder) / "bundle", tolerances=tolerances, groups=groups, exclude=exclude,
-                             redetect=tolerances is not None)
+        product = export_bundle(path, Path(folder) / "bundle", tolerances=tolerances, groups=groups,
+                                exclude=exclude, redetect=tolerances is not None)
+        return product if prepare is None else prepare(product)
 
 
 def _occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:

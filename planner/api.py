@@ -142,7 +142,7 @@ DEFAULT_MODE = STRUCTURE_DEFAULT
 
 def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fasteners: str = "tagged",
                     model_options: dict | None = None, subassemblies: str | None = None,
-                    max_components: int = 8) -> Product:
+                    max_components: int = 8, interlocks: str = "resolve") -> Product:
     """Load PRODUCT: a product file, a bundle folder, a CAD file a plugin reads (``.FCStd``, STEP: through
     FreeCAD), or the name of an embedded example (``pen``).
 
@@ -160,6 +160,9 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
     ``designer``).
     ``model_options``: how a CAD model is read (``{"groups": {NAME: [labels]}, "exclude": [labels]}``, as
     ``aplan export-freecad --group/--exclude``); only for a CAD model, an error for anything else.
+    ``interlocks``: pairs of parts that block each other along every direction, in a product drawn in CAD,
+    are resolved from its meshes (``resolve``: one note per decision), refused (``error``) or left to the
+    planner (``keep``), as :func:`~planner.assembly.interlocks.apply_interlock_mode`; before the proposals.
     """
     if fasteners not in FASTENER_MODES + (DEFAULT_MODE,):
         raise PlannerError(f"unknown fastener mode {fasteners!r}; use one of {', '.join(FASTENER_MODES)}")
@@ -169,10 +172,19 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
     if model_options and not _is_model_file(argument):
         raise PlannerError(f"{argument}: --group and --exclude choose the components of a CAD model (.FCStd, "
                            "STEP); this product's parts are chosen already (export the model again with them)")
-    product = argument if isinstance(argument, Product) else _load(argument, tolerances, model_options)
+    from .assembly.interlocks import INTERLOCK_MODES, apply_interlock_mode, drawn_in_cad
+
+    if interlocks not in INTERLOCK_MODES:
+        raise PlannerError(f"unknown interlock mode {interlocks!r}; use one of {', '.join(INTERLOCK_MODES)}")
+
+    def prepare(loaded: Product) -> Product:  # while a CAD model's meshes exist (its bundle is temporary)
+        return apply_interlock_mode(loaded, interlocks)
+
+    product = prepare(argument) if isinstance(argument, Product) else _load(argument, tolerances, model_options,
+                                                                            prepare)
     # The designer's structure, before any proposal; a product not drawn in CAD (no meshes: synthetic, written
     # by hand) is planned as written, as the paper's products are.
-    own = bool(product.fasteners or product.subassemblies) or not all(p.mesh for p in product.parts)
+    own = bool(product.fasteners or product.subassemblies) or not drawn_in_cad(product)
     fastener_mode = ("tagged" if own else "auto") if fasteners == DEFAULT_MODE else fasteners
     proposals = fastener_proposals(product).groups if fastener_mode == "auto" else ()
     resolved = with_fastener_mode(product, fastener_mode, proposals)
@@ -203,8 +215,9 @@ def fastener_report(product: Product) -> tuple[tuple[FastenerGroup, ...], Fasten
 
 
 def accept_fasteners(product: Product) -> Product:
-    """``product`` with the proposed fastener groups added to its ``fasteners`` section."""
-    return resolve_product(product, fasteners="auto")
+    """``product`` with the proposed fastener groups added to its ``fasteners`` section (its diagrams as they are:
+    the interlock rules are left to the planning)."""
+    return resolve_product(product, fasteners="auto", interlocks="keep")
 
 
 def _is_model_file(argument) -> bool:
@@ -215,7 +228,10 @@ def _is_model_file(argument) -> bool:
         Path(argument).suffix.lower() in registry().loaders
 
 
-def _load(argument: str | os.PathLike, tolerances=None, model_options: dict | None = None) -> Product:
+def _load(argument: str | os.PathLike, tolerances=None, model_options: dict | None = None,
+          prepare: Callable[[Product], Product] = lambda p: p) -> Product:
+    """The product ARGUMENT names (:func:`resolve_product`), passed through ``prepare`` while its files (a CAD
+    model's temporary bundle) exist."""
     from .geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, is_analysed
     from .plugins import registry
 
@@ -228,19 +244,20 @@ def _load(argument: str | os.PathLike, tolerances=None, model_options: dict | No
     if path.is_dir():
         if not (path / PRODUCT_FILE).is_file():
             raise UnknownProductError(f"{argument}: is a folder without {PRODUCT_FILE}, so not a product bundle")
-        return analysed(load_product(path / PRODUCT_FILE))
+        return prepare(analysed(load_product(path / PRODUCT_FILE)))
     if path.is_file():
         loader = registry().loaders.get(path.suffix.lower())
         if loader is not None:
-            return loader(path, **({} if tolerances is None else {"tolerances": tolerances}), **(model_options or {}))
+            return loader(path, **({} if tolerances is None else {"tolerances": tolerances}), **(model_options or {}),
+                          prepare=prepare)
         if path.suffix.lower() in (".fcstd", ".step", ".stp"):
             raise UnknownProductError(f"{argument}: reading {path.suffix} files needs APLAN's FreeCAD side "
                                       "(install the project with `pip install -e .` and FreeCAD)")
         product = load_product(path)
-        return product if tolerances is None else analysed(product)
+        return prepare(product if tolerances is None else analysed(product))
     if str(argument) in EXAMPLES:
         product = load_product(example_path(str(argument)))
-        return product if tolerances is None else analysed(product)
+        return prepare(product if tolerances is None else analysed(product))
     if path.exists():  # a device, a FIFO, a socket: reading it would never end or block
         raise UnknownProductError(not_regular(path, "product") or f"{argument}: not a regular file")
     raise UnknownProductError(

@@ -17,6 +17,7 @@ __all__ = [
     "DisconnectedProductError",
     "NotDisassemblableError",
     "InterlockedPartsError",
+    "InterlockRefusedError",
     "LimitExceededError",
     "SolveTimeError",
     "MemoryLimitError",
@@ -230,3 +231,14 @@ class ContactCeilingError(GeometryError):
         self.parts = parts
         self.ceiling = ceiling
         super().__init__(message)
+
+
+class InterlockRefusedError(InterlockedPartsError):
+    """Interlocked pairs in a product drawn in CAD that the interlock rules (:mod:`planner.assembly.interlocks`)
+    do not resolve: no rule frees them, or ``--interlocks error`` refuses what the rules would do. The message
+    is one line; ``pairs`` the pairs ``(first, second)``."""
+
+    def __init__(self, message: str, pairs: Sequence[tuple[str, str]]):
+        self.pairs = tuple(pairs)
+        self.stuck = sorted({p for pair in self.pairs for p in pair})
+        PlannerError.__init__(self, message)

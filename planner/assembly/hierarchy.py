@@ -274,7 +274,9 @@ def propose_subassemblies(product: Product, max_components: int = 8) -> tuple[Su
             added.append(Subassembly(name, tuple(group), label, PROPOSED))
         found.extend(added)
         current = product_levels(replace(product, subassemblies=tuple(found)))[-1].product
-    return tuple(found)
+    from .untangle import untangled  # imports this module
+
+    return untangled(product, tuple(found))
 
 
 def _separable_groups(product: Product, found: list[Subassembly], groups: list[list[str]], current: Product,

@@ -137,6 +137,16 @@ def add_fasteners(parser) -> None:
                              "as screw, bolt, nut; small parts joining two others: see aplan fasteners); none: plan "
                              "every part. Default: tagged, or auto when a CAD model (a bundle) has neither fastener "
                              "groups nor subassemblies of its own (a note says so)")
+    add_interlocks(parser)
+
+
+def add_interlocks(parser) -> None:
+    """``--interlocks {resolve,error,keep}``: what to do with parts that block each other along every direction."""
+    parser.add_argument("--interlocks", choices=("resolve", "error", "keep"), default="resolve",
+                        help="pairs of parts that block each other along every direction, in a product drawn in "
+                             "CAD: resolve: from the geometry (an overlap's insertion direction, a direction found "
+                             "on the pair, else one component), one line per decision (default); error: refuse, "
+                             "naming what would be done; keep: plan the diagrams as they are")
 
 
 def parse_group(text: str) -> tuple[str, list[str]]:
@@ -172,7 +182,8 @@ def product_from(args: argparse.Namespace, argument, tolerances=None):
         return argument   # a product already resolved (a level: its fasteners were chosen with the whole)
     return api.resolve_product(argument, tolerances, getattr(args, "fasteners", STRUCTURE_DEFAULT),
                                model_options_from(args), getattr(args, "subassemblies", None),
-                               getattr(args, "max_components", MAX_COMPONENTS))
+                               getattr(args, "max_components", MAX_COMPONENTS),
+                               getattr(args, "interlocks", "resolve"))
 
 
 def add_decision_options(parser: argparse.ArgumentParser) -> None:

@@ -11,6 +11,7 @@ import pytest
 from real_models import BACKGROUND, real_bundles  # noqa: F401  (the exports, done in the background; a fixture)
 
 from planner import make_plan, plan_statistics, resolve_product
+from planner.assembly.feasibility import interlocked_pairs
 from planner.assembly import statistics_within
 from planner.assembly.hierarchy import (
     TOP,
@@ -354,14 +355,19 @@ def test_groups_too_large_to_merge_are_peeled_instead():
 @pytest.mark.freecad
 def test_the_pump_plans_at_every_level_in_workstations_of_at_most_eight(real_bundles):  # noqa: F811
     """The diaphragm pump exported with the defaults, its overlapping pair 21_001 / 26_001 (1,434 mm^3 shared in
-    the model) marked as not blocking each other, its fasteners proposed: every proposed level plans, none
-    holds more than 8 members besides its fasteners (the long bolts 13_* fold: before, the body's workstation
-    held them and had 11), and the 24 fasteners are installed where their hosts meet."""
-    product = load_product(real_bundles["diaphragm_pump"] / "product.json")
-    pair = {"21_001", "26_001"}
-    product = replace(product, obstructions=tuple(Obstruction(o.direction, tuple(b for b in o.blocks if set(b) != pair))
-                                                  for o in product.obstructions))
-    product = with_subassemblies(resolve_product(product, fasteners="auto"), "auto")
+    the model) resolved by the interlock rules (inserted along the overlap's axis: no flag), its fasteners
+    proposed: every proposed level plans, none holds more than 8 members besides its fasteners (the long bolts
+    13_* fold: before, the body's workstation held them and had 11), and the 24 fasteners are installed where
+    their hosts meet. At other workstation sizes no level is interlocked either."""
+    resolved = resolve_product(load_product(real_bundles["diaphragm_pump"] / "product.json"), fasteners="auto")
+    decisions = resolved.geometry["analysis"]["interlocks"]
+    assert {frozenset(d["parts"]) for d in decisions} == {frozenset(p) for p in [("1_001", "8_002"), ("1_001", "8_007"),
+                                                                                  ("21_001", "26_001")]}
+    assert {d["rule"] for d in decisions} == {"overlap"}
+    for cap in (4, 6, 10):
+        for level in product_levels(with_subassemblies(resolved, "auto", cap)):
+            assert interlocked_pairs(level.product) == [], (cap, level.id)
+    product = with_subassemblies(resolved, "auto")
     installed = set()
     for level, figures in level_statistics(product):
         fasteners = {p for group in level.product.fasteners for p in group.parts}

@@ -169,9 +169,10 @@ def test_truck_and_pump(model, parts, contacts, interferences, shells, planned):
             "a solid in FreeCAD to silence this)" in product.geometry["warnings"]
     for item in found:
         assert item["volume"] > 1.0
-    # Planned as the file has it (without the default proposals), past the size limit or interlocked.
+    # Planned as the file has it (without the default proposals and interlock rules), past the size limit or
+    # interlocked.
     stats = aplan("stats", str(bundle), "--json", "--fasteners", "tagged", "--subassemblies", "designer",
-                  "--verbose", check=False)
+                  "--interlocks", "keep", "--verbose", check=False)
     status, message = planned
     assert stats.returncode == status and message in (stats.stdout + stats.stderr)
     if status == 3:
@@ -179,6 +180,18 @@ def test_truck_and_pump(model, parts, contacts, interferences, shells, planned):
         assert (figures["parts"], figures["contacts"], figures["subassemblies"]) == (parts, contacts, None)
         if parts == 61:
             assert "39 part(s) look like fasteners by name (wood_screw_001" in figures["not_computed"]["reason"]
+
+
+@pytest.mark.freecad
+def test_the_pump_plans_every_level_with_no_flag():
+    """With the default flags the pump's three interlocked pairs (above), all overlaps in the model, are inserted
+    along their overlaps' axes, one line each, and every workstation plans (before, level sa3 stopped on 21_001
+    and 26_001 unless --group outlet=21_001,26_001 was given)."""
+    done = aplan("stats", str(real_bundle("diaphragm_pump")), "--json")
+    figures = json.loads(done.stdout)
+    assert figures["total"]["parts"] == 53 and all(level["sequences"] >= 1 for level in figures["levels"])
+    for pair in ("1_001 and 8_002", "1_001 and 8_007", "21_001 and 26_001"):
+        assert f"interlock: {pair} overlap by" in done.stderr
 
 
 @pytest.mark.freecad
