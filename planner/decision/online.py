@@ -39,6 +39,7 @@ import numpy as np
 
 from ..defaults import ONLINE_DEPTH, ONLINE_EXPANSIONS, ONLINE_TREE_NUMBERS
 from ..errors import PlannerError
+from .deviations import MistakeSplit, switch_wait_values
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .online_steps import StepTimes
 from .policy import AlphaVectorPolicy
@@ -121,6 +122,7 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
     n = model.n_classes
     has_robot = len(model.action_operations) > 1
     final_value = (max(r.wait, r.wrong) if has_robot else r.wait) / (1 - g)
+    sigma, top = _switch_of(model)
     arrive = np.full(len(model.paths), np.nan)  # W(t)
     later = np.full(len(model.paths), np.nan)   # W2(t)
     arrive[model.final_state] = later[model.final_state] = final_value
@@ -137,8 +139,11 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
         can = model.class_action[classes] >= 0
         m = np.where(can, model.class_match_reward[classes] + g * (w + w2) / 2, -np.inf)
         v = np.maximum(np.maximum(stay_wait, stall), m)
-        value[classes], match[classes] = v, m
         wait[classes] = r.wait + g * (v + w) / 2
+        if sigma:  # a change of mind couples a state's classes: waiting's value by a fixed point per state
+            v, x = switch_wait_values(model, classes, source - lo, hi - lo, w, np.maximum(stall, m), top)
+            wait[classes] = r.wait + g * ((1 - sigma) * (v + w) + sigma * x) / 2
+        value[classes], match[classes] = v, m
         wrong[classes] = r.wrong + g * v
         fraction = model.class_fraction[classes]
         size = hi - lo
@@ -147,6 +152,13 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
     for array in (value, wait, match, wrong):
         array.flags.writeable = False
     return ClassValues(value, wait, match, wrong)
+
+
+def _switch_of(model: FactoredIntentionModel) -> tuple[float, float]:
+    """The change-of-mind probability (0 without deviations) and a value at least every class value."""
+    sigma = model.deviations.switch if model.deviations is not None else 0.0
+    r = model.rewards
+    return sigma, max(r.unfavorable, r.favorable, r.wrong, r.wait, 0.0) / (1 - model.discount)
 
 
 def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | None = None) -> ClassValues:
@@ -171,6 +183,7 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
     has_robot = len(model.action_operations) > 1
     final_value = (max(r.wait, r.wrong) if has_robot else r.wait) / (1 - g)
     stall = r.wrong / (1 - g) if has_robot else -np.inf
+    sigma, top = _switch_of(model)
     revealed = np.full(S, np.nan)   # VT(t)
     arrive = np.full(S, np.nan)     # A(t)
     revealed[model.final_state] = arrive[model.final_state] = final_value
@@ -191,8 +204,11 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
         np.maximum.at(best, source, tried)
         revealed[lo:hi] = np.maximum(np.maximum((r.wait + g * arrive[lo:hi] / 2) / (1 - g / 2), stall), best)
         v = np.maximum(np.maximum((r.wait + g * revealed[target] / 2) / (1 - g / 2), stall), m)
-        value[classes], match[classes] = v, m
         wait[classes] = r.wait + g * (v + revealed[target]) / 2
+        if sigma:  # after a redraw the robot knows the state, not the class: at most the classes' mean
+            v, x = switch_wait_values(model, classes, source, hi - lo, revealed[target], np.maximum(stall, m), top)
+            wait[classes] = r.wait + g * ((1 - sigma) * (v + revealed[target]) + sigma * x) / 2
+        value[classes], match[classes] = v, m
         wrong[classes] = r.wrong + g * v
     for array in (value, wait, match, wrong, revealed):
         array.flags.writeable = False
@@ -204,8 +220,16 @@ def observation_split(model: FactoredIntentionModel, predicted: FactoredBelief
     """The observations ``predicted`` can emit, each with its probability and the posterior belief:
     ``(z, P(z), b_z)``, the blank observation first (what the search's :class:`_Split` makes, all at once).
     Cost: O(k x Z') for k classes and Z' observations."""
-    split = _Split(model, predicted)
+    split = _split(model, predicted)
     return [(z, p, split.posterior(z)) for z, p, _ in split.branches]
+
+
+def _split(model: FactoredIntentionModel, predicted: FactoredBelief, value: np.ndarray | None = None):
+    """The split by observation; with mistakes, every observation possible (:class:`MistakeSplit`)."""
+    split = _Split(model, predicted, value)
+    if model.deviations is not None and model.deviations.mistake:
+        return MistakeSplit(model, split, value)
+    return split
 
 
 def _posterior(classes: np.ndarray, weighted: np.ndarray) -> FactoredBelief:
@@ -458,7 +482,7 @@ class OnlinePlanner:
     def _expand(self, node: _Node, action: int) -> None:
         model = self.model
         reward = float(model.expected_rewards(node.belief)[action])
-        split = _Split(model, model.predict(node.belief, action), self.values.value)
+        split = _split(model, model.predict(node.belief, action), self.values.value)
         # the split's arrays (classes, masses, their states and keys) and a node per observation
         self._numbers += 6 * split.classes.size + _NODE_NUMBERS * len(split.branches)
         wait_forever = self._after_now / model.discount
