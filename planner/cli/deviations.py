@@ -7,7 +7,7 @@ import argparse
 from ..decision.deviations import Deviations, deviations_of
 from .options import number
 
-__all__ = ["add_deviation_options", "deviations_from", "deviation_settings"]
+__all__ = ["add_deviation_options", "deviations_from"]
 
 _probability = number(0, 1, high_open=True)  # [0, 1): outside is a usage error naming the option (exit 2)
 
@@ -29,8 +29,3 @@ def deviations_from(args: argparse.Namespace) -> Deviations | None:
         return None
     return deviations_of(getattr(args, "switch", 0.0) or 0.0, getattr(args, "mistakes", 0.0) or 0.0)
 
-
-def deviation_settings(args: argparse.Namespace) -> dict | None:
-    """What a session's log records (its start event's ``settings.deviations``), None for the paper's model."""
-    deviations = deviations_from(args)
-    return None if deviations is None else deviations.as_dict()

@@ -49,8 +49,8 @@ class Deviations:
     mistake: float = 0.0
 
     def __post_init__(self) -> None:
-        check_probability(self.switch, "the switch probability")
-        check_probability(self.mistake, "the mistake probability")
+        object.__setattr__(self, "switch", check_probability(self.switch, "the switch probability"))
+        object.__setattr__(self, "mistake", check_probability(self.mistake, "the mistake probability"))
 
     def as_dict(self) -> dict:
         return {"switch": self.switch, "mistake": self.mistake}
@@ -66,7 +66,7 @@ def check_probability(value, what: str) -> float:
 
 def deviations_of(switch: float = 0.0, mistake: float = 0.0) -> Deviations | None:
     """The :class:`Deviations`, or None when both are 0 (the paper's model: nothing changes, byte for byte)."""
-    deviations = Deviations(float(switch), float(mistake))
+    deviations = Deviations(switch, mistake)
     return None if deviations.switch == 0 and deviations.mistake == 0 else deviations
 
 

@@ -211,3 +211,20 @@ def test_bounds_stay_above_the_exact_values(pen):
     report = planner.search(b0)
     assert report.lower <= report.upper + 1e-9
     assert report.upper >= a.lower_bound - 1e-6 and report.lower <= a.upper_bound + 1e-6
+
+
+def test_class_values_are_the_lumped_mdps_values(pen):
+    """The online planner's QMDP values with a change of mind (a fixed point per state, from above) equal
+    plain value iteration on the lumped POMDP's tables (an independent computation), to 1e-9."""
+    from planner.decision.online import class_values
+
+    plan = make_plan(pen, True)
+    fact = factored_model(plan, deviations=Deviations(0.3, 0.1))
+    lumped = lumped_pomdp(fact)
+    T = [t.toarray() for t in lumped.transition]
+    V = np.zeros(lumped.n_states)
+    for _ in range(3000):  # 0.9 ** 3000: converged far below the tolerance
+        V = np.max([lumped.reward[a] + lumped.discount * T[a] @ V for a in range(lumped.n_actions)], axis=0)
+    values = class_values(fact)
+    assert np.abs(V - values.value).max() <= 1e-9
+    assert np.all(values.value >= V - 1e-9)
