@@ -228,3 +228,25 @@ def test_class_values_are_the_lumped_mdps_values(pen):
     values = class_values(fact)
     assert np.abs(V - values.value).max() <= 1e-9
     assert np.all(values.value >= V - 1e-9)
+
+
+def test_the_flat_models_redraw_tables_are_refused_past_the_budget(pen):
+    """The flat redraw is dense per state: its entries are estimated from the intentions per state before any
+    table is built, and a budget between the paper's model and that estimate refuses it, naming the factored
+    model; the factored model needs no such table."""
+    from planner.decision.deviations import flat_deviation_entries
+    from planner.decision.intention_model import flat_model_bytes
+    from planner.errors import MemoryLimitError
+
+    plan = make_plan(pen, True)
+    d = Deviations(0.1, 0.0)
+    paper = intention_model(plan)
+    n = np.bincount(paper.graph.first_state)
+    robot = len(paper.actions) - 1
+    entries = flat_deviation_entries(paper.graph, robot, len(plan.observations), d)
+    assert entries == (1 + robot) * int((2 * n * n).sum())  # closed form of the docstring
+    budget = max(flat_model_bytes(plan), 24 * entries // 2)
+    intention_model(plan, max_bytes=budget)  # the paper's model fits
+    with pytest.raises(MemoryLimitError, match="--planner online"):
+        intention_model(plan, max_bytes=budget, deviations=d)
+    factored_model(plan, deviations=d)
