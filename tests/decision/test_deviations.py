@@ -250,3 +250,32 @@ def test_the_flat_models_redraw_tables_are_refused_past_the_budget(pen):
     with pytest.raises(MemoryLimitError, match="--planner online"):
         intention_model(plan, max_bytes=budget, deviations=d)
     factored_model(plan, deviations=d)
+
+
+def test_the_online_split_with_mistakes_is_the_exhaustive_one(pen):
+    """The online planner's split by observation with mistakes: each branch's probability and posterior equal
+    those computed observation by observation from the likelihoods, and the one branch that stands for the
+    observations the belief does not emit carries all of their probability (their posteriors are equal)."""
+    from planner.decision.online import observation_split
+
+    plan = make_plan(pen, True)
+    model = factored_model(plan, deviations=Deviations(0.1, 0.05))
+    updater = FactoredUpdater(model)
+    belief = updater.update(updater.initialize(), model.wait, 0)
+    predicted = model.predict(belief, model.wait)
+    Z = len(model.observations)
+    p = np.array([float(predicted.mass @ model.observation_likelihood(z, predicted.classes)) for z in range(Z)])
+    assert p.sum() == pytest.approx(1.0, abs=1e-12)
+    branches = observation_split(model, predicted)
+    assert sum(q for _, q, _ in branches) == pytest.approx(1.0, abs=1e-12)
+    for z, q, posterior in branches[:-1]:
+        assert q == pytest.approx(p[z], abs=1e-12)
+        expected = updater.update(belief, model.wait, z)
+        assert np.abs(posterior.dense(model.n_classes) - expected.dense(model.n_classes)).max() <= 1e-12
+    z, q, posterior = branches[-1]
+    emitted = {b[0] for b in branches[:-1]}
+    rest = [y for y in range(Z) if y not in emitted]
+    assert z == rest[0] and q == pytest.approx(p[rest].sum(), abs=1e-12)
+    for y in rest:
+        assert np.abs(updater.update(belief, model.wait, y).dense(model.n_classes)
+                      - posterior.dense(model.n_classes)).max() <= 1e-12
