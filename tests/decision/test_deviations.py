@@ -279,3 +279,16 @@ def test_the_online_split_with_mistakes_is_the_exhaustive_one(pen):
     for y in rest:
         assert np.abs(updater.update(belief, model.wait, y).dense(model.n_classes)
                       - posterior.dense(model.n_classes)).max() <= 1e-12
+
+
+def test_model_paper_forces_both_to_zero_in_the_written_model(tmp_path):
+    """``--model paper`` ignores --switch and --mistakes: the written POMDP is the paper's byte for byte, and
+    the one with them differs (a dense observation table)."""
+    from aplan_runner import run_aplan
+
+    paper, forced, deviating = (tmp_path / f"{name}.pomdp" for name in ("paper", "forced", "deviating"))
+    assert run_aplan("pomdp", "pen", "-o", paper).returncode == 0
+    assert run_aplan("pomdp", "pen", "-o", forced, "--switch", "0.2", "--mistakes", "0.1", "--model",
+                     "paper").returncode == 0
+    assert run_aplan("pomdp", "pen", "-o", deviating, "--switch", "0.2", "--mistakes", "0.1").returncode == 0
+    assert forced.read_bytes() == paper.read_bytes() != deviating.read_bytes()

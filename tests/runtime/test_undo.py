@@ -158,3 +158,23 @@ def test_keyboard_apart_session_and_replay(pen, tmp_path):
 def test_a_probability_outside_zero_one_is_a_usage_error(option, value):
     done = run_aplan("simulate", "pen", "--random", "1", option, value)
     assert done.returncode == 2 and f"argument {option}" in done.stderr and "below 1" in done.stderr
+
+
+@pytest.mark.parametrize("recorded", [{"switch": 1.5, "mistake": 0.0}, {"switch": "0.1", "mistake": 0.0},
+                                      {"switch": 0.1}, [0.1, 0.0]])
+def test_a_log_with_damaged_deviations_is_refused(pen, tmp_path, recorded):
+    from planner.runtime.log import SessionError
+
+    plan = make_plan(pen)
+    model = factored_model(plan, deviations=Deviations(0.1, 0.0))
+    path = tmp_path / "d.jsonl"
+    log = EventLog(path)
+    run_session(model, Waiting(model), ListedSource([BLANK]), ScriptedRobot(), log)
+    log.close()
+    events = [json.loads(line) for line in path.read_text().splitlines()]
+    assert events[0]["settings"]["deviations"] == {"switch": 0.1, "mistake": 0.0}
+    assert replay(path).mismatches == []
+    events[0]["settings"]["deviations"] = recorded
+    path.write_text("".join(json.dumps(e) + "\n" for e in events))
+    with pytest.raises(SessionError, match=r"d\.jsonl: the start event's deviations.*the log is damaged"):
+        replay(path)
