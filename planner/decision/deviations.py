@@ -37,7 +37,7 @@ from ..errors import PlannerError
 
 __all__ = ["Deviations", "deviations_of", "check_probability", "switch_share", "operator_step", "mix_likelihood",
            "flat_deviation_entries", "flat_switch", "mixed_observations", "lumped_switch", "MistakeSplit",
-           "switch_wait_values", "belief_at_states"]
+           "switch_wait_values", "switch_terms", "with_mistakes", "belief_at_states", "flat_tables"]
 
 
 @dataclass(frozen=True)
@@ -202,7 +202,22 @@ class MistakeSplit:
         return FactoredBelief(self.classes[keep], weighted[keep] / weighted[keep].sum())
 
 
+def with_mistakes(model, split, value: np.ndarray | None):
+    """``split`` (the online planner's split by observation), or with mistakes its :class:`MistakeSplit`."""
+    if model.deviations is not None and model.deviations.mistake:
+        return MistakeSplit(model, split, value)
+    return split
+
+
 # --- the bounds: waiting's self-loop with a switch -------------------------------------------------------
+
+def switch_terms(model) -> tuple[float, float]:
+    """The change-of-mind probability (0 without deviations) and a value at least every class value
+    (``max(R, 0) / (1 - g)``), where :func:`switch_wait_values` starts from."""
+    sigma = model.deviations.switch if model.deviations is not None else 0.0
+    r = model.rewards
+    return sigma, max(r.unfavorable, r.favorable, r.wrong, r.wait, 0.0) / (1 - model.discount)
+
 
 def switch_wait_values(model, classes: np.ndarray, source: np.ndarray, n_states: int, later: np.ndarray,
                        other: np.ndarray, top: float, sweeps: int = 500) -> tuple[np.ndarray, np.ndarray]:

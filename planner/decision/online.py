@@ -39,7 +39,7 @@ import numpy as np
 
 from ..defaults import ONLINE_DEPTH, ONLINE_EXPANSIONS, ONLINE_TREE_NUMBERS
 from ..errors import PlannerError
-from .deviations import MistakeSplit, switch_wait_values
+from .deviations import switch_terms, switch_wait_values, with_mistakes
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .online_steps import StepTimes
 from .policy import AlphaVectorPolicy
@@ -122,7 +122,7 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
     n = model.n_classes
     has_robot = len(model.action_operations) > 1
     final_value = (max(r.wait, r.wrong) if has_robot else r.wait) / (1 - g)
-    sigma, top = _switch_of(model)
+    sigma, top = switch_terms(model)
     arrive = np.full(len(model.paths), np.nan)  # W(t)
     later = np.full(len(model.paths), np.nan)   # W2(t)
     arrive[model.final_state] = later[model.final_state] = final_value
@@ -154,13 +154,6 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
     return ClassValues(value, wait, match, wrong)
 
 
-def _switch_of(model: FactoredIntentionModel) -> tuple[float, float]:
-    """The change-of-mind probability (0 without deviations) and a value at least every class value."""
-    sigma = model.deviations.switch if model.deviations is not None else 0.0
-    r = model.rewards
-    return sigma, max(r.unfavorable, r.favorable, r.wrong, r.wait, 0.0) / (1 - model.discount)
-
-
 def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | None = None) -> ClassValues:
     """A tighter upper bound than :func:`class_values`: the value if the robot knew the class now and, from
     then on, every assembly state (not the operator's next steps), learning the next step outright when an
@@ -183,7 +176,7 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
     has_robot = len(model.action_operations) > 1
     final_value = (max(r.wait, r.wrong) if has_robot else r.wait) / (1 - g)
     stall = r.wrong / (1 - g) if has_robot else -np.inf
-    sigma, top = _switch_of(model)
+    sigma, top = switch_terms(model)
     revealed = np.full(S, np.nan)   # VT(t)
     arrive = np.full(S, np.nan)     # A(t)
     revealed[model.final_state] = arrive[model.final_state] = final_value
@@ -220,16 +213,8 @@ def observation_split(model: FactoredIntentionModel, predicted: FactoredBelief
     """The observations ``predicted`` can emit, each with its probability and the posterior belief:
     ``(z, P(z), b_z)``, the blank observation first (what the search's :class:`_Split` makes, all at once).
     Cost: O(k x Z') for k classes and Z' observations."""
-    split = _split(model, predicted)
+    split = with_mistakes(model, _Split(model, predicted), None)
     return [(z, p, split.posterior(z)) for z, p, _ in split.branches]
-
-
-def _split(model: FactoredIntentionModel, predicted: FactoredBelief, value: np.ndarray | None = None):
-    """The split by observation; with mistakes, every observation possible (:class:`MistakeSplit`)."""
-    split = _Split(model, predicted, value)
-    if model.deviations is not None and model.deviations.mistake:
-        return MistakeSplit(model, split, value)
-    return split
 
 
 def _posterior(classes: np.ndarray, weighted: np.ndarray) -> FactoredBelief:
@@ -482,7 +467,8 @@ class OnlinePlanner:
     def _expand(self, node: _Node, action: int) -> None:
         model = self.model
         reward = float(model.expected_rewards(node.belief)[action])
-        split = _split(model, model.predict(node.belief, action), self.values.value)
+        split = with_mistakes(model, _Split(model, model.predict(node.belief, action), self.values.value),
+                              self.values.value)
         # the split's arrays (classes, masses, their states and keys) and a node per observation
         self._numbers += 6 * split.classes.size + _NODE_NUMBERS * len(split.branches)
         wait_forever = self._after_now / model.discount
