@@ -24,6 +24,10 @@ observation, :class:`~planner.decision.belief.DiscreteUpdater`) spreads by the s
 are in the intention itself, and the habits say which paths are likely (in the factored and lumped models,
 whose classes sum over completions, they enter the transitions).
 
+With deviations (:mod:`~planner.decision.deviations`: change of mind and mistakes), the operator's steps
+redraw the intention among those of its state before they stay or advance, and the observation table mixes in
+a uniform one; ``world`` keeps the paper's tables for simulated worlds.
+
 With a base part (paper Sec. V), the states are the intentions of the sequences that start from it
 (:func:`~planner.assembly.intentions.intention_graph` with ``base_part``) and the same definitions apply to
 that graph: the observations of an intention are those of its predecessors *in it*, and the initial belief is
