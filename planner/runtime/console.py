@@ -71,7 +71,8 @@ class KeyboardSource:
     def observe(self) -> Observation | Apart | None:
         while True:
             try:
-                line = self._read("operator picked (parts and tool; Enter: nothing; apart PART...: came off; q: stop): ")
+                line = self._read("operator picked (parts and tool; Enter: nothing; apart PART...: came off; "
+                                  "q: stop): ")
             except EOFError:
                 return None
             names = line.replace(",", " ").split()

@@ -55,8 +55,8 @@ __all__ = ["SessionResult", "run_session", "status_line"]
 @dataclass
 class SessionResult:
     """How a session ended. ``reason``: ``assembled``, ``source ended``, ``robot failed``, ``error``,
-    ``unrecoverable`` (a step undone left a state no plan finishes) or ``step limit``; ``message`` says more. (An interrupt has no result: the log's
-    end event says ``interrupted`` and the interrupt is raised again.)"""
+    ``unrecoverable`` (a step undone left a state no plan finishes) or ``step limit``; ``message`` says more.
+    (An interrupt has no result: the log's end event says ``interrupted`` and the interrupt is raised again.)"""
 
     reason: str
     message: str
