@@ -51,6 +51,7 @@ from .assembly.intentions import base_part_first_edges, count_intentions, most_c
 from .assembly.plan import Plan, make_plan
 from .assembly.stats import STAT_KEYS, PlanStatistics, plan_statistics, statistics_within
 from .decision.factored_model import FactoredIntentionModel, factored_model
+from .decision.deviations import Deviations
 from .decision.habits import Habits, habit_weights
 from .decision.parallel import check_parallel_memory
 from .decision.factored_simulate import FactoredEpisode, evaluate_factored, simulate_factored_episode
@@ -521,34 +522,37 @@ def plan_statistics_of(product: str | os.PathLike | Product | Plan, technical: b
 def decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                    rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                    base_part: str | None = None, limits: SizeLimits = SizeLimits(),
-                   habits: Habits | None = None, solving: bool = False) -> IntentionModel:
+                   habits: Habits | None = None, solving: bool = False,
+                   deviations: Deviations | None = None) -> IntentionModel:
     """The decision model of Alg. 3 of a product, PRODUCT argument or plan; ``base_part``: only the sequences
     that start from it (``"auto"``: the most connected part, :func:`base_part_of`); refused, with the estimate,
     past ``limits`` (the plan's, and the flat model's memory:
     :func:`~planner.decision.intention_model.flat_model_bytes`); with ``solving``, also when the solver would
     not fit beside it (:func:`~planner.decision.budget.check_flat_solver_memory`), before it is built.
     ``habits``: the operator's habits in place of the uniform choice (:mod:`~planner.decision.habits`; checked
-    to be this product's), None for the paper's."""
+    to be this product's), None for the paper's; ``deviations``: change of mind and mistakes
+    (:mod:`~planner.decision.deviations`), None for the paper's."""
     plan = product if isinstance(product, Plan) else \
         _decidable(plan_of(product, technical, flat_limits(limits, solving) if base_part is None else limits))
     base = base_part_of(plan, base_part)
     if solving:  # refused before the flat model is built when the solver would not fit beside it
         check_flat_solver_memory(plan, count_intentions(plan.states, base_part=base), limits.memory)
     return intention_model(plan, rewards, discount, base_part=base, max_bytes=limits.memory,
-                           weights=habit_weights(plan, habits))
+                           weights=habit_weights(plan, habits), deviations=deviations)
 
 
 def factored_decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                             rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                             base_part: str | None = None, limits: SizeLimits = SizeLimits(),
-                            habits: Habits | None = None, parallel: bool = False) -> FactoredIntentionModel:
+                            habits: Habits | None = None, parallel: bool = False,
+                            deviations: Deviations | None = None) -> FactoredIntentionModel:
     """The same decision model without enumerating intentions (paper Sec. V): beliefs over classes;
-    ``parallel``: the parallel model (docs/parallel.md)."""
+    ``parallel``: the parallel model (docs/parallel.md); ``deviations``: change of mind and mistakes."""
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
     if parallel:
         check_parallel_memory(plan, limits.memory)
     return factored_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits),
-                          parallel)
+                          parallel, deviations)
 
 
 def online_planner(model: FactoredIntentionModel, decision_time: float | None = DECISION_TIME,
@@ -591,7 +595,8 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
                    decision_time: float | None = DECISION_TIME, expansions: int | None = None,
                    time_limit: float = POLICY_TIME_LIMIT, limit: int = INTENTION_LIMIT,
                    base_part: str | None = None, limits: SizeLimits = SizeLimits(),
-                   inputs: InputLimits = InputLimits(), habits: Habits | None = None, parallel: bool = False):
+                   inputs: InputLimits = InputLimits(), habits: Habits | None = None, parallel: bool = False,
+                   deviations: Deviations | None = None):
     """The model, the policy and a note (what was chosen and why, or None) that a session, a simulation or an
     evaluation runs on:
 
@@ -604,7 +609,9 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
     ``base_part``: only the sequences that start from it (``"auto"``: the most connected part); ``inputs``:
     what the policy file may hold (:class:`~planner.validation.InputLimits`); ``habits``: the operator's habits
     in every model (:mod:`~planner.decision.habits`), None for the paper's model; ``parallel``: the parallel model
-    (docs/parallel.md), on the classes only: with it the flat model is refused (:func:`check_parallel_flat`).
+    (docs/parallel.md), on the classes only: with it the flat model is refused (:func:`check_parallel_flat`);
+    ``deviations``: change of mind and mistakes in every model (:mod:`~planner.decision.deviations`), None for
+    the paper's.
     """
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, online_limits(limits)))
     base_part = base_part_of(plan, base_part)
@@ -614,7 +621,7 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
         check_online_memory(plan, limits.memory)
         if parallel:
             check_parallel_memory(plan, limits.memory)
-        model = factored_model(plan, rewards, discount, base_part, weights, parallel)
+        model = factored_model(plan, rewards, discount, base_part, weights, parallel, deviations)
         lower = read_policy(policy, limits=inputs) if policy else None
         return model, online_planner(model, decision_time, expansions, lower), note
     intentions = count_intentions(plan.states, base_part=base_part)
@@ -630,13 +637,13 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
             check_online_memory(plan, limits.memory)
             if parallel:
                 check_parallel_memory(plan, limits.memory)
-            lumped = factored_model(plan, rewards, discount, base_part, weights, parallel)
+            lumped = factored_model(plan, rewards, discount, base_part, weights, parallel, deviations)
             vectors.check_sizes(lumped.n_classes, len(lumped.actions), str(policy))
             return lumped, vectors, None
     check_parallel_flat(parallel, "--planner offline")
     # Past the limits this raises, with the estimate and the options (--planner online among them).
     model = intention_model(plan, rewards, discount, limit=limit, base_part=base_part, max_bytes=limits.memory,
-                            weights=weights)
+                            weights=weights, deviations=deviations)
     if vectors is not None:
         vectors.check(model.pomdp, str(policy))
         return model, vectors, note
@@ -649,7 +656,7 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
 def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
                  rewards: Rewards = Rewards(), discount: float = DISCOUNT, base_part: str | None = None,
                  limits: SizeLimits = SizeLimits(), habits: Habits | None = None,
-                 parallel: bool = False) -> LumpedModel:
+                 parallel: bool = False, deviations: Deviations | None = None) -> LumpedModel:
     """The decision model of Alg. 3 lumped onto the factored model's classes (state edges and the finished
     product; :mod:`~planner.decision.lumped_model`): the same value as the flat model, far fewer states.
     ``.factored`` filters beliefs over classes, ``.pomdp`` (named ``<product>:lumped``) is what solvers take."""
@@ -658,7 +665,7 @@ def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | 
     if parallel:
         check_parallel_memory(plan, limits.memory)
     return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits),
-                              parallel)
+                              parallel, deviations)
 
 
 def check_parallel_flat(parallel: bool, where: str) -> None:
@@ -680,7 +687,7 @@ def _model_file_kind(path: str | os.PathLike) -> str | None:
 def load_model(argument: str | os.PathLike | Product, technical: bool | None = None, rewards: Rewards = Rewards(),
                discount: float = DISCOUNT, base_part: str | None = None, limits: SizeLimits = SizeLimits(),
                lumped: bool = False, inputs: InputLimits = InputLimits(), habits: Habits | None = None,
-               solving: bool = False, parallel: bool = False) -> Model:
+               solving: bool = False, parallel: bool = False, deviations: Deviations | None = None) -> Model:
     """MODEL: a ``.pomdpx`` (or ``.pomdpx.gz``) or ``.pomdp`` file (a bare :class:`POMDP`, read within
     ``inputs``: :class:`~planner.validation.InputLimits`), else a PRODUCT
     (its :class:`IntentionModel`, or with ``lumped`` its :class:`LumpedModel`; ``technical``, ``rewards``,
@@ -697,6 +704,9 @@ def load_model(argument: str | os.PathLike | Product, technical: bool | None = N
     if kind is not None and parallel:
         raise PlannerError(f"{argument}: --parallel applies to a PRODUCT; a model file's transitions are fixed "
                            "(give the PRODUCT, or leave out --parallel)")
+    if kind is not None and deviations is not None:
+        raise PlannerError(f"{argument}: --switch and --mistakes apply to a PRODUCT; a model file's transitions and "
+                           "observations are fixed (give the PRODUCT, or leave them out)")
     if kind is not None and lumped:
         raise PlannerError(f"{argument}: --lumped builds the lumped model of a PRODUCT; a model file is solved "
                            "as it is (write the lumped model with aplan pomdp PRODUCT --lumped -o FILE)")
@@ -707,8 +717,8 @@ def load_model(argument: str | os.PathLike | Product, technical: bool | None = N
     if kind == ".pomdp":
         return read_cassandra(argument, inputs)
     if lumped or parallel:
-        return lumped_model(argument, technical, rewards, discount, base_part, limits, habits, parallel)
-    return decision_model(argument, technical, rewards, discount, base_part, limits, habits, solving)
+        return lumped_model(argument, technical, rewards, discount, base_part, limits, habits, parallel, deviations)
+    return decision_model(argument, technical, rewards, discount, base_part, limits, habits, solving, deviations)
 
 
 # Reading a model file peaks at about 3 bytes of memory per byte of file (bench/README.md, model files).
@@ -887,7 +897,7 @@ def simulate(model: IntentionModel | FactoredIntentionModel, policy, sequences: 
     else:
         chosen = [model.full_sequence(s, what) for s in (sequences or [starts[0]])]
     return [simulate_episode(model.pomdp, policy, start, rng, max_steps, model.graph.successor, model.final_state,
-                             operator) for start in chosen]
+                             operator, world=model.world) for start in chosen]
 
 
 def _simulate_operator(model, policy, operator_model, random, seed, max_steps, operator) -> list:
@@ -902,7 +912,7 @@ def _simulate_operator(model, policy, operator_model, random, seed, max_steps, o
         return [simulate_factored_episode(model, policy, p.sequence, rng, max_steps, operator, p.switch, m)
                 for p, m in zip(plans, mistakes)]
     return [simulate_episode(model.pomdp, policy, p.sequence, rng, max_steps, model.graph.successor,
-                             model.final_state, operator, p.switch, model.graph.first_state, m)
+                             model.final_state, operator, p.switch, model.graph.first_state, m, model.world)
             for p, m in zip(plans, mistakes)]
 
 
@@ -950,5 +960,6 @@ def evaluate(model: Model | FactoredIntentionModel, policy, episodes: int, seed:
         mean, half, _ = evaluate_factored(model, policy, episodes, seed, max_steps)
         return mean, half
     final = model.final_state if isinstance(model, IntentionModel) else None
-    mean, half, _ = evaluate_policy(tables(model), policy, episodes, seed, max_steps, final)
+    world = model.world if isinstance(model, IntentionModel) else None  # deviations: the operator's own
+    mean, half, _ = evaluate_policy(tables(model), policy, episodes, seed, max_steps, final, world)
     return mean, half

@@ -27,6 +27,7 @@ from ..defaults import (
 )
 from ..errors import PlannerError, SolveTimeError
 from ..interrupts import exit_status
+from .deviations import deviations_from
 from .habits import habits_from
 from .options import (
     PRODUCT_HELP,
@@ -85,10 +86,11 @@ def model_from(args: argparse.Namespace, product_only: bool = False, solving: bo
             raise PlannerError(f"{argument}: a model file, but this command needs a PRODUCT (its plan names what the "
                                f"operator and the robot do){extra}")
         return api.decision_model(product_from(args, argument), args.technical, rewards_from(args), args.discount,
-                                  args.base_part, limits_from(args), habits_from(args))
+                                  args.base_part, limits_from(args), habits_from(args),
+                                  deviations=deviations_from(args))
     return api.load_model(product_from(args, argument), args.technical, rewards_from(args), args.discount,
                           args.base_part, limits_from(args), getattr(args, "lumped", False), inputs_from(args),
-                          habits_from(args), solving, parallel_from(args))
+                          habits_from(args), solving, parallel_from(args), deviations_from(args))
 
 
 def policy_from(args: argparse.Namespace, model):
@@ -114,7 +116,7 @@ def decision_maker_from(args: argparse.Namespace, product=None):
                                              rewards_from(args), args.discount, decision_time, expansions, args.time_limit,
                                              base_part=args.base_part, limits=limits_from(args),
                                              inputs=inputs_from(args), habits=habits_from(args),
-                                             parallel=parallel_from(args))
+                                             parallel=parallel_from(args), deviations=deviations_from(args))
     if note:
         log.info("%s", note)
     return model, policy

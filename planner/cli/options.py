@@ -207,6 +207,8 @@ def add_decision_options(parser: argparse.ArgumentParser) -> None:
     add_hierarchy(group)
     add_habits_options(group)
     add_parallel_options(group)
+    from .deviations import add_deviation_options  # its own module: it imports number from here
+    add_deviation_options(group)
     add_size_options(parser)
     add_input_options(parser)
 
@@ -217,8 +219,8 @@ def add_habits_options(group) -> None:
                        help="the operator's habits (aplan habits LOG... -o FILE) in place of the uniform choice "
                             "of Alg. 3, in every model and planner (docs/habits.md)")
     group.add_argument("--model", dest="habit_model", choices=("paper", "habits"), default=None,
-                       help="paper: the paper's model, ignoring --habits; habits (the default with --habits): "
-                            "the habits' model")
+                       help="paper: the paper's model, ignoring --habits, --switch and --mistakes; habits (the "
+                            "default with --habits): the habits' model")
 
 
 def add_parallel_options(group) -> None:

@@ -250,10 +250,11 @@ def _replay(args: argparse.Namespace) -> int:
         print(f"  {'step':>4}  {'robot action':<44} {'observation':<28} belief (top 3)")
     for k, (a, z, b) in steps:
         best = top_intentions(b, 3)
-        seen = f"{done.ignored[k]} (ignored)" if k in done.ignored else str(model.observations[z])
+        seen = f"{done.ignored[k]} (ignored)" if k in done.ignored else done.undone.get(k, str(model.observations[z]))
         if args.json:
             print(json.dumps({"step": k, "action": model.actions[a], "observation": model.observations[z],
-                              "top": best, **({"ignored": done.ignored[k]} if k in done.ignored else {})}))
+                              "top": best, **({"ignored": done.ignored[k]} if k in done.ignored else {}),
+                              **({"undone": done.undone[k]} if k in done.undone else {})}))
         else:
             top = " ".join(f"{'c' if factored else 'i'}{i} {p:.2f}" for i, p in best)
             print(f"  {k:>4}  {model.actions[a]:<44} {seen:<28} {top}")
@@ -269,6 +270,8 @@ def _replay(args: argparse.Namespace) -> int:
         written = plot_beliefs([trace], args.plot, done.product.name or model.name)
         if not args.json:
             print("wrote " + ", ".join(written))
+    if done.unrecoverable and not args.json:
+        print(f"  unrecoverable: {done.unrecoverable}")
     if done.mismatches:
         raise PlannerError(f"{args.log}: the logged beliefs differ from the recomputed ones at steps "
                            f"{', '.join(map(str, done.mismatches))}")

@@ -8,7 +8,9 @@ operation; None if it never did one), ``confident_step`` (the decision step, fro
 the true intention first exceeded ``CONFIDENCE`` while the product was not yet finished, as
 ``confident_after_operations`` counts it; None if never), ``robot_share`` (robot operations over all
 operations; None without any), ``switched_at_step`` (when the operator changed its mind) and
-``operator_mistakes`` (wrong parts taken). A finished episode's operations add up to its sequence's length. Cost: O(steps).
+``operator_mistakes`` (wrong parts taken), ``confident_after_switch`` (the belief on the new true intention
+passed ``CONFIDENCE`` after the switch, before the product was finished; None without a switch) and ``resets``
+(observations of probability 0 under the belief). A finished episode's operations add up to its sequence's length. Cost: O(steps).
 """
 from __future__ import annotations
 
@@ -30,7 +32,17 @@ def episode_measures(episode, threshold: float = CONFIDENCE) -> dict:
                                     and episode.unfinished(s)), None),
             "robot_share": round(robot / (robot + operator), 6) if robot + operator else None,
             "switched_at_step": episode.switched_at,
-            "operator_mistakes": sum(getattr(s, "mistake", False) for s in steps)}
+            "confident_after_switch": _confident_after_switch(episode, threshold),
+            "operator_mistakes": sum(getattr(s, "mistake", False) for s in steps),
+            "resets": int(getattr(episode, "resets", 0))}
+
+
+def _confident_after_switch(episode, threshold: float) -> bool | None:
+    """Whether the belief on the new true intention passed ``threshold`` at or after the step the operator
+    changed its mind and before the product was finished; None when it did not change its mind."""
+    if episode.switched_at is None:
+        return None
+    return any(s.p_true > threshold and episode.unfinished(s) for s in episode.steps[episode.switched_at - 1:])
 
 
 def run_totals(measures: list[dict]) -> dict:
@@ -44,5 +56,8 @@ def run_totals(measures: list[dict]) -> dict:
             "robot_share": round(robot / (robot + operator), 6) if robot + operator else None,
             "wrong_share": round(wrong / (robot + wrong), 6) if robot + wrong else None,
             "operator_mistakes": sum(m["operator_mistakes"] for m in measures),
+            "resets": sum(m["resets"] for m in measures),
+            "switched": sum(m["switched_at_step"] is not None for m in measures),
+            "confident_after_switch": sum(bool(m["confident_after_switch"]) for m in measures),
             "never_helped": sum(m["first_help_step"] is None for m in measures),
             "never_confident": sum(m["confident_step"] is None for m in measures)}

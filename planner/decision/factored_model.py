@@ -53,6 +53,7 @@ from ..assembly.intentions import allowed_edges, base_part_first_edges, paths_to
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
 from ..errors import PlannerError
+from .deviations import Deviations, mix_likelihood, operator_step, switch_share
 from .habits import weighted_fractions
 from .intention_model import WAIT, Rewards
 from .parallel import (ParallelTable, parallel_expected_rewards, parallel_predict, parallel_rewards,
@@ -131,6 +132,8 @@ class FactoredIntentionModel:
     weights: np.ndarray | None = None
     class_log_weight: np.ndarray | None = None
     parallel: ParallelTable | None = None  # the parallel model's pairs (docs/parallel.md); None: the paper's
+    deviations: Deviations | None = None  # change of mind and mistakes (deviations.py), None for the paper's
+    switch_share: np.ndarray | None = None  # per class, its share of a redraw at its state (with deviations)
 
     @property
     def name(self) -> str:
@@ -319,7 +322,9 @@ class FactoredIntentionModel:
         return self.state_classes[np.repeat(start - ends + count, count) + np.arange(total)], count
 
     def _wait_step(self, classes: np.ndarray, mass: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-        # Stay or advance one step, 1/2 each; the final class stays.
+        # Stay or advance one step, 1/2 each; the final class stays (with a change of mind: a redraw first).
+        if self.deviations is not None:
+            return operator_step(self, classes, mass)
         moving = classes != self.final_class
         half = np.where(moving, 0.5 * mass, mass)
         return [(classes, half), self.advance(classes[moving], half[moving])]
@@ -343,15 +348,21 @@ class FactoredIntentionModel:
         states = self.class_source if classes is None else self.class_source[classes]
         weight = self.emit_weight[states]
         if observation == 0:
-            return 0.25 * weight
+            return self._mixed(0.25 * weight)
         keys = states.astype(np.int64) * len(self.plan.observations) + int(observation)
         at = np.searchsorted(self.emit_keys, keys)
         found = self.emit_keys[np.minimum(at, self.emit_keys.size - 1)] == keys if self.emit_keys.size else \
             np.zeros(keys.shape, dtype=bool)
-        return np.where(found, weight, 0.0)
+        return self._mixed(np.where(found, weight, 0.0))
+
+    def _mixed(self, likelihood: np.ndarray) -> np.ndarray:
+        if self.deviations is None or not self.deviations.mistake:
+            return likelihood
+        return mix_likelihood(likelihood, self.deviations.mistake, len(self.plan.observations))
 
     def state_observations(self, state: int) -> tuple[np.ndarray, np.ndarray]:
-        """The observations ``state`` can emit (blank first) and their probabilities."""
+        """The observations ``state`` can emit (blank first) and their probabilities, without mistakes (the
+        simulated world's: its operator makes its own, :mod:`~planner.decision.operators`)."""
         Z = len(self.plan.observations)
         lo, hi = np.searchsorted(self.emit_keys, [state * Z, (state + 1) * Z])
         observations = np.concatenate([[0], self.emit_keys[lo:hi] - state * Z])
@@ -419,13 +430,14 @@ def _counts_per_state(plan: Plan) -> np.ndarray:
 
 def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                    base_part: str | None = None, weights: np.ndarray | None = None,
-                   parallel: bool = False) -> FactoredIntentionModel:
+                   parallel: bool = False, deviations: Deviations | None = None) -> FactoredIntentionModel:
     """The factored model of Alg. 3 over ``plan`` (module docstring), without enumerating intentions.
 
     ``base_part``: only the sequences that start from this part (paper Sec. V); :class:`PlannerError` when it
     is not a part or no sequence starts from it. ``weights``: a positive weight per state edge (operator
     habits, :func:`~planner.decision.habits.habit_weights`; module docstring), None for the paper's model.
     ``parallel``: the parallel model (:mod:`~planner.decision.parallel`: the robot may do the step after next).
+    ``deviations``: change of mind and mistakes (:mod:`~planner.decision.deviations`), None for the paper's.
 
     Cost: O(S + E log E) time and O(S + E) memory for S states and E state edges (one sort of the edges by
     source, one of the (state, observation) pairs); Python-int arithmetic only where the counts pass 2**52.
@@ -480,4 +492,15 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
         a.flags.writeable = False
     model = FactoredIntentionModel(plan, rewards, discount, *arrays, base_part=base_part, weights=class_weights,
                                    class_log_weight=log_weight)
-    return dataclasses.replace(model, parallel=parallel_table(model)) if parallel else model
+    if parallel and deviations is not None and deviations.switch:
+        # The bounds of the online planner and the solver are derived for each on its own; combined, waiting's
+        # redraw would also follow a parallel step, which no bound here accounts for yet.
+        raise PlannerError("the parallel model (--parallel) and a change of mind (--switch) are not combined yet: "
+                           "leave out one of them (--mistakes works with --parallel)")
+    if parallel:
+        model = dataclasses.replace(model, parallel=parallel_table(model))
+    if deviations is None:
+        return model
+    share = switch_share(model)
+    share.flags.writeable = False
+    return dataclasses.replace(model, deviations=deviations, switch_share=share)

@@ -103,8 +103,10 @@ def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[
         if position >= len(path):
             break
         if switch is not None and episode.switched_at is None and position >= switch.after:
-            path = episode.path = switch_path(model, path, position, switch.draw)
-            episode.switched_at = len(episode.steps) + 1
+            other = switch_path(model, path, position, switch.draw)
+            if other != path:  # else at the next state that has another completion
+                path = episode.path = other
+                episode.switched_at = len(episode.steps) + 1
         started = time.perf_counter()
         action = int(policy.action(belief))
         seconds = time.perf_counter() - started

@@ -47,7 +47,10 @@ class FactoredUpdater:
 
     def _reset(self, belief: FactoredBelief, action: int, observation: int) -> FactoredBelief:
         model = self.model
-        mask = reset_support(model.observation_likelihood(observation) > 0, model.reachable(belief.classes),
+        start = belief.classes
+        if model.deviations is not None and model.deviations.switch:  # a redraw reaches its state's classes
+            start = model.starting_at(np.unique(model.class_source[belief.classes]).astype(np.int64))[0]
+        mask = reset_support(model.observation_likelihood(observation) > 0, model.reachable(start),
                              action, observation, self.events, self.on_reset)
         if model.base_part is not None:  # the flat model's states are the base part's intentions only
             mask &= model.reachable(model.initial_classes)

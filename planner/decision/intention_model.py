@@ -24,6 +24,10 @@ observation, :class:`~planner.decision.belief.DiscreteUpdater`) spreads by the s
 are in the intention itself, and the habits say which paths are likely (in the factored and lumped models,
 whose classes sum over completions, they enter the transitions).
 
+With deviations (:mod:`~planner.decision.deviations`: change of mind and mistakes), the operator's steps
+redraw the intention among those of its state before they stay or advance, and the observation table mixes in
+a uniform one; ``world`` keeps the paper's tables for simulated worlds.
+
 With a base part (paper Sec. V), the states are the intentions of the sequences that start from it
 (:func:`~planner.assembly.intentions.intention_graph` with ``base_part``) and the same definitions apply to
 that graph: the observations of an intention are those of its predecessors *in it*, and the initial belief is
@@ -42,6 +46,7 @@ from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, IntentionGraph, count
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
 from ..errors import LimitExceededError, MemoryLimitError, PlannerError
+from .deviations import Deviations, flat_deviation_entries, flat_tables
 from .pomdp import POMDP
 
 __all__ = ["Rewards", "WAIT", "IntentionModel", "intention_model", "intention_pomdp", "flat_model_bytes",
@@ -80,6 +85,8 @@ class IntentionModel:
     action_operations: np.ndarray
     rewards: Rewards
     prior_weights: np.ndarray | None = None
+    deviations: Deviations | None = None  # change of mind and mistakes (deviations.py), None for the paper's
+    world: POMDP | None = None  # with deviations: the paper's tables, which a simulated world plays
 
     @property
     def name(self) -> str:
@@ -263,9 +270,11 @@ def flat_model_fits(plan: Plan, max_bytes: int | None = None, limit: int | None 
 def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                      graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT,
                      base_part: str | None = None, max_bytes: int | None = None,
-                     weights: np.ndarray | None = None) -> IntentionModel:
+                     weights: np.ndarray | None = None, deviations: Deviations | None = None) -> IntentionModel:
     """The decision model of Alg. 3 over the intentions of ``plan`` (definitions in the module docstring).
     ``weights``: a positive weight per state edge (operator habits, module docstring), None for the paper's.
+    ``deviations``: change of mind and mistakes (:mod:`~planner.decision.deviations`; their tables are checked
+    against ``max_bytes`` too), None for the paper's.
 
     ``graph``: the plan's intention graph when it was built already. Before anything is built the model's
     size is estimated (:func:`check_flat_model`): more than ``limit`` intentions (when ``graph`` is to be
@@ -283,9 +292,10 @@ def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
         raise PlannerError(f"the intention graph starts from base part {graph.base_part!r}, the model from "
                            f"{base_part!r}; build them with the same base part")
     robot_ops = np.flatnonzero(plan.tags.robot)
+    if deviations is not None:
+        _check_deviation_tables(plan, graph, len(robot_ops), deviations, max_bytes)
     transition = _transitions(graph, robot_ops)
     table = _observations(plan, graph)
-    observation = tuple(table for _ in transition)  # one object: solvers and updaters share its products
     initial = np.zeros(graph.n_intentions)
     starts = graph.full_sequences()
     prior = None
@@ -301,17 +311,37 @@ def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
         prior.flags.writeable = False
     names = tuple(f"i{i}" for i in range(graph.n_intentions))
     actions = tuple(f"a{k}:" + plan.andor.describe(int(op)).replace(" ", "") for k, op in enumerate(robot_ops))
+    reward = _rewards(plan, graph, robot_ops, rewards)
+    world = None
+    if deviations is not None:  # the paper's tables stay for a simulated world (its operator deviates itself)
+        world = POMDP(names, actions + (WAIT,), tuple(str(o) for o in plan.observations), tuple(transition),
+                      tuple(table for _ in transition), reward, initial, discount, name="world")
+        transition, table = flat_tables(graph, robot_ops, transition, table, prior, deviations)
+    observation = tuple(table for _ in transition)  # one object: solvers and updaters share its products
     pomdp = POMDP(names, actions + (WAIT,), tuple(str(o) for o in plan.observations), tuple(transition),
-                  observation, _rewards(plan, graph, robot_ops, rewards), initial, discount,
-                  name=plan.product.name or "aplan")
+                  observation, reward, initial, discount, name=plan.product.name or "aplan")
     action_operations = np.append(robot_ops, -1)
     action_operations.flags.writeable = False
-    return IntentionModel(plan, graph, pomdp, action_operations, rewards, prior)
+    return IntentionModel(plan, graph, pomdp, action_operations, rewards, prior, deviations, world)
+
+
+def _check_deviation_tables(plan: Plan, graph: IntentionGraph, n_robot: int, deviations: Deviations,
+                            max_bytes: int | None) -> None:
+    """Refuse, before they are built, the deviations' tables past ``max_bytes`` (12 bytes per entry, twice for
+    the sparse products that make them)."""
+    entries = flat_deviation_entries(graph, n_robot, len(plan.observations), deviations)
+    needed = 24 * entries
+    budget = default_memory_budget() if max_bytes is None else max_bytes
+    if needed > budget:
+        raise MemoryLimitError("flat decision model with change of mind and mistakes", needed, budget,
+                               f"{entries:,} table entries (a redraw over every intention of a state)",
+                               "The factored model and the online planner (--planner online) hold a change of mind "
+                               "in the classes of each state instead.", _FLAT_OPTIONS + memory_options(needed))
 
 
 def intention_pomdp(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                     graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT,
                     base_part: str | None = None, max_bytes: int | None = None,
-                    weights: np.ndarray | None = None) -> POMDP:
+                    weights: np.ndarray | None = None, deviations: Deviations | None = None) -> POMDP:
     """The tables alone of :func:`intention_model` (for solvers, files and comparisons with other planners)."""
-    return intention_model(plan, rewards, discount, graph, limit, base_part, max_bytes, weights).pomdp
+    return intention_model(plan, rewards, discount, graph, limit, base_part, max_bytes, weights, deviations).pomdp

@@ -51,6 +51,7 @@ import scipy.sparse as sp
 from ..assembly.plan import Plan
 from ..defaults import DISCOUNT
 from .delayed_reveal import DelayedReveal, delayed_reveal_bound
+from .deviations import Deviations, lumped_switch, mixed_observations
 from .factored_model import FactoredIntentionModel, factored_model
 from .intention_model import Rewards
 from .online import revealed_state_values
@@ -92,6 +93,8 @@ def _transitions(model: FactoredIntentionModel) -> tuple[sp.csr_matrix, ...]:
     identity = sp.identity(n, format="csr")
     advance = advance_matrix(model)
     wait = ((identity + advance) * 0.5).tocsr()
+    if model.deviations is not None and model.deviations.switch:  # a change of mind first (deviations.py)
+        wait = (lumped_switch(model) @ wait).tocsr()
     performed = (advance @ wait).tocsr()        # the robot's step, then the operator's stay-or-advance
     tables = []
     extra = parallel_rows(model, wait)  # the parallel model's right actions (None: the paper's)
@@ -122,7 +125,10 @@ def _observations(model: FactoredIntentionModel) -> sp.csr_matrix:
     cols = np.concatenate([np.zeros(n, dtype=np.int64), model.emit_keys[at] % Z])
     weight = model.emit_weight[source]
     values = np.concatenate([0.25 * weight, np.repeat(weight, count)])
-    return sp.csr_matrix((values, (rows, cols)), shape=(n, Z))
+    table = sp.csr_matrix((values, (rows, cols)), shape=(n, Z))
+    if model.deviations is not None and model.deviations.mistake:
+        table = mixed_observations(table, model.deviations.mistake)
+    return table
 
 
 def _rewards(model: FactoredIntentionModel) -> np.ndarray:
@@ -175,11 +181,11 @@ class LumpedModel:
 
 def lumped_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                  base_part: str | None = None, weights: np.ndarray | None = None,
-                 parallel: bool = False) -> LumpedModel:
+                 parallel: bool = False, deviations: Deviations | None = None) -> LumpedModel:
     """The factored model of ``plan`` (from ``base_part`` if given; ``weights``: operator habits, per state edge;
-    ``parallel``: the parallel model, docs/parallel.md) and its lumped POMDP. Cost: that of
-    :func:`factored_model` plus :func:`lumped_pomdp`."""
-    factored = factored_model(plan, rewards, discount, base_part, weights, parallel)
+    ``parallel``: the parallel model, docs/parallel.md; ``deviations``: change of mind and mistakes) and its
+    lumped POMDP. Cost: that of :func:`factored_model` plus :func:`lumped_pomdp`."""
+    factored = factored_model(plan, rewards, discount, base_part, weights, parallel, deviations)
     return LumpedModel(factored, lumped_pomdp(factored))
 
 
@@ -245,6 +251,9 @@ def solver_start(model: LumpedModel, finest: int = 2, points: bool = True, deadl
     6: 1.1 s and 4.9 s)."""
     reveal = None
     previous_nodes, previous_seconds = None, None
+    # With deviations the relaxed beliefs are no longer spreads or single classes (a redraw mixes them): the
+    # graph would not close, so the bound starts from the revealed-state values alone.
+    finest = 0 if model.factored.deviations is not None else finest
     for every in range(1, finest + 1):
         if reveal is not None and previous_nodes:
             growth = reveal.graph.n / previous_nodes

@@ -39,6 +39,7 @@ import numpy as np
 
 from ..defaults import ONLINE_DEPTH, ONLINE_EXPANSIONS, ONLINE_TREE_NUMBERS
 from ..errors import PlannerError
+from .deviations import switch_terms, switch_wait_values, with_mistakes
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .online_steps import StepTimes
 from .parallel_values import parallel_level, parallel_q_matrix, parallel_q_values, parallel_tries
@@ -125,6 +126,7 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
     n = model.n_classes
     has_robot = len(model.action_operations) > 1
     final_value = (max(r.wait, r.wrong) if has_robot else r.wait) / (1 - g)
+    sigma, top = switch_terms(model)
     arrive = np.full(len(model.paths), np.nan)  # W(t)
     later = np.full(len(model.paths), np.nan)   # W2(t)
     arrive[model.final_state] = later[model.final_state] = final_value
@@ -143,8 +145,11 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
         m = np.where(can, model.class_match_reward[classes] + g * (w + w2) / 2, -np.inf)
         v = np.maximum(np.maximum(stay_wait, stall), m)
         parallel_level(model, classes, v, value, arrive, pair_q)
-        value[classes], match[classes] = v, m
         wait[classes] = r.wait + g * (v + w) / 2
+        if sigma:  # a change of mind couples a state's classes: waiting's value by a fixed point per state
+            v, x = switch_wait_values(model, classes, source - lo, hi - lo, w, np.maximum(stall, m), top)
+            wait[classes] = r.wait + g * ((1 - sigma) * (v + w) + sigma * x) / 2
+        value[classes], match[classes] = v, m
         wrong[classes] = r.wrong + g * v
         fraction = model.class_fraction[classes]
         size = hi - lo
@@ -177,6 +182,7 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
     has_robot = len(model.action_operations) > 1
     final_value = (max(r.wait, r.wrong) if has_robot else r.wait) / (1 - g)
     stall = r.wrong / (1 - g) if has_robot else -np.inf
+    sigma, top = switch_terms(model)
     revealed = np.full(S, np.nan)   # VT(t)
     arrive = np.full(S, np.nan)     # A(t)
     revealed[model.final_state] = arrive[model.final_state] = final_value
@@ -201,8 +207,11 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
             parallel_level(model, classes, v, value, revealed, pair_q)
             best = parallel_tries(model, classes, source, hi - lo, m, can, pair_q, known_value)
         revealed[lo:hi] = np.maximum(np.maximum((r.wait + g * arrive[lo:hi] / 2) / (1 - g / 2), stall), best)
-        value[classes], match[classes] = v, m
         wait[classes] = r.wait + g * (v + revealed[target]) / 2
+        if sigma:  # after a redraw the robot knows the state, not the class: at most the classes' mean
+            v, x = switch_wait_values(model, classes, source, hi - lo, revealed[target], np.maximum(stall, m), top)
+            wait[classes] = r.wait + g * ((1 - sigma) * (v + revealed[target]) + sigma * x) / 2
+        value[classes], match[classes] = v, m
         wrong[classes] = r.wrong + g * v
     for array in (value, wait, match, wrong, revealed):
         array.flags.writeable = False
@@ -214,7 +223,7 @@ def observation_split(model: FactoredIntentionModel, predicted: FactoredBelief
     """The observations ``predicted`` can emit, each with its probability and the posterior belief:
     ``(z, P(z), b_z)``, the blank observation first (what the search's :class:`_Split` makes, all at once).
     Cost: O(k x Z') for k classes and Z' observations."""
-    split = _Split(model, predicted)
+    split = with_mistakes(model, _Split(model, predicted), None)
     return [(z, p, split.posterior(z)) for z, p, _ in split.branches]
 
 
@@ -468,7 +477,8 @@ class OnlinePlanner:
     def _expand(self, node: _Node, action: int) -> None:
         model = self.model
         reward = float(model.expected_rewards(node.belief)[action])
-        split = _Split(model, model.predict(node.belief, action), self.values.value)
+        split = with_mistakes(model, _Split(model, model.predict(node.belief, action), self.values.value),
+                              self.values.value)
         # the split's arrays (classes, masses, their states and keys) and a node per observation
         self._numbers += 6 * split.classes.size + _NODE_NUMBERS * len(split.branches)
         wait_forever = self._after_now / model.discount

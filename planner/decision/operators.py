@@ -11,7 +11,8 @@ observations stay the model's).
 - :class:`HabitualOperator`: one given sequence with probability ``strength``, otherwise uniform.
 - :class:`ChangingOperator`: a base operator that, with probability ``p`` per episode, switches once, after a
   uniformly drawn number of operations (1 to the length - 1), to another completion of the state it is in,
-  uniformly among those other than its own.
+  uniformly among those other than its own (where the state has no other, at the first later state that has
+  one; an episode whose remaining states have none does not switch: ``switched_at`` stays None).
 - Any of them with ``mistakes`` = q > 0 (``...,mistakes:Q``): at each decision step, with probability q, it
   takes a wrong part and puts it back: the camera sees another non-blank observation than the world's, drawn
   uniformly (:func:`mistaken_observation`), and the assembly does not change. These draws come from a stream

@@ -48,6 +48,7 @@ class Episode:
     final: int | None = None  # the finished product's intention, when the episode knows it
     switched_at: int | None = None  # the decision step (from 1) at which the operator changed its mind
     switched_to: int | None = None  # the intention it took then (``start``'s steps before it, then these)
+    resets: int = 0  # observations of probability 0 under the belief (each reset the belief)
 
     def first_confident(self, threshold: float = CONFIDENCE) -> int | None:
         """Operator operations done when the belief on the true intention first exceeds ``threshold`` before
@@ -88,7 +89,7 @@ OPERATORS = ("turns", "model")
 def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: np.random.Generator,
                      max_steps: int = 100, successor: np.ndarray | None = None,
                      final: int | None = None, operator: str = "model", switch=None,
-                     first_state: np.ndarray | None = None, mistakes=None) -> Episode:
+                     first_state: np.ndarray | None = None, mistakes=None, world: POMDP | None = None) -> Episode:
     """One episode from the true intention ``start`` until ``final`` (the finished product) or ``max_steps``.
 
     ``operator``: ``"model"`` draws the operator's timing from the model (it acts with probability 1/2 per
@@ -100,22 +101,28 @@ def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: n
     operator changes its mind once, after that many operations, to another intention of its assembly state.
     ``mistakes`` (rate, generator): at each step, with that probability, the observation is a wrong part's
     (:func:`~planner.decision.operators.mistaken_observation`); its draws come from that generator alone.
+    ``world``: the tables the world plays when they are not the robot's model's (a model with deviations:
+    :attr:`~planner.decision.intention_model.IntentionModel.world`, the paper's; the operator deviates itself).
     """
     if operator not in OPERATORS:
         raise ValueError(f"operator must be one of {OPERATORS}, got {operator!r}")
-    updater = DiscreteUpdater(model) if mistakes is None else DiscreteUpdater(model, on_reset=lambda event: None)
+    updater = DiscreteUpdater(model) if mistakes is None and switch is None else \
+        DiscreteUpdater(model, on_reset=lambda event: None)  # a deviating operator's resets are counted instead
     belief = updater.initialize()
     episode = Episode(start, beliefs=[belief], final=final)
     wait = model.actions.index("wait") if "wait" in model.actions else -1
     state, operations, discount, done = start, 0, 1.0, 0
-    transition = [t.tocsr() for t in model.transition]
-    observation = [o.tocsr() for o in model.observation]
+    tables = world if world is not None else model
+    transition = [t.tocsr() for t in tables.transition]
+    observation = [o.tocsr() for o in tables.observation]
     for _ in range(max_steps):
         if final is not None and state == final:
             break
         if switch is not None and episode.switched_at is None and done >= switch.after:
-            state = episode.switched_to = switch_intention(first_state, state, switch.draw)
-            episode.switched_at = len(episode.steps) + 1
+            other = switch_intention(first_state, state, switch.draw)
+            if other != state:  # else at the next state that has another completion
+                state = episode.switched_to = other
+                episode.switched_at = len(episode.steps) + 1
         started = time.perf_counter()
         action = policy.action(belief)
         seconds = time.perf_counter() - started
@@ -125,7 +132,7 @@ def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: n
             nxt = int(max(row.indices, key=lambda t: _moves(successor, state, int(t))))
         else:
             nxt = int(rng.choice(row.indices, p=row.data / row.data.sum()))
-        robot_did_step = action != wait and _moves_intention(model, action, state)
+        robot_did_step = action != wait and _moves_intention(tables, action, state)
         if successor is not None and nxt != state:
             done += _moves(successor, state, nxt)
             operations += _moves(successor, state, nxt) - (1 if robot_did_step else 0)
@@ -140,6 +147,7 @@ def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: n
                                   robot_operation=robot_did_step, wrong_action=action != wait and not robot_did_step,
                                   mistake=mistake))
         episode.beliefs.append(belief)
+    episode.resets = len(updater.events)
     return episode
 
 
@@ -173,14 +181,15 @@ def _moves(successor: np.ndarray, a: int, b: int) -> int:
 
 
 def evaluate_policy(model: POMDP, policy: AlphaVectorPolicy, episodes: int, seed: int = 0, max_steps: int = 100,
-                    final: int | None = None) -> tuple[float, float, list[float]]:
+                    final: int | None = None, world: POMDP | None = None) -> tuple[float, float, list[float]]:
     """Mean discounted return over ``episodes`` episodes (start drawn from the initial belief) and the
-    half-width of its 95 % confidence interval (normal approximation)."""
+    half-width of its 95 % confidence interval (normal approximation); ``world``: :func:`simulate_episode`'s."""
     rng = np.random.default_rng(seed)
     returns = []
     starts = rng.choice(model.n_states, size=episodes, p=model.initial)
     for start in starts:
-        returns.append(simulate_episode(model, policy, int(start), rng, max_steps, final=final).discounted_return)
+        returns.append(simulate_episode(model, policy, int(start), rng, max_steps, final=final,
+                                        world=world).discounted_return)
     mean = float(np.mean(returns))
     half = 1.96 * float(np.std(returns, ddof=1)) / math.sqrt(episodes) if episodes > 1 else float("nan")
     return mean, half, returns

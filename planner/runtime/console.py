@@ -12,6 +12,7 @@ from typing import Callable
 from ..assembly.tags import Observation
 from ..product import Product
 from .interfaces import Instruction, RobotReport
+from .undo import Apart
 
 __all__ = ["read_line", "ConsoleRobot", "KeyboardSource"]
 
@@ -56,8 +57,9 @@ class ConsoleRobot:
 
 class KeyboardSource:
     """The operator's picks typed in, one line per step: part and tool ids separated by spaces or commas
-    (``ink cartridge hammer``), an empty line for nothing, ``q`` to stop. A line naming something that is
-    not a part or tool, or two tools, is refused and asked again."""
+    (``ink cartridge hammer``), an empty line for nothing, ``q`` to stop, ``apart PART...`` when those parts
+    came off the piece that held them (a step undone: :class:`~planner.runtime.undo.Apart`). A line naming
+    something that is not a part or tool, or two tools, is refused and asked again."""
 
     def __init__(self, product: Product, read: Callable[[str], str] = read_line,
                  write: Callable[[str], None] | None = None):
@@ -66,15 +68,23 @@ class KeyboardSource:
         self._read = read
         self._write = write or _to_stderr
 
-    def observe(self) -> Observation | None:
+    def observe(self) -> Observation | Apart | None:
         while True:
             try:
-                line = self._read("operator picked (parts and tool; Enter: nothing; q: stop): ")
+                line = self._read("operator picked (parts and tool; Enter: nothing; apart PART...: came off; "
+                                  "q: stop): ")
             except EOFError:
                 return None
             names = line.replace(",", " ").split()
             if names in (["q"], ["quit"]):
                 return None
+            if names[:1] == ["apart"]:
+                unknown = [n for n in names[1:] if n not in self.parts]
+                if names[1:] and not unknown:
+                    return Apart(tuple(sorted(set(names[1:]))))
+                self._write(f"  apart needs the parts that came off, one piece (parts: {', '.join(sorted(self.parts))})"
+                            + (f"; not a part: {', '.join(unknown)}" if unknown else ""))
+                continue
             unknown = [n for n in names if n not in self.parts | self.tools]
             tools = [n for n in names if n in self.tools]
             if unknown:

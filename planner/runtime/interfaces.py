@@ -61,7 +61,8 @@ class ObservationSource(Protocol):
     """Where the operator's observations come from (a camera, a keyboard, a script, a ROS topic)."""
 
     def observe(self) -> Observation | None:
-        """The operator's operation in this step (BLANK when none); None when the source has ended."""
+        """The operator's operation in this step (BLANK when none); None when the source has ended; a
+        :class:`~planner.runtime.undo.Apart` when a piece came apart (a step undone)."""
 
     def robot_acting(self, instruction: Instruction) -> None:
         """Called before the robot performs ``instruction``, so the robot's own picks are not the operator's."""

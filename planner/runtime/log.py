@@ -5,15 +5,18 @@ seconds, to the millisecond):
 
 - ``start``: ``version``, ``product`` (the product itself, in the product file format), ``settings``
   (``base_part``: the part the model's sequences start from, or null; ``habits``: the operator habits the model
-  used, as the habits file holds them, or null; ``parallel``: the parallel model, docs/parallel.md; replay
-  rebuilds the same model),
+  used, as the habits file holds them, or null; ``parallel``: the parallel model, docs/parallel.md;
+  ``deviations``: ``{"switch": P, "mistake": Q}`` or null, docs/deviations.md; replay rebuilds the same model),
   ``n_intentions``, ``actions`` and ``observations`` (the model's names), ``top``;
 - per step: ``action`` (``step``, ``action``, ``name``, ``instruction``, ``decision_ms``: the milliseconds the
   policy took to choose it), ``robot`` (``step``, ``ok``,
   ``message``), ``observation`` (``step``, ``observation``, ``index``: null when no operation of the product
   shows it, ``ignored``: true when no operation explains it in the assembly state, so the belief was updated
   with the blank observation),
-  any ``warning`` (``step``, ``message``), ``belief`` (``step``, ``top``, ``p_finished``, ``operations``,
+  any ``warning`` (``step``, ``message``); instead of ``observation`` when a piece came apart (a step undone,
+  docs/deviations.md), ``apart`` (``step``, ``parts``, ``moves``: ``[[state before, state after], ...]``) or
+  ``unrecoverable`` (``step``, ``parts``, ``message``: the line shown to the person; the end event follows);
+  ``belief`` (``step``, ``top``, ``p_finished``, ``operations``,
   ``reset``: null, or how an observation of probability 0 reset the belief);
 - ``end``: ``step``, ``reason``, ``message``, ``operations``, ``top``.
 
@@ -161,6 +164,8 @@ class Replay:
     mismatches: list[int]
     events: list[dict]
     ignored: dict[int, str] = field(default_factory=dict)  # step (from 1) -> the observation counted as blank
+    undone: dict[int, str] = field(default_factory=dict)  # step (from 1) -> the piece that came apart
+    unrecoverable: str | None = None  # the message of a step the product could not recover from
 
 
 def read_log(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> list[dict]:
@@ -213,6 +218,21 @@ def _habit_weights(path: Path, plan, recorded) -> np.ndarray | None:
     return habit_weights(plan, habits_from_dict(recorded, f"{path} (start event, settings.habits)"))
 
 
+def _deviations(path: Path, recorded):
+    """The change of mind and mistakes a session's model used (``settings.deviations``), or None."""
+    from ..decision.deviations import deviations_of
+
+    if recorded is None:
+        return None
+    if not isinstance(recorded, dict) or set(recorded) != {"switch", "mistake"}:
+        raise SessionError(f"{path}: the start event's deviations {recorded!r} are not {{'switch': P, 'mistake': Q}}; "
+                           "the log is damaged")
+    try:
+        return deviations_of(recorded["switch"], recorded["mistake"])
+    except PlannerError as exc:
+        raise SessionError(f"{path}: the start event's deviations: {exc}; the log is damaged") from None
+
+
 def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel | FactoredIntentionModel]:
     """The product stored in the start event and its decision model (flat, or factored when the session's
     beliefs were over classes), checked against the logged names."""
@@ -232,8 +252,10 @@ def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel | Factor
     if not isinstance(parallel, bool):
         raise SessionError(f"{path}: the start event's 'parallel' setting {parallel!r} is not true or false; the log "
                            "is damaged")
-    model = (factored_model(plan, base_part=base_part, weights=weights, parallel=parallel)
-             if start.get("belief_over") == "classes" else intention_model(plan, base_part=base_part, weights=weights))
+    deviations = _deviations(path, settings.get("deviations"))
+    model = (factored_model(plan, base_part=base_part, weights=weights, parallel=parallel, deviations=deviations)
+             if start.get("belief_over") == "classes"
+             else intention_model(plan, base_part=base_part, weights=weights, deviations=deviations))
     if list(model.observations) != start.get("observations") or list(model.actions) != start.get("actions"):
         raise SessionError(f"{path}: the product in the log no longer gives the logged actions and observations "
                            "(the log was written by another planner version)")
@@ -285,6 +307,20 @@ def replay(path: str | os.PathLike, tolerance: float = 1e-6, limits: InputLimits
                 done.actions.append(action)
                 done.observations.append(observation)
                 done.beliefs.append(belief)
+            elif kind == "apart":  # a step undone: the belief moves to the earlier states (runtime/undo.py)
+                from .undo import belief_after_apart, predicted
+
+                action = pending[event["step"]]
+                moves = [(int(a), int(b)) for a, b in event["moves"]]
+                if not moves or any(not 0 <= t < model.plan.states.n_states for _, t in moves):
+                    raise ValueError(f"apart moves {event['moves']!r} out of range")
+                belief = belief_after_apart(model, predicted(model, updater, belief, action), moves)
+                done.undone[len(done.actions) + 1] = "apart " + " ".join(map(str, event.get("parts", [])))
+                done.actions.append(action)
+                done.observations.append(blank)
+                done.beliefs.append(belief)
+            elif kind == "unrecoverable":
+                done.unrecoverable = str(event["message"])
             elif kind == "belief":
                 if any(not abs(belief_at(belief, int(i)) - float(p)) <= tolerance for i, p in event["top"]):
                     done.mismatches.append(event["step"])  # a NaN is a mismatch too

@@ -44,12 +44,15 @@ def logged_steps(events: list[dict], model) -> list[tuple[str, int]]:
     reported done and ``("operator", observation index)`` for each observation, in the order they were applied
     (:class:`~planner.runtime.progress.AssemblyProgress`, the session's rule): an observation no operation
     explains in the assembly state (the session ignored it and counted the step as blank; a log written before
-    that rule kept it) and a robot operation the state does not allow are left out. A blank observation: the
+    that rule kept it) and a robot operation the state does not allow are left out; a step undone ends them
+    (the steps before it are the sequence). A blank observation: the
     operator did nothing, or an operation that shows as blank. Cost: O(events E)."""
     progress, blank = AssemblyProgress(model.plan), model.plan.observations.index(BLANK)
     steps, pending = [], {}
     for event in events:
         kind = event.get("event")
+        if kind in ("apart", "unrecoverable"):  # a step undone: the sequence counted is the one before it
+            return steps
         if kind == "action":
             pending[event.get("step")] = [model.operation(int(event["action"])), False]
         elif kind == "robot" and event.get("ok") and event.get("step") in pending:

@@ -84,6 +84,17 @@ class AssemblyProgress:
             self.operations += 1
         return bool(reached)
 
+    def robot(self, operation: int) -> bool:
+        """Apply the robot's confirmed ``operation`` alone (a step whose observation was a step undone)."""
+        return self._robot(operation)
+
+    def set_states(self, states: set[int]) -> None:
+        """The assembly states after a step undone (:mod:`planner.runtime.undo`); the operations known done are
+        those of the most assembled of them (parts - subassemblies)."""
+        self.states = set(states)
+        blocks = [len(self.plan.states.subassemblies_of(s)) for s in self.states]
+        self.operations = len(self.plan.andor.parts) - min(blocks)
+
     def step(self, operation: int | None, observation: int | None) -> StepOutcome:
         """Apply one step: the robot's confirmed ``operation`` (None: wait, or not confirmed), then the
         operator's ``observation`` (an index of ``plan.observations``; None: one the plan does not have)."""

@@ -18,7 +18,10 @@ never ends a session.
 
 An observation that no operation explains in the assembly state (parts that cannot be joined now, a
 combination no operation shows) is logged as a warning naming the picks and what the operator could do, and
-counts as blank; the session goes on. So does a robot operation the assembly state does not allow.
+counts as blank; the session goes on. So does a robot operation the assembly state does not allow. A step
+undone (the source reports :class:`~planner.runtime.undo.Apart`) moves the belief to the completions of the
+earlier state by the prior, and one the product cannot recover from stops the session (reason
+``unrecoverable``): :mod:`planner.runtime.undo`.
 
 The source and the robot are the protocols of :mod:`planner.runtime.interfaces`. Every event goes to an
 :class:`~planner.runtime.log.EventLog` (format in :mod:`planner.runtime.log`). A robot failure or a
@@ -44,15 +47,16 @@ from ..product import product_to_dict
 from .interfaces import Instruction, ObservationSource, Robot, instruction_for
 from .log import LOG_VERSION, EventLog, belief_at, top_intentions, updater_for
 from .progress import AssemblyProgress
+from .undo import Apart, apart_state, belief_after_apart, in_model, predicted
 
 __all__ = ["SessionResult", "run_session", "status_line"]
 
 
 @dataclass
 class SessionResult:
-    """How a session ended. ``reason``: ``assembled``, ``source ended``, ``robot failed``, ``error`` or
-    ``step limit``; ``message`` says more. (An interrupt has no result: the log's
-    end event says ``interrupted`` and the interrupt is raised again.)"""
+    """How a session ended. ``reason``: ``assembled``, ``source ended``, ``robot failed``, ``error``,
+    ``unrecoverable`` (a step undone left a state no plan finishes) or ``step limit``; ``message`` says more.
+    (An interrupt has no result: the log's end event says ``interrupted`` and the interrupt is raised again.)"""
 
     reason: str
     message: str
@@ -98,7 +102,10 @@ def run_session(model: IntentionModel | FactoredIntentionModel, policy, source: 
             run.result.steps = step
             operation = run.perform(step, instruction_for(model, action, step), source, robot)
             observation, z = run.observe(step, source, operation)
-            run.update(step, action, observation, z)
+            if isinstance(observation, Apart):  # a step undone: the belief moves to the earlier state
+                run.undo(step, action, operation, observation)
+            else:
+                run.update(step, action, observation, z)
             done = run.progress.finished or (run.progress.may_be_finished and run.finished() >= finished_belief)
             if done:  # every operation joins two subassemblies: N - 1 were done, blank ones included
                 run.progress.operations = run.needed
@@ -162,6 +169,8 @@ class _Run:
         model = self.model
         intentions = count_intentions(model.plan.states) if self.factored else model.pomdp.n_states
         designed = model.plan.designed or model.plan.product  # before folding: replaying folds the same fasteners
+        deviations = getattr(model, "deviations", None)  # the model's own: replay rebuilds the same tables
+        settings = {**settings, "deviations": None if deviations is None else deviations.as_dict()}
         self.log.write("start", version=LOG_VERSION, product=product_to_dict(designed), settings=settings,
                        n_intentions=intentions, belief_over="classes" if self.factored else "intentions",
                        actions=list(model.actions), observations=list(model.observations),
@@ -197,6 +206,8 @@ class _Run:
         if observation is None:
             raise _Stop("source ended", f"the observations ended at step {step}, with {self.operations} of "
                         f"{self.needed} operations done")
+        if isinstance(observation, Apart):
+            return observation, None
         z = self.index.get(observation)
         before, possible = self.progress.describe(), self.progress.possible()
         outcome = self.progress.step(operation, z)
@@ -225,6 +236,44 @@ class _Run:
         result = self.result
         result.actions.append(action)
         result.observations.append(z)
+        result.beliefs.append(self.belief)
+        result.operations = self.operations
+
+    def undo(self, step: int, action: int, operation: int | None, apart: Apart) -> None:
+        """A step undone (:mod:`planner.runtime.undo`): the robot's operation, then the piece come apart; the
+        belief moves to the completions of the states left (an ``apart`` event), or the session stops when no
+        plan can finish the product from them (an ``unrecoverable`` event, one line for the person)."""
+        plan, progress = self.model.plan, self.progress
+        if operation is not None:
+            progress.robot(operation)
+        before = progress.describe()
+        moves, why, applies = [], [], False
+        for s in sorted(progress.states):
+            t, reason = apart_state(plan, s, apart.parts)
+            applies |= t != -1
+            if t is not None and t >= 0 and not in_model(self.model, t):
+                t, reason = None, f"no sequence from the base part {self.model.base_part} goes through it"
+            if t is not None and t >= 0:
+                moves.append((s, t))
+            else:
+                why.append(reason)
+        if not applies:
+            self.log.write("warning", step=step, message=(
+                f"{apart} ignored: {why[0]} ({before}); name the parts of the piece that came off (apart PART...). "
+                "The step counts as blank"))
+            return self.update(step, action, BLANK, self.blank)
+        if not moves:
+            message = (f"step {step}: {apart}: the product cannot be finished from here by any plan ({why[0]}; "
+                       f"it was {before}); take it apart to an assembly state of the plan and start a new session")
+            self.log.write("unrecoverable", step=step, parts=list(apart.parts), message=message)
+            raise _Stop("unrecoverable", message)
+        self.log.write("apart", step=step, parts=list(apart.parts), moves=[list(m) for m in moves])
+        self.belief = belief_after_apart(self.model, predicted(self.model, self.updater, self.belief, action), moves)
+        progress.set_states({t for _, t in moves})
+        self.resets.clear()
+        result = self.result
+        result.actions.append(action)
+        result.observations.append(self.blank)
         result.beliefs.append(self.belief)
         result.operations = self.operations
 
