@@ -143,7 +143,8 @@ def _load_model(path: Path, tolerances: Tolerances | None = None, groups: dict[s
     _MODEL_BUNDLES[model] = bundle
     parts = tuple(replace(p, mesh=str(bundle / p.mesh) if p.mesh else None,
                           brep=str(bundle / p.brep) if p.brep else None) for p in product.parts)
-    return replace(product, parts=parts, source=model)
+    return replace(product, parts=parts, source=model,
+                   geometry={**product.geometry, "x-temporary-bundle": str(bundle)})
 
 
 def export_warnings(product: Product) -> list[str]:
