@@ -118,20 +118,15 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
     return load_bundle(bundle)
 
 
-#: CAD model (resolved path) -> the temporary bundle it was read from in this process (kept until the process
-#: ends: the meshes and B-reps stay readable, e.g. for the occt engine or measuring gaps).
-_MODEL_BUNDLES: dict[str, Path] = {}
-
-
 def _load_model(path: Path, tolerances: Tolerances | None = None, groups: dict[str, list[str]] | None = None,
                 exclude: list[str] | None = None) -> Product:
     """PRODUCT given as a CAD model: export it to a temporary bundle and analyse its meshes (with
     ``tolerances`` when given, e.g. ``contact="auto"``); ``groups`` and ``exclude`` as export-freecad's.
 
     The product's ``source`` is the model (what headers and messages name), its parts' meshes and B-reps are
-    absolute paths into the bundle, which lives until the process ends. Every warning of the export (meshes
-    that are unreliable, overlaps, objects left out, structure entries dropped) is logged, as
-    ``aplan export-freecad`` prints them."""
+    absolute paths into the bundle, which lives until the process ends (``geometry.x-temporary-bundle``: the
+    occt engine reads its B-reps there). Every warning of the export (meshes that are unreliable, overlaps,
+    objects left out, structure entries dropped) is logged, as ``aplan export-freecad`` prints them."""
     folder = Path(tempfile.mkdtemp(prefix="aplan-"))
     atexit.register(shutil.rmtree, folder, True)
     bundle = folder / "bundle"
@@ -140,7 +135,6 @@ def _load_model(path: Path, tolerances: Tolerances | None = None, groups: dict[s
     for warning in export_warnings(product):
         log.warning("%s: %s", Path(path).name, warning)
     model = str(Path(path).resolve())
-    _MODEL_BUNDLES[model] = bundle
     parts = tuple(replace(p, mesh=str(bundle / p.mesh) if p.mesh else None,
                           brep=str(bundle / p.brep) if p.brep else None) for p in product.parts)
     return replace(product, parts=parts, source=model,
@@ -158,7 +152,7 @@ def export_warnings(product: Product) -> list[str]:
 def _occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
     if product.source == "<memory>":
         raise FreeCADError("the occt engine reads a bundle's B-rep files: give it a bundle folder")
-    folder = _MODEL_BUNDLES.get(product.source) or Path(product.source).parent
+    folder = (product.geometry or {}).get("x-temporary-bundle") or Path(product.source).parent
     data = run_batch("analyze-occt", {"folder": str(folder), "contact": tolerances.contact,
                                       "interference": tolerances.interference, "depth": tolerances.depth,
                                       "pair_budget": tolerances.pair_budget,

@@ -110,7 +110,9 @@ def _export(name: str) -> tuple:
     tmp, built = BUILT.result()
     if "APLAN-RESULT" not in built.stdout:
         return tmp / name, built
-    return tmp / name, aplan_process("export-freecad", str(tmp / f"{name}.FCStd"), "-o", str(tmp / name))
+    # the linked assembly with --skip-damaged: nothing is damaged, so nothing may be said to be left out
+    return tmp / name, aplan_process("export-freecad", str(tmp / f"{name}.FCStd"), "-o", str(tmp / name),
+                                     *(["--skip-damaged"] if name == "linked" else []))
 
 
 def _session(name: str) -> subprocess.CompletedProcess:
@@ -182,7 +184,7 @@ def test_linked_documents_pass_the_damage_check(tmp_path):
     """Assembly4 style: the links name documents beside the assembly (<XLink file="base.FCStd">), no archive
     member; copied alone, the assembly is refused naming each link and the missing document, with a fix the
     command accepts."""
-    bundle, done = _bundle("linked")
+    bundle, done = _bundle("linked")  # exported with --skip-damaged
     assert "damaged" not in done.stdout + done.stderr and "left out" not in done.stdout + done.stderr
     product = json.loads((bundle / "product.json").read_text())
     assert sorted(p["id"] for p in product["parts"]) == ["Base", "Cap", "Post", "Post2"]
@@ -222,3 +224,20 @@ def test_what_the_export_writes_stats_reads():
         text = done.stderr
         assert "subassemblies[" not in text and "fasteners[" not in text and "Traceback" not in text, (name, text)
         assert done.returncode in (0, 3) or "block each other" in text, (name, text)  # interlocks: item 1
+
+
+@pytest.mark.freecad
+def test_fasteners_output_of_a_model_and_a_bundle_is_read_by_stats(tmp_path):
+    """`aplan fasteners -o` writes a file that `aplan stats` reads: from a CAD model (its temporary bundle's
+    paths left out, with a warning) and from the pump's bundle (its proposals folded)."""
+    require_freecadcmd()
+    tmp, _ = BUILT.result()
+    done = aplan("fasteners", str(tmp / "grouped.FCStd"), "-o", str(tmp_path / "g.json"))
+    assert "no mesh or B-rep paths: grouped.FCStd was read into a temporary bundle" in done.stderr
+    data = json.loads((tmp_path / "g.json").read_text())
+    assert all("mesh" not in p for p in data["parts"]) and "x-temporary-bundle" not in data["geometry"]
+    assert aplan("stats", str(tmp_path / "g.json"), check=False).returncode == 0
+    aplan("fasteners", str(real_bundle("diaphragm_pump")), "-o", str(tmp_path / "p.json"))
+    stats = aplan("stats", str(tmp_path / "p.json"), check=False)
+    assert "subassemblies[" not in stats.stderr and "fasteners[" not in stats.stderr
+    assert stats.returncode in (0, 3) or "block each other" in stats.stderr  # interlocks: item 1
