@@ -44,7 +44,8 @@ from dataclasses import dataclass
 
 from .model import FastenerGroup, Part, Product
 
-__all__ = ["FASTENER_WORDS", "ROLLING_WORDS", "HOST_VOLUME_RATIO", "FastenerProposals", "fastener_proposals", "propose_fasteners"]
+__all__ = ["FASTENER_WORDS", "ROLLING_WORDS", "HOST_VOLUME_RATIO", "FastenerProposals", "fastener_proposals",
+           "propose_fasteners"]
 
 FASTENER_WORDS = ("screw", "bolt", "nut", "washer", "pin", "rivet", "clip")
 # Rolling elements of a bearing: small parts between two larger ones that are not fasteners.

@@ -254,7 +254,9 @@ _LINKING = b"""<?xml version='1.0' encoding='utf-8'?>
         <Property name="LinkedObject" type="App::PropertyXLink">
           <XLink file="%s" stamp="2026-12-02T01:10:49Z" name="Part"/>
         </Property>
-        <Property name="PlacementList" type="App::PropertyPlacementList"><PlacementList file="PlacementList"/></Property>
+        <Property name="PlacementList" type="App::PropertyPlacementList">
+          <PlacementList file="PlacementList"/>
+        </Property>
       </Properties>
     </Object>
   </ObjectData>

@@ -45,7 +45,8 @@ feature(doc, "Bottom", Part.makeBox(40, 40, 5), group)
 feature(doc, "Middle", Part.makeBox(40, 40, 5, V(0, 0, 5)), group)
 face = feature(doc, "Outline", Part.makePlane(40, 40, V(0, 0, 20)), group)  # faces, no solid
 plane = doc.addObject("App::Plane", "Datum"); group.addObject(plane)
-base = doc.addObject("Part::Box", "TopBase"); base.Length = base.Width = 40; base.Height = 5; base.Placement.Base = V(0, 0, 10)
+base = doc.addObject("Part::Box", "TopBase"); base.Length = base.Width = 40; base.Height = 5
+base.Placement.Base = V(0, 0, 10)
 tool = doc.addObject("Part::Cylinder", "TopHole"); tool.Radius = 5; tool.Height = 5; tool.Placement.Base = V(20, 20, 10)
 cut = doc.addObject("Part::Cut", "Top"); cut.Base = base; cut.Tool = tool
 group.addObject(tool)  # the operand in the group, the cut outside it
@@ -79,7 +80,8 @@ for name, shape in (("base", Part.makeBox(60, 30, 10)), ("post", Part.makeCylind
     parts[name] = body
 asm = FreeCAD.newDocument("linked"); asm.saveAs(os.path.join(folder, "linked.FCStd"))
 model = asm.addObject("App::Part", "Model")
-for label, target, at in (("Base", "base", V(0, 0, 0)), ("Post", "post", V(15, 15, 10)), ("Post2", "post", V(45, 15, 10)),
+for label, target, at in (("Base", "base", V(0, 0, 0)), ("Post", "post", V(15, 15, 10)),
+                          ("Post2", "post", V(45, 15, 10)),
                           ("Cap", "cap", V(5, 5, 40))):
     link = asm.addObject("App::Link", label); link.LinkedObject = parts[target]; link.Placement.Base = at
     model.addObject(link)

@@ -139,7 +139,8 @@ def test_rolling_elements_are_no_fasteners(name):
     product = _product({"inner": 1000.0, "outer": 1000.0, name: 5.0}, [("inner", name), ("outer", name)])
     proposals = fastener_proposals(product)
     assert proposals.groups == ()
-    assert [(p, r.split(":")[1].strip()) for p, r in proposals.left_out] == [(name, "a rolling element, not a fastener")]
+    assert [(p, r.split(":")[1].strip()) for p, r in proposals.left_out] == [
+        (name, "a rolling element, not a fastener")]
 
 
 def _bearing(balls_in_bearing_with_rings: bool) -> Product:
@@ -180,3 +181,5 @@ def test_folding_a_subassemblys_members_reads_back(caplog):
     assert fold_fasteners(folded).subassemblies == ()
     assert "subassembly 'bearing' is dissolved: folding the fasteners 4_001, 4_002, 4_003 leaves it only " \
            "inner, which takes its place" in caplog.text
+    assert "the proposed fastener group fasteners_inner+outer folds 4_001, 4_002, 4_003, members of the " \
+           "designer's subassembly bearing; --fasteners tagged keeps them parts" in caplog.text
