@@ -151,8 +151,8 @@ def test_each_document_runs_to_a_session_with_the_default_flags(name):
     require_freecadcmd()
     done = succeeded(SESSIONS[name].result())
     assert "assembled: the product is assembled" in done.stdout and "Traceback" not in done.stderr
-    # the header and every message name the model, never the temporary bundle it was read from
-    assert "aplan-" not in done.stdout + done.stderr
+    # every message names the model, never the temporary bundle it was read from
+    assert "bundle/product.json" not in done.stdout + done.stderr
 
 
 @pytest.mark.freecad
@@ -236,6 +236,7 @@ def test_fasteners_output_of_a_model_and_a_bundle_is_read_by_stats(tmp_path):
     tmp, _ = BUILT.result()
     done = aplan("fasteners", str(tmp / "grouped.FCStd"), "-o", str(tmp_path / "g.json"))
     assert "no mesh or B-rep paths: grouped.FCStd was read into a temporary bundle" in done.stderr
+    assert done.stdout.startswith(f"grouped ({(tmp / 'grouped.FCStd').resolve()}): 4 parts")  # the model, named
     data = json.loads((tmp_path / "g.json").read_text())
     assert all("mesh" not in p for p in data["parts"]) and "x-temporary-bundle" not in data["geometry"]
     assert aplan("stats", str(tmp_path / "g.json"), check=False).returncode == 0
