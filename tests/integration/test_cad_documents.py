@@ -17,7 +17,7 @@ import sys
 
 import pytest
 from background import Job, folder, run
-from conftest import SHARED, require_freecadcmd, require_shared
+from conftest import REPO, SHARED, require_freecadcmd, require_shared
 from real_models import JOBS as REAL_JOBS
 from real_models import real_bundle
 
@@ -53,6 +53,12 @@ group.addObject(tool)  # the operand in the group, the cut outside it
 block = feature(doc, "Block", Part.makeBox(10, 10, 10, V(15, 15, 15)))
 cover = doc.addObject("Part::Compound", "Cover"); cover.Links = [cut, block]  # the authors' grouping
 doc.recompute(); doc.saveAs(os.path.join(folder, "grouped.FCStd"))
+# The same with an APLAN analysis whose subassembly tree names objects that are no parts (a face, an operand).
+sys.path.insert(0, {repo!r})
+from freecad_aplan.intent import create_analysis, update_intent
+update_intent(create_analysis(doc), "tree", subassemblies=[{{"id": "stack", "parts": ["Bottom", "Middle", "Outline"]}},
+                                                           {{"id": "pair", "parts": ["Top", "TopBase"]}}])
+doc.saveAs(os.path.join(folder, "tree.FCStd"))
 
 # 2. A bearing: an App::Part container of an outer ring, an inner ring and eight balls, on a shaft in a housing.
 doc = FreeCAD.newDocument("bearing")
@@ -101,7 +107,7 @@ def _build() -> tuple:
     """The three documents, built by FreeCADCmd in one folder: (folder, the run)."""
     tmp = _folder()
     script = tmp / "documents_probe.py"
-    script.write_text(BUILD.format(folder=str(tmp)))
+    script.write_text(BUILD.format(folder=str(tmp), repo=str(REPO)))
     return tmp, run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(script)])
 
 
@@ -132,7 +138,7 @@ def _export_truck_step() -> tuple:
                                  "-o", str(bundle))
 
 
-EXPORTS = {name: Job(f"export {name}", functools.partial(_export, name)) for name in DOCUMENTS}
+EXPORTS = {name: Job(f"export {name}", functools.partial(_export, name)) for name in (*DOCUMENTS, "tree")}
 SESSIONS = {name: Job(f"session {name}", functools.partial(_session, name)) for name in DOCUMENTS}
 STP_TRUCK = Job("export the truck's STEP file", _export_truck_step)
 BACKGROUND = (BUILT, *EXPORTS.values(), *SESSIONS.values(), *REAL_JOBS.values(), *PEN_JOBS.values(), STP_TRUCK)
@@ -170,6 +176,23 @@ def test_a_group_with_non_part_objects_and_a_compound():
 
 
 @pytest.mark.freecad
+def test_the_analysis_tree_is_fitted_to_the_exported_parts():
+    """The analysis' tree names a face and a boolean's operand (no parts): each dropped with a warning, a
+    subassembly left with one member dissolved; the compound, not used then, is named in one line."""
+    bundle, done = _bundle("tree")
+    product = json.loads((bundle / "product.json").read_text())
+    assert [(s["id"], s["parts"]) for s in product["subassemblies"]] == [("stack", ["Bottom", "Middle"])]
+    warnings = product["geometry"]["warnings"]
+    assert "the analysis' subassembly tree: 'stack' lists 'Outline', which is no exported part (excluded, folded, " \
+           "or the input of another feature): dropped from it" in warnings
+    assert "the analysis' subassembly tree: 'pair' is dissolved: it is left only 'Top', which takes its place" \
+        in warnings
+    assert "the compounds Cover are not used as subassemblies: the APLAN analysis holds a subassembly tree of its " \
+           "own (empty it to use the document's)" in warnings
+    assert all(f"warning: {w}" in done.stdout for w in warnings)
+
+
+@pytest.mark.freecad
 def test_bearing_balls_are_no_fasteners():
     bundle, _ = _bundle("bearing")
     product = json.loads((bundle / "product.json").read_text())
@@ -202,7 +225,7 @@ def test_linked_documents_pass_the_damage_check(tmp_path):
 
 
 def _every_bundle() -> dict:
-    out = {name: _bundle(name)[0] for name in DOCUMENTS}
+    out = {name: _bundle(name)[0] for name in EXPORTS}
     out.update({name: real_bundle(name) for name in REAL_JOBS})
     bundle, done = STP_TRUCK.result()
     out["toy_truck stp"] = succeeded(done) and bundle
