@@ -24,7 +24,7 @@ from lxml import etree
 
 from planner.errors import PlannerError
 
-__all__ = ["DamagedDocumentError", "Damage", "document_damage", "check_document"]
+__all__ = ["DamagedDocumentError", "Damage", "document_damage", "check_document", "SKIP_OPTION", "SKIP_BY_EXPORT"]
 
 _LOCAL = struct.Struct("<4sHHHHHIIIHH")  # a zip member's local header
 _DECLARED = re.compile(rb'<Object\s[^>]*?name="([^"]+)"[^>]*>')
@@ -33,7 +33,10 @@ _TYPE = re.compile(rb'\stype="([^"]+)"')
 _EXPORTED = re.compile(r"^(Part::|PartDesign::|App::Link|Aplan::)")
 _DATA = re.compile(rb'<Object\s+name="([^"]+)"[^>]*>')
 _LABEL = re.compile(rb'<Property\s+name="Label"[^>]*>\s*<String\s+value="([^"]*)"')
-_FILE = re.compile(rb'\sfile="([^"]+)"')
+_FILE = re.compile(rb'<([A-Za-z]+)\s[^>]*?\bfile="([^"]+)"')
+# an App::Link to an object of another document: ``file`` names that document (relative to this one's folder,
+# as FreeCAD resolves it), not a member of this archive
+_XLINK = b"XLink"
 
 
 # what the zip and zlib modules raise on damaged data (a flipped bit can make a member look encrypted: RuntimeError)
@@ -119,11 +122,18 @@ def _inflate(data: bytes, start: int, method: int) -> tuple[bytes, int, bool]:
     return body, len(data) - len(inflater.unused_data), inflater.eof
 
 
-def document_damage(path: str | Path) -> list[Damage]:
+def document_damage(path: str | Path, _seen: set[Path] | None = None) -> list[Damage]:
     """The damaged objects of the ``.FCStd`` document ``path`` (empty when it reads back whole): objects whose
     data in ``Document.xml`` lies at or after an XML error, or whose files (shapes) are missing from the archive
-    or unreadable. Raises :class:`DamagedDocumentError` when ``Document.xml`` itself cannot be read."""
+    or unreadable, and links (``App::Link``, Assembly4, A2plus) to another document that is missing beside it
+    or is itself damaged. Raises :class:`DamagedDocumentError` when ``Document.xml`` itself cannot be read.
+
+    A link's ``<XLink file="NAME.FCStd">`` names a document, not an archive member: FreeCAD looks for it
+    relative to the linking document's folder (an absolute path as it is). Each linked document is checked
+    once. Cost: one pass over each archive reached."""
     path = Path(path)
+    seen = _seen if _seen is not None else set()
+    seen.add(path.resolve())
     data = path.read_bytes()
     intact, truncated = _members(data)
     if not intact.get("Document.xml"):
@@ -165,7 +175,13 @@ def document_damage(path: str | Path) -> list[Damage]:
             damage.append(Damage(name, label, why))
             continue
         for file_match in _FILE.finditer(block):
-            member = file_match.group(1).decode("utf-8", "replace")
+            member = file_match.group(2).decode("utf-8", "replace")
+            if file_match.group(1) == _XLINK:
+                problem = _linked_document_problem(path, member, seen)
+                if problem:
+                    damage.append(Damage(name, label, problem))
+                    break
+                continue
             if member not in intact:
                 why = "the archive is truncated or its directory damaged" if truncated else "the archive lacks it"
                 damage.append(Damage(name, label, f"its file {member} is missing ({why})"))
@@ -174,6 +190,25 @@ def document_damage(path: str | Path) -> list[Damage]:
                 damage.append(Damage(name, label, f"its file {member} is unreadable (bad data or checksum)"))
                 break
     return damage
+
+
+def _linked_document_problem(path: Path, name: str, seen: set[Path]) -> str | None:
+    """Why the document ``name`` that an object of ``path`` links to cannot be read (None when it can, or
+    was checked already): missing beside ``path``, or damaged."""
+    if not name:
+        return None  # an empty XLink: the link is to an object of this document
+    linked = Path(name) if Path(name).is_absolute() else path.parent / name
+    if not linked.is_file():
+        return f"it links to {name}, which is not in {linked.parent} (copy it beside {path.name})"
+    if linked.resolve() in seen:
+        return None
+    try:
+        inner = document_damage(linked, seen)
+    except DamagedDocumentError as exc:
+        return f"it links to {name}, which cannot be read ({exc})"
+    if inner:
+        return f"it links to {name}, which is damaged: {'; '.join(str(d) for d in inner)}"
+    return None
 
 
 class _Scanned:
@@ -207,10 +242,19 @@ class _Scanned:
         raise KeyError(wanted)
 
 
-def check_document(path: str | Path, skip_damaged: bool = False) -> list[str]:
+#: What the error recommends when the caller takes ``--skip-damaged`` (``aplan export-freecad``), and when it
+#: does not (a command reading the model itself: ``session``, ``stats``, ``simulate``, ...).
+SKIP_OPTION = "--skip-damaged exports the rest, leaving these out"
+SKIP_BY_EXPORT = ("`aplan export-freecad MODEL -o BUNDLE --skip-damaged` exports the rest, leaving these out; "
+                  "then give BUNDLE instead of MODEL")
+
+
+def check_document(path: str | Path, skip_damaged: bool = False, fix: str = SKIP_OPTION) -> list[str]:
     """Raise :class:`DamagedDocumentError` naming each damaged object of the ``.FCStd`` document ``path``
     (:func:`document_damage`), or, with ``skip_damaged``, return one warning naming each object that will be
-    left out. STEP files and other types are not checked (an empty list)."""
+    left out. ``fix``: how the error says to export the rest (:data:`SKIP_OPTION` where ``--skip-damaged``
+    is accepted, :data:`SKIP_BY_EXPORT` elsewhere). STEP files and other types are not checked (an empty
+    list)."""
     path = Path(path)
     if path.suffix.lower() != ".fcstd":
         return []
@@ -221,6 +265,5 @@ def check_document(path: str | Path, skip_damaged: bool = False) -> list[str]:
     if not skip_damaged:
         raise DamagedDocumentError(
             f"{path}: the document is damaged, {len(damage)} object(s) cannot be read: {listed}. Open a backup "
-            "(FreeCAD keeps NAME.FCBak) or repair and save it in FreeCAD; --skip-damaged exports the rest, "
-            "leaving these out")
+            f"(FreeCAD keeps NAME.FCBak) or repair and save it in FreeCAD; {fix}")
     return [f"{path}: the document is damaged; left out {len(damage)} object(s) that cannot be read: {listed}"]

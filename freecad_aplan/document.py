@@ -7,8 +7,8 @@ Which objects are parts:
 - ``App::Link`` objects (also to other documents), with the link's placement;
 - objects inside ``App::Part`` containers, with the containers' placements.
 
-The document's structure (``App::Part`` containers nesting parts, and groups) becomes the product's
-subassemblies (:func:`document_subassemblies`).
+The document's structure (``App::Part`` containers nesting parts, groups, and compounds of whole parts that
+nothing else uses: :func:`is_grouping`) becomes the product's subassemblies (:func:`document_subassemblies`).
 
 Objects whose shape another feature consumes (boolean operands, the features inside a body, the profile
 of an extrusion: a link property of the feature names them, :func:`consuming_properties`) are skipped, as
@@ -33,7 +33,7 @@ import Part
 from planner.errors import PlannerError
 
 __all__ = ["Component", "ReadResult", "open_model", "read_components", "document_subassemblies", "matching",
-           "consuming_properties", "DocumentError"]
+           "consuming_properties", "is_grouping", "DocumentError"]
 
 _IMPORT_PREFERENCES = "User parameter:BaseApp/Preferences/Mod/Import"
 
@@ -139,7 +139,7 @@ def consuming_properties(user, obj) -> list[str]:
     """
     if not obj.isDerivedFrom("Part::Feature") and not obj.isDerivedFrom("App::Link"):
         return []
-    if not user.isDerivedFrom("Part::Feature") or user.isDerivedFrom("App::Link"):
+    if not user.isDerivedFrom("Part::Feature") or user.isDerivedFrom("App::Link") or is_grouping(user):
         return []
     names = []
     for name in user.PropertiesList:
@@ -155,6 +155,17 @@ def consuming_properties(user, obj) -> list[str]:
         if any(_same(linked, obj) for linked in _linked_objects(value)):
             names.append(name)
     return names
+
+
+def is_grouping(obj) -> bool:
+    """Whether ``obj`` is a compound (``Part::Compound``) that groups whole parts as the authors did, and that
+    no other feature consumes: its members are parts, and it is a subassembly of them (a container), not a
+    part of its own. A compound a boolean or another feature uses is a shape like any other. Cost: one pass
+    over the properties of the objects using it."""
+    if not obj.isDerivedFrom("Part::Compound"):
+        return False
+    users = {user.Name: user for user in obj.InList}.values()
+    return not any(consuming_properties(user, obj) for user in users)
 
 
 def _parent_placement(obj) -> "FreeCAD.Placement":
@@ -251,11 +262,18 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
 
     singles: list[Component] = []
     left_out: list[tuple[str, str]] = []
+    compounds = [o for o in objects if is_grouping(o)]
+    if compounds:
+        many = len(compounds) > 1
+        warnings.append(f"{len(compounds)} compound{'s' * many} ({', '.join(o.Label for o in compounds)}) "
+                        f"group{'' if many else 's'} parts as the authors did: each member is a part, each "
+                        "compound a subassembly of them")
+    skipped = {o.Name for o in compounds}
     grouped: dict[str, list[tuple[object, "Part.Shape"]]] = {g: [] for g in groups}
     for obj in objects:
         if not (obj.isDerivedFrom("Part::Feature") or obj.isDerivedFrom("App::Link")):
             continue
-        if obj.Name in excluded:
+        if obj.Name in excluded or obj.Name in skipped:
             continue
         users = {user.Name: user for user in obj.InList}.values()  # an object can be in an InList twice
         consumers = [f"{user.Label}.{name}" for user in users for name in consuming_properties(user, obj)]
@@ -377,6 +395,9 @@ def _container_parents(document) -> dict[str, object]:
     for obj in document.Objects:
         if obj.TypeId in _CONTAINERS or any(obj.isDerivedFrom(t) for t in _CONTAINERS):
             for child in getattr(obj, "Group", None) or ():
+                parents.setdefault(child.Name, obj)
+        elif is_grouping(obj):  # the authors' compound of parts (read_components reads its members)
+            for child in getattr(obj, "Links", None) or ():
                 parents.setdefault(child.Name, obj)
     return parents
 

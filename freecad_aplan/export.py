@@ -32,7 +32,7 @@ from planner.defaults import (ANGULAR_DEFLECTION, LINEAR_DEFLECTION, MESH_TOLERA
 from planner.errors import GeometryError
 from planner.files import write_atomic
 
-from .document import document_subassemblies, open_model, read_components
+from .document import document_subassemblies, is_grouping, open_model, read_components
 from .tessellation import checked_mesh
 
 if TYPE_CHECKING:
@@ -183,7 +183,9 @@ def export_document(document, folder: str, source: str, groups=None, exclude=Non
     if intent is not None:  # the designer's fastener tags and subassembly tree (freecad_aplan.structure)
         from .structure import structure_entries
 
-        extra.update(structure_entries(intent, {c.id: list(c.objects) for c in result.components}))
+        labels = {o.Name: o.Label for o in document.Objects}
+        extra.update(structure_entries(intent, {c.id: list(c.objects) for c in result.components}, labels,
+                                       result.warnings))
     ids = {c.id for c in result.components}
     if extra:
         try:  # check the intent against the components before writing anything
@@ -210,6 +212,11 @@ def export_document(document, folder: str, source: str, groups=None, exclude=Non
         structure = document_subassemblies(document, result.components, tools)
         if structure:
             extra["subassemblies"] = structure
+    else:
+        compounds = [o.Label for o in document.Objects if is_grouping(o)]
+        if compounds:
+            result.warnings.append(f"the compounds {', '.join(compounds)} are not used as subassemblies: the APLAN "
+                                   "analysis holds a subassembly tree of its own (empty it to use the document's)")
     extra["x-freecad-objects"] = {c.id: list(c.objects) for c in result.components}
     product = export_components(result.components, folder, source, result.warnings, linear_deflection,
                                 angular_deflection, extra, recorded,

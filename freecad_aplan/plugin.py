@@ -13,6 +13,7 @@ Nothing here imports FreeCAD: FreeCAD runs as a separate program (:mod:`freecad_
 from __future__ import annotations
 
 import argparse
+import atexit
 import logging
 import shutil
 import sys
@@ -29,10 +30,10 @@ from planner.interrupts import raise_if_swallowed
 from planner.product import Product, save_product
 from planner.product.designer import add_directions
 
-from .archive import check_document
+from .archive import SKIP_BY_EXPORT, SKIP_OPTION, check_document
 from .runner import FreeCADError, run_batch
 
-__all__ = ["register", "export_bundle", "occt_report"]
+__all__ = ["register", "export_bundle", "export_warnings", "occt_report"]
 
 MODEL_SUFFIXES = (".fcstd", ".step", ".stp")
 
@@ -44,7 +45,8 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
                   groups: dict[str, list[str]] | None = None, exclude: list[str] | None = None,
                   split_solids: bool = False, linear_deflection: float | None = None,
                   angular_deflection: float | None = None, freecadcmd: str | None = None,
-                  overwrite: bool = False, redetect: bool = False, directions=(), skip_damaged: bool = False) -> Product:
+                  overwrite: bool = False, redetect: bool = False, directions=(), skip_damaged: bool = False,
+                  damaged_fix: str = SKIP_OPTION) -> Product:
     """Export ``model`` into the bundle folder ``bundle`` and analyse it with ``engine`` (or ``"none"``).
 
     The document's APLAN analysis (designer intent) chooses the components and adds its constraints and tags.
@@ -63,7 +65,8 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
 
     A damaged ``.FCStd`` (a truncated archive, a corrupt Document.xml: :mod:`freecad_aplan.archive`) is an
     error naming each object that cannot be read, before FreeCAD runs; with ``skip_damaged``, a warning naming
-    them, and the rest is exported.
+    them, and the rest is exported (``damaged_fix``: how the error says to do that,
+    :data:`~freecad_aplan.archive.SKIP_OPTION` or :data:`~freecad_aplan.archive.SKIP_BY_EXPORT`).
 
     The bundle is built in a temporary folder beside it and renamed into place at the end, so a failure or an
     interrupt leaves no partial bundle (and an existing one untouched). Returns the bundle's product.
@@ -75,7 +78,7 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
         raise FreeCADError(f"{model}: unsupported model type {model.suffix!r}; use .FCStd, .step or .stp")
     if bundle.exists() and not overwrite:
         raise FreeCADError(f"{bundle} already exists; choose another folder or overwrite it (--force)")
-    for warning in check_document(model, skip_damaged):
+    for warning in check_document(model, skip_damaged, damaged_fix):
         log.warning("%s", warning)
     bundle.parent.mkdir(parents=True, exist_ok=True)
     work = make_folder_beside(bundle)  # 0o777 less the umask, as the bundle folder should end up
@@ -119,17 +122,40 @@ def _load_model(path: Path, tolerances: Tolerances | None = None, groups: dict[s
                 exclude: list[str] | None = None, prepare=None) -> Product:
     """PRODUCT given as a CAD model: export it to a temporary bundle and analyse its meshes (with
     ``tolerances`` when given, e.g. ``contact="auto"``); ``groups`` and ``exclude`` as export-freecad's.
-    ``prepare(product)``, when given, runs while the bundle's meshes exist (the interlock rules read them)."""
-    with tempfile.TemporaryDirectory(prefix="aplan-") as folder:
-        product = export_bundle(path, Path(folder) / "bundle", tolerances=tolerances, groups=groups,
-                                exclude=exclude, redetect=tolerances is not None)
-        return product if prepare is None else prepare(product)
+
+    The product's ``source`` is the model (what headers and messages name), its parts' meshes and B-reps are
+    absolute paths into the bundle, which lives until the process ends (``geometry.x-temporary-bundle``: the
+    occt engine reads its B-reps there). Every warning of the export (meshes that are unreliable, overlaps,
+    objects left out, structure entries dropped) is logged, as ``aplan export-freecad`` prints them.
+    ``prepare(product)``, when given, runs on the product as returned (the interlock rules read its meshes)."""
+    folder = Path(tempfile.mkdtemp(prefix="aplan-"))
+    atexit.register(shutil.rmtree, folder, True)
+    bundle = folder / "bundle"
+    product = export_bundle(path, bundle, tolerances=tolerances, groups=groups, exclude=exclude,
+                            redetect=tolerances is not None, damaged_fix=SKIP_BY_EXPORT)
+    for warning in export_warnings(product):
+        log.warning("%s: %s", Path(path).name, warning)
+    model = str(Path(path).resolve())
+    parts = tuple(replace(p, mesh=str(bundle / p.mesh) if p.mesh else None,
+                          brep=str(bundle / p.brep) if p.brep else None) for p in product.parts)
+    product = replace(product, parts=parts, source=model,
+                      geometry={**product.geometry, "x-temporary-bundle": str(bundle)})
+    return product if prepare is None else prepare(product)
+
+
+def export_warnings(product: Product) -> list[str]:
+    """The warnings of a bundle's export and analysis (``geometry.warnings`` and ``geometry.analysis.warnings``),
+    each once, in order: what ``aplan export-freecad`` prints."""
+    geometry = product.geometry or {}
+    found = list(geometry.get("warnings", [])) + list(geometry.get("analysis", {}).get("warnings", []))
+    return list(dict.fromkeys(found))
 
 
 def _occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
     if product.source == "<memory>":
         raise FreeCADError("the occt engine reads a bundle's B-rep files: give it a bundle folder")
-    data = run_batch("analyze-occt", {"folder": str(Path(product.source).parent), "contact": tolerances.contact,
+    folder = (product.geometry or {}).get("x-temporary-bundle") or Path(product.source).parent
+    data = run_batch("analyze-occt", {"folder": str(folder), "contact": tolerances.contact,
                                       "interference": tolerances.interference, "depth": tolerances.depth,
                                       "pair_budget": tolerances.pair_budget,
                                       "directions": _occt_directions(product, tolerances)},
@@ -232,7 +258,7 @@ def _export_command(subparsers) -> None:
         if source.startswith("stored") and (args.engine or set(given) - {"contact_ceiling"}):
             print("  warning: --engine and the tolerances were not applied: the diagrams stored in the document "
                   "were used; add --redetect to detect them again")
-        for warning in product.geometry.get("warnings", []) + product.geometry.get("analysis", {}).get("warnings", []):
+        for warning in export_warnings(product):
             print(f"  warning: {warning}")
         return 0
 

@@ -81,10 +81,21 @@ def subassembly_entries(intent: Intent) -> list[dict]:
              "source": "designer"} for s in intent.subassemblies]
 
 
-def structure_entries(intent: Intent, objects: dict[str, list[str]]) -> dict:
+def structure_entries(intent: Intent, objects: dict[str, list[str]], labels: dict[str, str] | None = None,
+                      warnings: list[str] | None = None) -> dict:
     """The product-file keys the analysis' structure adds: ``fasteners`` (and their tools in ``tools``) and
-    ``subassemblies``, each only when the analysis has some."""
+    ``subassemblies``, each only when the analysis has some. With ``warnings`` (a list), entries naming what is
+    no exported component are mapped or dropped, one warning each (:mod:`freecad_aplan.readback`; ``labels``:
+    internal name -> label), instead of raising :class:`IntentError`."""
     out: dict = {}
+    if warnings is not None:
+        from .readback import fit_fasteners, fit_subassemblies
+
+        tags, said = fit_fasteners(list(intent.fasteners), objects, labels)
+        tree, more = fit_subassemblies([dict(s) for s in intent.subassemblies], objects, labels,
+                                       "the analysis' subassembly tree")
+        warnings.extend(said + more)
+        intent = replace(intent, fasteners=tags, subassemblies=tree)
     fasteners = fastener_entries(intent, objects)
     if fasteners:
         out["fasteners"] = fasteners

@@ -189,11 +189,25 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
     fastener_mode = ("tagged" if own else "auto") if fasteners == DEFAULT_MODE else fasteners
     proposals = fastener_proposals(product).groups if fastener_mode == "auto" else ()
     resolved = with_fastener_mode(product, fastener_mode, proposals)
+    _note_structure_folded(product, resolved)
     if subassemblies is not None:
         mode = ("designer" if own else "auto") if subassemblies == DEFAULT_MODE else subassemblies
         resolved = with_subassemblies(resolved, mode, max_components)
     _note_proposals(product, resolved, fasteners == DEFAULT_MODE, subassemblies == DEFAULT_MODE)
     return resolved
+
+
+def _note_structure_folded(product: Product, resolved: Product) -> None:
+    """One warning per proposed fastener group that folds members of the designer's subassemblies (the
+    document's structure): the group, the members and their subassembly, and the option that keeps them."""
+    listed = {m: s.id for s in product.subassemblies if s.source == "designer" for m in s.parts}
+    for group in resolved.fasteners[len(product.fasteners):]:
+        members = [p for p in group.parts if p in listed]
+        if members:
+            where = ", ".join(sorted({listed[p] for p in members}))
+            log.warning("the proposed fastener group %s folds %s, member%s of the designer's subassembl%s %s; "
+                        "--fasteners tagged keeps them parts", group.id, ", ".join(members),
+                        "s" if len(members) > 1 else "", "ies" if "," in where else "y", where)
 
 
 def _note_proposals(product: Product, resolved: Product, fasteners: bool, subassemblies: bool) -> None:

@@ -114,9 +114,7 @@ def _with_fasteners(product: Product) -> list[Level]:
     subassemblies list them), each fastener group added to the lowest level that holds all its hosts, its
     hosts mapped onto that level's members. Cost: that of the levels plus O(fastener parts x levels)."""
     folding = fold(product)
-    gone = product.fastener_parts
-    structure = tuple(replace(g, parts=tuple(m for m in g.parts if m not in gone)) for g in product.subassemblies)
-    levels = product_levels(replace(folding.product, subassemblies=structure))
+    levels = product_levels(folding.product)  # its subassemblies without the fasteners (some dissolved: fold)
     holds = {level.id: level.parts for level in levels}
     parts = {p.id: p for p in product.parts}
     markers = dict(product.markers.ids) if product.markers is not None else {}

@@ -54,11 +54,30 @@ class _Format(logging.Formatter):
         return f"aplan: {message}" if record.levelno < logging.WARNING else f"aplan: warning: {message}"
 
 
+class _Once(logging.Filter):
+    """Each warning once per command: a product is folded, checked or read at several steps of one command,
+    and a warning about it (a dissolved subassembly, say) would be repeated as often."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.said: set[str] = set()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno < logging.WARNING:
+            return True
+        message = record.getMessage()
+        if message in self.said:
+            return False
+        self.said.add(message)
+        return True
+
+
 def _configure_logging(verbose: bool = False) -> logging.Handler:
-    """Notes and warnings to standard error; with ``verbose`` the details too (DEBUG: the whole explanation of
-    a warning the library gave in one line)."""
+    """Notes and warnings to standard error (each warning once); with ``verbose`` the details too (DEBUG: the
+    whole explanation of a warning the library gave in one line)."""
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(_Format())
+    handler.addFilter(_Once())
     for name in ("planner", "freecad_aplan"):
         logger = logging.getLogger(name)
         logger.addHandler(handler)

@@ -260,7 +260,20 @@ def _fasteners(args: argparse.Namespace) -> int:
 
 
 def _relocated(product, output: str):
-    """``product`` with its mesh and B-rep paths relative to ``output``'s folder instead of its own file's."""
+    """``product`` with its mesh and B-rep paths relative to ``output``'s folder instead of its own file's.
+    A product read from a CAD model lives in a temporary bundle (``geometry.x-temporary-bundle``) that is
+    removed when the command ends: its paths are left out, with a warning saying how to keep them."""
+    temporary = (product.geometry or {}).get("x-temporary-bundle")
+    if temporary:
+        def kept(path: str | None) -> str | None:
+            return None if path is not None and path.startswith(temporary) else path
+
+        product = replace(product, parts=tuple(replace(p, mesh=kept(p.mesh), brep=kept(p.brep)) for p in product.parts),
+                          geometry={k: v for k, v in product.geometry.items() if k != "x-temporary-bundle"})
+        log.warning("%s: no mesh or B-rep paths: %s was read into a temporary bundle, removed at the end; to keep "
+                    "them, write a bundle with `aplan export-freecad MODEL -o BUNDLE` and run aplan fasteners on "
+                    "BUNDLE", output, Path(product.source).name)
+        return product
     source = Path(product.source)
     here, there = source.resolve().parent, Path(output).resolve().parent
     if not source.is_file() or here == there:

@@ -9,6 +9,16 @@ A part is a *candidate* fastener when
 - *geometry*: its volume is at most the product's median part volume, and at least two of the parts it
   touches are each :data:`HOST_VOLUME_RATIO` times its volume or more (a small part that joins two others).
 
+A part is never a candidate when
+
+- *rolling element*: its id or label holds one of :data:`ROLLING_WORDS` (``ball``, ``roller``, ``needle``), or
+- *own joint*: it is a candidate by geometry only, and a subassembly of the designer's (the document's
+  structure: an ``App::Part`` container such as a bearing of rings and balls) holds it together with every
+  part it touches: the authors modelled that joint as one component, whose balls or rollers are parts.
+
+Those are listed in :attr:`FastenerProposals.left_out` with the reason. A proposal that folds a member of a
+designer's subassembly says so in its ``reason`` (the member and the subassembly).
+
 Candidates that touch one another form one fastener (a bolt, its nut and washer); its hosts are the
 non-candidate parts it touches. A host ``X`` of a fastener is its *shaft* (a long bolt held by a washer or nut
 stack, passing through a bore with clearance) when
@@ -34,15 +44,19 @@ from dataclasses import dataclass
 
 from .model import FastenerGroup, Part, Product
 
-__all__ = ["FASTENER_WORDS", "HOST_VOLUME_RATIO", "FastenerProposals", "fastener_proposals", "propose_fasteners"]
+__all__ = ["FASTENER_WORDS", "ROLLING_WORDS", "HOST_VOLUME_RATIO", "FastenerProposals", "fastener_proposals",
+           "propose_fasteners"]
 
 FASTENER_WORDS = ("screw", "bolt", "nut", "washer", "pin", "rivet", "clip")
+# Rolling elements of a bearing: small parts between two larger ones that are not fasteners.
+ROLLING_WORDS = ("ball", "roller", "needle")
 
 # A fastener is this many times smaller than each of two parts it joins (the truck's screws: 68 and more;
 # the pump's bolts: 300 and more; its diaphragm, clamped between two housings, is not a fastener).
 HOST_VOLUME_RATIO = 10.0
 
 _WORD = re.compile(r"(?<![a-z])(" + "|".join(FASTENER_WORDS) + r")(e?s)?(?![a-z])")
+_ROLLING = re.compile(r"(?<![a-z])(" + "|".join(ROLLING_WORDS) + r")(e?s)?(?![a-z])")
 
 
 @dataclass(frozen=True)
@@ -54,14 +68,31 @@ class FastenerProposals:
     left_out: tuple[tuple[str, str], ...]
 
 
-def _name_word(part: Part) -> str | None:
-    """The fastener word in the part's id or label, if any."""
+def _name_word(part: Part, words: re.Pattern = _WORD) -> str | None:
+    """The fastener word (or another of ``words``) in the part's id or label, if any."""
     for text in (part.id, part.label):
         spaced = re.sub(r"([a-z])([A-Z])", r"\1 \2", text or "").lower()
-        found = _WORD.search(spaced)
+        spaced = re.sub(r"[0-9_]+", " ", spaced)  # Ball001, ball_3: the word, then a number
+        found = words.search(spaced)
         if found:
             return found.group(1)
     return None
+
+
+def _designer_structure(product: Product) -> tuple[dict[str, str], dict[str, set[str]]]:
+    """Part -> the designer's subassembly that lists it directly, and subassembly -> the parts it holds at any
+    depth. Cost: O(subassembly members x depth)."""
+    designer = [s for s in product.subassemblies if s.source == "designer"]
+    listed = {s.id: s.parts for s in designer}
+    parent = {m: s.id for s in designer for m in s.parts}
+
+    def held(sid: str, seen: frozenset = frozenset()) -> set[str]:
+        out: set[str] = set()
+        for m in listed[sid]:
+            out |= held(m, seen | {sid}) if m in listed and m not in seen else {m}
+        return out
+
+    return {p: parent[p] for p in product.part_ids if p in parent}, {s: held(s) for s in listed}
 
 
 def fastener_proposals(product: Product) -> FastenerProposals:
@@ -74,9 +105,15 @@ def fastener_proposals(product: Product) -> FastenerProposals:
         touching[b].add(a)
     volumes = {p.id: p.volume for p in product.parts if p.volume is not None}
     median = statistics.median(volumes.values()) if volumes else None
+    in_subassembly, holds = _designer_structure(product)
     why: dict[str, str] = {}
+    not_fasteners: list[tuple[str, str]] = []
     for part in product.parts:
         if part.id in tagged:
+            continue
+        rolling = _name_word(part, _ROLLING)
+        if rolling:
+            not_fasteners.append((part.id, f"name ({rolling!r}): a rolling element, not a fastener"))
             continue
         word = _name_word(part)
         if word:
@@ -88,9 +125,18 @@ def fastener_proposals(product: Product) -> FastenerProposals:
         big = sorted(n for n in touching[part.id] if n not in tagged
                      and volumes.get(n, 0.0) >= HOST_VOLUME_RATIO * max(volume, 1e-12))
         if len(big) >= 2:
+            own = in_subassembly.get(part.id)
+            if own is not None and touching[part.id] <= holds[own]:
+                not_fasteners.append((part.id, f"geometry (joins {', '.join(big)}), but the designer's subassembly "
+                                               f"{own!r} holds it with every part it touches (a bearing's balls, "
+                                               "say): left as a part"))
+                continue
             ratio = min(volumes[n] for n in big) / max(volume, 1e-12)
             why[part.id] = f"geometry (volume {volume:.4g}, at most the median {median:.4g}; joins {', '.join(big)}, " \
                            f"each {ratio:.0f} times larger or more)"
+    for part_id in why:
+        if part_id in in_subassembly:
+            why[part_id] += f"; folding takes it out of the designer's subassembly {in_subassembly[part_id]!r}"
     enclosing = _enclosing(product)
     fasteners, left_out = [], []
     for members in _touching_groups(sorted(why, key=product.part_ids.index), touching):
@@ -106,7 +152,7 @@ def fastener_proposals(product: Product) -> FastenerProposals:
                             for m in members)
         else:
             fasteners.append((members, hosts))
-    return FastenerProposals(_grouped(fasteners, why), tuple(left_out))
+    return FastenerProposals(_grouped(fasteners, why), tuple(not_fasteners + left_out))
 
 
 def _enclosing(product: Product) -> dict[str, set[str]]:

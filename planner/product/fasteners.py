@@ -79,22 +79,28 @@ def fold(product: Product) -> Folding:
 def _structure(product: Product, gone: frozenset[str]) -> tuple:
     """The subassemblies without the fasteners folded (``gone``): a fastener a subassembly lists is installed by
     the operation that joins its hosts, no member of its own. A subassembly left with fewer than two members is
-    an error naming the fastener and the fix."""
-    from ..errors import ProductFormatError
-
-    kept = []
-    for i, group in enumerate(product.subassemblies):
-        members = tuple(m for m in group.parts if m not in gone)
-        if len(members) < 2 <= len(group.parts):
-            folded = [m for m in group.parts if m in gone]
-            raise ProductFormatError(product.source, f"subassemblies[{i}].parts",
-                                     f"{', '.join(folded)} in subassembly {group.id!r} "
-                                     f"{'is a fastener' if len(folded) == 1 else 'are fasteners'}, folded into the "
-                                     f"operation that installs {'it' if len(folded) == 1 else 'them'}, which leaves "
-                                     f"{len(members)} member(s); list the parts it joins instead, or plan with "
-                                     "--fasteners none")
-        kept.append(replace(group, parts=members) if len(members) < len(group.parts) else group)
-    return tuple(kept)
+    dissolved (its member, if any, takes its place in the subassembly holding it), with a warning naming it and
+    the fasteners. Cost: O(members x nesting depth)."""
+    groups = {g.id: g for g in product.subassemblies}
+    members = {g.id: [m for m in g.parts if m not in gone] for g in product.subassemblies}
+    dissolved: dict[str, str | None] = {}  # subassembly -> what stands for it now (None: nothing)
+    changed = True
+    while changed:  # a dissolved subassembly can leave the one holding it with too few members in turn
+        changed = False
+        for sid, inner in members.items():
+            if sid in dissolved:
+                continue
+            inner[:] = [x for m in inner for x in ([dissolved[m]] if m in dissolved else [m]) if x is not None]
+            if len(inner) < 2:
+                dissolved[sid] = inner[0] if inner else None
+                changed = True
+    for sid, stands in dissolved.items():
+        folded = [m for m in groups[sid].parts if m in gone]
+        log.warning("subassembly %r is dissolved: folding the fastener%s %s leaves it %s", sid,
+                    "s" if len(folded) > 1 else "", ", ".join(folded) or "(none of its own)",
+                    f"only {stands}, which takes its place" if stands else "empty")
+    return tuple(replace(g, parts=tuple(members[g.id])) if tuple(members[g.id]) != g.parts else g
+                 for g in product.subassemblies if g.id not in dissolved)
 
 
 def fold_fasteners(product: Product) -> Product:

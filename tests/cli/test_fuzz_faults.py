@@ -14,6 +14,7 @@ import io
 import json
 import os
 import re
+import shutil
 import signal
 import subprocess
 import sys
@@ -210,6 +211,8 @@ def test_damaged_document_is_an_error_naming_each_object(kind, command, damaged,
     named = {label for label in _shape_files(zipfile.ZipFile(PEN_FCSTD).read("Document.xml")) if label in err}
     assert named == lost
     assert "--skip-damaged" in err and _tree(tmp_path) == set()
+    # only an option the command takes: stats has no --skip-damaged, export-freecad has
+    assert ("`aplan export-freecad MODEL -o BUNDLE --skip-damaged`" in err) == (command == "stats")
 
 
 def test_truncation_anywhere_names_exactly_the_lost_objects(tmp_path):
@@ -237,6 +240,54 @@ def test_the_intact_document_has_no_damage():
     from freecad_aplan.archive import document_damage
 
     assert document_damage(require_shared(PEN_FCSTD)) == []
+
+
+_LINKING = b"""<?xml version='1.0' encoding='utf-8'?>
+<Document SchemaVersion="4" ProgramVersion="0.20" FileVersion="1">
+  <Objects Count="1">
+    <Object type="App::Link" name="Post" id="1"/>
+  </Objects>
+  <ObjectData Count="1">
+    <Object name="Post">
+      <Properties Count="2">
+        <Property name="Label" type="App::PropertyString"><String value="Post"/></Property>
+        <Property name="LinkedObject" type="App::PropertyXLink">
+          <XLink file="%s" stamp="2026-12-02T01:10:49Z" name="Part"/>
+        </Property>
+        <Property name="PlacementList" type="App::PropertyPlacementList">
+          <PlacementList file="PlacementList"/>
+        </Property>
+      </Properties>
+    </Object>
+  </ObjectData>
+</Document>
+"""
+
+
+def _linking(folder, target: str):
+    path = folder / "asm.FCStd"
+    with zipfile.ZipFile(path, "w") as out:
+        out.writestr("Document.xml", _LINKING % target.encode())
+        out.writestr("PlacementList", b"\0\0\0\0")
+    return path
+
+
+def test_a_link_to_another_document_is_no_missing_member(tmp_path, damaged):
+    """<XLink file="post.FCStd"> names a document beside this one (Assembly4, A2plus, App::Link), not a member
+    of the archive: no damage when it is there; the link named when it is missing or damaged itself."""
+    from freecad_aplan.archive import document_damage
+
+    path = _linking(tmp_path, "post.FCStd")
+    shutil.copy(PEN_FCSTD, tmp_path / "post.FCStd")
+    assert document_damage(path) == []
+    (tmp_path / "post.FCStd").unlink()
+    (damage,) = document_damage(path)
+    assert (damage.name, damage.problem) == ("Post", f"it links to post.FCStd, which is not in {tmp_path} (copy it "
+                                                     "beside asm.FCStd)")
+    shutil.copy(damaged["truncated"][0], tmp_path / "post.FCStd")
+    (damage,) = document_damage(path)
+    assert damage.problem.startswith("it links to post.FCStd, which is damaged: ")
+    assert _linking(tmp_path, "") and document_damage(path) == []  # an empty XLink: this document's own object
 
 
 def test_skip_damaged_exports_the_rest_with_a_warning(damaged, tmp_path):

@@ -131,3 +131,55 @@ def test_a_shaft_needs_a_single_other_part_and_large_hosts():
     small_motor = replace(product, parts=tuple(replace(p, volume=30000.0) if p.id == "motor" else p
                                                for p in product.parts))
     assert [g.parts for g in propose_fasteners(small_motor)] == [("ring",)]
+
+
+@pytest.mark.parametrize("name", ["Ball001", "ball_3", "NeedleRoller", "taper rollers"])
+def test_rolling_elements_are_no_fasteners(name):
+    """A bearing's balls, rollers, needles are small parts between two larger ones, yet no fasteners."""
+    product = _product({"inner": 1000.0, "outer": 1000.0, name: 5.0}, [("inner", name), ("outer", name)])
+    proposals = fastener_proposals(product)
+    assert proposals.groups == ()
+    assert [(p, r.split(":")[1].strip()) for p, r in proposals.left_out] == [
+        (name, "a rolling element, not a fastener")]
+
+
+def _bearing(balls_in_bearing_with_rings: bool) -> Product:
+    """Two rings and three balls numbered as the pump numbers its parts (no word says what they are), the
+    balls touching both rings; the designer's subassembly 'bearing' holds the balls, with both rings or with
+    the inner one only."""
+    volumes = {"inner": 1000.0, "outer": 1000.0, "4_001": 5.0, "4_002": 5.0, "4_003": 5.0}
+    contacts = [(b, r) for b in ("4_001", "4_002", "4_003") for r in ("inner", "outer")]
+    members = ("inner", "outer", "4_001", "4_002", "4_003") if balls_in_bearing_with_rings else \
+        ("inner", "4_001", "4_002", "4_003")
+    product = _product(volumes, contacts)
+    from planner.product import Subassembly
+
+    return replace(product, subassemblies=(Subassembly("bearing", members),))
+
+
+def test_the_designers_own_joint_is_not_folded():
+    """Balls that the designer's subassembly holds with every part they touch stay parts (said why); balls
+    whose hosts are outside it are proposed, saying that folding takes them out of the subassembly."""
+    proposals = fastener_proposals(_bearing(True))
+    assert proposals.groups == ()
+    assert [p for p, _ in proposals.left_out] == ["4_001", "4_002", "4_003"]
+    assert all("the designer's subassembly 'bearing' holds it with every part it touches" in r
+               for _, r in proposals.left_out)
+    (group,) = fastener_proposals(_bearing(False)).groups
+    assert group.parts == ("4_001", "4_002", "4_003")
+    assert "folding takes it out of the designer's subassembly 'bearing'" in group.reason
+
+
+def test_folding_a_subassemblys_members_reads_back(caplog):
+    """Folded balls leave the subassembly 'bearing' with the inner ring only: it is dissolved with a warning
+    naming it and the fasteners, and the product reads back (issue 26: '4_003' is neither a part nor ...)."""
+    product = _bearing(False)
+    folded = resolve_product(product, fasteners="auto", subassemblies="designer")
+    assert sorted(folded.fastener_parts) == ["4_001", "4_002", "4_003"]
+    from planner.product import fold_fasteners
+
+    assert fold_fasteners(folded).subassemblies == ()
+    assert "subassembly 'bearing' is dissolved: folding the fasteners 4_001, 4_002, 4_003 leaves it only " \
+           "inner, which takes its place" in caplog.text
+    assert "the proposed fastener group fasteners_inner+outer folds 4_001, 4_002, 4_003, members of the " \
+           "designer's subassembly bearing; --fasteners tagged keeps them parts" in caplog.text
