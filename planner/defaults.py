@@ -57,7 +57,7 @@ MESH_TRIANGLE_BUDGET = 60_000
 OCCT_PAIR_BUDGET = 30.0
 # ... and at most this many OCCT operations (a distance, a common, a prism's test) per pair: work, not seconds.
 OCCT_PAIR_STEPS = 400
-# ... and at most this many seconds (wall clock) over all the pairs it is given; the pairs left when it runs
+# ... and at most this many CPU seconds over all the pairs it is given; the pairs left when it runs
 # out keep the mesh engine's answer (freecad_aplan.hybrid), so an 88-part assembly is done within 5 minutes.
 OCCT_TIME_LIMIT = 180.0
 

@@ -32,7 +32,7 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
                    pair_budget: float = OCCT_PAIR_BUDGET, budgets: dict | None = None,
                    progress: Callable[[str], None] | None = None, directions=(), pairs=None,
                    pair_steps: int | None = None, time_limit: float | None = None,
-                   clock: Callable[[], float] = time.perf_counter) -> dict:
+                   clock: Callable[[], float] = time.process_time) -> dict:
     """Contacts, interferences and the +X, +Y, +Z obstruction diagrams of exact part shapes, and those along
     the unit vectors ``directions`` (the designer's, the candidate directions of
     :func:`planner.geometry.mesh_engine.candidate_directions`), tested like the axes.
@@ -51,7 +51,7 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     other budgets, checked between booleans); a pair it cannot decide in time counts as touching and
     blocking, is listed under ``undecided`` and named in a warning, and the others go on. Work too:
     ``pair_steps`` OCCT operations per pair at most (None: no bound; :class:`~.budget.PairClock`), and
-    ``time_limit`` seconds of ``clock`` (wall clock) over the whole run, after which every pair left is
+    ``time_limit`` seconds of ``clock`` (CPU seconds of this process) over the whole run, after which every pair left is
     undecided (``timed_out`` is then True). ``pairs``: the pairs of ids to decide (None: all): the others
     are neither measured nor reported (:mod:`freecad_aplan.hybrid` decides them on the meshes). ``progress``
     receives a line every few seconds. ``pairs`` counts the contact pairs decided by part boxes (``far``), by

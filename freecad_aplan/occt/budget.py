@@ -9,6 +9,8 @@ import numpy as np
 
 from .solids import bounding_box
 
+SHOWN = 10  # undecided pairs told one per line; the others in one line
+
 __all__ = ["PairClock", "face_boxes", "face_gap", "sweep_meets"]
 
 
@@ -19,7 +21,8 @@ class PairClock:
     A pair is *undecided* when its work would go beyond its bounds: ``steps`` OCCT operations (a distance,
     a common, one prism's test: counted at each :meth:`exhausted` that lets one start; None: no bound), or
     ``budget`` CPU seconds (``budgets[{a, b}]`` for the pair of ids ``a``, ``b``), or when ``time_limit``
-    seconds of ``clock`` (wall clock, injectable for tests) have passed since the clock was made: the engine
+    seconds of ``clock`` (CPU seconds of this process by default, as the budgets, so that a machine loaded
+    by other work does not leave pairs undecided; injectable for tests) have passed since the clock was made: the engine
     stops working on it, reports it and goes on with the others (after the time limit, every pair left is
     undecided at once). OCCT's booleans cannot be interrupted, so the bounds are checked between them: a
     pair may overrun by one boolean. CPU time of this process (OCCT's booleans run in it, on one core), so
@@ -29,7 +32,7 @@ class PairClock:
 
     def __init__(self, ids: list[str], budget: float, budgets: dict | None = None,
                  progress: Callable[[str], None] | None = None, every: float = 5.0, steps: int | None = None,
-                 time_limit: float | None = None, clock: Callable[[], float] = time.perf_counter) -> None:
+                 time_limit: float | None = None, clock: Callable[[], float] = time.process_time) -> None:
         self.ids, self.budget, self.progress, self.every = ids, budget, progress, every
         self.steps, self.time_limit, self.clock = steps, time_limit, clock
         index = {part_id: k for k, part_id in enumerate(ids)}
@@ -99,12 +102,16 @@ class PairClock:
     def warnings(self, fallback: str = "counted as touching and blocking") -> list[str]:
         """One line per undecided pair (``fallback``: what its relations are taken to be), and one for the time
         limit when it was reached."""
+        shown = sorted(self.undecided.items())[:SHOWN]
         lines = [f"OCCT did not decide {', '.join(whats)} for {self.ids[i]!r} and {self.ids[j]!r} within the "
                  f"budget of {self.budgets.get((i, j), self.budget):g} CPU s"
                  f"{'' if self.steps is None else f' and {self.steps} operations'} per pair (spent "
                  f"{self.spent.get((i, j), 0.0):.1f} s, {self.work.get((i, j), 0)} operations"
                  f"{', time limit reached' if self.timed_out else ''}); {fallback}: check this pair "
-                 "(or raise --pair-budget, --time-limit)" for (i, j), whats in sorted(self.undecided.items())]
+                 "(or raise --pair-budget, --time-limit)" for (i, j), whats in shown]
+        if len(self.undecided) > SHOWN:
+            lines.append(f"OCCT left {len(self.undecided) - SHOWN} more pairs undecided: "
+                         + ", ".join(f"{self.ids[i]}/{self.ids[j]}" for i, j in sorted(self.undecided)[SHOWN:]))
         if self.timed_out:
             lines.insert(0, f"OCCT reached its time limit of {self.time_limit:g} s: {len(self.undecided)} pairs "
                             f"undecided ({fallback})")

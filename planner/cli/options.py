@@ -259,8 +259,8 @@ def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
                        help="occt engine: seconds of work per pair of parts, at least 0; a pair not decided in time "
                             f"is reported and counted as touching and blocking (default {d.pair_budget:g})")
     group.add_argument("--time-limit", type=positive_seconds, default=d.time_limit, metavar="S",
-                       help="occt engine (and the pairs of parts without a good mesh): seconds for all the pairs it "
-                            "decides, above 0; the pairs left then keep the mesh engine's answer and are reported "
+                       help="occt engine (and the pairs of parts without a good mesh): CPU seconds for all the pairs "
+                            "OCCT decides, above 0; the pairs left then keep the mesh engine's answer and are reported "
                             f"(default {d.time_limit:g})")
     group.add_argument("--directions", type=_direction_count, default=d.directions, metavar="N",
                        help="mesh and occt engines: motion directions besides the axes to find on the parts' faces and "

@@ -5,16 +5,16 @@ circle, Part::Sweep) resting on the plate, and a washer around the rod resting o
 The spring's mesh cannot be within 1 % of its B-rep in the tessellation's work bound (its first mesh is
 about 2.6 % short; ``finer`` would need about 190,000 facets; Mefisto is 15 % short), so its export
 reports the fallback rule ``exact`` for it (:mod:`freecad_aplan.tessellation`)."""
-import FreeCAD
-import Part
-
-V = FreeCAD.Vector
 ROD_RADIUS, COIL_RADIUS, WIRE, PITCH, HEIGHT = 8.5, 10.0, 0.6, 2.0, 40.0
 
 
 def build_spring_document(path: str) -> dict:
     """Build and save the document at ``path``; returns its object names by role. The parts are placed so
     that the spring touches the plate and the washer (distances measured, not assumed)."""
+    import FreeCAD
+    import Part
+
+    V = FreeCAD.Vector
     doc = FreeCAD.newDocument("spring_rod")
     helix = doc.addObject("Part::Helix", "Helix")
     helix.Pitch, helix.Height, helix.Radius = PITCH, HEIGHT, COIL_RADIUS
