@@ -15,9 +15,10 @@ Definitions
   ``pair_steps`` operations per pair, ``time_limit`` s in all.
 - The mesh engine decides every pair on the meshes, then OCCT decides the pairs of parts whose rule is
   ``exact`` or ``box`` (only those), within the same bounds.
-- A pair OCCT leaves undecided (bounds, time limit) keeps the mesh engine's answer, and is reported: in the
+- A relation OCCT leaves undecided (bounds, time limit) keeps the mesh engine's answer, relation by
+  relation (a pair's contact; each motion of one part along one direction), and is reported: in the
   warnings, and in ``tolerances["pairs"]`` of the report (``mesh``: pairs settled on the meshes, ``occt``:
-  decided by OCCT, ``undecided``: the pairs, ``timed_out``).
+  wholly decided by OCCT, ``undecided``: the pairs with a relation left, ``timed_out``).
 
 This module does not import FreeCAD: OCCT runs in FreeCADCmd (:mod:`freecad_aplan.runner`).
 """
@@ -63,34 +64,63 @@ def exact_pairs(meshes: list[PartMesh], fallback, contact: float, near: bool) ->
     return pairs
 
 
+def _open_relations(occt: dict) -> tuple[set, set]:
+    """The pairs whose contact OCCT left undecided ({a, b}) and the motions it left undecided ((mover, other,
+    direction name)), from ``undecided_relations`` (else every relation of an ``undecided`` pair)."""
+    contacts, motions = set(), set()
+    relations = occt.get("undecided_relations")
+    if relations is None:
+        return {frozenset(p) for p in occt.get("undecided", [])}, None
+    for a, b, what in relations:
+        if what in ("the contact", "the overlap"):
+            contacts.add(frozenset((a, b)))
+        else:
+            mover, _, name = what.rpartition(" moving along ")
+            motions.add((mover, b if mover == a else a, name))
+    return contacts, motions
+
+
 def merge_reports(mesh: GeometryReport, occt: dict, pairs, engine: str, fallback: dict[str, str]) -> GeometryReport:
-    """The mesh engine's report with the pairs of ``pairs`` that OCCT decided (``occt``: the answer of
-    :func:`freecad_aplan.occt.analyze_bundle_breps`) taken from OCCT: their contacts, interferences and
-    obstructions along every direction the mesh engine tested. Undecided pairs keep the mesh answer."""
-    undecided = {frozenset(p) for p in occt.get("undecided", [])}
-    decided = {frozenset(p) for p in pairs} - undecided
+    """The mesh engine's report with what OCCT decided (``occt``: the answer of
+    :func:`freecad_aplan.occt.analyze_bundle_breps`) on the pairs of ``pairs`` taken from OCCT, relation by
+    relation: a pair's contact and interference, and each motion (mover, direction) along every direction
+    the mesh engine tested. A relation OCCT left undecided keeps the mesh answer."""
+    asked = {frozenset(p) for p in pairs}
+    open_contacts, open_motions = _open_relations(occt)
+    undecided = {frozenset(p) for p in occt.get("undecided", [])} & asked
 
-    def ours(pair) -> bool:
-        return frozenset(pair) in decided
+    def contact_ours(pair) -> bool:
+        return frozenset(pair) in asked and frozenset(pair) not in open_contacts
 
-    contacts = [c for c in mesh.contacts if not ours(c)] + [tuple(c) for c in occt["contacts"] if ours(c)]
-    interferences = [i for i in mesh.interferences if not ours(i[:2])] + \
-        [(i["parts"][0], i["parts"][1], float(i["volume"])) for i in occt["interferences"] if ours(i["parts"])]
+    def motion_ours(pair, name: str) -> bool:
+        key = frozenset(pair)
+        if key not in asked:
+            return False
+        if open_motions is None:
+            return key not in open_contacts
+        return (pair[0], pair[1], name) not in open_motions
+
+    contacts = [c for c in mesh.contacts if not contact_ours(c)] + \
+        [tuple(c) for c in occt["contacts"] if contact_ours(c)]
+    interferences = [i for i in mesh.interferences if not contact_ours(i[:2])] + \
+        [(i["parts"][0], i["parts"][1], float(i["volume"])) for i in occt["interferences"] if contact_ours(i["parts"])]
     obstructions = {}
     for name, found in mesh.obstructions.items():
         exact = occt["obstructions"].get(name)
         if exact is None:  # a direction OCCT did not test: the meshes decide it
             obstructions[name] = tuple(found)
             continue
-        obstructions[name] = tuple([p for p in found if not ours(p)] + [tuple(p) for p in exact if ours(p)])
-    record = {"mesh": len(mesh.parts) * (len(mesh.parts) - 1) // 2 - len({frozenset(p) for p in pairs}),
-              "occt": len(decided), "undecided": sorted(sorted(p) for p in undecided),
+        obstructions[name] = tuple([tuple(p) for p in found if not motion_ours(tuple(p), name)] +
+                                   [tuple(p) for p in exact if motion_ours(tuple(p), name)])
+    record = {"mesh": len(mesh.parts) * (len(mesh.parts) - 1) // 2 - len(asked),
+              "occt": len(asked - undecided), "undecided": sorted(sorted(p) for p in undecided),
+              "undecided_relations": len(occt.get("undecided_relations", [])),
               "timed_out": bool(occt.get("timed_out")), "time_limit": occt.get("time_limit"),
               "fallback": dict(sorted(fallback.items()))}
     tolerances = {**mesh.tolerances, "pairs": record,
                   **({"occt": occt["tolerances"]} if engine == "occt" and "tolerances" in occt else {})}
     summary = (f"{engine} engine: {record['mesh']} pairs settled on the meshes, {record['occt']} decided by OCCT"
-               f"{f', {len(undecided)} undecided (the mesh answer kept)' if undecided else ''}"
+               f"{f', {len(undecided)} partly undecided (the mesh answer kept for what OCCT did not decide)' if undecided else ''}"
                + (f"; parts decided on their exact shape: "
                   f"{', '.join(f'{p} ({r})' for p, r in sorted(fallback.items()))}" if fallback else ""))
     return replace(mesh, engine=engine, contacts=tuple(contacts), interferences=tuple(interferences),

@@ -52,7 +52,8 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     blocking, is listed under ``undecided`` and named in a warning, and the others go on. Work too:
     ``pair_steps`` OCCT operations per pair at most (None: no bound; :class:`~.budget.PairClock`), and
     ``time_limit`` seconds of ``clock`` (CPU seconds of this process) over the whole run, after which every pair left is
-    undecided (``timed_out`` is then True). ``pairs``: the pairs of ids to decide (None: all): the others
+    undecided (``timed_out`` is then True); ``undecided_relations`` lists ``[a, b, what]``, ``what`` being
+    ``"the contact"``, ``"the overlap"`` or ``"X moving along D"``. ``pairs``: the pairs of ids to decide (None: all): the others
     are neither measured nor reported (:mod:`freecad_aplan.hybrid` decides them on the meshes). ``progress``
     receives a line every few seconds. ``pairs`` counts the contact pairs decided by part boxes (``far``), by
     face boxes (``far_faces``) and those measured exactly (``exact``), and the obstruction candidates (over
@@ -128,6 +129,8 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
         "tolerances": {"contact": contact, "interference": interference, "depth": depth,
                        "volume": depth ** 3},
         "undecided": [[ids[i], ids[j]] for i, j in sorted(clock.undecided)], "pairs": dict(clock.counts),
+        "undecided_relations": [[ids[i], ids[j], what] for (i, j), whats in sorted(clock.undecided.items())
+                                for what in whats],
         "pair_budget": pair_budget, "pair_steps": pair_steps, "time_limit": time_limit,
         "timed_out": clock.timed_out, "selected": None if clock.selected is None else len(clock.selected),
         "warnings": warnings, "seconds": round(time.perf_counter() - start, 3),
