@@ -5,7 +5,9 @@ Definitions
 - A part's *rule* (``geometry.mesh_check.parts[id].rule`` of the bundle, :func:`freecad_aplan.export.mesh_rule`)
   says how its relations are decided: ``mesh`` and ``refined`` (a mesh within 1 % of its B-rep) on the
   meshes; ``exact`` and ``box`` (no mesh within 1 % in the tessellation's work bound: springs, helices) on
-  its exact shape. A bundle without that record (written by hand, older) has every part on the meshes.
+  its exact shape; ``hull`` on its ring hull's mesh, by both engines (a spring's exact shape is what OCCT
+  cannot sweep within a bound). A bundle without that record (written by hand, older) has every part on
+  the meshes.
 - An *easy* pair, for the occt engine, is one whose two parts are on the meshes and whose meshes' bounding
   boxes are apart by more than the contact tolerance: the surfaces cannot touch, and the mesh engine's
   projection test errs only where surfaces touch or slide along each other (the slivers of two
@@ -39,26 +41,30 @@ __all__ = ["fallback_parts", "exact_pairs", "merge_reports", "mesh_then_occt"]
 EXACT_RULES = ("exact", "box")
 
 
-def fallback_parts(product: Product) -> dict[str, str]:
-    """The parts of ``product`` whose rule is ``exact`` or ``box`` (module docstring), with their rule."""
+def fallback_parts(product: Product, rules=EXACT_RULES) -> dict[str, str]:
+    """The parts of ``product`` whose rule is one of ``rules`` (module docstring), with their rule."""
     parts = (product.geometry.get("mesh_check") or {}).get("parts") or {}
     found = {}
     for part_id, check in parts.items():
         rule = check.get("rule") or ("exact" if check.get("method") == "exact" else "mesh")
-        if rule in EXACT_RULES and part_id in product.part_ids:
+        if rule in rules and part_id in product.part_ids:
             found[part_id] = rule
     return found
 
 
-def exact_pairs(meshes: list[PartMesh], fallback, contact: float, near: bool) -> list[tuple[str, str]]:
+def exact_pairs(meshes: list[PartMesh], fallback, contact: float, near: bool, hulls=()) -> list[tuple[str, str]]:
     """The pairs OCCT decides: every pair with a part of ``fallback``, and with ``near``, every pair whose
-    meshes' bounding boxes are within ``contact`` of each other (module docstring). Cost O(parts^2)."""
+    meshes' bounding boxes are within ``contact`` of each other (module docstring), except the pairs with a
+    part of ``hulls`` (rule ``hull``: decided on its hull, its exact shape being what OCCT cannot sweep
+    within a bound). Cost O(parts^2)."""
     lo = np.array([m.vertices.min(axis=0) for m in meshes])
     hi = np.array([m.vertices.max(axis=0) for m in meshes])
     gaps = np.maximum(lo[:, None, :] - hi[None, :, :], lo[None, :, :] - hi[:, None, :]).max(axis=2)
     pairs = []
     for i in range(len(meshes)):
         for j in range(i + 1, len(meshes)):
+            if meshes[i].id in hulls or meshes[j].id in hulls:
+                continue
             if meshes[i].id in fallback or meshes[j].id in fallback or (near and gaps[i, j] <= contact):
                 pairs.append((meshes[i].id, meshes[j].id))
     return pairs
@@ -139,7 +145,8 @@ def mesh_then_occt(product: Product, meshes: list[PartMesh], tolerances: Toleran
     fallback = fallback_parts(product)
     if engine == "mesh" and not fallback:
         return report
-    pairs = exact_pairs(meshes, fallback, float(tolerances.contact), near=engine == "occt")
+    pairs = exact_pairs(meshes, fallback, float(tolerances.contact), near=engine == "occt",
+                        hulls=fallback_parts(product, ("hull",)))
     if not pairs:
         return merge_reports(report, {"contacts": [], "interferences": [], "obstructions": {}}, [], engine, fallback)
     arguments = {"contact": tolerances.contact, "interference": tolerances.interference, "depth": tolerances.depth,

@@ -20,6 +20,7 @@ def test_easy_pairs_are_the_far_ones_between_good_meshes():
     assert exact_pairs(meshes, {}, 0.01, near=True) == [("a", "b"), ("b", "c")]
     assert exact_pairs(meshes, {}, 0.01, near=False) == []
     assert exact_pairs(meshes, {"far": "exact"}, 0.01, near=False) == [("a", "far"), ("b", "far"), ("c", "far")]
+    assert exact_pairs(meshes, {}, 0.01, near=True, hulls={"b": "hull"}) == []  # decided on the hull's mesh
 
 
 def test_occt_decides_relation_by_relation():
