@@ -363,3 +363,24 @@ def test_step_import_restores_the_link_group_preference(tmp_path):
 #: The exports and FreeCAD runs the tests read, done in the background (tests/background.py), in the order the
 #: tests need them.
 BACKGROUND = (*PEN_JOBS.values(), PLACEMENTS_JOB, *JOBS.values(), DOCUMENT_TYPES_JOB, OCCT_JOB)
+
+
+@pytest.mark.freecad
+def test_a_part_without_a_good_mesh_is_decided_on_its_exact_shape(pen_bundles, tmp_path):
+    """The mesh engine on a bundle where one part's rule is ``exact`` (set here: the pen's meshes are all
+    right): OCCT decides the pairs with that part (freecad_aplan/hybrid.py), and the diagrams still match the
+    ground truth; the pairs without it are settled on the meshes."""
+    bundle = tmp_path / "b"
+    shutil.copytree(pen_bundles["simplified", "FCStd"], bundle)
+    data = json.loads((bundle / "product.json").read_text())
+    part = data["parts"][0]["id"]
+    data["geometry"]["mesh_check"]["parts"][part]["rule"] = "exact"
+    (bundle / "product.json").write_text(json.dumps(data))
+    done = aplan("analyze", str(bundle), "--engine", "mesh", "--json")
+    report = json.loads(done.stdout)
+    pairs = report["tolerances"]["pairs"]
+    assert pairs["fallback"] == {part: "exact"} and pairs["mesh"] == 15 - 5 and pairs["occt"] == 5
+    assert f"parts decided on their exact shape: {part} (exact)" in report["warnings"][0]
+    assert {frozenset(c) for c in report["contacts"]} == LIAISONS
+    for name in ("+X", "+Y", "+Z"):
+        assert {tuple(p) for p in report["obstructions"][name]} == ground_truth(name), name
