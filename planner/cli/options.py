@@ -256,8 +256,9 @@ def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
                        metavar="N", help=f"mesh engine: pixels across the product for the projection test, 16 to "
                                          f"{RESOLUTION_LIMIT:,} (default {d.resolution})")
     group.add_argument("--pair-budget", type=number(0), default=d.pair_budget, metavar="S",
-                       help="occt engine: seconds of work per pair of parts, at least 0; a pair not decided in time "
-                            f"is reported and counted as touching and blocking (default {d.pair_budget:g})")
+                       help="occt engine: CPU seconds of work per pair of parts, at least 0; a pair not decided in "
+                            "time is reported and keeps the mesh engine's answer (counted as touching and blocking "
+                            f"when the bundle has no meshes) (default {d.pair_budget:g})")
     group.add_argument("--time-limit", type=positive_seconds, default=d.time_limit, metavar="S",
                        help="occt engine (and the pairs of parts without a good mesh): CPU seconds for all the pairs "
                             "OCCT decides, above 0; the pairs left then keep the mesh engine's answer and are reported "
