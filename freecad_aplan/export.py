@@ -33,14 +33,15 @@ from planner.errors import GeometryError
 from planner.files import write_atomic
 
 from .document import document_subassemblies, is_grouping, open_model, read_components
-from .tessellation import checked_mesh
+from .tessellation import box_mesh, checked_mesh
 
 if TYPE_CHECKING:
     from .intent import Intent
 
-__all__ = ["export_components", "export_document", "export_model", "DEFAULT_LINEAR_DEFLECTION",
+__all__ = ["mesh_rule", "fallback_mesh", "export_components", "export_document", "export_model", "DEFAULT_LINEAR_DEFLECTION",
            "DEFAULT_ANGULAR_DEFLECTION"]
 
+RULES = ("mesh", "refined", "hull", "exact", "box")  # see mesh_rule and fallback_mesh
 DEFAULT_LINEAR_DEFLECTION = LINEAR_DEFLECTION  # model units (mm): the largest distance between mesh and surface
 DEFAULT_ANGULAR_DEFLECTION = ANGULAR_DEFLECTION  # radians between neighbouring facet normals on curved faces
 
@@ -55,15 +56,53 @@ def _file_name(part_id: str, used: set[str]) -> str:
     return name
 
 
-def _report_check(part_id: str, check, tolerance: float, warnings: list[str]) -> None:
-    """A warning for a part whose first mesh was off (re-tessellated) or that no mesher got right."""
+def mesh_rule(check) -> str:
+    """The rule a part's relations are decided by, from its :class:`~freecad_aplan.tessellation.MeshCheck`
+    (before :func:`fallback_mesh`): ``mesh`` (its first mesh is within tolerance), ``refined`` (another
+    method's is), ``exact`` (none is within the work bound: the closest closed mesh is kept, and the pairs of
+    the part are decided on its exact shape, :mod:`freecad_aplan.hybrid`) or ``box`` (no closed mesh: its
+    bounding box stands in, and its pairs are decided on its exact shape too)."""
+    if check.method == "exact":
+        return "exact" if check.closed else "box"
+    return "mesh" if check.method == "standard" else "refined"
+
+
+def fallback_mesh(shape, mesh, check, linear: float, angular: float):
+    """(rule, mesh) for a part: its :func:`mesh_rule` and mesh, except that a part no mesh is right for gets
+    its ring hull when one is tight (rule ``hull``: a spring's tube, :mod:`freecad_aplan.hull`; its pairs are
+    then decided on that mesh, which holds the part), else its bounding box when no mesh is closed."""
+    import MeshPart
+
+    from .hull import ring_hull
+
+    rule = mesh_rule(check)
+    if rule not in ("exact", "box"):
+        return rule, mesh
+    points = [(p.x, p.y, p.z) for p in mesh.Points]
+    hull = ring_hull(points, shape.Volume, linear, shape)
+    if hull is not None:
+        ring = MeshPart.meshFromShape(Shape=hull, LinearDeflection=linear, AngularDeflection=angular, Relative=False)
+        if ring.isSolid():
+            return "hull", ring
+    return (rule, mesh) if rule == "exact" else (rule, box_mesh(shape))
+
+
+def _report_check(part_id: str, check, rule: str, tolerance: float, warnings: list[str]) -> None:
+    """A warning for a part whose first mesh was off (re-tessellated) or that no mesher got right (with the
+    fallback ``rule`` applied to it)."""
     first = next((error for _, error, _ in check.tried if error is not None), None)
     before = "no triangles" if first is None else f"{first:+.1%} in volume"
-    if check.method == "exact":
-        warnings.append(f"{part_id}: no tessellation is within {tolerance:.0%} of the B-rep (first mesh "
-                        f"{before}, best {check.volume_error:+.1%}{'' if check.closed else ', open'}); the mesh "
-                        "engine's contacts and obstructions for this part are unreliable: use --engine occt")
-    elif check.method != "standard":
+    if rule in ("exact", "box", "hull"):
+        what = {"hull": "its contacts and obstructions are decided on its ring hull (the tube its section sweeps "
+                        "around its axis, which holds the part: conservative for blocking)",
+                "exact": "its contacts and obstructions are decided on its exact shape (OCCT), and its closest "
+                         "mesh stands in for anything OCCT leaves undecided",
+                "box": "its contacts and obstructions are decided on its exact shape (OCCT), and its bounding "
+                       "box (no closed mesh) for anything OCCT leaves undecided"}[rule]
+        warnings.append(f"{part_id}: no tessellation is within {tolerance:.0%} of the B-rep within the mesh budget "
+                        f"(first mesh {before}, best {check.volume_error:+.1%}; tried "
+                        f"{', '.join(method for method, _, _ in check.tried)}); fallback rule {rule!r}: {what}")
+    elif rule == "refined":
         warnings.append(f"{part_id}: the mesh differed from the B-rep ({before}); re-tessellated with "
                         f"{check.method}: {check.volume_error:+.2%} in volume, {check.area_error:+.2%} in area")
 
@@ -77,8 +116,9 @@ def export_components(components, folder: str, source: str, warnings: list[str],
 
     Each mesh is checked against its B-rep (:func:`~freecad_aplan.tessellation.checked_mesh`): re-tessellated
     when its volume or area is off by more than ``mesh_tolerance``; ``geometry.mesh_check`` records per part
-    the errors and the method kept, and under ``exact`` the parts no mesher got right (only the OCCT engine
-    is reliable for them); ``geometry.warnings`` names every part that needed another method.
+    the errors, the method kept and the part's rule (:func:`fallback_mesh`); under ``exact`` the parts no
+    mesher got right within the work bound (their pairs are decided by OCCT), and under ``rules`` the parts
+    of each rule; ``geometry.warnings`` names every part that needed another method or a fallback.
 
     ``extra``: more top-level keys of the product file (the designer intent's constraints and tags, stored
     diagrams); ``analysis``: the ``geometry.analysis`` record of where those diagrams came from; ``designer``:
@@ -98,8 +138,9 @@ def export_components(components, folder: str, source: str, warnings: list[str],
         if mesh is None:
             raise GeometryError(f"part {component.id!r}: tessellation produced no triangles (tried "
                                 f"{', '.join(method for method, _, _ in check.tried)})")
-        checks[component.id] = check.as_dict()
-        _report_check(component.id, check, mesh_tolerance, warnings)
+        rule, mesh = fallback_mesh(component.shape, mesh, check, linear_deflection, angular_deflection)
+        checks[component.id] = {**check.as_dict(), "rule": rule}
+        _report_check(component.id, check, rule, mesh_tolerance, warnings)
         mesh.write(os.path.join(folder, "meshes", name + ".stl"))
         component.shape.exportBrep(os.path.join(folder, "breps", name + ".brep"))
         part = {"id": component.id, "label": component.label, "mesh": f"meshes/{name}.stl",
@@ -114,7 +155,9 @@ def export_components(components, folder: str, source: str, warnings: list[str],
                      "tessellation": {"linear_deflection": linear_deflection,
                                       "angular_deflection": angular_deflection},
                      "mesh_check": {"tolerance": mesh_tolerance, "parts": checks,
-                                    "exact": [i for i, c in checks.items() if c["method"] == "exact"]},
+                                    "exact": [i for i, c in checks.items() if c["method"] == "exact"],
+                                    "rules": {rule: [i for i, c in checks.items() if c["rule"] == rule]
+                                              for rule in RULES}},
                      "warnings": warnings, **({"analysis": analysis} if analysis else {}),
                      **({"designer": designer} if designer else {})},
         **(extra or {}),

@@ -31,7 +31,8 @@ from planner.product import Product, save_product
 from planner.product.designer import add_directions
 
 from .archive import SKIP_BY_EXPORT, SKIP_OPTION, check_document
-from .runner import FreeCADError, run_batch
+from .hybrid import fallback_parts, mesh_then_occt
+from .runner import FreeCADError, find_freecadcmd, run_batch
 
 __all__ = ["register", "export_bundle", "export_warnings", "occt_report"]
 
@@ -152,15 +153,56 @@ def export_warnings(product: Product) -> list[str]:
 
 
 def _occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
+    """The occt engine: the meshes settle the easy pairs, OCCT the others within ``tolerances``' budget
+    (:mod:`freecad_aplan.hybrid`); a bundle whose meshes cannot be read goes to OCCT whole, as before."""
+    from planner.geometry.bundle import load_part_meshes
+
     if product.source == "<memory>":
         raise FreeCADError("the occt engine reads a bundle's B-rep files: give it a bundle folder")
-    folder = (product.geometry or {}).get("x-temporary-bundle") or Path(product.source).parent
-    data = run_batch("analyze-occt", {"folder": str(folder), "contact": tolerances.contact,
-                                      "interference": tolerances.interference, "depth": tolerances.depth,
-                                      "pair_budget": tolerances.pair_budget,
-                                      "directions": _occt_directions(product, tolerances)},
-                     on_note=lambda text: print(text, file=sys.stderr, flush=True))
+    try:
+        meshes = load_part_meshes(product)
+    except PlannerError:
+        meshes = None
+    if meshes is not None:
+        return mesh_then_occt(product, meshes, tolerances, "occt", lambda arguments: _run_occt(product, arguments))
+    data = _run_occt(product, {"contact": tolerances.contact, "interference": tolerances.interference,
+                               "depth": tolerances.depth, "pair_budget": tolerances.pair_budget,
+                               "pair_steps": tolerances.pair_steps, "time_limit": tolerances.time_limit,
+                               "directions": _occt_directions(product, tolerances)})
     return occt_report(product, data)
+
+
+def _run_occt(product: Product, arguments: dict) -> dict:
+    # A CAD model's product names the model as its source; its B-reps are in the kept temporary bundle.
+    folder = (product.geometry or {}).get("x-temporary-bundle") or Path(product.source).parent
+    return run_batch("analyze-occt", {"folder": str(folder), **arguments},
+                     on_note=lambda text: print(text, file=sys.stderr, flush=True))
+
+
+def _mesh_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
+    """The mesh engine, with the pairs of parts that have no good mesh (rule ``exact`` or ``box``) decided by
+    OCCT (:mod:`freecad_aplan.hybrid`); without FreeCAD, or without B-reps, the meshes decide them, with a
+    warning."""
+    from planner.geometry.bundle import ENGINES, load_part_meshes
+
+    fallback = fallback_parts(product)
+    if not fallback:
+        return ENGINES["mesh"](product, tolerances)
+    meshes = load_part_meshes(product)
+    missing = [p.id for p in product.parts if p.id in fallback and not getattr(p, "brep", None)]
+    if product.source == "<memory>" or missing:
+        report = ENGINES["mesh"](product, tolerances)
+        return replace(report, warnings=(f"parts {', '.join(sorted(fallback))} have no mesh within the B-rep "
+                                         "tolerance and no B-rep to decide their pairs on: the meshes decide "
+                                         "them", *report.warnings))
+    try:
+        find_freecadcmd()
+    except FreeCADError as exc:
+        report = ENGINES["mesh"](product, tolerances)
+        return replace(report, warnings=(f"parts {', '.join(sorted(fallback))} have no mesh within the B-rep "
+                                         f"tolerance; OCCT would decide their pairs, but {exc}: the meshes "
+                                         "decide them", *report.warnings))
+    return mesh_then_occt(product, meshes, tolerances, "mesh", lambda arguments: _run_occt(product, arguments))
 
 
 def _occt_directions(product: Product, tolerances: Tolerances) -> list[list[float]]:
@@ -246,7 +288,7 @@ def _export_command(subparsers) -> None:
                  if getattr(args, k) is not None}
         product = export_bundle(args.model, args.output, args.engine,
                                 {**given, "resolution": args.resolution, "directions": args.directions,
-                                 "pair_budget": args.pair_budget},
+                                 "pair_budget": args.pair_budget, "time_limit": args.time_limit},
                                 dict(args.group),
                                 args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
                                 args.freecadcmd, args.force, args.redetect, args.direction, args.skip_damaged)
@@ -270,3 +312,4 @@ def register(registry) -> None:
     for suffix in MODEL_SUFFIXES:
         registry.loaders[suffix] = _load_model
     registry.engines["occt"] = _occt_engine
+    registry.engines["mesh"] = _mesh_engine  # the planner's, plus OCCT for the parts without a good mesh

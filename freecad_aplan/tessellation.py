@@ -14,8 +14,17 @@ engine invents interferences and misses contacts. So every mesh is compared with
   B-spline, which BRepMesh meshes by another code path), ``netgen`` (when FreeCAD was built with it).
   The order is by cost and by what worked: on that part, finer took 2 s (-29 %, the same faces
   missing), Mefisto 2.5 s (+0.56 %), toNurbs 26 s (-20 %, open; its B-splines also change the volume by 9 %);
-- when none passes, the closest mesh is kept and the part is marked ``exact``: only the OCCT engine's
-  results are reliable for it.
+- when none passes, the closest mesh is kept and the part is marked ``exact``; the export then gives it a
+  fallback (:func:`freecad_aplan.export.fallback_mesh`): its ring hull when that is tight (a spring's tube,
+  :mod:`freecad_aplan.hull`), else its pairs are decided on its exact shape (:mod:`freecad_aplan.hybrid`),
+  with its bounding box as its mesh when no closed mesh was made.
+
+The work is bounded, not timed: at most ``refinements`` methods after the first (default
+:data:`~planner.defaults.MESH_REFINEMENTS`), and no mesh of more than ``triangle_budget`` facets (default
+:data:`~planner.defaults.MESH_TRIANGLE_BUDGET`): ``finer`` is not even run when the first mesh times
+:data:`FINER_GROWTH` is over it (measured: 5 to 7 times the facets), and a mesh over it is not kept. A
+helical spring is the usual case: its first mesh is 2.7 % short, ``finer`` gets within 1 % with 99,000
+facets, Mefisto is 16 % short.
 """
 from __future__ import annotations
 
@@ -24,11 +33,12 @@ from dataclasses import dataclass, field
 
 import MeshPart
 
-from planner.defaults import MESH_TOLERANCE
+from planner.defaults import MESH_REFINEMENTS, MESH_TOLERANCE, MESH_TRIANGLE_BUDGET
 
-__all__ = ["MeshCheck", "checked_mesh", "METHODS"]
+__all__ = ["MeshCheck", "checked_mesh", "box_mesh", "METHODS", "FINER_GROWTH"]
 
 METHODS = ("standard", "finer", "mefisto", "nurbs", "netgen")
+FINER_GROWTH = 5  # facets of a ``finer`` mesh over those of the first (5 to 7 measured on springs and pins)
 
 
 @dataclass
@@ -76,28 +86,48 @@ def _closed(mesh) -> bool:
     return mesh.isSolid()
 
 
+def box_mesh(shape):
+    """A closed mesh of ``shape``'s bounding box (12 facets): the stand-in of a part without a closed mesh."""
+    import FreeCAD
+    import Mesh
+    import Part
+
+    box = shape.BoundBox
+    solid = Part.makeBox(max(box.XLength, 1e-6), max(box.YLength, 1e-6), max(box.ZLength, 1e-6),
+                         FreeCAD.Vector(box.XMin, box.YMin, box.ZMin))
+    return Mesh.Mesh(solid.tessellate(1.0))
+
+
 def checked_mesh(shape, linear: float, angular: float, tolerance: float = MESH_TOLERANCE,
-                 methods: tuple[str, ...] = METHODS):
+                 methods: tuple[str, ...] = METHODS, refinements: int = MESH_REFINEMENTS,
+                 triangle_budget: int = MESH_TRIANGLE_BUDGET):
     """The mesh of ``shape`` (closed, global coordinates) and its :class:`MeshCheck`.
 
-    Tries ``methods`` in order and keeps the first closed mesh whose volume and area are within
-    ``tolerance`` (a fraction) of the B-rep's, else the closed (or any) mesh with the smallest volume
-    error, marked ``exact``. Cost: one tessellation when the first passes (0.01-0.3 s a part); the later
-    methods take seconds each (Mefisto about 4 s on a 64 mm part of 18 faces), and run only for parts whose
-    mesh failed.
+    Tries ``methods`` in order, at most ``1 + refinements`` of them, and keeps the first closed mesh of at
+    most ``triangle_budget`` facets whose volume and area are within ``tolerance`` (a fraction) of the
+    B-rep's, else the closed (or any) mesh with the smallest volume error, marked ``exact`` (a method
+    skipped for the budget is listed in ``tried`` with error None and 0 s). Cost: one tessellation when
+    the first passes (0.01-0.3 s a part); at most ``refinements`` more for a part whose mesh failed (seconds
+    each: Mefisto about 4 s on a 64 mm part of 18 faces, 9 s on a spring of 10 turns).
     """
     volume, area = shape.Volume, shape.Area
     best = None  # (closed, -|volume error|) largest is best
     tried: list[tuple[str, float | None, float]] = []
-    for method in methods:
+    first_facets = None
+    for method in methods[:1 + max(int(refinements), 0)]:
+        if method == "finer" and first_facets is not None and first_facets * FINER_GROWTH > triangle_budget:
+            tried.append((method, None, 0.0))  # it would be over the budget: not run
+            continue
         start = time.perf_counter()
         try:
             mesh = _mesh(shape, method, linear, angular)
         except Exception:  # a mesher missing from this build (Netgen), or failing on this shape
             mesh = None
-        if mesh is None or mesh.CountFacets == 0:
+        if mesh is None or mesh.CountFacets == 0 or (first_facets is not None and mesh.CountFacets > triangle_budget):
             tried.append((method, None, time.perf_counter() - start))
             continue
+        if first_facets is None:
+            first_facets = mesh.CountFacets
         closed = _closed(mesh)
         volume_error = (mesh.Volume - volume) / volume
         area_error = (mesh.Area - area) / area

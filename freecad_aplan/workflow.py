@@ -151,7 +151,9 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
 
         designer = [d.vector for d in designer_geometry(product).directions]  # tested like the axes
         report = occt_report(product, analyze_bundle_breps(folder, contact=contact, interference=interference,
-                                                           depth=depth, directions=designer))
+                                                           depth=depth, directions=designer,
+                                                           pair_steps=tolerances.pair_steps,
+                                                           time_limit=tolerances.time_limit))
     else:
         report = analyze_product(product, engine, tolerances)
     save_product(apply_report(product, report), Path(folder) / PRODUCT_FILE)

@@ -9,7 +9,8 @@ __all__ = [
     "PRODUCT_FORMAT", "PRODUCT_VERSION", "PRODUCT_FILE",
     "CONTACT_TOLERANCE", "CONTACT_CEILING_FRACTION", "TOUCHING_FRACTION", "INTERFERENCE_VOLUME", "BLOCKING_DEPTH",
     "RASTER_RESOLUTION", "CANDIDATE_DIRECTIONS",
-    "LINEAR_DEFLECTION", "ANGULAR_DEFLECTION", "MESH_TOLERANCE", "OCCT_PAIR_BUDGET",
+    "LINEAR_DEFLECTION", "ANGULAR_DEFLECTION", "MESH_TOLERANCE", "MESH_REFINEMENTS", "MESH_TRIANGLE_BUDGET", "OCCT_PAIR_BUDGET",
+    "OCCT_TIME_LIMIT", "OCCT_PAIR_STEPS",
     "INTENTION_LIMIT", "SUBASSEMBLY_LIMIT", "CUTS_PER_SUBASSEMBLY", "MEMORY_LIMIT", "FILE_LIMIT", "DISCOUNT",
     "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
     "CONFIDENCE", "DECISION_TIME", "ONLINE_EXPANSIONS", "ONLINE_DEPTH",
@@ -46,9 +47,19 @@ ANGULAR_DEFLECTION = 0.25    # radians between neighbouring facet normals on cur
 # A part's mesh is re-tessellated (another method) when its volume or area differs from the B-rep's by more
 # than this fraction (chordal meshes of curved parts are 0.1-0.6 % smaller at the deflections above).
 MESH_TOLERANCE = 0.01
+# The work of that check, per part: at most this many methods after the first, and no mesh of more facets than
+# this (a helical spring needs about 99,000 to be within 1 %; the truck's and the pump's parts at most ~15,000).
+# A part no method gets right within them falls back (freecad_aplan.tessellation: rule "exact" or "box").
+MESH_REFINEMENTS = 2
+MESH_TRIANGLE_BUDGET = 60_000
 # The exact (OCCT) engine: CPU seconds of work per pair of parts before the pair is reported undecided (the
 # slowest pairs of the 61-part truck take about 10 s).
 OCCT_PAIR_BUDGET = 30.0
+# ... and at most this many OCCT operations (a distance, a common, a prism's test) per pair: work, not seconds.
+OCCT_PAIR_STEPS = 400
+# ... and at most this many CPU seconds over all the pairs it is given; the pairs left when it runs
+# out keep the mesh engine's answer (freecad_aplan.hybrid), so an 88-part assembly is done within 5 minutes.
+OCCT_TIME_LIMIT = 180.0
 
 # Assembly plans: intention graphs larger than this are refused before they are built.
 INTENTION_LIMIT = 1_000_000

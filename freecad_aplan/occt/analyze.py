@@ -30,7 +30,9 @@ class BrepError(DocumentError):
 def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTACT_TOLERANCE,
                    interference: float = INTERFERENCE_VOLUME, depth: float = BLOCKING_DEPTH,
                    pair_budget: float = OCCT_PAIR_BUDGET, budgets: dict | None = None,
-                   progress: Callable[[str], None] | None = None, directions=()) -> dict:
+                   progress: Callable[[str], None] | None = None, directions=(), pairs=None,
+                   pair_steps: int | None = None, time_limit: float | None = None,
+                   clock: Callable[[], float] = time.process_time) -> dict:
     """Contacts, interferences and the +X, +Y, +Z obstruction diagrams of exact part shapes, and those along
     the unit vectors ``directions`` (the designer's, the candidate directions of
     :func:`planner.geometry.mesh_engine.candidate_directions`), tested like the axes.
@@ -47,7 +49,12 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
 
     Time: OCCT works at most ``pair_budget`` seconds on a pair of parts (``budgets`` maps pairs of ids to
     other budgets, checked between booleans); a pair it cannot decide in time counts as touching and
-    blocking, is listed under ``undecided`` and named in a warning, and the others go on. ``progress``
+    blocking, is listed under ``undecided`` and named in a warning, and the others go on. Work too:
+    ``pair_steps`` OCCT operations per pair at most (None: no bound; :class:`~.budget.PairClock`), and
+    ``time_limit`` seconds of ``clock`` (CPU seconds of this process) over the whole run, after which every pair left is
+    undecided (``timed_out`` is then True); ``undecided_relations`` lists ``[a, b, what]``, ``what`` being
+    ``"the contact"``, ``"the overlap"`` or ``"X moving along D"``. ``pairs``: the pairs of ids to decide (None: all): the others
+    are neither measured nor reported (:mod:`freecad_aplan.hybrid` decides them on the meshes). ``progress``
     receives a line every few seconds. ``pairs`` counts the contact pairs decided by part boxes (``far``), by
     face boxes (``far_faces``) and those measured exactly (``exact``), and the obstruction candidates (over
     all the directions) by part boxes (``sweep_candidates``) and those left by face boxes (``sweep_exact``).
@@ -92,7 +99,17 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
 
     if not pair_budget >= 0:
         raise GeometryError(f"pair_budget must be >= 0 seconds, got {pair_budget!r}")
-    clock = PairClock(ids, pair_budget, budgets, progress)
+    if time_limit is not None and not (time_limit > 0 and math.isfinite(time_limit)):
+        raise GeometryError(f"time_limit must be a finite number of seconds above 0, got {time_limit!r}")
+    if pair_steps is not None and not (isinstance(pair_steps, int) and pair_steps >= 0):
+        raise GeometryError(f"pair_steps must be a whole number >= 0, got {pair_steps!r}")
+    clock = PairClock(ids, pair_budget, budgets, progress, steps=pair_steps, time_limit=time_limit, clock=clock)
+    if pairs is not None:
+        index = {part_id: k for k, part_id in enumerate(ids)}
+        unknown = sorted({p for pair in pairs for p in pair} - set(index))
+        if unknown:
+            raise BrepError(f"pairs name parts that are not given: {', '.join(unknown)}")
+        clock.selected = {(min(index[a], index[b]), max(index[a], index[b])) for a, b in pairs if a != b}
     faces = [face_boxes(s) for s in shapes]
     contacts, overlap = find_contacts(ids, shapes, boxes, faces, points, contact, fuzzies, warnings, clock)
     interferences = [(i, j, overlap[i, j][0]) for i, j in contacts if overlap.get((i, j), (0.0,))[0] > interference]
@@ -102,7 +119,7 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     extra = _named_directions(directions)
     obstructions = find_obstructions(ids, shapes, boxes, faces, overlap, contact, depth, fuzzies, warnings, clock,
                                      list(extra.items()))
-    warnings.extend(clock.warnings())
+    warnings.extend(clock.warnings() if pairs is None else clock.warnings("the mesh engine's answer stands"))
     return {
         "engine": "occt", "parts": len(ids),
         "contacts": [[ids[i], ids[j]] for i, j in contacts],
@@ -112,7 +129,11 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
         "tolerances": {"contact": contact, "interference": interference, "depth": depth,
                        "volume": depth ** 3},
         "undecided": [[ids[i], ids[j]] for i, j in sorted(clock.undecided)], "pairs": dict(clock.counts),
-        "pair_budget": pair_budget, "warnings": warnings, "seconds": round(time.perf_counter() - start, 3),
+        "undecided_relations": [[ids[i], ids[j], what] for (i, j), whats in sorted(clock.undecided.items())
+                                for what in whats],
+        "pair_budget": pair_budget, "pair_steps": pair_steps, "time_limit": time_limit,
+        "timed_out": clock.timed_out, "selected": None if clock.selected is None else len(clock.selected),
+        "warnings": warnings, "seconds": round(time.perf_counter() - start, 3),
     }
 
 

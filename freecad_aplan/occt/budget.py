@@ -9,23 +9,32 @@ import numpy as np
 
 from .solids import bounding_box
 
+SHOWN = 10  # undecided pairs told one per line; the others in one line
+
 __all__ = ["PairClock", "face_boxes", "face_gap", "sweep_meets"]
 
 
 class PairClock:
-    """CPU seconds of OCCT work spent per unordered pair of parts, against a budget, and progress reports.
+    """The work OCCT spends per unordered pair of parts, against per-pair bounds and an overall time limit,
+    and progress reports.
 
-    A pair is *undecided* when its work would go beyond its budget (``budget``, or ``budgets[{a, b}]`` for
-    the pair of ids ``a``, ``b``): the engine stops working on it, reports it and goes on with the others.
-    OCCT's booleans cannot be interrupted, so the budget is checked between them: a pair may overrun by one
-    boolean. CPU time of this process (OCCT's booleans run in it, on one core), so that a loaded machine
-    does not make pairs undecided; ``progress`` receives a line at most every ``every`` seconds of wall clock
-    (and the last of each phase).
+    A pair is *undecided* when its work would go beyond its bounds: ``steps`` OCCT operations (a distance,
+    a common, one prism's test: counted at each :meth:`exhausted` that lets one start; None: no bound), or
+    ``budget`` CPU seconds (``budgets[{a, b}]`` for the pair of ids ``a``, ``b``), or when ``time_limit``
+    seconds of ``clock`` (CPU seconds of this process by default, as the budgets, so that a machine loaded
+    by other work does not leave pairs undecided; injectable for tests) have passed since the clock was made: the engine
+    stops working on it, reports it and goes on with the others (after the time limit, every pair left is
+    undecided at once). OCCT's booleans cannot be interrupted, so the bounds are checked between them: a
+    pair may overrun by one boolean. CPU time of this process (OCCT's booleans run in it, on one core), so
+    that a loaded machine does not make pairs undecided; ``progress`` receives a line at most every
+    ``every`` seconds of wall clock (and the last of each phase).
     """
 
     def __init__(self, ids: list[str], budget: float, budgets: dict | None = None,
-                 progress: Callable[[str], None] | None = None, every: float = 5.0) -> None:
+                 progress: Callable[[str], None] | None = None, every: float = 5.0, steps: int | None = None,
+                 time_limit: float | None = None, clock: Callable[[], float] = time.process_time) -> None:
         self.ids, self.budget, self.progress, self.every = ids, budget, progress, every
+        self.steps, self.time_limit, self.clock = steps, time_limit, clock
         index = {part_id: k for k, part_id in enumerate(ids)}
         self.budgets = {}
         for pair, seconds in (budgets or {}).items():
@@ -33,21 +42,41 @@ class PairClock:
             if a is not None and b is not None:
                 self.budgets[min(a, b), max(a, b)] = float(seconds)
         self.spent: dict[tuple[int, int], float] = {}
+        self.work: dict[tuple[int, int], int] = {}
         self.undecided: dict[tuple[int, int], list[str]] = {}
         self.counts = {"far": 0, "far_faces": 0, "exact": 0, "sweep_candidates": 0, "sweep_exact": 0}
+        self.timed_out = False
+        self.selected: set[tuple[int, int]] | None = None  # the pairs to decide (None: all), by index
         self._current: tuple[tuple[int, int], float] | None = None
-        self._start = self._last = time.perf_counter()
+        self._start = self.clock()
+        self._began = self._last = time.perf_counter()
+
+    def wanted(self, i: int, j: int) -> bool:
+        """True when the pair (i, j) is one the engine was asked to decide (:attr:`selected`)."""
+        return self.selected is None or self._key(i, j) in self.selected
+
+    def out_of_time(self) -> bool:
+        """True once ``time_limit`` seconds of ``clock`` have passed (it stays True)."""
+        if not self.timed_out and self.time_limit is not None and self.clock() - self._start >= self.time_limit:
+            self.timed_out = True
+        return self.timed_out
 
     def _key(self, i: int, j: int) -> tuple[int, int]:
         return (i, j) if i < j else (j, i)
 
     def exhausted(self, i: int, j: int) -> bool:
-        """True when the pair (i, j) has used up its budget (its current work included)."""
+        """True when the pair (i, j) has used up its steps or its budget (its current work included), or the
+        time limit has passed; else one more step of its work is counted."""
         key = self._key(i, j)
         spent = self.spent.get(key, 0.0)
         if self._current is not None and self._current[0] == key:
             spent += time.process_time() - self._current[1]
-        return spent >= self.budgets.get(key, self.budget)
+        if self.out_of_time() or spent >= self.budgets.get(key, self.budget):
+            return True
+        if self.steps is not None and self.work.get(key, 0) >= self.steps:
+            return True
+        self.work[key] = self.work.get(key, 0) + 1
+        return False
 
     def start(self, i: int, j: int) -> None:
         self._current = (self._key(i, j), time.process_time())
@@ -67,14 +96,26 @@ class PairClock:
         now = time.perf_counter()
         if self.progress is not None and (now - self._last >= self.every or done == total):
             self._last = now
-            self.progress(f"occt: {phase} {done}/{total} ({now - self._start:.0f} s, "
+            self.progress(f"occt: {phase} {done}/{total} ({now - self._began:.0f} s, "
                           f"{len(self.undecided)} pairs undecided)")
 
-    def warnings(self) -> list[str]:
-        return [f"OCCT did not decide {', '.join(whats)} for {self.ids[i]!r} and {self.ids[j]!r} within the "
-                f"budget of {self.budgets.get((i, j), self.budget):g} CPU s per pair (spent "
-                f"{self.spent.get((i, j), 0.0):.1f} s); counted as touching and blocking: check this pair "
-                "(or raise --pair-budget)" for (i, j), whats in sorted(self.undecided.items())]
+    def warnings(self, fallback: str = "counted as touching and blocking") -> list[str]:
+        """One line per undecided pair (``fallback``: what its relations are taken to be), and one for the time
+        limit when it was reached."""
+        shown = sorted(self.undecided.items())[:SHOWN]
+        lines = [f"OCCT did not decide {', '.join(whats)} for {self.ids[i]!r} and {self.ids[j]!r} within the "
+                 f"budget of {self.budgets.get((i, j), self.budget):g} CPU s"
+                 f"{'' if self.steps is None else f' and {self.steps} operations'} per pair (spent "
+                 f"{self.spent.get((i, j), 0.0):.1f} s, {self.work.get((i, j), 0)} operations"
+                 f"{', time limit reached' if self.timed_out else ''}); {fallback}: check this pair "
+                 "(or raise --pair-budget, --time-limit)" for (i, j), whats in shown]
+        if len(self.undecided) > SHOWN:
+            lines.append(f"OCCT left {len(self.undecided) - SHOWN} more pairs undecided: "
+                         + ", ".join(f"{self.ids[i]}/{self.ids[j]}" for i, j in sorted(self.undecided)[SHOWN:]))
+        if self.timed_out:
+            lines.insert(0, f"OCCT reached its time limit of {self.time_limit:g} s: {len(self.undecided)} pairs "
+                            f"undecided ({fallback})")
+        return lines
 
 
 def face_boxes(shape) -> np.ndarray:

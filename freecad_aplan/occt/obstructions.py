@@ -40,13 +40,18 @@ def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth:
         pairs = []
         for i, (lo, hi) in enumerate(turned):
             clock.tick(f"obstructions {name}", i + 1, len(boxes))
-            candidates = [j for j, (lo2, hi2) in enumerate(turned) if j != i
+            candidates = [j for j, (lo2, hi2) in enumerate(turned) if j != i and clock.wanted(i, j)
                           and all(min(hi[k], hi2[k]) - max(lo[k], lo2[k]) > contact for k in (0, 1))
                           and hi2[2] > lo[2] + depth]
             clock.counts["sweep_candidates"] += len(candidates)
             candidates = [j for j in candidates if sweep_meets(turned_faces[i], turned_faces[j], 2, contact, depth)]
             clock.counts["sweep_exact"] += len(candidates)
             if not candidates:
+                continue
+            if clock.out_of_time():  # no prisms built: every candidate left is undecided
+                for j in candidates:
+                    clock.give_up(i, j, f"{ids[i]} moving along {name}")
+                    pairs.append((i, j))
                 continue
             length = scene_hi - float(lo[2]) + 1.0
             prisms, meshed = sweep_prisms(shapes[i], d, length, contact / 2, contact * 1e-3)

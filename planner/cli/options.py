@@ -283,8 +283,13 @@ def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
                        metavar="N", help=f"mesh engine: pixels across the product for the projection test, 16 to "
                                          f"{RESOLUTION_LIMIT:,} (default {d.resolution})")
     group.add_argument("--pair-budget", type=number(0), default=d.pair_budget, metavar="S",
-                       help="occt engine: seconds of work per pair of parts, at least 0; a pair not decided in time "
-                            f"is reported and counted as touching and blocking (default {d.pair_budget:g})")
+                       help="occt engine: CPU seconds of work per pair of parts, at least 0; a pair not decided in "
+                            "time is reported and keeps the mesh engine's answer (counted as touching and blocking "
+                            f"when the bundle has no meshes) (default {d.pair_budget:g})")
+    group.add_argument("--time-limit", type=positive_seconds, default=d.time_limit, metavar="S",
+                       help="occt engine (and the pairs of parts without a good mesh): CPU seconds for all the pairs "
+                            "OCCT decides, above 0; the pairs left then keep the mesh engine's answer and are reported "
+                            f"(default {d.time_limit:g})")
     group.add_argument("--directions", type=_direction_count, default=d.directions, metavar="N",
                        help="mesh and occt engines: motion directions besides the axes to find on the parts' faces and "
                             f"axes and test like the axes, 0 to 64 (default {d.directions}; 0: the axes only)")
@@ -338,7 +343,7 @@ def contact_tolerances_from(args: argparse.Namespace) -> Tolerances | None:
 def tolerances_from(args: argparse.Namespace) -> Tolerances:
     return Tolerances(contact=args.contact, interference=args.interference, depth=args.depth,
                       resolution=args.resolution, directions=args.directions,
-                      contact_ceiling=args.contact_ceiling, pair_budget=args.pair_budget)
+                      contact_ceiling=args.contact_ceiling, pair_budget=args.pair_budget, time_limit=args.time_limit)
 
 
 def positive_seconds(text: str, high: float = TIME_LIMIT_MAX) -> float:

@@ -5,8 +5,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import math
+
 from ..defaults import (BLOCKING_DEPTH, CANDIDATE_DIRECTIONS, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, OCCT_PAIR_BUDGET,
-                        RASTER_RESOLUTION)
+                        OCCT_PAIR_STEPS, OCCT_TIME_LIMIT, RASTER_RESOLUTION)
 from ..errors import GeometryError
 
 __all__ = ["AUTO", "Tolerances"]
@@ -29,7 +31,9 @@ class Tolerances:
     tested like the axes (0: the axes only).
     ``designer_directions``: unit vectors the designer added (``geometry.designer`` of the product,
     :mod:`planner.product.designer`), tested like the axes besides the ``directions`` found on the geometry.
-    ``pair_budget``: OCCT engine: seconds of work per pair of parts before the pair is reported undecided.
+    ``pair_budget``: OCCT engine: seconds of work per pair of parts before the pair is reported undecided;
+    ``pair_steps``: OCCT operations per pair likewise; ``time_limit``: seconds over all the pairs OCCT
+    decides, after which the pairs left keep the mesh engine's answer (:mod:`freecad_aplan.hybrid`).
     """
 
     contact: float | str = CONTACT_TOLERANCE
@@ -39,6 +43,8 @@ class Tolerances:
     grazing: int = 1
     directions: int = CANDIDATE_DIRECTIONS
     pair_budget: float = OCCT_PAIR_BUDGET
+    pair_steps: int = OCCT_PAIR_STEPS
+    time_limit: float = OCCT_TIME_LIMIT
     contact_ceiling: float | None = None
     designer_directions: tuple[tuple[float, float, float], ...] = ()
 
@@ -55,6 +61,10 @@ class Tolerances:
         for name in (() if self.auto else ("contact",)) + ("interference", "depth", "pair_budget"):
             if not getattr(self, name) >= 0:
                 raise GeometryError(f"tolerance {name} must be >= 0, got {getattr(self, name)!r}")
+        if not (isinstance(self.time_limit, (int, float)) and self.time_limit > 0 and math.isfinite(self.time_limit)):
+            raise GeometryError(f"the OCCT time limit must be a finite number of seconds above 0, got {self.time_limit!r}")
+        if not (isinstance(self.pair_steps, int) and self.pair_steps >= 1):
+            raise GeometryError(f"pair_steps must be a whole number >= 1, got {self.pair_steps!r}")
         if self.resolution < 16:
             raise GeometryError(f"resolution must be at least 16 pixels, got {self.resolution}")
         if not (isinstance(self.directions, int) and 0 <= self.directions <= 64):

@@ -297,21 +297,28 @@ def test_occt_engine_through_the_command_line(pen_bundles):
 
 @pytest.mark.freecad
 def test_occt_pair_budget_through_the_command_line(pen_bundles, tmp_path):
-    """--pair-budget 0: every pair OCCT would measure is reported undecided (counted as touching), with
-    progress on standard error; the pairs told apart by their boxes are still decided."""
+    """--pair-budget 0: every pair OCCT would measure is reported undecided, with progress on standard error,
+    and keeps the mesh engine's answer (freecad_aplan/hybrid.py): the contacts are still the liaisons; the
+    pairs the meshes settle (apart) are not given to OCCT."""
     bundle = tmp_path / "b"
     shutil.copytree(pen_bundles["simplified", "FCStd"], bundle)
     done = aplan("analyze", str(bundle), "--engine", "occt", "--pair-budget", "0", "--json")
     assert "occt: contacts 15/15" in done.stderr and "occt: obstructions +Z" in done.stderr
     report = json.loads(done.stdout)
     undecided = [w for w in report["warnings"] if w.startswith("OCCT did not decide")]
-    contacts = {frozenset(c) for c in report["contacts"]}
-    # The 5 liaisons and 5 more pairs whose face boxes come within the contact tolerance are undecided
-    # contacts; the other 5 pairs are apart by their boxes; pairs that only meet along a sweep are undecided
-    # obstructions.
-    assert LIAISONS <= contacts and len(contacts) == 10
-    assert len([w for w in undecided if w.startswith("OCCT did not decide the contact")]) == 10 < len(undecided)
-    assert all("within the budget of 0 CPU s per pair" in w for w in undecided)
+    assert {frozenset(c) for c in report["contacts"]} == LIAISONS
+    pairs = report["tolerances"]["pairs"]
+    assert pairs["mesh"] + pairs["occt"] + len(pairs["undecided"]) == 15 and pairs["mesh"] > 0
+    assert LIAISONS <= {frozenset(p) for p in pairs["undecided"]}
+    assert undecided and all("within the budget of 0 CPU s and 400 operations per pair" in w for w in undecided)
+
+
+@pytest.mark.freecad
+def test_a_time_limit_that_is_not_positive_is_a_usage_error(pen_bundles):
+    for value in ("0", "-1", "nan"):
+        done = aplan("analyze", str(pen_bundles["simplified", "FCStd"]), "--engine", "occt", "--time-limit", value,
+                     check=False)
+        assert done.returncode == 2 and "--time-limit" in done.stderr, done.stderr
 
 
 IMPORT_PREFERENCE = """
@@ -369,3 +376,24 @@ def test_step_import_restores_the_link_group_preference(tmp_path):
 #: The exports and FreeCAD runs the tests read, done in the background (tests/background.py), in the order the
 #: tests need them.
 BACKGROUND = (*PEN_JOBS.values(), PLACEMENTS_JOB, *JOBS.values(), DOCUMENT_TYPES_JOB, OCCT_JOB)
+
+
+@pytest.mark.freecad
+def test_a_part_without_a_good_mesh_is_decided_on_its_exact_shape(pen_bundles, tmp_path):
+    """The mesh engine on a bundle where one part's rule is ``exact`` (set here: the pen's meshes are all
+    right): OCCT decides the pairs with that part (freecad_aplan/hybrid.py), and the diagrams still match the
+    ground truth; the pairs without it are settled on the meshes."""
+    bundle = tmp_path / "b"
+    shutil.copytree(pen_bundles["simplified", "FCStd"], bundle)
+    data = json.loads((bundle / "product.json").read_text())
+    part = data["parts"][0]["id"]
+    data["geometry"]["mesh_check"]["parts"][part]["rule"] = "exact"
+    (bundle / "product.json").write_text(json.dumps(data))
+    done = aplan("analyze", str(bundle), "--engine", "mesh", "--json")
+    report = json.loads(done.stdout)
+    pairs = report["tolerances"]["pairs"]
+    assert pairs["fallback"] == {part: "exact"} and pairs["mesh"] == 15 - 5 and pairs["occt"] == 5
+    assert f"parts decided on their exact shape: {part} (exact)" in report["warnings"][0]
+    assert {frozenset(c) for c in report["contacts"]} == LIAISONS
+    for name in ("+X", "+Y", "+Z"):
+        assert {tuple(p) for p in report["obstructions"][name]} == ground_truth(name), name

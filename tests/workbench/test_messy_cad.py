@@ -171,5 +171,6 @@ def test_occt_pair_budget(messy):
     assert budget["obstructions"]["+X"] == free["obstructions"]["+X"] == [["a", "b"], ["a", "c"], ["b", "c"]]
     assert [w for w in budget["warnings"] if w.startswith("OCCT did not decide")] == [
         "OCCT did not decide the contact, a moving along +X for 'a' and 'b' within the budget of 0 CPU s per pair "
-        "(spent 0.0 s); counted as touching and blocking: check this pair (or raise --pair-budget)"]
+        "(spent 0.0 s, 0 operations); counted as touching and blocking: check this pair (or raise --pair-budget, "
+        "--time-limit)"]
     assert budget["pairs"]["far"] >= 3 and any("pairs" in line for line in messy["progress"])

@@ -1,0 +1,158 @@
+"""Both engines on one bundle: the meshes settle the easy pairs, OCCT the rest, within a budget.
+
+Definitions
+-----------
+- A part's *rule* (``geometry.mesh_check.parts[id].rule`` of the bundle, :func:`freecad_aplan.export.mesh_rule`)
+  says how its relations are decided: ``mesh`` and ``refined`` (a mesh within 1 % of its B-rep) on the
+  meshes; ``exact`` and ``box`` (no mesh within 1 % in the tessellation's work bound: springs, helices) on
+  its exact shape; ``hull`` on its ring hull's mesh, by both engines (a spring's exact shape is what OCCT
+  cannot sweep within a bound). A bundle without that record (written by hand, older) has every part on
+  the meshes.
+- An *easy* pair, for the occt engine, is one whose two parts are on the meshes and whose meshes' bounding
+  boxes are apart by more than the contact tolerance: the surfaces cannot touch, and the mesh engine's
+  projection test errs only where surfaces touch or slide along each other (the slivers of two
+  tessellations, :mod:`planner.geometry.mesh_engine`), so its answer stands. Every other pair is an
+  *exact* pair: the mesh engine first, then OCCT on the exact pairs only
+  (:func:`freecad_aplan.occt.analyze_shapes` with ``pairs``), at most ``pair_budget`` CPU s and
+  ``pair_steps`` operations per pair, ``time_limit`` s in all.
+- The mesh engine decides every pair on the meshes, then OCCT decides the pairs of parts whose rule is
+  ``exact`` or ``box`` (only those), within the same bounds.
+- A relation OCCT leaves undecided (bounds, time limit) keeps the mesh engine's answer, relation by
+  relation (a pair's contact; each motion of one part along one direction), and is reported: in the
+  warnings, and in ``tolerances["pairs"]`` of the report (``mesh``: pairs settled on the meshes, ``occt``:
+  wholly decided by OCCT, ``undecided``: the pairs with a relation left, ``timed_out``).
+
+This module does not import FreeCAD: OCCT runs in FreeCADCmd (:mod:`freecad_aplan.runner`).
+"""
+from __future__ import annotations
+
+import sys
+from dataclasses import replace
+from typing import Callable
+
+import numpy as np
+
+from planner.geometry import GeometryReport, Tolerances
+from planner.geometry.mesh_engine import PartMesh, analyze_meshes
+from planner.product import Product
+
+__all__ = ["fallback_parts", "exact_pairs", "merge_reports", "mesh_then_occt"]
+
+EXACT_RULES = ("exact", "box")
+
+
+def fallback_parts(product: Product, rules=EXACT_RULES) -> dict[str, str]:
+    """The parts of ``product`` whose rule is one of ``rules`` (module docstring), with their rule."""
+    parts = (product.geometry.get("mesh_check") or {}).get("parts") or {}
+    found = {}
+    for part_id, check in parts.items():
+        rule = check.get("rule") or ("exact" if check.get("method") == "exact" else "mesh")
+        if rule in rules and part_id in product.part_ids:
+            found[part_id] = rule
+    return found
+
+
+def exact_pairs(meshes: list[PartMesh], fallback, contact: float, near: bool, hulls=()) -> list[tuple[str, str]]:
+    """The pairs OCCT decides: every pair with a part of ``fallback``, and with ``near``, every pair whose
+    meshes' bounding boxes are within ``contact`` of each other (module docstring), except the pairs with a
+    part of ``hulls`` (rule ``hull``: decided on its hull, its exact shape being what OCCT cannot sweep
+    within a bound). Cost O(parts^2)."""
+    lo = np.array([m.vertices.min(axis=0) for m in meshes])
+    hi = np.array([m.vertices.max(axis=0) for m in meshes])
+    gaps = np.maximum(lo[:, None, :] - hi[None, :, :], lo[None, :, :] - hi[:, None, :]).max(axis=2)
+    pairs = []
+    for i in range(len(meshes)):
+        for j in range(i + 1, len(meshes)):
+            if meshes[i].id in hulls or meshes[j].id in hulls:
+                continue
+            if meshes[i].id in fallback or meshes[j].id in fallback or (near and gaps[i, j] <= contact):
+                pairs.append((meshes[i].id, meshes[j].id))
+    return pairs
+
+
+def _open_relations(occt: dict) -> tuple[set, set]:
+    """The pairs whose contact OCCT left undecided ({a, b}) and the motions it left undecided ((mover, other,
+    direction name)), from ``undecided_relations`` (else every relation of an ``undecided`` pair)."""
+    contacts, motions = set(), set()
+    relations = occt.get("undecided_relations")
+    if relations is None:
+        return {frozenset(p) for p in occt.get("undecided", [])}, None
+    for a, b, what in relations:
+        if what in ("the contact", "the overlap"):
+            contacts.add(frozenset((a, b)))
+        else:
+            mover, _, name = what.rpartition(" moving along ")
+            motions.add((mover, b if mover == a else a, name))
+    return contacts, motions
+
+
+def merge_reports(mesh: GeometryReport, occt: dict, pairs, engine: str, fallback: dict[str, str]) -> GeometryReport:
+    """The mesh engine's report with what OCCT decided (``occt``: the answer of
+    :func:`freecad_aplan.occt.analyze_bundle_breps`) on the pairs of ``pairs`` taken from OCCT, relation by
+    relation: a pair's contact and interference, and each motion (mover, direction) along every direction
+    the mesh engine tested. A relation OCCT left undecided keeps the mesh answer."""
+    asked = {frozenset(p) for p in pairs}
+    open_contacts, open_motions = _open_relations(occt)
+    undecided = {frozenset(p) for p in occt.get("undecided", [])} & asked
+
+    def contact_ours(pair) -> bool:
+        return frozenset(pair) in asked and frozenset(pair) not in open_contacts
+
+    def motion_ours(pair, name: str) -> bool:
+        key = frozenset(pair)
+        if key not in asked:
+            return False
+        if open_motions is None:
+            return key not in open_contacts
+        return (pair[0], pair[1], name) not in open_motions
+
+    contacts = [c for c in mesh.contacts if not contact_ours(c)] + \
+        [tuple(c) for c in occt["contacts"] if contact_ours(c)]
+    interferences = [i for i in mesh.interferences if not contact_ours(i[:2])] + \
+        [(i["parts"][0], i["parts"][1], float(i["volume"])) for i in occt["interferences"] if contact_ours(i["parts"])]
+    obstructions = {}
+    for name, found in mesh.obstructions.items():
+        exact = occt["obstructions"].get(name)
+        if exact is None:  # a direction OCCT did not test: the meshes decide it
+            obstructions[name] = tuple(found)
+            continue
+        obstructions[name] = tuple([tuple(p) for p in found if not motion_ours(tuple(p), name)] +
+                                   [tuple(p) for p in exact if motion_ours(tuple(p), name)])
+    record = {"mesh": len(mesh.parts) * (len(mesh.parts) - 1) // 2 - len(asked),
+              "occt": len(asked - undecided), "undecided": sorted(sorted(p) for p in undecided),
+              "undecided_relations": len(occt.get("undecided_relations", [])),
+              "timed_out": bool(occt.get("timed_out")), "time_limit": occt.get("time_limit"),
+              "fallback": dict(sorted(fallback.items()))}
+    tolerances = {**mesh.tolerances, "pairs": record,
+                  **({"occt": occt["tolerances"]} if engine == "occt" and "tolerances" in occt else {})}
+    summary = (f"{engine} engine: {record['mesh']} pairs settled on the meshes, {record['occt']} decided by OCCT"
+               f"{f', {len(undecided)} partly undecided (the mesh answer kept for what OCCT did not decide)' if undecided else ''}"
+               + (f"; parts decided on their exact shape: "
+                  f"{', '.join(f'{p} ({r})' for p, r in sorted(fallback.items()))}" if fallback else ""))
+    return replace(mesh, engine=engine, contacts=tuple(contacts), interferences=tuple(interferences),
+                   obstructions=obstructions, tolerances=tolerances,
+                   warnings=(summary, *mesh.warnings, *occt.get("warnings", ())),
+                   seconds=mesh.seconds + float(occt.get("seconds", 0.0)))
+
+
+def mesh_then_occt(product: Product, meshes: list[PartMesh], tolerances: Tolerances, engine: str,
+                   run_occt: Callable[[dict], dict]) -> GeometryReport:
+    """The report of ``engine`` (``mesh`` or ``occt``) decided as the module docstring says: the mesh engine
+    on ``meshes``, then ``run_occt(arguments)`` (the ``analyze-occt`` batch job) on the exact pairs. With
+    the mesh engine and no part of rule ``exact``/``box``, OCCT does not run. Cost: the mesh engine's, plus
+    at most ``tolerances.time_limit`` s of OCCT."""
+    report = analyze_meshes(meshes, tolerances)
+    fallback = fallback_parts(product)
+    if engine == "mesh" and not fallback:
+        return report
+    pairs = exact_pairs(meshes, fallback, float(tolerances.contact), near=engine == "occt",
+                        hulls=fallback_parts(product, ("hull",)))
+    if not pairs:
+        return merge_reports(report, {"contacts": [], "interferences": [], "obstructions": {}}, [], engine, fallback)
+    arguments = {"contact": tolerances.contact, "interference": tolerances.interference, "depth": tolerances.depth,
+                 "pair_budget": tolerances.pair_budget, "pair_steps": tolerances.pair_steps,
+                 "time_limit": tolerances.time_limit, "pairs": [list(p) for p in pairs],
+                 "directions": [list(v) for v in report.directions.values()]}
+    print(f"occt: deciding {len(pairs)} of {len(meshes) * (len(meshes) - 1) // 2} pairs on the exact shapes "
+          f"(at most {tolerances.time_limit:g} s)", file=sys.stderr, flush=True)
+    return merge_reports(report, run_occt(arguments), pairs, engine, fallback)

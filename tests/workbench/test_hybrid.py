@@ -1,0 +1,51 @@
+"""The merge of the mesh engine's and OCCT's answers (freecad_aplan/hybrid.py, no FreeCAD needed): OCCT's
+answer is taken relation by relation for the pairs it was asked, the mesh engine's kept for everything else
+and for every relation OCCT left undecided."""
+from __future__ import annotations
+
+from freecad_aplan.hybrid import exact_pairs, fallback_parts, merge_reports
+from planner.geometry import Tolerances
+from planner.geometry.mesh_engine import analyze_meshes
+from planner.product import product_from_dict
+from test_budgets import box_meshes
+
+
+def _mesh():
+    return analyze_meshes(box_meshes(), Tolerances(directions=0))
+
+
+def test_easy_pairs_are_the_far_ones_between_good_meshes():
+    meshes = box_meshes()
+    # a-b, b-c touch (boxes within the contact tolerance); a-c and the far box are apart.
+    assert exact_pairs(meshes, {}, 0.01, near=True) == [("a", "b"), ("b", "c")]
+    assert exact_pairs(meshes, {}, 0.01, near=False) == []
+    assert exact_pairs(meshes, {"far": "exact"}, 0.01, near=False) == [("a", "far"), ("b", "far"), ("c", "far")]
+    assert exact_pairs(meshes, {}, 0.01, near=True, hulls={"b": "hull"}) == []  # decided on the hull's mesh
+
+
+def test_occt_decides_relation_by_relation():
+    mesh = _mesh()
+    assert ("a", "b") in mesh.obstructions["+X"] and ("b", "c") in mesh.obstructions["+X"]
+    # OCCT (made up, to tell the sources apart): a and b do not touch, a moving along +X is undecided, b moving
+    # along +X does not hit c; the pair b-c keeps its contact.
+    occt = {"contacts": [["b", "c"]], "interferences": [], "undecided": [["a", "b"]],
+            "undecided_relations": [["a", "b", "a moving along +X"]], "timed_out": True, "time_limit": 1.0,
+            "obstructions": {"+X": [], "+Y": [], "+Z": []}, "warnings": ["w"]}
+    merged = merge_reports(mesh, occt, [("a", "b"), ("b", "c")], "occt", {})
+    assert {frozenset(c) for c in merged.contacts} == {frozenset(("b", "c"))}
+    assert ("a", "b") in merged.obstructions["+X"]      # undecided: the mesh answer
+    assert ("b", "c") not in merged.obstructions["+X"]  # decided by OCCT
+    record = merged.tolerances["pairs"]
+    assert record == {"mesh": 6 - 2, "occt": 1, "undecided": [["a", "b"]], "undecided_relations": 1,
+                      "timed_out": True, "time_limit": 1.0, "fallback": {}}
+    assert merged.engine == "occt" and "w" in merged.warnings
+
+
+def test_fallback_parts_come_from_the_bundle_rules():
+    product = product_from_dict({"format": "aplan-product", "version": 1, "parts": [{"id": "a"}, {"id": "s"},
+                                 {"id": "h"}, {"id": "old"}], "contacts": [],
+                                 "geometry": {"mesh_check": {"parts": {"a": {"method": "standard", "rule": "mesh"},
+                                                                       "s": {"method": "exact", "rule": "exact"},
+                                                                       "h": {"method": "exact", "rule": "hull"},
+                                                                       "old": {"method": "exact"}}}}}, "t")
+    assert fallback_parts(product) == {"s": "exact", "old": "exact"}
