@@ -78,3 +78,19 @@ def test_an_image_the_detector_cannot_read_ends_the_session_with_that_message(ro
     end = log_events(log)[-1]
     assert end["event"] == "end" and end["reason"] == "error" and end["step"] == 1
     _no_traceback(ros)
+
+
+def test_the_launch_file_starts_the_planner_and_the_vision_server_through_aplan(tmp_path):
+    require_ros()
+    import os
+    import shutil
+
+    roslaunch = shutil.which("roslaunch")
+    assert roslaunch, "roslaunch is missing (python3-roslaunch)"
+    env = {**os.environ, "ROS_PACKAGE_PATH": str(REPO / "planner" / "runtime" / "ros"), "ROS_HOME": str(tmp_path)}
+    nodes = subprocess.run([roslaunch, "--nodes", "aplan_ros", "cell.launch", "product:=pen"], env=env,
+                           capture_output=True, text=True, timeout=120)
+    assert nodes.stdout.split() == ["/cell/vision", "/cell/planner"], nodes.stderr
+    args = subprocess.run([roslaunch, "--args", "/cell/planner", "aplan_ros", "cell.launch", "product:=pen"], env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert args.stdout.strip().endswith("aplan_ros/aplan ros --node planner __name:=planner"), args.stdout
