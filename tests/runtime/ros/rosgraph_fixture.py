@@ -124,3 +124,21 @@ def wait_for(predicate, what: str, timeout: float = 120) -> None:
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out waiting for {what}")
         time.sleep(0.05)
+
+
+@pytest.fixture(scope="session")
+def ros_cache(tmp_path_factory):
+    """One folder of generated aplan_msgs for the test session."""
+    return tmp_path_factory.mktemp("aplan_msgs")
+
+
+@pytest.fixture
+def ros(tmp_path, ros_cache):
+    """A running ROS master on a free loopback port; stopped after the test with every node."""
+    require_ros()
+    graph = RosGraph(tmp_path, ros_cache)
+    graph.start_master()
+    try:
+        yield graph
+    finally:
+        graph.stop()

@@ -6,7 +6,7 @@ import subprocess
 import sys
 import textwrap
 
-from rosgraph_fixture import REPO, log_events, require_ros
+from rosgraph_fixture import REPO, log_events, require_ros, ros, ros_cache  # noqa: F401 - fixtures
 
 
 def _no_traceback(ros) -> None:

@@ -9,7 +9,7 @@ import sys
 import time
 from pathlib import Path
 
-from rosgraph_fixture import REPO, log_events, wait_for
+from rosgraph_fixture import REPO, log_events, ros, ros_cache, wait_for  # noqa: F401 - fixtures
 
 MODEL = ["pen", "--expansions", "200"]  # a fixed amount of work per decision: the same actions on any machine
 TIMING = ("time", "decision_ms")  # what differs between two runs of the same session
@@ -32,7 +32,7 @@ def _cell(ros, *sim: str) -> None:
 
 def _planner(ros, *extra: str) -> tuple[int, str, Path]:
     log = ros.folder / "ros.jsonl"
-    ros.aplan("planner", "ros", *MODEL, "--log", str(log), *extra)
+    ros.aplan("planner", "ros", *MODEL, "--log", str(log), "--frame-timeout", "120", *extra)  # a bound on a hang; a test may lower it
     status = ros.wait("planner")
     return status, ros.output("planner"), log
 

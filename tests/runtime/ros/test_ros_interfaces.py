@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from planner.runtime.ros.images import ENCODINGS, ImageError, image_to_array
+from rosgraph_fixture import ros_cache  # noqa: F401 - fixture
 
 
 def _image(frame: np.ndarray, encoding: str, pad: int = 0):
