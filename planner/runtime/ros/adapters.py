@@ -150,7 +150,12 @@ class RosRobot:
                 finished.set()
 
         handle = self.client.send_goal(goal_of(instruction, self.msgs.PerformGoal), on_transition)
-        if not finished.wait(self.timeout):
+        try:
+            answered = finished.wait(self.timeout)
+        except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the robot stops too, then the session's log ends
+            handle.cancel()
+            raise
+        if not answered:
             handle.cancel()
             return RobotReport(False, f"the robot server at {self.name} gave no result within {self.timeout:g} s "
                                       "(--robot-timeout); the goal was cancelled")

@@ -32,7 +32,8 @@ def _cell(ros, *sim: str) -> None:
 
 def _planner(ros, *extra: str) -> tuple[int, str, Path]:
     log = ros.folder / "ros.jsonl"
-    ros.aplan("planner", "ros", *MODEL, "--log", str(log), "--frame-timeout", "120", *extra)  # a bound on a hang; a test may lower it
+    # --frame-timeout: a bound on a hang (a test may lower it)
+    ros.aplan("planner", "ros", *MODEL, "--log", str(log), "--frame-timeout", "120", *extra)
     status = ros.wait("planner")
     return status, ros.output("planner"), log
 
@@ -118,5 +119,23 @@ def test_the_image_topic_stopping(ros):
     assert "no marker message on /markers for 8 s (--frame-timeout) after 12 frames" in output, output
     end = log_events(log)[-1]
     assert end["event"] == "end" and end["reason"] == "error" and end["step"] == 1
+    _replays(log)
+    _no_traceback(ros)
+
+
+def test_sigterm_while_the_robot_works_cancels_the_goal_and_ends_the_log(ros):
+    import os
+    import signal
+
+    _cell(ros, "--hang-at", "2")
+    log = ros.folder / "ros.jsonl"
+    ros.aplan("planner", "ros", *MODEL, "--log", str(log), "--frame-timeout", "120")
+    wait_for(lambda: log.is_file() and any(e["event"] == "action" and e["step"] == 2 for e in log_events(log)),
+             "the planner's step 2", timeout=300)
+    os.kill(ros.processes["planner"].pid, signal.SIGTERM)
+    assert ros.wait("planner") == 143
+    assert "interrupted (SIGTERM): the session log" in ros.output("planner")
+    end = log_events(log)[-1]
+    assert end["event"] == "end" and end["reason"] == "interrupted" and end["step"] == 2
     _replays(log)
     _no_traceback(ros)
