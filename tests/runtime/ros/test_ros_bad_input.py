@@ -94,3 +94,29 @@ def test_the_launch_file_starts_the_planner_and_the_vision_server_through_aplan(
     args = subprocess.run([roslaunch, "--args", "/cell/planner", "aplan_ros", "cell.launch", "product:=pen"], env=env,
                           capture_output=True, text=True, timeout=120)
     assert args.stdout.strip().endswith("aplan_ros/aplan ros --node planner __name:=planner"), args.stdout
+
+
+def test_markers_outside_the_products_map_are_a_logged_warning(ros):
+    _python(ros, "camera", """
+        import sys, time
+        import numpy as np
+        from planner.runtime.ros.system import require_ros; require_ros()
+        import rospy; from sensor_msgs.msg import Image
+        from planner.runtime.ros.images import array_to_image
+        from planner.runtime.tray import marker_image
+        frame = np.full((400, 400), 255, np.uint8); frame[100:300, 100:300] = marker_image('DICT_4X4_50', 40, 200)
+        rospy.init_node('camera'); pub = rospy.Publisher('image', Image, queue_size=1)
+        while not rospy.is_shutdown():
+            pub.publish(array_to_image(frame, Image)); time.sleep(0.02)
+    """)
+    ros.aplan("vision", "ros-vision", "pen")
+    ros.aplan("robot", "ros-robot", "--auto")
+    log = ros.folder / "ros.jsonl"
+    ros.aplan("planner", "ros", "pen", "--expansions", "50", "--log", str(log), "--max-steps", "1",
+              "--quiet-frames", "10", "--frame-timeout", "120")
+    assert ros.wait("planner") == 1
+    events = log_events(log)
+    warnings = [e["message"] for e in events if e["event"] == "warning"]
+    assert warnings == ["marker 40 is not in the product's marker map (DICT_4X4_50); ignored"], warnings  # once
+    assert events[-1]["reason"] == "step limit"
+    _no_traceback(ros)
