@@ -165,7 +165,7 @@ def _sim(args: argparse.Namespace) -> int:
                          settle=args.quiet_frames + 5)
     watch = _node(args)
     try:
-        SimulatedRosCell(cell, watch, args.fail_at, args.hang_at, args.pause_at, args.stop_after)
+        SimulatedRosCell(cell, watch, args.fail_at, args.hang_at, args.pause_at, args.stop_after, args.cancel_at)
         print(f"aplan ros-sim: {rospy.resolve_name('image')}, {rospy.resolve_name('perform')}", flush=True)
         rospy.spin()
     finally:
@@ -242,6 +242,9 @@ def add_commands(commands) -> None:
                      metavar="STEP", help="the robot never answers at STEP, until cancelled")
     sim.add_argument("--pause-at", type=number(1, STEP_LIMIT, integer=True), action="append", default=[],
                      metavar="STEP", help="the robot answers STEP only after the ROS master has gone")
+    sim.add_argument("--cancel-at", type=number(1, STEP_LIMIT, integer=True), action="append", default=[],
+                     metavar="STEP", help="the robot server cancels the goal of STEP itself (the operator changed "
+                                          "course)")
     sim.add_argument("--stop-after", type=number(0, integer=True), default=None, metavar="N",
                      help="the camera stops after N frames")
     sim.add_argument("--node", default="aplan_cell", **node)

@@ -75,7 +75,8 @@ def console_answer(instruction: Instruction, cancelled: Callable[[], bool], stre
 
 class RobotServer:
     """The ``perform`` action server; ``answer(instruction, cancelled)`` -> ``(done, reason)`` decides each
-    goal (default :func:`console_answer`). A goal cancelled while ``answer`` runs ends preempted."""
+    goal (default :func:`console_answer`); ``done`` None: the server cancels the goal itself (preempted, with
+    ``reason``). A goal the planner cancels while ``answer`` runs ends preempted."""
 
     def __init__(self, answer: Callable[[Instruction, Callable[[], bool]], tuple[bool, str]] = console_answer,
                  name: str = "perform"):
@@ -91,8 +92,10 @@ class RobotServer:
 
     def execute(self, goal) -> None:
         done, reason = self.answer(instruction_of(goal), self.server.is_preempt_requested)
-        result = self.msgs.PerformResult(done=done, reason=reason)
-        if self.server.is_preempt_requested():
+        result = self.msgs.PerformResult(done=bool(done), reason=reason)
+        if done is None:  # the server's own cancel (the operator changed course)
+            self.server.set_preempted(result, reason)
+        elif self.server.is_preempt_requested():
             self.server.set_preempted(result, "cancelled by the planner")
         else:
             self.server.set_succeeded(result)

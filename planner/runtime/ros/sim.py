@@ -6,7 +6,8 @@ The camera runs in step with the planner: it publishes the next frame only when 
 frames already rendered have run out (what the in-process demo does). So the planner sees exactly the demo's
 frames, in the demo's order, and writes the same session log. Fault drills for tests and rehearsals:
 ``fail_at`` (the robot answers "failed" at those steps), ``hang_at`` (it never answers, until cancelled),
-``pause_at`` (it answers only once the ROS master has gone), ``stop_after`` (the camera stops after that many
+``pause_at`` (it answers only once the ROS master has gone), ``cancel_at`` (it cancels the goal itself, as
+when the operator changed course), ``stop_after`` (the camera stops after that many
 frames).
 """
 from __future__ import annotations
@@ -27,14 +28,14 @@ class SimulatedRosCell:
     """Publishes ``cell``'s frames on demand and serves its robot (module docstring)."""
 
     def __init__(self, cell: SimulatedCell, watch: MasterWatch, fail_at=(), hang_at=(), pause_at=(),
-                 stop_after: int | None = None):
+                 stop_after: int | None = None, cancel_at=()):
         import rospy
         from sensor_msgs.msg import Image
         from std_msgs.msg import UInt32
 
         self.cell, self.watch = cell, watch
         self.fail_at, self.hang_at, self.pause_at = set(fail_at), set(hang_at), set(pause_at)
-        self.stop_after = stop_after
+        self.stop_after, self.cancel_at = stop_after, set(cancel_at)
         self.published = 0
         self.lock = threading.Lock()
         self._image = Image
@@ -67,6 +68,8 @@ class SimulatedRosCell:
                 time.sleep(0.1)
         if step in self.fail_at:
             return False, f"scripted failure at step {step}"
+        if step in self.cancel_at:
+            return None, "the operator changed course"
         with self.lock:
             self.cell.robot(instruction)
         return True, ""

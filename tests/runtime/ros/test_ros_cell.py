@@ -87,6 +87,15 @@ def test_a_robot_that_answers_failed(ros):
     _no_traceback(ros)
 
 
+def test_a_goal_the_robot_server_cancels_because_the_operator_changed_course(ros):
+    _cell(ros, "--cancel-at", "2")
+    status, output, log = _planner(ros)
+    assert status == 1
+    assert "the goal was cancelled by the robot server: the operator changed course" in output, output
+    _ended(log, "robot failed", 2)
+    _no_traceback(ros)
+
+
 def test_a_robot_that_never_answers_times_out_and_the_goal_is_cancelled(ros):
     _cell(ros, "--hang-at", "2")
     status, output, log = _planner(ros, "--robot-timeout", "2")
