@@ -39,8 +39,8 @@ def split_remaps(argv: list[str]) -> list[str]:
     """``argv`` without its ROS arguments (kept in :data:`REMAPS`) when it runs one of :data:`COMMANDS`."""
     if not argv or argv[0] not in COMMANDS:
         return argv
-    REMAPS[:] = [a for a in argv if ":=" in a]
-    return [a for a in argv if ":=" not in a]
+    REMAPS[:] = [str(a) for a in argv if ":=" in str(a)]
+    return [a for a in argv if ":=" not in str(a)]
 
 
 def _require() -> None:
