@@ -8,7 +8,7 @@ closed the step's observation (the simulated camera renders a frame only when th
 no later frame exists then). It covers the planner's tracking, the Bayes update, the online decision (200
 expansions), the log's fsynced lines, the belief message and the goal's trip through actionlib.
 
-    .venv/bin/python bench/bench_ros_latency.py            # 3 sessions, about 2 minutes
+    .venv/bin/python bench/bench_ros_latency.py --sessions 6   # about 5 minutes
 """
 from __future__ import annotations
 
