@@ -5,7 +5,8 @@
 # numpy, networkx, lxml, scipy, matplotlib, jsonschema and threadpoolctl (the planner, the occt engine, solving,
 # pictures);
 # the mesh engine's trimesh and manifold3d are not packaged by Debian, so the workbench runs that engine in
-# this .venv.
+# this .venv. With --ros (or --freecad --ros), also install Debian's ROS 1 (rosmaster, rospy, actionlib, genpy and
+# the standard message definitions; aplan ros, docs/ros.md) when missing, and generate aplan_msgs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -20,9 +21,19 @@ freecad_ready() {
         /usr/bin/python3 -c "import numpy, networkx, lxml, scipy, matplotlib, jsonschema, threadpoolctl" 2>/dev/null
 }
 
-if [ "${1:-}" = "--freecad" ] && ! freecad_ready; then
-    if [ "$(id -u)" = 0 ]; then as_root=(); elif sudo -n true 2>/dev/null; then as_root=(sudo -n); else as_root=(); fi
-    if command -v apt-get >/dev/null 2>&1 && { [ "$(id -u)" = 0 ] || [ ${#as_root[@]} -gt 0 ]; }; then
+want_freecad=0; want_ros=0
+for option in "$@"; do
+    case "$option" in
+        --freecad) want_freecad=1 ;;
+        --ros) want_ros=1 ;;
+        *) echo "setup: unknown option $option (use --freecad, --ros)" >&2; exit 2 ;;
+    esac
+done
+if [ "$(id -u)" = 0 ]; then as_root=(); elif sudo -n true 2>/dev/null; then as_root=(sudo -n); else as_root=(); fi
+can_apt() { command -v apt-get >/dev/null 2>&1 && { [ "$(id -u)" = 0 ] || [ ${#as_root[@]} -gt 0 ]; }; }
+
+if [ "$want_freecad" = 1 ] && ! freecad_ready; then
+    if can_apt; then
         echo "setup: installing FreeCAD and its Python packages from Debian (about a minute)" >&2
         "${as_root[@]}" apt-get update -qq
         DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends \
@@ -30,5 +41,27 @@ if [ "${1:-}" = "--freecad" ] && ! freecad_ready; then
             python3-matplotlib python3-jsonschema python3-threadpoolctl >/dev/null
     else
         echo "setup: FreeCAD (or a Python package it needs) is missing and apt-get cannot be used here: FreeCAD tests will be skipped" >&2
+    fi
+fi
+
+# ROS 1 for the system Python (the .venv reaches it: planner/runtime/ros/system.py); no recommends, to stay small.
+ros_ready() {
+    command -v rosmaster >/dev/null 2>&1 && [ -d /usr/share/std_msgs/msg ] && [ -d /usr/share/actionlib_msgs/msg ] &&
+        /usr/bin/python3 -c "import rospy, actionlib, genpy, sensor_msgs.msg" 2>/dev/null
+}
+if [ "$want_ros" = 1 ]; then
+    if ! ros_ready; then
+        if can_apt; then
+            echo "setup: installing ROS 1 from Debian (rosmaster, rospy, actionlib, genpy)" >&2
+            "${as_root[@]}" apt-get update -qq
+            DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends \
+                ros-core python3-rospy python3-actionlib python3-actionlib-msgs python3-sensor-msgs python3-genpy \
+                python3-genmsg ros-std-msgs ros-actionlib-msgs >/dev/null
+        else
+            echo "setup: ROS 1 is missing and apt-get cannot be used here: ROS tests will be skipped" >&2
+        fi
+    fi
+    if ros_ready; then
+        .venv/bin/python -c "from planner.runtime.ros.interfaces import generate; print('setup: aplan_msgs in', generate())" >&2
     fi
 fi

@@ -1,6 +1,6 @@
 """The ``aplan`` command line: ``stats``, ``intentions``, ``synth`` (:mod:`.plan`), ``analyze``
 (:mod:`.geometry`), ``pomdp``, ``solve``, ``simulate``, ``evaluate`` (:mod:`.decision`), ``session``,
-``replay``, ``markers`` (:mod:`.runtime`), ``habits`` (:mod:`.habits`), and the commands plugins add (``export-freecad``).
+``replay``, ``markers`` (:mod:`.runtime`), ``ros``, ``ros-vision``, ``ros-robot``, ``ros-sim`` (:mod:`.ros`), ``habits`` (:mod:`.habits`), and the commands plugins add (``export-freecad``).
 
 Each module only parses arguments and prints; the work is done by :mod:`planner.api`. Messages for the user
 (notes, warnings) go through :mod:`logging` to standard error; results go to standard output.
@@ -26,7 +26,7 @@ from typing import Sequence
 from ..errors import LimitExceededError, PlannerError, UsageError
 from ..interrupts import Interrupted, delivered, exit_status, signal_number, signals_as_interrupts, swallowed
 from ..plugins import registry
-from . import decision, geometry, habits, plan, runtime
+from . import decision, geometry, habits, plan, ros, runtime
 from .options import add_tolerance_options, add_verbose, check_outputs, explain, offer_options, tolerances_from
 
 __all__ = ["main", "build_parser", "add_tolerance_options", "tolerances_from"]
@@ -36,7 +36,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="aplan", description="APLAN: assembly plans and operator intentions "
                                      "for human-robot collaborative assembly (Cramer et al., RA-L 2021).")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for group in (plan, geometry, decision, runtime, habits):
+    for group in (plan, geometry, decision, runtime, habits, ros):
         group.add_commands(commands)
     for add in registry().commands:
         add(commands)
@@ -104,7 +104,8 @@ def _named(error: PlannerError, args, text: str) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    # ROS arguments (name:=value, roslaunch's __name:=) go to rospy, not argparse
+    args = build_parser().parse_args(ros.split_remaps(list(sys.argv[1:] if argv is None else argv)))
     # Undone at the end: main() also runs inside tests and other programs.
     handler = _configure_logging(getattr(args, "verbose", False))
     try:

@@ -38,6 +38,8 @@ log = logging.getLogger(__name__)
 
 
 def _source_name(args: argparse.Namespace) -> str:
+    if getattr(args, "source_name", None):  # aplan ros: the marker topic
+        return args.source_name
     if args.camera is not None:
         return f"camera {args.camera}"
     if args.video:
@@ -151,11 +153,16 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
             log.info("note: the product has no 'markers': parts then tools are markers 0, 1, ... in file order "
                      "(see aplan markers)")
         detector = MarkerDetector(markers.dictionary)
-        stream, simulated = _open_stream(args, model, markers, detector)
+        # aplan ros opens its marker topic and robot action client instead (planner.cli.ros)
+        stream, simulated = getattr(args, "open_stream", _open_stream)(args, model, markers, detector)
         robot = simulated or robot
     interactive = sys.stderr.isatty()
 
+    also = getattr(args, "on_event", None)  # aplan ros: publishes the belief
+
     def show(event: dict) -> None:
+        if also is not None:
+            also(event)
         if event["event"] == "warning":
             print(f"{chr(10) if interactive else ''}aplan: warning: step {event.get('step', '-')}: {event['message']}",
                   file=sys.stderr, flush=True)
