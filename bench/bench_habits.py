@@ -143,6 +143,18 @@ def _policy(args, model, weights):
             f"online planner, {args.expansions} expansions per decision")
 
 
+def paid_share(model, plans) -> float:
+    """Of the robot-capable operations in the sequences the operator sets out to do, the share the paper's
+    rewards pay the robot for (unfavorable to humans: +10; the others give it -2, so an optimal robot leaves them
+    to the operator): the most of the capable share the robot can take without losing reward."""
+    tags, capable, paid = model.plan.tags, 0, 0
+    for p in plans:
+        ops = model.sequence_operations(p.sequence)
+        capable += sum(bool(tags.robot[o]) for o in ops)
+        paid += sum(bool(tags.robot[o] and tags.unfavorable[o]) for o in ops)
+    return round(paid / capable, 4) if capable else 0.0
+
+
 def _run(model, policy, plans, seed: int) -> list:
     """One episode per plan, each with its own world stream: the same draws for every model given them."""
     return [simulate_factored_episode(model, policy, p.sequence, np.random.default_rng([seed, 12, k]),
@@ -177,7 +189,8 @@ def _measure(args, name: str, product, folder: Path) -> dict:
     plans = operator.plans(paper, args.episodes, np.random.default_rng([args.seed, 14]),
                            np.random.default_rng([args.seed, 15]))
     row = {"product": name, "parts": len(plan.product.parts), "sequences": n, "operator": repr(operator),
-           "logs": args.logs, "steps_learned": steps, "episodes": args.episodes}
+           "logs": args.logs, "steps_learned": steps, "episodes": args.episodes,
+           "paid_share": paid_share(paper, plans)}
     returns = {}
     for label, model, w in (("paper", paper, None), ("habits", habit, weights)):
         started = time.perf_counter()
@@ -210,7 +223,8 @@ def _targets(operator: str, row: dict) -> dict:
 def _print(row: dict) -> None:
     p, h, d = row["paper"], row["habits"], row["paired_difference"]
     print(f"{row['product']}: {row['parts']} parts, {row['sequences']:,} sequences; operator {row['operator']}; "
-          f"{row['steps_learned']} steps learned from {row['logs']} logs; {row['episodes']} episodes")
+          f"{row['steps_learned']} steps learned from {row['logs']} logs; {row['episodes']} episodes; "
+          f"{_pct(row['paid_share'])} of the capable operations are unfavorable to humans (paid +10)")
     for label, m in (("paper", p), ("habits", h)):
         print(f"  {label:>6}: robot {_pct(m['robot_capable_share'])} of the operations it can do "
               f"({_pct(m['robot_share'])} of all), wrong {_pct(m['wrong_share'])} of its actions, never helped "
