@@ -189,12 +189,17 @@ def _measure(args, name: str, product, folder: Path) -> dict:
     plans = operator.plans(paper, args.episodes, np.random.default_rng([args.seed, 14]),
                            np.random.default_rng([args.seed, 15]))
     row = {"product": name, "parts": len(plan.product.parts), "sequences": n, "operator": repr(operator),
-           "logs": args.logs, "steps_learned": steps, "episodes": args.episodes,
-           "paid_share": paid_share(paper, plans)}
-    returns = {}
+           "logs": args.logs, "steps_learned": steps, "episodes": args.episodes}
+    returns, chosen = {}, {}
     for label, model, w in (("paper", paper, None), ("habits", habit, weights)):
         started = time.perf_counter()
-        policy, how = _policy(args, model, w)
+        chosen[label] = (model, *_policy(args, model, w), time.perf_counter() - started)
+    if args.online_episodes and any(how.startswith("online") for _, _, how, _ in chosen.values()):
+        plans = plans[:args.online_episodes]  # the first ones: the same episodes for both models
+        row["episodes"] = len(plans)
+    row["paid_share"] = paid_share(paper, plans)
+    for label, (model, policy, how, solving) in chosen.items():
+        started = time.perf_counter() - solving
         played = _run(model, policy, plans, args.seed)
         totals = run_totals([episode_measures(e) for e in played])
         returns[label] = [e.discounted_return for e in played]
@@ -248,6 +253,8 @@ def main() -> None:
     parser.add_argument("--planner", choices=("auto", "online", "offline"), default="auto",
                         help="auto: the offline lumped policy when its solve converges (--max-gap), else online")
     parser.add_argument("--expansions", type=int, default=200)
+    parser.add_argument("--online-episodes", type=int, metavar="N",
+                        help="when the online planner decides (slow on a loaded machine), only the first N episodes")
     parser.add_argument("--trials", type=int, default=300, help="solver trials for --planner offline or auto")
     parser.add_argument("--max-gap", type=float, default=0.5, help="auto: the largest upper - lower bound accepted")
     parser.add_argument("--max-classes", type=int, default=2000, help="largest lumped model --planner offline solves")
