@@ -207,6 +207,8 @@ def _measure(args, name: str, product, folder: Path) -> dict:
         row[label] = {"mean_return": round(mean, 4), "ci95": round(half, 4),
                       "robot_capable_share": totals["robot_capable_share"], "wrong_share": totals["wrong_share"],
                       "robot_share": totals["robot_share"], "never_helped": totals["never_helped"],
+                      "robot_operations": totals["robot_operations"], "wrong_robot_actions": totals["wrong_robot_actions"],
+                      "robot_capable_operations": totals["robot_capable_operations"],
                       "planner": how, "seconds": round(time.perf_counter() - started, 1)}
     diff_mean, diff_half = _mean(np.subtract(returns["habits"], returns["paper"]))
     row["paired_difference"] = {"mean": round(diff_mean, 4), "ci95": round(diff_half, 4)}
@@ -231,8 +233,9 @@ def _print(row: dict) -> None:
           f"{row['steps_learned']} steps learned from {row['logs']} logs; {row['episodes']} episodes; "
           f"{_pct(row['paid_share'])} of the capable operations are unfavorable to humans (paid +10)")
     for label, m in (("paper", p), ("habits", h)):
-        print(f"  {label:>6}: robot {_pct(m['robot_capable_share'])} of the operations it can do "
-              f"({_pct(m['robot_share'])} of all), wrong {_pct(m['wrong_share'])} of its actions, never helped "
+        print(f"  {label:>6}: robot {_pct(m['robot_capable_share'])} of the operations it can do ("
+              f"{m['robot_operations']} of {m['robot_capable_operations']}; {_pct(m['robot_share'])} of all), wrong "
+              f"{_pct(m['wrong_share'])} of its actions ({m['wrong_robot_actions']}), never helped "
               f"in {m['never_helped']}; mean return {m['mean_return']:.3f} +- {m['ci95']:.3f}; {m['planner']}, "
               f"{m['seconds']} s")
     missed = [k for k, ok in row["targets"].items() if not ok]
