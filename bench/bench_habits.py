@@ -1,17 +1,34 @@
-"""Operator habits (issue 23), a quick measure: on the pen (no technical constraint), an operator who follows one
-full sequence 80 % of the time (else any other, uniformly); habits learned from 20 session logs of that operator
-(written through the project's session loop and log writer, the operator assembling alone); then the paper's
-model and the habits' model, each with the online planner (a fixed number of expansions per decision: the same
-actions on any machine), on the same seeded episodes drawn from that operator.
+"""Operator habits (issue 23, "Habits help" and "Nothing is lost"): on any product, level by level, an operator who
+follows one full sequence with probability 0.8 (``habitual:K:0.8``, else any sequence uniformly); its habits
+learned through the real pipeline (20 session logs written by the session loop and log writer, the operator
+assembling alone, then ``aplan habits LOG... -o H.json`` run as a command); then the paper's model and the
+habits' model on the same 500 fresh episodes (the same plans and the same world draws, episode by episode).
 
-Run: ``.venv/bin/python bench/bench_habits.py [--episodes 300] [--logs 20] [--expansions 200]`` (about a minute
-per 100 episodes on one core). ``--write-habits FILE`` also writes the learned habits (for ``aplan evaluate
---habits FILE --operator-sequence habitual:5:0.8``; ``--episodes 0``: only that).
+Per product and level it prints the robot's share of the operations it is able to do (robot-capable operations
+of the sequences done), its wrong actions as a share of its actions, and the mean discounted return +- 95 %
+(normal approximation) under both models, with the issue's targets checked (share >= 30 %, wrong <= 2 %, return
+>= 2x the paper model's, or > 0 where that is <= 0). ``--operator uniform`` is the "Nothing is lost" case: the
+habits of a uniform operator, against the paper's model (target: the habits model's mean within the paper
+model's 95 % interval or above).
+
+Planner: the online planner with a fixed number of expansions per decision (``--expansions``, no clock: the same
+actions on any machine) on the factored model, which is exact (the same beliefs and values as the flat model);
+``--planner offline`` solves a policy over the lumped model's classes instead (bounded by ``--trials``), when
+the lumped model is small enough (``--max-classes``); ``auto`` (the default) takes that policy only when the
+solve closes the gap between its bounds at the initial belief to ``--max-gap``, else the online planner.
+
+Run: ``.venv/bin/python bench/bench_habits.py PRODUCT... [--episodes 500] [--logs 20] [--expansions 200]``
+with PRODUCT ``pen``, ``chain:9`` / ``complete:7`` (written by ``aplan synth``), a product file or a bundle
+folder (planned with ``--fasteners auto --subassemblies auto``; every level, or ``--level ID,ID``).
+``--write-habits FILE`` also writes the learned habits (``--episodes 0``: only that), for ``aplan evaluate
+--habits FILE --operator-sequence habitual:K:0.8``.
 """
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import subprocess
 import sys
 import tempfile
 import time
@@ -23,102 +40,246 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from planner import api  # noqa: E402
+from planner.decision.episode_measures import episode_measures, run_totals  # noqa: E402
 from planner.decision.factored_model import factored_model  # noqa: E402
 from planner.decision.factored_simulate import simulate_factored_episode  # noqa: E402
 from planner.decision.habits import habit_weights  # noqa: E402
-from planner.decision.intention_model import intention_model  # noqa: E402
-from planner.decision.io.habits_file import write_habits  # noqa: E402
-from planner.runtime.habits_logs import habits_from_logs  # noqa: E402
+from planner.decision.io.habits_file import read_habits  # noqa: E402
+from planner.decision.operators import HabitualOperator, UniformOperator  # noqa: E402
 from planner.runtime.log import EventLog  # noqa: E402
 from planner.runtime.scripted import ScriptedOperator, ScriptedRobot  # noqa: E402
 from planner.runtime.session import run_session  # noqa: E402
 
+APLAN = [sys.executable, "-m", "planner"]
+
 
 class _Wait:
-    def __init__(self, n_actions: int):
-        self.wait = n_actions - 1
+    """The robot of the learning sessions: it waits, so every logged step is the operator's own choice."""
+
+    def __init__(self, wait: int):
+        self.wait = wait
 
     def action(self, belief) -> int:
         return self.wait
 
 
-def _operator_rank(rng: np.random.Generator, favourite: int, n: int, share: float) -> int:
-    """The operator's sequence: ``favourite`` with probability ``share``, else any other, uniformly."""
-    if rng.random() < share:
-        return favourite
-    other = int(rng.integers(n - 1))
-    return other if other < favourite else other + 1
+def _products(specs: list[str], level: str | None, folder: Path) -> list[tuple[str, api.Product]]:
+    """``(name, product)`` per level to measure: ``pen``; ``chain:N`` / ``complete:N`` through ``aplan synth``;
+    a product file or bundle planned as a CAD model is by default (proposed fasteners and workstations)."""
+    out = []
+    for spec in specs:
+        if spec == "pen":
+            out.append(("pen", api.resolve_product("pen")))
+            continue
+        if spec.split(":")[0] in ("chain", "complete"):
+            out.append((spec.replace(":", " "), api.resolve_product(synth_product(spec, folder))))
+            continue
+        product = api.resolve_product(spec, None, "auto", None, "auto")
+        name = Path(spec).name
+        ids = level.split(",") if level else [lv.id for lv in api.levels_of(product)]
+        for lv in ids:
+            out.append((f"{name} {lv}" if len(ids) > 1 or level else name, api.level_product(product, "designer", lv)))
+    return out
 
 
-def _write_logs(plan, ranks: list[int], folder: Path) -> list[Path]:
-    flat = intention_model(plan)
-    fact = factored_model(plan)
+def synth_product(spec: str, folder: Path) -> Path:
+    """``chain:N`` or ``complete:N`` written by ``aplan synth`` into ``folder``."""
+    kind, n = spec.split(":")
+    path = folder / f"{kind}{n}.json"
+    subprocess.run(APLAN + ["synth", kind, n, "-o", str(path)], check=True, cwd=ROOT, capture_output=True)
+    return path
+
+
+def favourite_of(n_sequences: int, seed: int) -> int:
+    """The habitual operator's sequence (a rank), drawn from the seed: no hand-picked one."""
+    return int(np.random.default_rng([seed, 13]).integers(n_sequences))
+
+
+def learn_habits(product: Path, logs: int, seed: int, folder: Path, share: float = 0.8) -> tuple[Path, int]:
+    """The habits file learned (:func:`_learn`) from ``logs`` sessions of the operator ``habitual:K:share`` on
+    ``product`` (K: :func:`favourite_of`), and K."""
+    plan = api.plan_of(api.resolve_product(product))
+    model = factored_model(plan)
+    favourite = favourite_of(model.n_sequences, seed)
+    _learn(plan, model, HabitualOperator(favourite, share), logs, seed, folder, product.name)
+    return folder / "habits.json", favourite
+
+
+def _learn(plan, model, operator, logs: int, seed: int, folder: Path, name: str):
+    """The habits of ``operator`` from ``logs`` sessions (the session loop, its log writer, then ``aplan
+    habits`` as a command): the habits read back and checked against ``plan``, and the steps counted."""
+    plans = operator.plans(model, logs, np.random.default_rng([seed, 10]), np.random.default_rng([seed, 11]))
+    folder.mkdir(parents=True, exist_ok=True)
     paths = []
-    for k, rank in enumerate(ranks):
-        operator = ScriptedOperator(plan, fact.sequence_operations(fact.sequence(rank)))
+    for k, drawn in enumerate(plans):
         path = folder / f"session-{k:02d}.jsonl"
-        result = run_session(flat, _Wait(len(flat.actions)), operator, ScriptedRobot(), EventLog(path))
-        assert result.assembled, result.message
-        paths.append(path)
-    return paths
+        person = ScriptedOperator(plan, model.sequence_operations(drawn.sequence))
+        result = run_session(model, _Wait(model.wait), person, ScriptedRobot(), EventLog(path))
+        if not result.assembled:
+            raise SystemExit(f"{name}: learning session {k} did not finish: {result.message}")
+        paths.append(str(path))
+    output = folder / "habits.json"
+    done = subprocess.run(APLAN + ["habits", *paths, "-o", str(output), "--json"], cwd=ROOT, capture_output=True,
+                          text=True)
+    if done.returncode != 0:
+        raise SystemExit(f"{name}: aplan habits failed: {done.stderr.strip()}")
+    return read_habits(output), json.loads(done.stdout)["steps"]
 
 
-def _mean(returns: list[float]) -> tuple[float, float]:
-    mean = float(np.mean(returns))
-    return mean, 1.96 * float(np.std(returns, ddof=1)) / math.sqrt(len(returns))
+def _policy(args, model, weights):
+    """The robot's policy on ``model`` and what it is: ``offline`` (or ``auto`` when its solve closes the gap at
+    the initial belief to ``--max-gap``) a policy over the lumped model's classes, else the online planner."""
+    if args.planner in ("offline", "auto") and model.n_classes <= args.max_classes:
+        from planner.decision.lumped_model import lumped_model
+        from planner.decision.solvers import PointBasedSolver
+
+        lumped = lumped_model(model.plan, weights=weights)
+        result = PointBasedSolver(max_iterations=args.trials, time_limit=None, precision=1e-3).solve(lumped.pomdp)
+        gap = result.upper_bound - result.lower_bound
+        if args.planner == "offline" or gap <= args.max_gap:
+            return result.policy, (f"offline lumped policy ({args.trials} trials, bounds {result.lower_bound:.3f} "
+                                   f"to {result.upper_bound:.3f})")
+    return (api.online_planner(model, decision_time=None, expansions=args.expansions),
+            f"online planner, {args.expansions} expansions per decision")
+
+
+def paid_share(model, plans) -> float:
+    """Of the robot-capable operations in the sequences the operator sets out to do, the share the paper's
+    rewards pay the robot for (unfavorable to humans: +10; the others give it -2, so an optimal robot leaves them
+    to the operator): the most of the capable share the robot can take without losing reward."""
+    tags, capable, paid = model.plan.tags, 0, 0
+    for p in plans:
+        ops = model.sequence_operations(p.sequence)
+        capable += sum(bool(tags.robot[o]) for o in ops)
+        paid += sum(bool(tags.robot[o] and tags.unfavorable[o]) for o in ops)
+    return round(paid / capable, 4) if capable else 0.0
+
+
+def _run(model, policy, plans, seed: int) -> list:
+    """One episode per plan, each with its own world stream: the same draws for every model given them."""
+    return [simulate_factored_episode(model, policy, p.sequence, np.random.default_rng([seed, 12, k]),
+                                      switch=p.switch) for k, p in enumerate(plans)]
+
+
+def _mean(values) -> tuple[float, float]:
+    values = np.asarray(values, dtype=float)
+    half = 1.96 * float(values.std(ddof=1)) / math.sqrt(values.size) if values.size > 1 else float("nan")
+    return float(values.mean()), half
+
+
+def _pct(x) -> str:
+    return "-" if x is None else f"{100 * x:.1f} %"
+
+
+def _measure(args, name: str, product, folder: Path) -> dict:
+    began = time.perf_counter()
+    plan = api.plan_of(product, args.technical)
+    paper = factored_model(plan)
+    n = paper.n_sequences
+    favourite = favourite_of(n, args.seed) if args.favourite is None else args.favourite
+    operator = UniformOperator() if args.operator == "uniform" else HabitualOperator(favourite % n, args.share)
+    habits, steps = _learn(plan, paper, operator, args.logs, args.seed, folder, name)
+    if args.write_habits:  # for aplan evaluate --habits FILE --operator-sequence (README, Simulated operators)
+        Path(args.write_habits).write_bytes((folder / "habits.json").read_bytes())
+        print(f"{name}: wrote {args.write_habits} (operator {operator!r})")
+    if args.episodes == 0:
+        return None
+    weights = habit_weights(plan, habits)
+    habit = factored_model(plan, weights=weights)
+    plans = operator.plans(paper, args.episodes, np.random.default_rng([args.seed, 14]),
+                           np.random.default_rng([args.seed, 15]))
+    row = {"product": name, "parts": len(plan.product.parts), "sequences": n, "operator": repr(operator),
+           "logs": args.logs, "steps_learned": steps, "episodes": args.episodes}
+    returns, chosen = {}, {}
+    for label, model, w in (("paper", paper, None), ("habits", habit, weights)):
+        started = time.perf_counter()
+        chosen[label] = (model, *_policy(args, model, w), time.perf_counter() - started)
+    if args.online_episodes and any(how.startswith("online") for _, _, how, _ in chosen.values()):
+        plans = plans[:args.online_episodes]  # the first ones: the same episodes for both models
+        row["episodes"] = len(plans)
+    row["paid_share"] = paid_share(paper, plans)
+    for label, (model, policy, how, solving) in chosen.items():
+        started = time.perf_counter() - solving
+        played = _run(model, policy, plans, args.seed)
+        totals = run_totals([episode_measures(e) for e in played])
+        returns[label] = [e.discounted_return for e in played]
+        mean, half = _mean(returns[label])
+        row[label] = {"mean_return": round(mean, 4), "ci95": round(half, 4),
+                      "robot_capable_share": totals["robot_capable_share"], "wrong_share": totals["wrong_share"],
+                      "robot_share": totals["robot_share"], "never_helped": totals["never_helped"],
+                      "robot_operations": totals["robot_operations"], "wrong_robot_actions": totals["wrong_robot_actions"],
+                      "robot_capable_operations": totals["robot_capable_operations"],
+                      "planner": how, "seconds": round(time.perf_counter() - started, 1)}
+    diff_mean, diff_half = _mean(np.subtract(returns["habits"], returns["paper"]))
+    row["paired_difference"] = {"mean": round(diff_mean, 4), "ci95": round(diff_half, 4)}
+    row["targets"] = _targets(args.operator, row)
+    row["seconds"] = round(time.perf_counter() - began, 1)
+    return row
+
+
+def _targets(operator: str, row: dict) -> dict:
+    p, h = row["paper"], row["habits"]
+    if operator == "uniform":  # nothing lost: within the paper model's 95 % interval, or above it
+        return {"within_or_above": h["mean_return"] >= p["mean_return"] - p["ci95"]}
+    paper = p["mean_return"]
+    return {"share_30": (h["robot_capable_share"] or 0) >= 0.30,
+            "wrong_2": h["wrong_share"] is None or h["wrong_share"] <= 0.02,
+            "return_2x": h["mean_return"] > 0 if paper <= 0 else h["mean_return"] >= 2 * paper}
+
+
+def _print(row: dict) -> None:
+    p, h, d = row["paper"], row["habits"], row["paired_difference"]
+    print(f"{row['product']}: {row['parts']} parts, {row['sequences']:,} sequences; operator {row['operator']}; "
+          f"{row['steps_learned']} steps learned from {row['logs']} logs; {row['episodes']} episodes; "
+          f"{_pct(row['paid_share'])} of the capable operations are unfavorable to humans (paid +10)")
+    for label, m in (("paper", p), ("habits", h)):
+        print(f"  {label:>6}: robot {_pct(m['robot_capable_share'])} of the operations it can do ("
+              f"{m['robot_operations']} of {m['robot_capable_operations']}; {_pct(m['robot_share'])} of all), wrong "
+              f"{_pct(m['wrong_share'])} of its actions ({m['wrong_robot_actions']}), never helped "
+              f"in {m['never_helped']}; mean return {m['mean_return']:.3f} +- {m['ci95']:.3f}; {m['planner']}, "
+              f"{m['seconds']} s")
+    missed = [k for k, ok in row["targets"].items() if not ok]
+    print(f"  habits - paper (paired): {d['mean']:.3f} +- {d['ci95']:.3f}; targets "
+          + ("met" if not missed else "MISSED: " + ", ".join(missed)))
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--episodes", type=int, default=300)
+    parser.add_argument("products", nargs="*", default=["pen"], metavar="PRODUCT")
+    parser.add_argument("--level", help="only these levels (ID,ID...) of a product planned in workstations")
+    parser.add_argument("--episodes", type=int, default=500)
     parser.add_argument("--logs", type=int, default=20)
-    parser.add_argument("--expansions", type=int, default=200)
+    parser.add_argument("--operator", choices=("habitual", "uniform"), default="habitual",
+                        help="habitual (habitual:K:SHARE) or uniform (the 'nothing is lost' case)")
     parser.add_argument("--share", type=float, default=0.8, help="how often the operator takes its favourite")
-    parser.add_argument("--favourite", type=int, default=5, help="the favourite sequence's rank (0 to 23)")
+    parser.add_argument("--favourite", type=int, help="the favourite sequence's rank (default: a seeded draw)")
+    parser.add_argument("--planner", choices=("auto", "online", "offline"), default="auto",
+                        help="auto: the offline lumped policy when its solve converges (--max-gap), else online")
+    parser.add_argument("--expansions", type=int, default=200)
+    parser.add_argument("--online-episodes", type=int, metavar="N",
+                        help="when the online planner decides (slow on a loaded machine), only the first N episodes")
+    parser.add_argument("--trials", type=int, default=300, help="solver trials for --planner offline or auto")
+    parser.add_argument("--max-gap", type=float, default=0.5, help="auto: the largest upper - lower bound accepted")
+    parser.add_argument("--max-classes", type=int, default=2000, help="largest lumped model --planner offline solves")
+    parser.add_argument("--technical", action=argparse.BooleanOptionalAction, default=None)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--write-habits", metavar="FILE", help="write the learned habits to FILE")
+    parser.add_argument("--json", action="store_true", help="one JSON line per product and level")
+    parser.add_argument("--write-habits", metavar="FILE", help="also write the learned habits (one product)")
     args = parser.parse_args()
-
-    plan = api.plan_of("pen", technical=False)
-    paper = factored_model(plan)
-    n = paper.n_sequences
-    rng = np.random.default_rng(args.seed)
-    learned_ranks = [_operator_rank(rng, args.favourite, n, args.share) for _ in range(args.logs)]
+    if args.episodes == 1 or args.episodes < 0 or args.logs < 1:
+        parser.error("--episodes must be 0 (only learn) or at least 2, and --logs at least 1")
+    if args.write_habits and len(args.products) > 1:
+        parser.error("--write-habits writes one product's habits: give one PRODUCT (and one --level)")
     with tempfile.TemporaryDirectory() as folder:
-        began = time.perf_counter()
-        logs = _write_logs(plan, learned_ranks, Path(folder))
-        habits, steps = habits_from_logs(plan, logs)
-        learned = time.perf_counter() - began
-    if args.write_habits:
-        write_habits(args.write_habits, habits, len(logs))
-        print(f"wrote {args.write_habits}")
-    print(f"pen: {n} sequences; {args.logs} logs ({learned_ranks.count(args.favourite)} of the favourite "
-          f"sequence {args.favourite}), {steps} steps counted, {len(habits.counts)} state edges, "
-          f"{learned:.1f} s to write and learn them")
-    weighted = factored_model(plan, weights=habit_weights(plan, habits))
-    start = paper.sequence(args.favourite)
-    print(f"prior of the favourite sequence: paper {1 / n:.4f}, habits "
-          f"{math.exp(sum(math.log(weighted.class_fraction[e]) for e in start)):.4f}")
-
-    if args.episodes < 1:
-        return
-    episode_rng = np.random.default_rng(args.seed + 1)
-    ranks = [_operator_rank(episode_rng, args.favourite, n, args.share) for _ in range(args.episodes)]
-    seeds = episode_rng.integers(2 ** 32, size=args.episodes)
-    for name, model in (("paper", paper), ("habits", weighted)):
-        planner = api.online_planner(model, decision_time=None, expansions=args.expansions)
-        began = time.perf_counter()
-        returns, steps_taken = [], []
-        for rank, seed in zip(ranks, seeds):
-            episode = simulate_factored_episode(model, planner, paper.sequence(rank), np.random.default_rng(int(seed)))
-            returns.append(episode.discounted_return)
-            steps_taken.append(len(episode.steps))
-        mean, half = _mean(returns)
-        fav = [r for r, k in zip(returns, ranks) if k == args.favourite]
-        rest = [r for r, k in zip(returns, ranks) if k != args.favourite]
-        print(f"{name:>6}: mean return {mean:.3f} +- {half:.3f} (95 %) over {len(returns)} episodes; favourite "
-              f"{np.mean(fav):.3f} ({len(fav)}), others {np.mean(rest):.3f} ({len(rest)}); mean steps "
-              f"{np.mean(steps_taken):.2f}; {time.perf_counter() - began:.1f} s")
+        for k, (name, product) in enumerate(_products(args.products, args.level, Path(folder))):
+            row = _measure(args, name, product, Path(folder) / f"logs-{k}")
+            if row is None:
+                continue
+            if args.json:
+                print(json.dumps(row))
+            else:
+                _print(row)
+            sys.stdout.flush()
 
 
 if __name__ == "__main__":

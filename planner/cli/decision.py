@@ -260,8 +260,10 @@ def _print_totals(args: argparse.Namespace, episodes) -> None:
 def _totals_line(operator, totals: dict) -> str:
     share = "-" if totals["robot_share"] is None else f"{100 * totals['robot_share']:.1f} %"
     wrong = "-" if totals["wrong_share"] is None else f"{100 * totals['wrong_share']:.1f} %"
+    capable = "-" if totals["robot_capable_share"] is None else f"{100 * totals['robot_capable_share']:.1f} %"
     return (f"operator {operator!r}, {totals['episodes']} episodes: the robot did {share} of the operations "
-            f"({totals['robot_operations']} of {totals['robot_operations'] + totals['operator_operations']}); "
+            f"({totals['robot_operations']} of {totals['robot_operations'] + totals['operator_operations']}; "
+            f"{capable} of the {totals['robot_capable_operations']} it is able to do); "
             f"wrong robot actions {totals['wrong_robot_actions']} ({wrong} of its actions); never helped in "
             f"{totals['never_helped']}, never confident in {totals['never_confident']}")
 

@@ -25,12 +25,15 @@ def episode_measures(episode, threshold: float = CONFIDENCE) -> dict:
     steps = episode.steps
     robot = sum(s.robot_operation for s in steps)
     operator = steps[-1].operator_operations if steps else 0
+    capable = episode.robot_capable
     return {"robot_operations": robot, "operator_operations": operator,
             "wrong_robot_actions": sum(s.wrong_action for s in steps),
             "first_help_step": next((k for k, s in enumerate(steps, 1) if s.robot_operation), None),
             "confident_step": next((k for k, s in enumerate(steps, 1) if s.p_true > threshold
                                     and episode.unfinished(s)), None),
             "robot_share": round(robot / (robot + operator), 6) if robot + operator else None,
+            "robot_capable_operations": capable,
+            "robot_capable_share": round(robot / capable, 6) if capable else None,
             "switched_at_step": episode.switched_at,
             "confident_after_switch": _confident_after_switch(episode, threshold),
             "operator_mistakes": sum(getattr(s, "mistake", False) for s in steps),
@@ -46,14 +49,16 @@ def _confident_after_switch(episode, threshold: float) -> bool | None:
 
 
 def run_totals(measures: list[dict]) -> dict:
-    """A run's totals: the robot's share of all operations, and its wrong actions as a share of its actions
-    (operations it did plus wrong ones; None when it never acted)."""
+    """A run's totals: the robot's share of all operations and of the operations it is able to do, and its
+    wrong actions as a share of its actions (operations it did plus wrong ones; None when it never acted)."""
     robot = sum(m["robot_operations"] for m in measures)
     operator = sum(m["operator_operations"] for m in measures)
     wrong = sum(m["wrong_robot_actions"] for m in measures)
+    capable = sum(m["robot_capable_operations"] for m in measures)
     return {"episodes": len(measures), "robot_operations": robot, "operator_operations": operator,
-            "wrong_robot_actions": wrong,
+            "wrong_robot_actions": wrong, "robot_capable_operations": capable,
             "robot_share": round(robot / (robot + operator), 6) if robot + operator else None,
+            "robot_capable_share": round(robot / capable, 6) if capable else None,
             "wrong_share": round(wrong / (robot + wrong), 6) if robot + wrong else None,
             "operator_mistakes": sum(m["operator_mistakes"] for m in measures),
             "resets": sum(m["resets"] for m in measures),

@@ -53,6 +53,7 @@ class FactoredEpisode:
     resets: int = 0                                    # unexplained observations (never with the model's world)
     beliefs: list[FactoredBelief] = field(default_factory=list)  # before the first step, then after each (sparse)
     switched_at: int | None = None                     # the decision step (from 1) the operator changed its mind
+    robot_capable: int = 0                             # operations done (by anyone) that the robot could have done
 
     @property
     def finished(self) -> bool:
@@ -118,6 +119,7 @@ def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[
         options = model.position_transition(path, position, action)
         nxt = max(p for p, _ in options) if operator == "turns" else model.sample_position(path, position, action, rng)
         operations += nxt - position - robot_steps
+        episode.robot_capable += int(np.count_nonzero(model.class_action[path[position:nxt]] >= 0))
         z = model.sample_observation(path, nxt, rng)
         z, mistake = operator_mistake(z, len(model.observations), mistakes)
         belief = updater.update(belief, action, z)

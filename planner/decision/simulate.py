@@ -49,6 +49,7 @@ class Episode:
     switched_at: int | None = None  # the decision step (from 1) at which the operator changed its mind
     switched_to: int | None = None  # the intention it took then (``start``'s steps before it, then these)
     resets: int = 0  # observations of probability 0 under the belief (each reset the belief)
+    robot_capable: int = 0  # operations done (by anyone) that the robot could have done (counted with ``successor``)
 
     def first_confident(self, threshold: float = CONFIDENCE) -> int | None:
         """Operator operations done when the belief on the true intention first exceeds ``threshold`` before
@@ -136,6 +137,7 @@ def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: n
         if successor is not None and nxt != state:
             done += _moves(successor, state, nxt)
             operations += _moves(successor, state, nxt) - (1 if robot_did_step else 0)
+            episode.robot_capable += _capable_between(model, successor, state, nxt, wait)
         orow = observation[action].getrow(nxt)
         z = int(rng.choice(orow.indices, p=orow.data / orow.data.sum()))
         z, mistake = operator_mistake(z, len(model.observations), mistakes)
@@ -167,6 +169,16 @@ def _moves_intention(model: POMDP, action: int, state: int) -> bool:
     """True when ``action`` is the intention's next step: it moves it (other operations leave it)."""
     row = model.transition[action].getrow(state)
     return not (row.nnz == 1 and row.indices[0] == state)
+
+
+def _capable_between(model: POMDP, successor: np.ndarray, a: int, b: int, wait: int) -> int:
+    """How many of the operations from intention a to b (along the successors) some robot action does: an
+    intention's next step is robot-capable when an action other than wait moves it. Cost: O(steps x actions)."""
+    count = 0
+    while a != b and a >= 0:
+        count += any(_moves_intention(model, action, a) for action in range(len(model.actions)) if action != wait)
+        a = successor[a]
+    return count
 
 
 def _moves(successor: np.ndarray, a: int, b: int) -> int:

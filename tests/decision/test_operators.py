@@ -5,6 +5,7 @@ operations = the sequence's length; wrong actions = the steps the reward table s
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -167,11 +168,49 @@ def test_measures_add_up(kind, flat, factored):
         helped = [k for k, s in enumerate(episode.steps, 1) if s.reward in (Rewards().favorable, Rewards().unfavorable)]
         assert m["first_help_step"] == (helped[0] if helped else None) and len(helped) == m["robot_operations"]
     assert sum(m["wrong_robot_actions"] for m in measures) > 0  # the random policy does err
+    assert all(m["robot_capable_operations"] == PEN_OPERATIONS for m in measures)  # the robot can do each
     totals = run_totals(measures)
     robot = sum(m["robot_operations"] for m in measures)
     assert totals["robot_share"] == pytest.approx(robot / (PEN_OPERATIONS * 8), abs=1e-6)
     assert totals["wrong_share"] == pytest.approx(totals["wrong_robot_actions"] / (robot + totals["wrong_robot_actions"]),
                                                   abs=1e-6)
+    assert totals["robot_capable_operations"] == PEN_OPERATIONS * 8
+    assert totals["robot_capable_share"] == totals["robot_share"]
+
+
+@pytest.mark.parametrize("kind", ["flat", "factored"])
+def test_robot_capable_operations_follow_the_tags(kind, plan):
+    """With the operations that bring the ink in tagged not robot-capable, an episode's robot-capable operations are
+    the tagged ones of the sequence it did (after a switch too), counted from the plan's tags."""
+    robot = plan.tags.robot.copy()
+    for j in range(len(plan.andor.operations)):
+        if frozenset({"ink"}) in plan.andor.inputs(j):
+            robot[j] = False
+    assert 0 < robot.sum() < robot.size
+    tagged = replace(plan, tags=replace(plan.tags, robot=robot))
+    model = intention_model(tagged) if kind == "flat" else factored_model(tagged)
+    played = api.simulate(model, RandomActions(len(model.actions), 3), random=12, seed=2, max_steps=400,
+                          operator_model=ChangingOperator(0.5))
+    seen = set()
+    for episode in played:
+        m = episode_measures(episode)
+        capable = sum(bool(robot[o]) for o in _operations_done(model, episode))
+        assert m["robot_capable_operations"] == capable == PEN_OPERATIONS - 1  # the ink comes in once per sequence
+        assert m["robot_operations"] <= capable
+        assert m["robot_capable_share"] == pytest.approx(m["robot_operations"] / capable, abs=1e-6)
+        seen.add(m["robot_operations"])
+    assert len(seen) > 1  # the random robot does some of them, not always as many
+
+
+def _operations_done(model, episode) -> list[int]:
+    """The AND/OR operations of the sequence an episode did (after a switch, the one it switched to)."""
+    if hasattr(episode, "path"):
+        return model.sequence_operations(episode.path)
+    ops = model.sequence_operations(episode.start)
+    if episode.switched_to is None:
+        return ops
+    after = model.sequence_operations(episode.switched_to)
+    return ops[:len(ops) - len(after)] + after
 
 
 @pytest.mark.parametrize("kind", ["flat", "factored"])

@@ -16,8 +16,8 @@ from planner.decision.simulate import Episode, Step, confidence_text, decision_t
 from planner.decision.solvers import PointBasedSolver
 
 MEASURES = {"robot_operations", "operator_operations", "wrong_robot_actions", "first_help_step", "confident_step",
-            "robot_share", "switched_at_step", "operator_mistakes", "confident_after_switch",
-            "resets"}  # planner.decision.episode_measures
+            "robot_share", "robot_capable_operations", "robot_capable_share", "switched_at_step",
+            "operator_mistakes", "confident_after_switch", "resets"}  # planner.decision.episode_measures
 
 
 @pytest.fixture(scope="module")
