@@ -5,6 +5,8 @@ is one undoable transaction, a refused change is told in the panel and changes n
 """
 from __future__ import annotations
 
+from types import MappingProxyType
+
 import FreeCADGui
 from PySide import QtCore, QtGui
 
@@ -43,7 +45,7 @@ def _entry(group) -> str:
     return "\n+ ".join(sorted(group.hosts)) if group.hosts else group.id
 
 
-_HEADINGS = {"designer": "Tagged by the designer", "proposed": "Proposed by the planner"}
+_HEADINGS = MappingProxyType({"designer": "Tagged by the designer", "proposed": "Proposed by the planner"})
 
 
 class FastenersPanel:

@@ -108,8 +108,10 @@ def pairs(report: dict, axis: str) -> set[tuple[str, str]]:
 def test_report_layout(occt):
     report = occt["cases"]["stacked"]
     assert set(report) == {"engine", "parts", "contacts", "interferences", "obstructions", "tolerances",
-                           "warnings", "seconds", "undecided", "pairs", "pair_budget"}
+                           "warnings", "seconds", "undecided", "pairs", "pair_budget", "pair_steps", "time_limit",
+                           "timed_out", "selected", "undecided_relations"}
     assert report["undecided"] == [] and report["pair_budget"] == 30.0
+    assert report["timed_out"] is False and report["undecided_relations"] == [] and report["selected"] is None
     assert report["engine"] == "occt" and report["parts"] == 2 and list(report["obstructions"]) == ["+X", "+Y", "+Z"]
     assert report["tolerances"]["contact"] == 0.1 and report["warnings"] == []
 
