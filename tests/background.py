@@ -21,6 +21,7 @@ import signal
 import subprocess
 import tempfile
 import threading
+import time
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
@@ -45,7 +46,7 @@ class Job:
     """A named piece of slow work (``work``: no arguments, returns the result), done once per session."""
 
     def __init__(self, name: str, work: Callable[[], object]) -> None:
-        self.name, self.work = name, work
+        self.name, self.work = name, _timed(name, work)
         self._future: concurrent.futures.Future | None = None
         self._lock = threading.Lock()
 
@@ -73,6 +74,19 @@ class Job:
             except Exception as exc:  # noqa: BLE001  (raised again by future.result(), in every waiting test)
                 future.set_exception(exc)
         return future.result()
+
+
+SECONDS: dict[str, float] = {}  # each finished job's wall seconds (a report only: no test reads it)
+
+
+def _timed(name: str, work: Callable[[], object]) -> Callable[[], object]:
+    def timed() -> object:
+        begun = time.monotonic()
+        try:
+            return work()
+        finally:
+            SECONDS[name] = time.monotonic() - begun
+    return timed
 
 
 def start(jobs: Iterable[Job]) -> None:

@@ -101,5 +101,14 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     background.start(job for item in session.items for job in _jobs(item))
 
 
+def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Config) -> None:
+    """The background jobs' wall seconds, the slowest first (where a FreeCAD-bound suite spends its time)."""
+    if background.SECONDS:
+        terminalreporter.section("background jobs (wall seconds)")
+        for name, seconds in sorted(background.SECONDS.items(), key=lambda item: -item[1])[:25]:
+            terminalreporter.write_line(f"{seconds:7.1f} s  {name}")
+        terminalreporter.write_line(f"{sum(background.SECONDS.values()):7.1f} s  in all")
+
+
 def pytest_sessionfinish(session: pytest.Session) -> None:
     background.stop()
