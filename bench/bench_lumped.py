@@ -4,7 +4,7 @@ time, time to a gap of 0.05, peak memory.
 Run: ``.venv/bin/python bench/bench_lumped.py [--time-limit 60] [--cpu] [PRODUCT ...]`` (about the time limit
 per product; prints a Markdown table). Each product runs in a fresh subprocess, so its peak resident memory
 (ru_maxrss) is its own: the model built, the solver run (one BLAS thread: the solver picks it below 10,000
-states). The limit counts the upper bound's start (:func:`~planner.decision.lumped_model.solver_start`: the
+states). The limit counts the upper bound's start (:func:`~planner.decision.solvers.warm_start.solver_start`: the
 delayed-reveal bounds) as ``aplan solve --lumped`` does; with ``--cpu`` it is in CPU seconds of the process
 (one core), not wall seconds, so that a loaded machine gives the same figures; each row also gives the CPU
 seconds used and the load average when it ran. ``--flat`` solves the flat model over intentions instead
@@ -26,7 +26,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner import chain_product, complete_product, count_intentions, make_plan, resolve_product  # noqa: E402
 from planner.decision import intention_pomdp  # noqa: E402
-from planner.decision.lumped_model import lumped_model, solver_start  # noqa: E402
+from planner.decision.lumped_model import lumped_model  # noqa: E402
+from planner.decision.solvers.warm_start import solver_start  # noqa: E402
 from planner.decision.solvers import PointBasedSolver  # noqa: E402
 
 PRODUCTS = ["complete:5", "chain:7", "complete:6", "chain:9"]

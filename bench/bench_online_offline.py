@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner import api, chain_product, complete_product, make_plan, resolve_product  # noqa: E402
 from planner.decision.factored_simulate import evaluate_factored  # noqa: E402
-from planner.decision.lumped_model import solver_start  # noqa: E402
+from planner.decision.solvers.warm_start import solver_start  # noqa: E402
 from planner.decision.online import OnlinePlanner  # noqa: E402
 from planner.decision.solvers import PointBasedSolver  # noqa: E402
 

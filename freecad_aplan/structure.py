@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+from planner.defaults import MAX_COMPONENTS
 from planner.errors import PlannerError, ProductFormatError
 
 from .intent import Intent, IntentError, read_intent, update_intent
@@ -229,7 +230,7 @@ def accept_fastener_proposals(analysis, ids: list[str] | None = None, keep: list
                          fasteners=fasteners, tools=new_tools)
 
 
-def proposed_structure(analysis, max_components: int = 8) -> list[dict]:
+def proposed_structure(analysis, max_components: int = MAX_COMPONENTS) -> list[dict]:
     """The planner's subassembly tree for the analysis' product, its fasteners folded
     (:func:`planner.api.proposed_subassemblies`, as ``--subassemblies auto``), as entries."""
     from planner import api

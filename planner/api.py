@@ -54,7 +54,6 @@ from .decision.factored_model import FactoredIntentionModel, factored_model
 from .decision.deviations import Deviations
 from .decision.habits import Habits, habit_weights
 from .decision.parallel import check_parallel_memory
-from .decision.factored_simulate import FactoredEpisode, evaluate_factored, simulate_factored_episode
 from .decision.intention_model import IntentionModel, Rewards, flat_model_bytes, flat_model_fits, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
@@ -69,19 +68,21 @@ from .decision.budget import (
     lumped_start_fits,
     online_limits,
 )
-from .decision.lumped_model import LumpedModel, solver_start
+from .decision.lumped_model import LumpedModel
+from .decision.episodes import evaluate, evaluate_operator, simulate
+from .decision.models import is_flat, is_lumped, solver_plan, tables
 from .decision.lumped_model import lumped_model as build_lumped_model
 from .decision.online import OnlinePlanner
-from .decision.operators import mistake_stream
 from .decision.policy import AlphaVectorPolicy, PolicyError, read_policy
 from .decision.pomdp import POMDP
-from .decision.simulate import Episode, evaluate_policy, simulate_episode
-from .decision.solvers import PointBasedSolver, SolveResult
+from .decision.solvers import PointBasedSolver, SarsopSolver, SolveResult
+from .decision.solvers.warm_start import WarmStart
 from .defaults import (
     DECISION_TIME,
     DISCOUNT,
     FILE_LIMIT,
     INTENTION_LIMIT,
+    MAX_COMPONENTS,
     ONLINE_EXPANSIONS,
     POLICY_TIME_LIMIT,
     SOLVE_PRECISION,
@@ -97,7 +98,7 @@ from .errors import (
     UnknownProductError,
     gib,
 )
-from .interrupts import Interrupted, deferred_interrupts
+from .interrupts import deferred_interrupts
 from .product import (
     FASTENER_MODES,
     FastenerGroup,
@@ -143,7 +144,7 @@ DEFAULT_MODE = STRUCTURE_DEFAULT
 
 def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fasteners: str = "tagged",
                     model_options: dict | None = None, subassemblies: str | None = None,
-                    max_components: int = 8, interlocks: str = "resolve") -> Product:
+                    max_components: int = MAX_COMPONENTS, interlocks: str = "resolve") -> Product:
     """Load PRODUCT: a product file, a bundle folder, a CAD file a plugin reads (``.FCStd``, STEP: through
     FreeCAD), or the name of an embedded example (``pen``).
 
@@ -338,7 +339,7 @@ def _decidable(plan: Plan) -> Plan:
     return plan
 
 
-def arranged(product: str | os.PathLike | Product, subassemblies: str = "designer", max_components: int = 8) -> Product:
+def arranged(product: str | os.PathLike | Product, subassemblies: str = "designer", max_components: int = MAX_COMPONENTS) -> Product:
     """The product with the subassemblies ``subassemblies`` asks for
     (:func:`~planner.assembly.hierarchy.with_subassemblies`): ``designer`` the file's, ``auto`` proposed when the
     file has none (at most ``max_components`` members each), ``none`` none."""
@@ -347,7 +348,7 @@ def arranged(product: str | os.PathLike | Product, subassemblies: str = "designe
 
 
 def levels_of(product: str | os.PathLike | Product, subassemblies: str = "designer",
-              max_components: int = 8) -> list[Level]:
+              max_components: int = MAX_COMPONENTS) -> list[Level]:
     """The workstations of a product, bottom-up (:func:`~planner.assembly.hierarchy.product_levels`) with its
     subassemblies as ``subassemblies`` asks: ``designer`` (the file's), ``auto`` (proposed when the file has
     none, at most ``max_components`` members each) or ``none`` (one level: the product flat)."""
@@ -356,7 +357,7 @@ def levels_of(product: str | os.PathLike | Product, subassemblies: str = "design
 
 
 def level_product(product: str | os.PathLike | Product, subassemblies: str = "designer", level: str | None = None,
-                  max_components: int = 8) -> Product:
+                  max_components: int = MAX_COMPONENTS) -> Product:
     """The product one workstation plans: level ``level`` (a subassembly id or ``top``), or the product itself
     when it is planned flat; several levels without ``level`` is a :class:`PlannerError` naming them."""
     product = product if isinstance(product, Product) else resolve_product(product)
@@ -365,7 +366,7 @@ def level_product(product: str | os.PathLike | Product, subassemblies: str = "de
 
 def hierarchy_statistics_of(product: str | os.PathLike | Product, technical: bool | None = None,
                             limits: SizeLimits = SizeLimits(), subassemblies: str = "designer",
-                            max_components: int = 8, flat_limits: SizeLimits | None = None,
+                            max_components: int = MAX_COMPONENTS, flat_limits: SizeLimits | None = None,
                             progress: Callable[[str], None] | None = None):
     """The figures of every level (``[(Level, PlanStatistics)]``, bottom-up) and of the product planned flat:
     a :class:`PlanStatistics` within ``flat_limits`` (default ``limits``), or the :class:`PlannerError` that
@@ -389,7 +390,7 @@ def hierarchy_statistics_of(product: str | os.PathLike | Product, technical: boo
 LEVEL_KEYS = ("parts", "subassemblies", "operations", "states", "state_edges", "intentions", "sequences")
 
 
-def proposed_subassemblies(product: Product, max_components: int = 8) -> tuple[Subassembly, ...]:
+def proposed_subassemblies(product: Product, max_components: int = MAX_COMPONENTS) -> tuple[Subassembly, ...]:
     """The planner's subassembly tree for ``product``, ignoring any it already has
     (:func:`~planner.assembly.hierarchy.propose_subassemblies`: what ``--subassemblies auto`` plans with)."""
     return propose_subassemblies(replace(product, subassemblies=()), max_components)
@@ -750,11 +751,6 @@ def _check_model_read(path: str | os.PathLike, max_bytes: int) -> None:
                                memory_options(needed))
 
 
-def tables(model: Model) -> POMDP:
-    """The POMDP tables of a decision model (a :class:`POMDP` is its own tables)."""
-    return model.pomdp if isinstance(model, (IntentionModel, LumpedModel)) else model
-
-
 def check_model_file(model: Model, path: str | os.PathLike, max_bytes: int = FILE_LIMIT,
                      read_budget: int | None = None) -> int:
     """The bytes :func:`save_model` would write to ``path`` (:func:`~planner.decision.io.size.model_file_bytes`),
@@ -818,30 +814,20 @@ def solve(model: Model, time_limit: float = SOLVE_TIME_LIMIT, precision: float =
     the memory the model and the solver may take together, estimated before the solver starts
     (:func:`~planner.decision.solvers.tables.solver_bytes`)."""
     if engine == "sarsop":
-        from .decision.solvers.sarsop import solve_with_sarsop
-
-        return solve_with_sarsop(tables(model), time_limit, precision)
+        return SarsopSolver(time_limit, precision).solve(tables(model))
     if engine != "builtin":
         raise PlannerError(f"unknown solver engine {engine!r}; use one of {', '.join(SOLVER_ENGINES)}")
     budget = default_memory_budget() if max_bytes is None else max_bytes
-    check_solver_memory(tables(model), budget, model.factored.plan if isinstance(model, LumpedModel) else None,
-                        isinstance(model, IntentionModel))
+    check_solver_memory(tables(model), budget, solver_plan(model), is_flat(model))
     solver = PointBasedSolver(time_limit=time_limit, precision=precision, max_iterations=iterations,
                               keep_on_interrupt=keep_on_interrupt, write_seconds=write_seconds)
     started = solver.clock() if started is None else started  # the time limit counts the bounds' set-up too
+    if is_lumped(model):  # relaxed bounds (the state told, or told late) start the upper bound lower
+        groups, points = lumped_start_fits(model.pomdp, model.factored.plan, budget)  # optional: left out past it
+        solver = replace(solver, warm_start=WarmStart(model, points=points, groups=groups))
     with deferred_interrupts() if keep_on_interrupt else nullcontext(lambda: 0) as pending:
-        start = {}
-        if isinstance(model, LumpedModel):  # relaxed bounds (the state told, or told late) start the upper bound lower
-            finite = time_limit is not None and math.isfinite(time_limit)
-            left = started + time_limit - solver.clock() if finite else math.inf
-            groups, points = lumped_start_fits(model.pomdp, model.factored.plan, budget)  # optional: left out past it
-            start = solver_start(model, points=points, deadline=solver.clock() + left / 4 if finite else math.inf,
-                                 clock=lambda: math.inf if pending() else solver.clock()).solve_options
-            if not groups:
-                start["groups"] = None
-            if pending():  # before the solver had anything: nothing to keep, so stop at once
-                raise Interrupted(pending())
-        return solver.solve(tables(model), progress, started=started, **start)
+        # the warm start checks ``pending``: an interrupt before the solver had anything stops it at once
+        return solver.solve(tables(model), progress, started=started, stopped=pending)
 
 
 def check_solved(result: SolveResult, precision: float, time_limit: float, what: str = "--time-limit",
@@ -881,99 +867,3 @@ def policy_for(model: Model, policy: str | os.PathLike | None = None, time_limit
     if warning:
         log.warning("%s", warning)
     return result.policy, result
-
-
-def simulate(model: IntentionModel | FactoredIntentionModel, policy, sequences: Sequence[int] | None = None,
-             every: bool = False, random: int | None = None, seed: int = 0, max_steps: int = 100,
-             operator: str = "model", what: str = "--sequence", operator_model=None
-             ) -> list[Episode] | list[FactoredEpisode]:
-    """One episode per full sequence played (``Episode.start``): ``every`` one, ``random`` ones drawn at
-    random, the listed ``sequences`` (each checked), or by default the first. The operator follows its
-    sequence (``operator``: ``model`` or ``turns``, see :func:`~planner.decision.simulate.simulate_episode`);
-    one random stream, seeded by ``seed``, draws the sequences and then every episode.
-
-    On a :class:`FactoredIntentionModel` the sequences are numbered by rank (0 to the number of sequences - 1,
-    :meth:`~FactoredIntentionModel.sequence`) and random ones are drawn uniformly without enumerating them.
-
-    ``operator_model`` (:mod:`planner.decision.operators`; with ``random`` only) draws the ``random`` plans
-    (sequences and switches) instead of the model's initial belief, before any episode."""
-    if operator_model is not None:
-        return _simulate_operator(model, policy, operator_model, random, seed, max_steps, operator)
-    if isinstance(model, FactoredIntentionModel):
-        return _simulate_factored(model, policy, sequences, every, random, seed, max_steps, operator, what)
-    starts = [int(s) for s in model.full_sequences()]
-    rng = np.random.default_rng(seed)
-    if every:
-        chosen = starts
-    elif random:  # from the initial belief: uniform, or the operator's habits
-        prior = None if model.prior_weights is None else model.pomdp.initial[starts]
-        chosen = [int(s) for s in rng.choice(starts, size=random, p=prior)]
-    else:
-        chosen = [model.full_sequence(s, what) for s in (sequences or [starts[0]])]
-    return [simulate_episode(model.pomdp, policy, start, rng, max_steps, model.graph.successor, model.final_state,
-                             operator, world=model.world) for start in chosen]
-
-
-def _simulate_operator(model, policy, operator_model, random, seed, max_steps, operator) -> list:
-    if not random:
-        raise PlannerError("--operator-sequence draws the sequences the operator does: give --random N "
-                           "(not --sequence or --all)")
-    rng = np.random.default_rng(seed)  # the plans first, as the default draws, then the episodes
-    plans = operator_model.plans(model, random, rng, np.random.default_rng([seed, 1]))
-    rate = operator_model.mistakes
-    mistakes = [(rate, mistake_stream(seed, k)) if rate > 0 else None for k in range(len(plans))]
-    if isinstance(model, FactoredIntentionModel):
-        return [simulate_factored_episode(model, policy, p.sequence, rng, max_steps, operator, p.switch, m)
-                for p, m in zip(plans, mistakes)]
-    return [simulate_episode(model.pomdp, policy, p.sequence, rng, max_steps, model.graph.successor,
-                             model.final_state, operator, p.switch, model.graph.first_state, m, model.world)
-            for p, m in zip(plans, mistakes)]
-
-
-def evaluate_operator(model: Model | FactoredIntentionModel, policy, operator_model, episodes: int, seed: int = 0,
-                      max_steps: int = 100) -> tuple[float, float, list]:
-    """:func:`evaluate` against ``operator_model``: the episodes of :func:`simulate` with ``random=episodes``
-    (the same ones, for the same seed), their mean discounted return, its 95 % half-width and the episodes."""
-    if isinstance(model, LumpedModel):
-        model = model.factored
-    if not isinstance(model, (IntentionModel, FactoredIntentionModel)):
-        raise PlannerError("--operator-sequence needs a PRODUCT (its sequences), not a model file")
-    played = simulate(model, policy, random=episodes, seed=seed, max_steps=max_steps, operator_model=operator_model)
-    returns = [e.discounted_return for e in played]
-    half = 1.96 * float(np.std(returns, ddof=1)) / math.sqrt(episodes) if episodes > 1 else float("nan")
-    return float(np.mean(returns)), half, played
-
-
-def _simulate_factored(model: FactoredIntentionModel, policy, sequences, every, random, seed, max_steps, operator,
-                       what) -> list[FactoredEpisode]:
-    rng = np.random.default_rng(seed)
-    if every:
-        if model.n_sequences > 10_000:
-            raise PlannerError(f"the product has {model.n_sequences:,} full sequences: too many to play every one; "
-                               "use --random N or --sequence K")
-        paths = [model.sequence(k) for k in range(model.n_sequences)]
-    elif random:
-        paths = [model.sample_sequence(rng) for _ in range(random)]
-    else:
-        paths = []
-        for k in sequences or [0]:
-            if not 0 <= int(k) < model.n_sequences:
-                raise PlannerError(f"{what} {k}: with the online planner sequences are numbered by rank, from 0 to "
-                                   f"{model.n_sequences - 1:,}")
-            paths.append(model.sequence(int(k)))
-    return [simulate_factored_episode(model, policy, path, rng, max_steps, operator) for path in paths]
-
-
-def evaluate(model: Model | FactoredIntentionModel, policy, episodes: int, seed: int = 0,
-             max_steps: int = 100) -> tuple[float, float]:
-    """The mean discounted return over ``episodes`` simulated episodes and its 95 % confidence half-width;
-    episodes of an intention model (flat, factored or lumped) end at the finished product."""
-    if isinstance(model, LumpedModel):  # its policies are over classes: the factored filter runs them
-        model = model.factored
-    if isinstance(model, FactoredIntentionModel):
-        mean, half, _ = evaluate_factored(model, policy, episodes, seed, max_steps)
-        return mean, half
-    final = model.final_state if isinstance(model, IntentionModel) else None
-    world = model.world if isinstance(model, IntentionModel) else None  # deviations: the operator's own
-    mean, half, _ = evaluate_policy(tables(model), policy, episodes, seed, max_steps, final, world)
-    return mean, half

@@ -15,7 +15,7 @@ __all__ = [
     "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
     "CONFIDENCE", "DECISION_TIME", "ONLINE_EXPANSIONS", "ONLINE_DEPTH",
     "JSON_DEPTH_LIMIT", "INPUT_FILE_LIMIT", "SPREAD_CELL_LIMIT", "DECLARED_LIMIT", "RESOLUTION_LIMIT", "EPISODE_LIMIT",
-    "LINEAR_DEFLECTION_MIN", "STRUCTURE_DEFAULT", "MAX_COMPONENTS", "HABITS_FORMAT", "HABITS_VERSION", "HABITS_PRIOR",
+    "LINEAR_DEFLECTION_MIN", "STRUCTURE_DEFAULT", "MAX_COMPONENTS", "STAY", "BLANK_WEIGHT", "HABITS_FORMAT", "HABITS_VERSION", "HABITS_PRIOR",
     "TIME_LIMIT_MAX", "DECISION_TIME_MAX", "EXPANSION_LIMIT", "TRIAL_LIMIT", "STEP_LIMIT", "ONLINE_TREE_NUMBERS",
 ]
 
@@ -79,6 +79,11 @@ FILE_LIMIT = 4 * 2 ** 30
 
 # Decision model (Alg. 3) and solving.
 DISCOUNT = 0.9
+# The paper's model constants (Sec. III-C), written once: each step the operator stays or advances one step
+# with probability STAY each (waiting's transition), and the blank observation is emitted with BLANK_WEIGHT
+# times the weight of each operation's observation.
+STAY = 0.5
+BLANK_WEIGHT = 0.25
 SOLVE_TIME_LIMIT = 60.0            # aplan solve
 POLICY_TIME_LIMIT = 20.0           # simulate, evaluate and session when no --policy is given
 WORKBENCH_SOLVE_TIME_LIMIT = 10.0  # the workbench's Solve command (its parameter SolveTimeLimit overrides it)

@@ -104,3 +104,62 @@ def test_the_checker_sees_a_violation(tmp_path):
     module.write_text("def f():\n    from ..decision.pomdp import POMDP\n")
     names = [name for _, name in _imports(module, "planner.product")]
     assert _layer(names[0].split(".")) > _layer(("planner", "product"))
+
+
+# Rooms inside the decision package (issue 24): a model never imports what is built on it. The models (their
+# tables, beliefs and filters) import no solver, no bound, no planner and not the interface; the bounds
+# (class-MDP, delayed reveal) no solver but the upper bound's types, and no planner; solvers no online planner;
+# a policy (alpha vectors) none of them either; the interface (models.py) nothing but what it describes. Imports inside functions count too.
+DECISION_ROOMS = {
+    "model": ({"pomdp", "intention_model", "factored_model", "lumped_model", "parallel", "parallel_values",
+               "deviations", "habits", "belief", "factored_updater"},
+              ("solvers", "online", "bounds", "delayed_reveal", "models", "simulate", "factored_simulate",
+               "episodes")),
+    "bound": ({"bounds", "delayed_reveal"}, ("online", "models", "solvers.point_based", "solvers.warm_start",
+                                             "solvers.sarsop")),
+    "solver": ({"solvers"}, ("online", "models", "simulate", "factored_simulate")),
+    "policy": ({"policy"}, ("solvers", "online", "bounds", "delayed_reveal", "models", "simulate",
+                            "factored_simulate")),
+    "interface": ({"models"}, ("solvers", "simulate", "factored_simulate", "episodes")),
+}
+
+
+def _room_of(relative: tuple[str, ...]) -> str | None:
+    if len(relative) < 3 or relative[1] != "decision":
+        return None
+    name = relative[2]
+    return next((room for room, (members, _) in DECISION_ROOMS.items() if name in members), None)
+
+
+def test_decision_rooms_import_nothing_built_on_them():
+    offenders = []
+    for path, relative, package in _planner_modules():
+        room = _room_of(relative)
+        if room is None:
+            continue
+        forbidden = DECISION_ROOMS[room][1]
+        for line, name in _imports(path, package):
+            inner = name.removeprefix("planner.decision.")
+            if name.startswith("planner.decision.") and any(inner == f or inner.startswith(f + ".") for f in forbidden):
+                offenders.append(f"{path.relative_to(REPO)}:{line} ({room}) imports {name}")
+    assert offenders == []
+
+
+def test_every_decision_module_has_a_room_or_is_a_front():
+    """A new module of the decision package is placed in a room, or listed here as built on them all."""
+    fronts = {"__init__", "belief_plot", "budget", "episode_measures", "online", "online_steps", "operators",
+              "simulate", "factored_simulate", "episodes", "io"}
+    placed = set().union(*(members for members, _ in DECISION_ROOMS.values())) | fronts
+    names = {p.relative_to(REPO / "planner" / "decision").parts[0].removesuffix(".py")
+             for p in (REPO / "planner" / "decision").rglob("*.py")}
+    assert names - placed == set(), "a new module of planner/decision: give it a room in DECISION_ROOMS"
+
+
+def test_the_room_check_finds_a_model_importing_a_solver(tmp_path):
+    """A model importing the solver is caught (the check can fail)."""
+    module = tmp_path / "lumped_model.py"
+    module.write_text("from .solvers.upper import RelaxedQ\n")
+    names = [name for _, name in _imports(module, "planner.decision")]
+    assert names[0] == "planner.decision.solvers.upper"
+    assert _room_of(("planner", "decision", "lumped_model")) == "model"
+    assert any(names[0].removeprefix("planner.decision.").startswith(f) for f in DECISION_ROOMS["model"][1])

@@ -28,7 +28,7 @@ from __future__ import annotations
 import logging
 from dataclasses import dataclass, replace
 
-from ..defaults import SUBASSEMBLY_LIMIT
+from ..defaults import MAX_COMPONENTS, SUBASSEMBLY_LIMIT
 from ..errors import LimitExceededError, NotDisassemblableError, PlannerError
 from ..product import Markers, Obstruction, OperationTag, Part, Product, Subassembly, TechnicalConstraint, fold
 from .andor import and_or_graph
@@ -207,7 +207,7 @@ def _subassembly_markers(product: Product) -> dict[str, int]:
     return {group.id: marker for group, marker in zip(product.subassemblies, free)}
 
 
-def with_subassemblies(product: Product, mode: str = "designer", max_components: int = 8) -> Product:
+def with_subassemblies(product: Product, mode: str = "designer", max_components: int = MAX_COMPONENTS) -> Product:
     """``product`` with the subassemblies ``mode`` asks for: ``designer`` its own (none if absent), ``auto`` its
     own or, when it has none, :func:`propose_subassemblies`, ``none`` none (planned flat)."""
     if mode not in SUBASSEMBLY_MODES:
@@ -220,7 +220,7 @@ def with_subassemblies(product: Product, mode: str = "designer", max_components:
     return product
 
 
-def propose_subassemblies(product: Product, max_components: int = 8) -> tuple[Subassembly, ...]:
+def propose_subassemblies(product: Product, max_components: int = MAX_COMPONENTS) -> tuple[Subassembly, ...]:
     """A tree of workstation-sized subassemblies for ``product``, from its connection diagram.
 
     Definition: the parts are grouped into connected groups of at most ``max_components`` members by greedy

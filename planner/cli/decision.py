@@ -12,8 +12,7 @@ import time
 from .. import api
 from ..decision.belief_plot import episode_trace, plot_beliefs, state_trace
 from ..decision.episode_measures import episode_measures, run_totals
-from ..decision.intention_model import IntentionModel
-from ..decision.online import OnlinePlanner
+from ..decision.models import is_flat, is_online_planner
 from ..decision.policy import WRITE_SECONDS, write_policy
 from ..decision.simulate import confidence_text, decision_times
 from ..defaults import (
@@ -218,7 +217,7 @@ def _simulate_level(args: argparse.Namespace, product) -> list:
     model, policy = decision_maker_from(args, product)
     episodes = api.simulate(model, policy, args.sequence, args.all, args.random, args.seed, args.max_steps,
                             args.operator, operator_model=args.operator_model)
-    if not isinstance(model, IntentionModel):
+    if not is_flat(model):
         return _print_factored(model, episodes, args)
     for episode in episodes:
         operations = model.describe_operations(episode.start)
@@ -331,7 +330,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     if args.operator_model is not None and api._model_file_kind(args.model):  # refused before any solving
         raise PlannerError(f"{args.model}: --operator-sequence needs a PRODUCT (its full sequences), not a model file")
     model, policy = decision_maker_from(args)
-    if isinstance(policy, OnlinePlanner) and policy.decision_time is not None:
+    if is_online_planner(policy) and policy.decision_time is not None:
         log.info("the online planner takes up to %g s per decision: %d episodes can take minutes (progress below); "
                  "--expansions N bounds the work per decision instead", policy.decision_time, args.episodes)
     if args.operator_model is not None:

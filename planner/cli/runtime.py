@@ -10,7 +10,7 @@ from pathlib import Path
 
 from .. import api
 from ..decision.intention_model import IntentionModel
-from ..decision.policy import AlphaVectorPolicy
+from ..decision.models import BELIEF_OVER, belief_over, is_flat, is_offline_policy
 from ..defaults import HABITS_PRIOR, STEP_LIMIT
 from ..errors import PlannerError, UsageError
 from ..product import DEFAULT_MARKER_DICTIONARY
@@ -95,7 +95,7 @@ class _Primed:
 
 def _demo_operations(model, k: int) -> list[int]:
     """The operations of full sequence ``k``: an intention number on the flat model, a rank on the factored one."""
-    if isinstance(model, IntentionModel):
+    if is_flat(model):
         try:
             return model.sequence_operations(model.full_sequence(k, "--demo"))
         except PlannerError as exc:  # a value out of the option's range: a usage error (README, exit status)
@@ -181,7 +181,7 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
                                                                       message=message),
                               detections=stream, robot_uses_tray_tools=not args.robot_own_tools)
     decision_time, expansions = online_budget(args)
-    online = not isinstance(policy, AlphaVectorPolicy)
+    online = not is_offline_policy(policy)
     settings = {"planner": "online" if online else "offline", "policy": args.policy,
                 "decision_time": decision_time if online else None, "expansions": expansions if online else None,
                 "technical": args.technical, "base_part": model.base_part, "discount": args.discount,
@@ -245,11 +245,12 @@ def _replay(args: argparse.Namespace) -> int:
     import numpy as np
 
     from ..decision.belief_plot import BeliefTrace, plot_beliefs, state_trace
-    from ..runtime.log import replay, top_intentions
+    from ..decision.models import top_intentions
+    from ..runtime.log import replay
 
     done = replay(args.log, limits=inputs_from(args))
     model = done.model
-    factored = not isinstance(model, IntentionModel)
+    factored = belief_over(model) == BELIEF_OVER["factored"]  # a replayed model is flat or factored
     steps = list(enumerate(zip(done.actions, done.observations, done.beliefs[1:]), start=1))
     if not args.json:
         print(f"{done.product.name or args.log}: {len(done.actions)} steps, "

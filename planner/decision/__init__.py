@@ -9,7 +9,10 @@
 - the *belief updater*: ``initialize`` and ``update(belief, action, observation)`` (``belief``;
   :class:`FactoredUpdater` on the factored model).
 
-``simulate`` plays episodes of any model against any policy with any updater.
+``simulate`` plays episodes of any model against any policy with any updater. ``models`` is the interface the
+front ends use (:func:`~planner.decision.models.updater_for`, ``tables``, ``belief_over``, ...): no code outside
+this package tests a decision type; ``bounds`` holds the class-MDP bounds, ``solvers.warm_start`` the lumped
+model's warm start.
 """
 from .belief import DiscreteUpdater, UnexplainedObservation
 from .factored_model import FactoredBelief, FactoredIntentionModel, factored_model

@@ -22,7 +22,7 @@ from ..errors import MemoryLimitError, gib
 from .factored_model import factored_model_bytes
 from .intention_model import _BYTES_PER_INTENTION, _BYTES_PER_INTENTION_ACTION, flat_model_bytes
 from .lumped_model import lumped_pomdp_bytes
-from .online import VALUE_BLOCK
+from .bounds import VALUE_BLOCK
 from .pomdp import POMDP
 from .solvers.tables import pomdp_bytes, solver_bytes
 
@@ -43,9 +43,9 @@ def plan_bytes(plan: Plan) -> int:
 
 def class_values_bytes(n_classes: int, n_states: int) -> tuple[int, int]:
     """``(held, peak)``: the bytes the online planner's values hold
-    (:func:`~planner.decision.online.revealed_state_values`: four float64 per class, one per state) and the most
+    (:func:`~planner.decision.bounds.revealed_state_values`: four float64 per class, one per state) and the most
     they take while computed, on top of the model: the held ones, the class values they start from (one
-    float64 a class is kept) and the temporaries of one block of :data:`~planner.decision.online.VALUE_BLOCK`
+    float64 a class is kept) and the temporaries of one block of :data:`~planner.decision.bounds.VALUE_BLOCK`
     classes (about 14 float64 each). Held within 10 % above what is measured (chain 11, complete 7:
     tests/decision/test_memory_estimates.py; 32.8 bytes a class on chain 16 and 20, complete 9 and 10)."""
     held = 32 * n_classes + 8 * n_states + 16384  # and the arrays' headers, the model's caches

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from ..defaults import STAY
 from ..errors import PlannerError
 
 __all__ = ["Deviations", "deviations_of", "check_probability", "switch_share", "operator_step", "mix_likelihood",
@@ -101,7 +102,7 @@ def operator_step(model, classes: np.ndarray, mass: np.ndarray) -> list[tuple[np
         classes = np.concatenate([classes, drawn])
         mass = np.concatenate([np.where(moving, (1 - sigma) * mass, mass), np.repeat(per_state, count) * share])
     moving = classes != final
-    half = np.where(moving, 0.5 * mass, mass)
+    half = np.where(moving, STAY * mass, mass)
     return [(classes, half), model.advance(classes[moving], half[moving])]
 
 

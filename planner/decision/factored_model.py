@@ -51,7 +51,7 @@ import numpy as np
 
 from ..assembly.intentions import allowed_edges, base_part_first_edges, paths_to_final
 from ..assembly.plan import Plan
-from ..defaults import DISCOUNT
+from ..defaults import BLANK_WEIGHT, DISCOUNT, STAY
 from ..errors import PlannerError
 from .deviations import Deviations, mix_likelihood, operator_step, switch_share
 from .habits import weighted_fractions
@@ -243,12 +243,12 @@ class FactoredIntentionModel:
         if position >= end:
             return [(end, 1.0)]
         if action == self.wait:
-            return [(position, 0.5), (position + 1, 0.5)]
+            return [(position, STAY), (position + 1, 1 - STAY)]
         if self.class_action[path[position]] != action:
             return [(position, 1.0)]
         if position + 1 == end:
             return [(end, 1.0)]
-        return [(position + 1, 0.5), (position + 2, 0.5)]
+        return [(position + 1, STAY), (position + 2, 1 - STAY)]
 
     def sample_position(self, path: list[int], position: int, action: int, rng: np.random.Generator) -> int:
         """The next position along ``path`` drawn from :meth:`position_transition` (a simulator's step)."""
@@ -326,7 +326,7 @@ class FactoredIntentionModel:
         if self.deviations is not None:
             return operator_step(self, classes, mass)
         moving = classes != self.final_class
-        half = np.where(moving, 0.5 * mass, mass)
+        half = np.where(moving, STAY * mass, mass)
         return [(classes, half), self.advance(classes[moving], half[moving])]
 
     def predict(self, belief: FactoredBelief, action: int) -> FactoredBelief:
@@ -348,7 +348,7 @@ class FactoredIntentionModel:
         states = self.class_source if classes is None else self.class_source[classes]
         weight = self.emit_weight[states]
         if observation == 0:
-            return self._mixed(0.25 * weight)
+            return self._mixed(BLANK_WEIGHT * weight)
         keys = states.astype(np.int64) * len(self.plan.observations) + int(observation)
         at = np.searchsorted(self.emit_keys, keys)
         found = self.emit_keys[np.minimum(at, self.emit_keys.size - 1)] == keys if self.emit_keys.size else \
@@ -367,7 +367,7 @@ class FactoredIntentionModel:
         lo, hi = np.searchsorted(self.emit_keys, [state * Z, (state + 1) * Z])
         observations = np.concatenate([[0], self.emit_keys[lo:hi] - state * Z])
         weight = self.emit_weight[state]
-        return observations, np.concatenate([[0.25 * weight], np.full(hi - lo, weight)])
+        return observations, np.concatenate([[BLANK_WEIGHT * weight], np.full(hi - lo, weight)])
 
     def rewards_of(self, classes: np.ndarray, action: int) -> np.ndarray:
         """R(class, action): the class's next step (un)favorable, any other operation wrong, wait."""
@@ -467,7 +467,7 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
         seen = np.where(allowed_edges(states, base_part), seen, 0)
     keys = np.sort(states.edge_target.astype(np.int64)[seen != 0] * Z + seen[seen != 0])
     keys = keys[np.r_[True, keys[1:] != keys[:-1]]] if keys.size else keys  # distinct (a sort beats hashing)
-    emit_weight = 1.0 / (np.bincount(keys // Z, minlength=S) + 0.25)
+    emit_weight = 1.0 / (np.bincount(keys // Z, minlength=S) + BLANK_WEIGHT)
     robot_ops = np.flatnonzero(plan.tags.robot)
     action_of_op = np.full(len(plan.andor.operations), -1, dtype=np.int64)
     action_of_op[robot_ops] = np.arange(len(robot_ops))

@@ -44,7 +44,7 @@ import scipy.sparse as sp
 from ..assembly.guards import OPTIONS, Progress, default_memory_budget, memory_options
 from ..assembly.intentions import DEFAULT_INTENTION_LIMIT, IntentionGraph, count_intentions, intention_graph
 from ..assembly.plan import Plan
-from ..defaults import DISCOUNT
+from ..defaults import BLANK_WEIGHT, DISCOUNT, STAY
 from ..errors import LimitExceededError, MemoryLimitError, PlannerError
 from .deviations import Deviations, flat_deviation_entries, flat_tables
 from .pomdp import POMDP
@@ -151,7 +151,7 @@ def _transitions(graph: IntentionGraph, robot_ops: np.ndarray) -> list[sp.csr_ma
         moves = after[origin] != origin
         cols = np.concatenate([origin, after[origin][moves]])
         rr = np.concatenate([rows, rows[moves]])
-        vals = np.concatenate([np.where(moves, 0.5, 1.0), np.full(moves.sum(), 0.5)])
+        vals = np.concatenate([np.where(moves, STAY, 1.0), np.full(moves.sum(), STAY)])
         return sp.csr_matrix((vals, (rr, cols)), shape=(n, n))
 
     transition = []
@@ -177,10 +177,10 @@ def _observations(plan: Plan, graph: IntentionGraph) -> sp.csr_matrix:
     pairs = np.unique(np.stack([successor[preds], plan.operation_observation[step[preds]]], axis=1), axis=0)
     pairs = pairs[pairs[:, 1] != 0]  # an operation that looks like waiting adds nothing beyond the blank
     count = np.bincount(pairs[:, 0], minlength=n).astype(float)
-    weight = 1.0 / (count + 0.25)
+    weight = 1.0 / (count + BLANK_WEIGHT)
     rows = np.concatenate([pairs[:, 0], states])
     cols = np.concatenate([pairs[:, 1], np.zeros(n, dtype=np.int64)])
-    vals = np.concatenate([weight[pairs[:, 0]], 0.25 * weight])
+    vals = np.concatenate([weight[pairs[:, 0]], BLANK_WEIGHT * weight])
     return sp.csr_matrix((vals, (rows, cols)), shape=(n, len(plan.observations)))
 
 

@@ -39,15 +39,15 @@ from typing import Callable
 import numpy as np
 
 from ..assembly.tags import BLANK
-from ..decision.belief import DiscreteUpdater
-from ..decision.factored_model import FactoredBelief, FactoredIntentionModel, factored_model
-from ..decision.factored_updater import FactoredUpdater
+from ..decision.factored_model import FactoredIntentionModel, factored_model
 from ..decision.intention_model import IntentionModel, intention_model
+from ..decision.models import BELIEF_OVER, belief_at, top_intentions, updater_for
 from ..errors import PlannerError
 from ..files import with_faults
 from ..product import Product, product_from_dict
 from ..validation import INPUT_OPTION, InputError, InputLimits, json_loads, not_regular
 
+# top_intentions, belief_at and updater_for live in planner.decision.models; still importable from here
 __all__ = ["LOG_VERSION", "SessionError", "EventLog", "top_intentions", "belief_at", "updater_for", "Replay", "read_log", "replay"]
 
 LOG_VERSION = 1
@@ -55,24 +55,6 @@ LOG_VERSION = 1
 
 class SessionError(PlannerError):
     """A session cannot start or go on: a log that cannot be written or read, a model that does not fit."""
-
-
-def top_intentions(belief, k: int = 5) -> list[list]:
-    """The ``k`` most probable intentions (or classes, for a :class:`FactoredBelief`) with a positive
-    probability, as the log's ``top`` field."""
-    if isinstance(belief, FactoredBelief):
-        order = np.argsort(-belief.mass, kind="stable")[:k]
-        return [[int(belief.classes[i]), round(float(belief.mass[i]), 6)] for i in order]
-    order = np.argsort(-belief, kind="stable")[:k]
-    return [[int(i), round(float(belief[i]), 6)] for i in order if belief[i] > 0]
-
-
-def belief_at(belief, index: int) -> float:
-    """The probability of intention (or class) ``index``."""
-    if isinstance(belief, FactoredBelief):
-        at = int(np.searchsorted(belief.classes, index))
-        return float(belief.mass[at]) if at < belief.classes.size and belief.classes[at] == index else 0.0
-    return float(belief[index])
 
 
 class EventLog:
@@ -254,19 +236,12 @@ def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel | Factor
                            "is damaged")
     deviations = _deviations(path, settings.get("deviations"))
     model = (factored_model(plan, base_part=base_part, weights=weights, parallel=parallel, deviations=deviations)
-             if start.get("belief_over") == "classes"
+             if start.get("belief_over") == BELIEF_OVER["factored"]
              else intention_model(plan, base_part=base_part, weights=weights, deviations=deviations))
     if list(model.observations) != start.get("observations") or list(model.actions) != start.get("actions"):
         raise SessionError(f"{path}: the product in the log no longer gives the logged actions and observations "
                            "(the log was written by another planner version)")
     return product, model
-
-
-def updater_for(model: IntentionModel | FactoredIntentionModel, on_reset=None):
-    """The exact Bayes filter of ``model``: over intentions, or over classes on the factored model."""
-    if isinstance(model, FactoredIntentionModel):
-        return FactoredUpdater(model, on_reset=on_reset)
-    return DiscreteUpdater(model.pomdp, on_reset=on_reset, reset_weights=model.prior_weights)
 
 
 def _in_the_log(event) -> None:

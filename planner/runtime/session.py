@@ -42,10 +42,11 @@ from ..assembly.tags import BLANK, Observation
 from ..decision.belief import UnexplainedObservation
 from ..decision.factored_model import FactoredBelief, FactoredIntentionModel
 from ..decision.intention_model import IntentionModel
+from ..decision.models import BELIEF_OVER, belief_at, belief_over, belief_prefix, final_of, top_intentions, updater_for
 from ..errors import PlannerError
 from ..product import product_to_dict
 from .interfaces import Instruction, ObservationSource, Robot, instruction_for
-from .log import LOG_VERSION, EventLog, belief_at, top_intentions, updater_for
+from .log import LOG_VERSION, EventLog
 from .progress import AssemblyProgress
 from .undo import Apart, apart_state, belief_after_apart, in_model, predicted
 
@@ -76,7 +77,7 @@ class SessionResult:
 def status_line(step: int, belief, observation: str, next_action: str, k: int = 3) -> str:
     """``step 3 | belief i12 0.71 i15 0.20 i3 0.05 | seen ink+[hammer] | next a4:...`` (classes ``c12`` on the
     factored model)"""
-    prefix = "c" if isinstance(belief, FactoredBelief) else "i"
+    prefix = belief_prefix(belief)
     top = " ".join(f"{prefix}{i} {p:.2f}" for i, p in top_intentions(belief, k))
     return f"step {step} | belief {top} | seen {observation} | next {next_action}"
 
@@ -145,8 +146,9 @@ class _Run:
         self.progress = AssemblyProgress(model.plan)
         self.blank = model.plan.observations.index(BLANK)
         self.updater = updater_for(model, on_reset=self.resets.append)
-        self.factored = isinstance(model, FactoredIntentionModel)
-        self.final = model.final_class if self.factored else model.final_state
+        self.over = belief_over(model)
+        self.factored = self.over == BELIEF_OVER["factored"]
+        self.final = final_of(model)
         self.belief = self.updater.initialize()
         self.result = SessionResult("running", "", 0, 0, self.belief, [self.belief])  # stop() says how it ended
 
@@ -172,7 +174,7 @@ class _Run:
         deviations = getattr(model, "deviations", None)  # the model's own: replay rebuilds the same tables
         settings = {**settings, "deviations": None if deviations is None else deviations.as_dict()}
         self.log.write("start", version=LOG_VERSION, product=product_to_dict(designed), settings=settings,
-                       n_intentions=intentions, belief_over="classes" if self.factored else "intentions",
+                       n_intentions=intentions, belief_over=self.over,
                        actions=list(model.actions), observations=list(model.observations),
                        top=top_intentions(self.belief))
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..assembly.plan import Plan
 from ..decision.deviations import belief_at_states
-from ..decision.factored_model import FactoredBelief
+from ..decision.models import is_flat, predict, state_mass
 
 __all__ = ["Apart", "apart_state", "belief_after_apart", "state_mass", "in_model", "predicted"]
 
@@ -72,13 +72,6 @@ def apart_state(plan: Plan, state: int, parts: tuple[str, ...]) -> tuple[int | N
     return int(found[0]), ""
 
 
-def state_mass(model, belief, state: int) -> float:
-    """The belief's mass on the assembly ``state`` (its classes, or its intentions)."""
-    if isinstance(belief, FactoredBelief):
-        return float(belief.mass[model.class_source[belief.classes] == state].sum())
-    return float(belief[model.graph.first_state == state].sum())
-
-
 def belief_after_apart(model, predicted, moves: list[tuple[int, int]]):
     """The belief after a step undone (module docstring): the prior over the completions of each new state of
     ``moves`` (``(from state, to state)`` pairs), weighted by ``predicted``'s mass on the state it came from
@@ -96,7 +89,7 @@ def belief_after_apart(model, predicted, moves: list[tuple[int, int]]):
 def in_model(model, state: int) -> bool:
     """Whether the decision model holds completions of ``state`` (with a base part, only the states its
     sequences reach). Cost: O(I) or O(S + E)."""
-    if hasattr(model, "graph"):
+    if is_flat(model):
         return bool((model.graph.first_state == state).any())
     if model.base_part is None:
         return True
@@ -104,7 +97,5 @@ def in_model(model, state: int) -> bool:
 
 
 def predicted(model, updater, belief, action: int):
-    """The belief after ``action`` before any observation (flat or factored)."""
-    if isinstance(belief, FactoredBelief):
-        return model.predict(belief, action)
-    return updater.predict(belief, action)
+    """The belief after ``action`` before any observation (flat or factored): :func:`planner.decision.models.predict`."""
+    return predict(model, updater, belief, action)

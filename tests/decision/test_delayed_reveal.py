@@ -8,7 +8,8 @@ import pytest
 from planner import chain_product, complete_product, make_plan
 from planner.decision import PointBasedSolver, factored_model, intention_model
 from planner.decision.delayed_reveal import delayed_reveal_bound, reveal_graph, reveal_values
-from planner.decision.lumped_model import LumpedModel, lumped_pomdp, solver_bounds, solver_start
+from planner.decision.lumped_model import LumpedModel, lumped_pomdp
+from planner.decision.solvers.warm_start import solver_bounds, solver_start
 from planner.decision.online import revealed_state_values
 from planner.decision.solvers.upper import UpperBound
 

@@ -184,7 +184,7 @@ def test_bounds_stay_above_the_exact_values(pen):
     the discounted tail's largest reward, bounded here by the certified solver's upper bound); the solver on
     the flat and the lumped models (its start from those bounds) gives overlapping intervals."""
     from planner.decision import PointBasedSolver
-    from planner.decision.lumped_model import solver_bounds
+    from planner.decision.solvers.warm_start import solver_bounds
     from planner.decision.online import OnlinePlanner, class_values, revealed_state_values
 
     plan = make_plan(pen, True)

@@ -175,7 +175,7 @@ def test_planners_run_on_the_weighted_models_with_the_same_values(pen):
     V*(b0) overlap; the exact three-step values are equal; the online planner and the lumped model's bounds
     (which read the weighted fractions) start from the same belief."""
     from planner.decision import PointBasedSolver
-    from planner.decision.lumped_model import solver_bounds
+    from planner.decision.solvers.warm_start import solver_bounds
     from planner.decision.online import OnlinePlanner
 
     plan = make_plan(pen, True)

@@ -124,7 +124,7 @@ def test_sizes(pen):
 def test_solver_bounds_groups_spread_over_each_state(models):
     """One group per assembly state with two or more classes out of it: those classes, by their fractions
     (summing to 1), with the "state known" value, which is at most the classes' own bound averaged."""
-    from planner.decision.lumped_model import solver_bounds
+    from planner.decision.solvers.warm_start import solver_bounds
 
     plan, fact, lumped = models
     Q, groups = solver_bounds(fact)
@@ -142,7 +142,7 @@ def test_corner_groups_keep_the_solver_bounds_valid_and_tighter(pen, name):
     """The lumped model solved with and without the groups, by the same number of trials: both certified
     intervals contain V*(b0) (they overlap, and overlap the flat model's on the pen), and the groups'
     upper bound is the lower one."""
-    from planner.decision.lumped_model import solver_bounds
+    from planner.decision.solvers.warm_start import solver_bounds
 
     product, technical = (pen, True) if name == "pen-technical" else (chain_product(5), None)
     plan = make_plan(product, technical)

@@ -15,11 +15,11 @@ import pytest
 from planner.assembly import make_plan
 from planner.assembly.andor import and_or_graph, liaison_adjacency
 from planner.assembly.state_count import count_states, count_unconstrained
-from planner.decision import online
+from planner.decision import bounds
 from planner.decision.factored_model import factored_model, factored_model_bytes
 from planner.decision.lumped_model import lumped_pomdp, lumped_pomdp_bytes
 from planner.decision.budget import class_values_bytes
-from planner.decision.online import revealed_state_values
+from planner.decision.bounds import revealed_state_values
 from planner.decision.solvers.tables import Tables, mdp_upper_bound, solver_bytes
 from planner.product.examples import example_path
 from planner.product import load_product
@@ -101,9 +101,9 @@ def test_values_in_blocks_are_the_same(monkeypatch):
     """The backward passes split a level into blocks of states: any split gives the same values."""
     model = factored_model(make_plan(complete_product(6)))
     whole = revealed_state_values(model)
-    monkeypatch.setattr(online, "VALUE_BLOCK", 7)
-    monkeypatch.setattr(online._level_blocks, "__defaults__", (7,))
-    assert len(list(online._level_blocks(model))) > len(model.plan.states.level_start)  # split indeed
+    monkeypatch.setattr(bounds, "VALUE_BLOCK", 7)
+    monkeypatch.setattr(bounds._level_blocks, "__defaults__", (7,))
+    assert len(list(bounds._level_blocks(model))) > len(model.plan.states.level_start)  # split indeed
     split = revealed_state_values(model)
     for a, b in zip((whole.value, whole.wait, whole.match, whole.wrong, whole.state),
                     (split.value, split.wait, split.match, split.wrong, split.state)):

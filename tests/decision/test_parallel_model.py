@@ -17,7 +17,7 @@ from planner.decision.delayed_reveal import delayed_reveal_bound
 from planner.decision.episode_measures import episode_measures
 from planner.decision.factored_simulate import simulate_factored_episode
 from planner.decision.habits import habit_weights_from
-from planner.decision.lumped_model import solver_bounds
+from planner.decision.solvers.warm_start import solver_bounds
 from planner.decision.online import OnlinePlanner, class_values, revealed_state_values
 
 TOLERANCE = 1e-9

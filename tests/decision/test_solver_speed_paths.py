@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from planner import chain_product, make_plan
-from planner.decision.lumped_model import lumped_model, solver_start
+from planner.decision.lumped_model import lumped_model
+from planner.decision.solvers.warm_start import solver_start
 from planner.decision.solvers import PointBasedSolver
 from planner.decision.solvers.lower import LowerBound
 from planner.decision.solvers.tables import Rows, best_products

@@ -21,11 +21,11 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field, replace
-from typing import Callable
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
-from ...interrupts import deferred_interrupts
+from ...interrupts import Interrupted, deferred_interrupts
 from ..policy import AlphaVectorPolicy
 from ..pomdp import POMDP
 from .belief_set import BeliefSet
@@ -36,6 +36,9 @@ from .tables import Tables, fast_informed_bound
 from .threads import blas_threads, limited_blas
 from .trials import backup_groups, bounds_at, trial
 from .upper import CornerGroups, RelaxedQ, UpperBound
+
+if TYPE_CHECKING:
+    from .warm_start import WarmStart
 
 __all__ = ["PointBasedSolver", "SolveResult"]
 
@@ -127,20 +130,31 @@ class PointBasedSolver:
     blas_threads: int | None = None
     keep_on_interrupt: bool = False
     write_seconds: float = 0.0
+    warm_start: WarmStart | None = field(default=None, repr=False, compare=False)
     clock: Callable[[], float] = field(default=time.perf_counter, repr=False, compare=False)
 
     def solve(self, model: POMDP, progress: Callable[[float, float, float], None] | None = None,
               upper: np.ndarray | None = None, groups: CornerGroups | None = None,
               started: float | None = None, points: tuple[np.ndarray, np.ndarray] | None = None,
-              relaxed: RelaxedQ | None = None) -> SolveResult:
+              relaxed: RelaxedQ | None = None, stopped: Callable[[], int] | None = None) -> SolveResult:
         """Solve ``model``; ``progress(seconds, lower, upper)`` is called after each step; ``upper``: a known
         upper bound on Q* (actions x states) to start the informed bound from, ``groups``: corner groups of
-        the upper bound (the lumped model's :func:`~planner.decision.lumped_model.solver_bounds` gives both);
+        the upper bound (the lumped model's :func:`~.warm_start.solver_bounds` gives both);
         ``started``: the ``clock()`` value the time limit counts from (default: now), e.g. before building them;
         ``points``: beliefs (N, S) and upper values at them (N,), stored as sawtooth points where below the
         bound; ``relaxed``: Q-values of a relaxed problem (:class:`~.upper.RelaxedQ`), one more upper bound
-        at every belief (the lumped model's :func:`~planner.decision.lumped_model.solver_start` gives all)."""
+        at every belief (the lumped model's :func:`~.warm_start.solver_start` gives all). With a ``warm_start``
+        in the configuration and no ``upper`` given, they come from it, within its share of the time limit;
+        ``stopped()`` non-zero (an interrupt the caller deferred) cuts it short and raises
+        :class:`~planner.interrupts.Interrupted` before the solver starts (nothing to keep yet)."""
         start = self.clock() if started is None else started
+        if self.warm_start is not None and upper is None:
+            stopped = stopped if stopped is not None else (lambda: 0)
+            options = self.warm_start.options(self.clock, start, self.time_limit, stopped)
+            if stopped():
+                raise Interrupted(stopped())
+            upper, groups, points, relaxed = (options["upper"], options["groups"], options["points"],
+                                              options["relaxed"])
         m = Tables(model)
         if upper is not None and np.shape(upper) != (m.A, m.S):
             raise ValueError(f"the starting upper bound is {np.shape(upper)}, the model needs {(m.A, m.S)}")

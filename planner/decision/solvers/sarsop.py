@@ -6,6 +6,7 @@ import shutil
 import subprocess
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 from ...errors import PlannerError
@@ -14,11 +15,28 @@ from ..policy import read_policy
 from ..pomdp import POMDP
 from .point_based import SolveResult
 
-__all__ = ["solve_with_sarsop"]
+__all__ = ["SarsopSolver", "solve_with_sarsop"]
+
+
+@dataclass(frozen=True)
+class SarsopSolver:
+    """APPL SARSOP (``pomdpsol``, when it is on PATH) as a solver: the configuration (``time_limit`` s,
+    ``precision``: the target gap at the initial belief, ``executable``), :meth:`solve` runs it, as
+    :class:`~.point_based.PointBasedSolver` does."""
+
+    time_limit: float = 60.0
+    precision: float = 1e-3
+    executable: str = "pomdpsol"
+
+    def solve(self, model: POMDP) -> SolveResult:
+        """Run ``pomdpsol`` on ``model`` (written as POMDPX to a temporary folder); its last reported bounds and
+        its policy make the result. A missing ``pomdpsol`` or a failed run is a :class:`PlannerError`."""
+        return solve_with_sarsop(model, self.time_limit, self.precision, self.executable)
 
 
 def solve_with_sarsop(model: POMDP, time_limit: float, precision: float, executable: str = "pomdpsol") -> SolveResult:
-    """Run ``pomdpsol`` on ``model``; its last reported bounds and its policy make the result."""
+    """Run ``pomdpsol`` on ``model``; its last reported bounds and its policy make the result
+    (:class:`SarsopSolver` is the solver object)."""
     found = shutil.which(executable)
     if found is None:
         raise PlannerError(f"{executable!r} is not on PATH; install APPL SARSOP or use the builtin engine")
