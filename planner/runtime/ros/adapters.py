@@ -178,7 +178,7 @@ class MarkerFeed:
     or the detector stopped); a message with ``error`` set (an unreadable frame) is one too.
     """
 
-    def __init__(self, watch: MasterWatch, name: str = "markers", frame_timeout: float = 10.0,
+    def __init__(self, watch: MasterWatch, name: str = "markers", frame_timeout: float = 60.0,
                  connect_timeout: float = 30.0, poll: float = 0.5):
         import rospy
         from std_msgs.msg import UInt32
