@@ -153,8 +153,8 @@ def test_the_image_topic_stopping(ros_shared):
 
 
 def test_sigterm_while_the_robot_works_cancels_the_goal_and_ends_the_log(ros):
-    # its own master: on the module's, after the other tests, the planner once did not exit on SIGTERM (a lead
-    # to follow; the test checks the fresh cell)
+    # its own master: once, on the module's after the other tests, the planner did not exit on SIGTERM (an
+    # interrupt rospy swallowed? RosRobot.perform now re-raises those); a fresh cell keeps this test exact
     import os
     import signal
 
