@@ -114,17 +114,16 @@ def _ros(args: argparse.Namespace) -> int:
         publisher = BeliefPublisher()
         level = rospy.Publisher("level", UInt32, queue_size=1, latch=True)
         robots: list = []  # one action client for every level
+        opened: list = []  # the levels started so far
 
         def open_stream(args, model, markers, detector):
-            level.publish(UInt32(len(args.levels_opened) + 1))
-            args.levels_opened.append(model)
+            opened.append(model)
+            level.publish(UInt32(len(opened)))
             if not robots:
                 robots.append(RosRobot(watch, timeout=args.robot_timeout, server_timeout=args.server_timeout))
             feed = MarkerFeed(watch, frame_timeout=args.frame_timeout, connect_timeout=args.server_timeout)
             args.source_name, args.robot = f"ros {feed.name}", f"ros {robots[0].name}"
             return feed, robots[0]
-
-        args.levels_opened = []
 
         args.open_stream, args.on_event = open_stream, publisher
         return _session(args)
