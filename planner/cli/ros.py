@@ -5,16 +5,26 @@ offline or online planner, the same log, ``aplan replay``) with the robot an ``a
 server and the observations from an ``aplan_msgs/Markers`` topic. Arguments ``name:=value`` (ROS remappings,
 ``__name:=``, what roslaunch adds) go to rospy, the rest to argparse. The node's private parameters
 (``~product``, ``~level``, ``~planner``, ``~policy``, ``~decision_time``, ``~expansions``, ``~log``,
-``~max_steps``, ``~debounce``, ``~quiet_frames``) stand for the options not given on the command line and are
-checked as the options are. ROS is imported only when one of these commands runs.
+``~max_steps``, ``~debounce``, ``~quiet_frames``, ``~habits``, ``~habits_out``) stand for the options not given
+on the command line and are checked as the options are. A product of several levels runs them bottom-up in one
+run, as ``aplan session`` does; the latched ``level`` topic (``std_msgs/UInt32``) says which (1, 2, ...), so that
+``aplan ros-sim`` switches its cell with it. ROS is imported only when one of these commands runs.
 """
 from __future__ import annotations
 
 import argparse
 
-from ..defaults import STEP_LIMIT
+from ..defaults import HABITS_PRIOR, STEP_LIMIT
 from ..errors import UsageError
-from .options import PRODUCT_HELP, add_decision_options, add_policy_options, decision_seconds, index, number
+from .options import (
+    PRODUCT_HELP,
+    add_decision_options,
+    add_force,
+    add_policy_options,
+    decision_seconds,
+    index,
+    number,
+)
 from .runtime import FRAME_LIMIT
 
 __all__ = ["add_commands", "split_remaps", "REMAPS"]
@@ -22,6 +32,10 @@ __all__ = ["add_commands", "split_remaps", "REMAPS"]
 REMAPS: list[str] = []  # the ROS arguments of this run (name:=value), for rospy.init_node
 COMMANDS = ("ros", "ros-vision", "ros-robot", "ros-sim")
 seconds = number(0, 86_400, low_open=True)
+# Seconds the planner waits for the next marker message before it ends the session: "the camera went quiet". It
+# counts only while the planner waits for a frame (not while it decides or the robot works), and a live camera
+# sends 30 a second; the margin is for a detector or simulator on a loaded machine (10 s fired once on one).
+FRAME_TIMEOUT = 60.0
 
 # parameter -> (dest, parse, default when neither the option nor the parameter is given)
 _PARAMETERS = {
@@ -32,6 +46,7 @@ _PARAMETERS = {
     "max_steps": ("max_steps", number(1, STEP_LIMIT, integer=True), 500),
     "debounce": ("debounce", number(1, FRAME_LIMIT, integer=True), 3),
     "quiet_frames": ("quiet_frames", number(1, FRAME_LIMIT, integer=True), 45),
+    "habits": ("habits", str, None), "habits_out": ("habits_out", str, None),
 }
 
 
@@ -86,18 +101,29 @@ def _apply_parameters(args: argparse.Namespace) -> None:
 
 def _ros(args: argparse.Namespace) -> int:
     from ..runtime.ros.adapters import BeliefPublisher, MarkerFeed, RosRobot
+    from .options import check_outputs
     from .runtime import _session
 
     watch = _node(args)
     try:
         _apply_parameters(args)
+        check_outputs(args)  # again: ~habits_out may have come from a parameter
+        import rospy
+        from std_msgs.msg import UInt32
+
         publisher = BeliefPublisher()
+        level = rospy.Publisher("level", UInt32, queue_size=1, latch=True)
+        robots: list = []  # one action client for every level
+        opened: list = []  # the levels started so far
 
         def open_stream(args, model, markers, detector):
-            robot = RosRobot(watch, timeout=args.robot_timeout, server_timeout=args.server_timeout)
+            opened.append(model)
+            level.publish(UInt32(len(opened)))
+            if not robots:
+                robots.append(RosRobot(watch, timeout=args.robot_timeout, server_timeout=args.server_timeout))
             feed = MarkerFeed(watch, frame_timeout=args.frame_timeout, connect_timeout=args.server_timeout)
-            args.source_name, args.robot = f"ros {feed.name}", f"ros {robot.name}"
-            return feed, robot
+            args.source_name, args.robot = f"ros {feed.name}", f"ros {robots[0].name}"
+            return feed, robots[0]
 
         args.open_stream, args.on_event = open_stream, publisher
         return _session(args)
@@ -151,21 +177,23 @@ def _sim(args: argparse.Namespace) -> int:
     from ..runtime.ros.sim import SimulatedRosCell
     from ..runtime.tray import CameraModel, SimulatedCell, tray_layout
     from ..runtime.vision import marker_map
-    from .decision import decision_maker_from, product_argument
+    from .decision import decision_maker_from, levels_from
     from ..runtime.scripted import ScriptedOperator
     from .runtime import _demo_operations
 
-    model, _ = decision_maker_from(args, product_argument(args))
-    designed = model.plan.designed or model.plan.product
-    markers = marker_map(designed)
-    # the cell of aplan session --demo K, frame for frame (planner.cli.runtime._open_stream)
-    operator = ScriptedOperator(model.plan, _demo_operations(model, args.demo))
-    camera = CameraModel(blur=1.2, noise=6, perspective=0.04, hands=True, seed=args.demo)
-    cell = SimulatedCell(tray_layout(markers, margin=camera.perspective + 0.02), operator, camera,
-                         settle=args.quiet_frames + 5)
+    def cell_of(product) -> SimulatedCell:
+        """The cell of aplan session --demo K on one level, frame for frame (planner.cli.runtime._open_stream)."""
+        model, _ = decision_maker_from(args, product)
+        designed = model.plan.designed or model.plan.product
+        operator = ScriptedOperator(model.plan, _demo_operations(model, args.demo))
+        camera = CameraModel(blur=1.2, noise=6, perspective=0.04, hands=True, seed=args.demo)
+        return SimulatedCell(tray_layout(marker_map(designed), margin=camera.perspective + 0.02), operator, camera,
+                             settle=args.quiet_frames + 5)
+
+    cells = [cell_of(product) for _, product in levels_from(args)]  # the levels aplan ros runs, in its order
     watch = _node(args)
     try:
-        SimulatedRosCell(cell, watch, args.fail_at, args.hang_at, args.pause_at, args.stop_after, args.cancel_at)
+        SimulatedRosCell(cells, watch, args.fail_at, args.hang_at, args.pause_at, args.stop_after, args.cancel_at)
         print(f"aplan ros-sim: {rospy.resolve_name('image')}, {rospy.resolve_name('perform')}", flush=True)
         rospy.spin()
     finally:
@@ -201,13 +229,19 @@ def add_commands(commands) -> None:
                      help="robot decisions at most (default 500)")
     ros.add_argument("--robot-timeout", type=seconds, default=300.0, metavar="S",
                      help="seconds to wait for the robot's result before cancelling the goal (default 300)")
-    ros.add_argument("--frame-timeout", type=seconds, default=10.0, metavar="S",
-                     help="seconds without a marker message that end the session (default 10)")
+    ros.add_argument("--frame-timeout", type=seconds, default=FRAME_TIMEOUT, metavar="S",
+                     help="seconds the planner waits for the next marker message before it ends the session: the "
+                          f"camera or the detector went quiet (default {FRAME_TIMEOUT:g})")
     ros.add_argument("--server-timeout", type=seconds, default=30.0, metavar="S",
                      help="seconds to wait at start for the robot server and the marker topic (default 30)")
+    ros.add_argument("--habits-out", metavar="FILE",
+                     help="at the end, write the habits (--habits, or none) plus the steps of this session "
+                          "(docs/habits.md); an existing file is replaced only with --force")
+    ros.add_argument("--habits-prior", type=number(0, low_open=True), default=HABITS_PRIOR, metavar="ALPHA",
+                     help=f"the prior of --habits-out when there is no --habits (default {HABITS_PRIOR:g})")
+    add_force(ros, outputs=("habits_out",))
     ros.add_argument("--node", default="aplan_planner", **node)
-    ros.set_defaults(run=_ros, demo=None, keyboard=False, camera=None, video=None, images=None, robot="ros",
-                     habits_out=None, habits_prior=None)
+    ros.set_defaults(run=_ros, demo=None, keyboard=False, camera=None, video=None, images=None, robot="ros")
 
     vision = commands.add_parser("ros-vision", help="ROS vision server: sensor_msgs/Image -> ArUco markers",
                                  description="Detect the tray's ArUco markers in each frame of 'image' "

@@ -16,6 +16,7 @@ import time
 import xmlrpc.client
 
 from ...errors import PlannerError
+from ...interrupts import raise_if_swallowed
 from ..interfaces import Instruction, RobotReport
 from ..vision.markers import VisionError
 
@@ -151,7 +152,11 @@ class RosRobot:
 
         handle = self.client.send_goal(goal_of(instruction, self.msgs.PerformGoal), on_transition)
         try:
-            answered = finished.wait(self.timeout)
+            deadline, answered = time.monotonic() + self.timeout, False
+            while not answered and time.monotonic() < deadline:
+                # an interrupt that rospy or actionlib caught on the way (bare excepts) still ends the wait
+                raise_if_swallowed()
+                answered = finished.wait(min(0.5, max(0.0, deadline - time.monotonic())))
         except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the robot stops too, then the session's log ends
             handle.cancel()
             raise
@@ -178,7 +183,7 @@ class MarkerFeed:
     or the detector stopped); a message with ``error`` set (an unreadable frame) is one too.
     """
 
-    def __init__(self, watch: MasterWatch, name: str = "markers", frame_timeout: float = 10.0,
+    def __init__(self, watch: MasterWatch, name: str = "markers", frame_timeout: float = 60.0,
                  connect_timeout: float = 30.0, poll: float = 0.5):
         import rospy
         from std_msgs.msg import UInt32
@@ -219,6 +224,7 @@ class MarkerFeed:
         """The next message, saying every ``poll`` s that the planner waits (and that the master answers)."""
         started = time.monotonic()
         while True:
+            raise_if_swallowed()  # as in RosRobot.perform
             self.watch.check()
             self.waiting.publish(self._uint32(self.read))
             try:

@@ -4,7 +4,8 @@
 The camera runs in step with the planner: it publishes the next frame only when the planner says on
 ``waiting_for_frames`` that it has read every frame published so far, and the operator acts only when the
 frames already rendered have run out (what the in-process demo does). So the planner sees exactly the demo's
-frames, in the demo's order, and writes the same session log. Fault drills for tests and rehearsals:
+frames, in the demo's order, and writes the same session log. A product of several levels is a cell per
+level: the planner's latched ``level`` topic (``std_msgs/UInt32``, 1, 2, ...) says which one the camera shows. Fault drills for tests and rehearsals:
 ``fail_at`` (the robot answers "failed" at those steps), ``hang_at`` (it never answers, until cancelled),
 ``pause_at`` (it answers only once the ROS master has gone), ``cancel_at`` (it cancels the goal itself, as
 when the operator changed course), ``stop_after`` (the camera stops after that many
@@ -27,13 +28,13 @@ __all__ = ["SimulatedRosCell"]
 class SimulatedRosCell:
     """Publishes ``cell``'s frames on demand and serves its robot (module docstring)."""
 
-    def __init__(self, cell: SimulatedCell, watch: MasterWatch, fail_at=(), hang_at=(), pause_at=(),
+    def __init__(self, cells: list[SimulatedCell], watch: MasterWatch, fail_at=(), hang_at=(), pause_at=(),
                  stop_after: int | None = None, cancel_at=()):
         import rospy
         from sensor_msgs.msg import Image
         from std_msgs.msg import UInt32
 
-        self.cell, self.watch = cell, watch
+        self.cells, self.cell, self.level, self.watch = list(cells), cells[0], 1, watch
         self.fail_at, self.hang_at, self.pause_at = set(fail_at), set(hang_at), set(pause_at)
         self.stop_after, self.cancel_at = stop_after, set(cancel_at)
         self.published = 0
@@ -43,6 +44,21 @@ class SimulatedRosCell:
         self.robot = RobotServer(self.answer)
         self.subscriber = rospy.Subscriber("waiting_for_frames", UInt32, self.on_waiting, queue_size=10,
                                            tcp_nodelay=True)
+        self.levels = rospy.Subscriber("level", UInt32, self.on_level, queue_size=10)
+
+    def on_level(self, message) -> None:
+        """The planner starts level ``message.data`` (from 1): its cell, from its first frame. A level the
+        simulation does not have is logged and ignored (the planner then times out waiting for frames)."""
+        import rospy
+
+        with self.lock:
+            if message.data == self.level:
+                return
+            if not 1 <= message.data <= len(self.cells):
+                rospy.logerr("aplan ros-sim: the planner started level %d of %d", message.data, len(self.cells))
+                return
+            # frames of the level before are all read (each is published only when asked for), so none mixes in
+            self.level, self.cell, self.published = message.data, self.cells[message.data - 1], 0
 
     def on_waiting(self, message) -> None:
         """The planner has read ``message.data`` frames: publish the next one when it has read them all."""

@@ -48,9 +48,9 @@ def _free_port() -> int:
 class RosGraph:
     """The master and the nodes of one test (``env``: the environment every node gets)."""
 
-    def __init__(self, folder: Path, cache: Path):
+    def __init__(self, folder: Path, cache: Path, port: int | None = None):
         self.folder = folder
-        self.port = _free_port()
+        self.port = port or _free_port()
         home = folder / "ros_home"
         home.mkdir()
         self.env = {**os.environ, "ROS_MASTER_URI": f"http://127.0.0.1:{self.port}", "ROS_IP": "127.0.0.1",
@@ -104,14 +104,20 @@ class RosGraph:
             process.wait(10)
 
     def stop(self) -> None:
-        for name in reversed(list(self.processes)):
-            process = self.processes[name]
-            if process.poll() is None:
-                try:
-                    os.killpg(process.pid, signal.SIGTERM)
-                    process.wait(5)
-                except (ProcessLookupError, subprocess.TimeoutExpired):
-                    self.kill(name)
+        """SIGTERM to every node still running at once, then SIGKILL to what is left after 5 s (each waited for
+        in turn would add their shutdowns up)."""
+        running = [name for name, process in self.processes.items() if process.poll() is None]
+        for name in running:
+            try:
+                os.killpg(self.processes[name].pid, signal.SIGTERM)
+            except ProcessLookupError:
+                pass
+        deadline = time.monotonic() + 5
+        for name in running:
+            try:
+                self.processes[name].wait(max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                self.kill(name)
 
 
 def log_events(path: Path) -> list[dict]:
@@ -130,6 +136,29 @@ def wait_for(predicate, what: str, timeout: float = 120) -> None:
 def ros_cache(tmp_path_factory):
     """One folder of generated aplan_msgs for the test session."""
     return tmp_path_factory.mktemp("aplan_msgs")
+
+
+@pytest.fixture(scope="module")
+def ros_master(tmp_path_factory, ros_cache):
+    """One master for a module's tests (each starts its own master takes ~1 s and a process); the tests' nodes
+    are stopped after each (:func:`ros_shared`). Not for a test that stops the master."""
+    require_ros()
+    graph = RosGraph(tmp_path_factory.mktemp("rosmaster"), ros_cache)
+    graph.start_master()
+    try:
+        yield graph
+    finally:
+        graph.stop()
+
+
+@pytest.fixture
+def ros_shared(tmp_path, ros_cache, ros_master):
+    """The nodes of one test on the module's master (:func:`ros_master`); stopped after the test."""
+    graph = RosGraph(tmp_path, ros_cache, port=ros_master.port)
+    try:
+        yield graph
+    finally:
+        graph.stop()
 
 
 @pytest.fixture
