@@ -9,8 +9,9 @@
   with the cover, the four bolts folded;
 - bad input, a ball in a closed cage: one line naming the pair and what helps, nothing written.
 
-One FreeCADCmd process builds the four documents (a few seconds); each session is a process of its own, in a
-folder of its own, in the background (tests/background.py).
+One FreeCADCmd process builds the four documents and exports all but the press fit (a few seconds); the press
+fit's session runs from its ``.FCStd`` (exporting it itself), the others' from their bundles, each a process of
+its own, in a folder of its own, in the background (tests/background.py).
 """
 from __future__ import annotations
 
@@ -30,18 +31,36 @@ from integration.interlock_documents import DOCUMENTS, SCRIPT
 
 
 
+#: The document whose session runs from its ``.FCStd`` end to end (the export inside the session); the
+#: others' sessions read the bundles the same FreeCADCmd process exported them to (FreeCAD started once).
+FROM_CAD = "press_fit"
+
+EXPORT = """
+import sys
+sys.path.insert(0, REPO)
+from freecad_aplan.export import export_model
+for name in BUNDLES:
+    export_model(os.path.join(TMP, name + ".FCStd"), os.path.join(TMP, name + "_bundle"))
+print("APLAN-EXPORTED " + json.dumps(BUNDLES), flush=True)
+"""
+
+
 def _build() -> tuple[Path, subprocess.CompletedProcess]:
     tmp = folder("interlock-docs")
     script = tmp / "interlock_docs.py"
-    script.write_text(f"TMP = {str(tmp)!r}\n" + SCRIPT)
+    bundles = [name for name in DOCUMENTS if name != FROM_CAD]
+    script.write_text(f"TMP = {str(tmp)!r}\nREPO = {str(REPO)!r}\nBUNDLES = {bundles!r}\n" + SCRIPT + EXPORT)
     return tmp, run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(script)])
 
 
 def _session(name: str):
     def work() -> tuple[Path, subprocess.CompletedProcess]:
-        documents, _ = BACKGROUND[0].result()
+        documents, built = BACKGROUND[0].result()
+        if "APLAN-EXPORTED" not in built.stdout:
+            return folder(f"interlock-{name}"), built
+        model = documents / (f"{name}.FCStd" if name == FROM_CAD else f"{name}_bundle")
         here = folder(f"interlock-{name}")   # the session's own working folder: its logs, or nothing
-        done = run([sys.executable, "-m", "planner", "session", str(documents / f"{name}.FCStd"), "--demo", "0"],
+        done = run([sys.executable, "-m", "planner", "session", str(model), "--demo", "0"],
                    cwd=here, env={**ENVIRONMENT, "PYTHONPATH": str(REPO)})
         return here, done
     return work
