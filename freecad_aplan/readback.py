@@ -18,6 +18,8 @@ Each mapping, drop and dissolution is one warning naming the entry and the membe
 """
 from __future__ import annotations
 
+from planner.product.fasteners import dissolve_small
+
 __all__ = ["fit_subassemblies", "fit_fasteners"]
 
 
@@ -64,19 +66,10 @@ def fit_subassemblies(entries: list[dict], objects: dict[str, list[str]], labels
                 kept.append(target)
                 taken[target] = entry["id"]
         members[entry["id"]] = kept
-    dissolved: dict[str, str | None] = {}
-    changed = True
-    while changed:  # a dissolved subassembly can leave the one holding it with too few members in turn
-        changed = False
-        for sid, inner in members.items():
-            if sid in dissolved:
-                continue
-            inner[:] = [x for m in inner for x in ([dissolved[m]] if m in dissolved else [m]) if x is not None]
-            if len(inner) < 2:
-                dissolved[sid] = inner[0] if inner else None
-                changed = True
-                left = f"only {inner[0]!r}, which takes its place" if inner else "empty"
-                warnings.append(f"{where}: {sid!r} is dissolved: it is left {left}")
+    dissolved = dissolve_small(members)
+    for sid, stands in dissolved.items():
+        left = f"only {stands!r}, which takes its place" if stands is not None else "empty"
+        warnings.append(f"{where}: {sid!r} is dissolved: it is left {left}")
     return [dict(e, parts=members[e["id"]]) for e in entries if e["id"] not in dissolved], warnings
 
 

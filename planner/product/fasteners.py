@@ -24,7 +24,7 @@ from itertools import combinations
 from .model import FastenerGroup, Markers, OperationTag, Product, TechnicalConstraint
 from .validation import fastener_hosts
 
-__all__ = ["FASTENER_MODES", "Folding", "fold", "fold_fasteners", "with_fastener_mode"]
+__all__ = ["FASTENER_MODES", "Folding", "dissolve_small", "fold", "fold_fasteners", "with_fastener_mode"]
 
 log = logging.getLogger(__name__)
 
@@ -83,7 +83,22 @@ def _structure(product: Product, gone: frozenset[str]) -> tuple:
     the fasteners. Cost: O(members x nesting depth)."""
     groups = {g.id: g for g in product.subassemblies}
     members = {g.id: [m for m in g.parts if m not in gone] for g in product.subassemblies}
-    dissolved: dict[str, str | None] = {}  # subassembly -> what stands for it now (None: nothing)
+    dissolved = dissolve_small(members)
+    for sid, stands in dissolved.items():
+        folded = [m for m in groups[sid].parts if m in gone]
+        log.warning("subassembly %r is dissolved: folding the fastener%s %s leaves it %s", sid,
+                    "s" if len(folded) > 1 else "", ", ".join(folded) or "(none of its own)",
+                    f"only {stands}, which takes its place" if stands else "empty")
+    return tuple(replace(g, parts=tuple(members[g.id])) if tuple(members[g.id]) != g.parts else g
+                 for g in product.subassemblies if g.id not in dissolved)
+
+
+def dissolve_small(members: dict[str, list[str]]) -> dict[str, str | None]:
+    """Dissolve, in place, every subassembly of ``members`` (subassembly id -> its member ids) left with fewer
+    than two members: its member, if any, takes its place in the subassembly holding it, which may be left too
+    small in turn. Returns each dissolved subassembly and what stands for it now (None: nothing), in the order
+    they were dissolved. Cost: O(members x nesting depth)."""
+    dissolved: dict[str, str | None] = {}
     changed = True
     while changed:  # a dissolved subassembly can leave the one holding it with too few members in turn
         changed = False
@@ -94,13 +109,7 @@ def _structure(product: Product, gone: frozenset[str]) -> tuple:
             if len(inner) < 2:
                 dissolved[sid] = inner[0] if inner else None
                 changed = True
-    for sid, stands in dissolved.items():
-        folded = [m for m in groups[sid].parts if m in gone]
-        log.warning("subassembly %r is dissolved: folding the fastener%s %s leaves it %s", sid,
-                    "s" if len(folded) > 1 else "", ", ".join(folded) or "(none of its own)",
-                    f"only {stands}, which takes its place" if stands else "empty")
-    return tuple(replace(g, parts=tuple(members[g.id])) if tuple(members[g.id]) != g.parts else g
-                 for g in product.subassemblies if g.id not in dissolved)
+    return dissolved
 
 
 def fold_fasteners(product: Product) -> Product:
