@@ -14,18 +14,17 @@ from __future__ import annotations
 
 import argparse
 
-from ..defaults import HABITS_PRIOR, STEP_LIMIT
+from ..defaults import STEP_LIMIT
 from ..errors import UsageError
 from .options import (
     PRODUCT_HELP,
     add_decision_options,
-    add_force,
     add_policy_options,
     decision_seconds,
     index,
     number,
 )
-from .runtime import FRAME_LIMIT
+from .runtime import FRAME_LIMIT, add_habits_out
 
 __all__ = ["add_commands", "split_remaps", "REMAPS"]
 
@@ -234,12 +233,7 @@ def add_commands(commands) -> None:
                           f"camera or the detector went quiet (default {FRAME_TIMEOUT:g})")
     ros.add_argument("--server-timeout", type=seconds, default=30.0, metavar="S",
                      help="seconds to wait at start for the robot server and the marker topic (default 30)")
-    ros.add_argument("--habits-out", metavar="FILE",
-                     help="at the end, write the habits (--habits, or none) plus the steps of this session "
-                          "(docs/habits.md); an existing file is replaced only with --force")
-    ros.add_argument("--habits-prior", type=number(0, low_open=True), default=HABITS_PRIOR, metavar="ALPHA",
-                     help=f"the prior of --habits-out when there is no --habits (default {HABITS_PRIOR:g})")
-    add_force(ros, outputs=("habits_out",))
+    add_habits_out(ros)
     ros.add_argument("--node", default="aplan_planner", **node)
     ros.set_defaults(run=_ros, demo=None, keyboard=False, camera=None, video=None, images=None, robot="ros")
 

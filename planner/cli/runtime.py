@@ -301,6 +301,17 @@ def _markers(args: argparse.Namespace) -> int:
     return 0
 
 
+def add_habits_out(parser) -> None:
+    """``--habits-out FILE`` and ``--habits-prior ALPHA`` (the habits a session writes when it ends), with the
+    ``--force`` that lets FILE be replaced: the options of every command that runs a session."""
+    parser.add_argument("--habits-out", metavar="FILE",
+                        help="at the end, write the habits (--habits, or none) plus the steps of this session "
+                             "(docs/habits.md); an existing file is replaced only with --force")
+    parser.add_argument("--habits-prior", type=number(0, low_open=True), default=HABITS_PRIOR, metavar="ALPHA",
+                        help=f"the prior of --habits-out when there is no --habits (default {HABITS_PRIOR:g})")
+    add_force(parser, outputs=("habits_out",))
+
+
 def _add_session(commands) -> None:
     session = commands.add_parser(
         "session", help="run the collaboration loop: observations -> belief -> robot instructions",
@@ -334,12 +345,7 @@ def _add_session(commands) -> None:
                               "(default: the robot takes its tool from the tray too, as in the paper)")
     session.add_argument("--max-steps", type=number(1, STEP_LIMIT, integer=True), default=500, metavar="N",
                          help=f"robot decisions at most, 1 to {STEP_LIMIT:,} (default 500)")
-    session.add_argument("--habits-out", metavar="FILE",
-                         help="at the end, write the habits (--habits, or none) plus the steps of this session "
-                              "(docs/habits.md); an existing file is replaced only with --force")
-    session.add_argument("--habits-prior", type=number(0, low_open=True), default=HABITS_PRIOR, metavar="ALPHA",
-                         help=f"the prior of --habits-out when there is no --habits (default {HABITS_PRIOR:g})")
-    add_force(session, outputs=("habits_out",))
+    add_habits_out(session)
     add_decision_options(session)
     session.set_defaults(run=_session)
 
