@@ -58,6 +58,7 @@ from .habits import weighted_fractions
 from .intention_model import WAIT, Rewards
 from .parallel import (ParallelTable, parallel_expected_rewards, parallel_predict, parallel_rewards,
                        parallel_table)
+from .projected import PROJECTED, projected_table
 
 __all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model", "factored_model_bytes"]
 
@@ -430,13 +431,15 @@ def _counts_per_state(plan: Plan) -> np.ndarray:
 
 def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                    base_part: str | None = None, weights: np.ndarray | None = None,
-                   parallel: bool = False, deviations: Deviations | None = None) -> FactoredIntentionModel:
+                   parallel: bool | str = False, deviations: Deviations | None = None) -> FactoredIntentionModel:
     """The factored model of Alg. 3 over ``plan`` (module docstring), without enumerating intentions.
 
     ``base_part``: only the sequences that start from this part (paper Sec. V); :class:`PlannerError` when it
     is not a part or no sequence starts from it. ``weights``: a positive weight per state edge (operator
     habits, :func:`~planner.decision.habits.habit_weights`; module docstring), None for the paper's model.
-    ``parallel``: the parallel model (:mod:`~planner.decision.parallel`: the robot may do the step after next).
+    ``parallel``: the parallel model (True or ``"next"``, :mod:`~planner.decision.parallel`: the robot may do the
+    step after next) or ``"projected"`` (:mod:`~planner.decision.projected`: any operation, the operator's
+    sequence projected onto the new state); False: the paper's.
     ``deviations``: change of mind and mistakes (:mod:`~planner.decision.deviations`), None for the paper's.
 
     Cost: O(S + E log E) time and O(S + E) memory for S states and E state edges (one sort of the edges by
@@ -492,13 +495,17 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
         a.flags.writeable = False
     model = FactoredIntentionModel(plan, rewards, discount, *arrays, base_part=base_part, weights=class_weights,
                                    class_log_weight=log_weight)
+    if parallel not in (False, True, "next", PROJECTED):
+        raise PlannerError(f"unknown parallel model {parallel!r}: use False (the paper's), True or 'next' (the step "
+                           f"after next) or {PROJECTED!r}")
     if parallel and deviations is not None and deviations.switch:
         # The bounds of the online planner and the solver are derived for each on its own; combined, waiting's
         # redraw would also follow a parallel step, which no bound here accounts for yet.
         raise PlannerError("the parallel model (--parallel) and a change of mind (--switch) are not combined yet: "
                            "leave out one of them (--mistakes works with --parallel)")
     if parallel:
-        model = dataclasses.replace(model, parallel=parallel_table(model))
+        model = dataclasses.replace(model, parallel=projected_table(model) if parallel == PROJECTED
+                                    else parallel_table(model))
     if deviations is None:
         return model
     share = switch_share(model)

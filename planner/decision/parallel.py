@@ -24,11 +24,12 @@ candidate at its peak, about 66 bytes a pair held (:func:`check_parallel_memory`
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..assembly.intentions import allowed_edges
+from .projected import PROJECTED, projected_bytes, projected_candidates, projected_rewrite
 
 __all__ = ["ParallelTable", "parallel_table", "parallel_rewrite", "parallel_bytes", "check_parallel_memory",
            "parallel_candidates", "parallel_predict", "parallel_rewards", "parallel_expected_rewards"]
@@ -52,6 +53,9 @@ class ParallelTable:
     step: np.ndarray
     robot_edge: np.ndarray
     start: np.ndarray
+    #: ``next``: this module's pairs (the step after next); ``projected``: :mod:`.projected`'s (``step`` -1)
+    rule: str = "next"
+    projector: object = field(default=None, compare=False, repr=False)  # the projected rule's lookups
 
     @property
     def size(self) -> int:
@@ -92,21 +96,25 @@ def parallel_bytes(states) -> int:
     return CANDIDATE_BYTES * parallel_candidates(states)
 
 
-def check_parallel_memory(plan, budget: int) -> None:
-    """Refuse the parallel model of ``plan`` when the factored model, the online planner's values and the
-    pairs, with the plan held, would not fit in ``budget`` bytes (:class:`~planner.errors.MemoryLimitError`, with
-    the estimate and the options). Cost: O(E)."""
+def check_parallel_memory(plan, budget: int, rule: bool | str = True) -> None:
+    """Refuse the parallel model of ``plan`` (``rule``: True or ``next`` for this module's pairs, ``projected``
+    for :mod:`.projected`'s) when the factored model, the online planner's values and the pairs, with the plan
+    held, would not fit in ``budget`` bytes (:class:`~planner.errors.MemoryLimitError`, with the estimate and
+    the options). Cost: O(E)."""
     from ..assembly.guards import memory_options
     from ..errors import MemoryLimitError, gib
     from .budget import online_bytes, plan_bytes
 
     states = plan.states
-    pairs = parallel_bytes(states)
+    projected = rule == PROJECTED
+    pairs = projected_bytes(states) if projected else parallel_bytes(states)
     needed = plan_bytes(plan) + online_bytes(states.n_states, states.n_edges) + pairs
     if needed > budget:
-        raise MemoryLimitError("parallel model (its pairs)", needed, budget,
-                               f"{parallel_candidates(states):,} candidate pairs ({gib(pairs)}) beside the factored "
-                               "model", "Leave out --parallel, or plan a smaller product.", memory_options(needed))
+        count = projected_candidates(states) if projected else parallel_candidates(states)
+        flag = "--projected" if projected else "--parallel"
+        raise MemoryLimitError(f"{'projected' if projected else 'parallel'} model (its pairs)", needed, budget,
+                               f"{count:,} candidate pairs ({gib(pairs)}) beside the factored model",
+                               f"Leave out {flag}, or plan a smaller product.", memory_options(needed))
 
 
 def parallel_table(model) -> ParallelTable:
@@ -193,7 +201,11 @@ def parallel_rewrite(model, path: list[int], position: int, action: int) -> list
     action is right (a parallel pair of ``path[position]`` whose ``step`` is ``path[position + 1]``), the path with
     the robot's edge ``f`` and then ``e'`` in place of the operator's next two steps (the robot's step is then the
     path's next one: the episode counts it as the robot's, with its reward), else ``path`` itself."""
-    if model.parallel is None or position + 1 >= len(path):
+    if model.parallel is None or position >= len(path):
+        return path
+    if model.parallel.rule == PROJECTED:
+        return projected_rewrite(model, path, position, action)
+    if position + 1 >= len(path):
         return path
     _, p = model.parallel.find(np.array([path[position]]), action)
     if not p.size or int(model.parallel.step[p[0]]) != path[position + 1]:
