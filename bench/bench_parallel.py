@@ -1,12 +1,14 @@
-"""Help before the last step (issue 23, item 2): the parallel model (docs/parallel.md) against the paper's, with a
-uniform operator (``--operator-sequence uniform``) and the online planner (a fixed number of expansions per
-decision: the same actions on any machine), on the same seeded episodes. Per product: the robot's share of the
-operations, its wrong actions as a share of its actions, and the mean discounted return.
+"""Help before the last step (issue 23, item 2): the parallel and projected models (docs/parallel.md) against the
+paper's, with a uniform operator (``--operator-sequence uniform``) and the online planner (a fixed number of
+expansions per decision: the same actions on any machine), on the same seeded episodes. Per product: the robot's
+share of the operations and of the operations it is able to do, its wrong actions as a share of its actions, and
+the mean discounted return.
 
 Run: ``.venv/bin/python bench/bench_parallel.py [--episodes 20] [--expansions 100] [--products pen,chain9,complete7]
-[--truck BUNDLE] [--habitual K] [--rewards U,F,W]`` (``BUNDLE``: ``aplan export-freecad
-../shared/models/toy_truck/asm_cement_mixer_truck.FCStd -o BUNDLE``; its levels as ``aplan session BUNDLE
---fasteners auto --subassemblies auto`` plans them). ``--habitual K``: instead, an operator who does sequence ``K``
+[--truck BUNDLE] [--pump BUNDLE] [--levels sa1,top] [--models paper,parallel,projected] [--habitual K]
+[--rewards U,F,W]`` (``BUNDLE``: ``aplan export-freecad ../shared/models/toy_truck/asm_cement_mixer_truck.FCStd
+-o BUNDLE``, the pump's with ``--group outlet=21_001,26_001``; its levels as ``aplan session BUNDLE --fasteners
+auto --subassemblies auto`` plans them; ``--levels``: only those). ``--habitual K``: instead, an operator who does sequence ``K``
 80 % of the time (``habitual:K:0.8``), both models with the habits counted from 20 other plans of that operator
 (counted directly, as ``aplan habits`` counts logs).
 """
@@ -32,7 +34,7 @@ from planner.decision.online import OnlinePlanner  # noqa: E402
 from planner.decision.operators import parse_operator  # noqa: E402
 
 
-def _products(names: list[str], truck: str | None):
+def _products(names: list[str], bundles: list[tuple[str, str]], levels: set[str] | None):
     for name in names:
         if name == "pen":
             yield "pen", api.resolve_product("pen")
@@ -42,10 +44,11 @@ def _products(names: list[str], truck: str | None):
             yield name, complete_product(int(name[8:]))
         else:
             raise SystemExit(f"unknown product {name!r}")
-    if truck:
-        product = api.resolve_product(truck, None, "auto", {"groups": {}, "exclude": []}, "auto", 8)
+    for label, bundle in bundles:
+        product = api.resolve_product(bundle, None, "auto", {"groups": {}, "exclude": []}, "auto", 8)
         for level in api.levels_of(product, "designer"):
-            yield f"truck:{level.id}", level.product
+            if levels is None or level.id in levels:
+                yield f"{label}:{level.id}", level.product
 
 
 def _habits(plan, operator, seed: int, sessions: int = 20):
@@ -79,7 +82,7 @@ def _later_q(model) -> float:
     return max(chances, default=0.0)
 
 
-def _run(plan, parallel: bool, episodes: int, expansions: int, seed: int, habitual: int | None, rewards: Rewards):
+def _run(plan, parallel: bool | str, episodes: int, expansions: int, seed: int, habitual: int | None, rewards: Rewards):
     operator = parse_operator("uniform" if habitual is None else f"habitual:{habitual}:0.8")
     weights = None if habitual is None else _habits(plan, operator, seed)
     model = factored_model(plan, rewards, weights=weights, parallel=parallel)
@@ -87,11 +90,15 @@ def _run(plan, parallel: bool, episodes: int, expansions: int, seed: int, habitu
     began = time.perf_counter()
     mean, half, played = api.evaluate_operator(model, planner, operator, episodes, seed)
     totals = run_totals([episode_measures(e) for e in played])
-    pairs = "0 | - | -"
+    pairs = "- | - | -"
     if parallel:  # and those whose expected reward beats waiting's (q r + (1 - q) wrong > wait)
         par = model.parallel
         worth = int((rewards.wrong + par.fraction * (par.reward - rewards.wrong) > rewards.wait).sum())
-        pairs = f"{par.size:,} ({worth:,}) | {par.fraction.max(initial=0.0):.3f} | {_later_q(model):.3f}"
+        if parallel == "projected":  # the certain ones (q = 1: right for every completion of the class)
+            certain = int((par.fraction > 1 - 1e-9).sum())
+            pairs = f"{par.size:,} ({worth:,}) | {par.fraction.max(initial=0.0):.3f} | {certain:,} certain"
+        else:
+            pairs = f"{par.size:,} ({worth:,}) | {par.fraction.max(initial=0.0):.3f} | {_later_q(model):.3f}"
     return mean, half, totals, pairs, time.perf_counter() - began
 
 
@@ -102,24 +109,37 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--products", default="pen,chain9,complete7")
     parser.add_argument("--truck", metavar="BUNDLE")
+    parser.add_argument("--pump", metavar="BUNDLE")
+    parser.add_argument("--levels", metavar="ID,ID", help="only these levels of the bundles")
+    parser.add_argument("--models", default="paper,parallel", help="of paper, parallel, projected")
     parser.add_argument("--habitual", type=int, metavar="K")
     parser.add_argument("--rewards", default="10,-2,-50", metavar="U,F,W",
                         help="unfavorable, favorable and wrong rewards (default the paper's 10,-2,-50)")
     args = parser.parse_args()
     rewards = Rewards(*(float(x) for x in args.rewards.split(",")), 0.0)
-    print("| product | model | pairs (worth a try) | max q | max q, any later step | robot share | "
-          "wrong / robot actions | mean return (95 %) | seconds |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for name, product in _products([p for p in args.products.split(",") if p], args.truck):
+    kinds = {"paper": False, "parallel": True, "projected": "projected"}
+    models = [m for m in args.models.split(",") if m]
+    if not models or any(m not in kinds for m in models):
+        raise SystemExit(f"--models: a list of {', '.join(kinds)}, got {args.models!r}")
+    bundles = [(label, path) for label, path in (("truck", args.truck), ("pump", args.pump)) if path]
+    levels = set(args.levels.split(",")) if args.levels else None
+    print("| product | model | pairs (worth a try) | max q | max q, any later step / certain | robot share | capable "
+          "share | wrong / robot actions | mean return (95 %) | CPU s |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name, product in _products([p for p in args.products.split(",") if p], bundles, levels):
         plan = make_plan(product)
-        for parallel in (False, True):
-            mean, half, t, pairs, seconds = _run(plan, parallel, args.episodes, args.expansions, args.seed,
-                                                     args.habitual, rewards)
+        for label in models:
+            cpu = time.process_time()
+            mean, half, t, pairs, _ = _run(plan, kinds[label], args.episodes, args.expansions, args.seed,
+                                           args.habitual, rewards)
+            cpu = time.process_time() - cpu
             share = "-" if t["robot_share"] is None else f"{100 * t['robot_share']:.1f} % ({t['robot_operations']})"
+            capable = "-" if t["robot_capable_share"] is None else \
+                f"{100 * t['robot_capable_share']:.1f} % of {t['robot_capable_operations']}"
             wrong = "-" if t["wrong_share"] is None else f"{100 * t['wrong_share']:.1f} % ({t['wrong_robot_actions']})"
             interval = f"{mean:.3f} +- {half:.3f}" if math.isfinite(half) else f"{mean:.3f}"
-            print(f"| {name} | {'parallel' if parallel else 'paper'} | {pairs} | {share} | {wrong} | {interval} | "
-                  f"{seconds:.0f} |", flush=True)
+            print(f"| {name} | {label} | {pairs} | {share} | {capable} | {wrong} | {interval} | {cpu:.0f} |",
+                  flush=True)
     return 0
 
 

@@ -53,7 +53,7 @@ from .assembly.stats import STAT_KEYS, PlanStatistics, plan_statistics, statisti
 from .decision.factored_model import FactoredIntentionModel, factored_model
 from .decision.deviations import Deviations
 from .decision.habits import Habits, habit_weights
-from .decision.parallel import check_parallel_memory
+from .decision.parallel import check_parallel_memory, parallel_flag
 from .decision.intention_model import IntentionModel, Rewards, flat_model_bytes, flat_model_fits, intention_model
 from .decision.io.cassandra import read_cassandra, write_cassandra
 from .decision.io.pomdpx import read_pomdpx, write_pomdpx
@@ -565,7 +565,7 @@ def factored_decision_model(product: str | os.PathLike | Product | Plan, technic
     ``parallel``: the parallel model (docs/parallel.md); ``deviations``: change of mind and mistakes."""
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
     if parallel:
-        check_parallel_memory(plan, limits.memory)
+        check_parallel_memory(plan, limits.memory, parallel)
     return factored_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits),
                           parallel, deviations)
 
@@ -635,7 +635,7 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
     if choice == "online":
         check_online_memory(plan, limits.memory)
         if parallel:
-            check_parallel_memory(plan, limits.memory)
+            check_parallel_memory(plan, limits.memory, parallel)
         model = factored_model(plan, rewards, discount, base_part, weights, parallel, deviations)
         lower = read_policy(policy, limits=inputs) if policy else None
         return model, online_planner(model, decision_time, expansions, lower), note
@@ -651,7 +651,7 @@ def decision_maker(product: str | os.PathLike | Product | Plan, planner: str | N
         if length == classes and length != intentions:
             check_online_memory(plan, limits.memory)
             if parallel:
-                check_parallel_memory(plan, limits.memory)
+                check_parallel_memory(plan, limits.memory, parallel)
             lumped = factored_model(plan, rewards, discount, base_part, weights, parallel, deviations)
             vectors.check_sizes(lumped.n_classes, len(lumped.actions), str(policy))
             return lumped, vectors, None
@@ -678,7 +678,7 @@ def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | 
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, lumped_limits(limits)))
     check_lumped_memory(plan, limits.memory)
     if parallel:
-        check_parallel_memory(plan, limits.memory)
+        check_parallel_memory(plan, limits.memory, parallel)
     return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits),
                               parallel, deviations)
 
@@ -688,10 +688,11 @@ def check_parallel_flat(parallel: bool, where: str) -> None:
     it (a wrong parallel action would condition the distribution within a class), so ``where`` with it is a
     :class:`PlannerError` naming what helps."""
     if parallel:
-        raise PlannerError(f"--parallel is a model over the factored model's classes, and {where} would build the "
+        flag = parallel_flag(parallel)
+        raise PlannerError(f"{flag} is a model over the factored model's classes, and {where} would build the "
                            "flat model over intentions, which cannot hold it: use the online planner (--planner "
-                           "online), or a policy over the classes (aplan solve PRODUCT --parallel -o P.policy), or "
-                           "leave out --parallel")
+                           f"online), or a policy over the classes (aplan solve PRODUCT {flag} -o P.policy), or "
+                           f"leave out {flag}")
 
 
 def _model_file_kind(path: str | os.PathLike) -> str | None:
@@ -717,8 +718,8 @@ def load_model(argument: str | os.PathLike | Product, technical: bool | None = N
         raise PlannerError(f"{argument}: --habits applies to a PRODUCT; a model file's initial belief and "
                            "transitions are fixed (give the PRODUCT, or leave out --habits)")
     if kind is not None and parallel:
-        raise PlannerError(f"{argument}: --parallel applies to a PRODUCT; a model file's transitions are fixed "
-                           "(give the PRODUCT, or leave out --parallel)")
+        raise PlannerError(f"{argument}: {parallel_flag(parallel)} applies to a PRODUCT; a model file's transitions "
+                           f"are fixed (give the PRODUCT, or leave out {parallel_flag(parallel)})")
     if kind is not None and deviations is not None:
         raise PlannerError(f"{argument}: --switch and --mistakes apply to a PRODUCT; a model file's transitions and "
                            "observations are fixed (give the PRODUCT, or leave them out)")

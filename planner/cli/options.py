@@ -224,16 +224,30 @@ def add_habits_options(group) -> None:
 
 
 def add_parallel_options(group) -> None:
-    """``--parallel``: the parallel model (docs/parallel.md); ``--model paper`` turns it off."""
+    """``--parallel`` and ``--projected``: the parallel models (docs/parallel.md); ``--model paper`` turns them off."""
     group.add_argument("--parallel", action="store_true",
                        help="the parallel model: the robot may do the operator's step after next now, when that "
                             "keeps the operator's next step possible (docs/parallel.md; on the classes: the online "
                             "planner or a lumped policy); --model paper turns it off")
+    group.add_argument("--projected", action="store_true",
+                       help="the projected model: the robot may do any operation now, right when the operator's "
+                            "sequence projected onto the new state (the parts it joined, joined) stays feasible "
+                            "(docs/parallel.md, The projected model; on the classes, as --parallel); --model paper "
+                            "turns it off")
 
 
-def parallel_from(args: argparse.Namespace) -> bool:
-    """Whether ``args`` ask for the parallel model (``--parallel`` without ``--model paper``)."""
-    return bool(getattr(args, "parallel", False)) and getattr(args, "habit_model", None) != "paper"
+def parallel_from(args: argparse.Namespace) -> bool | str:
+    """The parallel model ``args`` ask for, as :func:`~planner.decision.factored_model.factored_model` takes it:
+    True (``--parallel``), ``"projected"`` (``--projected``) or False (neither, or ``--model paper``); both at
+    once is a :class:`~planner.errors.UsageError`."""
+    parallel, projected = bool(getattr(args, "parallel", False)), bool(getattr(args, "projected", False))
+    if parallel and projected:
+        from ..errors import UsageError
+        raise UsageError("--parallel and --projected are two models of the robot's help before the last step: "
+                         "give one of them (docs/parallel.md)")
+    if getattr(args, "habit_model", None) == "paper":
+        return False
+    return "projected" if projected else parallel
 
 
 def rewards_from(args: argparse.Namespace) -> Rewards:

@@ -31,7 +31,7 @@ import numpy as np
 from ..assembly.intentions import allowed_edges
 from .projected import PROJECTED, projected_bytes, projected_candidates, projected_rewrite
 
-__all__ = ["ParallelTable", "parallel_table", "parallel_rewrite", "parallel_bytes", "check_parallel_memory",
+__all__ = ["ParallelTable", "parallel_table", "parallel_flag", "parallel_rewrite", "parallel_bytes", "check_parallel_memory",
            "parallel_candidates", "parallel_predict", "parallel_rewards", "parallel_expected_rewards"]
 
 
@@ -86,6 +86,11 @@ class ParallelTable:
 CANDIDATE_BYTES = 100
 
 
+def parallel_flag(rule: bool | str) -> str:
+    """The command-line flag of a parallel model (``True``/``next``: ``--parallel``, ``projected``: ``--projected``)."""
+    return "--projected" if rule == PROJECTED else "--parallel"
+
+
 def parallel_candidates(states) -> int:
     """The (class, class out of its target) candidates :func:`parallel_table` looks at: ``nnz(M)``. Cost: O(E)."""
     return int(np.bincount(states.edge_source, minlength=states.n_states)[states.edge_target].sum())
@@ -111,7 +116,7 @@ def check_parallel_memory(plan, budget: int, rule: bool | str = True) -> None:
     needed = plan_bytes(plan) + online_bytes(states.n_states, states.n_edges) + pairs
     if needed > budget:
         count = projected_candidates(states) if projected else parallel_candidates(states)
-        flag = "--projected" if projected else "--parallel"
+        flag = parallel_flag(rule)
         raise MemoryLimitError(f"{'projected' if projected else 'parallel'} model (its pairs)", needed, budget,
                                f"{count:,} candidate pairs ({gib(pairs)}) beside the factored model",
                                f"Leave out {flag}, or plan a smaller product.", memory_options(needed))
