@@ -298,3 +298,20 @@ def test_bad_input_and_memory():
     check_parallel_memory(plan, 2 ** 31, "projected")
     with pytest.raises(MemoryLimitError, match="projected model.*--projected"):
         check_parallel_memory(plan, projected_bytes(plan.states), "projected")
+
+
+@pytest.mark.parametrize("product", [chain_product(11), complete_product(7)])
+def test_the_memory_estimate_bounds_the_measured_peak(product):
+    import tracemalloc
+
+    from planner.decision.projected import projected_table
+
+    plan = make_plan(product)
+    model = factored_model(plan)
+    tracemalloc.start()
+    try:
+        projected_table(model)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= projected_bytes(plan.states) <= 3 * peak
