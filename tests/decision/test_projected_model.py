@@ -315,3 +315,26 @@ def test_the_memory_estimate_bounds_the_measured_peak(product):
     finally:
         tracemalloc.stop()
     assert peak <= projected_bytes(plan.states) <= 3 * peak
+
+
+def _star(k):
+    """A base part and ``k`` parts that touch only the base: every order of adding them is a sequence (the
+    truck's sa4 in small)."""
+    from planner.product.model import Part, Product
+
+    parts = (Part("base", "Base"),) + tuple(Part(f"leaf{i}", f"Leaf {i}") for i in range(1, k + 1))
+    return Product(parts, tuple(("base", p.id) for p in parts[1:]), name=f"star of {k}")
+
+
+@pytest.mark.parametrize("k", [3, 4, 5])
+def test_a_growing_subassembly_the_step_after_next_sees_nothing_the_projection_everything(k):
+    """Closed form. Parts added one by one to a base: after the robot adds leaf p, no operation of the operator's
+    sequence stays the same (each joins a larger block), so the step-after-next model has no pair; the projection
+    is the sequence minus "add p", always feasible: with j leaves on the base (C(k, j) states) and r = k - j to
+    add, r (r - 1) pairs, each certain help (q = 1)."""
+    plan = make_plan(_star(k))
+    assert plan.tags.robot.all()
+    assert factored_model(plan, parallel=True).parallel.size == 0
+    par = factored_model(plan, parallel="projected").parallel
+    assert par.size == sum(comb(k, j) * (k - j) * (k - j - 1) for j in range(k + 1))
+    assert np.all(np.abs(par.fraction - 1) < 1e-9)
