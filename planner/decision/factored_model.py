@@ -36,6 +36,8 @@ bounds, which read ``class_fraction``, work on the weighted model unchanged.
 The parallel model (``parallel=True``, :mod:`~planner.decision.parallel`, docs/parallel.md) is a Markov model on
 these classes: a robot action may also do the operator's step after next (``parallel``: the pairs), right with
 the operator's chance of taking it then; :meth:`predict` and the rewards read the pairs, nothing else changes.
+The projected model (``parallel="projected"``, :mod:`~planner.decision.projected`) has pairs of the same form:
+any robot operation, right when the operator's remaining sequence projected onto the new state stays feasible.
 
 The Bayes filter is :class:`~planner.decision.factored_updater.FactoredUpdater`. Beliefs are sparse (:class:`FactoredBelief`: sorted classes and their positive masses); an update costs
 O(k log k) for the k classes the belief reaches after the action's steps (support, its out-edges and,

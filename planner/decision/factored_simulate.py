@@ -5,7 +5,10 @@ The world is the flat model's (the same transitions, observations and rewards, :
 factored_model`), played along the sequence's edges by position, so an episode never enumerates intentions.
 In the parallel model (:mod:`planner.decision.parallel`) a robot action that does the operator's step after
 next is right when the sequence takes it there: the sequence then continues with it done (the robot's step,
-then the operator's next one, then the rest), and the step counts as the robot's operation.
+then the operator's next one, then the rest), and the step counts as the robot's operation. In the projected
+model (:mod:`planner.decision.projected`) a pair's action is right when the projection of the rest of the
+sequence onto the robot's new state is feasible: the sequence continues with the robot's step, then that
+projection.
 """
 from __future__ import annotations
 
