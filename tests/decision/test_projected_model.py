@@ -16,6 +16,7 @@ import pytest
 
 from planner import chain_product, complete_product, make_plan
 from planner.decision import DiscreteUpdater, FactoredUpdater, PointBasedSolver, factored_model, lumped_pomdp
+from planner.decision.delayed_reveal import delayed_reveal_bound
 from planner.decision.episode_measures import episode_measures
 from planner.decision.factored_simulate import simulate_factored_episode
 from planner.decision.habits import habit_weights_from
@@ -238,6 +239,7 @@ def test_class_mdp_bound_is_value_iteration_and_the_solver_stays_below_the_bound
     plain = PointBasedSolver(time_limit=None, max_iterations=60, precision=1e-6).solve(lumped)
     b0 = fact.initial_belief()
     assert plain.lower_bound <= float(revealed.q_values(fact, b0).max()) + 1e-9
+    assert plain.lower_bound <= delayed_reveal_bound(fact, lumped).initial_value + 1e-9
     search = OnlinePlanner(fact, 200, None).search(b0)
     assert search.lower <= plain.upper_bound + 1e-9 and plain.lower_bound <= search.upper + 1e-9
 
