@@ -340,3 +340,10 @@ def test_a_growing_subassembly_the_step_after_next_sees_nothing_the_projection_e
     par = factored_model(plan, parallel="projected").parallel
     assert par.size == sum(comb(k, j) * (k - j) * (k - j - 1) for j in range(k + 1))
     assert np.all(np.abs(par.fraction - 1) < 1e-9)
+
+
+def test_with_a_change_of_mind_it_is_refused_naming_its_flag():
+    from planner.decision.deviations import Deviations
+
+    with pytest.raises(PlannerError, match=r"\(--projected\) and a change of mind"):
+        factored_model(make_plan(chain_product(4)), parallel="projected", deviations=Deviations(switch=0.1))
