@@ -35,11 +35,13 @@ from ..product.merge import merge_parts
 from .feasibility import InterlockedPair, interlocked_pairs
 from .interlocks import _meshes, _pair_relation, _tolerances, resolve_interlocks
 
-__all__ = ["interlock_proposals", "apply_proposal", "refused_interlocks", "refusal_message", "refusal_error",
+__all__ = ["interlock_proposals", "record_proposals", "PROPOSALS_KEY", "apply_proposal", "refused_interlocks", "refusal_message", "refusal_error",
            "REFUSED_KEY"]
 
 #: The key of the designer's refusals under ``geometry.designer``.
 REFUSED_KEY = "refused_interlocks"
+#: The key of the proposals (and of the lines of the pairs no rule frees) under ``geometry.analysis``.
+PROPOSALS_KEY = "interlock_proposals"
 
 
 def interlock_proposals(product: Product, meshes=None) -> tuple[list[dict], list[str]]:
@@ -95,6 +97,18 @@ def interlock_proposals(product: Product, meshes=None) -> tuple[list[dict], list
             added.add(name)
         proposals.append(entry)
     return proposals, lines
+
+
+def record_proposals(product: Product, meshes=None) -> Product:
+    """``product`` with its interlock proposals (:func:`interlock_proposals`) recorded in its
+    ``geometry.analysis``: ``interlock_proposals`` and ``interlock_unresolved`` (the lines); ``product`` itself
+    when nothing is interlocked. Its diagrams as they are. A detection calls this while the meshes exist (the
+    workbench's Detect). Cost: that of :func:`interlock_proposals`."""
+    proposals, lines = interlock_proposals(product, meshes)
+    if not proposals and not lines:
+        return product
+    analysis = {**product.geometry.get("analysis", {}), PROPOSALS_KEY: proposals, "interlock_unresolved": lines}
+    return replace(product, geometry={**product.geometry, "analysis": analysis})
 
 
 def apply_proposal(product: Product, proposal: dict) -> Product:

@@ -15,7 +15,7 @@ from test_interlocks import AXIS, _analysed, _captured, _press_fit
 from planner import make_plan, plan_statistics
 from planner.assembly.feasibility import interlocked_pairs
 from planner.assembly.interlock_proposals import (REFUSED_KEY, apply_proposal, interlock_proposals,
-                                                  refused_interlocks)
+                                                  record_proposals, refused_interlocks)
 from planner.assembly.interlocks import apply_interlock_mode, resolve_interlocks
 from planner.errors import InterlockRefusedError, PlannerError
 from planner.product import product_from_dict, product_to_dict
@@ -120,3 +120,12 @@ def test_a_pair_no_rule_frees_is_a_line_not_a_proposal():
     proposals, (line,) = interlock_proposals(product, parts)
     assert proposals == [] and line.startswith("cage and ball block each other along every direction tried")
 
+
+
+def test_recorded_with_the_diagrams_only_when_something_is_interlocked(pen):
+    assert record_proposals(pen) is pen
+    product, parts = _press_fit()
+    recorded = record_proposals(product, parts)
+    assert recorded.obstructions == product.obstructions
+    assert recorded.geometry["analysis"]["interlock_proposals"] == interlock_proposals(product, parts)[0]
+    assert recorded.geometry["analysis"]["interlock_unresolved"] == []
