@@ -112,13 +112,16 @@ def decide_interlocks(analysis, decisions: dict[int, str]) -> list[str]:
                                                         for p in entry["parts"]))
         record.append({"parts": list(proposal["parts"]), "rule": proposal["rule"], "text": proposal["text"],
                        "decision": decision})
-        lines.append(f"{decision}: {proposal['text'] if decision == 'accepted' else pair + ' (' + proposal['rule'] + ')'}")
+        said = proposal["text"] if decision == "accepted" else f"{pair} ({proposal['rule']}): refused when planning"
+        lines.append(f"{decision}: {said}")
     data = product_to_dict(product)
     designer = product.geometry.get("designer", {})
     diagrams.update(parts=list(product.part_ids), contacts=data["contacts"], obstructions=data["obstructions"],
                     analysis=product.geometry.get("analysis", {}))
-    what = (f"{list(chosen.values())[0][:-2]} interlock {' and '.join(proposals[next(iter(chosen))]['parts'])}"
-            if len(chosen) == 1 else f"decide {len(chosen)} interlocks")
+    (first, decision), = list(chosen.items())[:1]
+    verb = {"accepted": "accept", "rejected": "reject"}[decision]
+    what = (f"{verb} interlock {' and '.join(proposals[first]['parts'])}" if len(chosen) == 1 else
+            f"decide {len(chosen)} interlocks")
     update_intent(analysis, what, groups=groups, subassemblies=subassemblies, diagrams=diagrams, interlocks=record,
                   directions=[list(v) for v in designer.get("directions", [])],
                   not_blocking=[dict(m) for m in designer.get("not_blocking", [])])

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from types import MappingProxyType
 
+import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
@@ -152,7 +153,8 @@ class InterlocksPanel:
         except IntentError as exc:
             self.message.setText(str(exc))
             return False
-        self.stored = lines
+        for line in lines:  # one line per decision in the report view, as the command line says them
+            FreeCAD.Console.PrintMessage(f"APLAN: interlock {line}\n")
         self._close()
         return True
 

@@ -74,7 +74,6 @@ def interlock_proposals(product: Product, meshes=None) -> tuple[list[dict], list
             name = d.direction.name
             raw[(a, b, name)] = ({p for p in had[name].blocks if set(p) == {a, b}} if name in had else set(
                 _pair_relation(by_id[a], by_id[b], np.asarray(d.direction.vector, dtype=float), pixel, tol)))
-    added: set[str] = set()
     proposals = []
     for d in decisions:
         entry = {"rule": d.rule, "parts": list(d.parts), "text": d.text}
@@ -89,12 +88,11 @@ def interlock_proposals(product: Product, meshes=None) -> tuple[list[dict], list
         found = raw.get((a, b, name), kept)
         entry.update(direction=list(d.direction.vector), direction_name=name,
                      leaving=a if (a, b) not in kept else b, not_blocking=sorted([list(p) for p in found - kept]))
-        if name not in had and name not in added:
+        if name not in had:  # every proposal along it carries it: any one of them may be accepted alone
             decided = {frozenset(k[:2]): v for k, v in raw.items() if k[2] == name}
             blocks = [p for p in now.blocks if frozenset(p) not in decided]
             blocks += sorted(p for v in decided.values() for p in v)
             entry["obstruction"] = [list(p) for p in blocks]
-            added.add(name)
         proposals.append(entry)
     return proposals, lines
 

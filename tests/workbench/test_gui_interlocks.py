@@ -172,7 +172,9 @@ def panel():
     settle()
     result["accepted"] = {{"intent": intent(), "undo": len(FreeCAD.ActiveDocument.UndoNames) - undo_before,
                           "undo_name": FreeCAD.ActiveDocument.UndoNames[0], "geometry": geometry(),
-                          "looks": looks(), "arrows": len(arrows()), "plan": plan()}}
+                          "looks": looks(), "arrows": len(arrows()), "plan": plan(),
+                          "report": [line for line in window.findChild(QtGui.QDockWidget, "Report view").widget(
+                              ).toPlainText().splitlines() if "APLAN: interlock" in line]}}
     FreeCAD.ActiveDocument.undo()
     settle()
     result["undone"] = {{"intent": intent(), "geometry": geometry(), "plan": plan()}}
@@ -265,6 +267,8 @@ def test_an_interlock_proposal_shown_accepted_undone_and_rejected():
         ("Pin", "Block", "+Z")]
     assert intent["directions"] == [] and intent["plus_z"] == [["Block", "Pin"]]
     assert accepted["plan"] == ["planned", 1]
+    assert len(accepted["report"]) == 1 and "APLAN: interlock accepted: Block and Pin overlap by" in \
+        accepted["report"][0]  # one line (after the report view's time), as the command line says it
     assert accepted["geometry"] == data["before"] and accepted["arrows"] == 0
     assert accepted["looks"] == data["home_looks"]
     # Undone: no decision, no mark, interlocked again; the document as it was.
