@@ -4,7 +4,9 @@ detects, opens the panel, selects the proposal (inserted along +Z, the overlap's
 the block blue and an arrow up from the pin (pixels of tests/artifacts/gui_interlocks_proposal.png), accepts it
 (one undo step: the analysis carries the mark, the plan has its one sequence, the user's shapes, placements
 and colours as they were), undoes it, then rejects it (the plan refuses the pair in the ``--interlocks error``
-words). The panel fits the default task view (tests/artifacts/gui_panel_interlocks.png)."""
+words). Then the captured knob of the same tests: its one-component proposal shows the cover and the knob
+together (tests/artifacts/gui_interlocks_component.png), Cancel restores the view. The panel fits the default
+task view (tests/artifacts/gui_panel_interlocks.png)."""
 from __future__ import annotations
 
 import json
@@ -26,7 +28,7 @@ import hashlib, json, os, time, traceback
 from PySide import QtCore, QtGui
 import FreeCAD, FreeCADGui
 
-OUT, COPY, ARTIFACTS = {out!r}, {copy!r}, {artifacts!r}
+OUT, COPY, CAPTURED, ARTIFACTS = {out!r}, {copy!r}, {captured!r}, {artifacts!r}
 result = {{}}
 PARTS = ("Block", "Pin")
 MATERIALS = {{}}
@@ -87,7 +89,7 @@ def arrows():
 
 
 def on_screen(name):
-    # The part's bounding box projected on the 3D view (pixels, as the view's picture has them).
+    # The part's bounding box projected on the 3D view (pixels; the view's y runs up).
     view = FreeCADGui.ActiveDocument.ActiveView
     box = FreeCAD.ActiveDocument.getObject(name).Shape.BoundBox
     return [list(view.getPointOnScreen(box.getPoint(i))) for i in range(8)]
@@ -186,6 +188,50 @@ def panel():
     settle()
     result["rejected"] = {{"intent": intent(), "geometry": geometry(), "plan": plan(), "arrows": len(arrows()),
                           "looks": looks()}}
+    captured()
+
+
+def shown_looks(materials):
+    return {{n: [list(m.diffuseColor[0]), round(100 * m.transparency[0])] for n, m in materials.items()}}
+
+
+def captured():
+    # A one-component proposal: the knob captured by the cover, both highlighted together, no arrow.
+    from freecad_aplan.plan3d import face_materials
+    doc = FreeCAD.openDocument(CAPTURED)
+    solids = [o for o in doc.Objects if o.TypeId == "Part::Feature"]
+    for o in solids:
+        o.ViewObject.Visibility = True
+    FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    settle(2.0)
+    MATERIALS.clear()
+    MATERIALS.update({{o.Name: face_materials(o)[0] for o in solids}})
+    result["captured_home"] = shown_looks(MATERIALS)
+    FreeCADGui.runCommand("Aplan_CreateAnalysis")
+    FreeCADGui.runCommand("Aplan_Detect")
+    after_jobs(captured_panel)
+
+
+def captured_panel():
+    FreeCADGui.runCommand("Aplan_Interlocks")
+    settle()
+    window = FreeCADGui.getMainWindow()
+    listed = window.findChild(QtGui.QListWidget, "AplanInterlocksList")
+    listed.setCurrentRow(0)
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    settle()
+    view = FreeCADGui.ActiveDocument.ActiveView
+    view.saveImage(os.path.join(ARTIFACTS, "gui_interlocks_component.png"), *view.getSize(), "White")
+    result["captured"] = {{"entries": [listed.item(r).text() for r in range(listed.count())],
+                          "looks": shown_looks(MATERIALS), "arrows": len(arrows()),
+                          "screen": {{n: on_screen(n) for n in ("Cover", "Knob", "Housing")}},
+                          "cut_off": cut_off(task_view_viewport()) + broken_words(task_view_viewport())}}
+    state().panel.reject()  # Cancel: the view as it was, nothing stored
+    settle()
+    from freecad_aplan.intent import find_analysis, read_intent
+    result["captured_closed"] = [shown_looks(MATERIALS), len(arrows()),
+                                 read_intent(find_analysis(FreeCAD.ActiveDocument)).interlocks]
     finish(0)
 
 
@@ -207,7 +253,7 @@ def _in_the_window() -> tuple:
     script = tmp / "gui_interlocks.py"
     script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, layout_check=LAYOUT_CHECK,
                                         out=str(tmp / "result.json"), copy=str(tmp / "press_fit.FCStd"),
-                                        artifacts=str(ARTIFACTS)))
+                                        captured=str(tmp / "captured.FCStd"), artifacts=str(ARTIFACTS)))
     return tmp, freecad_gui_run(tmp, script, display=170)
 
 
@@ -284,6 +330,23 @@ def test_an_interlock_proposal_shown_accepted_undone_and_rejected():
     assert kind == "InterlockRefusedError" and "1 interlocked pair(s), refused by the designer" in text
     assert "the rules would resolve them so: Block and Pin overlap by" in text
     assert rejected["arrows"] == 0 and rejected["looks"] == data["home_looks"]
+    _assert_component(data)
+
+
+def _assert_component(data) -> None:
+    """The captured knob: one proposal, one component with the cover; both orange together, the housing and the
+    bolts dimmed, no arrow; Cancel puts the view back and stores nothing."""
+    captured = data["captured"]
+    assert captured["entries"] == ["Cover\n+ Knob\none component: not decided"] and captured["cut_off"] == []
+    looks = captured["looks"]
+    assert looks["Cover"] == looks["Knob"] == [pytest.approx(list(ORANGE)), 0] and captured["arrows"] == 0
+    assert all(t == 85 for name, (_, t) in looks.items() if name not in ("Cover", "Knob"))
+    assert data["captured_closed"] == [data["captured_home"], 0, []]
+    picture = read_picture(ARTIFACTS / "gui_interlocks_component.png")
+    orange = picture.coloured(hue_of(ORANGE), saturation=0.3)
+    cover = _region(captured["screen"]["Cover"], picture.size)
+    # The cover's (and knob's) orange fills about half its projected box (measured 0.51): about half of that.
+    assert _share(orange, cover) >= 0.25, _share(orange, cover)
 
 
 def _assert_proposal_picture(data) -> None:
