@@ -21,6 +21,11 @@ top of the geometry (everything is saved in the ``.FCStd`` and restored on reope
 - ``Fasteners``: the designer's fastener tags, one JSON object per group, by internal object name
   (``{"id": g, "objects": [...], "hosts": [...], "tool"?: t}``: the objects are installed together, joining the
   hosts' components; :mod:`freecad_aplan.structure`);
+- ``Interlocks``: the designer's decisions on the interlock proposals of the last detection (one JSON object
+  each: ``{"parts": [a, b], "rule": r, "text": t, "decision": "accepted" or "rejected"}``,
+  :mod:`freecad_aplan.interlocks`): an accepted one is written into the designer data above (directions,
+  marks, diagrams, groups), a rejected one makes the planner refuse the pair (the product's
+  ``geometry.designer.refused_interlocks``);
 - ``Subassemblies``: the designer's subassembly tree, one product-format JSON object per subassembly over
   component ids (``{"id": s, "parts": [...], "label"?: l}``); empty: the document's own structure
   (``App::Part`` containers and groups) applies;
@@ -73,6 +78,7 @@ class Intent:
     not_blocking: list[dict] = field(default_factory=list)
     fasteners: list[dict] = field(default_factory=list)
     subassemblies: list[dict] = field(default_factory=list)
+    interlocks: list[dict] = field(default_factory=list)
 
 
 # property name, FreeCAD type, property group, tooltip; in the order of Intent's fields
@@ -103,6 +109,9 @@ _PROPERTIES = (
      'one JSON object per fastener group: {"id": g, "objects": [...], "hosts": [...], "tool": t} (internal names)'),
     ("Subassemblies", "App::PropertyStringList", "Structure",
      'one JSON object per subassembly: {"id": s, "parts": [component or subassembly ids]}; empty: the document\'s own'),
+    ("Interlocks", "App::PropertyStringList", "Detection",
+     'the designer\'s decisions on the interlock proposals, one JSON object each: {"parts": [a, b], "rule": r, '
+     '"text": t, "decision": "accepted" or "rejected"} (made in the interlocks panel)'),
 )
 
 
@@ -251,7 +260,8 @@ def read_intent(analysis) -> Intent:
                   not_blocking=not_blocking,
                   fasteners=_json_entries(analysis, "Fasteners") if "Fasteners" in analysis.PropertiesList else [],
                   subassemblies=(_json_entries(analysis, "Subassemblies")
-                                 if "Subassemblies" in analysis.PropertiesList else []))
+                                 if "Subassemblies" in analysis.PropertiesList else []),
+                  interlocks=_json_entries(analysis, "Interlocks") if "Interlocks" in analysis.PropertiesList else [])
 
 
 def _write(analysis, intent: Intent) -> None:
@@ -286,6 +296,7 @@ def _write(analysis, intent: Intent) -> None:
         "NotBlocking": [json.dumps(m, sort_keys=True) for m in intent.not_blocking],
         "Fasteners": [json.dumps(g, sort_keys=True) for g in intent.fasteners],
         "Subassemblies": [json.dumps(g, sort_keys=True) for g in intent.subassemblies],
+        "Interlocks": [json.dumps(d, sort_keys=True) for d in intent.interlocks],
     }
     for name, value in values.items():
         if getattr(analysis, name) != value:  # unchanged properties stay untouched (no needless undo steps)
@@ -309,9 +320,13 @@ def update_intent(analysis, description: str, **changes) -> Intent:
 
 def designer_record(intent: Intent) -> dict:
     """The product's ``geometry.designer`` (:mod:`planner.product.designer`): the designer's directions and
-    not-blocking marks the analysis holds (empty when it holds none)."""
+    not-blocking marks the analysis holds, and the interlock proposals the designer rejected
+    (``refused_interlocks``, :mod:`planner.assembly.interlock_proposals`); empty when it holds none."""
+    refused = [{k: d[k] for k in ("parts", "rule", "text") if k in d} for d in intent.interlocks
+               if d.get("decision") == "rejected"]
     return {**({"directions": [list(v) for v in intent.directions]} if intent.directions else {}),
-            **({"not_blocking": [dict(m) for m in intent.not_blocking]} if intent.not_blocking else {})}
+            **({"not_blocking": [dict(m) for m in intent.not_blocking]} if intent.not_blocking else {}),
+            **({"refused_interlocks": refused} if refused else {})}
 
 
 def product_intent(intent: Intent) -> dict:

@@ -20,11 +20,11 @@ from types import MappingProxyType
 import FreeCAD
 
 __all__ = ["COLOURS", "DIMMED", "SceneChanges", "bound_box", "component_objects", "extent", "face_materials",
-           "orthographic_fit", "relation_looks", "shown_transform", "step_looks"]
+           "orthographic_fit", "relation_looks", "interlock_looks", "shown_transform", "step_looks"]
 
 #: Colours (RGB 0..1) and transparencies (percent) of the roles.
 COLOURS = MappingProxyType({"moving": (1.0, 0.55, 0.0), "blocked": (0.85, 0.1, 0.1), "blocking": (0.1, 0.35, 0.9)})
-DIMMED = MappingProxyType({"fixed": 55, "idle": 85, "blocking": 75})
+DIMMED = MappingProxyType({"fixed": 55, "idle": 85, "blocking": 75, "holding": 50})
 
 
 def component_objects(document, diagrams: dict) -> dict[str, list]:
@@ -84,6 +84,13 @@ def relation_looks(parts, blocked: str, blocking: str) -> dict[str, tuple]:
     often encloses the blocked one), the others dimmed."""
     return {p: (COLOURS["blocked"], 0) if p == blocked else (COLOURS["blocking"], DIMMED["blocking"])
             if p == blocking else (None, DIMMED["idle"]) for p in parts}
+
+
+def interlock_looks(parts, leaving: str, other: str) -> dict[str, tuple]:
+    """Per part for an interlock proposal with a direction: the part that leaves orange, the other blue and a
+    little see-through (it often holds the first), the others dimmed."""
+    return {p: (COLOURS["moving"], 0) if p == leaving else (COLOURS["blocking"], DIMMED["holding"])
+            if p == other else (None, DIMMED["idle"]) for p in parts}
 
 
 def _parent_rotation(obj) -> FreeCAD.Rotation:

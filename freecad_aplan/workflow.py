@@ -135,7 +135,8 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
                    interference: float = INTERFERENCE_VOLUME, depth: float = BLOCKING_DEPTH) -> dict:
     """Run a geometry engine on the bundle ``folder`` and write the result into its ``product.json``.
 
-    Returns the counts (parts, contacts, interferences, seconds). Runs in a background job.
+    Returns the counts (parts, contacts, interferences, seconds). The interlock rules' proposals are recorded
+    with the diagrams (:func:`planner.assembly.interlock_proposals.record_proposals`). Runs in a background job.
     """
     from planner.geometry import Tolerances
     from planner.geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
@@ -156,7 +157,10 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
                                                            time_limit=tolerances.time_limit))
     else:
         report = analyze_product(product, engine, tolerances)
-    save_product(apply_report(product, report), Path(folder) / PRODUCT_FILE)
+    from planner.assembly.interlock_proposals import record_proposals
+
+    # The interlock rules' proposals, while the meshes are here: the interlocks panel lists them.
+    save_product(record_proposals(apply_report(product, report)), Path(folder) / PRODUCT_FILE)
     return {"parts": len(report.parts), "contacts": len(report.contacts),
             "interferences": len(report.interferences), "seconds": round(report.seconds, 3)}
 

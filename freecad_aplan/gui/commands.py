@@ -250,6 +250,20 @@ class Diagrams(_Command):
         _show_panel(self.state, DiagramsPanel(analysis))
 
 
+class Interlocks(_Command):
+    name, menu = "Aplan_Interlocks", "Interlocks"
+    tooltip = ("Parts that block each other along every direction, and what the rules would do (an overlap's axis, "
+               "a direction from the contacts, one component): see each in 3D, accept or reject it")
+
+    def run(self):
+        from ..interlocks import interlock_report
+        from .interlocks import InterlocksPanel
+
+        analysis = workflow.require_analysis(_document())
+        interlock_report(analysis)  # a clear message when nothing was detected yet
+        _show_panel(self.state, InterlocksPanel(analysis))
+
+
 class Intent(_Command):
     name, menu = "Aplan_Intent", "Technical constraints, operation tags and base part"
     tooltip = ("Edit technical constraints; tag operations as unfavorable to humans, robot-capable, and their tool; "
@@ -461,7 +475,7 @@ class Simulate(_Command):
         self.state.belief_dialog.show()
 
 
-COMMANDS = (CreateAnalysis, GroupComponent, ExcludeParts, Detect, Diagrams, Intent, Fasteners, Subassemblies, Plan,
+COMMANDS = (CreateAnalysis, GroupComponent, ExcludeParts, Detect, Diagrams, Interlocks, Intent, Fasteners, Subassemblies, Plan,
             Plan3D, ExportBundle, ExportModel, Solve, Simulate)
 
 

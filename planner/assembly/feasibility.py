@@ -96,9 +96,14 @@ def directions_tried(pairs: list[InterlockedPair]) -> str:
 
 def interlock_error(product: Product, pairs: list[InterlockedPair]) -> "InterlockedPartsError":
     """The :class:`~planner.errors.InterlockedPartsError` that ``pairs`` prove (one line in its summary, the
-    whole explanation in its message). Cost: O(n^2 D) for the pairs the designer's marks released."""
+    whole explanation in its message); the :class:`~planner.errors.InterlockRefusedError` of a refused proposal
+    when the designer refused one for them (:mod:`planner.assembly.interlock_proposals`). Cost: O(n^2 D) for the pairs the designer's marks released."""
     from ..errors import InterlockedPartsError
+    from .interlock_proposals import refusal_error
 
+    refused = refusal_error(product, pairs)  # a proposal the designer turned down: its own message
+    if refused is not None:
+        return refused
     order = {p: i for i, p in enumerate(product.part_ids)}
     stuck = sorted({p for pair in pairs for p in (pair.first, pair.second)}, key=order.get)
     return InterlockedPartsError(stuck, interlock_message(pairs, released=released_interlocks(product)),

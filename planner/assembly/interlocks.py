@@ -156,7 +156,8 @@ def apply_interlock_mode(product: Product, mode: str = "resolve", meshes: list[P
     and logs one line per decision, ``error`` raises :class:`~planner.errors.InterlockRefusedError` naming what
     the rules would do, ``keep`` returns it untouched (the planner names the pairs). A pair no rule frees,
     in a product drawn in CAD, is an :class:`~planner.errors.InterlockRefusedError` in one line
-    (:attr:`Unresolved.line`) in both of the first modes; a product without meshes is planned as written.
+    (:attr:`Unresolved.line`) in both of the first modes, and so is a pair whose proposal the designer refused
+    (:func:`~planner.assembly.interlock_proposals.refusal_error`); a product without meshes is planned as written.
     Cost: that of :func:`resolve_interlocks`."""
     from ..errors import InterlockRefusedError, PlannerError
 
@@ -164,6 +165,11 @@ def apply_interlock_mode(product: Product, mode: str = "resolve", meshes: list[P
         raise PlannerError(f"unknown interlock mode {mode!r}; use one of {', '.join(INTERLOCK_MODES)}")
     if mode == "keep":
         return product
+    from .interlock_proposals import refusal_error, refusal_message
+
+    refused = refusal_error(product)  # the designer turned these down: never applied
+    if refused is not None:
+        raise refused
     resolved, decisions, unresolved = resolve_interlocks(product, meshes)
     unresolved = tuple(u for u in unresolved if "no meshes" not in u.why)
     pairs = [(d.parts[0], d.parts[1]) for d in decisions] + [(u.pair.first, u.pair.second) for u in unresolved]
@@ -173,11 +179,10 @@ def apply_interlock_mode(product: Product, mode: str = "resolve", meshes: list[P
         more = f" (and {len(unresolved) - 1} more pairs: {others})" if others else ""
         raise InterlockRefusedError(where + unresolved[0].line + more, pairs)
     if mode == "error" and decisions:
-        listed = "; ".join(d.text.split(" (")[0] if d.rule == "component" else d.text for d in decisions)
-        raise InterlockRefusedError(
-            f"{where}{len(decisions)} interlocked pair(s), refused by --interlocks error; the rules would resolve "
-            f"them so: {listed}. Leave out --interlocks error to apply this, or resolve them in the CAD model (the "
-            "workbench's diagrams panel)", pairs)
+        listed = [d.text.split(" (")[0] if d.rule == "component" else d.text for d in decisions]
+        raise InterlockRefusedError(refusal_message(
+            where, listed, "--interlocks error", "Leave out --interlocks error to apply this, or resolve them in "
+            "the CAD model (the workbench's diagrams panel)"), pairs)
     for decision in decisions:
         log.info("interlock: %s", decision.text)
     return resolved
