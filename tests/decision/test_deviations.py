@@ -333,29 +333,3 @@ def test_a_change_of_mind_moves_no_belief_while_the_robot_waits(pen, kind):
             after.append(up.update(up.update(up.initialize(), action, 0), m.wait, 0).dense(m.n_classes))
         assert after[0][c] == 0.0 < after[1][c]
 
-
-def test_the_changing_operator_does_every_full_sequence_equally_often(pen):
-    """Closed form behind docs/deviations.md's "Measured": the full sequence a changing operator does (a uniform
-    one, switched at one of its switch points to another completion of that state, uniformly among the others)
-    is uniform over the full sequences, so the paper's filter is the exact posterior of that world and no model
-    of the switch can track it better. Exact enumeration of the operator's draws (sequences, points, ranks)."""
-    from fractions import Fraction
-
-    from planner.decision.operators import switch_path, switch_points
-
-    model = factored_model(make_plan(pen, True))
-    total = model.n_sequences
-    done: dict[tuple, Fraction] = {}
-    for rank in range(total):
-        path = model.sequence(rank)
-        points = switch_points(model, path)
-        if not points:  # it cannot switch: it does its own
-            done[tuple(path)] = done.get(tuple(path), Fraction(0)) + Fraction(1, total)
-        for position in points:
-            p = Fraction(1, total * len(points))
-            others = int(model.paths[model.class_source[path[position]]]) - 1
-            for k in range(others):
-                new = tuple(switch_path(model, path, position, (k + 0.5) / others))
-                assert new != tuple(path) and new[:position] == tuple(path[:position])
-                done[new] = done.get(new, Fraction(0)) + p / others
-    assert len(done) == total and set(done.values()) == {Fraction(1, total)}
