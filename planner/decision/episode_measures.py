@@ -1,5 +1,5 @@
 """What an episode says about the collaboration: who did the operations, the robot's wrong actions, when it
-first helped and when it was sure of the operator's intention (flat and factored episodes alike).
+first helped and when it was sure of the operator's intention (an :class:`~.episode.Episode` of any model).
 
 Per episode: ``robot_operations`` (the robot's actions that were the intention's next step),
 ``operator_operations`` (the operator's), ``wrong_robot_actions`` (the robot's operations that were not: the
@@ -20,8 +20,7 @@ __all__ = ["episode_measures", "run_totals"]
 
 
 def episode_measures(episode, threshold: float = CONFIDENCE) -> dict:
-    """The per-episode measures (module docstring) of an :class:`~.simulate.Episode` or a
-    :class:`~.factored_simulate.FactoredEpisode`."""
+    """The per-episode measures (module docstring) of an :class:`~.episode.Episode` of any model."""
     steps = episode.steps
     robot = sum(s.robot_operation for s in steps)
     operator = steps[-1].operator_operations if steps else 0

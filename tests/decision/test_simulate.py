@@ -11,8 +11,8 @@ from figure_support import pyplot_untouched
 from planner import make_plan
 from planner.decision import intention_model
 from planner.decision.belief_plot import episode_trace, plot_beliefs
-from planner.decision.factored_simulate import FactoredEpisode, FactoredStep
-from planner.decision.simulate import Episode, Step, confidence_text, decision_times, evaluate_policy, simulate_episode
+from planner.decision.episode import Episode, Step
+from planner.decision.simulate import confidence_text, decision_times, evaluate_policy, simulate_episode
 from planner.decision.solvers import PointBasedSolver
 
 MEASURES = {"robot_operations", "operator_operations", "wrong_robot_actions", "first_help_step", "confident_step",
@@ -105,13 +105,13 @@ def test_cli_simulate_and_evaluate(tmp_path):
 
 
 def _flat(p_true: list[float], states: list[int]) -> Episode:
-    return Episode(9, [Step(0, 0, state, p, k + 1, 0.0) for k, (p, state) in enumerate(zip(p_true, states))],
-                   final=0)
+    return Episode([Step(0, 0, p, k + 1, 0.0, state=state) for k, (p, state) in enumerate(zip(p_true, states))],
+                   start=9, final=0)
 
 
-def _factored(p_true: list[float], positions: list[int]) -> FactoredEpisode:
-    return FactoredEpisode([4, 5, 6], [FactoredStep(0, 0, position, p, k + 1, 0.0, 0.0)
-                                       for k, (p, position) in enumerate(zip(p_true, positions))])
+def _factored(p_true: list[float], positions: list[int]) -> Episode:
+    return Episode([Step(0, 0, p, k + 1, 0.0, 0.0, position=position)
+                    for k, (p, position) in enumerate(zip(p_true, positions))], path=[4, 5, 6])
 
 
 def test_confident_only_before_the_product_is_finished():
