@@ -35,8 +35,8 @@ def episode_measures(episode, threshold: float = CONFIDENCE) -> dict:
             "robot_capable_share": round(robot / capable, 6) if capable else None,
             "switched_at_step": episode.switched_at,
             "confident_after_switch": _confident_after_switch(episode, threshold),
-            "operator_mistakes": sum(getattr(s, "mistake", False) for s in steps),
-            "resets": int(getattr(episode, "resets", 0))}
+            "operator_mistakes": sum(s.mistake for s in steps),
+            "resets": int(episode.resets)}
 
 
 def _confident_after_switch(episode, threshold: float) -> bool | None:

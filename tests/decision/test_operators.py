@@ -227,7 +227,7 @@ def test_robot_capable_operations_follow_the_tags(kind, plan):
 
 def _operations_done(model, episode) -> list[int]:
     """The AND/OR operations of the sequence an episode did (after a switch, the one it switched to)."""
-    if hasattr(episode, "path"):
+    if episode.path is not None:  # an episode over classes
         return model.sequence_operations(episode.path)
     ops = model.sequence_operations(episode.start)
     if episode.switched_to is None:
