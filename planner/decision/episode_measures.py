@@ -8,8 +8,11 @@ operation; None if it never did one), ``confident_step`` (the decision step, fro
 the true intention first exceeded ``CONFIDENCE`` while the product was not yet finished, as
 ``confident_after_operations`` counts it; None if never), ``robot_share`` (robot operations over all
 operations; None without any), ``switched_at_step`` (when the operator changed its mind) and
-``operator_mistakes`` (wrong parts taken), ``confident_after_switch`` (the belief on the new true intention
-passed ``CONFIDENCE`` after the switch, before the product was finished; None without a switch) and ``resets``
+``operator_mistakes`` (wrong parts taken), ``confident_after_switch`` (at some step from the one the operator
+changed its mind before, ``switched_at_step``, on, the belief after that step's observation on the true
+intention, which is then the new one: the assembly state and the new sequence from there, ``Step.p_true``,
+exceeded ``CONFIDENCE``, and that step left the product unfinished; the step that finishes it does not count,
+the belief is then on the finished product trivially; None without a switch; docs/deviations.md) and ``resets``
 (observations of probability 0 under the belief). A finished episode's operations add up to its sequence's length. Cost: O(steps).
 """
 from __future__ import annotations
