@@ -13,7 +13,8 @@ changed its mind before, ``switched_at_step``, on, the belief after that step's 
 intention, which is then the new one: the assembly state and the new sequence from there, ``Step.p_true``,
 exceeded ``CONFIDENCE``, and that step left the product unfinished; the step that finishes it does not count,
 the belief is then on the finished product trivially; None without a switch; docs/deviations.md) and ``resets``
-(observations of probability 0 under the belief). A finished episode's operations add up to its sequence's length. Cost: O(steps).
+(observations of probability 0 under the belief). A finished episode's operations add up to its sequence's
+length. Cost: O(steps).
 """
 from __future__ import annotations
 

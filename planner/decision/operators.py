@@ -35,7 +35,8 @@ import numpy as np
 from ..errors import PlannerError
 
 __all__ = ["Switch", "OperatorPlan", "UniformOperator", "HabitualOperator", "ChangingOperator", "parse_operator",
-           "switch_intention", "switch_path", "switch_points", "mistaken_observation", "mistake_stream", "OPERATOR_SPELLING"]
+           "switch_intention", "switch_path", "switch_points", "mistaken_observation", "mistake_stream",
+           "OPERATOR_SPELLING"]
 
 OPERATOR_SPELLING = ("uniform, habitual:K:STRENGTH, changing:P, mistakes:Q, or a base (uniform or habitual) "
                      "followed by changing and mistakes, comma-separated (habitual:5:0.8,changing:0.1,mistakes:0.05)")
