@@ -127,6 +127,18 @@ def test_confident_only_before_the_product_is_finished():
     assert confidence_text(1).endswith("after 1 operator operation") and confidence_text(3).endswith("operations")
 
 
+def test_one_episode_type_tells_finished_in_each_models_terms():
+    """Issue 24: one Episode for every model; finished and unfinished read ``state`` / ``final`` over
+    intentions and ``position`` / ``path`` over classes."""
+    flat, factored = _flat([0.5, 1.0], [3, 0]), _factored([0.5, 0.6, 1.0], [1, 2, 3])
+    assert type(flat) is type(factored) and type(flat.steps[0]) is type(factored.steps[0])
+    assert flat.finished and factored.finished
+    assert [flat.unfinished(s) for s in flat.steps] == [True, False]
+    assert [factored.unfinished(s) for s in factored.steps] == [True, True, False]
+    assert not _flat([0.5, 0.6], [3, 2]).finished and not _factored([0.5], [1]).finished
+    assert Episode(start=0, final=0).finished and Episode(path=[]).finished and not Episode(start=3).finished
+
+
 def test_decision_times_closed_form():
     """1 to 20 ms: median 10.5 ms, 95th percentile 19 + 0.05 ms (rank 0.95 x 19 = 18.05, linear), max 20 ms."""
     times = decision_times(k / 1000 for k in range(1, 21))
