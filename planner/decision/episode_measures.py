@@ -1,5 +1,5 @@
 """What an episode says about the collaboration: who did the operations, the robot's wrong actions, when it
-first helped and when it was sure of the operator's intention (flat and factored episodes alike).
+first helped and when it was sure of the operator's intention (an :class:`~.episode.Episode` of any model).
 
 Per episode: ``robot_operations`` (the robot's actions that were the intention's next step),
 ``operator_operations`` (the operator's), ``wrong_robot_actions`` (the robot's operations that were not: the
@@ -8,9 +8,13 @@ operation; None if it never did one), ``confident_step`` (the decision step, fro
 the true intention first exceeded ``CONFIDENCE`` while the product was not yet finished, as
 ``confident_after_operations`` counts it; None if never), ``robot_share`` (robot operations over all
 operations; None without any), ``switched_at_step`` (when the operator changed its mind) and
-``operator_mistakes`` (wrong parts taken), ``confident_after_switch`` (the belief on the new true intention
-passed ``CONFIDENCE`` after the switch, before the product was finished; None without a switch) and ``resets``
-(observations of probability 0 under the belief). A finished episode's operations add up to its sequence's length. Cost: O(steps).
+``operator_mistakes`` (wrong parts taken), ``confident_after_switch`` (at some step from the one the operator
+changed its mind before, ``switched_at_step``, on, the belief after that step's observation on the true
+intention, which is then the new one: the assembly state and the new sequence from there, ``Step.p_true``,
+exceeded ``CONFIDENCE``, and that step left the product unfinished; the step that finishes it does not count,
+the belief is then on the finished product trivially; None without a switch; docs/deviations.md) and ``resets``
+(observations of probability 0 under the belief). A finished episode's operations add up to its sequence's
+length. Cost: O(steps).
 """
 from __future__ import annotations
 
@@ -20,8 +24,7 @@ __all__ = ["episode_measures", "run_totals"]
 
 
 def episode_measures(episode, threshold: float = CONFIDENCE) -> dict:
-    """The per-episode measures (module docstring) of an :class:`~.simulate.Episode` or a
-    :class:`~.factored_simulate.FactoredEpisode`."""
+    """The per-episode measures (module docstring) of an :class:`~.episode.Episode` of any model."""
     steps = episode.steps
     robot = sum(s.robot_operation for s in steps)
     operator = steps[-1].operator_operations if steps else 0
@@ -36,8 +39,8 @@ def episode_measures(episode, threshold: float = CONFIDENCE) -> dict:
             "robot_capable_share": round(robot / capable, 6) if capable else None,
             "switched_at_step": episode.switched_at,
             "confident_after_switch": _confident_after_switch(episode, threshold),
-            "operator_mistakes": sum(getattr(s, "mistake", False) for s in steps),
-            "resets": int(getattr(episode, "resets", 0))}
+            "operator_mistakes": sum(s.mistake for s in steps),
+            "resets": int(episode.resets)}
 
 
 def _confident_after_switch(episode, threshold: float) -> bool | None:

@@ -13,11 +13,12 @@ import numpy as np
 
 from ..errors import PlannerError
 from .factored_model import FactoredIntentionModel
-from .factored_simulate import FactoredEpisode, evaluate_factored, simulate_factored_episode
+from .episode import Episode
+from .factored_simulate import evaluate_factored, simulate_factored_episode
 from .intention_model import IntentionModel
 from .models import Model, filtered, final_of, is_factored, is_flat, of_product, tables
 from .operators import mistake_stream
-from .simulate import Episode, evaluate_policy, simulate_episode
+from .simulate import evaluate_policy, simulate_episode
 
 __all__ = ["simulate", "evaluate", "evaluate_operator"]
 
@@ -25,8 +26,9 @@ __all__ = ["simulate", "evaluate", "evaluate_operator"]
 def simulate(model: IntentionModel | FactoredIntentionModel, policy, sequences: Sequence[int] | None = None,
              every: bool = False, random: int | None = None, seed: int = 0, max_steps: int = 100,
              operator: str = "model", what: str = "--sequence", operator_model=None
-             ) -> list[Episode] | list[FactoredEpisode]:
-    """One episode per full sequence played (``Episode.start``): ``every`` one, ``random`` ones drawn at
+             ) -> list[Episode]:
+    """One :class:`~.episode.Episode` per full sequence played (``Episode.start``; ``Episode.path`` on a
+    factored model): ``every`` one, ``random`` ones drawn at
     random, the listed ``sequences`` (each checked), or by default the first. The operator follows its
     sequence (``operator``: ``model`` or ``turns``, see :func:`~planner.decision.simulate.simulate_episode`);
     one random stream, seeded by ``seed``, draws the sequences and then every episode.
@@ -83,7 +85,7 @@ def evaluate_operator(model: Model | FactoredIntentionModel, policy, operator_mo
 
 
 def _simulate_factored(model: FactoredIntentionModel, policy, sequences, every, random, seed, max_steps, operator,
-                       what) -> list[FactoredEpisode]:
+                       what) -> list[Episode]:
     rng = np.random.default_rng(seed)
     if every:
         if model.n_sequences > 10_000:

@@ -15,67 +15,22 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..assembly.guards import Progress
+from .episode import Episode, Step
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .factored_updater import FactoredUpdater
 from .operators import switch_path
 from .parallel import parallel_rewrite
 from .simulate import operator_mistake
 
-__all__ = ["FactoredStep", "FactoredEpisode", "simulate_factored_episode", "evaluate_factored",
-           "true_intention_probability"]
+__all__ = ["simulate_factored_episode", "evaluate_factored", "true_intention_probability"]
 
 OPERATORS = ("turns", "model")
 
 log = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True)
-class FactoredStep:
-    action: int
-    observation: int
-    position: int             # steps of the sequence done after the step
-    p_true: float             # the belief on the true intention (the flat model's number) after the update
-    operator_operations: int  # operations the operator has performed so far
-    reward: float
-    decision_seconds: float   # the time the policy took to choose ``action``
-    robot_operation: bool = False  # the robot's action was the intention's next step (it helped)
-    wrong_action: bool = False     # the robot did an operation that is not the intention's next step
-    mistake: bool = False          # the operator took a wrong part (the observation is that pick)
-
-
-@dataclass
-class FactoredEpisode:
-    path: list[int]                                    # the full sequence's state edges
-    steps: list[FactoredStep] = field(default_factory=list)
-    discounted_return: float = 0.0
-    resets: int = 0                                    # unexplained observations (never with the model's world)
-    beliefs: list[FactoredBelief] = field(default_factory=list)  # before the first step, then after each (sparse)
-    switched_at: int | None = None                     # the decision step (from 1) the operator changed its mind
-    robot_capable: int = 0                             # operations done (by anyone) that the robot could have done
-
-    @property
-    def finished(self) -> bool:
-        return bool(self.steps) and self.steps[-1].position == len(self.path) or not self.path
-
-    def first_confident(self, threshold: float) -> int | None:
-        """Operator operations done when the belief on the true intention first exceeds ``threshold`` before
-        the product is finished (after a step that leaves some of the sequence to do); None if it never does.
-        Once the product is assembled the belief is on it trivially, so that step does not count."""
-        return next((s.operator_operations for s in self.steps if s.p_true > threshold and self.unfinished(s)),
-                    None)
-
-    def unfinished(self, step: FactoredStep) -> bool:
-        """Whether some of the sequence was still to do after ``step``."""
-        return step.position < len(self.path)
-
-    def confident_before_finished(self, threshold: float) -> bool:
-        """True when the belief on the true intention passed ``threshold`` before the product was finished."""
-        return self.first_confident(threshold) is not None
 
 
 def true_intention_probability(model: FactoredIntentionModel, belief: FactoredBelief, path: list[int],
@@ -90,7 +45,7 @@ def true_intention_probability(model: FactoredIntentionModel, belief: FactoredBe
 
 def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[int], rng: np.random.Generator,
                               max_steps: int = 100, operator: str = "model", switch=None,
-                              mistakes=None) -> FactoredEpisode:
+                              mistakes=None) -> Episode:
     """One episode along ``path`` (state edges from the initial state) until the product is finished or
     ``max_steps``. ``operator``: ``model`` (it acts with probability 1/2 per step, as the model says) or
     ``turns`` (it acts whenever the model lets it). ``policy.action(belief)`` picks the robot's actions.
@@ -101,7 +56,7 @@ def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[
         raise ValueError(f"operator must be one of {OPERATORS}, got {operator!r}")
     updater = FactoredUpdater(model, on_reset=lambda event: None)
     belief = updater.initialize()
-    episode = FactoredEpisode(list(path), beliefs=[belief])
+    episode = Episode(beliefs=[belief], path=list(path))
     position, operations, discount = 0, 0, 1.0
     for _ in range(max_steps):
         if position >= len(path):
@@ -129,9 +84,9 @@ def simulate_factored_episode(model: FactoredIntentionModel, policy, path: list[
         episode.discounted_return += discount * reward
         discount *= model.discount
         position = nxt
-        episode.steps.append(FactoredStep(action, z, position, true_intention_probability(model, belief, path, position),
-                                          operations, reward, seconds, robot_steps == 1,
-                                          action != model.wait and robot_steps == 0, mistake))
+        episode.steps.append(Step(action, z, true_intention_probability(model, belief, path, position), operations,
+                                  reward, seconds, robot_steps == 1, action != model.wait and robot_steps == 0, mistake,
+                                  position=position))
         episode.beliefs.append(belief)
     episode.resets = len(updater.events)
     return episode

@@ -9,10 +9,14 @@ observations stay the model's).
 - :class:`UniformOperator`: every full sequence equally likely (the paper's operator). Its draws are today's
   ``aplan simulate --random N`` draws on the paper's model, number for number.
 - :class:`HabitualOperator`: one given sequence with probability ``strength``, otherwise uniform.
-- :class:`ChangingOperator`: a base operator that, with probability ``p`` per episode, switches once, after a
-  uniformly drawn number of operations (1 to the length - 1), to another completion of the state it is in,
-  uniformly among those other than its own (where the state has no other, at the first later state that has
-  one; an episode whose remaining states have none does not switch: ``switched_at`` stays None).
+- :class:`ChangingOperator`: a base operator that, with probability ``p`` per episode, switches once, to
+  another completion of the state it is in, uniformly among those other than its own, at a point drawn
+  uniformly among the *switch points* of its sequence (:func:`switch_points`: the positions 1 to length - 1
+  whose state has another completion). So ``p`` is the share of episodes that switch, on any product whose
+  sequences have a switch point (a sequence with none does not switch). In the episode the switch comes at the
+  first decision step with at least that many operations done (one step may do two, the robot's and the
+  operator's: then at the first later state that has another completion, or not at all: ``switched_at`` stays
+  None).
 - Any of them with ``mistakes`` = q > 0 (``...,mistakes:Q``): at each decision step, with probability q, it
   takes a wrong part and puts it back: the camera sees another non-blank observation than the world's, drawn
   uniformly (:func:`mistaken_observation`), and the assembly does not change. These draws come from a stream
@@ -31,7 +35,8 @@ import numpy as np
 from ..errors import PlannerError
 
 __all__ = ["Switch", "OperatorPlan", "UniformOperator", "HabitualOperator", "ChangingOperator", "parse_operator",
-           "switch_intention", "switch_path", "mistaken_observation", "mistake_stream", "OPERATOR_SPELLING"]
+           "switch_intention", "switch_path", "switch_points", "mistaken_observation", "mistake_stream",
+           "OPERATOR_SPELLING"]
 
 OPERATOR_SPELLING = ("uniform, habitual:K:STRENGTH, changing:P, mistakes:Q, or a base (uniform or habitual) "
                      "followed by changing and mistakes, comma-separated (habitual:5:0.8,changing:0.1,mistakes:0.05)")
@@ -124,7 +129,8 @@ class HabitualOperator:
 
 
 class ChangingOperator:
-    """``base``'s plans; with probability ``p`` an episode's operator switches once (module docstring)."""
+    """``base``'s plans; with probability ``p`` an episode's operator switches once, at one of its sequence's
+    :func:`switch_points` drawn uniformly (module docstring)."""
 
     def __init__(self, p: float, base=None):
         if not 0.0 <= p < 1.0:
@@ -135,12 +141,14 @@ class ChangingOperator:
     def plans(self, model, count: int, rng: np.random.Generator, switch_rng: np.random.Generator
               ) -> list[OperatorPlan]:
         plans = self.base.plans(model, count, rng, switch_rng)
-        draws = switch_rng.random((count, 3))  # switch?, after how many operations, which other completion
+        draws = switch_rng.random((count, 3))  # switch?, at which switch point, which other completion
+        completions = np.bincount(model.graph.first_state) if _is_flat(model) else None
         out = []
         for plan, (u, v, w) in zip(plans, draws):
-            length = _length(model, plan.sequence)
-            if u < self.p and length >= 2:
-                plan = OperatorPlan(plan.sequence, Switch(1 + int(v * (length - 1)), float(w)))
+            points = switch_points(model, plan.sequence, completions) if u < self.p else []
+            if points:
+                plan = OperatorPlan(plan.sequence, Switch(points[min(int(v * len(points)), len(points) - 1)],
+                                                          float(w)))
             out.append(plan)
         return out
 
@@ -164,10 +172,18 @@ def mistaken_observation(observation: int, n_observations: int, draw: float) -> 
     return observation if not others else others[min(int(draw * len(others)), len(others) - 1)]
 
 
-def _length(model, sequence) -> int:
+def switch_points(model, sequence, completions: np.ndarray | None = None) -> list[int]:
+    """The positions ``1 <= q < length`` of a full sequence (a flat model's intention number, or a factored
+    model's state edges) at which the operator can change its mind: the assembly state after ``q`` operations
+    has another completion. Position 0 is not one (a change before the first operation is another sequence from
+    the start). ``completions``: on the flat model, the intentions per state (``np.bincount`` of the graph's
+    ``first_state``; computed when None, O(intentions)). Cost: O(length)."""
     if _is_flat(model):
-        return len(model.graph.path(int(sequence))) - 1
-    return len(sequence)
+        if completions is None:
+            completions = np.bincount(model.graph.first_state)
+        states = model.graph.path(int(sequence))
+        return [q for q in range(1, len(states) - 1) if completions[states[q]] >= 2]
+    return [q for q in range(1, len(sequence)) if int(model.paths[model.class_source[sequence[q]]]) >= 2]
 
 
 def switch_intention(first_state: np.ndarray, intention: int, draw: float) -> int:

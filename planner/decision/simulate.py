@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..defaults import CONFIDENCE
 from .belief import DiscreteUpdater
+from .episode import Episode, Step
 from .operators import mistaken_observation, switch_intention
 from .policy import AlphaVectorPolicy
 from .pomdp import POMDP
@@ -25,46 +25,8 @@ __all__ = ["Step", "Episode", "confidence_text", "decision_times", "evaluate_pol
            "operator_mistake"]
 
 
-@dataclass(frozen=True)
-class Step:
-    action: int
-    observation: int
-    state: int              # the true intention after the step
-    p_true: float           # the belief on it after the update
-    operator_operations: int  # operations the operator has performed so far
-    reward: float
-    decision_seconds: float = 0.0  # the time the policy took to choose ``action``
-    robot_operation: bool = False  # the robot's action was the intention's next step (it helped)
-    wrong_action: bool = False     # the robot did an operation that is not the intention's next step
-    mistake: bool = False          # the operator took a wrong part (the observation is that pick)
-
-
-@dataclass
-class Episode:
-    start: int
-    steps: list[Step] = field(default_factory=list)
-    beliefs: list[np.ndarray] = field(default_factory=list)  # before the first step, then after each
-    discounted_return: float = 0.0
-    final: int | None = None  # the finished product's intention, when the episode knows it
-    switched_at: int | None = None  # the decision step (from 1) at which the operator changed its mind
-    switched_to: int | None = None  # the intention it took then (``start``'s steps before it, then these)
-    resets: int = 0  # observations of probability 0 under the belief (each reset the belief)
-    robot_capable: int = 0  # operations done (by anyone) that the robot could have done (counted with ``successor``)
-
-    def first_confident(self, threshold: float = CONFIDENCE) -> int | None:
-        """Operator operations done when the belief on the true intention first exceeds ``threshold`` before
-        the product is finished (after a step whose true intention is not ``final``); None if it never does.
-        Once the product is assembled the belief is on it trivially, so that step does not count."""
-        return next((s.operator_operations for s in self.steps if s.p_true > threshold and self.unfinished(s)),
-                    None)
-
-    def unfinished(self, step: Step) -> bool:
-        """Whether the product was still unfinished after ``step`` (always, when ``final`` is not known)."""
-        return self.final is None or step.state != self.final
-
-
 def confidence_text(operations: int | None, threshold: float = CONFIDENCE) -> str:
-    """What :meth:`Episode.first_confident` found, in words: ``belief on the true intention first above 0.9
+    """What :meth:`~.episode.Episode.first_confident` found, in words: ``belief on the true intention first above 0.9
     after 2 operator operations``, or that it never was before the product was finished."""
     if operations is None:
         return f"belief on the true intention never above {threshold:g} before the product was finished"
@@ -110,7 +72,7 @@ def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: n
     updater = DiscreteUpdater(model) if mistakes is None and switch is None else \
         DiscreteUpdater(model, on_reset=lambda event: None)  # a deviating operator's resets are counted instead
     belief = updater.initialize()
-    episode = Episode(start, beliefs=[belief], final=final)
+    episode = Episode(beliefs=[belief], start=start, final=final)
     wait = model.actions.index("wait") if "wait" in model.actions else -1
     state, operations, discount, done = start, 0, 1.0, 0
     tables = world if world is not None else model
@@ -145,9 +107,9 @@ def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: n
         episode.discounted_return += discount * reward
         discount *= model.discount
         state = nxt
-        episode.steps.append(Step(action, z, state, float(belief[state]), operations, reward, seconds,
+        episode.steps.append(Step(action, z, float(belief[state]), operations, reward, seconds,
                                   robot_operation=robot_did_step, wrong_action=action != wait and not robot_did_step,
-                                  mistake=mistake))
+                                  mistake=mistake, state=state))
         episode.beliefs.append(belief)
     episode.resets = len(updater.events)
     return episode

@@ -292,3 +292,44 @@ def test_model_paper_forces_both_to_zero_in_the_written_model(tmp_path):
                      "paper").returncode == 0
     assert run_aplan("pomdp", "pen", "-o", deviating, "--switch", "0.2", "--mistakes", "0.1").returncode == 0
     assert forced.read_bytes() == paper.read_bytes() != deviating.read_bytes()
+
+
+class _Waiting:
+    """A robot that always waits (the observer of bench/bench_change_of_mind.py)."""
+
+    def __init__(self, wait: int):
+        self.wait = wait
+
+    def action(self, belief) -> int:
+        return self.wait
+
+
+@pytest.mark.parametrize("kind", ["flat", "factored"])
+def test_a_change_of_mind_moves_no_belief_while_the_robot_waits(pen, kind):
+    """Within an assembly state the belief is the prior over its completions (observations depend on the state
+    only), and a redraw draws from that prior: so while the robot never rules a completion out, ``--switch``
+    leaves every belief as the paper's (seeded paired episodes of a changing operator, switched ones among
+    them); it does move mass after a wrong robot action (the ruled-out class comes back)."""
+    from planner.decision.episodes import simulate
+    from planner.decision.operators import parse_operator
+
+    plan = make_plan(pen, True)
+    build = intention_model if kind == "flat" else factored_model
+    paper, switching = build(plan), build(plan, deviations=Deviations(0.3, 0.0))
+    wait = len(paper.actions) - 1
+    played = [simulate(m, _Waiting(wait), random=40, seed=3, operator_model=parse_operator("uniform,changing:0.3"))
+              for m in (paper, switching)]
+    assert sum(e.switched_at is not None for e in played[0]) >= 5
+    for one, two in zip(*played):
+        assert [s.observation for s in one.steps] == [s.observation for s in two.steps]
+        assert np.abs(np.array([s.p_true for s in one.steps]) - [s.p_true for s in two.steps]).max() <= 1e-12
+    if kind == "factored":  # a wrong robot action rules the performing class out; the redraw brings it back
+        c = int(paper.classes_from(plan.states.initial)[0])
+        action = int(paper.class_action[c])
+        assert action >= 0
+        after = []
+        for m in (paper, switching):  # the robot does c's operation, then waits; the camera sees blanks
+            up = FactoredUpdater(m)
+            after.append(up.update(up.update(up.initialize(), action, 0), m.wait, 0).dense(m.n_classes))
+        assert after[0][c] == 0.0 < after[1][c]
+

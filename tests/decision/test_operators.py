@@ -18,7 +18,7 @@ from planner.decision.habits import habit_weights_from
 from planner.decision.intention_model import Rewards
 from planner.decision.online import OnlinePlanner
 from planner.decision.operators import (ChangingOperator, HabitualOperator, UniformOperator, parse_operator,
-                                        switch_path)
+                                        switch_path, switch_points)
 from planner.decision.simulate import simulate_episode
 from planner.decision.solvers import PointBasedSolver
 from planner.errors import PlannerError
@@ -155,6 +155,29 @@ def test_a_switch_keeps_the_operations_done_and_takes_another_completion(factore
             assert other[:position] == path[:position] and (other == path) == alone
 
 
+def test_a_changing_operator_switches_in_a_share_p_of_the_episodes(flat, factored):
+    """p is the share of episodes with a switch (issue 23: "switches sequence once per episode with probability
+    0.3") whose sequence has a switch point (11 of the technical pen's 12: so p 11 / 12 of all episodes); the
+    switch comes at one of them, and the flat and factored models find the same points for the same sequence
+    (matched by their operations)."""
+    (flat_model, _), (model, _) = flat, factored
+    points = {}
+    for start in flat_model.full_sequences():
+        ops = tuple(flat_model.graph.operations(int(start)))
+        points[ops] = switch_points(flat_model, int(start))
+    for rank in range(model.n_sequences):
+        path = model.sequence(rank)
+        mine = switch_points(model, path)
+        assert mine == points[tuple(model.sequence_operations(path))]
+        assert mine == [q for q in range(1, len(path)) if switch_path(model, path, q, 0.5) != path]
+    assert (model.n_sequences, sum(not v for v in points.values())) == (12, 1)
+    draws, p = 4000, 0.3 * 11 / 12
+    plans = ChangingOperator(0.3).plans(model, draws, np.random.default_rng(5), np.random.default_rng([5, 1]))
+    switched = [plan for plan in plans if plan.switch is not None]
+    assert abs(len(switched) / draws - p) <= 4 * np.sqrt(p * (1 - p) / draws)
+    assert all(plan.switch.after in switch_points(model, plan.sequence) for plan in switched)
+
+
 @pytest.mark.parametrize("kind", ["flat", "factored"])
 def test_measures_add_up(kind, flat, factored):
     model, _ = flat if kind == "flat" else factored
@@ -204,7 +227,7 @@ def test_robot_capable_operations_follow_the_tags(kind, plan):
 
 def _operations_done(model, episode) -> list[int]:
     """The AND/OR operations of the sequence an episode did (after a switch, the one it switched to)."""
-    if hasattr(episode, "path"):
+    if episode.path is not None:  # an episode over classes
         return model.sequence_operations(episode.path)
     ops = model.sequence_operations(episode.start)
     if episode.switched_to is None:

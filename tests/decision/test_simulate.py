@@ -11,8 +11,8 @@ from figure_support import pyplot_untouched
 from planner import make_plan
 from planner.decision import intention_model
 from planner.decision.belief_plot import episode_trace, plot_beliefs
-from planner.decision.factored_simulate import FactoredEpisode, FactoredStep
-from planner.decision.simulate import Episode, Step, confidence_text, decision_times, evaluate_policy, simulate_episode
+from planner.decision.episode import Episode, Step
+from planner.decision.simulate import confidence_text, decision_times, evaluate_policy, simulate_episode
 from planner.decision.solvers import PointBasedSolver
 
 MEASURES = {"robot_operations", "operator_operations", "wrong_robot_actions", "first_help_step", "confident_step",
@@ -105,13 +105,13 @@ def test_cli_simulate_and_evaluate(tmp_path):
 
 
 def _flat(p_true: list[float], states: list[int]) -> Episode:
-    return Episode(9, [Step(0, 0, state, p, k + 1, 0.0) for k, (p, state) in enumerate(zip(p_true, states))],
-                   final=0)
+    return Episode([Step(0, 0, p, k + 1, 0.0, state=state) for k, (p, state) in enumerate(zip(p_true, states))],
+                   start=9, final=0)
 
 
-def _factored(p_true: list[float], positions: list[int]) -> FactoredEpisode:
-    return FactoredEpisode([4, 5, 6], [FactoredStep(0, 0, position, p, k + 1, 0.0, 0.0)
-                                       for k, (p, position) in enumerate(zip(p_true, positions))])
+def _factored(p_true: list[float], positions: list[int]) -> Episode:
+    return Episode([Step(0, 0, p, k + 1, 0.0, 0.0, position=position)
+                    for k, (p, position) in enumerate(zip(p_true, positions))], path=[4, 5, 6])
 
 
 def test_confident_only_before_the_product_is_finished():
@@ -125,6 +125,18 @@ def test_confident_only_before_the_product_is_finished():
     assert not _factored([0.5, 0.6, 1.0], [1, 2, 3]).confident_before_finished(0.9)
     assert confidence_text(None) == "belief on the true intention never above 0.9 before the product was finished"
     assert confidence_text(1).endswith("after 1 operator operation") and confidence_text(3).endswith("operations")
+
+
+def test_one_episode_type_tells_finished_in_each_models_terms():
+    """Issue 24: one Episode for every model; finished and unfinished read ``state`` / ``final`` over
+    intentions and ``position`` / ``path`` over classes."""
+    flat, factored = _flat([0.5, 1.0], [3, 0]), _factored([0.5, 0.6, 1.0], [1, 2, 3])
+    assert type(flat) is type(factored) and type(flat.steps[0]) is type(factored.steps[0])
+    assert flat.finished and factored.finished
+    assert [flat.unfinished(s) for s in flat.steps] == [True, False]
+    assert [factored.unfinished(s) for s in factored.steps] == [True, True, False]
+    assert not _flat([0.5, 0.6], [3, 2]).finished and not _factored([0.5], [1]).finished
+    assert Episode(start=0, final=0).finished and Episode(path=[]).finished and not Episode(start=3).finished
 
 
 def test_decision_times_closed_form():
