@@ -109,7 +109,7 @@ def _mesh_python() -> str | None:
 
 def worker_command(action: str, engine: str | None = None) -> list[str]:
     """The program and arguments of a background job running ``batch.py`` (``action``: export, analyze,
-    level-stats, solve).
+    level-stats, solve, session).
 
     The occt engine and the solver run in FreeCADCmd; the mesh engine needs trimesh and manifold3d, so it
     runs in :func:`_mesh_python`, else in FreeCADCmd when FreeCAD's Python has them. Raises
@@ -118,7 +118,7 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
     from .dependencies import MESH_ENGINE, installed
     from .runner import FreeCADError, find_freecadcmd
 
-    if action == "level-stats" and _mesh_python() is not None:  # the planner alone: no FreeCAD to start
+    if action in ("level-stats", "session") and _mesh_python() is not None:  # the planner alone: no FreeCAD
         return [_mesh_python(), BATCH_SCRIPT]
     if action == "analyze" and engine == "mesh":
         python = _mesh_python()

@@ -461,8 +461,21 @@ class Simulate(_Command):
         self.state.belief_dialog.show()
 
 
+class Session(_Command):
+    name, menu = "Aplan_Session", "Run a session (simulated camera cell)"
+    tooltip = ("Run aplan session --demo on a level (or all, bottom-up) in the background: a simulated operator on "
+               "a rendered tray, the robot deciding from the camera; shows the belief plot when it ends")
+
+    def run(self):
+        from .session import SessionPanel
+
+        analysis = workflow.require_analysis(_document())
+        product = workflow.analysis_product(analysis)
+        _show_panel(self.state, SessionPanel(product, workflow.analysis_base_part(analysis), self.state.jobs))
+
+
 COMMANDS = (CreateAnalysis, GroupComponent, ExcludeParts, Detect, Diagrams, Intent, Fasteners, Subassemblies, Plan,
-            Plan3D, ExportBundle, ExportModel, Solve, Simulate)
+            Plan3D, ExportBundle, ExportModel, Solve, Simulate, Session)
 
 
 def register(state: WorkbenchState) -> list[str]:

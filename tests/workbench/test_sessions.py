@@ -1,0 +1,103 @@
+"""The workbench's levels, model choice and simulated sessions (freecad_aplan.sessions), without FreeCAD: the
+session panel only calls these. Expected values: the chain's levels from its definition, the pen's 69
+intentions (the paper, Sec. VI), and the command line's own run of the same session."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from dataclasses import replace
+
+import pytest
+from conftest import REPO
+
+from freecad_aplan.sessions import (
+    ALL_LEVELS,
+    level_choices,
+    level_of,
+    model_choice,
+    run_simulated_session,
+    session_arguments,
+)
+from planner import api
+from planner.assembly.guards import SizeLimits
+from planner.errors import PlannerError
+from planner.product import Subassembly, save_product
+from planner.product.synthetic import chain_product
+
+
+def _chain_with_levels():
+    """p1-p2-p3-p4 in a chain, with the subassembly s1 = {p1, p2}: two workstations, s1 then the top level
+    {s1, p3, p4}."""
+    return replace(chain_product(4), subassemblies=(Subassembly("s1", ("p1", "p2")),))
+
+
+def test_level_choices_bottom_up_with_members():
+    choices = level_choices(_chain_with_levels())
+    assert [(c.id, sorted(c.members)) for c in choices] == [("s1", ["p1", "p2"]), ("top", ["p3", "p4", "s1"])]
+    assert [c.label for c in choices][0] == "s1: 2 members"
+
+
+def test_a_flat_product_is_one_choice_without_an_id():
+    pen = api.resolve_product("pen")
+    choices = level_choices(pen)
+    assert len(choices) == 1 and choices[0].id is None and sorted(choices[0].members) == sorted(pen.part_ids)
+    assert level_of(pen, None).part_ids == pen.part_ids
+
+
+def test_level_of_names_the_levels_when_several():
+    product = _chain_with_levels()
+    assert sorted(level_of(product, "s1").part_ids) == ["p1", "p2"]
+    with pytest.raises(PlannerError, match="s1"):
+        level_of(product, None)
+
+
+def test_model_choice_flat_where_it_fits_else_lumped():
+    pen = api.resolve_product("pen")
+    flat = model_choice(pen)
+    assert (flat.kind, flat.intentions) == ("flat", 69)  # the pen's 69 intentions (paper, Sec. VI)
+    # the same rule as the command line's planner choice: a memory budget the flat model passes
+    tiny = model_choice(pen, limits=SizeLimits(memory=1))
+    assert tiny.kind == "lumped" and "69 intentions" in tiny.note
+
+
+def test_session_arguments_are_the_command_lines():
+    assert session_arguments("p.json", "s.jsonl", "s1", 2, 40, 9, "p1") == [
+        "session", "p.json", "--demo", "2", "--log", "s.jsonl", "--level", "s1", "--expansions", "40",
+        "--max-steps", "9", "--base-part", "p1"]
+    assert session_arguments("p.json", "s.jsonl", ALL_LEVELS) == ["session", "p.json", "--demo", "0", "--log",
+                                                                   "s.jsonl"]
+    with pytest.raises(PlannerError, match="from 0"):
+        session_arguments("p.json", "s.jsonl", sequence=-1)
+
+
+def test_simulated_session_of_one_level_is_the_command_lines(tmp_path):
+    """s1 of the chain in the simulated cell, with a fixed number of expansions (no clock): assembled, its
+    belief plot written, and the same decisions as ``aplan session`` run as a command."""
+    product = tmp_path / "product.json"
+    save_product(_chain_with_levels(), product)
+    lines = []
+    result = run_simulated_session(str(product), str(tmp_path / "gui"), "s1", 0, expansions=20, progress=lines.append)
+    assert result["assembled"] is True and len(result["levels"]) == 1
+    done, = result["levels"]
+    assert done["level"] == "s1" and done["reason"] == "assembled" and done["steps"] >= 1
+    png = (tmp_path / "gui" / "session-belief.png").read_bytes()
+    assert done["plot"].endswith("session-belief.png") and png[:8] == b"\x89PNG\r\n\x1a\n"
+    assert any(line.startswith("step 1 | belief") for line in lines), lines
+    assert any(line.startswith("assembled: ") for line in lines)
+    log = tmp_path / "cli.jsonl"
+    subprocess.run([sys.executable, "-m", "planner", "session", str(product), "--demo", "0", "--level", "s1",
+                    "--expansions", "20", "--log", str(log)], cwd=REPO, check=True, capture_output=True)
+
+    def decisions(path):
+        return [(e["event"], e.get("action"), e.get("observation")) for e in map(json.loads, open(path))
+                if e["event"] in ("action", "observation")]
+
+    assert decisions(done["log"]) == decisions(log) and decisions(log)
+
+
+def test_simulated_session_refusal_is_the_command_lines_message(tmp_path):
+    product = tmp_path / "product.json"
+    save_product(_chain_with_levels(), product)
+    with pytest.raises(PlannerError, match="nowhere"):
+        run_simulated_session(str(product), str(tmp_path / "gui"), "nowhere", 0, expansions=5)
