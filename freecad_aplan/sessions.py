@@ -8,6 +8,7 @@ The workbench runs what the command line runs, so these only pick arguments and 
   (the intention limit and the memory budget, :func:`~planner.decision.intention_model.flat_model_fits`: the
   test the command line's planner choice makes), else the lumped model over the factored model's classes,
   whose policy the online planner and the offline one follow (``aplan pomdp/solve --lumped``);
+  :func:`level_model` builds it;
 - :func:`session_arguments` and :func:`run_simulated_session`: ``aplan session PRODUCT --demo K`` (the
   simulated camera cell: an operator following full sequence K on a rendered tray, seen through the vision
   pipeline) on one level or on every level bottom-up, run in-process through :func:`planner.cli.main`, then
@@ -26,8 +27,8 @@ from typing import Callable
 
 from planner.errors import PlannerError
 
-__all__ = ["LevelChoice", "ModelChoice", "level_choices", "level_of", "model_choice", "session_arguments",
-           "run_simulated_session", "ALL_LEVELS"]
+__all__ = ["LevelChoice", "ModelChoice", "level_choices", "level_of", "member_parts", "model_choice", "level_model",
+           "session_arguments", "run_simulated_session", "ALL_LEVELS"]
 
 #: The level selector's entry for "every level, bottom-up" (the command line without ``--level``).
 ALL_LEVELS = "all levels"
@@ -77,6 +78,17 @@ def level_of(product, level: str | None):
     return api.level_product(product, "designer", level)
 
 
+def member_parts(product, level: str | None) -> dict[str, tuple[str, ...]]:
+    """Member of the level ``level`` of ``product`` (None: the product planned flat) -> the product's parts it
+    stands for: a part itself, a subassembly the parts it holds (what Plan in 3D moves as one block). Cost:
+    that of :func:`planner.api.levels_of`."""
+    from planner import api
+
+    levels = {lv.id: lv for lv in api.levels_of(product)}
+    here = level_of(product, level)
+    return {m: tuple(sorted(levels[m].parts)) if m in levels and m != level else (m,) for m in here.part_ids}
+
+
 def model_choice(product, technical: bool | None = None, base_part: str | None = None, limits=None) -> ModelChoice:
     """The model the workbench builds for ``product`` (one level): ``flat`` when the flat model fits the
     intention limit and the memory budget ``limits`` (:class:`~planner.assembly.guards.SizeLimits`, default
@@ -94,6 +106,18 @@ def model_choice(product, technical: bool | None = None, base_part: str | None =
         return ModelChoice("flat", intentions, f"the flat model: {intentions:,} intentions")
     return ModelChoice("lumped", intentions, f"the flat model would hold {intentions:,} intentions, more than fits: "
                                              "the lumped model over the factored model's classes")
+
+
+def level_model(product, level: str | None = None, technical: bool | None = None, base_part: str | None = None):
+    """The decision model Export model and Solve build for level ``level`` of ``product`` (a resolved product or
+    a product file; None: the product planned flat), as :func:`model_choice` says: the flat model
+    (:func:`planner.api.decision_model`) or the lumped one (``api.load_model(..., lumped=True)``, as ``aplan
+    pomdp/solve --lumped``). Returns ``(model, choice)``. Cost: that of building the model."""
+    from planner import api
+
+    level_product = level_of(product if isinstance(product, api.Product) else api.resolve_product(product), level)
+    choice = model_choice(level_product, technical, base_part)
+    return api.load_model(level_product, technical, base_part=base_part, lumped=choice.kind == "lumped"), choice
 
 
 def session_arguments(product_file: str, log: str, level: str | None = None, sequence: int = 0,

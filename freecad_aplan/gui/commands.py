@@ -327,7 +327,7 @@ class Plan3D(_Command):
                "operation), or the one a session log recorded; the document is restored when the panel closes")
 
     def run(self):
-        from .plan3d import Plan3DPanel
+        from .plan3d_panel import Plan3DPanel
 
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
@@ -367,6 +367,20 @@ def _save_path(title: str, filters: str, suffix: str) -> str | None:
     return path if os.path.splitext(path)[1] else path + suffix
 
 
+def _ask_level(product) -> tuple[bool, str | None]:
+    """(chosen, level): for a product of several workstations the level the designer picks
+    (:func:`freecad_aplan.sessions.level_choices`; chosen False when cancelled), else (True, None)."""
+    from ..sessions import level_choices
+
+    choices = level_choices(product)
+    if len(choices) == 1:
+        return True, None
+    labels = [c.label for c in choices]
+    label, ok = QtGui.QInputDialog.getItem(FreeCADGui.getMainWindow(), "APLAN level",
+                                           "Workstation (level) whose decision model to use", labels, 0, False)
+    return bool(ok), choices[labels.index(label)].id if ok else None
+
+
 class ExportBundle(_Command):
     name, menu = "Aplan_ExportBundle", "Export product bundle"
     tooltip = "Write a bundle folder (product.json with diagrams and intent, meshes, B-reps) for aplan"
@@ -388,10 +402,12 @@ class ExportModel(_Command):
     def run(self):
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
-        path = _save_path("Export decision model", "POMDPX (*.pomdpx);;POMDP (*.pomdp)", ".pomdpx")
+        chosen, level = _ask_level(product)
+        path = chosen and _save_path("Export decision model", "POMDPX (*.pomdpx);;POMDP (*.pomdp)", ".pomdpx")
         if path:
-            sizes = workflow.export_decision_model(product, path, base_part=workflow.analysis_base_part(analysis))
-            _message(f"wrote {path}: {sizes['states']} states, {sizes['actions']} actions, "
+            sizes = workflow.export_decision_model(product, path, base_part=workflow.analysis_base_part(analysis),
+                                                   level=level)
+            _message(f"wrote {path} ({sizes['model']} model): {sizes['states']} states, {sizes['actions']} actions, "
                      f"{sizes['observations']} observations", error=False)
 
 
@@ -407,7 +423,8 @@ class Solve(_Command):
 
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
-        path = _save_path("Save policy", "SARSOP policy (*.policy)", ".policy")
+        chosen, level = _ask_level(product)
+        path = chosen and _save_path("Save policy", "SARSOP policy (*.policy)", ".policy")
         if not path:
             return
         seconds = FreeCAD.ParamGet(PARAMETERS).GetFloat("SolveTimeLimit", WORKBENCH_SOLVE_TIME_LIMIT) or WORKBENCH_SOLVE_TIME_LIMIT
@@ -417,7 +434,7 @@ class Solve(_Command):
         def done(result):
             shutil.rmtree(folder, ignore_errors=True)
             self.state.policy = path
-            _message(f"wrote {path}: lower bound {result['lower_bound']:.5f}, upper bound "
+            _message(f"wrote {path} ({result['model']} model): lower bound {result['lower_bound']:.5f}, upper bound "
                      f"{result['upper_bound']:.5f}, {result['alpha_vectors']} alpha vectors", error=False)
 
         def failed(message):
@@ -425,7 +442,7 @@ class Solve(_Command):
             _message(message)
 
         job = {"action": "solve", "product": os.path.join(folder, PRODUCT_FILE), "output": path,
-               "time_limit": seconds, "base_part": workflow.analysis_base_part(analysis)}
+               "time_limit": seconds, "base_part": workflow.analysis_base_part(analysis), "level": level}
         BackgroundJob(f"Solving the decision model ({seconds:g} s)", workflow.worker_command("solve"), job, done,
                       failed, self.state.jobs, FreeCADGui.getMainWindow()).start()
 
@@ -439,6 +456,9 @@ class Simulate(_Command):
 
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
+        chosen, level = _ask_level(product)
+        if not chosen:
+            return
         policy = self.state.policy
         if not policy or not os.path.isfile(policy):
             policy, _ = QtGui.QFileDialog.getOpenFileName(FreeCADGui.getMainWindow(), "Policy to simulate", "",
@@ -451,7 +471,7 @@ class Simulate(_Command):
             return
         stem = os.path.join(tempfile.mkdtemp(prefix="aplan-simulate-"), "belief")
         result = workflow.simulate_sequence(product, policy, stem, None if sequence < 0 else sequence,
-                                            base_part=workflow.analysis_base_part(analysis))
+                                            base_part=workflow.analysis_base_part(analysis), level=level)
         from planner.decision.simulate import confidence_text
 
         said = confidence_text(result["confident_after"], CONFIDENCE)

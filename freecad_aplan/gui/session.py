@@ -26,15 +26,16 @@ __all__ = ["SessionPanel"]
 class SessionPanel:
     """The task panel of one product (the analysis' ``product``, a resolved :class:`~planner.product.Product`).
 
-    ``run()`` starts the session of the selected level, ``cancel()`` ends it; ``result`` holds the job's
-    answer once it ended (``{"command", "assembled", "levels": [...]}``), ``error`` its message when it failed.
+    ``run()`` starts the session of the selected level, ``cancel()`` ends it; ``lines`` holds the run's output
+    lines so far (the last one shows in the panel), ``result`` the job's answer once it ended (``{"command",
+    "assembled", "levels": [...]}``), ``error`` its message when it failed.
     """
 
     def __init__(self, product, base_part: str | None, jobs: list):
         from planner.product import save_product
 
         self.product, self.base_part, self.jobs = product, base_part, jobs
-        self.job, self.result, self.error = None, None, None
+        self.job, self.result, self.error, self.lines = None, None, None, []
         self.folder = tempfile.mkdtemp(prefix="aplan-session-")
         self.product_file = os.path.join(self.folder, PRODUCT_FILE)
         save_product(product, self.product_file)
@@ -94,7 +95,7 @@ class SessionPanel:
 
         if self.job is not None:
             return
-        self.result, self.error = None, None
+        self.result, self.error, self.lines = None, None, []
         level = self.selected_level()
         count = len(self.levels) if level == ALL_LEVELS else 1
         self.progress.setRange(0, count)
@@ -117,6 +118,7 @@ class SessionPanel:
             self.job.cancel()
 
     def _progress(self, line: str) -> None:
+        self.lines.append(line)
         if line.startswith("level ") and " of " in line:  # "level sa2 (1 of 5): ..." starts a level
             self.progress.setValue(int(line.split("(", 1)[1].split(" of ")[0]) - 1)
         self.status.setText(line)
@@ -133,9 +135,13 @@ class SessionPanel:
         ended = "; ".join(f"{d['level'] or 'product'}: {d['message']}" for d in result["levels"])
         self.status.setText(f"{'assembled' if result['assembled'] else 'not assembled'}. {ended}. "
                             f"Logs and plots: {os.path.dirname(result['levels'][-1]['log'])}")
-        picture = QtGui.QPixmap(result["levels"][-1]["plot"])
-        width = max(self.form.width(), 200)
-        self.plot.setPixmap(picture.scaledToWidth(width, QtCore.Qt.SmoothTransformation))
+        self.show_plot()
+
+    def show_plot(self) -> None:
+        """The belief plot of the last level that ran, at the panel's width (again after the panel was widened)."""
+        if self.result is not None:
+            picture = QtGui.QPixmap(self.result["levels"][-1]["plot"])
+            self.plot.setPixmap(picture.scaledToWidth(max(self.form.width(), 200), QtCore.Qt.SmoothTransformation))
 
     def _failed(self, message: str) -> None:
         self._ended()

@@ -14,7 +14,9 @@ from conftest import REPO
 from freecad_aplan.sessions import (
     ALL_LEVELS,
     level_choices,
+    level_model,
     level_of,
+    member_parts,
     model_choice,
     run_simulated_session,
     session_arguments,
@@ -101,3 +103,25 @@ def test_simulated_session_refusal_is_the_command_lines_message(tmp_path):
     save_product(_chain_with_levels(), product)
     with pytest.raises(PlannerError, match="nowhere"):
         run_simulated_session(str(product), str(tmp_path / "gui"), "nowhere", 0, expansions=5)
+
+
+def test_member_parts_of_a_level():
+    """The top level of the chain moves s1 as one block: its parts p1 and p2."""
+    product = _chain_with_levels()
+    assert member_parts(product, "top") == {"s1": ("p1", "p2"), "p3": ("p3",), "p4": ("p4",)}
+    assert member_parts(product, "s1") == {"p1": ("p1",), "p2": ("p2",)}
+    pen = api.resolve_product("pen")
+    assert member_parts(pen, None) == {p: (p,) for p in pen.part_ids}
+
+
+def test_level_model_is_the_flat_model_where_it_fits(tmp_path):
+    """Export model and Solve on a level: the level's flat model (as `aplan pomdp` on it), the lumped one only
+    past the limits; the pen (flat) gives the paper's model: 69 intentions, 22 actions."""
+    model, choice = level_model(api.resolve_product("pen"))
+    assert choice.kind == "flat" and (model.pomdp.n_states, model.pomdp.n_actions) == (69, 22)
+    product = tmp_path / "product.json"
+    save_product(_chain_with_levels(), product)
+    model, choice = level_model(str(product), "top")
+    assert choice.kind == "flat" and model.pomdp.n_states == choice.intentions
+    with pytest.raises(PlannerError, match="s1"):
+        level_model(str(product))  # several levels: one must be named
