@@ -12,8 +12,9 @@ The workbench runs what the command line runs, so these only pick arguments and 
 - :func:`session_arguments` and :func:`run_simulated_session`: ``aplan session PRODUCT --demo K`` (the
   simulated camera cell: an operator following full sequence K on a rendered tray, seen through the vision
   pipeline) on one level or on every level bottom-up, run in-process through :func:`planner.cli.main`, then
-  ``aplan replay LOG --plot STEM`` for each level's belief plot. A background job (``batch.py session``)
-  runs it, its output lines being the job's progress.
+  ``aplan replay LOG --plot STEM`` for each level's belief plot; or the operator's picks typed in
+  (``--keyboard``), read from standard input. A background job (``batch.py session``) runs it, its output
+  lines being the job's progress, the panel writing the picks to its input.
 """
 from __future__ import annotations
 
@@ -28,7 +29,7 @@ from typing import Callable
 from planner.errors import PlannerError
 
 __all__ = ["LevelChoice", "ModelChoice", "level_choices", "level_of", "member_parts", "model_choice", "level_model",
-           "session_arguments", "run_simulated_session", "ALL_LEVELS"]
+           "session_arguments", "run_simulated_session", "ALL_LEVELS", "SOURCES"]
 
 #: The level selector's entry for "every level, bottom-up" (the command line without ``--level``).
 ALL_LEVELS = "all levels"
@@ -120,16 +121,25 @@ def level_model(product, level: str | None = None, technical: bool | None = None
     return api.load_model(level_product, technical, base_part=base_part, lumped=choice.kind == "lumped"), choice
 
 
+#: Where a session's observations come from: the simulated camera cell, or the operator's picks typed in.
+SOURCES = ("demo", "keyboard")
+
+
 def session_arguments(product_file: str, log: str, level: str | None = None, sequence: int = 0,
                       expansions: int | None = None, max_steps: int | None = None,
-                      base_part: str | None = None) -> list[str]:
-    """The ``aplan session`` arguments of a simulated session of ``product_file`` (``--demo sequence``;
-    ``level`` None or :data:`ALL_LEVELS`: every level bottom-up, each with its log ``LOG-<level>.jsonl``).
-    With ``expansions`` the online planner does that many expansions per decision and nothing else (no
-    clock: the same decisions on any machine); without, the command line's decision time."""
+                      base_part: str | None = None, source: str = "demo") -> list[str]:
+    """The ``aplan session`` arguments of a session of ``product_file``: ``source`` ``demo``, the simulated
+    camera cell (``--demo sequence``), or ``keyboard``, the operator's picks typed in one line a step on
+    standard input, the robot's instructions confirmed at once (``--keyboard --robot auto``); ``level`` None or
+    :data:`ALL_LEVELS`: every level bottom-up, each with its log ``LOG-<level>.jsonl``. With ``expansions`` the
+    online planner does that many expansions per decision and nothing else (no clock: the same decisions on
+    any machine); without, the command line's decision time."""
+    if source not in SOURCES:
+        raise PlannerError(f"unknown session source {source!r}; use one of {', '.join(SOURCES)}")
     if not (isinstance(sequence, int) and sequence >= 0):
         raise PlannerError(f"sequence {sequence!r}: a full sequence is a number from 0")
-    arguments = ["session", str(product_file), "--demo", str(sequence), "--log", str(log)]
+    picked = ["--demo", str(sequence)] if source == "demo" else ["--keyboard", "--robot", "auto"]
+    arguments = ["session", str(product_file), *picked, "--log", str(log)]
     if level not in (None, ALL_LEVELS):
         arguments += ["--level", level]
     if expansions is not None:
@@ -185,10 +195,12 @@ def _level_logs(log: str, level: str | None, levels: list[str]) -> list[tuple[st
 
 def run_simulated_session(product_file: str, folder: str, level: str | None = None, sequence: int = 0,
                           expansions: int | None = None, max_steps: int | None = None,
-                          base_part: str | None = None, progress: Callable[[str], None] | None = None) -> dict:
-    """Run ``aplan session PRODUCT --demo SEQUENCE`` (:func:`session_arguments`) with its logs in ``folder``,
-    then ``aplan replay LOG --plot`` for each level that ran; ``progress(line)`` gets every output line (the
-    level started, each step's status line, what ended it).
+                          base_part: str | None = None, progress: Callable[[str], None] | None = None,
+                          source: str = "demo") -> dict:
+    """Run ``aplan session PRODUCT --demo SEQUENCE`` (:func:`session_arguments`; ``source="keyboard"``: the picks
+    read from standard input instead) with its logs in ``folder``, then ``aplan replay LOG --plot`` for each
+    level that ran; ``progress(line)`` gets every output line (the level started, each step's status line,
+    what ended it).
 
     Returns ``{"command", "assembled", "levels": [{"level", "reason", "message", "steps", "log", "plot"}]}``
     (``plot``: the PNG of the belief plot). Raises :class:`~planner.errors.PlannerError` with the command's
@@ -200,7 +212,7 @@ def run_simulated_session(product_file: str, folder: str, level: str | None = No
 
     os.makedirs(folder, exist_ok=True)
     log = os.path.join(folder, "session.jsonl")
-    arguments = session_arguments(product_file, log, level, sequence, expansions, max_steps, base_part)
+    arguments = session_arguments(product_file, log, level, sequence, expansions, max_steps, base_part, source)
     # the levels as the command line resolves PRODUCT (its --fasteners and --subassemblies defaults)
     resolved = api.resolve_product(product_file, fasteners=api.DEFAULT_MODE, subassemblies=api.DEFAULT_MODE)
     levels = [lv.id for lv in api.levels_of(resolved)]

@@ -60,6 +60,10 @@ class BackgroundJob(QtCore.QObject):
             self.dialog.show()
         return self
 
+    def send(self, line: str) -> None:
+        """Write ``line`` to the job's standard input (a keyboard session's picks)."""
+        self.process.write((line.rstrip("\n") + "\n").encode("utf-8"))
+
     def cancel(self) -> None:
         """Stop the job; nothing it computed is kept."""
         if self not in self.running:

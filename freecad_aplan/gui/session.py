@@ -1,7 +1,8 @@
 """The session task panel: ``aplan session --demo`` in the simulated camera cell, from the workbench.
 
-The designer picks a level (a workstation; all of them bottom-up), the full sequence the simulated operator
-follows and the online planner's expansions per decision, and runs it: the session runs in a background job
+The designer picks a level (a workstation; all of them bottom-up), the source (the simulated camera cell, or
+the operator's picks typed in the panel: ``--keyboard``), the full sequence the simulated operator follows
+and the online planner's expansions per decision, and runs it: the session runs in a background job
 (``batch.py session``: :func:`freecad_aplan.sessions.run_simulated_session`, the command line in-process), its
 output lines show in the panel as it goes, Cancel ends it, and the belief plot of the last level shows in the
 panel when it ends. Nothing in the document changes.
@@ -35,7 +36,7 @@ class SessionPanel:
         from planner.product import save_product
 
         self.product, self.base_part, self.jobs = product, base_part, jobs
-        self.job, self.result, self.error, self.lines = None, None, None, []
+        self.job, self.result, self.error, self.lines, self.running = None, None, None, [], None
         self.folder = tempfile.mkdtemp(prefix="aplan-session-")
         self.product_file = os.path.join(self.folder, PRODUCT_FILE)
         save_product(product, self.product_file)
@@ -53,6 +54,11 @@ class SessionPanel:
         if len(self.levels) > 1:
             self.level.addItem(f"{ALL_LEVELS}, bottom-up", ALL_LEVELS)
         stacked_field(layout, "Level (workstation)", self.level)
+        self.source = narrow_combo(QtGui.QComboBox())
+        self.source.setObjectName("AplanSessionSource")
+        self.source.addItem("simulated camera cell", "demo")
+        self.source.addItem("keyboard: type the operator's picks", "keyboard")
+        stacked_field(layout, "Observations from", self.source)
         self.sequence = QtGui.QSpinBox()
         self.sequence.setObjectName("AplanSessionSequence")
         self.sequence.setRange(0, 10**6)
@@ -70,6 +76,16 @@ class SessionPanel:
         self.cancel_button.setEnabled(False)
         self.cancel_button.clicked.connect(self.cancel)
         layout.addWidget(button_rows(self.run_button, self.cancel_button))
+        self.picks = QtGui.QLineEdit()
+        self.picks.setObjectName("AplanSessionPicks")
+        self.picks.setPlaceholderText("parts and tool picked; empty: nothing")
+        self.picks.returnPressed.connect(self.send_picks)
+        self.send_button = QtGui.QPushButton("Send picks")
+        self.send_button.setObjectName("AplanSendPicks")
+        self.send_button.clicked.connect(self.send_picks)
+        stacked_field(layout, "Keyboard session: what the operator picked (Enter sends; q stops)", self.picks)
+        layout.addWidget(button_rows(self.send_button))
+        self._keyboard(False)
         self.progress = QtGui.QProgressBar()
         self.progress.setObjectName("AplanSessionProgress")
         self.progress.setRange(0, 1)
@@ -89,6 +105,17 @@ class SessionPanel:
     def selected_level(self) -> str | None:
         return self.level.currentData()
 
+    def _keyboard(self, running: bool) -> None:
+        self.picks.setEnabled(running)
+        self.send_button.setEnabled(running)
+
+    def send_picks(self) -> None:
+        """Send the typed picks to the keyboard session running (one step of the operator)."""
+        if self.job is not None and self.running == "keyboard":
+            self.lines.append(f"picked: {self.picks.text()}")
+            self.job.send(self.picks.text())
+            self.picks.clear()
+
     def run(self) -> None:
         """Start the selected level's session in the background (a second one waits for the first)."""
         from .jobs import BackgroundJob
@@ -105,12 +132,14 @@ class SessionPanel:
         run = tempfile.mkdtemp(prefix="run-", dir=self.folder)
         job = {"action": "session", "product_file": self.product_file, "folder": run, "level": level,
                "sequence": self.sequence.value(), "expansions": self.expansions.value(),
-               "base_part": self.base_part}
+               "base_part": self.base_part, "source": self.source.currentData()}
         self.job = BackgroundJob(f"Session of {level or 'the product'}", workflow.worker_command("session"), job,
                                  self._done, self._failed, self.jobs, FreeCADGui.getMainWindow(),
                                  on_progress=self._progress)
+        self.running = job["source"]  # a keyboard session's picks go to the job's input
         self.run_button.setEnabled(False)
         self.cancel_button.setEnabled(True)
+        self._keyboard(job["source"] == "keyboard")
         self.job.start()
 
     def cancel(self) -> None:
@@ -125,6 +154,7 @@ class SessionPanel:
 
     def _ended(self) -> None:
         self.job = None
+        self._keyboard(False)
         self.run_button.setEnabled(True)
         self.cancel_button.setEnabled(False)
 
@@ -141,7 +171,9 @@ class SessionPanel:
         """The belief plot of the last level that ran, at the panel's width (again after the panel was widened)."""
         if self.result is not None:
             picture = QtGui.QPixmap(self.result["levels"][-1]["plot"])
-            self.plot.setPixmap(picture.scaledToWidth(max(self.form.width(), 200), QtCore.Qt.SmoothTransformation))
+            scaled = picture.scaledToWidth(max(self.form.width(), 200), QtCore.Qt.SmoothTransformation)
+            self.plot.setPixmap(scaled)
+            self.plot.setMinimumHeight(scaled.height())  # whole: the task view scrolls rather than squeeze it
 
     def _failed(self, message: str) -> None:
         self._ended()

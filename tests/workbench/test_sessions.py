@@ -3,6 +3,7 @@ session panel only calls these. Expected values: the chain's levels from its def
 intentions (the paper, Sec. VI), and the command line's own run of the same session."""
 from __future__ import annotations
 
+import io
 import json
 import subprocess
 import sys
@@ -125,3 +126,20 @@ def test_level_model_is_the_flat_model_where_it_fits(tmp_path):
     assert choice.kind == "flat" and model.pomdp.n_states == choice.intentions
     with pytest.raises(PlannerError, match="s1"):
         level_model(str(product))  # several levels: one must be named
+
+
+def test_keyboard_session_reads_the_picks_from_standard_input(tmp_path, monkeypatch):
+    """The panel's keyboard session: the operator's picks one line a step on standard input (the panel writes
+    them to the job's input), the robot's instructions confirmed at once; s1 of the chain is one operation."""
+    product = tmp_path / "product.json"
+    save_product(_chain_with_levels(), product)
+    assert session_arguments("p.json", "s.jsonl", "s1", source="keyboard") == [
+        "session", "p.json", "--keyboard", "--robot", "auto", "--log", "s.jsonl", "--level", "s1"]
+    monkeypatch.setattr(sys, "stdin", io.StringIO("p1 nothing\np1 p2\n"))  # a bad line is asked again
+    lines = []
+    result = run_simulated_session(str(product), str(tmp_path / "kb"), "s1", expansions=20, source="keyboard",
+                                   progress=lines.append)
+    assert result["assembled"] is True and result["levels"][0]["steps"] == 1
+    assert any("not a part or tool: nothing" in line for line in lines), lines
+    with pytest.raises(PlannerError, match="unknown session source"):
+        session_arguments("p.json", "s.jsonl", source="camera")
