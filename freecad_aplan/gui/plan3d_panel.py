@@ -109,6 +109,7 @@ class Plan3DPanel:
                                   "the view.")
         chooser = self._chooser()
         self.layout.replaceWidget(self.chooser, chooser)
+        self.chooser.setParent(None)  # off the panel now: a hidden child would still be laid out by nobody
         self.chooser.deleteLater()
         self.chooser = chooser
         self.choose(0)
