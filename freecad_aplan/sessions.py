@@ -28,8 +28,8 @@ from typing import Callable
 
 from planner.errors import PlannerError
 
-__all__ = ["LevelChoice", "ModelChoice", "level_choices", "level_of", "member_parts", "model_choice", "level_model",
-           "session_arguments", "run_simulated_session", "ALL_LEVELS", "SOURCES"]
+__all__ = ["LevelChoice", "ModelChoice", "level_choices", "level_of", "member_parts", "base_part_in", "model_choice",
+           "level_model", "session_arguments", "run_simulated_session", "ALL_LEVELS", "SOURCES"]
 
 #: The level selector's entry for "every level, bottom-up" (the command line without ``--level``).
 ALL_LEVELS = "all levels"
@@ -90,6 +90,12 @@ def member_parts(product, level: str | None) -> dict[str, tuple[str, ...]]:
     return {m: tuple(sorted(levels[m].parts)) if m in levels and m != level else (m,) for m in here.part_ids}
 
 
+def base_part_in(level_product, base_part: str | None) -> str | None:
+    """The base part a level's plan starts from: ``base_part`` when the level holds it (or ``auto``: the level's
+    most connected part), else None (the designer's base part sits in another workstation). Cost: O(parts)."""
+    return base_part if base_part in ("auto", *level_product.part_ids) else None
+
+
 def model_choice(product, technical: bool | None = None, base_part: str | None = None, limits=None) -> ModelChoice:
     """The model the workbench builds for ``product`` (one level): ``flat`` when the flat model fits the
     intention limit and the memory budget ``limits`` (:class:`~planner.assembly.guards.SizeLimits`, default
@@ -117,6 +123,7 @@ def level_model(product, level: str | None = None, technical: bool | None = None
     from planner import api
 
     level_product = level_of(product if isinstance(product, api.Product) else api.resolve_product(product), level)
+    base_part = base_part_in(level_product, base_part) if level is not None else base_part
     choice = model_choice(level_product, technical, base_part)
     return api.load_model(level_product, technical, base_part=base_part, lumped=choice.kind == "lumped"), choice
 

@@ -475,9 +475,10 @@ def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None
     from planner import api
     from planner.decision.belief_plot import episode_trace, plot_beliefs
 
-    from .sessions import level_of, model_choice
+    from .sessions import base_part_in, level_of, model_choice
 
     product = level_of(product, level)
+    base_part = base_part_in(product, base_part) if level is not None else base_part
     choice = model_choice(product, technical, base_part)
     if choice.kind != "flat":
         raise PlannerError(f"{'level ' + level if level else product.name}: {choice.note}; a policy over classes "

@@ -9,8 +9,7 @@ import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
 
-from ..intent import BASE_PART_AUTO
-from ..sessions import level_choices, level_of, member_parts
+from ..sessions import base_part_in, level_choices, level_of, member_parts
 from .layout import button_rows, narrow_combo, panel_layout
 from .plan3d import PlanView, redraw, restore_when_gone
 
@@ -91,8 +90,7 @@ class Plan3DPanel:
 
         self.timer.stop()
         level_product = level_of(self.product, level)
-        # the base part where this level has it (or chooses one: auto)
-        base = self.base_part if level is None or self.base_part in (BASE_PART_AUTO, *level_product.part_ids) else None
+        base = self.base_part if level is None else base_part_in(level_product, self.base_part)
         self.level_id, self.level_base = level, base
         self.plan = api.plan_of(level_product)
         self.count, self.sequences = api.sequence_choices(self.plan, base, SEQUENCE_LIST_LIMIT)

@@ -18,7 +18,7 @@ from PySide import QtCore, QtGui
 from planner.defaults import ONLINE_EXPANSIONS, PRODUCT_FILE
 
 from .. import workflow
-from ..sessions import ALL_LEVELS, level_choices
+from ..sessions import ALL_LEVELS, base_part_in, level_choices, level_of
 from .layout import button_rows, narrow_combo, panel_layout, stacked_field, wrapped_label
 
 __all__ = ["SessionPanel"]
@@ -129,10 +129,13 @@ class SessionPanel:
         self.progress.setValue(0)
         self.plot.clear()
         self.status.setText(f"starting the session of {level or 'the product'}")
+        # the designer's base part for the level that holds it (every level at once: each starts anywhere)
+        base = self.base_part if len(self.levels) == 1 else None if level == ALL_LEVELS else base_part_in(
+            level_of(self.product, level), self.base_part)
         run = tempfile.mkdtemp(prefix="run-", dir=self.folder)
         job = {"action": "session", "product_file": self.product_file, "folder": run, "level": level,
                "sequence": self.sequence.value(), "expansions": self.expansions.value(),
-               "base_part": self.base_part, "source": self.source.currentData()}
+               "base_part": base, "source": self.source.currentData()}
         self.job = BackgroundJob(f"Session of {level or 'the product'}", workflow.worker_command("session"), job,
                                  self._done, self._failed, self.jobs, FreeCADGui.getMainWindow(),
                                  on_progress=self._progress)

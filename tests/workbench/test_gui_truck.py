@@ -248,18 +248,30 @@ def wait_session():
 
 
 def session_screenshot():
-    panel = state().panel
-    panel.show_plot()
+    state().panel.show_plot()
     QtGui.QApplication.processEvents()
+    QtCore.QTimer.singleShot(400, guarded(scroll_to_plot))  # the task view laid out with the plot's height
+
+
+def scroll_to_plot():
+    panel = state().panel
     scroll = panel.plot.parentWidget()
     while scroll is not None and not isinstance(scroll, QtGui.QScrollArea):
         scroll = scroll.parentWidget()
-    if scroll is not None:  # the task view scrolled down to the plot, as a person does
-        scroll.ensureWidgetVisible(panel.plot)
+    if scroll is not None:  # the task view scrolled down to the plot's end (its heat map), as a person does
+        scroll.verticalScrollBar().setValue(scroll.verticalScrollBar().maximum())
+        result["session_scroll"] = [type(scroll).__name__, scroll.verticalScrollBar().value()]
     QtGui.QApplication.processEvents()
+    QtCore.QTimer.singleShot(400, guarded(grab_session))
+
+
+def grab_session():
+    panel = state().panel
     plot = panel.plot
     result["session_plot"] = [plot.pixmap() is not None and not plot.pixmap().isNull(), plot.width(), plot.height(),
                               plot.pixmap().height()]
+    corner = plot.mapToGlobal(QtCore.QPoint(0, 0))
+    result["session_plot_on_screen"] = [corner.x(), corner.y(), plot.width(), plot.height()]
     QtGui.QApplication.primaryScreen().grabWindow(0).save(os.path.join(ARTIFACTS, "gui_truck_session.png"))
     plot.grab().save(os.path.join(ARTIFACTS, "gui_truck_session_plot.png"))
     # The same level from the keyboard: the picks the simulated operator made (the demo's log), typed in the
@@ -441,6 +453,9 @@ def test_truck_structure_in_the_workbench(real_bundles):  # noqa: F811
     assert plot.share(plot.coloured(112.0, width=70, saturation=0.3, value=0.2)) >= 0.025
     screen = read_picture(ARTIFACTS / "gui_truck_session.png")
     assert screen.size == (1280, 800) and screen.colours() >= 200
+    x, y, width, height = data["session_plot_on_screen"]  # the plot's part in the task view, its heat map in view
+    shown = screen.crop(x, y, width, height)
+    assert shown.share(shown.coloured(112.0, width=70, saturation=0.3, value=0.2)) >= 0.02, data.get("session_scroll")
     shutil.rmtree(Path(log).parents[1], ignore_errors=True)  # the panel keeps its logs and plots for the user
     # The keyboard session: the demo's picks typed in give the assembled level too; the bad line is refused.
     assert data["keyboard_enabled"] == [True, True] and data["keyboard_error"] is None, data["keyboard_error"]

@@ -14,6 +14,7 @@ from conftest import REPO
 
 from freecad_aplan.sessions import (
     ALL_LEVELS,
+    base_part_in,
     level_choices,
     level_model,
     level_of,
@@ -143,3 +144,12 @@ def test_keyboard_session_reads_the_picks_from_standard_input(tmp_path, monkeypa
     assert any("not a part or tool: nothing" in line for line in lines), lines
     with pytest.raises(PlannerError, match="unknown session source"):
         session_arguments("p.json", "s.jsonl", source="camera")
+
+
+def test_a_base_part_applies_to_the_levels_that_hold_it():
+    product = _chain_with_levels()
+    top = level_of(product, "top")
+    assert base_part_in(top, "p3") == "p3" and base_part_in(top, "auto") == "auto"
+    assert base_part_in(top, "p1") is None  # p1 is built in s1, not at the top level
+    model, _ = level_model(product, "top", base_part="p1")  # not refused: the top level starts anywhere
+    assert model.pomdp.n_states == level_model(product, "top")[0].pomdp.n_states
