@@ -475,14 +475,9 @@ def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None
     from planner import api
     from planner.decision.belief_plot import episode_trace, plot_beliefs
 
-    from .sessions import base_part_in, level_of, model_choice
+    from .sessions import flat_level
 
-    product = level_of(product, level)
-    base_part = base_part_in(product, base_part) if level is not None else base_part
-    choice = model_choice(product, technical, base_part)
-    if choice.kind != "flat":
-        raise PlannerError(f"{'level ' + level if level else product.name}: {choice.note}; a policy over classes "
-                           "is simulated by a session: run it with APLAN > Run a session (the online planner)")
+    product, base_part = flat_level(product, level, technical, base_part)
     model = api.decision_model(product, technical, base_part=base_part)
     policy, _ = api.policy_for(model, policy_path)
     episode, = api.simulate(model, policy, None if sequence is None else [sequence], seed=seed, operator="turns",

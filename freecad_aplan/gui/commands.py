@@ -21,6 +21,7 @@ from planner.defaults import CONFIDENCE, PRODUCT_FILE, WORKBENCH_SOLVE_TIME_LIMI
 from planner.errors import PlannerError
 
 from .. import icon_path, workflow
+from . import session
 from ..document import DocumentError
 from ..intent import create_analysis, find_analysis, is_analysis, read_intent, update_intent
 
@@ -367,20 +368,6 @@ def _save_path(title: str, filters: str, suffix: str) -> str | None:
     return path if os.path.splitext(path)[1] else path + suffix
 
 
-def _ask_level(product) -> tuple[bool, str | None]:
-    """(chosen, level): for a product of several workstations the level the designer picks
-    (:func:`freecad_aplan.sessions.level_choices`; chosen False when cancelled), else (True, None)."""
-    from ..sessions import level_choices
-
-    choices = level_choices(product)
-    if len(choices) == 1:
-        return True, None
-    labels = [c.label for c in choices]
-    label, ok = QtGui.QInputDialog.getItem(FreeCADGui.getMainWindow(), "APLAN level",
-                                           "Workstation (level) whose decision model to use", labels, 0, False)
-    return bool(ok), choices[labels.index(label)].id if ok else None
-
-
 class ExportBundle(_Command):
     name, menu = "Aplan_ExportBundle", "Export product bundle"
     tooltip = "Write a bundle folder (product.json with diagrams and intent, meshes, B-reps) for aplan"
@@ -402,7 +389,7 @@ class ExportModel(_Command):
     def run(self):
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
-        chosen, level = _ask_level(product)
+        chosen, level = session.ask_level(product)
         path = chosen and _save_path("Export decision model", "POMDPX (*.pomdpx);;POMDP (*.pomdp)", ".pomdpx")
         if path:
             sizes = workflow.export_decision_model(product, path, base_part=workflow.analysis_base_part(analysis),
@@ -423,7 +410,7 @@ class Solve(_Command):
 
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
-        chosen, level = _ask_level(product)
+        chosen, level = session.ask_level(product)
         path = chosen and _save_path("Save policy", "SARSOP policy (*.policy)", ".policy")
         if not path:
             return
@@ -456,7 +443,7 @@ class Simulate(_Command):
 
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
-        chosen, level = _ask_level(product)
+        chosen, level = session.ask_level(product)
         if not chosen:
             return
         policy = self.state.policy
@@ -483,15 +470,13 @@ class Simulate(_Command):
 
 class Session(_Command):
     name, menu = "Aplan_Session", "Run a session (simulated camera cell)"
-    tooltip = ("Run aplan session --demo on a level (or all, bottom-up) in the background: a simulated operator on "
-               "a rendered tray, the robot deciding from the camera; shows the belief plot when it ends")
+    tooltip = ("Run aplan session on a level (or all, bottom-up) in the background: a simulated operator on a "
+               "rendered tray, or picks typed in; the robot decides; shows the belief plot when it ends")
 
     def run(self):
-        from .session import SessionPanel
-
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
-        _show_panel(self.state, SessionPanel(product, workflow.analysis_base_part(analysis), self.state.jobs))
+        _show_panel(self.state, session.SessionPanel(product, workflow.analysis_base_part(analysis), self.state.jobs))
 
 
 COMMANDS = (CreateAnalysis, GroupComponent, ExcludeParts, Detect, Diagrams, Intent, Fasteners, Subassemblies, Plan,

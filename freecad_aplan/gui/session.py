@@ -21,7 +21,7 @@ from .. import workflow
 from ..sessions import ALL_LEVELS, base_part_in, level_choices, level_of
 from .layout import button_rows, narrow_combo, panel_layout, stacked_field, wrapped_label
 
-__all__ = ["SessionPanel"]
+__all__ = ["SessionPanel", "ask_level"]
 
 
 class SessionPanel:
@@ -194,3 +194,15 @@ class SessionPanel:
 
     def reject(self) -> bool:
         return self.close()
+
+
+def ask_level(product) -> tuple[bool, str | None]:
+    """(chosen, level): for a product of several workstations the level the designer picks
+    (:func:`freecad_aplan.sessions.level_choices`; chosen False when cancelled), else (True, None)."""
+    choices = level_choices(product)
+    if len(choices) == 1:
+        return True, None
+    labels = [c.label for c in choices]
+    label, ok = QtGui.QInputDialog.getItem(FreeCADGui.getMainWindow(), "APLAN level",
+                                           "Workstation (level) whose decision model to use", labels, 0, False)
+    return bool(ok), choices[labels.index(label)].id if ok else None
