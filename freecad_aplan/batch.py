@@ -12,7 +12,9 @@ Three more actions serve the workbench's background jobs (:mod:`freecad_aplan.wo
 plain Python that has the planner's dependencies (no FreeCAD needed): ``analyze`` (a geometry engine on a
 bundle, written into its ``product.json``), ``level-stats`` (the per-level figures of ``aplan stats`` for a
 product of several workstations, with a note line per level) and ``solve`` (the point-based solver on a product
-file, written as a ``.policy``, with progress lines). ``export`` with ``"notes": true`` prints a note line per
+file, written as a ``.policy``, with progress lines), ``session`` (``aplan session --demo`` in the simulated
+camera cell and each level's belief plot, :func:`freecad_aplan.sessions.run_simulated_session`, a note line
+per output line). ``export`` with ``"notes": true`` prints a note line per
 part tessellated (the workbench's background detection).
 """
 import os
@@ -48,6 +50,10 @@ def _run(job: dict) -> dict:
         from freecad_aplan.workflow import level_statistics_report
 
         return level_statistics_report(**job, progress=lambda text: print(note_line(text), flush=True))
+    if action == "session":
+        from freecad_aplan.sessions import run_simulated_session
+
+        return run_simulated_session(**job, progress=lambda text: print(note_line(text), flush=True))
     if action == "solve":
         from freecad_aplan.workflow import solve_product
 

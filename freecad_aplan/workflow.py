@@ -109,7 +109,7 @@ def _mesh_python() -> str | None:
 
 def worker_command(action: str, engine: str | None = None) -> list[str]:
     """The program and arguments of a background job running ``batch.py`` (``action``: export, analyze,
-    level-stats, solve).
+    level-stats, solve, session).
 
     The occt engine and the solver run in FreeCADCmd; the mesh engine needs trimesh and manifold3d, so it
     runs in :func:`_mesh_python`, else in FreeCADCmd when FreeCAD's Python has them. Raises
@@ -118,7 +118,7 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
     from .dependencies import MESH_ENGINE, installed
     from .runner import FreeCADError, find_freecadcmd
 
-    if action == "level-stats" and _mesh_python() is not None:  # the planner alone: no FreeCAD to start
+    if action in ("level-stats", "session") and _mesh_python() is not None:  # the planner alone: no FreeCAD
         return [_mesh_python(), BATCH_SCRIPT]
     if action == "analyze" and engine == "mesh":
         python = _mesh_python()
@@ -430,26 +430,34 @@ def analysis_diagrams(analysis) -> dict:
     return stored_analysis(read_intent(analysis).diagrams)
 
 
-def export_decision_model(product, path: str, technical: bool | None = None, base_part: str | None = None) -> dict:
-    """Write the POMDP of ``product`` (Alg. 3; with ``base_part``, over the sequences that start from it) as
-    POMDPX or ``.pomdp`` (by the file name); returns its sizes."""
+def export_decision_model(product, path: str, technical: bool | None = None, base_part: str | None = None,
+                          level: str | None = None) -> dict:
+    """Write the POMDP of ``product`` (Alg. 3; with ``base_part``, over the sequences that start from it; of
+    workstation ``level`` for a product of several; lumped where the flat model does not fit:
+    :func:`freecad_aplan.sessions.level_model`) as POMDPX or ``.pomdp`` (by the file name); returns its sizes
+    and ``model`` (flat or lumped)."""
     from planner import api
 
-    model = api.decision_model(product, technical, base_part=base_part)
+    from .sessions import level_model
+
+    model, choice = level_model(product, level, technical, base_part)
     api.save_model(model, path)
     return {"states": model.pomdp.n_states, "actions": model.pomdp.n_actions,
-            "observations": model.pomdp.n_observations}
+            "observations": model.pomdp.n_observations, "model": choice.kind}
 
 
 def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE_TIME_LIMIT,
                   precision: float = SOLVE_PRECISION, technical: bool | None = None, progress=None,
-                  base_part: str | None = None) -> dict:
+                  base_part: str | None = None, level: str | None = None) -> dict:
     """Solve the decision model of the product file ``product`` (with ``base_part``: over the sequences that
-    start from it) and write the policy to ``output`` (a background job)."""
+    start from it; ``level`` as :func:`export_decision_model`) and write the policy to ``output`` (a
+    background job)."""
     from planner import api
     from planner.decision.policy import write_policy
 
-    model = api.decision_model(product, technical, base_part=base_part)
+    from .sessions import level_model
+
+    model, choice = level_model(product, level, technical, base_part)
     result = api.solve(model, time_limit, precision, progress=progress)
     # A policy no better than the blind ones is refused (a PlannerError naming the bound and what helps);
     # one barely better is written with the warning.
@@ -457,17 +465,23 @@ def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE
     write_policy(result.policy, output, model.name)
     return {"lower_bound": result.lower_bound, "upper_bound": result.upper_bound,
             "alpha_vectors": int(result.policy.alphas.shape[0]), "seconds": round(result.seconds, 2),
+            "model": choice.kind,
             **({"warning": warning} if warning else {})}
 
 
 def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None = None, seed: int = 0,
-                      technical: bool | None = None, base_part: str | None = None) -> dict:
+                      technical: bool | None = None, base_part: str | None = None, level: str | None = None) -> dict:
     """Play the operator through full sequence ``sequence`` (default: the first) against the policy, taking
     turns with the robot, and write the belief plot ``stem.png``/``stem.svg``; returns the steps and the plot
-    paths. ``base_part``: the model's, as the policy was solved for."""
+    paths. ``base_part``: the model's, as the policy was solved for; ``level``: that workstation's flat model
+    (a level whose flat model does not fit is refused, naming the session panel, which runs the online
+    planner)."""
     from planner import api
     from planner.decision.belief_plot import episode_trace, plot_beliefs
 
+    from .sessions import flat_level
+
+    product, base_part = flat_level(product, level, technical, base_part)
     model = api.decision_model(product, technical, base_part=base_part)
     policy, _ = api.policy_for(model, policy_path)
     episode, = api.simulate(model, policy, None if sequence is None else [sequence], seed=seed, operator="turns",

@@ -44,7 +44,7 @@ def require_freecad_gui() -> None:
         pytest.skip("the FreeCAD GUI (freecad) or xvfb-run is not installed")
 
 
-def freecad_gui_run(folder: Path, script: Path, display: int = 99) -> subprocess.CompletedProcess:
+def freecad_gui_run(folder: Path, script: Path, display: int = 99, timeout: float = 300) -> subprocess.CompletedProcess:
     """The run of :func:`run_freecad_gui` without its checks (a background job may call it): FreeCAD's home in
     ``folder/home``; the X display the first free one from ``display`` on (background jobs start elsewhere
     than the tests, so that two Xvfb never race for one number)."""
@@ -56,7 +56,7 @@ def freecad_gui_run(folder: Path, script: Path, display: int = 99) -> subprocess
     env = {**kept, "HOME": str(home), "QTWEBENGINE_CHROMIUM_FLAGS": "--no-sandbox --disable-gpu", "LANG": "C.UTF-8"}
     command = [shutil.which("xvfb-run"), "-n", str(display), "-a", "-s", "-screen 0 1280x800x24",
                shutil.which("freecad"), str(script)]
-    return background.run(command, timeout=300, env=env)
+    return background.run(command, timeout=timeout, env=env)
 
 
 def freecad_gui_result(done: subprocess.CompletedProcess, out: Path) -> dict:

@@ -21,6 +21,7 @@ from planner.defaults import CONFIDENCE, PRODUCT_FILE, WORKBENCH_SOLVE_TIME_LIMI
 from planner.errors import PlannerError
 
 from .. import icon_path, workflow
+from . import session
 from ..document import DocumentError
 from ..intent import create_analysis, find_analysis, is_analysis, read_intent, update_intent
 
@@ -341,7 +342,7 @@ class Plan3D(_Command):
                "operation), or the one a session log recorded; the document is restored when the panel closes")
 
     def run(self):
-        from .plan3d import Plan3DPanel
+        from .plan3d_panel import Plan3DPanel
 
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
@@ -402,10 +403,12 @@ class ExportModel(_Command):
     def run(self):
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
-        path = _save_path("Export decision model", "POMDPX (*.pomdpx);;POMDP (*.pomdp)", ".pomdpx")
+        chosen, level = session.ask_level(product)
+        path = chosen and _save_path("Export decision model", "POMDPX (*.pomdpx);;POMDP (*.pomdp)", ".pomdpx")
         if path:
-            sizes = workflow.export_decision_model(product, path, base_part=workflow.analysis_base_part(analysis))
-            _message(f"wrote {path}: {sizes['states']} states, {sizes['actions']} actions, "
+            sizes = workflow.export_decision_model(product, path, base_part=workflow.analysis_base_part(analysis),
+                                                   level=level)
+            _message(f"wrote {path} ({sizes['model']} model): {sizes['states']} states, {sizes['actions']} actions, "
                      f"{sizes['observations']} observations", error=False)
 
 
@@ -421,7 +424,8 @@ class Solve(_Command):
 
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
-        path = _save_path("Save policy", "SARSOP policy (*.policy)", ".policy")
+        chosen, level = session.ask_level(product)
+        path = chosen and _save_path("Save policy", "SARSOP policy (*.policy)", ".policy")
         if not path:
             return
         seconds = FreeCAD.ParamGet(PARAMETERS).GetFloat("SolveTimeLimit", WORKBENCH_SOLVE_TIME_LIMIT) or WORKBENCH_SOLVE_TIME_LIMIT
@@ -431,7 +435,7 @@ class Solve(_Command):
         def done(result):
             shutil.rmtree(folder, ignore_errors=True)
             self.state.policy = path
-            _message(f"wrote {path}: lower bound {result['lower_bound']:.5f}, upper bound "
+            _message(f"wrote {path} ({result['model']} model): lower bound {result['lower_bound']:.5f}, upper bound "
                      f"{result['upper_bound']:.5f}, {result['alpha_vectors']} alpha vectors", error=False)
 
         def failed(message):
@@ -439,7 +443,7 @@ class Solve(_Command):
             _message(message)
 
         job = {"action": "solve", "product": os.path.join(folder, PRODUCT_FILE), "output": path,
-               "time_limit": seconds, "base_part": workflow.analysis_base_part(analysis)}
+               "time_limit": seconds, "base_part": workflow.analysis_base_part(analysis), "level": level}
         BackgroundJob(f"Solving the decision model ({seconds:g} s)", workflow.worker_command("solve"), job, done,
                       failed, self.state.jobs, FreeCADGui.getMainWindow()).start()
 
@@ -453,6 +457,9 @@ class Simulate(_Command):
 
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
+        chosen, level = session.ask_level(product)
+        if not chosen:
+            return
         policy = self.state.policy
         if not policy or not os.path.isfile(policy):
             policy, _ = QtGui.QFileDialog.getOpenFileName(FreeCADGui.getMainWindow(), "Policy to simulate", "",
@@ -465,7 +472,7 @@ class Simulate(_Command):
             return
         stem = os.path.join(tempfile.mkdtemp(prefix="aplan-simulate-"), "belief")
         result = workflow.simulate_sequence(product, policy, stem, None if sequence < 0 else sequence,
-                                            base_part=workflow.analysis_base_part(analysis))
+                                            base_part=workflow.analysis_base_part(analysis), level=level)
         from planner.decision.simulate import confidence_text
 
         said = confidence_text(result["confident_after"], CONFIDENCE)
@@ -475,8 +482,19 @@ class Simulate(_Command):
         self.state.belief_dialog.show()
 
 
+class Session(_Command):
+    name, menu = "Aplan_Session", "Run a session (simulated camera cell)"
+    tooltip = ("Run aplan session on a level (or all, bottom-up) in the background: a simulated operator on a "
+               "rendered tray, or picks typed in; the robot decides; shows the belief plot when it ends")
+
+    def run(self):
+        analysis = workflow.require_analysis(_document())
+        product = workflow.analysis_product(analysis)
+        _show_panel(self.state, session.SessionPanel(product, workflow.analysis_base_part(analysis), self.state.jobs))
+
+
 COMMANDS = (CreateAnalysis, GroupComponent, ExcludeParts, Detect, Diagrams, Interlocks, Intent, Fasteners, Subassemblies, Plan,
-            Plan3D, ExportBundle, ExportModel, Solve, Simulate)
+            Plan3D, ExportBundle, ExportModel, Solve, Simulate, Session)
 
 
 def register(state: WorkbenchState) -> list[str]:

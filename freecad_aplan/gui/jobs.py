@@ -20,13 +20,15 @@ class BackgroundJob(QtCore.QObject):
 
     ``on_done(result)`` is called with the job's JSON result, ``on_failed(message)`` with a readable message
     (also when cancelled: ``cancelled`` is then True). Both run in the GUI thread. While it runs, the job is
-    in the list ``running`` (the workbench's, so that it can wait for its jobs).
+    in the list ``running`` (the workbench's, so that it can wait for its jobs). ``on_progress(text)``, when
+    given, gets each note line and the job shows no dialog of its own: a panel shows the progress and offers
+    :meth:`cancel` instead.
     """
 
     def __init__(self, title: str, command: list[str], job: dict, on_done, on_failed, running: list,
-                 parent=None):
+                 parent=None, on_progress=None):
         super().__init__(parent)
-        self.title, self.on_done, self.on_failed = title, on_done, on_failed
+        self.title, self.on_done, self.on_failed, self.on_progress = title, on_done, on_failed, on_progress
         self.running = running
         self.cancelled = False
         self.output = ""
@@ -54,8 +56,13 @@ class BackgroundJob(QtCore.QObject):
         self.running.append(self)
         self.process.start(self.program, self.arguments)
         self.timer.start(500)
-        self.dialog.show()
+        if self.on_progress is None:
+            self.dialog.show()
         return self
+
+    def send(self, line: str) -> None:
+        """Write ``line`` to the job's standard input (a keyboard session's picks)."""
+        self.process.write((line.rstrip("\n") + "\n").encode("utf-8"))
 
     def cancel(self) -> None:
         """Stop the job; nothing it computed is kept."""
@@ -78,6 +85,8 @@ class BackgroundJob(QtCore.QObject):
             note = read_note(line)
             if note is not None:  # any other job's progress: the last note line
                 self.progress_text = f"\n{note}"
+                if self.on_progress is not None:
+                    self.on_progress(note)
 
     def _close(self) -> None:
         self.timer.stop()

@@ -1,6 +1,6 @@
-"""The plan in the 3D view: the "Plan in 3D" task panel (an assembly sequence as an exploded view that
-collapses step by step), a relation of the diagrams panel shown in 3D, the parts of an operation or a state
-of the plan dialog highlighted.
+"""The plan in the 3D view: what the "Plan in 3D" task panel shows (:mod:`.plan3d_panel`: an assembly sequence
+as an exploded view that collapses step by step), a relation of the diagrams panel shown in 3D, the parts of
+an operation or a state of the plan dialog highlighted.
 
 The planner says what goes where (:func:`planner.api.plan_in_3d`); :class:`PlanView` shows it with
 :class:`freecad_aplan.plan3d.SceneChanges` (the view providers' Coin3D transforms and face materials, saved
@@ -16,20 +16,14 @@ from PySide import QtCore, QtGui
 
 from ..diagrams import relation_direction
 from ..plan3d import (COLOURS, DIMMED, SceneChanges, bound_box, component_objects, extent, orthographic_fit,
-                      relation_looks, step_looks)
-from .layout import button_rows, narrow_combo, panel_layout
+                      outline_points, relation_looks, step_looks)
 
-__all__ = ["ARROW_NAME", "PARTS_TAB_LIMIT", "SEQUENCE_LIST_LIMIT", "Plan3DPanel", "PlanView", "add_parts_tab",
-           "restore_when_gone"]
+__all__ = ["ARROW_NAME", "PARTS_TAB_LIMIT", "PlanView", "add_parts_tab", "redraw", "restore_when_gone"]
 
 #: The name of the arrow's Coin3D node (tests look for it in the scene graph).
 ARROW_NAME = "AplanArrow"
-#: Up to this many full sequences the panel lists them; past it, a spin box over the rank.
-SEQUENCE_LIST_LIMIT = 200
 #: Rows of the plan dialog's operations-and-states tab at most (a large plan lists its first ones).
 PARTS_TAB_LIMIT = 2000
-#: Milliseconds between steps when playing.
-PLAY_INTERVAL = 900
 #: Colours of the blocks of a state (multi-part subassemblies), in turn.
 PALETTE = ((1.0, 0.55, 0.0), (0.1, 0.35, 0.9), (0.15, 0.65, 0.2), (0.75, 0.2, 0.75), (0.85, 0.1, 0.1))
 
@@ -72,15 +66,29 @@ def _arrow(start, vector, colour):
 
 class PlanView:
     """What the 3D view shows of the plan, on one document: moved and painted parts (a
-    :class:`~freecad_aplan.plan3d.SceneChanges`) and at most one arrow; :meth:`restore` undoes all of it."""
+    :class:`~freecad_aplan.plan3d.SceneChanges`) and at most one arrow; :meth:`restore` undoes all of it.
+    ``members``: the plan is of one level (:func:`freecad_aplan.sessions.member_parts`)."""
 
-    def __init__(self, document, diagrams: dict):
-        self.document = document
-        self.objects = component_objects(document, diagrams)
-        self.spacing = extent([o for members in self.objects.values() for o in members])
+    def __init__(self, document, diagrams: dict, members: dict[str, tuple[str, ...]] | None = None):
+        self.document, self.diagrams = document, diagrams
         self.scene: SceneChanges | None = None
         self.arrow = None
         self.camera: str | None = None  # the user's camera, while :meth:`fit` has changed it
+        self.use_members(members)
+
+    def use_members(self, members: dict[str, tuple[str, ...]] | None) -> None:
+        """Show the plan of one level: ``members`` maps each member to the components it stands for (a
+        subassembly moves as one block; the components of other levels stay where they are, dimmed); None:
+        the product planned flat, one member per component."""
+        self.restore()
+        components = component_objects(self.document, self.diagrams)
+        self.objects, self.others = components, {}
+        if members is not None:
+            self.objects = {m: [o for p in parts for o in components.get(p, [])] for m, parts in members.items()}
+            self.objects = {m: objects for m, objects in self.objects.items() if objects}
+            held = {p for parts in members.values() for p in parts}
+            self.others = {p: objects for p, objects in components.items() if p not in held}
+        self.spacing = extent([o for members in self.objects.values() for o in members])
 
     def _begin(self) -> SceneChanges:
         global _SHOWING
@@ -104,11 +112,12 @@ class PlanView:
     def show_step(self, exploded, k: int) -> None:
         """Step ``k`` of an :class:`~planner.assembly.explode.ExplodedView`: every part at its offset, the moving
         ones highlighted, the rest dimmed, an arrow along the insertion direction, the view fitted to the
-        operation (the moving side, the side it joins and the arrow); after the last step the assembled product
+        moving parts; after the last step the assembled product
         as it is, fitted whole."""
         done = k >= len(exploded.steps)  # the assembled product, in its own colours
         looks = {p: (None, None) for p in self.objects} if done else step_looks(exploded.roles(k))
-        self._begin().apply(self.objects, exploded.offsets[k], looks)
+        self._begin().apply({**self.others, **self.objects}, exploded.offsets[k],
+                            {**{p: (None, DIMMED["idle"]) for p in self.others}, **looks})
         if done:
             self.fit(exploded.offsets[k])
             return
@@ -119,9 +128,10 @@ class PlanView:
         start = self._centre(step.moving) + shift
         reverse = FreeCAD.Vector(*(-c * 0.8 * exploded.spacing for c in step.direction.vector))
         self._add_arrow(start, tuple(reverse), COLOURS["moving"])
-        # Fitted to what the step is about: fitted to every part, the exploded product is a long thin line in
-        # which the moving part is a few pixels (issue 22); the dimmed idle parts may leave the view.
-        self.fit(exploded.offsets[k], set(step.moving) | set(step.fixed), [start, start + reverse])
+        # Fitted to the parts that move: fitted to every part, the exploded product is a long thin line in which
+        # the moving part is a few pixels (issue 22), and fitted to the side they join too, a small part still
+        # was (issue 24); the arrow and the other parts may leave the view, its start stays in.
+        self.fit(exploded.offsets[k], set(step.moving), [start], outline=True)
 
     def show_relation(self, kind: str, first: str, second: str) -> None:
         """A row of the diagrams table: ``first`` (blocked, red) and ``second`` (blocking, blue), the others
@@ -140,20 +150,24 @@ class PlanView:
             looks.update({p: (colour, 0) for p in group})
         self._begin().apply(self.objects, None, looks)
 
-    def fit(self, offsets: dict[str, tuple], parts=None, points=()) -> None:
+    def fit(self, offsets: dict[str, tuple], parts=None, points=(), outline: bool = False) -> None:
         """Fit the 3D view to ``parts`` (default: all) moved by ``offsets`` and to ``points`` (FreeCAD vectors),
         keeping the view's direction: an orthographic camera by :func:`~freecad_aplan.plan3d.orthographic_fit`
         (their projected extent, 10 % more), a perspective one by Coin's ``viewBoundingBox`` (the bounding
-        sphere). The user's camera is kept for :meth:`restore_camera`. Cost: eight corners per part."""
+        sphere). ``outline``: fitted to points on the parts' edges (:func:`~freecad_aplan.plan3d.outline_points`)
+        rather than their bounding boxes' corners. The user's camera is kept for :meth:`restore_camera`. Cost:
+        eight corners per part, or a dozen points per edge with ``outline``."""
         from pivy import coin
 
         view = _view(self.document)
         corners = list(points)
         for part in self.objects if parts is None else parts:
-            box = bound_box(self.objects.get(part, []))
+            objects = self.objects.get(part, [])
+            box = bound_box(objects)
             if box.isValid():
                 shift = FreeCAD.Vector(*offsets.get(part, (0.0, 0.0, 0.0)))
-                corners += [box.getPoint(i) + shift for i in range(8)]
+                drawn = outline_points(objects) if outline else []
+                corners += [p + shift for p in drawn] or [box.getPoint(i) + shift for i in range(8)]
         if view is None or not corners:
             return
         if self.camera is None:
@@ -223,182 +237,7 @@ def restore_when_gone(widget, view: PlanView) -> None:
     widget.destroyed.connect(lambda *_: (view.restore(), view.restore_camera()))
 
 
-def _text_box(name: str, lines: int) -> QtGui.QPlainTextEdit:
-    """Read-only text wrapped to the panel's width, ``lines`` high (a scroll bar if it needs more): unlike a
-    word-wrapped label it never asks the task view for more room than it has."""
-    box = QtGui.QPlainTextEdit()
-    box.setObjectName(name)
-    box.setReadOnly(True)
-    box.setLineWrapMode(QtGui.QPlainTextEdit.WidgetWidth)
-    box.setFrameShape(QtGui.QFrame.NoFrame)
-    box.viewport().setAutoFillBackground(False)
-    margins = box.contentsMargins().top() + box.contentsMargins().bottom() + 2 * box.document().documentMargin()
-    box.setFixedHeight(int(lines * box.fontMetrics().lineSpacing() + margins + 4))
-    box.setMinimumWidth(0)
-    return box
-
-
-class Plan3DPanel:
-    """The "Plan in 3D" task panel: a full assembly sequence (listed, chosen by rank, or the one a session log
-    recorded) stepped through in the 3D view: Back, Forward, Play. Closing it restores the document's view."""
-
-    def __init__(self, analysis, product, base_part: str | None = None):
-        from planner import api
-
-        from ..intent import read_intent
-
-        self.analysis, self.base_part = analysis, base_part
-        self.plan = api.plan_of(product)
-        self.count, self.sequences = api.sequence_choices(self.plan, base_part, SEQUENCE_LIST_LIMIT)
-        self.view = PlanView(analysis.Document, read_intent(analysis).diagrams)
-        self.exploded, self.k, self.title = None, 0, ""
-        self.form = QtGui.QWidget()
-        self.form.setObjectName("AplanPlan3DPanel")
-        self.form.setWindowTitle("APLAN: plan in 3D")
-        layout = panel_layout(self.form)
-        intro = _text_box("AplanPlan3DIntro", 4)
-        intro.setPlainText(f"{self.count:,} full assembly sequences"
-                           + (f" from the base part {base_part}" if base_part else "")
-                           + ". Orange: the parts that move; the arrow: the way they go in. Closing restores "
-                             "the view.")
-        layout.addWidget(intro)
-        self.chooser = self._chooser()
-        layout.addWidget(self.chooser)
-        log = QtGui.QPushButton("From a session log...")
-        log.setObjectName("AplanSequenceFromLog")
-        log.clicked.connect(lambda: self.ask_log())
-        layout.addWidget(log)
-        self.buttons = {}
-        for name, text, action in (("Back", "Back", self.back), ("Forward", "Forward", self.forward),
-                                   ("Play", "Play", self.play)):
-            button = QtGui.QPushButton(text)
-            button.setObjectName(f"AplanStep{name}")
-            button.clicked.connect(lambda checked=False, act=action: act())
-            self.buttons[name] = button
-        layout.addWidget(button_rows(*self.buttons.values()))  # above the step text: in view when the view is short
-        self.label = _text_box("AplanStepLabel", 7)
-        layout.addWidget(self.label)
-        layout.addStretch(1)
-        self.timer = QtCore.QTimer(self.form)
-        self.timer.setInterval(PLAY_INTERVAL)
-        self.timer.timeout.connect(self._tick)
-        restore_when_gone(self.form, self.view)
-        self.choose(0)
-
-    def _chooser(self) -> QtGui.QWidget:
-        if self.count <= SEQUENCE_LIST_LIMIT:
-            combo = QtGui.QComboBox()
-            combo.setObjectName("AplanSequenceChooser")
-            describe = self.plan.andor.describe
-            for rank, operations in enumerate(self.sequences):
-                combo.addItem(f"{rank}: " + " ; ".join(describe(o) for o in operations))
-            combo.currentIndexChanged.connect(lambda rank: self.choose(int(rank)))
-            # The operations are long: the closed box shows what fits (its tooltip and the list show all), so
-            # that the panel keeps the task view's width.
-            narrow_combo(combo)
-            combo.setToolTip("Full assembly sequences by rank: their operations in order")
-            return combo
-        spin = QtGui.QSpinBox()
-        spin.setObjectName("AplanSequenceRank")
-        spin.setRange(0, min(self.count - 1, 2**31 - 1))
-        spin.setPrefix("sequence rank ")
-        spin.valueChanged.connect(lambda rank: self.choose(int(rank)))
-        return spin
-
-    def choose(self, rank: int) -> None:
-        """Show the sequence of rank ``rank`` from its first step."""
-        from planner import api
-
-        listed = self.sequences[rank] if 0 <= rank < len(self.sequences) else int(rank)  # listed: no ranking again
-        self.use(api.plan_in_3d(self.plan, listed, self.view.spacing, self.base_part), f"sequence {rank}")
-
-    def use(self, exploded, title: str) -> None:
-        self.timer.stop()
-        self.exploded, self.title = exploded, title
-        self.show(0)  # each step fits the view to its operation
-
-    def load_log(self, path: str) -> bool:
-        """Show the sequence the session log ``path`` recorded; say why not in the panel otherwise."""
-        from planner import api
-        from planner.errors import PlannerError
-
-        try:
-            operations, logged = api.sequence_from_log(path, self.plan)
-            exploded = api.plan_in_3d(self.plan, operations, self.view.spacing, self.base_part)
-        except PlannerError as exc:
-            self.label.setPlainText(f"cannot show that log: {exc}")
-            FreeCAD.Console.PrintError(f"APLAN: {exc}\n")
-            return False
-        notes = []
-        if not logged.complete:
-            notes.append(f"the session stopped after {len(logged.operations)} operations; the rest is the first "
-                         "way to finish")
-        if logged.ambiguous:
-            notes.append("another sequence explains the log too")
-        self.use(exploded, "the logged sequence" + (f" ({'; '.join(notes)})" if notes else ""))
-        return True
-
-    def ask_log(self) -> None:
-        path, _ = QtGui.QFileDialog.getOpenFileName(FreeCADGui.getMainWindow(), "Session log", "",
-                                                    "Session log (*.jsonl *.log);;All files (*)")
-        if path:
-            self.load_log(path)
-
-    def show(self, k: int) -> None:
-        """Step ``k`` (0 .. the number of operations: the assembled product)."""
-        exploded = self.exploded
-        self.k = max(0, min(int(k), len(exploded.steps)))
-        self.view.show_step(exploded, self.k)
-        total = len(exploded.steps)
-        if self.k == total:
-            text = f"{self.title}: assembled ({total} operations)."
-        else:
-            step = exploded.steps[self.k]
-            moving = ", ".join(sorted(step.moving))
-            verb = "moves" if len(step.moving) == 1 else "move"
-            text = (f"{self.title}, step {self.k + 1} of {total}: {step.description}. {moving} {verb} in along "
-                    f"{step.direction.reverse.name} (it leaves freely along {step.direction.name}).")
-        self.label.setPlainText(text)
-        self.buttons["Back"].setEnabled(self.k > 0)
-        self.buttons["Forward"].setEnabled(self.k < total)
-        _redraw(self.analysis.Document)
-
-    def forward(self) -> None:
-        self.show(self.k + 1)
-
-    def back(self) -> None:
-        self.show(self.k - 1)
-
-    def play(self) -> None:
-        """From the first step (or where it is, unless at the end), one step every :data:`PLAY_INTERVAL` ms."""
-        if self.timer.isActive():
-            self.timer.stop()
-            return
-        if self.k >= len(self.exploded.steps):
-            self.show(0)
-        self.timer.start()
-
-    def _tick(self) -> None:
-        if self.k >= len(self.exploded.steps):
-            self.timer.stop()
-            return
-        self.forward()
-
-    def close(self) -> bool:
-        self.timer.stop()
-        self.view.restore()
-        self.view.restore_camera()
-        FreeCADGui.Control.closeDialog()
-        return True
-
-    def accept(self) -> bool:
-        return self.close()
-
-    def reject(self) -> bool:
-        return self.close()
-
-
-def _redraw(document) -> None:
+def redraw(document) -> None:
     view = _view(document)
     if view is not None:
         view.redraw()
@@ -440,7 +279,7 @@ def add_parts_tab(dialog, plan, analysis) -> QtGui.QTableWidget:
             view.restore()
         else:
             view.show_parts(rows[chosen[0].row()][2])
-        _redraw(analysis.Document)
+        redraw(analysis.Document)
 
     table.itemSelectionChanged.connect(selected)
     tabs = dialog.findChild(QtGui.QTabWidget)

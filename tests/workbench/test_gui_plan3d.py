@@ -275,7 +275,9 @@ def _assert_step_picture(k: int, assembled: bool) -> None:
     """What a person sees at step ``k`` (tests/artifacts/plan3d_step_K.png, white background). Thresholds: about
     half of what was measured on the pen's sequence 7 (bench/README.md: the Plan in 3D pictures); fitted to
     every exploded part as before issue 22, the drawing spanned 12 to 43 % of the view's height and its orange
-    0.05 to 0.11 % of the pixels, and the assembled pen 0.2 %."""
+    0.05 to 0.11 % of the pixels, and the assembled pen 0.2 %; fitted to the operation (issue 22), the moving
+    parts' bodies 0.10 to 1.25 %. Issue 24: fitted to the moving parts' outline, they cover a tenth of the view
+    at every step (measured 15 to 23 %)."""
     picture = read_picture(ARTIFACTS / f"plan3d_step_{k}.png")
     drawn = picture.differs_from((255, 255, 255))
     orange = picture.coloured(hue_of(ORANGE))
@@ -284,11 +286,10 @@ def _assert_step_picture(k: int, assembled: bool) -> None:
         assert picture.share(drawn) >= 0.06 and picture.share(orange) < 1e-4, (k, picture.share(drawn))
         assert picture.share(picture.coloured(hue_of((0.2, 0.3, 0.8)), saturation=0.3)) >= 0.004
         return
-    # The moving parts and their arrow orange (measured 0.33 to 1.45 % of the view), spanning at least a fifth
-    # of it; the parts' own bodies, the arrow's line taken away, still there (0.10 to 1.25 %).
-    assert picture.share(orange) >= 0.0015 and max(picture.extent(orange)) >= 0.2, (k, picture.share(orange))
-    assert picture.share(_opened(orange)) >= 0.0004, (k, picture.share(_opened(orange)))
-    assert picture.share(picture.grey()) >= 0.01, (k, picture.share(picture.grey()))  # the dimmed parts
+    # The moving parts and their arrow orange, spanning at least half of the view (measured 52 to 63 % of its
+    # width, 95 % of its height); the parts' own bodies, the arrow's line taken away, at least a tenth of it.
+    assert picture.share(orange) >= 0.10 and max(picture.extent(orange)) >= 0.5, (k, picture.share(orange))
+    assert picture.share(_opened(orange)) >= 0.10, (k, picture.share(_opened(orange)))
 
 
 def _assert_relation_picture() -> None:

@@ -3,17 +3,19 @@ the background with progress, the fastener proposals accepted in the fasteners p
 subassembly tree accepted in the tree panel, the per-level statistics computed in the background, a
 screenshot (tests/artifacts/gui_truck_structure.png), and the numbers checked against the command line: the
 tagged groups are those `aplan fasteners` proposes for the truck, and the levels those of `aplan stats` on the
-bundle the workbench exported."""
+bundle the workbench exported. Then the session panel: the smallest level chosen, its simulated camera session
+run in the background to the assembled level, and its belief plot shown (tests/artifacts/gui_truck_session.png)."""
 from __future__ import annotations
 
 import json
 import shutil
+from pathlib import Path
 
 import pytest
 from background import Job, folder
 from conftest import REPO, SHARED, freecad_gui_result, freecad_gui_run, require_freecad_gui, require_shared
 from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, aplan
-from pictures import read_picture
+from pictures import hue_of, read_picture
 from real_models import JOBS, real_bundles  # noqa: F401  (fixture: the truck exported once per session)
 
 ARTIFACTS = REPO / "tests" / "artifacts"
@@ -201,6 +203,118 @@ def screenshot():
     from freecad_aplan.intent import find_analysis
     doc = FreeCAD.ActiveDocument
     workflow.export_analysis_bundle(doc, find_analysis(doc), BUNDLE)
+    # A session in the simulated camera cell: the smallest level chosen in the panel's level selector, run in
+    # the background with a fixed number of expansions per decision (no clock), the belief plot shown at the end.
+    FreeCADGui.runCommand("Aplan_Session")
+    panel = state().panel
+    window = FreeCADGui.getMainWindow()
+    combo = window.findChild(QtGui.QComboBox, "AplanSessionLevel")
+    entries = [(combo.itemText(k), combo.itemData(k)) for k in range(combo.count())]
+    result["session_entries"] = entries
+    sizes = {{c.id: len(c.members) for c in panel.levels}}
+    smallest = min(sizes, key=lambda level: (sizes[level], level))
+    combo.setCurrentIndex(combo.findData(smallest))
+    window.findChild(QtGui.QSpinBox, "AplanSessionExpansions").setValue(50)
+    result["session_level"], result["session_members"] = panel.selected_level(), sizes[smallest]
+    result["session_started"] = time.monotonic()
+    window.findChild(QtGui.QPushButton, "AplanRunSession").click()
+    result["session_returned"] = round(time.monotonic() - result["session_started"], 2)
+    result["session_cancel_enabled"] = window.findChild(QtGui.QPushButton, "AplanCancelSession").isEnabled()
+    QtCore.QTimer.singleShot(200, guarded(wait_session))
+
+
+def wait_session():
+    panel = state().panel
+    if panel.job is not None:
+        text = FreeCADGui.getMainWindow().findChild(QtGui.QLabel, "AplanSessionStatus").text()
+        if not result.setdefault("session_progress", []) or result["session_progress"][-1] != text:
+            result["session_progress"].append(text)
+        QtCore.QTimer.singleShot(200, guarded(wait_session))
+        return
+    result["session_seconds"] = round(time.monotonic() - result["session_started"], 1)
+    result["session_result"], result["session_error"], result["session_lines"] = panel.result, panel.error, panel.lines
+    window = FreeCADGui.getMainWindow()
+    result["session_status"] = window.findChild(QtGui.QLabel, "AplanSessionStatus").text()
+    combo = [d for d in window.findChildren(QtGui.QDockWidget) if d.widget() and "Combo" in d.windowTitle()]
+    if combo:  # the task panel wide enough for the belief plot to read
+        window.resizeDocks(combo[:1], [640], QtCore.Qt.Horizontal)
+    if state().plan_dialog is not None:  # the levels dialog of before, out of the picture
+        state().plan_dialog.close()
+    for dock in window.findChildren(QtGui.QDockWidget):  # the report view too: the task view gets its height
+        if dock.windowTitle() == "Report view":
+            dock.hide()
+    QtGui.QApplication.processEvents()
+    QtCore.QTimer.singleShot(800, guarded(session_screenshot))
+
+
+def session_screenshot():
+    state().panel.show_plot()
+    QtGui.QApplication.processEvents()
+    QtCore.QTimer.singleShot(400, guarded(scroll_to_plot))  # the task view laid out with the plot's height
+
+
+def scroll_to_plot():
+    panel = state().panel
+    scroll = panel.plot.parentWidget()
+    while scroll is not None and not isinstance(scroll, QtGui.QScrollArea):
+        scroll = scroll.parentWidget()
+    if scroll is not None:  # the task view scrolled down to the plot's end (its heat map), as a person does
+        scroll.verticalScrollBar().setValue(scroll.verticalScrollBar().maximum())
+        result["session_scroll"] = [type(scroll).__name__, scroll.verticalScrollBar().value()]
+    QtGui.QApplication.processEvents()
+    QtCore.QTimer.singleShot(400, guarded(grab_session))
+
+
+def grab_session():
+    panel = state().panel
+    plot = panel.plot
+    result["session_plot"] = [plot.pixmap() is not None and not plot.pixmap().isNull(), plot.width(), plot.height(),
+                              plot.pixmap().height()]
+    corner = plot.mapToGlobal(QtCore.QPoint(0, 0))
+    result["session_plot_on_screen"] = [corner.x(), corner.y(), plot.width(), plot.height()]
+    QtGui.QApplication.primaryScreen().grabWindow(0).save(os.path.join(ARTIFACTS, "gui_truck_session.png"))
+    plot.grab().save(os.path.join(ARTIFACTS, "gui_truck_session_plot.png"))
+    # The same level from the keyboard: the picks the simulated operator made (the demo's log), typed in the
+    # panel after a line it refuses.
+    events = [json.loads(line) for line in open(panel.result["levels"][0]["log"])]
+    seen = [e["observation"] for e in events if e["event"] == "observation"]
+    typed = [" ".join(n.strip("[]") for n in observation.split("+")) for observation in seen]
+    window = FreeCADGui.getMainWindow()
+    source = window.findChild(QtGui.QComboBox, "AplanSessionSource")
+    source.setCurrentIndex(source.findData("keyboard"))
+    window.findChild(QtGui.QPushButton, "AplanRunSession").click()
+    picks = window.findChild(QtGui.QLineEdit, "AplanSessionPicks")
+    result["keyboard_enabled"] = [picks.isEnabled(), window.findChild(QtGui.QPushButton, "AplanSendPicks").isEnabled()]
+    for line in ["cabin_roof_001 nothing"] + typed:
+        picks.setText(line)
+        window.findChild(QtGui.QPushButton, "AplanSendPicks").click()
+    result["typed"] = typed
+    QtCore.QTimer.singleShot(200, guarded(wait_keyboard))
+
+
+def wait_keyboard():
+    panel = state().panel
+    if panel.job is not None:
+        QtCore.QTimer.singleShot(200, guarded(wait_keyboard))
+        return
+    result["keyboard_result"], result["keyboard_error"], result["keyboard_lines"] = panel.result, panel.error, \
+        panel.lines
+    # Plan in 3D plans per level: the same level chosen, its sequences stepped through in the 3D view.
+    FreeCADGui.runCommand("Aplan_Plan3D")
+    panel = state().panel
+    combo = FreeCADGui.getMainWindow().findChild(QtGui.QComboBox, "AplanPlan3DLevel")
+    result["plan3d_levels"] = [combo.itemData(k) for k in range(combo.count())]
+    combo.setCurrentIndex(combo.findData(result["session_level"]))
+    QtGui.QApplication.processEvents()
+    view = FreeCADGui.ActiveDocument.ActiveView
+    steps = len(panel.exploded.steps)
+    result["plan3d"] = {{"count": panel.count, "steps": steps, "members": sorted(panel.view.objects),
+                        "moving": [sorted(s.moving) for s in panel.exploded.steps]}}
+    for k in range(steps + 1):
+        panel.show(k)
+        QtGui.QApplication.processEvents()
+        view.saveImage(os.path.join(ARTIFACTS, f"gui_truck_plan3d_step_{{k}}.png"), *view.getSize(), "White")
+    panel.close()
     finish(0)
 
 
@@ -220,7 +334,7 @@ def _truck_in_the_window() -> tuple:
     script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, layout_check=LAYOUT_CHECK,
                                         out=str(tmp / "result.json"), copy=str(copy),
                                         bundle=str(tmp / "bundle"), artifacts=str(ARTIFACTS)))
-    return tmp, freecad_gui_run(tmp, script, display=150)
+    return tmp, freecad_gui_run(tmp, script, display=150, timeout=480)  # detection, levels and a session
 
 
 #: The truck's export (for `aplan fasteners`) and the window's run, done in the background (tests/background.py).
@@ -307,3 +421,55 @@ def test_truck_structure_in_the_workbench(real_bundles):  # noqa: F811
     assert data["shown"][-1 if not stats["flat"] else -2][6] == f"{stats['total']['intentions']:,}"
     screen = read_picture(ARTIFACTS / "gui_truck_structure.png")  # measured: 2.7 % dark (text), 565 colours
     assert screen.size == (1280, 800) and screen.share(screen.dark()) >= 0.01 and screen.colours() >= 200
+    # The session panel: the levels of `aplan stats` to choose from (and all of them, bottom-up); the smallest
+    # chosen, its simulated camera session run in the background to the assembled level with progress.
+    assert [data for _, data in data["session_entries"]] == [lv["level"] for lv in stats["levels"]] + ["all levels"]
+    smallest = min(stats["levels"], key=lambda lv: (len(lv["members"]), lv["level"]))
+    assert (data["session_level"], data["session_members"]) == (smallest["level"], len(smallest["members"]))
+    assert data["session_returned"] < 10 and data["session_cancel_enabled"] is True
+    assert data["session_error"] is None, data["session_error"]
+    session = data["session_result"]
+    assert session["assembled"] is True and [d["level"] for d in session["levels"]] == [smallest["level"]]
+    assert session["levels"][0]["reason"] == "assembled"
+    assert session["command"].startswith("aplan session ") and f"--level {smallest['level']}" in session["command"]
+    assert "--expansions 50" in session["command"]
+    assert any(line.startswith("step 1 | belief ") for line in data["session_lines"]), data["session_lines"]
+    assert data["session_progress"][0] == f"starting the session of {smallest['level']}"  # shown while it ran
+    assert data["session_status"].startswith("assembled. ")
+    # The log is one the command line replays (beliefs reproduced at every step); the belief plot written is
+    # Fig. 7's heat map, and the panel shows it (viridis cells and the red line of the most probable intention).
+    log = session["levels"][0]["log"]
+    assert "beliefs reproduced at all" in aplan("replay", log).stdout
+    # (A level of one operation: two assembly states, the belief one cell each step, viridis' top yellow;
+    # measured 7.6 % viridis, 0.42 % red, 1.3 % dark in the file; 5.2 % viridis in the panel's smaller copy.)
+    written = read_picture(session["levels"][0]["plot"])
+    viridis = written.coloured(112.0, width=70, saturation=0.3, value=0.2)  # green to yellow
+    assert written.size[0] == 1300 and written.share(viridis) >= 0.03
+    assert written.share(written.coloured(5.0, width=12, saturation=0.6, value=0.5)) >= 0.002  # the red line
+    assert written.share(written.dark(0.5)) >= 0.006  # its labels
+    shown, width, height, picture_height = data["session_plot"]
+    assert shown is True and width >= 400 and height >= picture_height >= 200  # the whole plot, 1300 px scaled
+    plot = read_picture(ARTIFACTS / "gui_truck_session_plot.png")
+    assert plot.share(plot.coloured(112.0, width=70, saturation=0.3, value=0.2)) >= 0.025
+    screen = read_picture(ARTIFACTS / "gui_truck_session.png")
+    assert screen.size == (1280, 800) and screen.colours() >= 200
+    x, y, width, height = data["session_plot_on_screen"]  # the plot's part in the task view, its heat map in view
+    shown = screen.crop(x, y, width, height)
+    assert shown.share(shown.coloured(112.0, width=70, saturation=0.3, value=0.2)) >= 0.02, data.get("session_scroll")
+    shutil.rmtree(Path(log).parents[1], ignore_errors=True)  # the panel keeps its logs and plots for the user
+    # The keyboard session: the demo's picks typed in give the assembled level too; the bad line is refused.
+    assert data["keyboard_enabled"] == [True, True] and data["keyboard_error"] is None, data["keyboard_error"]
+    typed = data["keyboard_result"]
+    assert typed["assembled"] is True and "--keyboard --robot auto" in typed["command"]
+    assert typed["levels"][0]["steps"] == session["levels"][0]["steps"] == len(data["typed"])
+    assert any("not a part or tool: nothing" in line for line in data["keyboard_lines"]), data["keyboard_lines"]
+    # Plan in 3D on the same level: its plan (the sequences `aplan stats` counts for it), its members only, the
+    # moving parts covering a tenth of the view at each step.
+    assert data["plan3d_levels"] == [lv["level"] for lv in stats["levels"]]
+    shown = data["plan3d"]
+    assert shown["count"] == smallest["sequences"] and shown["steps"] == smallest["operations"]
+    assert set(shown["members"]) <= set(smallest["members"])
+    for k in range(shown["steps"]):
+        step = read_picture(ARTIFACTS / f"gui_truck_plan3d_step_{k}.png")
+        orange = step.coloured(hue_of((1.0, 0.55, 0.0)))  # the moving colour (freecad_aplan.plan3d.COLOURS)
+        assert step.share(orange) >= 0.10, (k, step.share(orange))

@@ -1,0 +1,208 @@
+"""The session task panel: ``aplan session --demo`` in the simulated camera cell, from the workbench.
+
+The designer picks a level (a workstation; all of them bottom-up), the source (the simulated camera cell, or
+the operator's picks typed in the panel: ``--keyboard``), the full sequence the simulated operator follows
+and the online planner's expansions per decision, and runs it: the session runs in a background job
+(``batch.py session``: :func:`freecad_aplan.sessions.run_simulated_session`, the command line in-process), its
+output lines show in the panel as it goes, Cancel ends it, and the belief plot of the last level shows in the
+panel when it ends. Nothing in the document changes.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+
+import FreeCADGui
+from PySide import QtCore, QtGui
+
+from planner.defaults import ONLINE_EXPANSIONS, PRODUCT_FILE
+
+from .. import workflow
+from ..sessions import ALL_LEVELS, base_part_in, level_choices, level_of
+from .layout import button_rows, narrow_combo, panel_layout, stacked_field, wrapped_label
+
+__all__ = ["SessionPanel", "ask_level"]
+
+
+class SessionPanel:
+    """The task panel of one product (the analysis' ``product``, a resolved :class:`~planner.product.Product`).
+
+    ``run()`` starts the session of the selected level, ``cancel()`` ends it; ``lines`` holds the run's output
+    lines so far (the last one shows in the panel), ``result`` the job's answer once it ended (``{"command",
+    "assembled", "levels": [...]}``), ``error`` its message when it failed.
+    """
+
+    def __init__(self, product, base_part: str | None, jobs: list):
+        from planner.product import save_product
+
+        self.product, self.base_part, self.jobs = product, base_part, jobs
+        self.job, self.result, self.error, self.lines, self.running = None, None, None, [], None
+        self.folder = tempfile.mkdtemp(prefix="aplan-session-")
+        self.product_file = os.path.join(self.folder, PRODUCT_FILE)
+        save_product(product, self.product_file)
+        self.levels = level_choices(product)
+        self.form = QtGui.QWidget()
+        self.form.setObjectName("AplanSessionPanel")
+        self.form.setWindowTitle("APLAN: session")
+        layout = panel_layout(self.form)
+        layout.addWidget(wrapped_label("A simulated camera cell: an operator follows a full sequence on a rendered "
+                                       "tray, the robot decides from what the camera sees (aplan session --demo)."))
+        self.level = narrow_combo(QtGui.QComboBox())
+        self.level.setObjectName("AplanSessionLevel")
+        for choice in self.levels:
+            self.level.addItem(choice.label, choice.id)
+        if len(self.levels) > 1:
+            self.level.addItem(f"{ALL_LEVELS}, bottom-up", ALL_LEVELS)
+        stacked_field(layout, "Level (workstation)", self.level)
+        self.source = narrow_combo(QtGui.QComboBox())
+        self.source.setObjectName("AplanSessionSource")
+        self.source.addItem("simulated camera cell", "demo")
+        self.source.addItem("keyboard: type the operator's picks", "keyboard")
+        stacked_field(layout, "Observations from", self.source)
+        self.sequence = QtGui.QSpinBox()
+        self.sequence.setObjectName("AplanSessionSequence")
+        self.sequence.setRange(0, 10**6)
+        stacked_field(layout, "Full sequence the operator follows (by rank)", self.sequence)
+        self.expansions = QtGui.QSpinBox()
+        self.expansions.setObjectName("AplanSessionExpansions")
+        self.expansions.setRange(1, 10**6)
+        self.expansions.setValue(ONLINE_EXPANSIONS)
+        stacked_field(layout, "Online planner: expansions per decision", self.expansions)
+        self.run_button = QtGui.QPushButton("Run session")
+        self.run_button.setObjectName("AplanRunSession")
+        self.run_button.clicked.connect(self.run)
+        self.cancel_button = QtGui.QPushButton("Cancel session")
+        self.cancel_button.setObjectName("AplanCancelSession")
+        self.cancel_button.setEnabled(False)
+        self.cancel_button.clicked.connect(self.cancel)
+        layout.addWidget(button_rows(self.run_button, self.cancel_button))
+        self.picks = QtGui.QLineEdit()
+        self.picks.setObjectName("AplanSessionPicks")
+        self.picks.setPlaceholderText("parts and tool picked; empty: nothing")
+        self.picks.returnPressed.connect(self.send_picks)
+        self.send_button = QtGui.QPushButton("Send picks")
+        self.send_button.setObjectName("AplanSendPicks")
+        self.send_button.clicked.connect(self.send_picks)
+        stacked_field(layout, "Keyboard session: what the operator picked (Enter sends; q stops)", self.picks)
+        layout.addWidget(button_rows(self.send_button))
+        self._keyboard(False)
+        self.progress = QtGui.QProgressBar()
+        self.progress.setObjectName("AplanSessionProgress")
+        self.progress.setRange(0, 1)
+        self.progress.setValue(0)
+        layout.addWidget(self.progress)
+        self.status = wrapped_label("", "AplanSessionStatus")
+        layout.addWidget(self.status)
+        self.plot = QtGui.QLabel()
+        self.plot.setObjectName("AplanSessionPlot")
+        self.plot.setAlignment(QtCore.Qt.AlignHCenter | QtCore.Qt.AlignTop)
+        layout.addWidget(self.plot)
+        layout.addStretch(1)
+
+    def getStandardButtons(self):
+        return int(QtGui.QDialogButtonBox.Close)
+
+    def selected_level(self) -> str | None:
+        return self.level.currentData()
+
+    def _keyboard(self, running: bool) -> None:
+        self.picks.setEnabled(running)
+        self.send_button.setEnabled(running)
+
+    def send_picks(self) -> None:
+        """Send the typed picks to the keyboard session running (one step of the operator)."""
+        if self.job is not None and self.running == "keyboard":
+            self.lines.append(f"picked: {self.picks.text()}")
+            self.job.send(self.picks.text())
+            self.picks.clear()
+
+    def run(self) -> None:
+        """Start the selected level's session in the background (a second one waits for the first)."""
+        from .jobs import BackgroundJob
+
+        if self.job is not None:
+            return
+        self.result, self.error, self.lines = None, None, []
+        level = self.selected_level()
+        count = len(self.levels) if level == ALL_LEVELS else 1
+        self.progress.setRange(0, count)
+        self.progress.setValue(0)
+        self.plot.clear()
+        self.status.setText(f"starting the session of {level or 'the product'}")
+        # the designer's base part for the level that holds it (every level at once: each starts anywhere)
+        base = self.base_part if len(self.levels) == 1 else None if level == ALL_LEVELS else base_part_in(
+            level_of(self.product, level), self.base_part)
+        run = tempfile.mkdtemp(prefix="run-", dir=self.folder)
+        job = {"action": "session", "product_file": self.product_file, "folder": run, "level": level,
+               "sequence": self.sequence.value(), "expansions": self.expansions.value(),
+               "base_part": base, "source": self.source.currentData()}
+        self.job = BackgroundJob(f"Session of {level or 'the product'}", workflow.worker_command("session"), job,
+                                 self._done, self._failed, self.jobs, FreeCADGui.getMainWindow(),
+                                 on_progress=self._progress)
+        self.running = job["source"]  # a keyboard session's picks go to the job's input
+        self.run_button.setEnabled(False)
+        self.cancel_button.setEnabled(True)
+        self._keyboard(job["source"] == "keyboard")
+        self.job.start()
+
+    def cancel(self) -> None:
+        if self.job is not None:
+            self.job.cancel()
+
+    def _progress(self, line: str) -> None:
+        self.lines.append(line)
+        if line.startswith("level ") and " of " in line:  # "level sa2 (1 of 5): ..." starts a level
+            self.progress.setValue(int(line.split("(", 1)[1].split(" of ")[0]) - 1)
+        self.status.setText(line)
+
+    def _ended(self) -> None:
+        self.job = None
+        self._keyboard(False)
+        self.run_button.setEnabled(True)
+        self.cancel_button.setEnabled(False)
+
+    def _done(self, result: dict) -> None:
+        self._ended()
+        self.result = result
+        self.progress.setValue(self.progress.maximum())
+        ended = "; ".join(f"{d['level'] or 'product'}: {d['message']}" for d in result["levels"])
+        self.status.setText(f"{'assembled' if result['assembled'] else 'not assembled'}. {ended}. "
+                            f"Logs and plots: {os.path.dirname(result['levels'][-1]['log'])}")
+        self.show_plot()
+
+    def show_plot(self) -> None:
+        """The belief plot of the last level that ran, at the panel's width (again after the panel was widened)."""
+        if self.result is not None:
+            picture = QtGui.QPixmap(self.result["levels"][-1]["plot"])
+            scaled = picture.scaledToWidth(max(self.form.width(), 200), QtCore.Qt.SmoothTransformation)
+            self.plot.setPixmap(scaled)
+            self.plot.setMinimumHeight(scaled.height())  # whole: the task view scrolls rather than squeeze it
+
+    def _failed(self, message: str) -> None:
+        self._ended()
+        self.error = message
+        self.status.setText(message)
+
+    def close(self) -> bool:
+        """Close the panel, ending a session still running; the logs and plots stay in :attr:`folder`."""
+        self.cancel()
+        FreeCADGui.Control.closeDialog()
+        return True
+
+    def accept(self) -> bool:
+        return self.close()
+
+    def reject(self) -> bool:
+        return self.close()
+
+
+def ask_level(product) -> tuple[bool, str | None]:
+    """(chosen, level): for a product of several workstations the level the designer picks
+    (:func:`freecad_aplan.sessions.level_choices`; chosen False when cancelled), else (True, None)."""
+    choices = level_choices(product)
+    if len(choices) == 1:
+        return True, None
+    labels = [c.label for c in choices]
+    label, ok = QtGui.QInputDialog.getItem(FreeCADGui.getMainWindow(), "APLAN level",
+                                           "Workstation (level) whose decision model to use", labels, 0, False)
+    return bool(ok), choices[labels.index(label)].id if ok else None

@@ -1,0 +1,255 @@
+"""Levels, the model choice and simulated sessions of the workbench, as plain functions (no FreeCAD, no Qt).
+
+The workbench runs what the command line runs, so these only pick arguments and read results:
+
+- :func:`level_choices`: the workstations of a product (:func:`planner.api.levels_of`), bottom-up, as the
+  level selector lists them; one entry, the product itself, for a product planned flat;
+- :func:`model_choice`: the decision model Export model and Solve build: the flat model of Alg. 3 where it fits
+  (the intention limit and the memory budget, :func:`~planner.decision.intention_model.flat_model_fits`: the
+  test the command line's planner choice makes), else the lumped model over the factored model's classes,
+  whose policy the online planner and the offline one follow (``aplan pomdp/solve --lumped``);
+  :func:`level_model` builds it;
+- :func:`session_arguments` and :func:`run_simulated_session`: ``aplan session PRODUCT --demo K`` (the
+  simulated camera cell: an operator following full sequence K on a rendered tray, seen through the vision
+  pipeline) on one level or on every level bottom-up, run in-process through :func:`planner.cli.main`, then
+  ``aplan replay LOG --plot STEM`` for each level's belief plot; or the operator's picks typed in
+  (``--keyboard``), read from standard input. A background job (``batch.py session``) runs it, its output
+  lines being the job's progress, the panel writing the picks to its input.
+"""
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from planner.errors import PlannerError
+
+__all__ = ["LevelChoice", "ModelChoice", "level_choices", "level_of", "member_parts", "base_part_in", "model_choice",
+           "level_model", "flat_level", "session_arguments", "run_simulated_session", "ALL_LEVELS", "SOURCES"]
+
+#: The level selector's entry for "every level, bottom-up" (the command line without ``--level``).
+ALL_LEVELS = "all levels"
+
+
+@dataclass(frozen=True)
+class LevelChoice:
+    """One workstation in the level selector: ``id`` (a subassembly id or ``top``; None for a product planned
+    flat), ``members`` (the level's parts and the subassemblies it joins), ``label`` (what the selector shows)."""
+
+    id: str | None
+    members: tuple[str, ...]
+
+    @property
+    def label(self) -> str:
+        name = self.id if self.id is not None else "the product (flat)"
+        return f"{name}: {len(self.members)} members"
+
+
+@dataclass(frozen=True)
+class ModelChoice:
+    """The decision model of one level: ``kind`` ``flat`` (Alg. 3's model over intentions) or ``lumped`` (over
+    the factored model's classes), ``intentions`` the level's count of intentions, ``note`` why."""
+
+    kind: str
+    intentions: int
+    note: str
+
+
+def level_choices(product) -> list[LevelChoice]:
+    """The levels of ``product`` (a resolved :class:`~planner.product.Product`, its subassemblies as the
+    designer stored them), bottom-up as :func:`planner.api.levels_of` gives them; a product planned flat is one
+    entry with ``id`` None. Cost: that of ``levels_of`` (linear in levels x relations)."""
+    from planner import api
+
+    levels = api.levels_of(product)
+    if len(levels) == 1:
+        return [LevelChoice(None, tuple(levels[0].members))]
+    return [LevelChoice(level.id, tuple(level.members)) for level in levels]
+
+
+def level_of(product, level: str | None):
+    """The product level ``level`` plans (:func:`planner.api.level_product`; ``None``: the product itself,
+    which must then be planned flat, else a :class:`~planner.errors.PlannerError` names the levels)."""
+    from planner import api
+
+    return api.level_product(product, "designer", level)
+
+
+def member_parts(product, level: str | None) -> dict[str, tuple[str, ...]]:
+    """Member of the level ``level`` of ``product`` (None: the product planned flat) -> the product's parts it
+    stands for: a part itself, a subassembly the parts it holds (what Plan in 3D moves as one block). Cost:
+    that of :func:`planner.api.levels_of`."""
+    from planner import api
+
+    levels = {lv.id: lv for lv in api.levels_of(product)}
+    here = level_of(product, level)
+    return {m: tuple(sorted(levels[m].parts)) if m in levels and m != level else (m,) for m in here.part_ids}
+
+
+def base_part_in(level_product, base_part: str | None) -> str | None:
+    """The base part a level's plan starts from: ``base_part`` when the level holds it (or ``auto``: the level's
+    most connected part), else None (the designer's base part sits in another workstation). Cost: O(parts)."""
+    return base_part if base_part in ("auto", *level_product.part_ids) else None
+
+
+def model_choice(product, technical: bool | None = None, base_part: str | None = None, limits=None) -> ModelChoice:
+    """The model the workbench builds for ``product`` (one level): ``flat`` when the flat model fits the
+    intention limit and the memory budget ``limits`` (:class:`~planner.assembly.guards.SizeLimits`, default
+    the machine's), else ``lumped``. Cost: one plan and one count of intentions (no model is built)."""
+    from planner import api
+    from planner.assembly.guards import SizeLimits
+    from planner.assembly.intentions import count_intentions
+    from planner.decision.intention_model import flat_model_fits
+
+    limits = limits or SizeLimits()
+    plan = api.plan_of(product, technical)
+    base = api.base_part_of(plan, base_part)
+    intentions = count_intentions(plan.states, base_part=base)
+    if flat_model_fits(plan, limits.memory, intentions=intentions):
+        return ModelChoice("flat", intentions, f"the flat model: {intentions:,} intentions")
+    return ModelChoice("lumped", intentions, f"the flat model would hold {intentions:,} intentions, more than fits: "
+                                             "the lumped model over the factored model's classes")
+
+
+def level_model(product, level: str | None = None, technical: bool | None = None, base_part: str | None = None):
+    """The decision model Export model and Solve build for level ``level`` of ``product`` (a resolved product or
+    a product file; None: the product planned flat), as :func:`model_choice` says: the flat model
+    (:func:`planner.api.decision_model`) or the lumped one (``api.load_model(..., lumped=True)``, as ``aplan
+    pomdp/solve --lumped``). Returns ``(model, choice)``. Cost: that of building the model."""
+    from planner import api
+
+    level_product = level_of(product if isinstance(product, api.Product) else api.resolve_product(product), level)
+    base_part = base_part_in(level_product, base_part) if level is not None else base_part
+    choice = model_choice(level_product, technical, base_part)
+    return api.load_model(level_product, technical, base_part=base_part, lumped=choice.kind == "lumped"), choice
+
+
+def flat_level(product, level: str | None, technical: bool | None = None, base_part: str | None = None):
+    """``(level product, base part)`` of level ``level`` (:func:`level_of`, :func:`base_part_in`) when its flat
+    model fits (Simulate plays a sequence on it); else a :class:`~planner.errors.PlannerError` naming the session
+    panel, whose online planner decides on the factored model. Cost: that of :func:`model_choice`."""
+    level_product = level_of(product, level)
+    base_part = base_part_in(level_product, base_part) if level is not None else base_part
+    choice = model_choice(level_product, technical, base_part)
+    if choice.kind != "flat":
+        raise PlannerError(f"{'level ' + level if level else level_product.name}: {choice.note}; a policy over "
+                           "classes is simulated by a session: run it with APLAN > Run a session (the online planner)")
+    return level_product, base_part
+
+
+#: Where a session's observations come from: the simulated camera cell, or the operator's picks typed in.
+SOURCES = ("demo", "keyboard")
+
+
+def session_arguments(product_file: str, log: str, level: str | None = None, sequence: int = 0,
+                      expansions: int | None = None, max_steps: int | None = None,
+                      base_part: str | None = None, source: str = "demo") -> list[str]:
+    """The ``aplan session`` arguments of a session of ``product_file``: ``source`` ``demo``, the simulated
+    camera cell (``--demo sequence``), or ``keyboard``, the operator's picks typed in one line a step on
+    standard input, the robot's instructions confirmed at once (``--keyboard --robot auto``); ``level`` None or
+    :data:`ALL_LEVELS`: every level bottom-up, each with its log ``LOG-<level>.jsonl``. With ``expansions`` the
+    online planner does that many expansions per decision and nothing else (no clock: the same decisions on
+    any machine); without, the command line's decision time."""
+    if source not in SOURCES:
+        raise PlannerError(f"unknown session source {source!r}; use one of {', '.join(SOURCES)}")
+    if not (isinstance(sequence, int) and sequence >= 0):
+        raise PlannerError(f"sequence {sequence!r}: a full sequence is a number from 0")
+    picked = ["--demo", str(sequence)] if source == "demo" else ["--keyboard", "--robot", "auto"]
+    arguments = ["session", str(product_file), *picked, "--log", str(log)]
+    if level not in (None, ALL_LEVELS):
+        arguments += ["--level", level]
+    if expansions is not None:
+        arguments += ["--expansions", str(int(expansions))]
+    if max_steps is not None:
+        arguments += ["--max-steps", str(int(max_steps))]
+    if base_part:
+        arguments += ["--base-part", base_part]
+    return arguments
+
+
+class _Lines(io.TextIOBase):
+    """A text stream that hands each complete line to ``on_line`` (and keeps them all); ``on_line`` runs with
+    the streams of before (a progress callback that prints reaches the real output, not this stream)."""
+
+    def __init__(self, on_line: Callable[[str], None] | None) -> None:
+        self.on_line, self.lines, self._partial = on_line, [], ""
+        self.outer = (sys.stdout, sys.stderr)
+
+    def writable(self) -> bool:
+        return True
+
+    def isatty(self) -> bool:  # the session's status lines then end in newlines, one per step
+        return False
+
+    def write(self, text: str) -> int:
+        *done, self._partial = (self._partial + text).replace("\r", "\n").split("\n")
+        for line in done:
+            if line.strip():
+                self.lines.append(line)
+                if self.on_line is not None:
+                    with contextlib.redirect_stdout(self.outer[0]), contextlib.redirect_stderr(self.outer[1]):
+                        self.on_line(line)
+        return len(text)
+
+
+def _aplan(arguments: list[str], progress: Callable[[str], None] | None) -> tuple[int, list[str]]:
+    """``aplan ARGUMENTS`` in this process: its exit status and its output lines (stdout and stderr)."""
+    from planner.cli import main
+
+    lines = _Lines(progress)
+    with contextlib.redirect_stdout(lines), contextlib.redirect_stderr(lines):
+        status = main(arguments)
+    return status, lines.lines
+
+
+def _level_logs(log: str, level: str | None, levels: list[str]) -> list[tuple[str | None, str]]:
+    """(level, log path) of each level a session ran, as ``aplan session`` names them."""
+    if level not in (None, ALL_LEVELS) or len(levels) <= 1:
+        return [(None if level in (None, ALL_LEVELS) else level, log)]
+    return [(name, str(Path(log).with_suffix("")) + f"-{name}.jsonl") for name in levels]
+
+
+def run_simulated_session(product_file: str, folder: str, level: str | None = None, sequence: int = 0,
+                          expansions: int | None = None, max_steps: int | None = None,
+                          base_part: str | None = None, progress: Callable[[str], None] | None = None,
+                          source: str = "demo") -> dict:
+    """Run ``aplan session PRODUCT --demo SEQUENCE`` (:func:`session_arguments`; ``source="keyboard"``: the picks
+    read from standard input instead) with its logs in ``folder``, then ``aplan replay LOG --plot`` for each
+    level that ran; ``progress(line)`` gets every output line (the level started, each step's status line,
+    what ended it).
+
+    Returns ``{"command", "assembled", "levels": [{"level", "reason", "message", "steps", "log", "plot"}]}``
+    (``plot``: the PNG of the belief plot). Raises :class:`~planner.errors.PlannerError` with the command's
+    message when it refuses (an unknown level, a sequence out of range). Cost: that of the session (one
+    decision per step, each ``expansions`` expansions of the online planner) and one replay per level.
+    """
+    from planner import api
+    from planner.runtime.log import read_log
+
+    os.makedirs(folder, exist_ok=True)
+    log = os.path.join(folder, "session.jsonl")
+    arguments = session_arguments(product_file, log, level, sequence, expansions, max_steps, base_part, source)
+    # the levels as the command line resolves PRODUCT (its --fasteners and --subassemblies defaults)
+    resolved = api.resolve_product(product_file, fasteners=api.DEFAULT_MODE, subassemblies=api.DEFAULT_MODE)
+    levels = [lv.id for lv in api.levels_of(resolved)]
+    status, lines = _aplan(arguments, progress)
+    ran = [(name, path) for name, path in _level_logs(log, level, levels) if os.path.isfile(path)]
+    if status not in (0, 1) or not ran:  # 1: a session that ended without the product assembled
+        errors = [line for line in lines if line.startswith("aplan: error")]
+        raise PlannerError((errors[-1] if errors else f"aplan {' '.join(arguments)} ended with status {status}")
+                           .removeprefix("aplan: error: "))
+    done = []
+    for name, path in ran:
+        end = next((e for e in reversed(read_log(path)) if e["event"] == "end"), {})
+        stem = str(Path(path).with_suffix("")) + "-belief"
+        replayed, replay_lines = _aplan(["replay", path, "--plot", stem], None)
+        if replayed != 0:
+            raise PlannerError(f"aplan replay {path}: " + (replay_lines[-1] if replay_lines else f"status {replayed}"))
+        done.append({"level": name, "reason": end.get("reason"), "message": end.get("message"),
+                     "steps": end.get("step"), "log": path, "plot": stem + ".png"})
+    return {"command": "aplan " + " ".join(arguments), "assembled": all(d["reason"] == "assembled" for d in done),
+            "levels": done}
