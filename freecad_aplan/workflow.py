@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 from pathlib import Path
 
 from planner.defaults import (
@@ -35,9 +34,10 @@ from planner.defaults import (
     WORKBENCH_SOLVE_TIME_LIMIT,
 )
 from planner.errors import PlannerError
-from planner.files import make_folder_beside
+from planner.files import building_folder
 
-from . import ADDON_DIR
+from .dependencies import MESH_ENGINE, installed
+from .dependencies import mesh_python as _mesh_python  # the name the commands and tests use
 from .protocol import BATCH_SCRIPT
 
 __all__ = ["require_analysis", "export_for_detection", "detection_copy", "worker_command", "analyze_bundle",
@@ -97,16 +97,6 @@ def detection_copy(document, folder: str) -> tuple[str, int]:
     return path, len(result.components)
 
 
-def _mesh_python() -> str | None:
-    """The Python that runs the mesh engine: ``$APLAN_PYTHON``, else the addon's own ``.venv`` (made by
-    ``scripts/setup.sh``), else None (then FreeCADCmd, when FreeCAD's Python has trimesh and manifold3d)."""
-    explicit = os.environ.get("APLAN_PYTHON")
-    if explicit:
-        return explicit
-    venv = os.path.join(ADDON_DIR, ".venv", "bin", "python")
-    return venv if os.path.isfile(venv) and os.access(venv, os.X_OK) else None
-
-
 def worker_command(action: str, engine: str | None = None) -> list[str]:
     """The program and arguments of a background job running ``batch.py`` (``action``: export, analyze,
     level-stats, solve).
@@ -115,7 +105,6 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
     runs in :func:`_mesh_python`, else in FreeCADCmd when FreeCAD's Python has them. Raises
     :class:`~freecad_aplan.runner.FreeCADError` saying what to install when none can.
     """
-    from .dependencies import MESH_ENGINE, installed
     from .runner import FreeCADError, find_freecadcmd
 
     if action == "level-stats" and _mesh_python() is not None:  # the planner alone: no FreeCAD to start
@@ -138,8 +127,7 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
     Returns the counts (parts, contacts, interferences, seconds). Runs in a background job.
     """
     from planner.geometry import Tolerances
-    from planner.geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
-    from planner.product import save_product
+    from planner.geometry.bundle import PRODUCT_FILE, analyse_bundle, load_bundle
 
     product = load_bundle(folder)
     tolerances = Tolerances(contact=contact, interference=interference, depth=depth)
@@ -155,8 +143,8 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
                                                            pair_steps=tolerances.pair_steps,
                                                            time_limit=tolerances.time_limit))
     else:
-        report = analyze_product(product, engine, tolerances)
-    save_product(apply_report(product, report), Path(folder) / PRODUCT_FILE)
+        report = None  # the engine runs in analyse_bundle
+    _, report = analyse_bundle(product, Path(folder) / PRODUCT_FILE, engine, tolerances, report)
     return {"parts": len(report.parts), "contacts": len(report.contacts),
             "interferences": len(report.interferences), "seconds": round(report.seconds, 3)}
 
@@ -312,44 +300,19 @@ def unmark_not_blocking(analysis, relations) -> None:
 
 
 def analysis_product(analysis, name: str = ""):
-    """The product the planner sees: the stored diagrams plus the designer intent (a ``planner.Product``).
+    """The product the planner sees in ``analysis`` (:func:`freecad_aplan.analysis.analysis_product`); imported
+    here, not at the top, because the analysis reads FreeCAD objects and the background jobs import this module
+    in a plain Python."""
+    from .analysis import analysis_product as product_of
 
-    Raises :class:`~freecad_aplan.intent.IntentError` when nothing was detected yet or the intent does not fit.
-    """
-    from planner.errors import ProductFormatError
-    from planner.product import product_from_dict
-
-    from .intent import IntentError, designer_record, product_intent, read_intent
-    from .structure import component_objects, structure_entries
-
-    intent = read_intent(analysis)
-    diagrams = intent.diagrams
-    if not diagrams.get("parts"):
-        raise IntentError(f"{analysis.Label}: no contacts and obstructions yet; run APLAN > Detect contacts "
-                          "and obstructions first")
-    labels, volumes = diagrams.get("labels", {}), diagrams.get("volumes", {})
-    parts = [{"id": p, **({"label": labels[p]} if p in labels else {}),
-              **({"volume": volumes[p]} if p in volumes else {})} for p in diagrams["parts"]]
-    data = {"format": PRODUCT_FORMAT, "version": PRODUCT_VERSION, "name": name or analysis.Document.Label,
-            "parts": parts, "contacts": diagrams["contacts"], "obstructions": diagrams["obstructions"],
-            **product_intent(intent), **structure_entries(intent, component_objects(intent))}
-    record, released = designer_record(intent), diagrams.get("analysis", {}).get("designer")
-    if record or released:  # the designer's directions and marks, and what the marks released (aplan stats)
-        data["geometry"] = {**({"designer": record} if record else {}),
-                            **({"analysis": {"designer": released}} if released else {})}
-    try:
-        return product_from_dict(data, analysis.Label)
-    except ProductFormatError as exc:
-        raise IntentError(f"{analysis.Label}: {exc.location}: {exc.problem}; fix it in the APLAN task panels, "
-                          "or run the detection again if the components changed") from None
+    return product_of(analysis, name)
 
 
 def analysis_base_part(analysis) -> str | None:
-    """The analysis' base part (``BasePart``): None when empty, else ``auto`` or a component id, as the
-    planner's ``base_part`` arguments take it (:func:`planner.api.base_part_of` resolves and checks it)."""
-    from .intent import read_intent
+    """The analysis' base part (:func:`freecad_aplan.analysis.analysis_base_part`)."""
+    from .analysis import analysis_base_part as base_part_of
 
-    return read_intent(analysis).base_part or None
+    return base_part_of(analysis)
 
 
 def plan_report(product, folder: str | None = None, technical: bool | None = None, base_part: str | None = None):
@@ -398,10 +361,8 @@ def export_analysis_bundle(document, analysis, bundle: str) -> None:
     from planner.product import save_product
 
     product = analysis_product(analysis)
-    bundle = os.path.abspath(bundle)
-    work = str(make_folder_beside(bundle))  # 0o777 less the umask (mkdtemp's 0o700 would stay on the bundle)
-    try:
-        export_for_detection(document, work)
+    with building_folder(os.path.abspath(bundle)) as work:  # renamed into place when everything succeeded
+        export_for_detection(document, str(work))
         exported = load_bundle(work)
         if sorted(exported.part_ids) != sorted(product.part_ids):
             raise PlannerError(f"the components {sorted(exported.part_ids)} differ from those of the last detection "
@@ -409,12 +370,6 @@ def export_analysis_bundle(document, analysis, bundle: str) -> None:
         save_product(replace(exported, contacts=product.contacts, obstructions=product.obstructions,
                              geometry={**exported.geometry, "analysis": analysis_diagrams(analysis)}),
                      os.path.join(work, PRODUCT_FILE))
-        if os.path.exists(bundle):
-            shutil.rmtree(bundle)
-        os.rename(work, bundle)
-    except BaseException:
-        shutil.rmtree(work, ignore_errors=True)
-        raise
 
 
 def analysis_diagrams(analysis) -> dict:
