@@ -35,8 +35,9 @@ from ..errors import GeometryError
 from .feasibility import InterlockedPair, interlocked_pairs
 from ..product import Direction, Obstruction, Product
 from ..product.merge import merge_parts
-from ..geometry.mesh_engine import (_MERGE_ANGLE, _PATCH_SHARE, PartMesh, _blocking_pairs, _canonical,
-                          _facet_normals, _frame, _manifold, candidate_directions)
+from ..geometry.meshes import PartMesh, _manifold
+from ..geometry.projection import (_MERGE_ANGLE, _PATCH_SHARE, _blocking_pairs, _canonical, _facet_normals, _frame,
+                                  candidate_directions)
 from ..geometry.tolerances import Tolerances
 
 __all__ = ["InterlockDecision", "Unresolved", "resolve_interlocks", "apply_interlock_mode", "RULES", "INTERLOCK_MODES",

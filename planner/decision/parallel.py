@@ -20,7 +20,7 @@ class unchanged, as in the paper. So ``R(c, a) = wrong + q (r(o) - wrong)``. Eve
 ``(c, a)`` determines ``f``, ``e2`` and ``e'`` (an operation applied to a state has one result), so the pairs are
 a sparse table keyed by ``c * A + a`` (:class:`ParallelTable`). Cost of :func:`parallel_table`: O(C log E) time
 for the C = nnz(M) candidates (class, class out of its target) of the advance matrix, at most 100 bytes a
-candidate at its peak, about 66 bytes a pair held (:func:`check_parallel_memory` refuses past the budget).
+candidate at its peak, about 66 bytes a pair held (:func:`~planner.decision.budget.check_parallel_memory` refuses past the budget).
 """
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ import numpy as np
 
 from ..assembly.intentions import allowed_edges
 
-__all__ = ["ParallelTable", "parallel_table", "parallel_rewrite", "parallel_bytes", "check_parallel_memory",
+__all__ = ["ParallelTable", "parallel_table", "parallel_rewrite", "parallel_bytes",
            "parallel_candidates", "parallel_predict", "parallel_rewards", "parallel_expected_rewards"]
 
 
@@ -90,23 +90,6 @@ def parallel_candidates(states) -> int:
 def parallel_bytes(states) -> int:
     """The most :func:`parallel_table` takes on a plan's state graph ``states``, from counts alone."""
     return CANDIDATE_BYTES * parallel_candidates(states)
-
-
-def check_parallel_memory(plan, budget: int) -> None:
-    """Refuse the parallel model of ``plan`` when the factored model, the online planner's values and the
-    pairs, with the plan held, would not fit in ``budget`` bytes (:class:`~planner.errors.MemoryLimitError`, with
-    the estimate and the options). Cost: O(E)."""
-    from ..assembly.guards import memory_options
-    from ..errors import MemoryLimitError, gib
-    from .budget import online_bytes, plan_bytes
-
-    states = plan.states
-    pairs = parallel_bytes(states)
-    needed = plan_bytes(plan) + online_bytes(states.n_states, states.n_edges) + pairs
-    if needed > budget:
-        raise MemoryLimitError("parallel model (its pairs)", needed, budget,
-                               f"{parallel_candidates(states):,} candidate pairs ({gib(pairs)}) beside the factored "
-                               "model", "Leave out --parallel, or plan a smaller product.", memory_options(needed))
 
 
 def parallel_table(model) -> ParallelTable:
