@@ -28,8 +28,6 @@ from planner.defaults import (
     CONTACT_TOLERANCE,
     INTERFERENCE_VOLUME,
     PRODUCT_FILE,
-    PRODUCT_FORMAT,
-    PRODUCT_VERSION,
     SOLVE_PRECISION,
     WORKBENCH_SOLVE_TIME_LIMIT,
 )
@@ -38,6 +36,7 @@ from planner.files import building_folder
 
 from .dependencies import MESH_ENGINE, installed
 from .dependencies import mesh_python as _mesh_python  # the name the commands and tests use
+from .designer_edits import add_analysis_direction, edit_analysis_diagrams, mark_not_blocking, unmark_not_blocking
 from .protocol import BATCH_SCRIPT
 
 __all__ = ["require_analysis", "export_for_detection", "detection_copy", "worker_command", "analyze_bundle",
@@ -45,7 +44,7 @@ __all__ = ["require_analysis", "export_for_detection", "detection_copy", "worker
            "unmark_not_blocking", "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report",
            "has_levels", "level_statistics_report",
            "export_analysis_bundle", "export_decision_model",
-           "solve_product", "simulate_sequence", "BATCH_SCRIPT"]
+           "solve_product", "simulate_sequence", "analysis_spec", "spec_fields", "BATCH_SCRIPT"]
 
 
 
@@ -167,138 +166,6 @@ def store_detection(analysis, folder: str):
     return update_intent(analysis, "detect contacts and obstructions", diagrams=diagrams)
 
 
-def edit_analysis_diagrams(analysis, remove=(), add=()) -> dict:
-    """Remove and add relations of the analysis' stored diagrams in one undoable transaction.
-
-    Relations are ``(kind, a, b)`` triples (:mod:`freecad_aplan.diagrams`: ``("contact", a, b)``,
-    ``("blocks +X", x, y)`` for x blocked by y along +X). The diagrams panel calls this on OK. Raises
-    :class:`~freecad_aplan.diagrams.RelationError` (unknown component, a component related to itself, a
-    duplicate, a relation that is not there) or :class:`~freecad_aplan.intent.IntentError` (nothing detected
-    yet, a newer format) before anything changes. Returns the new diagrams.
-    """
-    from .diagrams import describe_relation, edited_diagrams
-    from .intent import IntentError, read_intent, update_intent
-
-    remove, add = [tuple(r) for r in remove], [tuple(r) for r in add]
-    diagrams = read_intent(analysis).diagrams
-    if not diagrams.get("parts"):
-        raise IntentError(f"{analysis.Label}: no contacts and obstructions yet; run APLAN > Detect contacts "
-                          "and obstructions first")
-    new = edited_diagrams(diagrams, remove, add)
-    if len(remove) + len(add) == 1:
-        description = ("remove " if remove else "add ") + describe_relation((remove or add)[0])
-    else:
-        description = f"edit diagrams ({len(remove)} removed, {len(add)} added)"
-    if remove or add:
-        update_intent(analysis, description, diagrams=new)
-    return new
-
-
-def _designer_product(analysis):
-    """The stored diagrams as a product with the analysis' designer directions and marks (``geometry.designer``)
-    and the detection's record (``geometry.analysis``), and the intent. Parts: the components, or one stand-in
-    before any detection (directions need no parts)."""
-    from planner.product import product_from_dict
-
-    from .intent import designer_record, read_intent
-
-    intent = read_intent(analysis)
-    diagrams = intent.diagrams
-    record = designer_record(intent)
-    data = {"format": PRODUCT_FORMAT, "version": PRODUCT_VERSION,
-            "parts": [{"id": p} for p in diagrams.get("parts") or ["-"]], "contacts": diagrams.get("contacts", []),
-            "obstructions": diagrams.get("obstructions", []),
-            "geometry": {"analysis": diagrams.get("analysis", {}), **({"designer": record} if record else {})}}
-    return product_from_dict(data, analysis.Label), intent
-
-
-def _store_designer(analysis, intent, product, description: str) -> None:
-    """Keep the designer record of ``product`` in the analysis, and its diagrams when something was detected:
-    one undoable transaction."""
-    from planner.product import product_to_dict
-
-    from .intent import update_intent
-
-    record = product.geometry.get("designer", {})
-    changes = {"directions": [list(v) for v in record.get("directions", [])],
-               "not_blocking": [dict(m) for m in record.get("not_blocking", [])]}
-    if intent.diagrams.get("parts"):
-        data = product_to_dict(product)
-        changes["diagrams"] = {**intent.diagrams, "obstructions": data["obstructions"],
-                               "analysis": product.geometry.get("analysis", {})}
-    update_intent(analysis, description, **changes)
-
-
-def add_analysis_direction(analysis, direction) -> list[str]:
-    """Add a designer direction (``X,Y,Z`` text or three numbers: checked and normalised) to the analysis, in
-    one undoable transaction; the next detection tests it like the axes. Returns notes: a direction along an
-    axis or within 2 degrees of one already there is merged (nothing changes). Raises
-    :class:`~planner.errors.GeometryError` for a bad vector, before anything changes."""
-    from planner.product.designer import add_directions
-
-    product, intent = _designer_product(analysis)
-    added, notes = add_directions(product, [direction])
-    if not notes:
-        name = added.geometry["designer"]["directions"][-1]
-        _store_designer(analysis, intent, added, f"add direction {', '.join(f'{c:g}' for c in name)}")
-    return notes
-
-
-def _marks(relations) -> list[tuple[str, str, object]]:
-    """Diagram rows ``("blocks D", x, y)`` as marks ``(x, y, D)``; D an axis name or a JSON vector."""
-    from .diagrams import RelationError
-
-    marks = []
-    for kind, x, y in relations:
-        if not kind.startswith("blocks "):
-            raise RelationError(f"{kind} {x} - {y}: only an obstruction can be marked not blocking")
-        name = kind[len("blocks "):]
-        marks.append((x, y, name if not name.startswith("[") else json.loads(name)))
-    return marks
-
-
-def mark_not_blocking(analysis, relations) -> list[str]:
-    """Mark obstruction relations of the stored diagrams (rows ``("blocks +X", x, y)``: x blocked by y along
-    +X) not blocking, in one undoable transaction: they leave the diagrams now and after every detection (the
-    analysis' ``NotBlocking``). A mark along a direction that is neither an axis nor a designer direction adds
-    it to the designer directions. Returns notes. Raises :class:`~freecad_aplan.diagrams.RelationError` for a
-    relation the diagrams do not hold or a contact, :class:`~freecad_aplan.intent.IntentError` before any
-    detection; nothing changes then."""
-    from planner.product.designer import mark_not_blocking as mark
-
-    from .diagrams import RelationError, _key, describe_relation, relation_rows
-    from .intent import IntentError
-
-    product, intent = _designer_product(analysis)
-    if not intent.diagrams.get("parts"):
-        raise IntentError(f"{analysis.Label}: no contacts and obstructions yet; run APLAN > Detect contacts "
-                          "and obstructions first")
-    relations = [tuple(r) for r in relations]
-    held = {_key(r) for r in relation_rows(intent.diagrams)}
-    for relation in relations:
-        if relation[0].startswith("blocks ") and _key(relation) not in held:
-            raise RelationError(f"cannot mark {describe_relation(relation)} not blocking: the diagrams do not hold it")
-    marked, notes = mark(product, _marks(relations))
-    what = describe_relation(relations[0]) if len(relations) == 1 else f"{len(relations)} relations"
-    _store_designer(analysis, intent, marked, f"mark {what} not blocking")
-    return notes
-
-
-def unmark_not_blocking(analysis, relations) -> None:
-    """Take designer marks back (rows ``("blocks +X", x, y)`` as :func:`mark_not_blocking` takes them), in one
-    undoable transaction: the relations they released return to the stored diagrams. Raises
-    :class:`~planner.errors.GeometryError` for a relation that is not marked; nothing changes then."""
-    from planner.product.designer import unmark_not_blocking as unmark
-
-    from .diagrams import describe_relation
-
-    product, intent = _designer_product(analysis)
-    relations = [tuple(r) for r in relations]
-    unmarked = unmark(product, _marks(relations))
-    what = describe_relation(relations[0]) if len(relations) == 1 else f"{len(relations)} relations"
-    _store_designer(analysis, intent, unmarked, f"unmark {what}")
-
-
 def analysis_product(analysis, name: str = ""):
     """The product the planner sees in ``analysis`` (:func:`freecad_aplan.analysis.analysis_product`); imported
     here, not at the top, because the analysis reads FreeCAD objects and the background jobs import this module
@@ -313,6 +180,30 @@ def analysis_base_part(analysis) -> str | None:
     from .analysis import analysis_base_part as base_part_of
 
     return base_part_of(analysis)
+
+
+def analysis_spec(analysis, technical: bool | None = None):
+    """The decision model the workbench's commands build for ``analysis``: a
+    :class:`~planner.api.specs.ModelSpec` with its base part (:func:`analysis_base_part`) and the paper's
+    rewards and discount, built once per command and passed to :func:`export_decision_model`,
+    :func:`simulate_sequence` and the solve job (whose JSON carries its fields: :func:`spec_fields`)."""
+    from planner.api import ModelSpec
+
+    return ModelSpec(technical=technical, base_part=analysis_base_part(analysis))
+
+
+def spec_fields(spec) -> dict:
+    """The fields of ``spec`` the workbench sets (technical constraints, base part), as a background job's
+    JSON carries them to :func:`solve_product`."""
+    return {"technical": spec.technical, "base_part": spec.base_part}
+
+
+def _spec(spec, technical: bool | None, base_part: str | None):
+    """``spec``, or the :class:`~planner.api.specs.ModelSpec` of ``technical`` and ``base_part`` (callers that
+    pass the two fields, as tests and scripts do)."""
+    from planner.api import ModelSpec
+
+    return spec if spec is not None else ModelSpec(technical=technical, base_part=base_part)
 
 
 def plan_report(product, folder: str | None = None, technical: bool | None = None, base_part: str | None = None):
@@ -381,12 +272,14 @@ def analysis_diagrams(analysis) -> dict:
     return stored_analysis(read_intent(analysis).diagrams)
 
 
-def export_decision_model(product, path: str, technical: bool | None = None, base_part: str | None = None) -> dict:
-    """Write the POMDP of ``product`` (Alg. 3; with ``base_part``, over the sequences that start from it) as
-    POMDPX or ``.pomdp`` (by the file name); returns its sizes."""
+def export_decision_model(product, path: str, technical: bool | None = None, base_part: str | None = None,
+                          spec=None) -> dict:
+    """Write the POMDP of ``product`` (Alg. 3; with ``base_part``, over the sequences that start from it; or the
+    model ``spec`` describes: :func:`analysis_spec`) as POMDPX or ``.pomdp`` (by the file name); returns its
+    sizes."""
     from planner import api
 
-    model = api.decision_model(product, technical, base_part=base_part)
+    model = api.model_of(product, _spec(spec, technical, base_part), flat=True)
     api.save_model(model, path)
     return {"states": model.pomdp.n_states, "actions": model.pomdp.n_actions,
             "observations": model.pomdp.n_observations}
@@ -400,7 +293,7 @@ def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE
     from planner import api
     from planner.decision.policy import write_policy
 
-    model = api.decision_model(product, technical, base_part=base_part)
+    model = api.model_of(product, _spec(None, technical, base_part), flat=True)
     result = api.solve(model, time_limit, precision, progress=progress)
     # A policy no better than the blind ones is refused (a PlannerError naming the bound and what helps);
     # one barely better is written with the warning.
@@ -412,15 +305,16 @@ def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE
 
 
 def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None = None, seed: int = 0,
-                      technical: bool | None = None, base_part: str | None = None) -> dict:
+                      technical: bool | None = None, base_part: str | None = None, spec=None) -> dict:
     """Play the operator through full sequence ``sequence`` (default: the first) against the policy, taking
     turns with the robot, and write the belief plot ``stem.png``/``stem.svg``; returns the steps and the plot
-    paths. ``base_part``: the model's, as the policy was solved for."""
+    paths. ``base_part`` (or ``spec``, :func:`analysis_spec`): the model's, as the policy was solved for."""
     from planner import api
     from planner.decision.belief_plot import episode_trace, plot_beliefs
 
-    model = api.decision_model(product, technical, base_part=base_part)
-    policy, _ = api.policy_for(model, policy_path)
+    spec = _spec(spec, technical, base_part)
+    model = api.model_of(product, spec, flat=True)
+    policy, _ = api.policy_for(model, policy_path, inputs=spec.inputs)
     episode, = api.simulate(model, policy, None if sequence is None else [sequence], seed=seed, operator="turns",
                             what="sequence")
     operations = " ; ".join(model.describe_operations(episode.start))

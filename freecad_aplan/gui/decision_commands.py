@@ -40,7 +40,7 @@ class ExportModel(_Command):
         product = workflow.analysis_product(analysis)
         path = _save_path("Export decision model", "POMDPX (*.pomdpx);;POMDP (*.pomdp)", ".pomdpx")
         if path:
-            sizes = workflow.export_decision_model(product, path, base_part=workflow.analysis_base_part(analysis))
+            sizes = workflow.export_decision_model(product, path, spec=workflow.analysis_spec(analysis))
             _message(f"wrote {path}: {sizes['states']} states, {sizes['actions']} actions, "
                      f"{sizes['observations']} observations", error=False)
 
@@ -75,7 +75,7 @@ class Solve(_Command):
             _message(message)
 
         job = {"action": "solve", "product": os.path.join(folder, PRODUCT_FILE), "output": path,
-               "time_limit": seconds, "base_part": workflow.analysis_base_part(analysis)}
+               "time_limit": seconds, **workflow.spec_fields(workflow.analysis_spec(analysis))}
         BackgroundJob(f"Solving the decision model ({seconds:g} s)", workflow.worker_command("solve"), job, done,
                       failed, self.state.jobs, FreeCADGui.getMainWindow()).start()
 
@@ -101,7 +101,7 @@ class Simulate(_Command):
             return
         stem = os.path.join(tempfile.mkdtemp(prefix="aplan-simulate-"), "belief")
         result = workflow.simulate_sequence(product, policy, stem, None if sequence < 0 else sequence,
-                                            base_part=workflow.analysis_base_part(analysis))
+                                            spec=workflow.analysis_spec(analysis))
         from planner.decision.simulate import confidence_text
 
         said = confidence_text(result["confident_after"], CONFIDENCE)
