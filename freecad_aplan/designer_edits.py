@@ -10,6 +10,8 @@ from __future__ import annotations
 import json
 
 from planner.defaults import PRODUCT_FORMAT, PRODUCT_VERSION
+from planner.product import product_from_dict, product_to_dict
+from planner.product.designer import add_directions, mark_not_blocking as mark, unmark_not_blocking as unmark
 
 __all__ = ["edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking", "unmark_not_blocking"]
 
@@ -45,8 +47,6 @@ def _designer_product(analysis):
     """The stored diagrams as a product with the analysis' designer directions and marks (``geometry.designer``)
     and the detection's record (``geometry.analysis``), and the intent. Parts: the components, or one stand-in
     before any detection (directions need no parts)."""
-    from planner.product import product_from_dict
-
     from .intent import designer_record, read_intent
 
     intent = read_intent(analysis)
@@ -62,8 +62,6 @@ def _designer_product(analysis):
 def _store_designer(analysis, intent, product, description: str) -> None:
     """Keep the designer record of ``product`` in the analysis, and its diagrams when something was detected:
     one undoable transaction."""
-    from planner.product import product_to_dict
-
     from .intent import update_intent
 
     record = product.geometry.get("designer", {})
@@ -81,8 +79,6 @@ def add_analysis_direction(analysis, direction) -> list[str]:
     one undoable transaction; the next detection tests it like the axes. Returns notes: a direction along an
     axis or within 2 degrees of one already there is merged (nothing changes). Raises
     :class:`~planner.errors.GeometryError` for a bad vector, before anything changes."""
-    from planner.product.designer import add_directions
-
     product, intent = _designer_product(analysis)
     added, notes = add_directions(product, [direction])
     if not notes:
@@ -111,8 +107,6 @@ def mark_not_blocking(analysis, relations) -> list[str]:
     it to the designer directions. Returns notes. Raises :class:`~freecad_aplan.diagrams.RelationError` for a
     relation the diagrams do not hold or a contact, :class:`~freecad_aplan.intent.IntentError` before any
     detection; nothing changes then."""
-    from planner.product.designer import mark_not_blocking as mark
-
     from .diagrams import RelationError, _key, describe_relation, relation_rows
     from .intent import IntentError
 
@@ -135,8 +129,6 @@ def unmark_not_blocking(analysis, relations) -> None:
     """Take designer marks back (rows ``("blocks +X", x, y)`` as :func:`mark_not_blocking` takes them), in one
     undoable transaction: the relations they released return to the stored diagrams. Raises
     :class:`~planner.errors.GeometryError` for a relation that is not marked; nothing changes then."""
-    from planner.product.designer import unmark_not_blocking as unmark
-
     from .diagrams import describe_relation
 
     product, intent = _designer_product(analysis)

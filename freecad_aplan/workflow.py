@@ -22,6 +22,8 @@ import json
 import os
 from pathlib import Path
 
+from planner import api
+from planner.decision.policy import write_policy
 from planner.defaults import (
     BLOCKING_DEPTH,
     CONFIDENCE,
@@ -33,6 +35,8 @@ from planner.defaults import (
 )
 from planner.errors import PlannerError
 from planner.files import building_folder
+from planner.product import fold, product_to_dict, save_product
+from planner.product.designer import designer_geometry
 
 from .dependencies import MESH_ENGINE, installed
 from .dependencies import mesh_python as _mesh_python  # the name the commands and tests use
@@ -131,8 +135,6 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
     product = load_bundle(folder)
     tolerances = Tolerances(contact=contact, interference=interference, depth=depth)
     if engine == "occt":
-        from planner.product.designer import designer_geometry
-
         from .occt import analyze_bundle_breps
         from .plugin import occt_report
 
@@ -151,8 +153,6 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
 def store_detection(analysis, folder: str):
     """Keep the diagrams of the analysed bundle ``folder`` in the analysis (one undoable step)."""
     from planner.geometry.bundle import load_bundle
-    from planner.product import product_to_dict
-
     from .intent import update_intent
 
     raw = json.loads((Path(folder) / PRODUCT_FILE).read_text(encoding="utf-8"))
@@ -187,9 +187,7 @@ def analysis_spec(analysis, technical: bool | None = None):
     :class:`~planner.api.specs.ModelSpec` with its base part (:func:`analysis_base_part`) and the paper's
     rewards and discount, built once per command and passed to :func:`export_decision_model`,
     :func:`simulate_sequence` and the solve job (whose JSON carries its fields: :func:`spec_fields`)."""
-    from planner.api import ModelSpec
-
-    return ModelSpec(technical=technical, base_part=analysis_base_part(analysis))
+    return api.ModelSpec(technical=technical, base_part=analysis_base_part(analysis))
 
 
 def spec_fields(spec) -> dict:
@@ -201,17 +199,13 @@ def spec_fields(spec) -> dict:
 def _spec(spec, technical: bool | None, base_part: str | None):
     """``spec``, or the :class:`~planner.api.specs.ModelSpec` of ``technical`` and ``base_part`` (callers that
     pass the two fields, as tests and scripts do)."""
-    from planner.api import ModelSpec
-
-    return spec if spec is not None else ModelSpec(technical=technical, base_part=base_part)
+    return spec if spec is not None else api.ModelSpec(technical=technical, base_part=base_part)
 
 
 def plan_report(product, folder: str | None = None, technical: bool | None = None, base_part: str | None = None):
     """The plan of ``product``, its statistics (``aplan stats``'s figures; with ``base_part``, the sequences that
     start from it and their intentions) and, with ``folder``, the pictures of its AND/OR, state and intention
     graphs (:func:`planner.assembly.figures.draw_plan`)."""
-    from planner import api
-
     plan, statistics = api.plan_statistics_of(product, technical, base_part)
     images = {}
     if folder is not None:
@@ -223,8 +217,6 @@ def plan_report(product, folder: str | None = None, technical: bool | None = Non
 
 def has_levels(product) -> bool:
     """True when ``product`` is planned as several workstations (its ``subassemblies``, with the designer's mode)."""
-    from planner import api
-
     return len(api.levels_of(product)) > 1
 
 
@@ -232,9 +224,6 @@ def level_statistics_report(product: str, technical: bool | None = None, progres
     """The per-level figures of the product file ``product`` (a background job): those ``aplan stats --json``
     prints for a product of several workstations (:func:`planner.api.level_report`), plus ``fasteners``: the
     folded groups (id, parts, hosts, tool). ``progress(text)`` is told each level as it starts."""
-    from planner import api
-    from planner.product import fold
-
     loaded = api.resolve_product(product)
     report = api.level_report(loaded, technical, progress=progress)
     report["fasteners"] = [{"id": g.id, "parts": list(g.parts), "hosts": sorted(g.hosts), "tool": g.tool}
@@ -249,8 +238,6 @@ def export_analysis_bundle(document, analysis, bundle: str) -> None:
     from dataclasses import replace
 
     from planner.geometry.bundle import PRODUCT_FILE, load_bundle
-    from planner.product import save_product
-
     product = analysis_product(analysis)
     with building_folder(os.path.abspath(bundle)) as work:  # renamed into place when everything succeeded
         export_for_detection(document, str(work))
@@ -277,8 +264,6 @@ def export_decision_model(product, path: str, technical: bool | None = None, bas
     """Write the POMDP of ``product`` (Alg. 3; with ``base_part``, over the sequences that start from it; or the
     model ``spec`` describes: :func:`analysis_spec`) as POMDPX or ``.pomdp`` (by the file name); returns its
     sizes."""
-    from planner import api
-
     model = api.model_of(product, _spec(spec, technical, base_part), flat=True)
     api.save_model(model, path)
     return {"states": model.pomdp.n_states, "actions": model.pomdp.n_actions,
@@ -290,9 +275,6 @@ def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE
                   base_part: str | None = None) -> dict:
     """Solve the decision model of the product file ``product`` (with ``base_part``: over the sequences that
     start from it) and write the policy to ``output`` (a background job)."""
-    from planner import api
-    from planner.decision.policy import write_policy
-
     model = api.model_of(product, _spec(None, technical, base_part), flat=True)
     result = api.solve(model, time_limit, precision, progress=progress)
     # A policy no better than the blind ones is refused (a PlannerError naming the bound and what helps);
@@ -309,7 +291,6 @@ def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None
     """Play the operator through full sequence ``sequence`` (default: the first) against the policy, taking
     turns with the robot, and write the belief plot ``stem.png``/``stem.svg``; returns the steps and the plot
     paths. ``base_part`` (or ``spec``, :func:`analysis_spec`): the model's, as the policy was solved for."""
-    from planner import api
     from planner.decision.belief_plot import episode_trace, plot_beliefs
 
     spec = _spec(spec, technical, base_part)
