@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import json
 import os
+import re
+from dataclasses import replace
 from pathlib import Path
 
 from planner import api
@@ -41,7 +43,9 @@ from planner.product.designer import designer_geometry
 from .dependencies import MESH_ENGINE, installed
 from .dependencies import mesh_python as _mesh_python  # the name the commands and tests use
 from .designer_edits import add_analysis_direction, edit_analysis_diagrams, mark_not_blocking, unmark_not_blocking
+from .diagrams import stored_analysis
 from .protocol import BATCH_SCRIPT
+from .runner import FreeCADError, find_freecadcmd
 
 __all__ = ["require_analysis", "export_for_detection", "detection_copy", "worker_command", "analyze_bundle",
            "store_detection", "edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking",
@@ -81,8 +85,6 @@ def detection_copy(document, folder: str) -> tuple[str, int]:
     raised here, before any job starts) and save a copy of the document into ``folder`` for a background export
     (FreeCADCmd: ``batch.py export``; the document itself is neither saved nor changed). Returns the copy's
     path and the number of components."""
-    import re
-
     from .document import read_components
     from .intent import find_analysis, read_intent
 
@@ -108,8 +110,6 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
     runs in :func:`_mesh_python`, else in FreeCADCmd when FreeCAD's Python has them. Raises
     :class:`~freecad_aplan.runner.FreeCADError` saying what to install when none can.
     """
-    from .runner import FreeCADError, find_freecadcmd
-
     if action == "level-stats" and _mesh_python() is not None:  # the planner alone: no FreeCAD to start
         return [_mesh_python(), BATCH_SCRIPT]
     if action == "analyze" and engine == "mesh":
@@ -235,8 +235,6 @@ def level_statistics_report(product: str, technical: bool | None = None, progres
 def export_analysis_bundle(document, analysis, bundle: str) -> None:
     """Write the bundle folder ``bundle`` (meshes, B-reps, product.json with the stored diagrams and intent);
     it appears only when everything succeeded, replacing an existing one."""
-    from dataclasses import replace
-
     from planner.geometry.bundle import PRODUCT_FILE, load_bundle
     product = analysis_product(analysis)
     with building_folder(os.path.abspath(bundle)) as work:  # renamed into place when everything succeeded
@@ -253,7 +251,6 @@ def export_analysis_bundle(document, analysis, bundle: str) -> None:
 def analysis_diagrams(analysis) -> dict:
     """The ``geometry.analysis`` of a product from the stored diagrams: the engine summary of the last
     detection (engine, tolerances, interferences, warnings), where the diagrams came from and their edits."""
-    from .diagrams import stored_analysis
     from .intent import read_intent
 
     return stored_analysis(read_intent(analysis).diagrams)
