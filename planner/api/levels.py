@@ -28,6 +28,7 @@ from .products import resolve_product
 __all__ = ["arranged", "levels_of", "level_product", "hierarchy_statistics_of", "LEVEL_KEYS",
            "proposed_subassemblies", "structure_problems", "level_report", "level_table"]
 
+
 def arranged(product: str | os.PathLike | Product, subassemblies: str = "designer", max_components: int = MAX_COMPONENTS) -> Product:
     """The product with the subassemblies ``subassemblies`` asks for
     (:func:`~planner.assembly.subassembly_proposals.with_subassemblies`): ``designer`` the file's, ``auto`` proposed when the

@@ -22,7 +22,8 @@ from ..validation import InputLimits
 from .products import resolve_product
 
 __all__ = ["explain_disconnected", "plan_of", "base_part_of", "sequence_choices", "plan_in_3d", "sequence_from_log",
-           "plan_statistics_of"]
+           "plan_statistics_of", "AUTO_BASE_PART"]
+
 
 def explain_disconnected(product: Product, error: DisconnectedProductError) -> DisconnectedProductError:
     """``error`` with the gaps between its groups: those the product's analysis recorded
