@@ -25,6 +25,7 @@ from .decision_commands import ExportBundle, ExportModel, Simulate, Solve
 
 __all__ = ["COMMANDS", "WorkbenchState", "register"]
 
+
 class CreateAnalysis(_Command):
     name, menu = "Aplan_CreateAnalysis", "Create analysis"
     tooltip = "Add an APLAN analysis to the document: it holds the designer intent (components, constraints, tags)"

@@ -17,6 +17,7 @@ from .command_base import PARAMETERS, _Command, _document, _message, _save_path
 
 __all__ = ["ExportBundle", "ExportModel", "Solve", "Simulate"]
 
+
 class ExportBundle(_Command):
     name, menu = "Aplan_ExportBundle", "Export product bundle"
     tooltip = "Write a bundle folder (product.json with diagrams and intent, meshes, B-reps) for aplan"
