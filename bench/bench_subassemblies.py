@@ -15,7 +15,8 @@ import time
 from dataclasses import replace
 
 from planner import api
-from planner.assembly.hierarchy import level_statistics, product_levels, propose_subassemblies
+from planner.assembly.hierarchy import level_statistics, product_levels
+from planner.assembly.subassembly_proposals import propose_subassemblies
 from planner.product import Obstruction, Product, save_product
 
 

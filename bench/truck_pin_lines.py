@@ -14,7 +14,7 @@ import sys
 import numpy as np
 import trimesh
 
-from planner.geometry import mesh_engine
+from planner.geometry import projection
 from planner.product import load_product
 
 
@@ -25,9 +25,9 @@ def blocking_lines(folder: str, moving: str, other: str) -> None:
     meshes = [trimesh.load(f"{folder}/meshes/{name}.stl") for name in (moving, other)]
     corner = np.vstack([m.vertices for m in meshes]).min(axis=0)
     for axis, name in enumerate("XYZ"):
-        u, v = mesh_engine._PLANE[axis]
-        a, b = (mesh_engine._rasterise(m.triangles, axis, corner[[u, v]], pixel, grazing) for m in meshes)
-        window = mesh_engine._window(a, b)
+        u, v = projection._PLANE[axis]
+        a, b = (projection._rasterise(m.triangles, axis, corner[[u, v]], pixel, grazing) for m in meshes)
+        window = projection._window(a, b)
         if window is None:
             print(f"{name}: the projections do not overlap")
             continue

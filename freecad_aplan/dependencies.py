@@ -10,9 +10,13 @@ lacks; :func:`message` is what the workbench prints once in the Report view when
 from __future__ import annotations
 
 import importlib.util
+import os
 from dataclasses import dataclass
 
-__all__ = ["Optional", "OPTIONAL", "REQUIRED", "installed", "missing", "message", "MESH_ENGINE", "detection_engine", "warn_missing"]
+from . import ADDON_DIR
+
+__all__ = ["Optional", "OPTIONAL", "REQUIRED", "installed", "missing", "message", "MESH_ENGINE", "detection_engine",
+           "mesh_python", "warn_missing"]
 
 
 @dataclass(frozen=True)
@@ -90,14 +94,22 @@ def detection_engine(engine: str, mesh_python: str | None) -> tuple[str, str]:
                     "folder, brings the mesh engine back; set Engine = occt to keep this one)")
 
 
+def mesh_python() -> str | None:
+    """The Python that runs the mesh engine: ``$APLAN_PYTHON``, else the addon's own ``.venv`` (made by
+    ``scripts/setup.sh``), else None (then FreeCADCmd, when FreeCAD's Python has trimesh and manifold3d)."""
+    explicit = os.environ.get("APLAN_PYTHON")
+    if explicit:
+        return explicit
+    venv = os.path.join(ADDON_DIR, ".venv", "bin", "python")
+    return venv if os.path.isfile(venv) and os.access(venv, os.X_OK) else None
+
+
 def warn_missing() -> str:
     """Print :func:`message` for this Python in FreeCAD's Report view (a warning; nothing when nothing is
     missing) and return it. Called when the workbench is activated."""
     import FreeCAD
 
-    from .workflow import _mesh_python
-
-    note = message(missing(), _mesh_python())
+    note = message(missing(), mesh_python())
     if note:
         FreeCAD.Console.PrintWarning(note)
     return note

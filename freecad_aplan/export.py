@@ -15,7 +15,7 @@ obstruction diagrams (as the designer edited them), when they cover exactly the 
 ``geometry.analysis.diagrams`` then says ``"stored in the document"`` (``", edited"`` after edits), and a
 geometry engine need not run. Without a tree in the analysis, the document's structure (``App::Part``
 containers, groups) becomes the product's ``subassemblies``
-(:func:`~freecad_aplan.document.document_subassemblies`). The document is never modified: shapes are copies,
+(:func:`~freecad_aplan.containers.document_subassemblies`). The document is never modified: shapes are copies,
 and documents this module
 opened are closed again.
 """
@@ -32,7 +32,9 @@ from planner.defaults import (ANGULAR_DEFLECTION, LINEAR_DEFLECTION, MESH_TOLERA
 from planner.errors import GeometryError
 from planner.files import write_atomic
 
-from .document import document_subassemblies, is_grouping, open_model, read_components
+from .analysis import structure_entries
+from .containers import document_subassemblies
+from .document import is_grouping, open_model, read_components
 from .tessellation import box_mesh, checked_mesh
 
 if TYPE_CHECKING:
@@ -224,8 +226,6 @@ def export_document(document, folder: str, source: str, groups=None, exclude=Non
     result = read_components(document, groups, exclude, split_solids)
     extra = product_intent(intent) if intent is not None else {}
     if intent is not None:  # the designer's fastener tags and subassembly tree (freecad_aplan.structure)
-        from .structure import structure_entries
-
         labels = {o.Name: o.Label for o in document.Objects}
         extra.update(structure_entries(intent, {c.id: list(c.objects) for c in result.components}, labels,
                                        result.warnings))

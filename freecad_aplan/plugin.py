@@ -23,10 +23,9 @@ from pathlib import Path
 
 from planner.defaults import ANGULAR_DEFLECTION, LINEAR_DEFLECTION, LINEAR_DEFLECTION_MIN
 from planner.errors import PlannerError
-from planner.files import make_folder_beside
+from planner.files import building_folder
 from planner.geometry import GeometryReport, Tolerances
-from planner.geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
-from planner.interrupts import raise_if_swallowed
+from planner.geometry.bundle import PRODUCT_FILE, analyse_bundle, load_bundle
 from planner.product import Product, save_product
 from planner.product.designer import add_directions
 
@@ -82,8 +81,7 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
     for warning in check_document(model, skip_damaged, damaged_fix):
         log.warning("%s", warning)
     bundle.parent.mkdir(parents=True, exist_ok=True)
-    work = make_folder_beside(bundle)  # 0o777 less the umask, as the bundle folder should end up
-    try:
+    with building_folder(bundle) as work:  # renamed into place when everything succeeded (planner.files)
         arguments = {"model": str(model), "folder": str(work), "groups": groups or {}, "exclude": exclude or [],
                      "split_solids": split_solids, "redetect": redetect}
         if linear_deflection is not None:
@@ -103,19 +101,7 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
             chosen = {k: stored[k] for k in ("contact", "interference", "depth") if k in stored}
             tolerances = Tolerances(**{**chosen, **(tolerances or {})})
         if engine != "none" and (not answer.get("diagrams") or directions):  # no stored diagrams that fit: detect
-            product = apply_report(product, analyze_product(product, engine, tolerances))
-            save_product(product, work / PRODUCT_FILE)
-        raise_if_swallowed()  # an interrupt some code caught and ignored: the bundle is not committed
-        if bundle.exists():
-            old = bundle.with_name(f".{bundle.name}.old")
-            bundle.rename(old)
-            work.rename(bundle)
-            shutil.rmtree(old)
-        else:
-            work.rename(bundle)
-    except BaseException:
-        shutil.rmtree(work, ignore_errors=True)
-        raise
+            analyse_bundle(product, work / PRODUCT_FILE, engine, tolerances)
     return load_bundle(bundle)
 
 

@@ -10,7 +10,7 @@ Plain functions over an APLAN analysis (:mod:`freecad_aplan.intent`), shared by 
   is refused, naming its parts. The planner's proposals (the call behind ``aplan fasteners``) can be accepted
   as they are.
 - *Subassemblies* (``Subassemblies``): product-format entries over component ids; empty means the document's
-  own structure (``App::Part`` containers and groups, :func:`~freecad_aplan.document.document_subassemblies`).
+  own structure (``App::Part`` containers and groups, :func:`~freecad_aplan.containers.document_subassemblies`).
   Every change is checked by the planner first (a cycle, a member in two subassemblies, an unknown member, a
   subassembly that cannot be built on its own: the message names the parts) and stored as one undo step.
 - :func:`structure_entries` turns both into the product file's ``fasteners`` and ``subassemblies`` sections
@@ -23,6 +23,14 @@ from dataclasses import replace
 from planner.defaults import MAX_COMPONENTS
 from planner.errors import PlannerError, ProductFormatError
 
+from .analysis import (
+    _owner_of,
+    analysis_product,
+    component_objects,
+    fastener_entries,
+    structure_entries,
+    subassembly_entries,
+)
 from .intent import Intent, IntentError, read_intent, update_intent
 
 __all__ = ["component_objects", "fastener_entries", "subassembly_entries", "structure_entries", "tag_fasteners",
@@ -31,80 +39,12 @@ __all__ = ["component_objects", "fastener_entries", "subassembly_entries", "stru
            "add_subassembly", "delete_subassembly"]
 
 
-def component_objects(intent: Intent) -> dict[str, list[str]]:
-    """Component id -> the internal names of its objects, as the last detection found them."""
-    return {p: list(intent.diagrams.get("objects", {}).get(p, [])) for p in intent.diagrams.get("parts", [])}
-
-
 def _detected(analysis) -> Intent:
     intent = read_intent(analysis)
     if not intent.diagrams.get("parts"):
         raise IntentError(f"{analysis.Label}: no contacts and obstructions yet; run APLAN > Detect contacts and "
                           "obstructions first (fastener hosts and subassemblies are checked on them)")
     return intent
-
-
-def _owner_of(objects: dict[str, list[str]]) -> dict[str, str]:
-    return {name: component for component, names in objects.items() for name in names}
-
-
-def fastener_entries(intent: Intent, objects: dict[str, list[str]]) -> list[dict]:
-    """The product file's ``fasteners`` section for the analysis' tags, over the components ``objects``
-    (component id -> its objects' internal names). Raises :class:`IntentError` naming the group when a tagged
-    object or host is no component (excluded, or grouped with other objects). Cost: O(tagged objects)."""
-    owner = _owner_of(objects)
-    out = []
-    for group in intent.fasteners:
-        where = f"fastener group {group.get('id')!r}"
-        parts, hosts = [], []
-        roles = (("fastener", group.get("objects", []), parts), ("host", group.get("hosts", []), hosts))
-        for role, names, into in roles:
-            for name in names:
-                component = owner.get(name)
-                if component is None:
-                    raise IntentError(f"{where}: the {role} object {name!r} is not a component of the product (left "
-                                      "out or missing); tag it again, or untag the group")
-                if role == "fastener" and not set(objects[component]) <= set(group["objects"]):
-                    raise IntentError(f"{where}: {name!r} is grouped with other objects into the component "
-                                      f"{component!r}; ungroup it to tag it as a fastener")
-                if component not in into:
-                    into.append(component)
-        entry = {"id": group["id"], "parts": parts, "hosts": hosts, "source": "designer"}
-        if group.get("tool"):
-            entry["tool"] = group["tool"]
-        out.append(entry)
-    return out
-
-
-def subassembly_entries(intent: Intent) -> list[dict]:
-    """The product file's ``subassemblies`` section for the analysis' tree (``source: "designer"``)."""
-    return [{"id": s["id"], "parts": list(s["parts"]), **({"label": s["label"]} if s.get("label") else {}),
-             "source": "designer"} for s in intent.subassemblies]
-
-
-def structure_entries(intent: Intent, objects: dict[str, list[str]], labels: dict[str, str] | None = None,
-                      warnings: list[str] | None = None) -> dict:
-    """The product-file keys the analysis' structure adds: ``fasteners`` (and their tools in ``tools``) and
-    ``subassemblies``, each only when the analysis has some. With ``warnings`` (a list), entries naming what is
-    no exported component are mapped or dropped, one warning each (:mod:`freecad_aplan.readback`; ``labels``:
-    internal name -> label), instead of raising :class:`IntentError`."""
-    out: dict = {}
-    if warnings is not None:
-        from .readback import fit_fasteners, fit_subassemblies
-
-        tags, said = fit_fasteners(list(intent.fasteners), objects, labels)
-        tree, more = fit_subassemblies([dict(s) for s in intent.subassemblies], objects, labels,
-                                       "the analysis' subassembly tree")
-        warnings.extend(said + more)
-        intent = replace(intent, fasteners=tags, subassemblies=tree)
-    fasteners = fastener_entries(intent, objects)
-    if fasteners:
-        out["fasteners"] = fasteners
-        out["tools"] = [{"id": t} for t in dict.fromkeys(list(intent.tools) + [g["tool"] for g in fasteners
-                                                                                   if g.get("tool")])]
-    if intent.subassemblies:
-        out["subassemblies"] = subassembly_entries(intent)
-    return out
 
 
 def _hosts(intent: Intent, parts: set[str], others: set[str]) -> list[str]:
@@ -177,8 +117,6 @@ def untag_fasteners(analysis, names: list[str]) -> Intent:
 
 
 def _product(analysis):
-    from .workflow import analysis_product
-
     return analysis_product(analysis)
 
 
@@ -241,7 +179,8 @@ def proposed_structure(analysis, max_components: int = MAX_COMPONENTS) -> list[d
 
 def document_structure(analysis) -> list[dict]:
     """The document's own structure (``App::Part`` containers and groups) over the detected components."""
-    from .document import Component, document_subassemblies
+    from .containers import document_subassemblies
+    from .document import Component
 
     intent = _detected(analysis)
     components = [Component(id=p, label=p, shape=None, objects=tuple(o))

@@ -20,32 +20,41 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
+import re
+from dataclasses import replace
 from pathlib import Path
 
+from planner import api
+from planner.assembly.interlock_proposals import record_proposals
+from planner.decision.policy import write_policy
 from planner.defaults import (
     BLOCKING_DEPTH,
     CONFIDENCE,
     CONTACT_TOLERANCE,
     INTERFERENCE_VOLUME,
     PRODUCT_FILE,
-    PRODUCT_FORMAT,
-    PRODUCT_VERSION,
     SOLVE_PRECISION,
     WORKBENCH_SOLVE_TIME_LIMIT,
 )
 from planner.errors import PlannerError
-from planner.files import make_folder_beside
+from planner.files import building_folder
+from planner.product import fold, product_to_dict, save_product
+from planner.product.designer import designer_geometry
 
-from . import ADDON_DIR
+from .dependencies import MESH_ENGINE, installed
+from .dependencies import mesh_python as _mesh_python  # the name the commands and tests use
+from .designer_edits import add_analysis_direction, edit_analysis_diagrams, mark_not_blocking, unmark_not_blocking
+from .diagrams import stored_analysis
 from .protocol import BATCH_SCRIPT
+from .runner import FreeCADError, find_freecadcmd
+from .sessions import flat_level, level_model
 
 __all__ = ["require_analysis", "export_for_detection", "detection_copy", "worker_command", "analyze_bundle",
            "store_detection", "edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking",
            "unmark_not_blocking", "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report",
            "has_levels", "level_statistics_report",
            "export_analysis_bundle", "export_decision_model",
-           "solve_product", "simulate_sequence", "BATCH_SCRIPT"]
+           "solve_product", "simulate_sequence", "analysis_spec", "spec_fields", "BATCH_SCRIPT"]
 
 
 
@@ -78,8 +87,6 @@ def detection_copy(document, folder: str) -> tuple[str, int]:
     raised here, before any job starts) and save a copy of the document into ``folder`` for a background export
     (FreeCADCmd: ``batch.py export``; the document itself is neither saved nor changed). Returns the copy's
     path and the number of components."""
-    import re
-
     from .document import read_components
     from .intent import find_analysis, read_intent
 
@@ -97,16 +104,6 @@ def detection_copy(document, folder: str) -> tuple[str, int]:
     return path, len(result.components)
 
 
-def _mesh_python() -> str | None:
-    """The Python that runs the mesh engine: ``$APLAN_PYTHON``, else the addon's own ``.venv`` (made by
-    ``scripts/setup.sh``), else None (then FreeCADCmd, when FreeCAD's Python has trimesh and manifold3d)."""
-    explicit = os.environ.get("APLAN_PYTHON")
-    if explicit:
-        return explicit
-    venv = os.path.join(ADDON_DIR, ".venv", "bin", "python")
-    return venv if os.path.isfile(venv) and os.access(venv, os.X_OK) else None
-
-
 def worker_command(action: str, engine: str | None = None) -> list[str]:
     """The program and arguments of a background job running ``batch.py`` (``action``: export, analyze,
     level-stats, solve, session).
@@ -115,9 +112,6 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
     runs in :func:`_mesh_python`, else in FreeCADCmd when FreeCAD's Python has them. Raises
     :class:`~freecad_aplan.runner.FreeCADError` saying what to install when none can.
     """
-    from .dependencies import MESH_ENGINE, installed
-    from .runner import FreeCADError, find_freecadcmd
-
     if action in ("level-stats", "session") and _mesh_python() is not None:  # the planner alone: no FreeCAD
         return [_mesh_python(), BATCH_SCRIPT]
     if action == "analyze" and engine == "mesh":
@@ -139,14 +133,11 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
     with the diagrams (:func:`planner.assembly.interlock_proposals.record_proposals`). Runs in a background job.
     """
     from planner.geometry import Tolerances
-    from planner.geometry.bundle import PRODUCT_FILE, analyze_product, apply_report, load_bundle
-    from planner.product import save_product
+    from planner.geometry.bundle import PRODUCT_FILE, analyse_bundle, load_bundle
 
     product = load_bundle(folder)
     tolerances = Tolerances(contact=contact, interference=interference, depth=depth)
     if engine == "occt":
-        from planner.product.designer import designer_geometry
-
         from .occt import analyze_bundle_breps
         from .plugin import occt_report
 
@@ -156,11 +147,12 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
                                                            pair_steps=tolerances.pair_steps,
                                                            time_limit=tolerances.time_limit))
     else:
-        report = analyze_product(product, engine, tolerances)
-    from planner.assembly.interlock_proposals import record_proposals
-
+        report = None  # the engine runs in analyse_bundle
+    analysed, report = analyse_bundle(product, Path(folder) / PRODUCT_FILE, engine, tolerances, report)
     # The interlock rules' proposals, while the meshes are here: the interlocks panel lists them.
-    save_product(record_proposals(apply_report(product, report)), Path(folder) / PRODUCT_FILE)
+    recorded = record_proposals(analysed)
+    if recorded is not analysed:
+        save_product(recorded, Path(folder) / PRODUCT_FILE)
     return {"parts": len(report.parts), "contacts": len(report.contacts),
             "interferences": len(report.interferences), "seconds": round(report.seconds, 3)}
 
@@ -168,8 +160,6 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
 def store_detection(analysis, folder: str):
     """Keep the diagrams of the analysed bundle ``folder`` in the analysis (one undoable step)."""
     from planner.geometry.bundle import load_bundle
-    from planner.product import product_to_dict
-
     from .intent import update_intent
 
     raw = json.loads((Path(folder) / PRODUCT_FILE).read_text(encoding="utf-8"))
@@ -183,185 +173,46 @@ def store_detection(analysis, folder: str):
     return update_intent(analysis, "detect contacts and obstructions", diagrams=diagrams)
 
 
-def edit_analysis_diagrams(analysis, remove=(), add=()) -> dict:
-    """Remove and add relations of the analysis' stored diagrams in one undoable transaction.
-
-    Relations are ``(kind, a, b)`` triples (:mod:`freecad_aplan.diagrams`: ``("contact", a, b)``,
-    ``("blocks +X", x, y)`` for x blocked by y along +X). The diagrams panel calls this on OK. Raises
-    :class:`~freecad_aplan.diagrams.RelationError` (unknown component, a component related to itself, a
-    duplicate, a relation that is not there) or :class:`~freecad_aplan.intent.IntentError` (nothing detected
-    yet, a newer format) before anything changes. Returns the new diagrams.
-    """
-    from .diagrams import describe_relation, edited_diagrams
-    from .intent import IntentError, read_intent, update_intent
-
-    remove, add = [tuple(r) for r in remove], [tuple(r) for r in add]
-    diagrams = read_intent(analysis).diagrams
-    if not diagrams.get("parts"):
-        raise IntentError(f"{analysis.Label}: no contacts and obstructions yet; run APLAN > Detect contacts "
-                          "and obstructions first")
-    new = edited_diagrams(diagrams, remove, add)
-    if len(remove) + len(add) == 1:
-        description = ("remove " if remove else "add ") + describe_relation((remove or add)[0])
-    else:
-        description = f"edit diagrams ({len(remove)} removed, {len(add)} added)"
-    if remove or add:
-        update_intent(analysis, description, diagrams=new)
-    return new
-
-
-def _designer_product(analysis):
-    """The stored diagrams as a product with the analysis' designer directions and marks (``geometry.designer``)
-    and the detection's record (``geometry.analysis``), and the intent. Parts: the components, or one stand-in
-    before any detection (directions need no parts)."""
-    from planner.product import product_from_dict
-
-    from .intent import designer_record, read_intent
-
-    intent = read_intent(analysis)
-    diagrams = intent.diagrams
-    record = designer_record(intent)
-    data = {"format": PRODUCT_FORMAT, "version": PRODUCT_VERSION,
-            "parts": [{"id": p} for p in diagrams.get("parts") or ["-"]], "contacts": diagrams.get("contacts", []),
-            "obstructions": diagrams.get("obstructions", []),
-            "geometry": {"analysis": diagrams.get("analysis", {}), **({"designer": record} if record else {})}}
-    return product_from_dict(data, analysis.Label), intent
-
-
-def _store_designer(analysis, intent, product, description: str) -> None:
-    """Keep the designer record of ``product`` in the analysis, and its diagrams when something was detected:
-    one undoable transaction."""
-    from planner.product import product_to_dict
-
-    from .intent import update_intent
-
-    record = product.geometry.get("designer", {})
-    changes = {"directions": [list(v) for v in record.get("directions", [])],
-               "not_blocking": [dict(m) for m in record.get("not_blocking", [])]}
-    if intent.diagrams.get("parts"):
-        data = product_to_dict(product)
-        changes["diagrams"] = {**intent.diagrams, "obstructions": data["obstructions"],
-                               "analysis": product.geometry.get("analysis", {})}
-    update_intent(analysis, description, **changes)
-
-
-def add_analysis_direction(analysis, direction) -> list[str]:
-    """Add a designer direction (``X,Y,Z`` text or three numbers: checked and normalised) to the analysis, in
-    one undoable transaction; the next detection tests it like the axes. Returns notes: a direction along an
-    axis or within 2 degrees of one already there is merged (nothing changes). Raises
-    :class:`~planner.errors.GeometryError` for a bad vector, before anything changes."""
-    from planner.product.designer import add_directions
-
-    product, intent = _designer_product(analysis)
-    added, notes = add_directions(product, [direction])
-    if not notes:
-        name = added.geometry["designer"]["directions"][-1]
-        _store_designer(analysis, intent, added, f"add direction {', '.join(f'{c:g}' for c in name)}")
-    return notes
-
-
-def _marks(relations) -> list[tuple[str, str, object]]:
-    """Diagram rows ``("blocks D", x, y)`` as marks ``(x, y, D)``; D an axis name or a JSON vector."""
-    from .diagrams import RelationError
-
-    marks = []
-    for kind, x, y in relations:
-        if not kind.startswith("blocks "):
-            raise RelationError(f"{kind} {x} - {y}: only an obstruction can be marked not blocking")
-        name = kind[len("blocks "):]
-        marks.append((x, y, name if not name.startswith("[") else json.loads(name)))
-    return marks
-
-
-def mark_not_blocking(analysis, relations) -> list[str]:
-    """Mark obstruction relations of the stored diagrams (rows ``("blocks +X", x, y)``: x blocked by y along
-    +X) not blocking, in one undoable transaction: they leave the diagrams now and after every detection (the
-    analysis' ``NotBlocking``). A mark along a direction that is neither an axis nor a designer direction adds
-    it to the designer directions. Returns notes. Raises :class:`~freecad_aplan.diagrams.RelationError` for a
-    relation the diagrams do not hold or a contact, :class:`~freecad_aplan.intent.IntentError` before any
-    detection; nothing changes then."""
-    from planner.product.designer import mark_not_blocking as mark
-
-    from .diagrams import RelationError, _key, describe_relation, relation_rows
-    from .intent import IntentError
-
-    product, intent = _designer_product(analysis)
-    if not intent.diagrams.get("parts"):
-        raise IntentError(f"{analysis.Label}: no contacts and obstructions yet; run APLAN > Detect contacts "
-                          "and obstructions first")
-    relations = [tuple(r) for r in relations]
-    held = {_key(r) for r in relation_rows(intent.diagrams)}
-    for relation in relations:
-        if relation[0].startswith("blocks ") and _key(relation) not in held:
-            raise RelationError(f"cannot mark {describe_relation(relation)} not blocking: the diagrams do not hold it")
-    marked, notes = mark(product, _marks(relations))
-    what = describe_relation(relations[0]) if len(relations) == 1 else f"{len(relations)} relations"
-    _store_designer(analysis, intent, marked, f"mark {what} not blocking")
-    return notes
-
-
-def unmark_not_blocking(analysis, relations) -> None:
-    """Take designer marks back (rows ``("blocks +X", x, y)`` as :func:`mark_not_blocking` takes them), in one
-    undoable transaction: the relations they released return to the stored diagrams. Raises
-    :class:`~planner.errors.GeometryError` for a relation that is not marked; nothing changes then."""
-    from planner.product.designer import unmark_not_blocking as unmark
-
-    from .diagrams import describe_relation
-
-    product, intent = _designer_product(analysis)
-    relations = [tuple(r) for r in relations]
-    unmarked = unmark(product, _marks(relations))
-    what = describe_relation(relations[0]) if len(relations) == 1 else f"{len(relations)} relations"
-    _store_designer(analysis, intent, unmarked, f"unmark {what}")
-
-
 def analysis_product(analysis, name: str = ""):
-    """The product the planner sees: the stored diagrams plus the designer intent (a ``planner.Product``).
+    """The product the planner sees in ``analysis`` (:func:`freecad_aplan.analysis.analysis_product`); imported
+    here, not at the top, because the analysis reads FreeCAD objects and the background jobs import this module
+    in a plain Python."""
+    from .analysis import analysis_product as product_of
 
-    Raises :class:`~freecad_aplan.intent.IntentError` when nothing was detected yet or the intent does not fit.
-    """
-    from planner.errors import ProductFormatError
-    from planner.product import product_from_dict
-
-    from .intent import IntentError, designer_record, product_intent, read_intent
-    from .structure import component_objects, structure_entries
-
-    intent = read_intent(analysis)
-    diagrams = intent.diagrams
-    if not diagrams.get("parts"):
-        raise IntentError(f"{analysis.Label}: no contacts and obstructions yet; run APLAN > Detect contacts "
-                          "and obstructions first")
-    labels, volumes = diagrams.get("labels", {}), diagrams.get("volumes", {})
-    parts = [{"id": p, **({"label": labels[p]} if p in labels else {}),
-              **({"volume": volumes[p]} if p in volumes else {})} for p in diagrams["parts"]]
-    data = {"format": PRODUCT_FORMAT, "version": PRODUCT_VERSION, "name": name or analysis.Document.Label,
-            "parts": parts, "contacts": diagrams["contacts"], "obstructions": diagrams["obstructions"],
-            **product_intent(intent), **structure_entries(intent, component_objects(intent))}
-    record, released = designer_record(intent), diagrams.get("analysis", {}).get("designer")
-    if record or released:  # the designer's directions and marks, and what the marks released (aplan stats)
-        data["geometry"] = {**({"designer": record} if record else {}),
-                            **({"analysis": {"designer": released}} if released else {})}
-    try:
-        return product_from_dict(data, analysis.Label)
-    except ProductFormatError as exc:
-        raise IntentError(f"{analysis.Label}: {exc.location}: {exc.problem}; fix it in the APLAN task panels, "
-                          "or run the detection again if the components changed") from None
+    return product_of(analysis, name)
 
 
 def analysis_base_part(analysis) -> str | None:
-    """The analysis' base part (``BasePart``): None when empty, else ``auto`` or a component id, as the
-    planner's ``base_part`` arguments take it (:func:`planner.api.base_part_of` resolves and checks it)."""
-    from .intent import read_intent
+    """The analysis' base part (:func:`freecad_aplan.analysis.analysis_base_part`)."""
+    from .analysis import analysis_base_part as base_part_of
 
-    return read_intent(analysis).base_part or None
+    return base_part_of(analysis)
+
+
+def analysis_spec(analysis, technical: bool | None = None):
+    """The decision model the workbench's commands build for ``analysis``: a
+    :class:`~planner.api.specs.ModelSpec` with its base part (:func:`analysis_base_part`) and the paper's
+    rewards and discount, built once per command and passed to :func:`export_decision_model`,
+    :func:`simulate_sequence` and the solve job (whose JSON carries its fields: :func:`spec_fields`)."""
+    return api.ModelSpec(technical=technical, base_part=analysis_base_part(analysis))
+
+
+def spec_fields(spec) -> dict:
+    """The fields of ``spec`` the workbench sets (technical constraints, base part), as a background job's
+    JSON carries them to :func:`solve_product`."""
+    return {"technical": spec.technical, "base_part": spec.base_part}
+
+
+def _spec(spec, technical: bool | None, base_part: str | None):
+    """``spec``, or the :class:`~planner.api.specs.ModelSpec` of ``technical`` and ``base_part`` (callers that
+    pass the two fields, as tests and scripts do)."""
+    return spec if spec is not None else api.ModelSpec(technical=technical, base_part=base_part)
 
 
 def plan_report(product, folder: str | None = None, technical: bool | None = None, base_part: str | None = None):
     """The plan of ``product``, its statistics (``aplan stats``'s figures; with ``base_part``, the sequences that
     start from it and their intentions) and, with ``folder``, the pictures of its AND/OR, state and intention
     graphs (:func:`planner.assembly.figures.draw_plan`)."""
-    from planner import api
-
     plan, statistics = api.plan_statistics_of(product, technical, base_part)
     images = {}
     if folder is not None:
@@ -373,8 +224,6 @@ def plan_report(product, folder: str | None = None, technical: bool | None = Non
 
 def has_levels(product) -> bool:
     """True when ``product`` is planned as several workstations (its ``subassemblies``, with the designer's mode)."""
-    from planner import api
-
     return len(api.levels_of(product)) > 1
 
 
@@ -382,9 +231,6 @@ def level_statistics_report(product: str, technical: bool | None = None, progres
     """The per-level figures of the product file ``product`` (a background job): those ``aplan stats --json``
     prints for a product of several workstations (:func:`planner.api.level_report`), plus ``fasteners``: the
     folded groups (id, parts, hosts, tool). ``progress(text)`` is told each level as it starts."""
-    from planner import api
-    from planner.product import fold
-
     loaded = api.resolve_product(product)
     report = api.level_report(loaded, technical, progress=progress)
     report["fasteners"] = [{"id": g.id, "parts": list(g.parts), "hosts": sorted(g.hosts), "tool": g.tool}
@@ -396,16 +242,10 @@ def level_statistics_report(product: str, technical: bool | None = None, progres
 def export_analysis_bundle(document, analysis, bundle: str) -> None:
     """Write the bundle folder ``bundle`` (meshes, B-reps, product.json with the stored diagrams and intent);
     it appears only when everything succeeded, replacing an existing one."""
-    from dataclasses import replace
-
     from planner.geometry.bundle import PRODUCT_FILE, load_bundle
-    from planner.product import save_product
-
     product = analysis_product(analysis)
-    bundle = os.path.abspath(bundle)
-    work = str(make_folder_beside(bundle))  # 0o777 less the umask (mkdtemp's 0o700 would stay on the bundle)
-    try:
-        export_for_detection(document, work)
+    with building_folder(os.path.abspath(bundle)) as work:  # renamed into place when everything succeeded
+        export_for_detection(document, str(work))
         exported = load_bundle(work)
         if sorted(exported.part_ids) != sorted(product.part_ids):
             raise PlannerError(f"the components {sorted(exported.part_ids)} differ from those of the last detection "
@@ -413,34 +253,24 @@ def export_analysis_bundle(document, analysis, bundle: str) -> None:
         save_product(replace(exported, contacts=product.contacts, obstructions=product.obstructions,
                              geometry={**exported.geometry, "analysis": analysis_diagrams(analysis)}),
                      os.path.join(work, PRODUCT_FILE))
-        if os.path.exists(bundle):
-            shutil.rmtree(bundle)
-        os.rename(work, bundle)
-    except BaseException:
-        shutil.rmtree(work, ignore_errors=True)
-        raise
 
 
 def analysis_diagrams(analysis) -> dict:
     """The ``geometry.analysis`` of a product from the stored diagrams: the engine summary of the last
     detection (engine, tolerances, interferences, warnings), where the diagrams came from and their edits."""
-    from .diagrams import stored_analysis
     from .intent import read_intent
 
     return stored_analysis(read_intent(analysis).diagrams)
 
 
 def export_decision_model(product, path: str, technical: bool | None = None, base_part: str | None = None,
-                          level: str | None = None) -> dict:
-    """Write the POMDP of ``product`` (Alg. 3; with ``base_part``, over the sequences that start from it; of
-    workstation ``level`` for a product of several; lumped where the flat model does not fit:
-    :func:`freecad_aplan.sessions.level_model`) as POMDPX or ``.pomdp`` (by the file name); returns its sizes
-    and ``model`` (flat or lumped)."""
-    from planner import api
-
-    from .sessions import level_model
-
-    model, choice = level_model(product, level, technical, base_part)
+                          level: str | None = None, spec=None) -> dict:
+    """Write the POMDP of ``product`` (Alg. 3; with ``base_part``, over the sequences that start from it, or
+    the base part of ``spec``: :func:`analysis_spec`; of workstation ``level`` for a product of several;
+    lumped where the flat model does not fit: :func:`freecad_aplan.sessions.level_model`) as POMDPX or
+    ``.pomdp`` (by the file name); returns its sizes and ``model`` (flat or lumped)."""
+    spec = _spec(spec, technical, base_part)
+    model, choice = level_model(product, level, spec.technical, spec.base_part)
     api.save_model(model, path)
     return {"states": model.pomdp.n_states, "actions": model.pomdp.n_actions,
             "observations": model.pomdp.n_observations, "model": choice.kind}
@@ -452,11 +282,6 @@ def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE
     """Solve the decision model of the product file ``product`` (with ``base_part``: over the sequences that
     start from it; ``level`` as :func:`export_decision_model`) and write the policy to ``output`` (a
     background job)."""
-    from planner import api
-    from planner.decision.policy import write_policy
-
-    from .sessions import level_model
-
     model, choice = level_model(product, level, technical, base_part)
     result = api.solve(model, time_limit, precision, progress=progress)
     # A policy no better than the blind ones is refused (a PlannerError naming the bound and what helps);
@@ -470,20 +295,19 @@ def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE
 
 
 def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None = None, seed: int = 0,
-                      technical: bool | None = None, base_part: str | None = None, level: str | None = None) -> dict:
+                      technical: bool | None = None, base_part: str | None = None, level: str | None = None,
+                      spec=None) -> dict:
     """Play the operator through full sequence ``sequence`` (default: the first) against the policy, taking
     turns with the robot, and write the belief plot ``stem.png``/``stem.svg``; returns the steps and the plot
-    paths. ``base_part``: the model's, as the policy was solved for; ``level``: that workstation's flat model
-    (a level whose flat model does not fit is refused, naming the session panel, which runs the online
-    planner)."""
-    from planner import api
+    paths. ``base_part`` (or ``spec``, :func:`analysis_spec`): the model's, as the policy was solved for;
+    ``level``: that workstation's flat model (a level whose flat model does not fit is refused, naming the
+    session panel, which runs the online planner)."""
     from planner.decision.belief_plot import episode_trace, plot_beliefs
 
-    from .sessions import flat_level
-
-    product, base_part = flat_level(product, level, technical, base_part)
-    model = api.decision_model(product, technical, base_part=base_part)
-    policy, _ = api.policy_for(model, policy_path)
+    spec = _spec(spec, technical, base_part)
+    product, base_part = flat_level(product, level, spec.technical, spec.base_part)
+    model = api.model_of(product, replace(spec, base_part=base_part), flat=True)
+    policy, _ = api.policy_for(model, policy_path, inputs=spec.inputs)
     episode, = api.simulate(model, policy, None if sequence is None else [sequence], seed=seed, operator="turns",
                             what="sequence")
     operations = " ; ".join(model.describe_operations(episode.start))

@@ -11,6 +11,7 @@ from __future__ import annotations
 import errno
 import os
 import secrets
+import shutil
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -22,9 +23,11 @@ from .interrupts import raise_if_swallowed
 __all__ = [
     "FAULT_DISK_FULL",
     "OutputError",
+    "building_folder",
     "check_output",
     "make_folder_beside",
     "open_atomic",
+    "replace_folder",
     "save_figure",
     "with_faults",
     "write_atomic",
@@ -166,3 +169,38 @@ def make_folder_beside(path: str | os.PathLike, suffix: str = ".partial") -> Pat
         except OSError as exc:
             raise _explain(path, exc) from None
     raise FileExistsError(f"{path.parent}: cannot create a folder for {path.name} ({_ATTEMPTS} names taken)")
+
+
+def replace_folder(work: str | os.PathLike, target: str | os.PathLike) -> None:
+    """Put the finished folder ``work`` (made by :func:`make_folder_beside`) in place of ``target``: the one
+    atomic folder swap. A target that exists is renamed aside first (``.NAME.old``), then ``work`` renamed into
+    place and the old one removed, so at every moment ``target`` is either the old folder or the new one (never
+    missing half its files, never a mix). An interrupt some code swallowed stops the swap before it starts
+    (:func:`~planner.interrupts.raise_if_swallowed`). Cost: two renames and removing the old folder."""
+    work, target = Path(work), Path(target)
+    raise_if_swallowed()
+    if not target.exists():
+        os.rename(work, target)
+        return
+    old = target.with_name(f".{target.name}.{secrets.token_hex(6)}.old")
+    os.rename(target, old)
+    try:
+        os.rename(work, target)
+    except BaseException:
+        os.rename(old, target)  # the old folder back: the target is never left missing
+        raise
+    shutil.rmtree(old, ignore_errors=True)
+
+
+@contextmanager
+def building_folder(target: str | os.PathLike) -> Iterator[Path]:
+    """Build the folder ``target`` in a new hidden folder beside it (:func:`make_folder_beside`), yielded; when the
+    block ends without an error it replaces ``target`` (:func:`replace_folder`), else it is removed and ``target``
+    is left as it was. Every folder the planner and the workbench write (bundles) goes through here."""
+    work = make_folder_beside(target)
+    try:
+        yield work
+        replace_folder(work, target)
+    except BaseException:
+        shutil.rmtree(work, ignore_errors=True)
+        raise

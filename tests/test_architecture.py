@@ -111,8 +111,9 @@ def test_the_checker_sees_a_violation(tmp_path):
 # (class-MDP, delayed reveal) no solver but the upper bound's types, and no planner; solvers no online planner;
 # a policy (alpha vectors) none of them either; the interface (models.py) nothing but what it describes. Imports inside functions count too.
 DECISION_ROOMS = {
-    "model": ({"pomdp", "intention_model", "factored_model", "lumped_model", "parallel", "parallel_values",
-               "projected", "deviations", "habits", "belief", "factored_updater"},
+    "model": ({"pomdp", "intention_model", "factored_model", "lumped_model", "parallel", "parallel_table", "parallel_values",
+               "projected", "deviations", "habits", "belief", "factored_updater", "factored_belief",
+               "factored_sequences"},
               ("solvers", "online", "bounds", "delayed_reveal", "models", "simulate", "factored_simulate",
                "episodes")),
     "bound": ({"bounds", "delayed_reveal"}, ("online", "models", "solvers.point_based", "solvers.warm_start",
@@ -163,3 +164,89 @@ def test_the_room_check_finds_a_model_importing_a_solver(tmp_path):
     assert names[0] == "planner.decision.solvers.upper"
     assert _room_of(("planner", "decision", "lumped_model")) == "model"
     assert any(names[0].removeprefix("planner.decision.").startswith(f) for f in DECISION_ROOMS["model"][1])
+
+
+# Rooms of the API (issue 24): one module per stage of the pipeline, each importing only the stages before it;
+# the values passed down (specs) import no stage. ``planner/api/__init__.py`` re-exports them all.
+API_STAGES = {"specs": 0, "products": 1, "plans": 2, "levels": 3, "models": 4, "policies": 5, "decisions": 6}
+
+# The command line's option bundles (planner/cli/options/): argparse types first, then the bundles, each
+# importing only those below it (the planner bundle adds the model bundle's options to simulate and evaluate).
+OPTION_BUNDLES = {"values": 0, "outputs": 1, "limits": 1, "geometry": 1, "advice": 1, "products": 2, "models": 3,
+                  "planners": 4}
+
+ROOMS = {("planner", "api"): API_STAGES, ("planner", "cli", "options"): OPTION_BUNDLES}
+
+
+@pytest.mark.parametrize("folder", sorted(ROOMS), ids=".".join)
+def test_stages_import_only_the_stages_before_them(folder):
+    ranks = ROOMS[folder]
+    package = ".".join(folder)
+    modules = {p.stem for p in REPO.joinpath(*folder).glob("*.py")} - {"__init__"}
+    assert modules == set(ranks), f"a new module of {package}: give it a rank"
+    offenders = []
+    for name in sorted(modules):
+        path = REPO.joinpath(*folder, f"{name}.py")
+        for line, imported in _imports(path, package):
+            other = imported.removeprefix(package + ".").split(".")[0] if imported.startswith(package + ".") else None
+            if other in ranks and other != name and ranks[other] >= ranks[name]:
+                offenders.append(f"{path.relative_to(REPO)}:{line} imports {imported}")
+    assert offenders == []
+
+
+def _runtime_imports(path: Path, package: str) -> list[tuple[int, str]]:
+    """:func:`_imports` without those under ``if TYPE_CHECKING:`` (for annotations only: they never run)."""
+    tree = ast.parse(path.read_text(), str(path))
+    hidden = {node.lineno for block in ast.walk(tree) if isinstance(block, ast.If)
+              and ast.unparse(block.test).endswith("TYPE_CHECKING")
+              for inner in block.body for node in ast.walk(inner) if isinstance(node, (ast.Import, ast.ImportFrom))}
+    return [(line, name) for line, name in _imports(path, package) if line not in hidden]
+
+
+def _import_graph(roots: tuple[Path, ...]):
+    """Module -> the modules it imports (inside functions too; ``TYPE_CHECKING`` imports left out), over the
+    modules under ``roots``. A package's ``__init__`` re-exports its modules, so it is neither a source nor a
+    target here: a circle runs through the modules themselves."""
+    import networkx as nx
+
+    modules = {}
+    for root in roots:
+        for path in sorted(root.rglob("*.py")):
+            if path.name == "__init__.py":
+                continue
+            parts = path.relative_to(root.parent).with_suffix("").parts
+            modules[".".join(parts)] = (path, ".".join(parts[:-1]))
+    graph = nx.DiGraph()
+    graph.add_nodes_from(modules)
+    for name, (path, package) in modules.items():
+        for _, imported in _runtime_imports(path, package):
+            if imported in modules and imported != name:
+                graph.add_edge(name, imported)
+    return graph
+
+
+def test_no_import_circles():
+    """No circle of imports among the modules of the planner and the workbench (issue 24: the circles
+    export/structure/workflow, gaps/mesh_engine and model/validation/designer were held open by imports inside
+    functions): what two modules share lives in a third below both."""
+    import networkx as nx
+
+    graph = _import_graph((REPO / "planner", REPO / "freecad_aplan"))
+    circles = sorted(" -> ".join(c + c[:1]) for c in nx.simple_cycles(graph))
+    assert circles == []
+
+
+def test_the_circle_check_finds_a_circle_held_open_by_a_function(tmp_path):
+    """Two modules importing each other, one of them inside a function, are a circle (the check can fail); an
+    import under ``TYPE_CHECKING`` is not."""
+    import networkx as nx
+
+    package = tmp_path / "pkg"
+    package.mkdir()
+    (package / "__init__.py").write_text("")
+    (package / "a.py").write_text("from .b import g\n\ndef f():\n    return g()\n")
+    (package / "b.py").write_text("def g():\n    from .a import f\n    return f\n")
+    (package / "c.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from .a import f\n")
+    (package / "d.py").write_text("from .c import TYPE_CHECKING\n")
+    graph = _import_graph((package,))
+    assert sorted(sorted(c) for c in nx.simple_cycles(graph)) == [["pkg.a", "pkg.b"]]

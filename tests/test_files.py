@@ -47,3 +47,30 @@ def test_save_figure_takes_the_format_from_the_suffix(tmp_path):
     with pytest.raises(ValueError, match="not supported"):
         save_figure(figure, tmp_path / "f.docx")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["f.PNG", "f.svg"]
+
+
+def test_building_folder_replaces_a_folder_on_success_only(tmp_path):
+    """The one folder swap (bundles): built beside the target, renamed into place at the end; a failure leaves
+    the old folder as it was and nothing else behind."""
+    from planner.files import building_folder
+
+    target = tmp_path / "bundle"
+    target.mkdir()
+    (target / "old.txt").write_text("old")
+    with pytest.raises(RuntimeError), building_folder(target) as work:
+        (work / "new.txt").write_text("half")
+        assert work.parent == tmp_path and work.name.startswith(".bundle.")
+        raise RuntimeError("the export failed")
+    assert sorted(p.name for p in target.iterdir()) == ["old.txt"] and [p.name for p in tmp_path.iterdir()] == ["bundle"]
+    with building_folder(target) as work:
+        (work / "new.txt").write_text("new")
+        assert (target / "old.txt").is_file()  # not in place before the block ends
+    assert sorted(p.name for p in target.iterdir()) == ["new.txt"] and [p.name for p in tmp_path.iterdir()] == ["bundle"]
+
+
+def test_building_folder_makes_a_new_folder(tmp_path):
+    from planner.files import building_folder
+
+    with building_folder(tmp_path / "fresh") as work:
+        (work / "a").write_text("a")
+    assert (tmp_path / "fresh" / "a").read_text() == "a" and [p.name for p in tmp_path.iterdir()] == ["fresh"]

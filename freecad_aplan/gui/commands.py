@@ -11,108 +11,20 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
-import traceback
 
 import FreeCAD
 import FreeCADGui
-from PySide import QtGui
 
-from planner.defaults import CONFIDENCE, PRODUCT_FILE, WORKBENCH_SOLVE_TIME_LIMIT
-from planner.errors import PlannerError
+from planner.defaults import PRODUCT_FILE
 
-from .. import icon_path, workflow
+from .. import workflow
 from . import session
 from ..document import DocumentError
-from ..intent import create_analysis, find_analysis, is_analysis, read_intent, update_intent
+from ..intent import create_analysis, find_analysis, read_intent, update_intent
+from .command_base import WorkbenchState, _Command, _document, _guarded, _message, _selected_objects, _show_panel
+from .decision_commands import ExportBundle, ExportModel, Simulate, Solve
 
 __all__ = ["COMMANDS", "WorkbenchState", "register"]
-
-PARAMETERS = "User parameter:BaseApp/Preferences/Mod/APLAN"
-
-
-class WorkbenchState:
-    """What the commands keep between them, for one workbench.
-
-    ``panel``, ``plan_dialog``, ``belief_dialog``: the open task panel and dialogs (Qt destroys a window
-    that nothing in Python refers to). ``plan``: what the last plan command showed (statistics and image
-    paths). ``policy``: the path of the last policy saved by Solve (Simulate offers it). ``jobs``: the
-    background jobs still running.
-    """
-
-    def __init__(self) -> None:
-        self.panel = None
-        self.plan_dialog = None
-        self.belief_dialog = None
-        self.plan: dict | None = None
-        self.policy: str | None = None
-        self.jobs: list = []
-
-
-def _message(text: str, error: bool = True) -> None:
-    """One line in the report view (and the status bar)."""
-    (FreeCAD.Console.PrintError if error else FreeCAD.Console.PrintMessage)(f"APLAN: {text}\n")
-    try:
-        FreeCADGui.getMainWindow().statusBar().showMessage(f"APLAN: {text.splitlines()[0]}", 15000)
-    except AttributeError:
-        pass
-
-
-def _guarded(action):
-    """Run a command body; expected errors become a message, unexpected ones a message plus a log entry."""
-    try:
-        action()
-    except PlannerError as exc:
-        _message(str(exc))
-    except Exception as exc:  # a bug: say so in one line, keep the details in the log
-        _message(f"internal error ({type(exc).__name__}: {exc}); please report it")
-        FreeCAD.Console.PrintLog(traceback.format_exc())
-
-
-def _document():
-    document = FreeCAD.ActiveDocument
-    if document is None:
-        raise DocumentError("no document is open: open an assembly first")
-    return document
-
-
-def _selected_objects() -> list:
-    objects = [o for o in FreeCADGui.Selection.getSelection() if not is_analysis(o)]
-    if not objects:
-        raise DocumentError("nothing is selected: select parts in the 3D view or the tree first")
-    return objects
-
-
-class _Command:
-    """Base: resources from the class attributes; active when there is a document (and an analysis).
-
-    ``state`` is shared by the commands of one workbench (a command made alone gets its own).
-    """
-
-    name = ""
-    menu = ""
-    tooltip = ""
-    needs_analysis = True
-
-    def __init__(self, state: WorkbenchState | None = None):
-        self.state = state if state is not None else WorkbenchState()
-
-    def GetResources(self):
-        return {"Pixmap": icon_path(f"{self.name}.svg"), "MenuText": self.menu, "ToolTip": self.tooltip}
-
-    def IsActive(self):
-        try:
-            document = FreeCAD.ActiveDocument
-            if document is None:
-                return False
-            return (find_analysis(document) is not None) if self.needs_analysis else True
-        except Exception:  # IsActive must never raise (FreeCAD calls it all the time)
-            return False
-
-    def Activated(self):
-        _guarded(self.run)
-
-    def run(self):
-        raise NotImplementedError
 
 
 class CreateAnalysis(_Command):
@@ -230,13 +142,6 @@ class Detect(_Command):
         workflow.store_detection(analysis, folder)
         _message(f"{result['parts']} parts, {result['contacts']} contacts, {result['interferences']} "
                  f"interferences ({result['seconds']:.1f} s); see Diagrams", error=False)
-
-
-def _show_panel(state: WorkbenchState, panel) -> None:
-    """Show ``panel`` in the task view, replacing any open one (kept in ``state`` so Qt does not drop it)."""
-    FreeCADGui.Control.closeDialog()
-    state.panel = panel
-    FreeCADGui.Control.showDialog(panel)
 
 
 class Diagrams(_Command):
@@ -373,113 +278,6 @@ class Subassemblies(_Command):
         analysis = workflow.require_analysis(_document())
         workflow.analysis_product(analysis)
         _show_panel(self.state, SubassembliesPanel(analysis))
-
-
-def _save_path(title: str, filters: str, suffix: str) -> str | None:
-    path, _ = QtGui.QFileDialog.getSaveFileName(FreeCADGui.getMainWindow(), title, "", filters)
-    if not path:
-        return None
-    return path if os.path.splitext(path)[1] else path + suffix
-
-
-class ExportBundle(_Command):
-    name, menu = "Aplan_ExportBundle", "Export product bundle"
-    tooltip = "Write a bundle folder (product.json with diagrams and intent, meshes, B-reps) for aplan"
-
-    def run(self):
-        document = _document()
-        analysis = workflow.require_analysis(document)
-        workflow.analysis_product(analysis)
-        path = _save_path("Export APLAN bundle (a new folder)", "Bundle folder (*)", "")
-        if path:
-            workflow.export_analysis_bundle(document, analysis, path)
-            _message(f"wrote the bundle {path}", error=False)
-
-
-class ExportModel(_Command):
-    name, menu = "Aplan_ExportModel", "Export decision model (POMDPX / .pomdp)"
-    tooltip = "Write the operator-intent POMDP (Alg. 3) as POMDPX or Cassandra .pomdp"
-
-    def run(self):
-        analysis = workflow.require_analysis(_document())
-        product = workflow.analysis_product(analysis)
-        chosen, level = session.ask_level(product)
-        path = chosen and _save_path("Export decision model", "POMDPX (*.pomdpx);;POMDP (*.pomdp)", ".pomdpx")
-        if path:
-            sizes = workflow.export_decision_model(product, path, base_part=workflow.analysis_base_part(analysis),
-                                                   level=level)
-            _message(f"wrote {path} ({sizes['model']} model): {sizes['states']} states, {sizes['actions']} actions, "
-                     f"{sizes['observations']} observations", error=False)
-
-
-class Solve(_Command):
-    name, menu = "Aplan_Solve", "Solve and save policy"
-    tooltip = ("Solve the decision model in the background (point-based solver; time limit: parameter "
-               f"Mod/APLAN/SolveTimeLimit, default {WORKBENCH_SOLVE_TIME_LIMIT:g} s) and save the policy")
-
-    def run(self):
-        from planner.product import save_product
-
-        from .jobs import BackgroundJob
-
-        analysis = workflow.require_analysis(_document())
-        product = workflow.analysis_product(analysis)
-        chosen, level = session.ask_level(product)
-        path = chosen and _save_path("Save policy", "SARSOP policy (*.policy)", ".policy")
-        if not path:
-            return
-        seconds = FreeCAD.ParamGet(PARAMETERS).GetFloat("SolveTimeLimit", WORKBENCH_SOLVE_TIME_LIMIT) or WORKBENCH_SOLVE_TIME_LIMIT
-        folder = tempfile.mkdtemp(prefix="aplan-solve-")
-        save_product(product, os.path.join(folder, PRODUCT_FILE))
-
-        def done(result):
-            shutil.rmtree(folder, ignore_errors=True)
-            self.state.policy = path
-            _message(f"wrote {path} ({result['model']} model): lower bound {result['lower_bound']:.5f}, upper bound "
-                     f"{result['upper_bound']:.5f}, {result['alpha_vectors']} alpha vectors", error=False)
-
-        def failed(message):
-            shutil.rmtree(folder, ignore_errors=True)
-            _message(message)
-
-        job = {"action": "solve", "product": os.path.join(folder, PRODUCT_FILE), "output": path,
-               "time_limit": seconds, "base_part": workflow.analysis_base_part(analysis), "level": level}
-        BackgroundJob(f"Solving the decision model ({seconds:g} s)", workflow.worker_command("solve"), job, done,
-                      failed, self.state.jobs, FreeCADGui.getMainWindow()).start()
-
-
-class Simulate(_Command):
-    name, menu = "Aplan_Simulate", "Simulate an operator sequence"
-    tooltip = "Play the operator through a full assembly sequence against the policy; show the belief plot"
-
-    def run(self):
-        from .panels import ImageDialog
-
-        analysis = workflow.require_analysis(_document())
-        product = workflow.analysis_product(analysis)
-        chosen, level = session.ask_level(product)
-        if not chosen:
-            return
-        policy = self.state.policy
-        if not policy or not os.path.isfile(policy):
-            policy, _ = QtGui.QFileDialog.getOpenFileName(FreeCADGui.getMainWindow(), "Policy to simulate", "",
-                                                          "SARSOP policy (*.policy)")
-            if not policy:
-                return
-        sequence, ok = QtGui.QInputDialog.getInt(FreeCADGui.getMainWindow(), "Simulate",
-                                                 "Full sequence (intention number; -1: the first)", -1, -1)
-        if not ok:
-            return
-        stem = os.path.join(tempfile.mkdtemp(prefix="aplan-simulate-"), "belief")
-        result = workflow.simulate_sequence(product, policy, stem, None if sequence < 0 else sequence,
-                                            base_part=workflow.analysis_base_part(analysis), level=level)
-        from planner.decision.simulate import confidence_text
-
-        said = confidence_text(result["confident_after"], CONFIDENCE)
-        caption = (f"Sequence {result['sequence']}: {said}. Steps: "
-                   + "; ".join(f"{a} / {o} / {p}" for a, o, p in result["steps"]))
-        self.state.belief_dialog = ImageDialog("APLAN belief", caption, result["plots"][0], FreeCADGui.getMainWindow())
-        self.state.belief_dialog.show()
 
 
 class Session(_Command):

@@ -13,7 +13,7 @@ from PySide import QtCore, QtGui
 from .. import structure
 from ..intent import IntentError, read_intent
 from .layout import button_rows, fit_columns, narrow_combo, panel_layout, stacked_field, wrapped_label
-from .panels import _item, _table
+from .tables import _item, _table
 
 __all__ = ["FastenersPanel", "SubassembliesPanel", "LevelsDialog", "level_rows"]
 

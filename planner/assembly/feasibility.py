@@ -99,7 +99,7 @@ def interlock_error(product: Product, pairs: list[InterlockedPair]) -> "Interloc
     whole explanation in its message); the :class:`~planner.errors.InterlockRefusedError` of a refused proposal
     when the designer refused one for them (:mod:`planner.assembly.interlock_proposals`). Cost: O(n^2 D) for the pairs the designer's marks released."""
     from ..errors import InterlockedPartsError
-    from .interlock_proposals import refusal_error
+    from .interlock_refusals import refusal_error
 
     refused = refusal_error(product, pairs)  # a proposal the designer turned down: its own message
     if refused is not None:

@@ -32,14 +32,13 @@ import numpy as np
 
 from ..product import Direction, Obstruction, Product
 from ..product.merge import merge_parts
-from .feasibility import InterlockedPair, interlocked_pairs
+from .feasibility import interlocked_pairs
+from .interlock_refusals import REFUSED_KEY, refusal_error, refusal_message, refused_interlocks
 from .interlocks import _meshes, _pair_relation, _tolerances, resolve_interlocks
 
 __all__ = ["interlock_proposals", "record_proposals", "PROPOSALS_KEY", "apply_proposal", "refused_interlocks", "refusal_message", "refusal_error",
            "REFUSED_KEY"]
 
-#: The key of the designer's refusals under ``geometry.designer``.
-REFUSED_KEY = "refused_interlocks"
 #: The key of the proposals (and of the lines of the pairs no rule frees) under ``geometry.analysis``.
 PROPOSALS_KEY = "interlock_proposals"
 
@@ -135,40 +134,3 @@ def apply_proposal(product: Product, proposal: dict) -> Product:
     if marks:
         product, _ = mark_not_blocking(product, marks)
     return product
-
-
-def refused_interlocks(product: Product) -> list[dict]:
-    """The designer's refusals of ``product`` (``geometry.designer.refused_interlocks``: module docstring)."""
-    designer = product.geometry.get("designer", {})
-    found = designer.get(REFUSED_KEY, []) if isinstance(designer, dict) else []
-    return [r for r in found if isinstance(r, dict) and len(r.get("parts", ())) == 2]
-
-
-def refusal_message(where: str, texts: list[str], by: str, remedy: str) -> str:
-    """The one line that refuses interlock decisions: how many, who refused them (``by``), what the rules would
-    do (``texts``, one per decision) and ``remedy``; the message of ``--interlocks error`` and of a designer's
-    refusal alike."""
-    return (f"{where}{len(texts)} interlocked pair(s), refused by {by}; the rules would resolve them so: "
-            f"{'; '.join(texts)}. {remedy}")
-
-
-def _short(rule: str, text: str) -> str:
-    return text.split(" (")[0] if rule == "component" else text
-
-
-def refusal_error(product: Product, pairs: list[InterlockedPair] | None = None):
-    """The :class:`~planner.errors.InterlockRefusedError` for the interlocked ``pairs`` (default: the product's)
-    the designer refused (:func:`refused_interlocks`), or None when it refused none of them. Cost: O(n^2 D)."""
-    from ..errors import InterlockRefusedError
-
-    pairs = interlocked_pairs(product) if pairs is None else pairs
-    stuck = {frozenset((p.first, p.second)) for p in pairs}
-    refused = [r for r in refused_interlocks(product) if frozenset(r["parts"]) in stuck]
-    if not refused:
-        return None
-    where = f"{product.name}: " if product.name else ""
-    texts = [_short(str(r.get("rule", "")), str(r.get("text") or " and ".join(r["parts"]))) for r in refused]
-    return InterlockRefusedError(refusal_message(
-        where, texts, "the designer (the workbench's interlocks panel)",
-        "Accept the proposal in APLAN > Interlocks to apply this, or resolve them in the CAD model (the "
-        "workbench's diagrams panel)"), [tuple(r["parts"]) for r in refused])

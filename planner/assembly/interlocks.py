@@ -35,8 +35,9 @@ from ..errors import GeometryError
 from .feasibility import InterlockedPair, interlocked_pairs
 from ..product import Direction, Obstruction, Product
 from ..product.merge import merge_parts
-from ..geometry.mesh_engine import (_MERGE_ANGLE, _PATCH_SHARE, PartMesh, _blocking_pairs, _canonical,
-                          _facet_normals, _frame, _manifold, candidate_directions)
+from ..geometry.meshes import PartMesh, _manifold
+from ..geometry.projection import (_MERGE_ANGLE, _PATCH_SHARE, _blocking_pairs, _canonical, _facet_normals, _frame,
+                                  candidate_directions)
 from ..geometry.tolerances import Tolerances
 
 __all__ = ["InterlockDecision", "Unresolved", "resolve_interlocks", "apply_interlock_mode", "RULES", "INTERLOCK_MODES",
@@ -157,7 +158,7 @@ def apply_interlock_mode(product: Product, mode: str = "resolve", meshes: list[P
     the rules would do, ``keep`` returns it untouched (the planner names the pairs). A pair no rule frees,
     in a product drawn in CAD, is an :class:`~planner.errors.InterlockRefusedError` in one line
     (:attr:`Unresolved.line`) in both of the first modes, and so is a pair whose proposal the designer refused
-    (:func:`~planner.assembly.interlock_proposals.refusal_error`); a product without meshes is planned as written.
+    (:func:`~planner.assembly.interlock_refusals.refusal_error`); a product without meshes is planned as written.
     Cost: that of :func:`resolve_interlocks`."""
     from ..errors import InterlockRefusedError, PlannerError
 
@@ -165,9 +166,9 @@ def apply_interlock_mode(product: Product, mode: str = "resolve", meshes: list[P
         raise PlannerError(f"unknown interlock mode {mode!r}; use one of {', '.join(INTERLOCK_MODES)}")
     if mode == "keep":
         return product
-    from .interlock_proposals import refusal_error, refusal_message
+    from .interlock_refusals import refusal_error, refusal_message
 
-    refused = refusal_error(product)  # the designer turned these down: never applied
+    refused = refusal_error(product, interlocked_pairs(product))  # the designer turned these down: never applied
     if refused is not None:
         raise refused
     resolved, decisions, unresolved = resolve_interlocks(product, meshes)

@@ -16,6 +16,7 @@ from dataclasses import replace
 
 from ..product import Product, Subassembly
 from .feasibility import interlocked_pairs
+from .hierarchy import product_levels
 
 __all__ = ["untangled"]
 
@@ -25,8 +26,6 @@ log = logging.getLogger(__name__)
 def untangled(product: Product, proposed: tuple[Subassembly, ...]) -> tuple[Subassembly, ...]:
     """``proposed`` (subassemblies of ``product``, which has none of its own) with every subassembly that tangles
     a level dissolved (module docstring), each named in a warning."""
-    from .hierarchy import product_levels
-
     groups = list(proposed)
     for _ in range(len(proposed)):
         ids = {g.id for g in groups}

@@ -26,8 +26,6 @@ from ..defaults import (
 )
 from ..errors import PlannerError, SolveTimeError
 from ..interrupts import exit_status
-from .deviations import deviations_from
-from .habits import habits_from
 from .options import (
     PRODUCT_HELP,
     add_decision_options,
@@ -38,12 +36,11 @@ from .options import (
     index,
     inputs_from,
     limits_from,
+    model_spec_from,
     number,
-    online_budget,
-    parallel_from,
+    planner_choice_from,
     positive_seconds,
     product_from,
-    rewards_from,
 )
 
 __all__ = ["add_commands", "model_from", "policy_from", "decision_maker_from", "product_argument", "levels_from"]
@@ -75,21 +72,19 @@ def levels_from(args: argparse.Namespace) -> list:
     return [(level, api.level_product(product, "designer", level)) for level in ids]
 
 
-def model_from(args: argparse.Namespace, product_only: bool = False, solving: bool = False):
-    """The model of ``args.model`` (or ``args.product``): a PRODUCT's decision model, or a model file."""
+def model_from(args: argparse.Namespace, product_only: bool = False, solving: bool = False,
+               spec: api.ModelSpec | None = None):
+    """The model of ``args.model`` (or ``args.product``): a PRODUCT's decision model, or a model file; ``spec``:
+    the model's :class:`~planner.api.specs.ModelSpec` when the command built it already (default: from ``args``)."""
     raw = getattr(args, "model", None) or args.product
     argument = raw if product_only and str(raw).lower().endswith(api.MODEL_SUFFIXES) else product_argument(args)
-    if product_only:
-        if str(argument).lower().endswith(api.MODEL_SUFFIXES):
-            extra = "; --base-part, too, applies to products only" if args.base_part else ""
-            raise PlannerError(f"{argument}: a model file, but this command needs a PRODUCT (its plan names what the "
-                               f"operator and the robot do){extra}")
-        return api.decision_model(product_from(args, argument), args.technical, rewards_from(args), args.discount,
-                                  args.base_part, limits_from(args), habits_from(args),
-                                  deviations=deviations_from(args))
-    return api.load_model(product_from(args, argument), args.technical, rewards_from(args), args.discount,
-                          args.base_part, limits_from(args), getattr(args, "lumped", False), inputs_from(args),
-                          habits_from(args), solving, parallel_from(args), deviations_from(args))
+    if product_only and str(argument).lower().endswith(api.MODEL_SUFFIXES):
+        extra = "; --base-part, too, applies to products only" if args.base_part else ""
+        raise PlannerError(f"{argument}: a model file, but this command needs a PRODUCT (its plan names what the "
+                           f"operator and the robot do){extra}")
+    product = product_from(args, argument)
+    spec = model_spec_from(args) if spec is None else spec
+    return api.model_of(product, spec, getattr(args, "lumped", False), solving, flat=product_only)
 
 
 def policy_from(args: argparse.Namespace, model):
@@ -101,21 +96,21 @@ def policy_from(args: argparse.Namespace, model):
     return policy
 
 
-def decision_maker_from(args: argparse.Namespace, product=None):
+def decision_maker_from(args: argparse.Namespace, product=None, spec: api.ModelSpec | None = None,
+                        choice: api.PlannerChoice | None = None):
     """The model and policy of ``args`` (:func:`planner.api.decision_maker`), logging what was chosen;
-    ``product``: this one (a level) instead of the one ``args`` names."""
+    ``product``: this one (a level) instead of the one ``args`` names; ``spec`` and ``choice``: the command's
+    :class:`~planner.api.specs.ModelSpec` and :class:`~planner.api.specs.PlannerChoice`, built once for all its
+    levels (default: from ``args``)."""
     argument = product if product is not None else product_argument(args)
-    decision_time, expansions = online_budget(args)
+    spec = model_spec_from(args) if spec is None else spec
+    choice = planner_choice_from(args) if choice is None else choice
     if not isinstance(argument, api.Product) and api._model_file_kind(argument):
-        if args.planner == "online":
+        if choice.planner == "online":
             raise PlannerError(f"{argument}: the online planner needs a PRODUCT (its factored model), not a model file")
-        model = model_from(args)
+        model = model_from(args, spec=spec)
         return model, policy_from(args, model)
-    model, policy, note = api.decision_maker(product_from(args, argument), args.planner, args.policy, args.technical,
-                                             rewards_from(args), args.discount, decision_time, expansions, args.time_limit,
-                                             base_part=args.base_part, limits=limits_from(args),
-                                             inputs=inputs_from(args), habits=habits_from(args),
-                                             parallel=parallel_from(args), deviations=deviations_from(args))
+    model, policy, note = api.decision_maker(product_from(args, argument), spec, choice)
     if note:
         log.info("%s", note)
     return model, policy
@@ -183,13 +178,14 @@ def _simulate(args: argparse.Namespace) -> int:
     if api._model_file_kind(args.model):
         raise PlannerError("simulate needs a PRODUCT (the intention graph names the sequences), not a model file")
     levels = levels_from(args)
+    spec, choice = model_spec_from(args), planner_choice_from(args)  # once, for every level
     played = []
     for k, (level, product) in enumerate(levels, start=1):
         if len(levels) > 1 and not args.json:
             print(f"level {level} ({k} of {len(levels)}): {', '.join(product.part_ids)}")
         if args.plot and len(levels) > 1:
             raise PlannerError("--plot draws one product's beliefs: pick one subassembly with --level ID")
-        played += _simulate_level(args, product)
+        played += _simulate_level(args, product, spec, choice)
     _print_run(played, args)
     return 0
 
@@ -213,8 +209,8 @@ def _times_text(times: dict) -> str:
             f"{1000 * times['decision_seconds_p95']:.1f} ms, max {1000 * times['decision_seconds_max']:.1f} ms")
 
 
-def _simulate_level(args: argparse.Namespace, product) -> list:
-    model, policy = decision_maker_from(args, product)
+def _simulate_level(args: argparse.Namespace, product, spec: api.ModelSpec, choice: api.PlannerChoice) -> list:
+    model, policy = decision_maker_from(args, product, spec, choice)
     episodes = api.simulate(model, policy, args.sequence, args.all, args.random, args.seed, args.max_steps,
                             args.operator, operator_model=args.operator_model)
     if not is_flat(model):

@@ -6,8 +6,8 @@ import json
 import logging
 from pathlib import Path
 
-from ..geometry.bundle import PRODUCT_FILE, analyze_product, apply_report
-from ..product import load_product, save_product
+from ..geometry.bundle import PRODUCT_FILE, analyse_bundle
+from ..product import load_product
 from ..product.designer import add_directions, designer_lines, mark_not_blocking
 from .options import add_force, add_tolerance_options, tolerances_from
 
@@ -38,9 +38,7 @@ def _analyze(args: argparse.Namespace) -> int:
     if args.not_blocking:  # checked (parts, direction) before the analysis runs
         product, more = mark_not_blocking(product, args.not_blocking)
         notes += more
-    report = analyze_product(product, args.engine, tolerances_from(args))
-    analysed = apply_report(product, report)
-    save_product(analysed, args.output or path)
+    analysed, report = analyse_bundle(product, args.output or path, args.engine, tolerances_from(args))
     for note in notes:
         log.warning("%s", note)
     if args.json:

@@ -5,26 +5,21 @@ from __future__ import annotations
 import argparse
 import json
 
-from ..decision.habits import Habits, HabitsError
+from ..decision.habits import HabitsError
 from ..decision.io.habits_file import read_habits, write_habits
 from ..defaults import HABITS_PRIOR
-from ..errors import PlannerError
-from .options import add_fasteners, add_force, add_input_options, add_technical, inputs_from, number, product_from
+from .options import (
+    add_fasteners,
+    add_force,
+    add_input_options,
+    add_technical,
+    habits_from,
+    inputs_from,
+    number,
+    product_from,
+)
 
 __all__ = ["add_commands", "habits_from"]
-
-
-def habits_from(args: argparse.Namespace) -> Habits | None:
-    """The habits a model-building command is to use: ``--habits`` read and checked, or None (``--model paper``,
-    or no ``--habits``). ``--model habits`` without ``--habits`` is an error."""
-    chosen, path = getattr(args, "habit_model", None), getattr(args, "habits", None)
-    if chosen == "paper":
-        return None
-    if path is None:
-        if chosen == "habits":
-            raise PlannerError("--model habits needs the habits: --habits FILE (aplan habits LOG... -o FILE)")
-        return None
-    return read_habits(path, inputs_from(args))
 
 
 def _habits(args: argparse.Namespace) -> int:

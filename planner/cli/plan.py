@@ -22,15 +22,10 @@ from ..product.synthetic import SYNTHETIC, synthetic_bytes, synthetic_contacts
 from .geometry import contact_choice
 from .options import (
     PRODUCT_HELP,
-    add_base_part,
     add_contact_options,
-    add_fasteners,
     add_force,
-    add_hierarchy,
     add_input_options,
-    add_model_options,
-    add_size_options,
-    add_technical,
+    add_product_options,
     advice,
     contact_tolerances_from,
     explain,
@@ -317,12 +312,7 @@ def add_commands(commands) -> None:
     stats.add_argument("--json", action="store_true",
                        help="print one JSON object with exactly those keys (null when not computed, and then "
                             "not_computed: the figures and the reason)")
-    add_technical(stats)
-    add_base_part(stats)
-    add_hierarchy(stats)
-    add_fasteners(stats)
-    add_model_options(stats)
-    add_size_options(stats)
+    add_product_options(stats)
     add_contact_options(stats)
     stats.set_defaults(run=_stats)
 
@@ -332,12 +322,7 @@ def add_commands(commands) -> None:
                             help=f"refuse to enumerate more intentions than this (default {DEFAULT_INTENTION_LIMIT:,})")
     intentions.add_argument("--full", action="store_true", help="only the full assembly sequences")
     intentions.add_argument("--json", action="store_true", help="one JSON object per line")
-    add_technical(intentions)
-    add_base_part(intentions)
-    add_hierarchy(intentions)
-    add_fasteners(intentions)
-    add_model_options(intentions)
-    add_size_options(intentions)
+    add_product_options(intentions)
     intentions.set_defaults(run=_intentions)
 
     sequence = commands.add_parser(
@@ -355,12 +340,7 @@ def add_commands(commands) -> None:
     sequence.add_argument("--spacing", type=positive_length, default=1.0, metavar="D",
                           help="how far the first moving side sits away in the exploded offsets (default 1)")
     sequence.add_argument("--json", action="store_true", help="print one JSON object with the steps and offsets")
-    add_technical(sequence)
-    add_base_part(sequence)
-    add_hierarchy(sequence)
-    add_fasteners(sequence)
-    add_model_options(sequence)
-    add_size_options(sequence)
+    add_product_options(sequence)
     add_input_options(sequence)
     sequence.set_defaults(run=_sequence)
 

@@ -22,7 +22,9 @@ from .options import (
     add_policy_options,
     decision_seconds,
     index,
+    model_spec_from,
     number,
+    planner_choice_from,
 )
 from .runtime import FRAME_LIMIT, add_habits_out
 
@@ -180,9 +182,11 @@ def _sim(args: argparse.Namespace) -> int:
     from ..runtime.scripted import ScriptedOperator
     from .runtime import _demo_operations
 
+    spec, choice = model_spec_from(args), planner_choice_from(args)  # once, for every level
+
     def cell_of(product) -> SimulatedCell:
         """The cell of aplan session --demo K on one level, frame for frame (planner.cli.runtime._open_stream)."""
-        model, _ = decision_maker_from(args, product)
+        model, _ = decision_maker_from(args, product, spec, choice)
         designed = model.plan.designed or model.plan.product
         operator = ScriptedOperator(model.plan, _demo_operations(model, args.demo))
         camera = CameraModel(blur=1.2, noise=6, perspective=0.04, hands=True, seed=args.demo)

@@ -24,9 +24,9 @@ from .options import (
     add_policy_options,
     index,
     inputs_from,
+    model_spec_from,
     number,
-    online_budget,
-    parallel_from,
+    planner_choice_from,
     positive,
 )
 
@@ -126,24 +126,26 @@ def _session(args: argparse.Namespace) -> int:
              for level, _ in levels]
     for path in paths:  # every level's log before the first level starts: a refusal has done nothing
         check_output(path, option="--log", replaceable=False, noun="log")
+    spec, choice = model_spec_from(args), planner_choice_from(args)  # once, for every level
     status = 0
     for k, ((level, product), path) in enumerate(zip(levels, paths), start=1):
         if len(levels) > 1:
             print(f"level {level} ({k} of {len(levels)}): {', '.join(product.part_ids)}")
-        status = _session_level(args, product, path, level if args.level or len(levels) > 1 else None)
+        status = _session_level(args, product, path, level if args.level or len(levels) > 1 else None, spec, choice)
         if status:
             return status
     return status
 
 
-def _session_level(args: argparse.Namespace, product, log_path: str, level: str | None) -> int:
+def _session_level(args: argparse.Namespace, product, log_path: str, level: str | None, spec: api.ModelSpec,
+                   choice: api.PlannerChoice) -> int:
     from ..runtime.console import ConsoleRobot, KeyboardSource
     from ..runtime.log import EventLog
     from ..runtime.scripted import ScriptedRobot
     from ..runtime.session import run_session
     from ..runtime.vision import MarkerDetector, VisionSource, marker_map
 
-    model, policy = decision_maker_from(args, product)
+    model, policy = decision_maker_from(args, product, spec, choice)
     plan = model.plan
     stream, robot = None, ConsoleRobot() if args.robot in (None, "console") else ScriptedRobot()
     if not args.keyboard:  # open the frames first: a camera or file that cannot be read stops before any log
@@ -180,15 +182,15 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
                               on_warning=lambda message: events.write("warning", step=_current_step(events),
                                                                       message=message),
                               detections=stream, robot_uses_tray_tools=not args.robot_own_tools)
-    decision_time, expansions = online_budget(args)
     online = not is_offline_policy(policy)
-    settings = {"planner": "online" if online else "offline", "policy": args.policy,
-                "decision_time": decision_time if online else None, "expansions": expansions if online else None,
-                "technical": args.technical, "base_part": model.base_part, "discount": args.discount,
+    settings = {"planner": "online" if online else "offline", "policy": choice.policy,
+                "decision_time": choice.decision_time if online else None,
+                "expansions": choice.expansions if online else None,
+                "technical": spec.technical, "base_part": model.base_part, "discount": spec.discount,
                 "rewards": vars(model.rewards), "robot": args.robot, "source": _source_name(args),
                 "debounce": args.debounce, "quiet_frames": args.quiet_frames,
-                "robot_own_tools": args.robot_own_tools, "level": level, "habits": _habits_setting(args),
-                "parallel": parallel_from(args)}
+                "robot_own_tools": args.robot_own_tools, "level": level, "habits": _habits_setting(args, spec.habits),
+                "parallel": spec.parallel}
     try:
         result = run_session(model, policy, source, robot, events, status, args.max_steps, settings=settings)
     except KeyboardInterrupt as exc:  # the log holds the session up to the interrupt: say so, exit 128 + N
@@ -228,12 +230,10 @@ def _update_habits(args: argparse.Namespace, plan, log_path: str) -> None:
     print(f"habits: {args.habits_out} ({steps} step{'s' if steps != 1 else ''} of this session added)")
 
 
-def _habits_setting(args: argparse.Namespace) -> dict | None:
+def _habits_setting(args: argparse.Namespace, habits) -> dict | None:
     """The habits the session's model used (the file's content: replay rebuilds the same model), or None."""
     from ..decision.io.habits_file import habits_to_dict
-    from .habits import habits_from
 
-    habits = habits_from(args)
     return None if habits is None else {**habits_to_dict(habits), "file": args.habits}
 
 

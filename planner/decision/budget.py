@@ -23,12 +23,15 @@ from .factored_model import factored_model_bytes
 from .intention_model import _BYTES_PER_INTENTION, _BYTES_PER_INTENTION_ACTION, flat_model_bytes
 from .lumped_model import lumped_pomdp_bytes
 from .bounds import VALUE_BLOCK
+from .parallel import parallel_bytes, parallel_candidates, parallel_flag
+from .projected import PROJECTED, projected_bytes, projected_candidates
 from .pomdp import POMDP
 from .solvers.tables import pomdp_bytes, solver_bytes
 
 __all__ = ["class_values_bytes", "online_planner_bytes", "plan_bytes", "online_bytes", "lumped_bytes", "online_limits",
            "lumped_limits", "flat_limits", "check_online_memory",
-           "check_lumped_memory", "check_solver_memory", "check_flat_solver_memory", "lumped_start_fits"]
+           "check_lumped_memory", "check_solver_memory", "check_flat_solver_memory", "lumped_start_fits",
+           "check_parallel_memory"]
 
 _HINT = "Plan with fewer parts (fold or group the fasteners), or one subassembly (one workstation) at a time."
 
@@ -179,3 +182,20 @@ def check_flat_solver_memory(plan: Plan, intentions: int, budget: int) -> None:
            "The solver keeps a few tables of one number per intention and action. The lumped model (--lumped) "
            "solves the same problem over far fewer states.",
            [("--lumped", "--lumped solves the lumped model (the same value over the state edges)")])
+
+
+def check_parallel_memory(plan, budget: int, rule: bool | str = True) -> None:
+    """Refuse the parallel model of ``plan`` (``rule``: True or ``next`` for :mod:`.parallel`'s pairs,
+    ``projected`` for :mod:`.projected`'s) when the factored model, the online planner's values and the pairs,
+    with the plan held, would not fit in ``budget`` bytes (:class:`~planner.errors.MemoryLimitError`, with the
+    estimate and the options). Cost: O(E)."""
+    states = plan.states
+    projected = rule == PROJECTED
+    pairs = projected_bytes(states) if projected else parallel_bytes(states)
+    needed = plan_bytes(plan) + online_bytes(states.n_states, states.n_edges) + pairs
+    if needed > budget:
+        count = projected_candidates(states) if projected else parallel_candidates(states)
+        flag = parallel_flag(rule)
+        raise MemoryLimitError(f"{'projected' if projected else 'parallel'} model (its pairs)", needed, budget,
+                               f"{count:,} candidate pairs ({gib(pairs)}) beside the factored model",
+                               f"Leave out {flag}, or plan a smaller product.", memory_options(needed))

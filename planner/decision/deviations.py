@@ -35,6 +35,7 @@ import scipy.sparse as sp
 
 from ..defaults import STAY
 from ..errors import PlannerError
+from .factored_belief import FactoredBelief, _sum_by
 
 __all__ = ["Deviations", "deviations_of", "check_probability", "switch_share", "operator_step", "mix_likelihood",
            "flat_deviation_entries", "flat_switch", "mixed_observations", "lumped_switch", "MistakeSplit",
@@ -90,8 +91,6 @@ def operator_step(model, classes: np.ndarray, mass: np.ndarray) -> list[tuple[np
     """``S W`` on a factored belief's (classes, mass), as pieces for the model's ``_combine``: the switch
     (``sigma`` of each unfinished class's mass to its state's classes by :func:`switch_share`), then stay or
     advance one step, 1/2 each (the final class stays). Cost: O(k log k + the classes of the states)."""
-    from .factored_model import _sum_by  # the factored model imports this module
-
     sigma = model.deviations.switch
     final = model.final_class
     if sigma > 0:
@@ -196,8 +195,6 @@ class MistakeSplit:
         self.branches = branches
 
     def posterior(self, z: int):
-        from .factored_model import FactoredBelief
-
         weighted = self.mass * self.model.observation_likelihood(z, self.classes)
         keep = weighted > 0
         return FactoredBelief(self.classes[keep], weighted[keep] / weighted[keep].sum())
@@ -258,8 +255,6 @@ def belief_at_states(model, states: list[int], weights: list[float] | None = Non
             at = graph.first_state == s
             out[at] += (w / total) * prior[at] / prior[at].sum()
         return out
-    from .factored_model import FactoredBelief, _sum_by
-
     share = switch_share(model) if model.deviations is None else model.switch_share
     parts_c, parts_m = [], []
     for s, w in zip(states, weights):

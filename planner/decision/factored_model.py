@@ -56,6 +56,8 @@ from ..assembly.plan import Plan
 from ..defaults import BLANK_WEIGHT, DISCOUNT, STAY
 from ..errors import PlannerError
 from .deviations import Deviations, mix_likelihood, operator_step, switch_share
+from .factored_belief import FactoredBelief, _sum_by
+from .factored_sequences import FactoredSequences
 from .habits import weighted_fractions
 from .intention_model import WAIT, Rewards
 from .parallel import (ParallelTable, parallel_expected_rewards, parallel_flag, parallel_predict, parallel_rewards,
@@ -66,38 +68,7 @@ __all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model", "factor
 
 
 @dataclass(frozen=True)
-class FactoredBelief:
-    """A belief over classes: ``classes`` sorted and distinct, ``mass[k] > 0`` the probability of
-    ``classes[k]`` (they sum to 1)."""
-
-    classes: np.ndarray
-    mass: np.ndarray
-
-    def dense(self, n_classes: int) -> np.ndarray:
-        """The masses as a vector over all ``n_classes`` classes."""
-        out = np.zeros(n_classes)
-        out[self.classes] = self.mass
-        return out
-
-
-def _sum_by(keys: np.ndarray, values: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
-    """The distinct ``keys`` (sorted, in ``range(size)``) whose ``values`` sum to more than 0, and the sums.
-
-    One sort when the keys are few; one dense ``bincount`` over ``size`` when they are many (it is then the
-    cheaper of the two). Cost: O(k log k) or O(k + size) for k keys.
-    """
-    if keys.size * 8 > size:
-        total = np.bincount(keys, weights=values, minlength=size)
-        distinct = np.flatnonzero(total > 0)
-        return distinct, total[distinct]
-    distinct, inverse = np.unique(keys, return_inverse=True)
-    total = np.bincount(inverse, weights=values, minlength=distinct.size)
-    keep = total > 0
-    return distinct[keep], total[keep]
-
-
-@dataclass(frozen=True)
-class FactoredIntentionModel:
+class FactoredIntentionModel(FactoredSequences):
     """Alg. 3's POMDP over classes (module docstring); the same names as :class:`IntentionModel`.
 
     Per class (``E + 1`` entries): ``class_source`` (the current assembly state), ``class_target`` (after the
@@ -195,74 +166,6 @@ class FactoredIntentionModel:
     def classes_from(self, state: int) -> np.ndarray:
         """The classes that start at ``state`` (its out-edges; the final class at the final state)."""
         return self.state_classes[self.state_class_start[state]:self.state_class_start[state + 1]]
-
-    def sequence(self, rank: int) -> list[int]:
-        """The state edges of full sequence number ``rank`` (0 <= rank < :attr:`n_sequences`; the order is the
-        edges' order at each state). Cost: O(length x out-degree)."""
-        rank = int(rank)
-        if not 0 <= rank < self.n_sequences:
-            raise PlannerError(f"sequence {rank} does not exist: there are {self.n_sequences} full sequences")
-        edges, state = [], self.plan.states.initial
-        while state != self.final_state:
-            for c in self._sequence_options(state):
-                size = int(self.paths[self.class_target[c]])
-                if rank < size:
-                    edges.append(int(c))
-                    state = int(self.class_target[c])
-                    break
-                rank -= size
-        return edges
-
-    def sample_sequence(self, rng: np.random.Generator) -> list[int]:
-        """A full sequence drawn uniformly (the initial belief), as state edges. Cost: O(length x out-degree)."""
-        edges, state = [], self.plan.states.initial
-        while state != self.final_state:
-            options = self._sequence_options(state)
-            p = self.class_fraction[options]
-            c = int(rng.choice(options, p=p if self.base_part is None or state != self.plan.states.initial
-                               else p / p.sum()))
-            edges.append(c)
-            state = int(self.class_target[c])
-        return edges
-
-    def _sequence_options(self, state: int) -> np.ndarray:
-        """The classes a full sequence may take at ``state``: the allowed first ones at the initial state."""
-        return self.initial_classes if state == self.plan.states.initial else self.classes_from(state)
-
-    def sequence_operations(self, edges: list[int]) -> list[int]:
-        """The operations of a path of state edges, in order."""
-        return [int(self.class_operation[e]) for e in edges]
-
-    def describe_operations(self, edges: list[int]) -> list[str]:
-        """:meth:`sequence_operations` as text (``ink+cartridge``, ...)."""
-        return [self.plan.andor.describe(o) for o in self.sequence_operations(edges)]
-
-    # --- one true intention: a full sequence's edges and how far along it the world is ------------------
-
-    def position_transition(self, path: list[int], position: int, action: int) -> list[tuple[int, float]]:
-        """T of the intention ``path[position:]`` (``path``: state edges to the final state) under ``action``,
-        as (next position, probability) pairs: the flat model's transition row, by position along ``path``."""
-        end = len(path)
-        if position >= end:
-            return [(end, 1.0)]
-        if action == self.wait:
-            return [(position, STAY), (position + 1, 1 - STAY)]
-        if self.class_action[path[position]] != action:
-            return [(position, 1.0)]
-        if position + 1 == end:
-            return [(end, 1.0)]
-        return [(position + 1, STAY), (position + 2, 1 - STAY)]
-
-    def sample_position(self, path: list[int], position: int, action: int, rng: np.random.Generator) -> int:
-        """The next position along ``path`` drawn from :meth:`position_transition` (a simulator's step)."""
-        options = self.position_transition(path, position, action)
-        return options[0][0] if len(options) == 1 else options[int(rng.random() < options[1][1])][0]
-
-    def sample_observation(self, path: list[int], position: int, rng: np.random.Generator) -> int:
-        """An observation drawn from the table of the state the world is in (blank included)."""
-        state = int(self.class_source[path[position]]) if position < len(path) else self.final_state
-        observations, p = self.state_observations(state)
-        return int(rng.choice(observations, p=p))
 
     def check_step(self, action: int, observation: int) -> None:
         """A :class:`PlannerError` unless ``action`` and ``observation`` are indices of this model's."""

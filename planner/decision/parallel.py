@@ -20,65 +20,18 @@ class unchanged, as in the paper. So ``R(c, a) = wrong + q (r(o) - wrong)``. Eve
 ``(c, a)`` determines ``f``, ``e2`` and ``e'`` (an operation applied to a state has one result), so the pairs are
 a sparse table keyed by ``c * A + a`` (:class:`ParallelTable`). Cost of :func:`parallel_table`: O(C log E) time
 for the C = nnz(M) candidates (class, class out of its target) of the advance matrix, at most 100 bytes a
-candidate at its peak, about 66 bytes a pair held (:func:`check_parallel_memory` refuses past the budget).
+candidate at its peak, about 66 bytes a pair held (:func:`~planner.decision.budget.check_parallel_memory` refuses past the budget).
 """
 from __future__ import annotations
-
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..assembly.intentions import allowed_edges
-from .projected import PROJECTED, projected_bytes, projected_candidates, projected_rewrite
+from .parallel_table import ParallelTable
+from .projected import PROJECTED, projected_rewrite
 
-__all__ = ["ParallelTable", "parallel_table", "parallel_flag", "parallel_rewrite", "parallel_bytes", "check_parallel_memory",
+__all__ = ["ParallelTable", "parallel_table", "parallel_flag", "parallel_rewrite", "parallel_bytes",
            "parallel_candidates", "parallel_predict", "parallel_rewards", "parallel_expected_rewards"]
-
-
-@dataclass(frozen=True)
-class ParallelTable:
-    """The parallel pairs, sorted by ``key = class * A + action`` (``A`` the number of actions, wait included):
-    per pair the class, the action, ``q`` (``fraction``), the class after a right action (``target``: ``e'``),
-    the reward of a right action (``reward``), the operator's edge the robot takes over (``step``: ``e2``) and the
-    robot's own edge (``robot_edge``: ``f``). ``start`` (classes + 1): the pairs of class ``c`` are
-    ``start[c]:start[c + 1]`` (the keys sort by class first)."""
-
-    n_actions: int
-    key: np.ndarray
-    pair_class: np.ndarray
-    action: np.ndarray
-    fraction: np.ndarray
-    target: np.ndarray
-    reward: np.ndarray
-    step: np.ndarray
-    robot_edge: np.ndarray
-    start: np.ndarray
-    #: ``next``: this module's pairs (the step after next); ``projected``: :mod:`.projected`'s (``step`` -1)
-    rule: str = "next"
-    projector: object = field(default=None, compare=False, repr=False)  # the projected rule's lookups
-
-    @property
-    def size(self) -> int:
-        return int(self.key.size)
-
-    def find(self, classes: np.ndarray, action: int) -> tuple[np.ndarray, np.ndarray]:
-        """``(k, p)``: the positions ``k`` in ``classes`` that have a pair with ``action``, and the pairs ``p``.
-        Cost: O(k log P)."""
-        if not self.key.size or action < 0:
-            empty = np.zeros(0, dtype=np.int64)
-            return empty, empty
-        keys = np.asarray(classes, dtype=np.int64) * self.n_actions + int(action)
-        at = np.minimum(np.searchsorted(self.key, keys), self.key.size - 1)
-        hit = np.flatnonzero(self.key[at] == keys)
-        return hit, at[hit]
-
-    def of_classes(self, classes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(k, p)``: every pair ``p`` of ``classes``, ``k`` the position of its class. Cost: O(k + pairs)."""
-        lo, hi = self.start[classes], self.start[np.asarray(classes) + 1]
-        count = hi - lo
-        ends = np.cumsum(count)
-        total = int(ends[-1]) if ends.size else 0
-        return np.repeat(np.arange(len(classes)), count), np.repeat(lo - ends + count, count) + np.arange(total)
 
 
 # parallel_table's peak per candidate (class, class out of its target): measured 85-89 bytes on chain 13 and
@@ -99,27 +52,6 @@ def parallel_candidates(states) -> int:
 def parallel_bytes(states) -> int:
     """The most :func:`parallel_table` takes on a plan's state graph ``states``, from counts alone."""
     return CANDIDATE_BYTES * parallel_candidates(states)
-
-
-def check_parallel_memory(plan, budget: int, rule: bool | str = True) -> None:
-    """Refuse the parallel model of ``plan`` (``rule``: True or ``next`` for this module's pairs, ``projected``
-    for :mod:`.projected`'s) when the factored model, the online planner's values and the pairs, with the plan
-    held, would not fit in ``budget`` bytes (:class:`~planner.errors.MemoryLimitError`, with the estimate and
-    the options). Cost: O(E)."""
-    from ..assembly.guards import memory_options
-    from ..errors import MemoryLimitError, gib
-    from .budget import online_bytes, plan_bytes
-
-    states = plan.states
-    projected = rule == PROJECTED
-    pairs = projected_bytes(states) if projected else parallel_bytes(states)
-    needed = plan_bytes(plan) + online_bytes(states.n_states, states.n_edges) + pairs
-    if needed > budget:
-        count = projected_candidates(states) if projected else parallel_candidates(states)
-        flag = parallel_flag(rule)
-        raise MemoryLimitError(f"{'projected' if projected else 'parallel'} model (its pairs)", needed, budget,
-                               f"{count:,} candidate pairs ({gib(pairs)}) beside the factored model",
-                               f"Leave out {flag}, or plan a smaller product.", memory_options(needed))
 
 
 def parallel_table(model) -> ParallelTable:

@@ -171,7 +171,7 @@ def projected_table(model):
     """The projected model's pairs of a :class:`~planner.decision.factored_model.FactoredIntentionModel`
     (module docstring) as a :class:`~planner.decision.parallel.ParallelTable` with ``rule = "projected"``
     (``step`` is -1: the step that disappears depends on the whole sequence). Cost: module docstring."""
-    from .parallel import ParallelTable
+    from .parallel_table import ParallelTable
 
     plan = model.plan
     states = plan.states

@@ -14,14 +14,14 @@ import numpy as np
 from ..defaults import PRODUCT_FILE
 from ..errors import GeometryError
 from ..interrupts import held_interrupts
-from ..product import AXIS_DIRECTIONS, Direction, Obstruction, Product, load_product
+from ..product import AXIS_DIRECTIONS, Direction, Obstruction, Product, load_product, save_product
 from ..product.designer import designer_geometry, release_marked
 from .clearances import analyze_with_clearances
 from .mesh_engine import AXES, GeometryReport, PartMesh, analyze_meshes
 from .tolerances import Tolerances
 
 __all__ = ["PRODUCT_FILE", "bundle_product_path", "load_bundle", "is_analysed", "load_part_meshes",
-           "analyze_product", "apply_report", "ENGINES"]
+           "analyze_product", "analyse_bundle", "apply_report", "ENGINES"]
 
 
 def bundle_product_path(folder: str | Path) -> Path:
@@ -103,6 +103,19 @@ def analyze_product(product: Product, engine: str = "mesh", tolerances: Toleranc
         tolerances = replace(tolerances, designer_directions=tuple(d.vector for d in designer))
     return analyze_with_clearances(lambda chosen: engines[engine](product, chosen), tolerances,
                                    lambda: load_part_meshes(product))
+
+
+def analyse_bundle(product: Product, path: str | Path, engine: str = "mesh", tolerances: Tolerances = Tolerances(),
+                   report: GeometryReport | None = None) -> tuple[Product, GeometryReport]:
+    """Analyse a bundle: the one way its diagrams are found and written, for the command line (``aplan
+    analyze``), the workbench and the FreeCAD export. ``report``: an engine's answer found elsewhere (the
+    workbench's OCCT run inside FreeCAD), else :func:`analyze_product` with ``engine`` and ``tolerances``;
+    applied to ``product`` (:func:`apply_report`) and the product written to ``path`` atomically. Returns the
+    analysed product and the report. Cost: the engine's."""
+    report = analyze_product(product, engine, tolerances) if report is None else report
+    analysed = apply_report(product, report)
+    save_product(analysed, path)
+    return analysed, report
 
 
 def apply_report(product: Product, report: GeometryReport) -> Product:

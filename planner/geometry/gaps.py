@@ -31,7 +31,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import GeometryError
-from .mesh_engine import PartMesh
+from .meshes import PartMesh
 
 __all__ = ["Gap", "GapReport", "connection_groups", "mesh_gaps", "gap_report", "contact_tolerance_for",
            "part_gaps", "fcl_available"]

@@ -28,9 +28,10 @@ from typing import TYPE_CHECKING, Any, Iterable, Sequence
 
 from ..errors import GeometryError, ProductFormatError
 from .constants import AXIS_DIRECTIONS
+from .directions import Direction, Obstruction
 
 if TYPE_CHECKING:
-    from .model import Direction, Product
+    from .model import Product
 
 __all__ = ["MERGE_DEGREES", "NotBlocking", "DesignerGeometry", "parse_direction", "unit_vector", "designer_geometry",
            "add_directions", "mark_not_blocking", "unmark_not_blocking", "release_marked", "designer_lines"]
@@ -99,8 +100,6 @@ def parse_direction(text: str, where: str = "direction") -> tuple[float, float, 
 
 
 def _direction(vector: Sequence[float]) -> "Direction":
-    from .model import Direction
-
     return Direction.from_vector(tuple(round(c, 9) + 0.0 for c in vector))  # type: ignore[arg-type]
 
 
@@ -266,8 +265,6 @@ def unmark_not_blocking(product: "Product", marks: Iterable[tuple[str, str, Any]
     """``product`` without the designer marks ``marks`` (as :func:`mark_not_blocking` takes them), the obstruction
     pairs they released (``geometry.analysis.designer.released``) put back: what a detection finds again.
     Raises :class:`~planner.errors.GeometryError` for a mark that is not there."""
-    from .model import Obstruction
-
     current = list(designer_geometry(product).not_blocking)
     directions = designer_geometry(product).directions
     gone = []
@@ -300,8 +297,6 @@ def release_marked(product: "Product") -> "Product":
     the designer directions, the pairs released (``[blocked, blocking, direction]``, as the diagrams list them)
     and the marks that matched no detected pair (``unmatched``). Idempotent. Cost: O(marks x directions +
     pairs)."""
-    from .model import Obstruction
-
     designer = designer_geometry(product)
     if not designer.directions and not designer.not_blocking:
         return product

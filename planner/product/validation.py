@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Iterable
 
 from ..errors import ProductFormatError
 from .constants import DEFAULT_MARKER_DICTIONARY, MARKER_DICTIONARIES, UNFAVORABLE_DEFAULTS, UNITS
+from .designer import designer_geometry
 from .messages import suggest
 
 if TYPE_CHECKING:
@@ -36,8 +37,6 @@ def check_product(product: "Product") -> None:
         _check_markers(product, set(parts) | set(tools))
     _check_subassemblies(product, parts, tools)
     if "designer" in product.geometry:  # the designer's directions and not-blocking marks
-        from .designer import designer_geometry
-
         designer_geometry(product, check_parts=False)  # a level or a folded product holds fewer parts
 
 

@@ -18,10 +18,9 @@ from planner.assembly.hierarchy import (
     ConstraintViolationError,
     level_statistics,
     product_levels,
-    propose_subassemblies,
     select_level,
-    with_subassemblies,
 )
+from planner.assembly.subassembly_proposals import propose_subassemblies, with_subassemblies
 from planner.errors import PlannerError, ProductFormatError
 from planner.product import (
     Direction,
@@ -382,7 +381,7 @@ def test_a_single_member_interlocked_with_a_group_joins_it_once():
     """Built, {p1, p2, p3} and p4 block each other along every axis (along X p1 hits p4 and p4 hits p2, and so
     on), though no two parts do: the single member p4 is merged into the group (4 members, within 1.5 x 3),
     and appears once."""
-    from planner.assembly.hierarchy import _separable_groups
+    from planner.assembly.subassembly_proposals import _separable_groups
 
     axes = [Direction.from_vector(v) for v in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))]
     blocks = [(("p1", "p4"), ("p4", "p2")), (("p2", "p4"), ("p4", "p3")), (("p3", "p4"), ("p4", "p1"))]

@@ -117,10 +117,11 @@ def test_session_goes_through_the_levels_with_a_log_each(capsys, chains, tmp_pat
     from planner.cli import runtime
 
     calls = []
-    monkeypatch.setattr(runtime, "_session_level", lambda args, product, path, level: calls.append(
-        (level, product.part_ids, path)) or 0)
+    monkeypatch.setattr(runtime, "_session_level", lambda args, product, path, level, spec, choice: calls.append(
+        (level, product.part_ids, path, spec, choice)) or 0)
     code, out, _ = run(capsys, "session", chains, "--demo", "0", "--log", tmp_path / "s.jsonl")
     assert code == 0 and [c[0] for c in calls] == ["A", "B", "top"]
+    assert all(c[3] is calls[0][3] and c[4] is calls[0][4] for c in calls)  # the options read once, for every level
     assert [c[1] for c in calls] == [("a1", "a2", "a3"), ("b1", "b2", "b3"), ("A", "B")]
     assert [c[2] for c in calls] == [str(tmp_path / f"s-{level}.jsonl") for level in ("A", "B", "top")]
     assert [line.split()[1] for line in out.splitlines() if line.startswith("level ")] == ["A", "B", "top"]

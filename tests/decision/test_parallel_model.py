@@ -223,7 +223,8 @@ def test_the_pairs_memory_is_estimated_from_counts_and_refused_past_the_budget(p
     """The candidates are nnz(M) of the advance matrix (counted independently); past the budget, a clear
     refusal before anything is built."""
     from planner.decision.lumped_model import advance_matrix
-    from planner.decision.parallel import check_parallel_memory, parallel_bytes, parallel_candidates
+    from planner.decision.budget import check_parallel_memory
+    from planner.decision.parallel import parallel_bytes, parallel_candidates
     from planner.errors import MemoryLimitError
 
     plan = make_plan(chain_product(6))

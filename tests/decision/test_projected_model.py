@@ -21,7 +21,7 @@ from planner.decision.episode_measures import episode_measures
 from planner.decision.factored_simulate import simulate_factored_episode
 from planner.decision.habits import habit_weights_from
 from planner.decision.online import OnlinePlanner, class_values, revealed_state_values
-from planner.decision.parallel import check_parallel_memory
+from planner.decision.budget import check_parallel_memory
 from planner.decision.projected import projected_bytes, projected_candidates, projected_rewrite
 from planner.errors import MemoryLimitError, PlannerError
 

@@ -82,3 +82,20 @@ def test_unknown_engine(tmp_path):
     bundle = make_bundle(tmp_path / "b")
     done = aplan("analyze", str(bundle), "--engine", "magic")
     assert done.returncode == 1 and "unknown geometry engine 'magic'; available: mesh, occt" in done.stderr
+
+
+def test_analyse_bundle_is_the_one_analysis_and_save(tmp_path):
+    """analyse_bundle (what aplan analyze, the workbench and the FreeCAD export run): the engine's report applied
+    and written; a report found elsewhere (the workbench's OCCT run) is applied as given, without the engine."""
+    from dataclasses import replace
+
+    from planner.geometry.bundle import analyse_bundle, load_bundle
+
+    bundle = make_bundle(tmp_path / "b")
+    product = load_bundle(bundle)
+    analysed, report = analyse_bundle(product, bundle / "product.json")
+    assert load_product(bundle / "product.json").contacts == analysed.contacts and len(report.contacts) == 2
+    given = replace(report, contacts=(("base", "lid"),), engine="given")
+    again, same = analyse_bundle(product, tmp_path / "given.json", "no such engine", report=given)
+    assert same is given and {frozenset(c) for c in again.contacts} == {frozenset(("base", "lid"))}
+    assert load_product(tmp_path / "given.json").geometry["analysis"]["engine"] == "given"

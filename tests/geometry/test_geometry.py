@@ -134,7 +134,7 @@ def _erode_by_hand(mask: np.ndarray, radius: int) -> np.ndarray:
 
 
 def test_erosion_equals_the_hand_written_one():
-    from planner.geometry.mesh_engine import _erode
+    from planner.geometry.projection import _erode
 
     rng = np.random.default_rng(7)
     eroded = 0

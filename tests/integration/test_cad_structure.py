@@ -14,7 +14,8 @@ from real_models import JOBS, real_bundle
 
 from integration.freecad_tools import aplan, aplan_process, freecad_result, succeeded
 from planner.api import resolve_product
-from planner.assembly.hierarchy import level_statistics, propose_subassemblies
+from planner.assembly.hierarchy import level_statistics
+from planner.assembly.subassembly_proposals import propose_subassemblies
 from planner.product import Obstruction
 
 STRUCTURED = """
@@ -37,7 +38,8 @@ box("A", 0, wheel); box("B", 10, wheel); box("C", 20, frame); box("D", 30, lonel
 pair = doc.addObject("Part::Feature", "Pair")
 pair.Shape = Part.makeCompound([Part.makeBox(10, 10, 10, FreeCAD.Vector(x, 0, 0)) for x in (50, 60)])
 doc.recompute(); doc.save()
-from freecad_aplan.document import document_subassemblies, read_components
+from freecad_aplan.containers import document_subassemblies
+from freecad_aplan.document import read_components
 result = read_components(doc, split_solids=True)
 print("APLAN-RESULT " + json.dumps(document_subassemblies(doc, result.components)))
 """

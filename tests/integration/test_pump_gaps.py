@@ -17,7 +17,7 @@ from planner.errors import ContactCeilingError, DisconnectedProductError
 from planner.geometry import Tolerances, analyze_product, apply_report
 from planner.geometry.bundle import bundle_product_path, load_part_meshes
 from planner.geometry.gaps import connection_groups, gap_report, mesh_gaps, part_gaps
-from planner.geometry.mesh_engine import _manifold
+from planner.geometry.meshes import _manifold
 
 PUMP = SHARED / "models" / "diaphragm_pump" / "asm_diaphragm_pump.FCStd"
 

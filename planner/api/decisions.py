@@ -1,0 +1,121 @@
+"""Stage 5 of the API: who decides in a session, a simulation or an evaluation: the offline policy on the flat model
+(the paper's), a policy over the lumped model's classes, or the online planner on the factored model (paper Sec. V)."""
+from __future__ import annotations
+
+import os
+
+from ..assembly.guards import SizeLimits
+from ..assembly.intentions import count_intentions
+from ..assembly.plan import Plan
+from ..decision.factored_model import FactoredIntentionModel, factored_model
+from ..decision.habits import habit_weights
+from ..decision.intention_model import flat_model_bytes, flat_model_fits, intention_model
+from ..decision.budget import check_online_memory, check_parallel_memory, online_limits
+from ..decision.episodes import evaluate, evaluate_operator, simulate
+from ..decision.online import OnlinePlanner
+from ..decision.policy import AlphaVectorPolicy, PolicyError, read_policy
+from ..defaults import DECISION_TIME, INTENTION_LIMIT, ONLINE_EXPANSIONS
+from ..errors import PlannerError, gib
+from ..product import Product
+
+from .models import check_parallel_flat
+from .plans import _decidable, base_part_of, plan_of
+from .policies import policy_for
+from .specs import PLANNERS, ModelSpec, PlannerChoice
+
+__all__ = ["PLANNERS", "online_planner", "choose_planner", "decision_maker", "simulate", "evaluate",
+           "evaluate_operator"]
+
+
+def online_planner(model: FactoredIntentionModel, decision_time: float | None = DECISION_TIME,
+                   expansions: int | None = None, lower: AlphaVectorPolicy | None = None) -> OnlinePlanner:
+    """The online planner on ``model``: at most ``decision_time`` seconds and ``expansions`` expansions per
+    decision. ``expansions`` alone (``decision_time`` None) is a fixed amount of work: the same actions on any
+    machine. ``lower``: an offline policy over the model's classes whose value the search starts from."""
+    if decision_time is None and expansions is None:
+        raise PlannerError("the online planner needs a decision time or a number of expansions")
+    return OnlinePlanner(model, expansions if expansions is not None else ONLINE_EXPANSIONS, decision_time,
+                         lower=lower)
+
+
+def choose_planner(plan: Plan, planner: str | None, policy: str | os.PathLike | None,
+                   limit: int = INTENTION_LIMIT, base_part: str | None = None,
+                   limits: SizeLimits = SizeLimits()) -> tuple[str, str | None]:
+    """``offline`` or ``online``, and why when it was not asked for. ``planner`` None: offline with a policy
+    file, else online (no policy to follow); a flat model of more than ``limit`` intentions or past
+    ``limits.memory`` is never built: offline then needs a policy over the lumped model's classes, and without
+    one the online planner decides."""
+    if planner is not None and planner not in PLANNERS:
+        raise PlannerError(f"unknown planner {planner!r}; use one of {', '.join(PLANNERS)}")
+    if planner is not None:
+        return planner, None
+    if policy:
+        return "offline", None
+    intentions = count_intentions(plan.states, base_part=base_part)
+    if not flat_model_fits(plan, limits.memory, limit, intentions):
+        needed = flat_model_bytes(plan, intentions)
+        passed = (f"about {gib(needed)}, past the memory budget of {gib(limits.memory)}" if needed > limits.memory
+                  else f"past the intention limit of {limit:,}")
+        return "online", (f"the flat model would hold {intentions:,} intentions ({passed}) and no --policy was "
+                          "given: using the online planner")
+    return "online", "no --policy: using the online planner"
+
+
+def decision_maker(product: str | os.PathLike | Product | Plan, spec: ModelSpec = ModelSpec(),
+                   choice: PlannerChoice = PlannerChoice()):
+    """The model, the policy and a note (what was chosen and why, or None) that a session, a simulation or an
+    evaluation runs on, for the model ``spec`` describes (:class:`~planner.api.specs.ModelSpec`) and the
+    planner ``choice`` asks for (:class:`~planner.api.specs.PlannerChoice`):
+
+    - online: the factored model and :func:`online_planner` (with ``choice.policy``, a policy over the classes,
+      as the lower bound it starts from);
+    - offline with a policy over the lumped model's classes: the factored model and that policy;
+    - offline otherwise: the flat model of Alg. 3 (refused above ``choice.limit`` intentions, naming
+      ``--planner online``) and the policy file, or the built-in solver's policy after ``choice.time_limit``
+      seconds.
+
+    The policy file is read within ``spec.inputs``; ``spec.habits`` and ``spec.deviations`` go into every
+    model; ``spec.parallel`` is on the classes only: with it the flat model is refused
+    (:func:`~planner.api.models.check_parallel_flat`).
+    """
+    limits, policy = spec.limits, choice.policy
+    plan = product if isinstance(product, Plan) else \
+        _decidable(plan_of(product, spec.technical, online_limits(limits)))
+    base_part = base_part_of(plan, spec.base_part)
+    weights = habit_weights(plan, spec.habits)
+    chosen, note = choose_planner(plan, choice.planner, policy, choice.limit, base_part, limits)
+
+    def factored() -> FactoredIntentionModel:
+        check_online_memory(plan, limits.memory)
+        if spec.parallel:
+            check_parallel_memory(plan, limits.memory, spec.parallel)
+        return factored_model(plan, spec.rewards, spec.discount, base_part, weights, spec.parallel, spec.deviations)
+
+    if chosen == "online":
+        model = factored()
+        lower = read_policy(policy, limits=spec.inputs) if policy else None
+        return model, online_planner(model, choice.decision_time, choice.expansions, lower), note
+    intentions = count_intentions(plan.states, base_part=base_part)
+    vectors = read_policy(policy, limits=spec.inputs) if policy else None
+    if vectors is not None:
+        classes = plan.states.n_edges + 1  # the factored model's classes: one per state edge, and finished
+        length = vectors.alphas.shape[1]
+        if length not in (intentions, classes):
+            raise PolicyError(f"{policy}: vectors of length {length:,}, but this product's model has {intentions:,} "
+                              f"intentions (flat) and {classes:,} classes (lumped): the policy belongs to "
+                              "another model (check the product, --technical and --base-part)")
+        if length == classes and length != intentions:
+            lumped = factored()
+            vectors.check_sizes(lumped.n_classes, len(lumped.actions), str(policy))
+            return lumped, vectors, None
+    check_parallel_flat(spec.parallel, "--planner offline")
+    # Past the limits this raises, with the estimate and the options (--planner online among them).
+    model = intention_model(plan, spec.rewards, spec.discount, limit=choice.limit, base_part=base_part,
+                            max_bytes=limits.memory, weights=weights, deviations=spec.deviations)
+    if vectors is not None:
+        vectors.check(model.pomdp, str(policy))
+        return model, vectors, note
+    vectors, result = policy_for(model, None, choice.time_limit)
+    note = (f"no --policy: solved for {result.seconds:.1f} s, lower bound {result.lower_bound:.5f}, upper "
+            f"bound {result.upper_bound:.5f}")
+    return model, vectors, note

@@ -1,0 +1,127 @@
+"""The decision-model bundle (when MODEL is a product): technical constraints, base part, discount, rewards, habits,
+the parallel model, change of mind and mistakes, read into one :class:`~planner.api.specs.ModelSpec`
+(:func:`model_spec_from`)."""
+from __future__ import annotations
+
+import argparse
+
+from ... import api
+from ...decision.intention_model import Rewards
+from ...decision.deviations import Deviations, deviations_of
+from ...decision.habits import Habits
+from ...decision.io.habits_file import read_habits
+from ...defaults import DISCOUNT
+from ...errors import PlannerError, UsageError
+
+from .limits import add_input_options, add_size_options, inputs_from, limits_from
+from .products import add_base_part, add_fasteners, add_hierarchy, add_model_options, add_technical
+from .values import _probability, finite, number
+
+__all__ = ["add_decision_options", "add_habits_options", "add_parallel_options", "add_deviation_options",
+           "parallel_from", "rewards_from", "habits_from", "deviations_from", "model_spec_from"]
+
+
+def add_decision_options(parser: argparse.ArgumentParser) -> None:
+    """The decision model's options (when MODEL is a product): technical constraints, base part, discount,
+    rewards."""
+    d = Rewards()
+    group = parser.add_argument_group("decision model (when MODEL is a product)")
+    add_technical(group)
+    add_base_part(group)
+    add_fasteners(group)
+    add_model_options(parser)
+    group.add_argument("--discount", type=number(0, 1, high_open=True), default=DISCOUNT,
+                       help=f"discount factor, from 0 to below 1 (default {DISCOUNT:g})")
+    group.add_argument("--reward-unfavorable", type=finite, default=d.unfavorable, metavar="R",
+                       help=f"robot does the next step, unfavorable to humans (default {d.unfavorable:g})")
+    group.add_argument("--reward-favorable", type=finite, default=d.favorable, metavar="R",
+                       help=f"robot does the next step, fine for humans (default {d.favorable:g})")
+    group.add_argument("--reward-wrong", type=finite, default=d.wrong, metavar="R",
+                       help=f"robot does another operation: its eagerness (default {d.wrong:g})")
+    group.add_argument("--reward-wait", type=finite, default=d.wait, metavar="R", help=f"wait (default {d.wait:g})")
+    add_hierarchy(group)
+    add_habits_options(group)
+    add_parallel_options(group)
+    add_deviation_options(group)
+    add_size_options(parser)
+    add_input_options(parser)
+
+
+def add_habits_options(group) -> None:
+    """``--habits FILE`` and ``--model paper|habits`` (operator habits, docs/habits.md)."""
+    group.add_argument("--habits", metavar="FILE",
+                       help="the operator's habits (aplan habits LOG... -o FILE) in place of the uniform choice "
+                            "of Alg. 3, in every model and planner (docs/habits.md)")
+    group.add_argument("--model", dest="habit_model", choices=("paper", "habits"), default=None,
+                       help="paper: the paper's model, ignoring --habits, --switch and --mistakes; habits (the "
+                            "default with --habits): the habits' model")
+
+
+def add_parallel_options(group) -> None:
+    """``--parallel`` and ``--projected``: the parallel models (docs/parallel.md); ``--model paper`` turns them off."""
+    group.add_argument("--parallel", action="store_true",
+                       help="the parallel model: the robot may do the operator's step after next now, when that "
+                            "keeps the operator's next step possible (docs/parallel.md; on the classes: the online "
+                            "planner or a lumped policy); --model paper turns it off")
+    group.add_argument("--projected", action="store_true",
+                       help="the projected model: the robot may do any operation now, right when the operator's "
+                            "sequence projected onto the new state (the parts it joined, joined) stays feasible "
+                            "(docs/parallel.md, The projected model; on the classes, as --parallel); --model paper "
+                            "turns it off")
+
+
+def parallel_from(args: argparse.Namespace) -> bool | str:
+    """The parallel model ``args`` ask for, as :func:`~planner.decision.factored_model.factored_model` takes it:
+    True (``--parallel``), ``"projected"`` (``--projected``) or False (neither, or ``--model paper``); both at
+    once is a :class:`~planner.errors.UsageError`."""
+    parallel, projected = bool(getattr(args, "parallel", False)), bool(getattr(args, "projected", False))
+    if parallel and projected:
+        raise UsageError("--parallel and --projected are two models of the robot's help before the last step: "
+                         "give one of them (docs/parallel.md)")
+    if getattr(args, "habit_model", None) == "paper":
+        return False
+    return "projected" if projected else parallel
+
+
+def rewards_from(args: argparse.Namespace) -> Rewards:
+    return Rewards(args.reward_unfavorable, args.reward_favorable, args.reward_wrong, args.reward_wait)
+
+
+def habits_from(args: argparse.Namespace) -> Habits | None:
+    """The habits a model-building command is to use: ``--habits`` read and checked, or None (``--model paper``,
+    or no ``--habits``). ``--model habits`` without ``--habits`` is an error."""
+    chosen, path = getattr(args, "habit_model", None), getattr(args, "habits", None)
+    if chosen == "paper":
+        return None
+    if path is None:
+        if chosen == "habits":
+            raise PlannerError("--model habits needs the habits: --habits FILE (aplan habits LOG... -o FILE)")
+        return None
+    return read_habits(path, inputs_from(args))
+
+
+def model_spec_from(args: argparse.Namespace) -> api.ModelSpec:
+    """The decision model ``args`` ask for (:func:`add_decision_options`) as one
+    :class:`~planner.api.specs.ModelSpec`, built once per command (a session builds it before its first level:
+    the habits file is read once) and passed down. Cost: reading ``--habits``, if given."""
+    return api.ModelSpec(technical=args.technical, rewards=rewards_from(args), discount=args.discount,
+                         base_part=args.base_part, limits=limits_from(args), inputs=inputs_from(args),
+                         habits=habits_from(args), parallel=parallel_from(args), deviations=deviations_from(args))
+
+
+def add_deviation_options(group) -> None:
+    """The two probabilities (docs/deviations.md); both 0 by default: the paper's model."""
+    group.add_argument("--switch", type=_probability, default=0.0, metavar="P",
+                       help="change of mind: each time the operator may act, with probability P in [0, 1) it "
+                            "first draws a new completion from the current assembly state by the prior "
+                            "(default 0: the paper's model; docs/deviations.md)")
+    group.add_argument("--mistakes", type=_probability, default=0.0, metavar="Q",
+                       help="mistakes: each observation is, with probability Q in [0, 1), one drawn uniformly "
+                            "from all (a wrong part or tool taken), so none resets the belief (default 0)")
+
+
+def deviations_from(args: argparse.Namespace) -> Deviations | None:
+    """The deviations ``args`` ask for, None for the paper's model (both 0, or ``--model paper``)."""
+    if getattr(args, "habit_model", None) == "paper":
+        return None
+    return deviations_of(getattr(args, "switch", 0.0) or 0.0, getattr(args, "mistakes", 0.0) or 0.0)

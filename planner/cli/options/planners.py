@@ -1,0 +1,80 @@
+"""The planner bundle (who decides: ``--planner``, ``--policy``, ``--time-limit``, ``--decision-time``,
+``--expansions``, read into one :class:`~planner.api.specs.PlannerChoice`) and the episode options of simulate and
+evaluate."""
+from __future__ import annotations
+
+import argparse
+
+from ... import api
+from ...decision.operators import parse_operator
+from ...defaults import DECISION_TIME, DECISION_TIME_MAX, EXPANSION_LIMIT, POLICY_TIME_LIMIT, STEP_LIMIT, TIME_LIMIT_MAX
+from ...errors import PlannerError
+
+from .models import add_decision_options
+from .values import decision_seconds, number, positive_seconds, whole
+
+__all__ = ["add_policy_options", "planner_choice_from", "online_budget", "add_episode_options", "operator_model"]
+
+
+def add_policy_options(parser: argparse.ArgumentParser) -> None:
+    """Who decides (simulate, evaluate, session): the offline policy in a file, the offline solver's after
+    --time-limit, or the online planner within --decision-time per decision."""
+    group = parser.add_argument_group("planner")
+    group.add_argument("--planner", choices=("offline", "online"), default=None,
+                       help="offline: follow a policy (--policy, or solve the flat model for --time-limit s); "
+                            "online: search the factored model at every decision (any product size). Default: "
+                            "offline with --policy, else online")
+    group.add_argument("--policy", metavar="POLICY",
+                       help="a .policy file over the model's intentions, or over its classes (aplan solve --lumped); "
+                            "with --planner online, a policy over the classes is the lower bound the search starts "
+                            "from")
+    group.add_argument("--time-limit", type=positive_seconds, default=POLICY_TIME_LIMIT,
+                       help=f"offline solver seconds when --planner offline and no --policy "
+                            f"(default {POLICY_TIME_LIMIT:g}; at most {TIME_LIMIT_MAX:,})")
+    group.add_argument("--decision-time", type=decision_seconds, default=None, metavar="S",
+                       help=f"online planner: seconds per decision (default {DECISION_TIME:g}; at most "
+                            f"{DECISION_TIME_MAX:g})")
+    group.add_argument("--expansions", type=number(1, EXPANSION_LIMIT, integer=True), default=None, metavar="N",
+                       help=f"online planner: expansions per decision, 1 to {EXPANSION_LIMIT:,}; alone, a fixed amount "
+                            "of work without a clock (the same actions on any machine)")
+
+
+def planner_choice_from(args: argparse.Namespace) -> api.PlannerChoice:
+    """Who decides, as ``args`` ask (:func:`add_policy_options`), as one :class:`~planner.api.specs.PlannerChoice`."""
+    decision_time, expansions = online_budget(args)
+    return api.PlannerChoice(args.planner, args.policy, decision_time, expansions, args.time_limit)
+
+
+def online_budget(args: argparse.Namespace) -> tuple[float | None, int | None]:
+    """(decision time, expansions) from --decision-time and --expansions (module defaults when neither)."""
+    if args.expansions is not None and args.decision_time is None:
+        return None, args.expansions
+    return (args.decision_time if args.decision_time is not None else DECISION_TIME), args.expansions
+
+
+def add_episode_options(parser: argparse.ArgumentParser) -> None:
+    """Options shared by simulate and evaluate."""
+    parser.add_argument("--seed", type=whole, default=0)
+    parser.add_argument("--max-steps", type=number(1, STEP_LIMIT, integer=True), default=100, metavar="N",
+                        help=f"steps per episode at most, 1 to {STEP_LIMIT:,} (default 100)")
+    parser.add_argument("--operator-sequence", type=operator_model, metavar="SPEC", dest="operator_model",
+                        help="which sequences the simulated operator does (needs --random N with simulate): "
+                             "uniform (every full sequence equally likely, whatever the robot's model); "
+                             "habitual:K:STRENGTH (sequence K, numbered as --sequence numbers them, with "
+                             "probability STRENGTH in [0, 1], else uniform); changing:P (with probability P in "
+                             "[0, 1) per episode it switches once, at a point of its sequence drawn uniformly among "
+                             "those whose state has another completion, to another one; after habitual:K:S, as "
+                             "habitual:K:S,changing:P); "
+                             ",mistakes:Q last: with probability Q in [0, 1) per step a wrong part is taken and "
+                             "put back (the camera sees another observation); drawn from "
+                             "--seed before any episode, so two planners face the same operators. Default: the "
+                             "model's initial belief (with --habits, the habits)")
+    add_decision_options(parser)
+
+
+def operator_model(text: str):
+    """``--operator-sequence``: the operator model (:func:`planner.decision.operators.parse_operator`)."""
+    try:
+        return parse_operator(text)
+    except PlannerError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
