@@ -98,6 +98,10 @@ def ring_hull(points, volume: float, pad: float, shape=None, tight: float = TIGH
         r_min, r_max, z_min, z_max = _exact_ranges(shape, centre, axis, (r_min + pad, r_max - pad, z_min + pad,
                                                                           z_max - pad))
         r_min = 0.0 if r_min < pad else r_min
+        # Checked again on the exact ranges: a coarse mesh's vertices need not sample the surface (the 12
+        # corners of an L of two bars lie near one circle, a 3.7 times ring; measured exactly, 41 times).
+        if math.pi * (r_max ** 2 - r_min ** 2) * (z_max - z_min) > tight * volume:
+            return None
     direction = FreeCAD.Vector(*(float(c) for c in axis))
     base = FreeCAD.Vector(*(float(c) for c in centre + z_min * axis))
     solid = Part.makeCylinder(r_max, z_max - z_min, base, direction)

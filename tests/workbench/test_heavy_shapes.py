@@ -168,4 +168,5 @@ def test_a_sweep_stops_between_faces(heavy):
 @pytest.mark.freecad
 def test_a_heavy_part_without_a_ring_is_decided_on_its_closest_mesh(heavy):
     # bound 0: every face is over it; the default bound: the bars' planes weigh 1, so OCCT decides them.
+    # No ring: the L's 12 vertices lie near one circle (a ring 3.7 times its volume), measured exactly 41 times.
     assert heavy["bars"] == ["closest", "exact"]
