@@ -83,6 +83,11 @@ def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth:
             if meshed:
                 warnings.append(f"part {ids[i]!r}: {meshed} face piece(s) swept along {name} as triangles within "
                                 f"{contact / 2:g} (no exact silhouette, or OCCT could not build their prism)")
+            missing = meshed - sum(1 for prism in prisms if not prism.exact_built)
+            if missing:  # e.g. a closed B-spline face (a torus as NURBS): its sweep is incomplete
+                warnings.append(f"part {ids[i]!r}: {missing} face piece(s) could not be swept along {name} at all "
+                                "(neither exactly nor as triangles): what it blocks through them is missed; check "
+                                "its pairs with --engine mesh")
             for j in candidates:
                 if clock.exhausted(i, j):
                     clock.give_up(i, j, f"{ids[i]} moving along {name}")

@@ -15,7 +15,8 @@ both documents, exports them and runs the OCCT engine on the 10-turn one, and ch
 - the OCCT engine makes no call on the spring's pairs (undecided at once, the reason named), and decides
   the other pairs exactly as without the spring;
 - a sweep over its triangle bound (a cylinder as a B-spline, bound 1) leaves its pair undecided, named;
-- a sweep asks its ``stop`` (the time limit) before each face, and is abandoned when it says so.
+- a sweep asks its ``stop`` (the time limit) before each face, and is abandoned when it says so;
+- a face OCCT cannot sweep at all (a sphere as a B-spline) is named in a warning (its blocking is missed).
 """
 from __future__ import annotations
 
@@ -66,6 +67,9 @@ for turns in TURNS:
 cylinder, block = Part.makeCylinder(5, 10, V(0, 0, -5)).toNurbs(), Part.makeBox(10, 10, 10, V(6, -5, -5))
 out["bounded"] = analyze_shapes([("cylinder", cylinder), ("block", block)], prism_triangles=1)
 out["free"] = analyze_shapes([("cylinder", cylinder), ("block", block)])
+# A sphere as a B-spline: its face cannot be swept (nor as triangles: a closed patch); said, not hidden.
+ball = Part.makeSphere(5).toNurbs()
+out["ball"] = analyze_shapes([("ball", ball), ("block", block)])["warnings"]
 # A part no mesh is right for, whose ring is loose (an L of two thin bars): on its closest mesh when heavy.
 import MeshPart
 from freecad_aplan.export import fallback_mesh
@@ -170,3 +174,10 @@ def test_a_heavy_part_without_a_ring_is_decided_on_its_closest_mesh(heavy):
     # bound 0: every face is over it; the default bound: the bars' planes weigh 1, so OCCT decides them.
     # No ring: the L's 12 vertices lie near one circle (a ring 3.7 times its volume), measured exactly 41 times.
     assert heavy["bars"] == ["closest", "exact"]
+
+
+@pytest.mark.freecad
+def test_a_face_that_cannot_be_swept_is_named(heavy):
+    # The ball moving along +X meets the block (closed form: the block spans the ball's section); OCCT cannot
+    # sweep the ball's one face, and says that what it blocks through it is missed.
+    assert any(w.startswith("part 'ball': 1 face piece(s) could not be swept along +X at all") for w in heavy["ball"])
