@@ -27,8 +27,8 @@ import re
 from typing import TYPE_CHECKING
 
 import FreeCAD
-from planner.defaults import (ANGULAR_DEFLECTION, LINEAR_DEFLECTION, MESH_TOLERANCE, PRODUCT_FILE, PRODUCT_FORMAT,
-                               PRODUCT_VERSION)
+from planner.defaults import (ANGULAR_DEFLECTION, LINEAR_DEFLECTION, MESH_TOLERANCE, OCCT_FACE_WEIGHT, PRODUCT_FILE,
+                               PRODUCT_FORMAT, PRODUCT_VERSION)
 from planner.errors import GeometryError
 from planner.files import write_atomic
 
@@ -43,7 +43,7 @@ if TYPE_CHECKING:
 __all__ = ["mesh_rule", "fallback_mesh", "export_components", "export_document", "export_model", "DEFAULT_LINEAR_DEFLECTION",
            "DEFAULT_ANGULAR_DEFLECTION"]
 
-RULES = ("mesh", "refined", "hull", "exact", "box")  # see mesh_rule and fallback_mesh
+RULES = ("mesh", "refined", "hull", "exact", "closest", "box")  # see mesh_rule and fallback_mesh
 DEFAULT_LINEAR_DEFLECTION = LINEAR_DEFLECTION  # model units (mm): the largest distance between mesh and surface
 DEFAULT_ANGULAR_DEFLECTION = ANGULAR_DEFLECTION  # radians between neighbouring facet normals on curved faces
 
@@ -69,38 +69,75 @@ def mesh_rule(check) -> str:
     return "mesh" if check.method == "standard" else "refined"
 
 
-def fallback_mesh(shape, mesh, check, linear: float, angular: float):
+def fallback_mesh(shape, mesh, check, linear: float, angular: float, face_weight: int = OCCT_FACE_WEIGHT):
     """(rule, mesh) for a part: its :func:`mesh_rule` and mesh, except that a part no mesh is right for gets
     its ring hull when one is tight (rule ``hull``: a spring's tube, :mod:`freecad_aplan.hull`; its pairs are
-    then decided on that mesh, which holds the part), else its bounding box when no mesh is closed."""
+    then decided on that mesh, which holds the part), else its bounding box when no mesh is closed.
+
+    A part whose exact shape is *heavy* (its heaviest face weighs more than ``face_weight``,
+    :mod:`freecad_aplan.occt.complexity`: OCCT would leave all its pairs undecided) gets a ring up to
+    :data:`~freecad_aplan.hull.LOOSE` times its volume instead (rule ``hull``), else its closest closed mesh
+    (rule ``closest``: decided on the meshes, no OCCT), else its bounding box (``box``). Cost: one
+    :func:`~freecad_aplan.hull.ring_hull` (two when heavy) and one tessellation of the ring."""
     import MeshPart
 
-    from .hull import ring_hull
+    from .hull import LOOSE, TIGHT, ring_hull
+    from .occt.complexity import shape_weight
 
     rule = mesh_rule(check)
     if rule not in ("exact", "box"):
         return rule, mesh
     points = [(p.x, p.y, p.z) for p in mesh.Points]
-    hull = ring_hull(points, shape.Volume, linear, shape)
-    if hull is not None:
+    heavy = shape_weight(shape)[0] > face_weight
+    for tight in ((TIGHT, LOOSE) if heavy else (TIGHT,)):
+        hull = ring_hull(points, shape.Volume, linear, shape, tight)
+        if hull is None:
+            continue
         ring = MeshPart.meshFromShape(Shape=hull, LinearDeflection=linear, AngularDeflection=angular, Relative=False)
         if ring.isSolid():
             return "hull", ring
-    return (rule, mesh) if rule == "exact" else (rule, box_mesh(shape))
+    if rule == "exact":
+        return ("closest" if heavy else "exact"), mesh
+    return rule, box_mesh(shape)
 
 
-def _report_check(part_id: str, check, rule: str, tolerance: float, warnings: list[str]) -> None:
+def _fallback_record(shape, mesh, rule: str) -> dict:
+    """What a fallback rule rests on: the exact shape's ``weight`` (:mod:`freecad_aplan.occt.complexity`),
+    and for ``hull`` the ring's volume over the part's (``hull_ratio``). Empty for a part on its mesh."""
+    from .occt.complexity import shape_weight
+
+    if rule in ("mesh", "refined"):
+        return {}
+    record = {"weight": shape_weight(shape)[0]}
+    if rule == "hull":
+        record["hull_ratio"] = round(float(mesh.Volume) / float(shape.Volume), 3)
+    return record
+
+
+def _fallback_detail(record: dict) -> str:
+    """The warning's words for a heavy part (:func:`_fallback_record`): why its exact shape is not used."""
+    weight = record.get("weight", 0)
+    if weight <= OCCT_FACE_WEIGHT:
+        return ""
+    ring = f"; its ring is {record['hull_ratio']:g} times its volume" if "hull_ratio" in record else ""
+    return (f" (its exact shape is beyond the OCCT engine's bound: heaviest face weight {weight:,} > "
+            f"{OCCT_FACE_WEIGHT:,}{ring})")
+
+
+def _report_check(part_id: str, check, rule: str, tolerance: float, warnings: list[str], detail: str = "") -> None:
     """A warning for a part whose first mesh was off (re-tessellated) or that no mesher got right (with the
     fallback ``rule`` applied to it)."""
     first = next((error for _, error, _ in check.tried if error is not None), None)
     before = "no triangles" if first is None else f"{first:+.1%} in volume"
-    if rule in ("exact", "box", "hull"):
+    if rule in ("exact", "box", "hull", "closest"):
         what = {"hull": "its contacts and obstructions are decided on its ring hull (the tube its section sweeps "
                         "around its axis, which holds the part: conservative for blocking)",
                 "exact": "its contacts and obstructions are decided on its exact shape (OCCT), and its closest "
                          "mesh stands in for anything OCCT leaves undecided",
                 "box": "its contacts and obstructions are decided on its exact shape (OCCT), and its bounding "
-                       "box (no closed mesh) for anything OCCT leaves undecided"}[rule]
+                       "box (no closed mesh) for anything OCCT leaves undecided",
+                "closest": "its contacts and obstructions are decided on its closest mesh (within the linear "
+                           "deflection of its surface; not conservative for blocking: check its pairs)"}[rule] + detail
         warnings.append(f"{part_id}: no tessellation is within {tolerance:.0%} of the B-rep within the mesh budget "
                         f"(first mesh {before}, best {check.volume_error:+.1%}; tried "
                         f"{', '.join(method for method, _, _ in check.tried)}); fallback rule {rule!r}: {what}")
@@ -141,8 +178,8 @@ def export_components(components, folder: str, source: str, warnings: list[str],
             raise GeometryError(f"part {component.id!r}: tessellation produced no triangles (tried "
                                 f"{', '.join(method for method, _, _ in check.tried)})")
         rule, mesh = fallback_mesh(component.shape, mesh, check, linear_deflection, angular_deflection)
-        checks[component.id] = {**check.as_dict(), "rule": rule}
-        _report_check(component.id, check, rule, mesh_tolerance, warnings)
+        checks[component.id] = {**check.as_dict(), "rule": rule, **_fallback_record(component.shape, mesh, rule)}
+        _report_check(component.id, check, rule, mesh_tolerance, warnings, _fallback_detail(checks[component.id]))
         mesh.write(os.path.join(folder, "meshes", name + ".stl"))
         component.shape.exportBrep(os.path.join(folder, "breps", name + ".brep"))
         part = {"id": component.id, "label": component.label, "mesh": f"meshes/{name}.stl",

@@ -6,8 +6,9 @@ Definitions
   says how its relations are decided: ``mesh`` and ``refined`` (a mesh within 1 % of its B-rep) on the
   meshes; ``exact`` and ``box`` (no mesh within 1 % in the tessellation's work bound: springs, helices) on
   its exact shape; ``hull`` on its ring hull's mesh, by both engines (a spring's exact shape is what OCCT
-  cannot sweep within a bound). A bundle without that record (written by hand, older) has every part on
-  the meshes.
+  cannot sweep within a bound); ``closest`` on its closest mesh, by both engines (its exact shape is over
+  the OCCT bound, :mod:`freecad_aplan.occt.complexity`, and no ring holds it tightly enough). A bundle
+  without that record (written by hand, older) has every part on the meshes.
 - An *easy* pair, for the occt engine, is one whose two parts are on the meshes and whose meshes' bounding
   boxes are apart by more than the contact tolerance: the surfaces cannot touch, and the mesh engine's
   projection test errs only where surfaces touch or slide along each other (the slivers of two
@@ -55,8 +56,8 @@ def fallback_parts(product: Product, rules=EXACT_RULES) -> dict[str, str]:
 def exact_pairs(meshes: list[PartMesh], fallback, contact: float, near: bool, hulls=()) -> list[tuple[str, str]]:
     """The pairs OCCT decides: every pair with a part of ``fallback``, and with ``near``, every pair whose
     meshes' bounding boxes are within ``contact`` of each other (module docstring), except the pairs with a
-    part of ``hulls`` (rule ``hull``: decided on its hull, its exact shape being what OCCT cannot sweep
-    within a bound). Cost O(parts^2)."""
+    part of ``hulls`` (rule ``hull`` or ``closest``: decided on its mesh, its exact shape being what OCCT
+    cannot sweep within a bound). Cost O(parts^2)."""
     lo = np.array([m.vertices.min(axis=0) for m in meshes])
     hi = np.array([m.vertices.max(axis=0) for m in meshes])
     gaps = np.maximum(lo[:, None, :] - hi[None, :, :], lo[None, :, :] - hi[:, None, :]).max(axis=2)
@@ -146,7 +147,7 @@ def mesh_then_occt(product: Product, meshes: list[PartMesh], tolerances: Toleran
     if engine == "mesh" and not fallback:
         return report
     pairs = exact_pairs(meshes, fallback, float(tolerances.contact), near=engine == "occt",
-                        hulls=fallback_parts(product, ("hull",)))
+                        hulls=fallback_parts(product, ("hull", "closest")))
     if not pairs:
         return merge_reports(report, {"contacts": [], "interferences": [], "obstructions": {}}, [], engine, fallback)
     arguments = {"contact": tolerances.contact, "interference": tolerances.interference, "depth": tolerances.depth,

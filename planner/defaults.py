@@ -10,7 +10,7 @@ __all__ = [
     "CONTACT_TOLERANCE", "CONTACT_CEILING_FRACTION", "TOUCHING_FRACTION", "INTERFERENCE_VOLUME", "BLOCKING_DEPTH",
     "RASTER_RESOLUTION", "CANDIDATE_DIRECTIONS",
     "LINEAR_DEFLECTION", "ANGULAR_DEFLECTION", "MESH_TOLERANCE", "MESH_REFINEMENTS", "MESH_TRIANGLE_BUDGET", "OCCT_PAIR_BUDGET",
-    "OCCT_TIME_LIMIT", "OCCT_PAIR_STEPS",
+    "OCCT_TIME_LIMIT", "OCCT_PAIR_STEPS", "OCCT_FACE_WEIGHT", "OCCT_PRISM_TRIANGLES",
     "INTENTION_LIMIT", "SUBASSEMBLY_LIMIT", "CUTS_PER_SUBASSEMBLY", "MEMORY_LIMIT", "FILE_LIMIT", "DISCOUNT",
     "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
     "CONFIDENCE", "DECISION_TIME", "ONLINE_EXPANSIONS", "ONLINE_DEPTH",
@@ -57,6 +57,14 @@ MESH_TRIANGLE_BUDGET = 60_000
 OCCT_PAIR_BUDGET = 30.0
 # ... and at most this many OCCT operations (a distance, a common, a prism's test) per pair: work, not seconds.
 OCCT_PAIR_STEPS = 400
+# ... and no work at all on a pair with a part whose most complex face weighs more than this (poles x (degree + 1)
+# squared of a B-spline, freecad_aplan.occt.complexity): one OCCT call on it cannot be bounded (a helical
+# spring's sweep, weight 54,600-108,360: 10-15 s and 371,000 triangles to tessellate one face, 11 GB to sweep
+# it). The pump's heaviest face weighs 3,472 (0.03 s). Such a pair keeps the mesh engine's answer, reported.
+OCCT_FACE_WEIGHT = 20_000
+# ... and no polyhedral prism (a face OCCT cannot sweep exactly, swept as its triangles) of more triangles than
+# this: the part's sweep along that direction is then undecided (the pump's largest face: 1,992 triangles).
+OCCT_PRISM_TRIANGLES = 20_000
 # ... and at most this many CPU seconds over all the pairs it is given; the pairs left when it runs
 # out keep the mesh engine's answer (freecad_aplan.hybrid), so an 88-part assembly is done within 5 minutes.
 OCCT_TIME_LIMIT = 180.0

@@ -10,12 +10,14 @@ from typing import Callable
 
 import Part
 
-from planner.defaults import BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, OCCT_PAIR_BUDGET, PRODUCT_FILE
+from planner.defaults import (BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, OCCT_FACE_WEIGHT, OCCT_PAIR_BUDGET,
+                              OCCT_PRISM_TRIANGLES, PRODUCT_FILE)
 from planner.errors import GeometryError
 from planner.product import AXIS_DIRECTIONS, Direction
 
 from ..document import DocumentError
 from .budget import PairClock, face_boxes
+from .complexity import describe_face, shape_weight
 from .contacts import find_contacts
 from .obstructions import find_obstructions
 from .solids import bounding_box, inner_points
@@ -32,7 +34,8 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
                    pair_budget: float = OCCT_PAIR_BUDGET, budgets: dict | None = None,
                    progress: Callable[[str], None] | None = None, directions=(), pairs=None,
                    pair_steps: int | None = None, time_limit: float | None = None,
-                   clock: Callable[[], float] = time.process_time) -> dict:
+                   clock: Callable[[], float] = time.process_time, face_weight: int | None = OCCT_FACE_WEIGHT,
+                   prism_triangles: int | None = OCCT_PRISM_TRIANGLES) -> dict:
     """Contacts, interferences and the +X, +Y, +Z obstruction diagrams of exact part shapes, and those along
     the unit vectors ``directions`` (the designer's, the candidate directions of
     :func:`planner.geometry.mesh_engine.candidate_directions`), tested like the axes.
@@ -58,6 +61,13 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     receives a line every few seconds. ``pairs`` counts the contact pairs decided by part boxes (``far``), by
     face boxes (``far_faces``) and those measured exactly (``exact``), and the obstruction candidates (over
     all the directions) by part boxes (``sweep_candidates``) and those left by face boxes (``sweep_exact``).
+
+    Bounded inside a call too: a part whose heaviest face weighs more than ``face_weight``
+    (:mod:`.complexity`; None: no bound) gets no OCCT call at all, its pairs (past the box culls) being
+    undecided at once and listed under ``heavy`` (id: weight); and a face swept as triangles may have at
+    most ``prism_triangles`` of them (None: no bound), else every pair of its part along that direction is
+    undecided (listed under ``sweeps_over``: [id, direction, triangles]). Decided pairs are decided as
+    without these bounds.
 
     Raises :class:`BrepError` naming the part when
     a shape holds no solid or no volume, :class:`~planner.errors.GeometryError` for a negative tolerance.
@@ -110,6 +120,16 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
         if unknown:
             raise BrepError(f"pairs name parts that are not given: {', '.join(unknown)}")
         clock.selected = {(min(index[a], index[b]), max(index[a], index[b])) for a, b in pairs if a != b}
+    if face_weight is not None and not (isinstance(face_weight, int) and face_weight >= 1):
+        raise GeometryError(f"face_weight must be a whole number >= 1, got {face_weight!r}")
+    heavy = {}  # the parts of the pairs asked for that no OCCT call is made on (their weight)
+    asked = None if clock.selected is None else {k for pair in clock.selected for k in pair}
+    for k, shape in enumerate(shapes):
+        weight, face = shape_weight(shape)
+        if face_weight is not None and weight > face_weight and (asked is None or k in asked):
+            heavy[ids[k]] = weight
+            clock.heavy[k] = (f"{ids[k]!r} has {describe_face(shape.Faces[face])} (weight {weight:,}, over the "
+                              f"bound of {face_weight:,}: one OCCT call on it cannot be bounded)")
     faces = [face_boxes(s) for s in shapes]
     contacts, overlap = find_contacts(ids, shapes, boxes, faces, points, contact, fuzzies, warnings, clock)
     interferences = [(i, j, overlap[i, j][0]) for i, j in contacts if overlap.get((i, j), (0.0,))[0] > interference]
@@ -117,8 +137,9 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
         warnings.append(f"parts {ids[i]!r} and {ids[j]!r} interpenetrate by {volume:.4g} cubic units "
                         f"(more than the interference tolerance {interference:g})")
     extra = _named_directions(directions)
+    over: list = []
     obstructions = find_obstructions(ids, shapes, boxes, faces, overlap, contact, depth, fuzzies, warnings, clock,
-                                     list(extra.items()))
+                                     list(extra.items()), prism_triangles, over)
     warnings.extend(clock.warnings() if pairs is None else clock.warnings("the mesh engine's answer stands"))
     return {
         "engine": "occt", "parts": len(ids),
@@ -133,6 +154,8 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
                                 for what in whats],
         "pair_budget": pair_budget, "pair_steps": pair_steps, "time_limit": time_limit,
         "timed_out": clock.timed_out, "selected": None if clock.selected is None else len(clock.selected),
+        "heavy": heavy, "face_weight": face_weight, "prism_triangles": prism_triangles,
+        "sweeps_over": [[ids[i], name, count] for i, name, count in over],
         "warnings": warnings, "seconds": round(time.perf_counter() - start, 3),
     }
 

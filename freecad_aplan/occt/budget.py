@@ -25,9 +25,14 @@ class PairClock:
     by other work does not leave pairs undecided; injectable for tests) have passed since the clock was made: the engine
     stops working on it, reports it and goes on with the others (after the time limit, every pair left is
     undecided at once). OCCT's booleans cannot be interrupted, so the bounds are checked between them: a
-    pair may overrun by one boolean. CPU time of this process (OCCT's booleans run in it, on one core), so
+    pair may overrun by one boolean (the weight and triangle bounds below keep that boolean bounded). CPU time of this process (OCCT's booleans run in it, on one core), so
     that a loaded machine does not make pairs undecided; ``progress`` receives a line at most every
     ``every`` seconds of wall clock (and the last of each phase).
+
+    So that no single call overruns, a pair is also undecided at once, before any call, when one of its parts
+    is *heavy* (:attr:`heavy`: part index -> why, set from :func:`~.complexity.shape_weight` over
+    :data:`~planner.defaults.OCCT_FACE_WEIGHT`), or when a sweep it needs is over its bound (the ``reason``
+    of :meth:`give_up`); the warnings then give that reason instead of the budget.
     """
 
     def __init__(self, ids: list[str], budget: float, budgets: dict | None = None,
@@ -46,6 +51,8 @@ class PairClock:
         self.undecided: dict[tuple[int, int], list[str]] = {}
         self.counts = {"far": 0, "far_faces": 0, "exact": 0, "sweep_candidates": 0, "sweep_exact": 0}
         self.timed_out = False
+        self.heavy: dict[int, str] = {}  # parts no OCCT call is made on (why), see the class docstring
+        self.reasons: dict[tuple[int, int], str] = {}  # why a pair was left undecided, when not its budget
         self.selected: set[tuple[int, int]] | None = None  # the pairs to decide (None: all), by index
         self._current: tuple[tuple[int, int], float] | None = None
         self._start = self.clock()
@@ -64,9 +71,15 @@ class PairClock:
     def _key(self, i: int, j: int) -> tuple[int, int]:
         return (i, j) if i < j else (j, i)
 
+    def too_heavy(self, i: int, j: int) -> bool:
+        """True when part i or part j is :attr:`heavy` (no work is counted)."""
+        return i in self.heavy or j in self.heavy
+
     def exhausted(self, i: int, j: int) -> bool:
-        """True when the pair (i, j) has used up its steps or its budget (its current work included), or the
-        time limit has passed; else one more step of its work is counted."""
+        """True when the pair (i, j) has a heavy part, or has used up its steps or its budget (its current
+        work included), or the time limit has passed; else one more step of its work is counted."""
+        if self.too_heavy(i, j):
+            return True
         key = self._key(i, j)
         spent = self.spent.get(key, 0.0)
         if self._current is not None and self._current[0] == key:
@@ -87,10 +100,15 @@ class PairClock:
             self.spent[key] = self.spent.get(key, 0.0) + time.process_time() - began
             self._current = None
 
-    def give_up(self, i: int, j: int, what: str) -> None:
-        """Record that the pair's ``what`` (contact, obstruction along an axis) was not decided in time."""
+    def give_up(self, i: int, j: int, what: str, reason: str | None = None) -> None:
+        """Record that the pair's ``what`` (contact, obstruction along an axis) was not decided in time, or
+        for ``reason`` (a heavy part's is taken from :attr:`heavy`)."""
         self.stop()
-        self.undecided.setdefault(self._key(i, j), []).append(what)
+        key = self._key(i, j)
+        self.undecided.setdefault(key, []).append(what)
+        reason = reason or self.heavy.get(i) or self.heavy.get(j)
+        if reason and key not in self.reasons:
+            self.reasons[key] = reason
 
     def tick(self, phase: str, done: int, total: int) -> None:
         now = time.perf_counter()
@@ -103,7 +121,9 @@ class PairClock:
         """One line per undecided pair (``fallback``: what its relations are taken to be), and one for the time
         limit when it was reached."""
         shown = sorted(self.undecided.items())[:SHOWN]
-        lines = [f"OCCT did not decide {', '.join(whats)} for {self.ids[i]!r} and {self.ids[j]!r} within the "
+        lines = [f"OCCT did not decide {', '.join(whats)} for {self.ids[i]!r} and {self.ids[j]!r}: "
+                 f"{self.reasons[i, j]}; {fallback}" if (i, j) in self.reasons else
+                 f"OCCT did not decide {', '.join(whats)} for {self.ids[i]!r} and {self.ids[j]!r} within the "
                  f"budget of {self.budgets.get((i, j), self.budget):g} CPU s"
                  f"{'' if self.steps is None else f' and {self.steps} operations'} per pair (spent "
                  f"{self.spent.get((i, j), 0.0):.1f} s, {self.work.get((i, j), 0)} operations"

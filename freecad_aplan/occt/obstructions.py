@@ -9,7 +9,7 @@ from planner.product import AXIS_DIRECTIONS
 
 from .budget import PairClock, sweep_meets
 from .frames import direction_frame, frame_boxes
-from .prisms import sweep_prisms
+from .prisms import SweepStopped, SweepTooLarge, sweep_prisms
 from .solids import common_volume
 
 __all__ = ["AXES", "find_obstructions"]
@@ -18,7 +18,8 @@ AXES = ("+X", "+Y", "+Z")
 
 
 def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth: float, fuzzies,
-                      warnings: list[str], clock: PairClock, directions=()):
+                      warnings: list[str], clock: PairClock, directions=(), prism_triangles: int | None = None,
+                      over: list | None = None):
     """Per direction (the axes, then ``directions``: (name, unit vector) pairs), the pairs (i, j): part i
     moving along it collides with part j.
 
@@ -26,7 +27,11 @@ def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth:
     (:func:`~.budget.sweep_meets`), both seen in the frame of the direction (:func:`~.frames.frame_boxes`:
     exact along an axis, a box around the box along another direction, so no pair that could block is
     dropped). Each candidate pair is worked on within ``clock``'s budget for its two parts (contacts
-    included); a pair out of time is counted as blocking and reported."""
+    included); a pair out of time is counted as blocking and reported. A candidate with a heavy part
+    (``clock.heavy``) is undecided before any prism is built; a sweep with a face of more than
+    ``prism_triangles`` triangles (:class:`~.prisms.SweepTooLarge`) leaves every candidate of its part along
+    that direction undecided, appended to ``over`` as (i, name, triangles); the time limit is checked
+    between the faces of a sweep too."""
     volume_tolerance = depth ** 3
     result = {}
     tested = [(name, AXIS_DIRECTIONS[name]) for name in AXES] + list(directions)
@@ -46,6 +51,10 @@ def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth:
             clock.counts["sweep_candidates"] += len(candidates)
             candidates = [j for j in candidates if sweep_meets(turned_faces[i], turned_faces[j], 2, contact, depth)]
             clock.counts["sweep_exact"] += len(candidates)
+            for j in [j for j in candidates if clock.too_heavy(i, j)]:  # no call on them, not even a sweep
+                clock.give_up(i, j, f"{ids[i]} moving along {name}")
+                pairs.append((i, j))
+            candidates = [j for j in candidates if not clock.too_heavy(i, j)]
             if not candidates:
                 continue
             if clock.out_of_time():  # no prisms built: every candidate left is undecided
@@ -54,10 +63,31 @@ def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth:
                     pairs.append((i, j))
                 continue
             length = scene_hi - float(lo[2]) + 1.0
-            prisms, meshed = sweep_prisms(shapes[i], d, length, contact / 2, contact * 1e-3)
+            try:
+                prisms, meshed = sweep_prisms(shapes[i], d, length, contact / 2, contact * 1e-3, prism_triangles,
+                                              clock.out_of_time)
+            except SweepStopped:  # the time limit passed while the sweep was built
+                for j in candidates:
+                    clock.give_up(i, j, f"{ids[i]} moving along {name}")
+                    pairs.append((i, j))
+                continue
+            except SweepTooLarge as too_large:
+                reason = (f"the sweep of {ids[i]!r} along {name} needs a face swept as {too_large.triangles:,} "
+                          f"triangles, over the bound of {prism_triangles:,}")
+                if over is not None:
+                    over.append((i, name, too_large.triangles))
+                for j in candidates:
+                    clock.give_up(i, j, f"{ids[i]} moving along {name}", reason)
+                    pairs.append((i, j))
+                continue
             if meshed:
                 warnings.append(f"part {ids[i]!r}: {meshed} face piece(s) swept along {name} as triangles within "
                                 f"{contact / 2:g} (no exact silhouette, or OCCT could not build their prism)")
+            missing = meshed - sum(1 for prism in prisms if not prism.exact_built)
+            if missing:  # e.g. a closed B-spline face (a torus as NURBS): its sweep is incomplete
+                warnings.append(f"part {ids[i]!r}: {missing} face piece(s) could not be swept along {name} at all "
+                                "(neither exactly nor as triangles): what it blocks through them is missed; check "
+                                "its pairs with --engine mesh")
             for j in candidates:
                 if clock.exhausted(i, j):
                     clock.give_up(i, j, f"{ids[i]} moving along {name}")

@@ -8,7 +8,7 @@ import Part
 from .silhouettes import facing, revolution_axis, silhouette_cutters, split_face
 from .solids import bounding_box
 
-__all__ = ["Prism", "sweep_direction", "exact_prism", "mesh_prism", "sweep_prisms"]
+__all__ = ["Prism", "SweepTooLarge", "SweepStopped", "sweep_direction", "exact_prism", "mesh_prism", "sweep_prisms"]
 
 _FLAT = 1e-7  # |normal . d| below this: the face is parallel to d there
 _FOLD = 1e-3  # a face whose normal turns past the silhouette by less than this (radians) is not split
@@ -72,10 +72,26 @@ def exact_prism(face, vector, flatness: float):
     return solid
 
 
-def mesh_prism(face, d, length: float, deflection: float):
+class SweepTooLarge(Exception):
+    """A face's polyhedral prism would have more triangles than its bound (``triangles``: the face's)."""
+
+    def __init__(self, triangles: int) -> None:
+        super().__init__(f"{triangles} triangles")
+        self.triangles = triangles
+
+
+class SweepStopped(Exception):
+    """The sweep was abandoned between two faces: its ``stop`` said so (the time limit passed)."""
+
+
+def mesh_prism(face, d, length: float, deflection: float, triangles_bound: int | None = None):
     """One polyhedral prism sweeping the backward-facing triangles of ``face``'s tessellation along ``d``
-    (for pieces OCCT cannot sweep exactly); None when it cannot be built."""
+    (for pieces OCCT cannot sweep exactly); None when it cannot be built. Raises :class:`SweepTooLarge`,
+    before any face of the prism is made, when the tessellation has more than ``triangles_bound`` triangles
+    (building one ``Part.Face`` per triangle is what exhausts memory: 11 GB for a spring's 371,000)."""
     points, triangles = face.tessellate(deflection)
+    if triangles_bound is not None and len(triangles) > triangles_bound:
+        raise SweepTooLarge(len(triangles))
     kept, area = [], 0.0
     for a, b, c in triangles:
         normal = (points[b] - points[a]).cross(points[c] - points[a])
@@ -149,7 +165,8 @@ class Prism:
             return None
 
 
-def _piece_prisms(piece, d, length: float, flatness: float, deflection: float) -> tuple[list, int]:
+def _piece_prisms(piece, d, length: float, flatness: float, deflection: float,
+                  triangles_bound: int | None = None) -> tuple[list, int]:
     """The prism (a :class:`Prism`) sweeping ``piece`` along ``d`` in a list, and 1 when the piece had to
     be swept as triangles.
 
@@ -170,24 +187,31 @@ def _piece_prisms(piece, d, length: float, flatness: float, deflection: float) -
     except Exception:  # OCCT construction errors ("Courbes non jointives", ...) are plain exceptions
         pass
     try:
-        prism = mesh_prism(piece, d, length, deflection)
+        prism = mesh_prism(piece, d, length, deflection, triangles_bound)
+    except SweepTooLarge:
+        raise
     except Exception:  # OCCT cannot mesh or sew it
         prism = None
     return ([] if prism is None else [Prism(piece, d, length, flatness, deflection, prism, False)]), 1
 
 
-def sweep_prisms(shape, d, length: float, deflection: float, flatness: float) -> tuple[list, int]:
+def sweep_prisms(shape, d, length: float, deflection: float, flatness: float,
+                 triangles_bound: int | None = None, stop=None) -> tuple[list, int]:
     """Prisms (:class:`Prism`) whose union is ``shape`` swept along ``d`` by ``length``, and the number
-    of pieces swept as triangles."""
+    of pieces swept as triangles. Raises :class:`SweepTooLarge` when a piece swept as triangles has more
+    than ``triangles_bound`` of them (None: no bound), and :class:`SweepStopped` when ``stop()`` (asked
+    before each face: a part of 1,000 faces takes minutes to sweep) returns True."""
     size = shape.BoundBox.DiagonalLength + 1.0
     prisms, trouble = [], 0
     for face in shape.copy().Faces:
+        if stop is not None and stop():
+            raise SweepStopped()
         low, high = facing(face, d)
         if low > -_FLAT:
             continue  # faces forwards or lies along d: the backward faces' prisms cover its prism
         pieces = [face] if high <= _FOLD else split_face(face, silhouette_cutters(face, d, size))
         for piece in pieces:
-            more, bad = _piece_prisms(piece, d, length, flatness, deflection)
+            more, bad = _piece_prisms(piece, d, length, flatness, deflection, triangles_bound)
             prisms += more
             trouble += bad
     return prisms, trouble

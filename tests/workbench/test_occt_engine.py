@@ -13,6 +13,7 @@ import subprocess
 import pytest
 from background import Job, folder, run
 from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
+from planner.defaults import OCCT_FACE_WEIGHT
 
 VARIANTS = [(v, ext) for v in ("simplified", "complex") for ext in ("FCStd", "stp")]
 LIAISONS = {frozenset(p) for p in [("ink_001", "cartridge_001"), ("cartridge_001", "head_001"),
@@ -109,8 +110,10 @@ def test_report_layout(occt):
     report = occt["cases"]["stacked"]
     assert set(report) == {"engine", "parts", "contacts", "interferences", "obstructions", "tolerances",
                            "warnings", "seconds", "undecided", "pairs", "pair_budget", "pair_steps", "time_limit",
-                           "timed_out", "selected", "undecided_relations"}
+                           "timed_out", "selected", "undecided_relations", "heavy", "face_weight",
+                           "prism_triangles", "sweeps_over"}
     assert report["undecided"] == [] and report["pair_budget"] == 30.0
+    assert report["heavy"] == {} and report["sweeps_over"] == [] and report["face_weight"] == OCCT_FACE_WEIGHT
     assert report["timed_out"] is False and report["undecided_relations"] == [] and report["selected"] is None
     assert report["engine"] == "occt" and report["parts"] == 2 and list(report["obstructions"]) == ["+X", "+Y", "+Z"]
     assert report["tolerances"]["contact"] == 0.1 and report["warnings"] == []

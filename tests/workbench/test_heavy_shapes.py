@@ -1,0 +1,183 @@
+"""Helical springs of pitch 4 (issue 26, items 3 and 4): the export and the exact engine bounded by work, in
+real FreeCAD.
+
+A spring of pitch 4 (10 and 20 turns, tests/workbench/spring_document.py) made ``aplan export-freecad`` run
+past 10 minutes and reach 11 GB: its ring hull is 4.4 times its volume (looser than
+:data:`freecad_aplan.hull.TIGHT`), so its pairs went to OCCT, which swept its B-spline face as 371,000
+triangles, one ``Part.Face`` each. One FreeCADCmd process (a background job, tests/background.py) builds
+both documents, exports them and runs the OCCT engine on the 10-turn one, and checks the work, not the clock:
+
+- the mesh check runs one tessellation: ``finer`` over the triangle budget, ``mefisto`` whose edges are
+  longer than the wire is thick (closed form: the mean thickness 4 V / A of a wire is its diameter);
+- the spring's exact shape is over the OCCT bound (:mod:`freecad_aplan.occt.complexity`), so it falls back to
+  its ring hull up to :data:`~freecad_aplan.hull.LOOSE` (rule ``hull``, reported), the ring's volume ratio
+  matching its closed form;
+- the OCCT engine makes no call on the spring's pairs (undecided at once, the reason named), and decides
+  the other pairs exactly as without the spring;
+- a sweep over its triangle bound (a cylinder as a B-spline, bound 1) leaves its pair undecided, named;
+- a sweep asks its ``stop`` (the time limit) before each face, and is abandoned when it says so;
+- a face OCCT cannot sweep at all (a sphere as a B-spline) is named in a warning (its blocking is missed).
+"""
+from __future__ import annotations
+
+import math
+
+import pytest
+from conftest import REPO, require_freecadcmd
+from integration.freecad_tools import freecad_result, freecadcmd_job
+
+from planner.defaults import MESH_REFINEMENTS, OCCT_FACE_WEIGHT
+from spring_document import COIL_RADIUS, WIRE
+
+PITCH = 4.0
+TURNS = (10, 20)
+TIGHT, LOOSE = 4.0, 8.0  # freecad_aplan.hull (it imports FreeCAD)
+
+SCRIPT = r"""
+import json, os, sys
+sys.path.insert(0, REPO); sys.path.insert(0, os.path.join(REPO, "tests", "workbench"))
+import FreeCAD, Part
+from spring_document import build_spring_document
+from freecad_aplan.document import open_model, read_components
+from freecad_aplan.export import export_model
+from freecad_aplan.occt import analyze_shapes
+from freecad_aplan.occt.complexity import shape_weight
+from freecad_aplan.tessellation import mean_thickness, mefisto_edge
+V = FreeCAD.Vector
+out = {}
+for turns in TURNS:
+    path = os.path.join(TMP, f"spring{turns}.FCStd")
+    build_spring_document(path, pitch=PITCH, height=PITCH * turns)
+    product, _ = export_model(path, os.path.join(TMP, f"bundle{turns}"))
+    check = product["geometry"]["mesh_check"]
+    doc = open_model(path)
+    shapes = {c.id: c.shape for c in read_components(doc).components}
+    spring = shapes["Spring"]
+    out[str(turns)] = {"check": check["parts"]["Spring"], "rules": check["rules"],
+                       "warnings": product["geometry"]["warnings"],
+                       "thickness": mean_thickness(spring.Volume, spring.Area), "mefisto_edge": mefisto_edge(spring),
+                       "weight": shape_weight(spring)[0]}
+    if turns == 10:
+        parts = sorted(shapes.items())
+        out["occt"] = analyze_shapes(parts)
+        out["occt_without"] = analyze_shapes([p for p in parts if p[0] != "Spring"])
+        out["occt_asked"] = analyze_shapes(parts, pairs=[["Plate", "Rod"], ["Rod", "Washer"]])
+    FreeCAD.closeDocument(doc.Name)
+# A cylinder as a B-spline: its side face folds with no known silhouette, so it is swept as triangles.
+cylinder, block = Part.makeCylinder(5, 10, V(0, 0, -5)).toNurbs(), Part.makeBox(10, 10, 10, V(6, -5, -5))
+out["bounded"] = analyze_shapes([("cylinder", cylinder), ("block", block)], prism_triangles=1)
+out["free"] = analyze_shapes([("cylinder", cylinder), ("block", block)])
+# A sphere as a B-spline: its face cannot be swept (nor as triangles: a closed patch); said, not hidden.
+ball = Part.makeSphere(5).toNurbs()
+out["ball"] = analyze_shapes([("ball", ball), ("block", block)])["warnings"]
+# A part no mesh is right for, whose ring is loose (an L of two thin bars): on its closest mesh when heavy.
+import MeshPart
+from freecad_aplan.export import fallback_mesh
+from freecad_aplan.tessellation import MeshCheck
+bars = Part.makeBox(100, 1, 1).fuse(Part.makeBox(1, 100, 1)).removeSplitter()
+closest = MeshPart.meshFromShape(Shape=bars, LinearDeflection=0.05, AngularDeflection=0.25, Relative=False)
+failed = MeshCheck(-0.02, -0.02, "exact", True, [])
+out["bars"] = [fallback_mesh(bars, closest, failed, 0.05, 0.25, face_weight=face)[0] for face in (0, 20000)]
+# A sweep is abandoned between two faces once its stop says so (the time limit, in the engine).
+from freecad_aplan.occt.prisms import SweepStopped, sweep_prisms
+asked = []
+try:
+    sweep_prisms(block, V(1, 0, 0), 20.0, 0.05, 1e-4, stop=lambda: asked.append(1) or len(asked) > 2)
+    out["stopped"] = None
+except SweepStopped:
+    out["stopped"] = len(asked)
+out["unstopped"] = len(sweep_prisms(block, V(1, 0, 0), 20.0, 0.05, 1e-4, stop=lambda: False)[0])
+print("APLAN-RESULT " + json.dumps(out), flush=True)
+"""
+
+BACKGROUND = (freecadcmd_job("heavy", lambda tmp: f"REPO = {str(REPO)!r}\nTMP = {str(tmp)!r}\nPITCH = {PITCH!r}\n"
+                                                  f"TURNS = {TURNS!r}\n" + SCRIPT),)
+
+
+@pytest.fixture(scope="module")
+def heavy():
+    require_freecadcmd()
+    return freecad_result(BACKGROUND[0].result()[1])
+
+
+def _ring_ratio(turns: int) -> float:
+    """The ring hull's volume over the spring's, closed form: the ring from COIL_RADIUS - WIRE to + WIRE over
+    the height plus the wire's diameter, the spring a tube of radius WIRE along the helix."""
+    height = PITCH * turns + 2 * WIRE
+    ring = math.pi * ((COIL_RADIUS + WIRE) ** 2 - (COIL_RADIUS - WIRE) ** 2) * height
+    tube = math.pi * WIRE ** 2 * turns * math.hypot(2 * math.pi * COIL_RADIUS, PITCH)
+    return ring / tube
+
+
+@pytest.mark.freecad
+@pytest.mark.parametrize("turns", TURNS)
+def test_the_mesh_check_runs_one_tessellation(heavy, turns):
+    found = heavy[str(turns)]
+    tried = found["check"]["tried"]
+    assert len(tried) <= 1 + MESH_REFINEMENTS and [t[0] for t in tried] == ["standard", "finer", "mefisto"]
+    assert tried[1][1:] == [None, 0.0] and tried[2][1:] == [None, 0.0]  # neither run
+    assert abs(found["thickness"] - 2 * WIRE) < 0.01 * 2 * WIRE  # a wire's mean thickness is its diameter
+    assert found["mefisto_edge"] > found["thickness"]
+
+
+@pytest.mark.freecad
+@pytest.mark.parametrize("turns", TURNS)
+def test_a_heavy_spring_falls_back_to_its_loose_ring(heavy, turns):
+    found = heavy[str(turns)]
+    check = found["check"]
+    assert found["rules"]["hull"] == ["Spring"] and sorted(found["rules"]["mesh"]) == ["Plate", "Rod", "Washer"]
+    assert check["weight"] == found["weight"] > OCCT_FACE_WEIGHT
+    assert TIGHT < check["hull_ratio"] <= LOOSE
+    assert abs(check["hull_ratio"] - _ring_ratio(turns)) < 0.02 * _ring_ratio(turns)
+    named = [w for w in found["warnings"] if w.startswith("Spring:")]
+    assert len(named) == 1 and "fallback rule 'hull'" in named[0] and f"weight {found['weight']:,}" in named[0]
+
+
+@pytest.mark.freecad
+def test_occt_makes_no_call_on_a_heavy_part(heavy):
+    occt, without = heavy["occt"], heavy["occt_without"]
+    assert occt["heavy"] == {"Spring": heavy["10"]["weight"]}
+    # Every pair of the spring is left to the mesh answer, with the reason, and no other pair.
+    assert sorted(map(tuple, occt["undecided"])) == [("Plate", "Spring"), ("Rod", "Spring"), ("Spring", "Washer")]
+    relations = {tuple(r) for r in occt["undecided_relations"]}
+    assert ("Rod", "Spring", "the contact") in relations and ("Rod", "Spring", "Spring moving along +Z") in relations
+    assert len(occt["warnings"]) == 3 and all(f"weight {heavy['10']['weight']:,}, over the bound" in w for w in occt["warnings"])
+    # The other pairs are decided as without the spring.
+    others = {"Plate", "Rod", "Washer"}
+    assert [c for c in occt["contacts"] if set(c) <= others] == without["contacts"]
+    for name, pairs in without["obstructions"].items():
+        assert [p for p in occt["obstructions"][name] if set(p) <= others] == pairs
+    # Asked only for pairs without the spring, it is not heavy for the run.
+    asked = heavy["occt_asked"]
+    assert asked["heavy"] == {} and asked["undecided"] == [] and asked["contacts"] == [["Plate", "Rod"]]
+
+
+@pytest.mark.freecad
+def test_a_sweep_over_its_triangle_bound_is_undecided(heavy):
+    bounded, free = heavy["bounded"], heavy["free"]
+    assert free["obstructions"]["+X"] == [["cylinder", "block"]] and free["undecided"] == []
+    (part, direction, triangles), = bounded["sweeps_over"]
+    assert (part, direction) == ("cylinder", "+X") and triangles > 1
+    assert bounded["undecided_relations"] == [["cylinder", "block", "cylinder moving along +X"]]
+    assert any(f"{triangles:,} triangles, over the bound of 1" in w for w in bounded["warnings"])
+    assert bounded["obstructions"]["+X"] == [["cylinder", "block"]]  # undecided counts as blocking
+
+
+@pytest.mark.freecad
+def test_a_sweep_stops_between_faces(heavy):
+    assert heavy["stopped"] == 3  # asked before each of the box's six faces, stopped at the third
+    assert heavy["unstopped"] == 1  # a box along +X: the prism of its one face facing backwards
+
+
+@pytest.mark.freecad
+def test_a_heavy_part_without_a_ring_is_decided_on_its_closest_mesh(heavy):
+    # bound 0: every face is over it; the default bound: the bars' planes weigh 1, so OCCT decides them.
+    # No ring: the L's 12 vertices lie near one circle (a ring 3.7 times its volume), measured exactly 41 times.
+    assert heavy["bars"] == ["closest", "exact"]
+
+
+@pytest.mark.freecad
+def test_a_face_that_cannot_be_swept_is_named(heavy):
+    # The ball moving along +X meets the block (closed form: the block spans the ball's section); OCCT cannot
+    # sweep the ball's one face, and says that what it blocks through it is missed.
+    assert any(w.startswith("part 'ball': 1 face piece(s) could not be swept along +X at all") for w in heavy["ball"])
