@@ -74,7 +74,7 @@ def decide_interlocks(analysis, decisions: dict[int, str]) -> list[str]:
     nothing changes then. Cost: O(size of the product) per accepted proposal."""
     from planner.product import product_to_dict
 
-    from .workflow import _designer_product
+    from .designer_edits import _designer_product
 
     proposals, _ = interlock_report(analysis)
     intent = read_intent(analysis)

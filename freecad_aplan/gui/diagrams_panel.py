@@ -231,9 +231,9 @@ class DiagramsPanel:
 
     def _show_in_3d(self) -> None:
         """One selected relation shown in 3D (blocked part red, blocking part blue, an arrow along the direction,
-        :class:`~freecad_aplan.gui.plan_view.PlanView`; an obstruction's parts are then not left selected, whose
+        :class:`~freecad_aplan.gui.plan3d.PlanView`; an obstruction's parts are then not left selected, whose
         highlight would hide the colours); any other selection restores the view."""
-        from .plan_view import PlanView, restore_when_gone
+        from .plan3d import PlanView, restore_when_gone
 
         if self.plan_view is None:
             self.plan_view = PlanView(self.analysis.Document, self.diagrams)

@@ -20,7 +20,8 @@ from .. import interlocks
 from ..intent import IntentError, read_intent
 from ..plan3d import COLOURS, interlock_looks
 from .layout import button_rows, panel_layout, stacked_field, wrapped_label
-from .plan3d import PlanView, _text_box, restore_when_gone
+from .plan3d import PlanView, restore_when_gone
+from .plan3d_panel import _text_box
 
 __all__ = ["InterlocksPanel", "RULE_NAMES", "show_interlock"]
 
