@@ -121,12 +121,14 @@ def test_act_confidence_needs_a_paying_operation():
 
 
 def test_presets():
-    """paper: no habits, the paper's rewards; habits: the file's prior; confident: alpha 1 per state and C 0.98
-    unless the user gives the wrong reward or a confidence."""
+    """paper: no habits, the paper's rewards; habits: the file's prior; confident: alpha 1 per state and its C
+    (w = -10 C / (1 - C)) unless the user gives the wrong reward or a confidence."""
     assert set(PRESETS) == {"paper", "habits", "confident"}
     assert preset_rewards(PRESETS["paper"], 10, -2, 0, None, None) == Rewards()
     assert preset_rewards(None, 10, -2, 0, None, None) == Rewards()
-    assert preset_rewards(CONFIDENT, 10, -2, 0, None, None).wrong == pytest.approx(-490, rel=1e-12)
+    c = CONFIDENT.act_confidence
+    assert 5 / 6 < c < 1
+    assert preset_rewards(CONFIDENT, 10, -2, 0, None, None).wrong == pytest.approx(-10 * c / (1 - c), rel=1e-12)
     assert preset_rewards(CONFIDENT, 10, -2, 0, -70.0, None).wrong == -70.0
     assert preset_rewards(CONFIDENT, 10, -2, 0, None, 0.9).wrong == pytest.approx(-90, rel=1e-12)
     h = Habits("pen", "0" * 16, 3.0, (("s", "o", 2.0),))
@@ -188,7 +190,7 @@ def test_act_confidence_and_reward_wrong_do_not_go_together(tmp_path):
 def test_the_default_is_the_papers_model_and_the_preset_its_parts(habits_files, tmp_path):
     """No option, --model paper and --reward-wrong -50 write the same model file; --act-confidence 0.98 the
     one of --reward-wrong w(0.98); --model confident with the per-edge habits the one of the per-state habits
-    with --act-confidence 0.98."""
+    with the preset's --act-confidence."""
     edge, state = habits_files
 
     def model(*options) -> bytes:
@@ -202,8 +204,9 @@ def test_the_default_is_the_papers_model_and_the_preset_its_parts(habits_files, 
     eager = model("--act-confidence", "0.98")
     assert eager == model("--reward-wrong", repr(wrong_for_confidence(0.98))) and eager != paper
     confident = model("--habits", edge, "--model", "confident")
-    assert confident == model("--habits", state, "--act-confidence", "0.98")
-    assert confident != model("--habits", edge, "--act-confidence", "0.98")  # the preset's prior is used
+    c = repr(CONFIDENT.act_confidence)
+    assert confident == model("--habits", state, "--act-confidence", c)
+    assert confident != model("--habits", edge, "--act-confidence", c)  # the preset's prior is used
     done = run_aplan("pomdp", "pen", "-o", tmp_path / "x.pomdp", "--model", "confident")
     assert done.returncode != 0 and "--model confident needs the habits" in done.stderr
     assert not (tmp_path / "x.pomdp").exists()
