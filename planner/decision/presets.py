@@ -82,6 +82,10 @@ def preset_rewards(preset: ModelPreset | None, unfavorable: float, favorable: fl
     if wrong is None:
         confidence = act_confidence if act_confidence is not None else (
             preset.act_confidence if preset is not None else None)
+        if confidence is not None and act_confidence is None and not unfavorable > wait:
+            raise UsageError(f"--model {preset.name} sets --act-confidence {confidence:g}, which needs a right "
+                             f"operation that pays more than waiting: --reward-unfavorable {unfavorable:g} is not "
+                             f"above --reward-wait {wait:g}; give --reward-wrong too")
         wrong = Rewards.wrong if confidence is None else wrong_for_confidence(confidence, unfavorable, wait)
     return Rewards(unfavorable, favorable, wrong, wait)
 

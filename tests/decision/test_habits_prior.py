@@ -210,3 +210,37 @@ def test_the_default_is_the_papers_model_and_the_preset_its_parts(habits_files, 
     done = run_aplan("pomdp", "pen", "-o", tmp_path / "x.pomdp", "--model", "confident")
     assert done.returncode != 0 and "--model confident needs the habits" in done.stderr
     assert not (tmp_path / "x.pomdp").exists()
+
+
+def test_a_confident_session_logs_its_prior_replays_and_keeps_the_files(habits_files, pen, tmp_path):
+    """A keyboard session with --model confident records the habits with the preset's prior (alpha 1 per state)
+    and replays to the same beliefs; --habits-out adds its steps to the file's counts with the file's own prior
+    (per edge here; per state kept for a per-state file)."""
+    from planner.assembly.explode import sequence_at
+
+    edge, state = habits_files
+    plan = make_plan(pen)
+    picks = []
+    for op in sequence_at(plan, 5):
+        seen = plan.observations[int(plan.operation_observation[op])]
+        picks.append(" ".join(seen.parts + ((seen.tool,) if seen.tool else ())))
+    never = ["--reward-unfavorable", "-1000", "--reward-favorable", "-1000"]  # the robot never acts
+    log, out = tmp_path / "s.jsonl", tmp_path / "out.json"
+    done = run_aplan("session", "pen", "--habits", edge, "--model", "confident", "--keyboard", "--planner", "online",
+                     "--expansions", "20", *never, "--log", log, "--habits-out", out, stdin="\n".join(picks) + "\n")
+    assert done.returncode == 2 and "--model confident sets --act-confidence" in done.stderr and not log.exists()
+    done = run_aplan("session", "pen", "--habits", edge, "--model", "confident", "--keyboard", "--planner", "online",
+                     "--expansions", "20", *never, "--reward-wrong", "-1000", "--log", log, "--habits-out", out,
+                     stdin="\n".join(picks) + "\n")
+    assert done.returncode == 0, done.stderr
+    recorded = json.loads(log.read_text().splitlines()[0])["settings"]["habits"]
+    assert (recorded["prior"], recorded["prior_per"], recorded["version"]) == (1.0, "state", 2)
+    replay = run_aplan("replay", log)
+    assert replay.returncode == 0 and "beliefs reproduced" in replay.stdout, replay.stdout + replay.stderr
+    assert json.loads(out.read_text())["prior_per"] == "edge"
+    out2 = tmp_path / "out2.json"
+    done = run_aplan("session", "pen", "--habits", state, "--keyboard", "--planner", "online", "--expansions", "20",
+                     *never, "--reward-wrong", "-1000", "--log", tmp_path / "s2.jsonl", "--habits-out", out2,
+                     stdin="\n".join(picks) + "\n")
+    assert done.returncode == 0, done.stderr
+    assert json.loads(out2.read_text())["prior_per"] == "state"
