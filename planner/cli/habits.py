@@ -46,10 +46,12 @@ def _habits(args: argparse.Namespace) -> int:
     write_habits(args.output, habits, len(args.logs))
     if args.json:
         print(json.dumps({"product": habits.product, "fingerprint": habits.fingerprint, "prior": habits.prior,
-                          "prior_per": habits.prior_per, "logs": len(args.logs), "steps": steps, "edges": len(habits.counts)}))
+                          "prior_per": habits.prior_per, "logs": len(args.logs), "steps": steps,
+                          "edges": len(habits.counts)}))
     else:
         print(f"{habits.product}: {steps} steps from {len(args.logs)} log{'s' if len(args.logs) != 1 else ''}, "
-              f"{len(habits.counts)} state edges counted (prior {habits.prior:g} per {habits.prior_per}; state graph {habits.fingerprint})")
+              f"{len(habits.counts)} state edges counted (prior {habits.prior:g} per {habits.prior_per}; state graph "
+              f"{habits.fingerprint})")
         print(f"habits: {args.output}")
     return 0
 
@@ -73,7 +75,8 @@ def add_commands(commands) -> None:
                              "default, as files written before this option); state, alpha in all at each state, "
                              "so a state of many operations needs no more sessions (docs/habits.md)")
     habits.add_argument("--add", metavar="HABITS", help="a habits file whose counts the logs' are added to")
-    habits.add_argument("--json", action="store_true", help="print product, fingerprint, prior, logs, steps, edges")
+    habits.add_argument("--json", action="store_true", help="print product, fingerprint, prior, prior_per, logs, steps, "
+                                                                     "edges")
     add_technical(habits)
     add_fasteners(habits)
     add_force(habits)
