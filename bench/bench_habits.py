@@ -22,6 +22,11 @@ with PRODUCT ``pen``, ``chain:9`` / ``complete:7`` (written by ``aplan synth``),
 folder (planned with ``--fasteners auto --subassemblies auto``; every level, or ``--level ID,ID``).
 ``--write-habits FILE`` also writes the learned habits (``--episodes 0``: only that), for ``aplan evaluate
 --habits FILE --operator-sequence habitual:K:0.8``.
+
+The habits' model's knobs (docs/habits.md): ``--prior ALPHA --prior-per edge|state`` (given to ``aplan habits``),
+``--act-confidence C[,C...]`` (the habits' model's eagerness, each C a row of its own on the same episodes: the
+trade-off curve; the paper's model keeps the paper's rewards), ``--model confident`` (the preset: its prior and
+confidence unless given).
 """
 from __future__ import annotations
 
@@ -46,6 +51,7 @@ from planner.decision.factored_simulate import simulate_factored_episode  # noqa
 from planner.decision.habits import habit_weights  # noqa: E402
 from planner.decision.io.habits_file import read_habits  # noqa: E402
 from planner.decision.operators import HabitualOperator, UniformOperator  # noqa: E402
+from planner.decision.presets import PRESETS, preset_rewards  # noqa: E402
 from planner.runtime.log import EventLog  # noqa: E402
 from planner.runtime.scripted import ScriptedOperator, ScriptedRobot  # noqa: E402
 from planner.runtime.session import run_session  # noqa: E402
@@ -95,17 +101,18 @@ def favourite_of(n_sequences: int, seed: int) -> int:
     return int(np.random.default_rng([seed, 13]).integers(n_sequences))
 
 
-def learn_habits(product: Path, logs: int, seed: int, folder: Path, share: float = 0.8) -> tuple[Path, int]:
+def learn_habits(product: Path, logs: int, seed: int, folder: Path, share: float = 0.8,
+                 prior: tuple[str, ...] = ()) -> tuple[Path, int]:
     """The habits file learned (:func:`_learn`) from ``logs`` sessions of the operator ``habitual:K:share`` on
     ``product`` (K: :func:`favourite_of`), and K."""
     plan = api.plan_of(api.resolve_product(product))
     model = factored_model(plan)
     favourite = favourite_of(model.n_sequences, seed)
-    _learn(plan, model, HabitualOperator(favourite, share), logs, seed, folder, product.name)
+    _learn(plan, model, HabitualOperator(favourite, share), logs, seed, folder, product.name, prior)
     return folder / "habits.json", favourite
 
 
-def _learn(plan, model, operator, logs: int, seed: int, folder: Path, name: str):
+def _learn(plan, model, operator, logs: int, seed: int, folder: Path, name: str, prior: tuple[str, ...] = ()):
     """The habits of ``operator`` from ``logs`` sessions (the session loop, its log writer, then ``aplan
     habits`` as a command): the habits read back and checked against ``plan``, and the steps counted."""
     plans = operator.plans(model, logs, np.random.default_rng([seed, 10]), np.random.default_rng([seed, 11]))
@@ -119,8 +126,8 @@ def _learn(plan, model, operator, logs: int, seed: int, folder: Path, name: str)
             raise SystemExit(f"{name}: learning session {k} did not finish: {result.message}")
         paths.append(str(path))
     output = folder / "habits.json"
-    done = subprocess.run(APLAN + ["habits", *paths, "-o", str(output), "--json"], cwd=ROOT, capture_output=True,
-                          text=True)
+    done = subprocess.run(APLAN + ["habits", *paths, "-o", str(output), "--json", *prior], cwd=ROOT,
+                          capture_output=True, text=True)
     if done.returncode != 0:
         raise SystemExit(f"{name}: aplan habits failed: {done.stderr.strip()}")
     return read_habits(output), json.loads(done.stdout)["steps"]
@@ -133,7 +140,7 @@ def _policy(args, model, weights):
         from planner.decision.lumped_model import lumped_model
         from planner.decision.solvers import PointBasedSolver
 
-        lumped = lumped_model(model.plan, weights=weights)
+        lumped = lumped_model(model.plan, model.rewards, weights=weights)
         result = PointBasedSolver(max_iterations=args.trials, time_limit=None, precision=1e-3).solve(lumped.pomdp)
         gap = result.upper_bound - result.lower_bound
         if args.planner == "offline" or gap <= args.max_gap:
@@ -161,6 +168,17 @@ def _run(model, policy, plans, seed: int) -> list:
                                       switch=p.switch) for k, p in enumerate(plans)]
 
 
+def paper_return(episode, discount: float, wrong: float = -50.0) -> float:
+    """The episode's discounted return under the paper's rewards: only the wrong action's reward differs
+    between the variants (a right operation's and waiting's are the paper's in all), so the returns of models
+    of other eagerness compare on one scale (the issue's "mean return" target)."""
+    total, g = 0.0, 1.0
+    for step in episode.steps:
+        total += g * (wrong if step.wrong_action else step.reward)
+        g *= discount
+    return total
+
+
 def _mean(values) -> tuple[float, float]:
     values = np.asarray(values, dtype=float)
     half = 1.96 * float(values.std(ddof=1)) / math.sqrt(values.size) if values.size > 1 else float("nan")
@@ -171,6 +189,29 @@ def _pct(x) -> str:
     return "-" if x is None else f"{100 * x:.1f} %"
 
 
+def _prior_options(args) -> tuple[str, ...]:
+    """The ``aplan habits`` options of the prior (``--prior``, ``--prior-per``, or the preset's)."""
+    out = []
+    if args.prior is not None:
+        out += ["--prior", repr(args.prior)]
+    if args.prior_per is not None:
+        out += ["--prior-per", args.prior_per]
+    return tuple(out)
+
+
+def _variants(args, plan, weights) -> list[tuple[str, object, object]]:
+    """``(label, model, weights)``: the paper's model (its rewards), then the habits' model at each
+    ``--act-confidence`` (the preset's, or the paper's rewards without one)."""
+    preset = PRESETS.get(args.model)
+    confidences = args.act_confidence or [None]
+    out = [("paper", factored_model(plan), None)]
+    for c in confidences:
+        rewards = preset_rewards(preset, 10.0, -2.0, 0.0, None, c)
+        label = "habits" if len(confidences) == 1 else f"habits C={c:g}"
+        out.append((label, factored_model(plan, rewards, weights=weights), weights))
+    return out
+
+
 def _measure(args, name: str, product, folder: Path) -> dict:
     began = time.perf_counter()
     plan = api.plan_of(product, args.technical)
@@ -178,47 +219,50 @@ def _measure(args, name: str, product, folder: Path) -> dict:
     n = paper.n_sequences
     favourite = favourite_of(n, args.seed) if args.favourite is None else args.favourite
     operator = UniformOperator() if args.operator == "uniform" else HabitualOperator(favourite % n, args.share)
-    habits, steps = _learn(plan, paper, operator, args.logs, args.seed, folder, name)
+    habits, steps = _learn(plan, paper, operator, args.logs, args.seed, folder, name, _prior_options(args))
     if args.write_habits:  # for aplan evaluate --habits FILE --operator-sequence (README, Simulated operators)
         Path(args.write_habits).write_bytes((folder / "habits.json").read_bytes())
         print(f"{name}: wrote {args.write_habits} (operator {operator!r})")
     if args.episodes == 0:
         return None
     weights = habit_weights(plan, habits)
-    habit = factored_model(plan, weights=weights)
     plans = operator.plans(paper, args.episodes, np.random.default_rng([args.seed, 14]),
                            np.random.default_rng([args.seed, 15]))
     row = {"product": name, "parts": len(plan.product.parts), "sequences": n, "operator": repr(operator),
-           "logs": args.logs, "steps_learned": steps, "episodes": args.episodes}
+           "logs": args.logs, "steps_learned": steps, "episodes": args.episodes,
+           "prior": habits.prior, "prior_per": habits.prior_per}
     returns, chosen = {}, {}
-    for label, model, w in (("paper", paper, None), ("habits", habit, weights)):
+    for label, model, w in _variants(args, plan, weights):
         started = time.perf_counter()
         chosen[label] = (model, *_policy(args, model, w), time.perf_counter() - started)
     if args.online_episodes and any(how.startswith("online") for _, _, how, _ in chosen.values()):
         plans = plans[:args.online_episodes]  # the first ones: the same episodes for both models
         row["episodes"] = len(plans)
     row["paid_share"] = paid_share(paper, plans)
+    row["labels"] = list(chosen)
     for label, (model, policy, how, solving) in chosen.items():
         started = time.perf_counter() - solving
         played = _run(model, policy, plans, args.seed)
         totals = run_totals([episode_measures(e) for e in played])
-        returns[label] = [e.discounted_return for e in played]
+        returns[label] = [paper_return(e, model.discount) for e in played]
         mean, half = _mean(returns[label])
-        row[label] = {"mean_return": round(mean, 4), "ci95": round(half, 4),
+        own, own_half = _mean([e.discounted_return for e in played])
+        row[label] = {"mean_return": round(mean, 4), "ci95": round(half, 4), "wrong_reward": model.rewards.wrong,
+                      "own_return": round(own, 4), "own_ci95": round(own_half, 4),
                       "robot_capable_share": totals["robot_capable_share"], "wrong_share": totals["wrong_share"],
                       "robot_share": totals["robot_share"], "never_helped": totals["never_helped"],
                       "robot_operations": totals["robot_operations"], "wrong_robot_actions": totals["wrong_robot_actions"],
                       "robot_capable_operations": totals["robot_capable_operations"],
                       "planner": how, "seconds": round(time.perf_counter() - started, 1)}
-    diff_mean, diff_half = _mean(np.subtract(returns["habits"], returns["paper"]))
-    row["paired_difference"] = {"mean": round(diff_mean, 4), "ci95": round(diff_half, 4)}
-    row["targets"] = _targets(args.operator, row)
+        if label != "paper":
+            diff_mean, diff_half = _mean(np.subtract(returns[label], returns["paper"]))
+            row[label]["paired_difference"] = {"mean": round(diff_mean, 4), "ci95": round(diff_half, 4)}
+            row[label]["targets"] = _targets(args.operator, row["paper"], row[label])
     row["seconds"] = round(time.perf_counter() - began, 1)
     return row
 
 
-def _targets(operator: str, row: dict) -> dict:
-    p, h = row["paper"], row["habits"]
+def _targets(operator: str, p: dict, h: dict) -> dict:
     if operator == "uniform":  # nothing lost: within the paper model's 95 % interval, or above it
         return {"within_or_above": h["mean_return"] >= p["mean_return"] - p["ci95"]}
     paper = p["mean_return"]
@@ -228,19 +272,29 @@ def _targets(operator: str, row: dict) -> dict:
 
 
 def _print(row: dict) -> None:
-    p, h, d = row["paper"], row["habits"], row["paired_difference"]
     print(f"{row['product']}: {row['parts']} parts, {row['sequences']:,} sequences; operator {row['operator']}; "
-          f"{row['steps_learned']} steps learned from {row['logs']} logs; {row['episodes']} episodes; "
+          f"{row['steps_learned']} steps learned from {row['logs']} logs (prior {row['prior']:g} per "
+          f"{row['prior_per']}); {row['episodes']} episodes; "
           f"{_pct(row['paid_share'])} of the capable operations are unfavorable to humans (paid +10)")
-    for label, m in (("paper", p), ("habits", h)):
+    for label in row["labels"]:
+        m = row[label]
         print(f"  {label:>6}: robot {_pct(m['robot_capable_share'])} of the operations it can do ("
               f"{m['robot_operations']} of {m['robot_capable_operations']}; {_pct(m['robot_share'])} of all), wrong "
               f"{_pct(m['wrong_share'])} of its actions ({m['wrong_robot_actions']}), never helped "
-              f"in {m['never_helped']}; mean return {m['mean_return']:.3f} +- {m['ci95']:.3f}; {m['planner']}, "
-              f"{m['seconds']} s")
-    missed = [k for k, ok in row["targets"].items() if not ok]
-    print(f"  habits - paper (paired): {d['mean']:.3f} +- {d['ci95']:.3f}; targets "
-          + ("met" if not missed else "MISSED: " + ", ".join(missed)))
+              f"in {m['never_helped']}; mean return (paper's rewards) {m['mean_return']:.3f} +- {m['ci95']:.3f}, "
+              f"under its own (wrong {m['wrong_reward']:g}) {m['own_return']:.3f}; {m['planner']}, {m['seconds']} s")
+        if label != "paper":
+            d = m["paired_difference"]
+            missed = [k for k, ok in m["targets"].items() if not ok]
+            print(f"          - paper (paired): {d['mean']:.3f} +- {d['ci95']:.3f}; targets "
+                  + ("met" if not missed else "MISSED: " + ", ".join(missed)))
+
+
+def _confidences(text: str) -> list[float]:
+    out = [float(c) for c in text.split(",")]
+    if not all(0 < c < 1 for c in out):  # NaN fails too
+        raise argparse.ArgumentTypeError(f"each confidence must be above 0 and below 1, got {text}")
+    return out
 
 
 def main() -> None:
@@ -265,7 +319,17 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", action="store_true", help="one JSON line per product and level")
     parser.add_argument("--write-habits", metavar="FILE", help="also write the learned habits (one product)")
+    parser.add_argument("--prior", type=float, help="aplan habits --prior ALPHA (default: its own)")
+    parser.add_argument("--prior-per", choices=("edge", "state"), help="aplan habits --prior-per (default: edge)")
+    parser.add_argument("--act-confidence", type=_confidences, metavar="C[,C...]",
+                        help="the habits' model's eagerness (one row each on the same episodes; default: -50)")
+    parser.add_argument("--model", choices=("habits", "confident"), default="habits",
+                        help="confident: the preset's prior and act confidence, unless given")
     args = parser.parse_args()
+    if args.model == "confident":
+        preset = PRESETS["confident"]
+        args.prior = preset.prior if args.prior is None else args.prior
+        args.prior_per = args.prior_per or preset.prior_per
     if args.episodes == 1 or args.episodes < 0 or args.logs < 1:
         parser.error("--episodes must be 0 (only learn) or at least 2, and --logs at least 1")
     if args.write_habits and len(args.products) > 1:

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 import json
+from dataclasses import replace
 
-from ..decision.habits import HabitsError
+from ..decision.habits import PRIOR_PER, HabitsError
 from ..decision.io.habits_file import read_habits, write_habits
 from ..defaults import HABITS_PRIOR
 from .options import (
@@ -33,13 +34,16 @@ def _habits(args: argparse.Namespace) -> int:
     if start is not None and plan is None:
         raise HabitsError(f"--add {args.add}: give the product too (--product PRODUCT), to check the counts against it")
     habits, steps = habits_from_logs(plan, args.logs, args.prior, args.technical, start, inputs_from(args))
+    habits = replace(habits, prior_per=args.prior_per or (start.prior_per if start is not None else "edge"))
     write_habits(args.output, habits, len(args.logs))
     if args.json:
         print(json.dumps({"product": habits.product, "fingerprint": habits.fingerprint, "prior": habits.prior,
-                          "logs": len(args.logs), "steps": steps, "edges": len(habits.counts)}))
+                          "prior_per": habits.prior_per, "logs": len(args.logs), "steps": steps,
+                          "edges": len(habits.counts)}))
     else:
         print(f"{habits.product}: {steps} steps from {len(args.logs)} log{'s' if len(args.logs) != 1 else ''}, "
-              f"{len(habits.counts)} state edges counted (prior {habits.prior:g}; state graph {habits.fingerprint})")
+              f"{len(habits.counts)} state edges counted (prior {habits.prior:g} per {habits.prior_per}; state graph "
+              f"{habits.fingerprint})")
         print(f"habits: {args.output}")
     return 0
 
@@ -56,10 +60,15 @@ def add_commands(commands) -> None:
                         help="the product the habits are for (default: the one the first log stores); every log "
                              "must be of its version")
     habits.add_argument("--prior", type=number(0, low_open=True), default=None, metavar="ALPHA",
-                        help=f"pseudo-observations per state edge, spread as the paper's model chooses "
+                        help=f"the prior's pseudo-observations alpha, spread as the paper's model chooses "
                              f"(default {HABITS_PRIOR:g}; above 0)")
+    habits.add_argument("--prior-per", choices=PRIOR_PER, default=None,
+                        help="what alpha counts: edge, alpha per next operation (alpha d at a state of d; the "
+                             "default, as files written before this option); state, alpha in all at each state, "
+                             "so a state of many operations needs no more sessions (docs/habits.md)")
     habits.add_argument("--add", metavar="HABITS", help="a habits file whose counts the logs' are added to")
-    habits.add_argument("--json", action="store_true", help="print product, fingerprint, prior, logs, steps, edges")
+    habits.add_argument("--json", action="store_true", help="print product, fingerprint, prior, prior_per, logs, steps, "
+                                                                     "edges")
     add_technical(habits)
     add_fasteners(habits)
     add_force(habits)

@@ -226,7 +226,8 @@ def _update_habits(args: argparse.Namespace, plan, log_path: str) -> None:
         log.warning("--habits-out %s: the session did no step and there were no habits: nothing written",
                     args.habits_out)
         return
-    write_habits(args.habits_out, habits_from_counts(plan, counts, habits.prior if habits else args.habits_prior))
+    write_habits(args.habits_out, habits_from_counts(plan, counts, habits.prior if habits else args.habits_prior,
+                                                     prior_per=habits.prior_per if habits else "edge"))
     print(f"habits: {args.habits_out} ({steps} step{'s' if steps != 1 else ''} of this session added)")
 
 

@@ -7,16 +7,20 @@ Read as a choice made step by step, that is choosing state edge ``e`` out of sta
 ``p0(e | s) = N(target e) / N(s)``, ``N`` the number of paths to the finished product (each completion equally
 likely) -- not ``1 / deg(s)``, which would favour the sequences through states of few choices. Habits are the
 Dirichlet-multinomial posterior mean of the choice at ``s`` whose prior mean is that choice and whose weight is
-``alpha`` pseudo-observations per edge (``alpha deg(s)`` at ``s``):
+``a(s)`` pseudo-observations at ``s``:
 
-    p(e | s) = (n(s, e) + alpha deg(s) p0(e | s)) / (n(s) + alpha deg(s)),
+    p(e | s) = (n(s, e) + a(s) p0(e | s)) / (n(s) + a(s)),
 
-``n(s, e)`` the times the operator was seen taking ``e`` at ``s``, ``n(s)`` their sum. Without counts it is the
-paper's choice exactly; an operation never seen keeps a probability of at least ``alpha deg(s) p0 / (n(s) +
-alpha deg(s)) > 0``; with many counts it tends to the observed frequencies. A full sequence's prior is the
-product of ``p(e | s)`` along it, i.e. the paper's ``1 / N(initial)`` times the *edge weights*
+``n(s, e)`` the times the operator was seen taking ``e`` at ``s``, ``n(s)`` their sum. The prior's spread
+(``prior_per``) says what ``alpha`` counts: ``"edge"`` (the first definition, files written before the choice
+existed) ``a(s) = alpha deg(s)``, alpha per next operation; ``"state"`` ``a(s) = alpha``, alpha in all at the
+state, spread over its operations as the paper's model chooses -- so that a state of many operations does not
+need many more sessions before the operator's own choices weigh (bench/README.md, Operator habits). Without
+counts it is the paper's choice exactly; an operation never seen keeps a probability of at least
+``a(s) p0 / (n(s) + a(s)) > 0``; with many counts it tends to the observed frequencies. A full sequence's prior
+is the product of ``p(e | s)`` along it, i.e. the paper's ``1 / N(initial)`` times the *edge weights*
 
-    w(e) = p(e | s) / p0(e | s) = (n(s, e) / p0(e | s) + alpha deg(s)) / (n(s) + alpha deg(s))
+    w(e) = p(e | s) / p0(e | s) = (n(s, e) / p0(e | s) + a(s)) / (n(s) + a(s))
 
 along it (exactly 1 at a state without counts, so habits without counts give the paper's model, bit for bit).
 The models take those weights (``weights``): the flat model's initial belief is proportional to the product of
@@ -45,7 +49,9 @@ from ..errors import PlannerError
 
 __all__ = ["Habits", "HabitsError", "state_graph_fingerprint", "edge_keys", "habits_from_counts", "edge_counts",
            "add_sequence", "choice_probabilities", "habit_weights", "habit_weights_from", "check_prior",
-           "weighted_fractions"]
+           "check_prior_per", "prior_pseudo_counts", "PRIOR_PER", "weighted_fractions"]
+
+PRIOR_PER = ("edge", "state")  # what alpha counts (module docstring): per next operation, or in all per state
 
 
 class HabitsError(PlannerError):
@@ -55,14 +61,16 @@ class HabitsError(PlannerError):
 @dataclass(frozen=True)
 class Habits:
     """Counts of the operator's choices: ``counts`` holds ``(state, operation, count)`` with the state and the
-    operation as :func:`edge_keys` writes them; ``prior`` is ``alpha``; ``product`` and ``fingerprint`` name the
-    plan they were counted on; ``source`` the file they were read from (for messages; "" in memory)."""
+    operation as :func:`edge_keys` writes them; ``prior`` is ``alpha`` and ``prior_per`` what it counts
+    (``"edge"`` or ``"state"``: module docstring); ``product`` and ``fingerprint`` name the plan they were counted
+    on; ``source`` the file they were read from (for messages; "" in memory)."""
 
     product: str
     fingerprint: str
     prior: float
     counts: tuple[tuple[str, str, float], ...]
     source: str = ""
+    prior_per: str = "edge"
 
     @property
     def total(self) -> float:
@@ -80,6 +88,14 @@ def check_prior(prior, where: str) -> float:
         raise HabitsError(f"{where}: the prior (alpha) must be a finite number above 0, got {prior!r}; the default "
                           f"is {HABITS_PRIOR:g}")
     return float(prior)
+
+
+def check_prior_per(prior_per, where: str) -> str:
+    """``prior_per`` if one of :data:`PRIOR_PER`, else a :class:`HabitsError` naming ``where``."""
+    if prior_per not in PRIOR_PER:
+        raise HabitsError(f"{where}: the prior's spread (prior_per) must be \"edge\" (alpha per next operation) or "
+                          f"\"state\" (alpha in all per state), got {prior_per!r}")
+    return prior_per
 
 
 def edge_keys(plan: Plan) -> list[tuple[str, str]]:
@@ -108,7 +124,8 @@ def _product_name(plan: Plan) -> str:
     return plan.product.name or "product"
 
 
-def habits_from_counts(plan: Plan, counts: np.ndarray, prior: float = HABITS_PRIOR, source: str = "") -> Habits:
+def habits_from_counts(plan: Plan, counts: np.ndarray, prior: float = HABITS_PRIOR, source: str = "",
+                       prior_per: str = "edge") -> Habits:
     """Habits of ``plan`` from per-state-edge ``counts`` (E,), keeping the edges counted (> 0)."""
     counts = np.asarray(counts, dtype=float)
     if counts.shape != (plan.states.n_edges,):
@@ -117,8 +134,9 @@ def habits_from_counts(plan: Plan, counts: np.ndarray, prior: float = HABITS_PRI
         raise HabitsError("habit counts must be finite and at least 0")
     keys = edge_keys(plan)
     kept = tuple((keys[e][0], keys[e][1], float(counts[e])) for e in np.flatnonzero(counts > 0))
-    return Habits(_product_name(plan), state_graph_fingerprint(plan), check_prior(prior, source or "habits"), kept,
-                  source)
+    where = source or "habits"
+    return Habits(_product_name(plan), state_graph_fingerprint(plan), check_prior(prior, where), kept, source,
+                  check_prior_per(prior_per, where))
 
 
 def _fix(habits: Habits) -> str:
@@ -190,19 +208,28 @@ def _paper_choice(plan: Plan) -> np.ndarray:
     return (counts[states.edge_target] / counts[states.edge_source]).astype(float)
 
 
-def choice_probabilities(plan: Plan, counts: np.ndarray, prior: float = HABITS_PRIOR) -> np.ndarray:
+def prior_pseudo_counts(plan: Plan, prior: float = HABITS_PRIOR, prior_per: str = "edge") -> np.ndarray:
+    """``a(source e)`` per state edge (E,): the prior's pseudo-observations at the edge's state, ``alpha
+    deg(s)`` for ``prior_per="edge"``, ``alpha`` for ``"state"`` (module docstring). Cost: O(S + E)."""
+    states = plan.states
+    if check_prior_per(prior_per, "habits") == "state":
+        return np.full(states.n_edges, float(prior))
+    return prior * np.bincount(states.edge_source, minlength=states.n_states).astype(float)[states.edge_source]
+
+
+def choice_probabilities(plan: Plan, counts: np.ndarray, prior: float = HABITS_PRIOR,
+                         prior_per: str = "edge") -> np.ndarray:
     """``p(e | s)`` per state edge (module docstring): they sum to 1 over each state's out-edges. Cost: O(S + E)."""
-    return habit_weights_from(plan, counts, prior) * _paper_choice(plan)
+    return habit_weights_from(plan, counts, prior, prior_per) * _paper_choice(plan)
 
 
-def habit_weights_from(plan: Plan, counts: np.ndarray, prior: float = HABITS_PRIOR) -> np.ndarray:
+def habit_weights_from(plan: Plan, counts: np.ndarray, prior: float = HABITS_PRIOR,
+                       prior_per: str = "edge") -> np.ndarray:
     """The edge weights ``w(e) = p(e | s) / p0(e | s)`` of per-edge ``counts`` (module docstring); exactly 1 at
     every state without counts. Cost: O(S + E)."""
     states = plan.states
-    source = states.edge_source
-    degree = np.bincount(source, minlength=states.n_states).astype(float)[source]
-    seen = np.bincount(source, weights=counts, minlength=states.n_states)[source]
-    pseudo = prior * degree
+    seen = np.bincount(states.edge_source, weights=counts, minlength=states.n_states)[states.edge_source]
+    pseudo = prior_pseudo_counts(plan, prior, prior_per)
     return (counts / _paper_choice(plan) + pseudo) / (seen + pseudo)
 
 
@@ -214,7 +241,8 @@ def habit_weights(plan: Plan, habits: Habits | None) -> np.ndarray | None:
     counts = edge_counts(plan, habits)
     if not counts.any():
         return None
-    return habit_weights_from(plan, counts, check_prior(habits.prior, habits.name))
+    return habit_weights_from(plan, counts, check_prior(habits.prior, habits.name),
+                              check_prior_per(habits.prior_per, habits.name))
 
 
 def weighted_fractions(states, target: np.ndarray, fraction: np.ndarray, weights

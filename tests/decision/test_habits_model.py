@@ -22,13 +22,17 @@ def _random_counts(plan, rng, fill=0.5):
     return rng.integers(1, 30, E).astype(float) * (rng.random(E) < fill)
 
 
-@pytest.fixture(scope="module", params=["pen-no-technical", "pen-technical", "chain-5", "complete-4"])
+@pytest.fixture(scope="module", params=["pen-no-technical", "pen-technical", "chain-5", "complete-4",
+                                        "pen-technical-per-state", "complete-4-per-state"])
 def weighted(request, pen):
+    """Random habits on a small product; ``-per-state``: the prior alpha in all per state (docs/habits.md)."""
+    name = request.param.removesuffix("-per-state")
     product, technical = {"pen-no-technical": (pen, False), "pen-technical": (pen, True),
-                          "chain-5": (chain_product(5), None), "complete-4": (complete_product(4), None)}[request.param]
+                          "chain-5": (chain_product(5), None), "complete-4": (complete_product(4), None)}[name]
     plan = make_plan(product, technical)
     rng = np.random.default_rng(sum(map(ord, request.param)))
-    weights = habit_weights_from(plan, _random_counts(plan, rng), float(rng.choice([0.1, 1.0, 3.0])))
+    per = "state" if request.param.endswith("-per-state") else "edge"
+    weights = habit_weights_from(plan, _random_counts(plan, rng), float(rng.choice([0.1, 1.0, 3.0])), per)
     return plan, weights, intention_model(plan, weights=weights), factored_model(plan, weights=weights)
 
 

@@ -10,6 +10,7 @@ from ...decision.intention_model import Rewards
 from ...decision.deviations import Deviations, deviations_of
 from ...decision.habits import Habits
 from ...decision.io.habits_file import read_habits
+from ...decision.presets import CONFIDENT, PRESETS, preset_habits, preset_rewards
 from ...defaults import DISCOUNT
 from ...errors import PlannerError, UsageError
 
@@ -36,8 +37,13 @@ def add_decision_options(parser: argparse.ArgumentParser) -> None:
                        help=f"robot does the next step, unfavorable to humans (default {d.unfavorable:g})")
     group.add_argument("--reward-favorable", type=finite, default=d.favorable, metavar="R",
                        help=f"robot does the next step, fine for humans (default {d.favorable:g})")
-    group.add_argument("--reward-wrong", type=finite, default=d.wrong, metavar="R",
+    eager = group.add_mutually_exclusive_group()
+    eager.add_argument("--reward-wrong", type=finite, default=None, metavar="R",
                        help=f"robot does another operation: its eagerness (default {d.wrong:g})")
+    eager.add_argument("--act-confidence", type=number(0, 1, low_open=True, high_open=True), default=None,
+                       metavar="C", help="the robot's eagerness as the belief in the next operation at which doing it "
+                                         "breaks even: sets --reward-wrong to (wait - C unfavorable) / (1 - C), e.g. "
+                                         "0.98: -490 (default: the paper's -50, C = 5/6; docs/habits.md)")
     group.add_argument("--reward-wait", type=finite, default=d.wait, metavar="R", help=f"wait (default {d.wait:g})")
     add_hierarchy(group)
     add_habits_options(group)
@@ -52,9 +58,11 @@ def add_habits_options(group) -> None:
     group.add_argument("--habits", metavar="FILE",
                        help="the operator's habits (aplan habits LOG... -o FILE) in place of the uniform choice "
                             "of Alg. 3, in every model and planner (docs/habits.md)")
-    group.add_argument("--model", dest="habit_model", choices=("paper", "habits"), default=None,
+    group.add_argument("--model", dest="habit_model", choices=tuple(PRESETS), default=None,
                        help="paper: the paper's model, ignoring --habits, --switch and --mistakes; habits (the "
-                            "default with --habits): the habits' model")
+                            "default with --habits): the habits' model; confident: the habits' model with the prior "
+                            f"spread per state (alpha {CONFIDENT.prior:g} in all) and --act-confidence "
+                            f"{CONFIDENT.act_confidence:g} unless given (docs/habits.md)")
 
 
 def add_parallel_options(group) -> None:
@@ -84,20 +92,26 @@ def parallel_from(args: argparse.Namespace) -> bool | str:
 
 
 def rewards_from(args: argparse.Namespace) -> Rewards:
-    return Rewards(args.reward_unfavorable, args.reward_favorable, args.reward_wrong, args.reward_wait)
+    """The rewards of ``args``: ``--reward-wrong``, else ``--act-confidence``'s, else the ``--model`` preset's
+    (:func:`planner.decision.presets.preset_rewards`)."""
+    return preset_rewards(PRESETS.get(getattr(args, "habit_model", None)), args.reward_unfavorable,
+                          args.reward_favorable, args.reward_wait, args.reward_wrong,
+                          getattr(args, "act_confidence", None))
 
 
 def habits_from(args: argparse.Namespace) -> Habits | None:
-    """The habits a model-building command is to use: ``--habits`` read and checked, or None (``--model paper``,
-    or no ``--habits``). ``--model habits`` without ``--habits`` is an error."""
+    """The habits a model-building command is to use: ``--habits`` read and checked, with the ``--model``
+    preset's prior in place of the file's (``--model confident``), or None (``--model paper``, or no
+    ``--habits``). ``--model habits`` or ``confident`` without ``--habits`` is an error."""
     chosen, path = getattr(args, "habit_model", None), getattr(args, "habits", None)
-    if chosen == "paper":
+    preset = PRESETS.get(chosen)
+    if preset is not None and not preset.habits:
         return None
     if path is None:
-        if chosen == "habits":
-            raise PlannerError("--model habits needs the habits: --habits FILE (aplan habits LOG... -o FILE)")
+        if preset is not None:
+            raise PlannerError(f"--model {chosen} needs the habits: --habits FILE (aplan habits LOG... -o FILE)")
         return None
-    return read_habits(path, inputs_from(args))
+    return preset_habits(preset, read_habits(path, inputs_from(args)))
 
 
 def model_spec_from(args: argparse.Namespace) -> api.ModelSpec:

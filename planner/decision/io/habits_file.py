@@ -6,7 +6,11 @@
                  "operation": "{ink} + {cartridge}", "count": 16}, ...]}
 
 ``product`` and ``fingerprint`` (:func:`~planner.decision.habits.state_graph_fingerprint`) name the plan the
-counts belong to; ``prior`` is alpha (finite, above 0); ``sessions`` the logs counted (for the reader; never
+counts belong to; ``prior`` is alpha (finite, above 0); ``prior_per`` what alpha counts, ``"edge"`` (per next
+operation) or ``"state"`` (in all per state; :mod:`~planner.decision.habits`): a file of version 1 has no
+``prior_per`` or ``"edge"`` (the files written before the choice existed read as they did), a file with
+``"state"`` is written as version 2 so that an older planner refuses it instead of reading alpha per edge;
+``sessions`` the logs counted (for the reader; never
 used in the model); ``counts`` the state edges counted at least once, each a state and an operation as
 ``aplan stats``/``intentions`` write them and a finite count of at least 0. Whether the keys are state edges of
 the product is checked when the habits are used (:func:`~planner.decision.habits.edge_counts`).
@@ -20,17 +24,20 @@ from pathlib import Path
 from ...defaults import HABITS_FORMAT, HABITS_VERSION
 from ...files import write_atomic
 from ...validation import InputError, InputLimits, json_loads
-from ..habits import Habits, HabitsError, check_prior
+from ..habits import Habits, HabitsError, check_prior, check_prior_per
 
 __all__ = ["read_habits", "write_habits", "habits_to_dict", "habits_from_dict"]
 
 _REWRITE = "write it again with aplan habits LOG... -o FILE"
+_STATE_PRIOR_VERSION = 2  # the first version that may spread alpha per state (module docstring)
 
 
 def habits_to_dict(habits: Habits, sessions: int | None = None) -> dict:
     """The file's content (module docstring)."""
-    return {"format": HABITS_FORMAT, "version": HABITS_VERSION, "product": habits.product,
-            "fingerprint": habits.fingerprint, "prior": habits.prior, "sessions": sessions,
+    version = HABITS_VERSION if habits.prior_per == "edge" else _STATE_PRIOR_VERSION
+    return {"format": HABITS_FORMAT, "version": version, "product": habits.product,
+            "fingerprint": habits.fingerprint, "prior": habits.prior, "prior_per": habits.prior_per,
+            "sessions": sessions,
             "counts": [{"state": s, "operation": o, "count": int(c) if float(c).is_integer() else c}
                        for s, o, c in habits.counts]}
 
@@ -48,13 +55,17 @@ def habits_from_dict(data, source: str) -> Habits:
     :class:`HabitsError` names ``source``, the place and the fix."""
     if not isinstance(data, dict) or data.get("format") != HABITS_FORMAT:
         raise HabitsError(f"{source}: not a habits file (no \"format\": \"{HABITS_FORMAT}\"); {_REWRITE}")
-    if data.get("version") != HABITS_VERSION:
-        raise HabitsError(f"{source}: habits file version {data.get('version')!r}; this planner reads version "
-                          f"{HABITS_VERSION}; {_REWRITE}")
+    version = data.get("version")
+    if isinstance(version, bool) or version not in (HABITS_VERSION, _STATE_PRIOR_VERSION):
+        raise HabitsError(f"{source}: habits file version {version!r}; this planner reads versions "
+                          f"{HABITS_VERSION} and {_STATE_PRIOR_VERSION}; {_REWRITE}")
     for key in ("product", "fingerprint"):
         if not isinstance(data.get(key), str) or not data[key]:
             raise HabitsError(f"{source}: \"{key}\" must be a non-empty string; {_REWRITE}")
     prior = check_prior(data.get("prior"), f"{source}: prior")
+    prior_per = check_prior_per(data.get("prior_per", "edge"), source)
+    if prior_per == "state" and version == HABITS_VERSION:
+        raise HabitsError(f"{source}: \"prior_per\": \"state\" needs version {_STATE_PRIOR_VERSION}; {_REWRITE}")
     counts = data.get("counts")
     if not isinstance(counts, list):
         raise HabitsError(f"{source}: \"counts\" must be a list of {{state, operation, count}}; {_REWRITE}")
@@ -69,7 +80,7 @@ def habits_from_dict(data, source: str) -> Habits:
             raise HabitsError(f"{where}: must be an object with a \"state\" and an \"operation\" (text) and a "
                               f"\"count\"; fix the entry or {_REWRITE}")
         out.append((entry["state"], entry["operation"], _count(entry["count"], where)))
-    return Habits(data["product"], data["fingerprint"], prior, tuple(out), source)
+    return Habits(data["product"], data["fingerprint"], prior, tuple(out), source, prior_per)
 
 
 def read_habits(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> Habits:
