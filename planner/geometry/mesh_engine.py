@@ -17,8 +17,8 @@ Method
 Contacts and interferences use manifold3d (exact mesh booleans and gap queries). The obstruction test is a
 continuous projection test: each part is rasterised along each axis into the first and last depth it
 occupies on every line parallel to the axis (a z-buffer holding the minimum and the maximum, :mod:`.raster`),
-on a grid of ``scene size / Tolerances.resolution``. ``x`` is blocked by ``y`` along ``+a`` when on some line through both
-``max depth(y) > min depth(x) + depth tolerance``. Lines are infinite, so no obstacle is stepped over,
+on a grid of ``scene size / Tolerances.resolution``. ``x`` is blocked by ``y`` along ``+a`` when on some line
+through both ``max depth(y) > min depth(x) + depth tolerance``. Lines are infinite, so no obstacle is stepped over,
 whatever its thickness along the motion. Lines within ``Tolerances.grazing`` pixels of a part's outline are
 ignored, so surfaces that only slide along each other (a peg in its hole, with slivers from tessellating the
 two cylinders differently) do not block; an overlap narrower than that is not seen.

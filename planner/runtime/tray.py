@@ -198,7 +198,8 @@ def _scene(layout: TrayLayout, present: frozenset, blur: float, perspective: flo
         ys = slice(max(out[0].start - reach, 0), min(out[0].stop + reach, height))
         xs = slice(max(out[1].start - reach, 0), min(out[1].stop + reach, width))
         part = _blurred(_tilt(layout, perspective, camera_seed, drawn, (ys, xs)), blur)
-        frame[out] = part[out[0].start - ys.start:out[0].stop - ys.start, out[1].start - xs.start:out[1].stop - xs.start]
+        frame[out] = part[out[0].start - ys.start:out[0].stop - ys.start,
+                          out[1].start - xs.start:out[1].stop - xs.start]
     return frame
 
 

@@ -59,7 +59,8 @@ class RosGraph:
         self.tracked = tracked  # a background job's: background.stop() ends its processes with the session
         home = folder / "ros_home"
         home.mkdir()
-        self.env = {**(os.environ if environment is None else environment), "ROS_MASTER_URI": f"http://127.0.0.1:{self.port}", "ROS_IP": "127.0.0.1",
+        self.env = {**(os.environ if environment is None else environment),
+                    "ROS_MASTER_URI": f"http://127.0.0.1:{self.port}", "ROS_IP": "127.0.0.1",
                     "ROS_HOSTNAME": "127.0.0.1", "ROS_HOME": str(home), "ROS_LOG_DIR": str(home / "log"),
                     "APLAN_ROS_CACHE": str(cache), "PYTHONUNBUFFERED": "1"}
         self.env.pop("ROS_NAMESPACE", None)
