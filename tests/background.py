@@ -5,7 +5,9 @@ export-freecad``, the FreeCAD window under Xvfb) through :func:`run` and returns
 module lists the jobs its fixtures read in a module attribute ``BACKGROUND``; tests/conftest.py runs those
 modules after the others, and starts their jobs when the session starts, one at a time in a thread of its
 own, in the order the modules will need them. FreeCAD then works in its own process on the machine's second
-core while the tests of the other modules run on the first (the suite itself runs on one core).
+core while the tests of the other modules run on the first (the suite itself runs on one core). A job's
+``lane`` names its thread: the ROS sessions (tests/runtime/ros), which mostly wait on each other's messages,
+run in a lane of their own beside FreeCAD's.
 
 Nothing is checked in the thread: a fixture calls :meth:`Job.result`, which waits for the job (or runs it at
 once, when it was not started or not begun yet), and makes the same checks as before on what it returns.
@@ -25,14 +27,14 @@ import time
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
-__all__ = ["ENVIRONMENT", "WORKING_FOLDER", "Job", "enabled", "folder", "run", "start", "stop"]
+__all__ = ["ENVIRONMENT", "WORKING_FOLDER", "Job", "enabled", "folder", "run", "start", "stop", "track"]
 
 #: The environment and working folder of the session's start, for every command run here: a test may change
 #: its own for a while (a fault-injection variable, ``monkeypatch.chdir``) while a job starts.
 ENVIRONMENT = dict(os.environ)
 WORKING_FOLDER = os.getcwd()
 
-_executor: concurrent.futures.ThreadPoolExecutor | None = None
+_executors: dict[str, concurrent.futures.ThreadPoolExecutor] = {}  # lane -> its thread
 _running: set[subprocess.Popen] = set()
 _lock = threading.Lock()
 
@@ -45,8 +47,8 @@ def enabled() -> bool:
 class Job:
     """A named piece of slow work (``work``: no arguments, returns the result), done once per session."""
 
-    def __init__(self, name: str, work: Callable[[], object]) -> None:
-        self.name, self.work = name, _timed(name, work)
+    def __init__(self, name: str, work: Callable[[], object], lane: str = "freecad") -> None:
+        self.name, self.work, self.lane = name, _timed(name, work), lane
         self._future: concurrent.futures.Future | None = None
         self._lock = threading.Lock()
 
@@ -90,25 +92,31 @@ def _timed(name: str, work: Callable[[], object]) -> Callable[[], object]:
 
 
 def start(jobs: Iterable[Job]) -> None:
-    """Queue ``jobs`` (each once, in this order) on the session's single background thread."""
-    global _executor
+    """Queue ``jobs`` (each once, in this order) on the background thread of each one's lane."""
     if not enabled():
         return
-    if _executor is None:
-        _executor = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="aplan-tests")
     for job in jobs:
-        job.submit(_executor)
+        if job.lane not in _executors:
+            _executors[job.lane] = concurrent.futures.ThreadPoolExecutor(
+                max_workers=1, thread_name_prefix=f"aplan-tests-{job.lane}")
+        job.submit(_executors[job.lane])
 
 
 def stop() -> None:
-    """End of the session: drop the queued jobs and end the command of the running one."""
-    global _executor
-    if _executor is not None:
-        _executor.shutdown(wait=False, cancel_futures=True)
-        _executor = None
+    """End of the session: drop the queued jobs and end the commands of the running ones."""
+    for executor in _executors.values():
+        executor.shutdown(wait=False, cancel_futures=True)
+    _executors.clear()
     with _lock:
         for process in list(_running):
             _kill(process)
+
+
+def track(process: subprocess.Popen, running: bool = True) -> None:
+    """Count ``process`` (started in a session of its own) among the commands :func:`stop` ends, or no longer
+    (``running`` False): for a job that starts processes itself, as the ROS sessions' nodes."""
+    with _lock:
+        (_running.add if running else _running.discard)(process)
 
 
 def _kill(process: subprocess.Popen) -> None:

@@ -95,10 +95,13 @@ def pytest_collection_modifyitems(session: pytest.Session, config: pytest.Config
 
 def pytest_collection_finish(session: pytest.Session) -> None:
     """Start the background jobs of the selected tests, in the order the tests will need them (only when
-    FreeCAD is there: without it those tests skip, or fail under APLAN_REQUIRE_FREECAD=1, as before)."""
-    if session.config.option.collectonly or not (shutil.which("freecadcmd") or shutil.which("FreeCADCmd")):
+    what a lane runs is there, FreeCAD or ROS: without it those tests skip, or fail under
+    APLAN_REQUIRE_FREECAD=1 or APLAN_REQUIRE_ROS=1, as before)."""
+    if session.config.option.collectonly:
         return
-    background.start(job for item in session.items for job in _jobs(item))
+    there = {"freecad": bool(shutil.which("freecadcmd") or shutil.which("FreeCADCmd")),
+             "ros": bool(shutil.which("rosmaster"))}
+    background.start(job for item in session.items for job in _jobs(item) if there.get(job.lane, True))
 
 
 def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Config) -> None:

@@ -81,3 +81,27 @@ def test_commands_run_in_the_environment_and_folder_of_the_session_start(monkeyp
     assert done.stdout.splitlines() == [background.ENVIRONMENT.get("APLAN_FAULT_DISK_FULL", "unset"),
                                         background.WORKING_FOLDER]
     assert background.WORKING_FOLDER != str(tmp_path)
+
+
+def test_each_lane_has_a_thread_of_its_own():
+    """A job of one lane (the ROS sessions) runs while another lane's (FreeCAD's) is still busy."""
+    if not background.enabled():
+        pytest.skip("APLAN_TEST_BACKGROUND=0: jobs run in the tests")
+    release, ran = threading.Event(), threading.Event()
+    names: list[str] = []
+
+    def other() -> str:
+        names.append(threading.current_thread().name)
+        ran.set()
+        return "done"
+
+    # The bounds only keep a broken lane from hanging the suite: it would then fail below.
+    blocker = background.Job("lane blocker", lambda: release.wait(60), lane="test-one")
+    job = background.Job("other lane", other, lane="test-two")
+    background.start([blocker, job])
+    try:
+        assert ran.wait(60), "the second lane's job did not run while the first lane was busy"
+        assert job.result() == "done" and names[0].startswith("aplan-tests-test-two")
+    finally:
+        release.set()
+    assert blocker.result() is True

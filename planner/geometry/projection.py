@@ -3,13 +3,15 @@ one pixel grid; a part blocks another along the direction when, in their shared 
 more than the depth tolerance. And the candidate motion directions found on the parts' planar faces."""
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
-from scipy import ndimage
 
 from ..product import Direction
 from .meshes import _AXIS_VECTORS, AXES, PartMesh
+# The z-buffer (a part's first and last depth on every line along an axis) is :mod:`.raster`'s.
+from .raster import DepthMap as _DepthMap
+from .raster import _PLANE
+from .raster import erode as _erode  # noqa: F401 (the name tests use)
+from .raster import rasterise as _rasterise
 from .tolerances import Tolerances
 
 __all__ = ["candidate_directions"]
@@ -18,111 +20,6 @@ __all__ = ["candidate_directions"]
 _MERGE_ANGLE = np.radians(2.0)   # directions closer than this are one
 _STEP_SLOPE = 4.0                # a depth change of more than this many pixels between neighbours is a step
 _PATCH_SHARE = 0.1               # a planar patch proposes its normal when it holds this share of its part's area
-
-
-_PLANE = {0: (1, 2), 1: (2, 0), 2: (0, 1)}  # the two in-plane axes (u, v) of a projection along each axis
-
-
-@dataclass
-class _DepthMap:
-    """A part seen along one axis: window origin (i0, j0) on the global grid, and per pixel the first and
-    last depth it occupies (``+inf``/``-inf`` where it is absent)."""
-
-    i0: int
-    j0: int
-    zmin: np.ndarray
-    zmax: np.ndarray
-    inner: np.ndarray  # covered and not within `grazing` pixels of the outline
-
-
-def _rasterise(triangles: np.ndarray, axis: int, origin: np.ndarray, pixel: float, grazing: int,
-               jump: float = np.inf) -> _DepthMap:
-    u, v = _PLANE[axis]
-    uv = (triangles[:, :, [u, v]] - origin) / pixel  # (m, 3, 2) in pixels
-    depth = triangles[:, :, axis]
-    i0 = int(np.floor(uv[..., 0].min())) - 1
-    j0 = int(np.floor(uv[..., 1].min())) - 1
-    width = int(np.ceil(uv[..., 0].max())) - i0 + 2
-    height = int(np.ceil(uv[..., 1].max())) - j0 + 2
-    zmin = np.full(width * height, np.inf)
-    zmax = np.full(width * height, -np.inf)
-
-    a, b, c = uv[:, 0], uv[:, 1], uv[:, 2]
-    area = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    keep = np.abs(area) > 1e-12  # faces parallel to the axis cover no line
-    uv, depth, area = uv[keep], depth[keep], area[keep]
-    a, b, c = uv[:, 0], uv[:, 1], uv[:, 2]
-    da, db, dc = depth[:, 0], depth[:, 1], depth[:, 2]
-    # Depth is affine over a triangle: gradient from the two edge vectors.
-    gx = ((db - da) * (c[:, 1] - a[:, 1]) - (dc - da) * (b[:, 1] - a[:, 1])) / area
-    gy = ((dc - da) * (b[:, 0] - a[:, 0]) - (db - da) * (c[:, 0] - a[:, 0])) / area
-
-    # Rows whose pixel centres (j + 0.5) the triangle spans.
-    vmin, vmax = uv[..., 1].min(axis=1), uv[..., 1].max(axis=1)
-    jlo = np.ceil(vmin - 0.5).astype(np.int64)
-    rows = np.maximum(np.floor(vmax - 0.5).astype(np.int64) - jlo + 1, 0)
-    tri = np.repeat(np.arange(len(rows)), rows)
-    y = (jlo[tri] + _ranks(rows) + 0.5)
-    # Span of the triangle on each row: intersect the row with the three edges.
-    left = np.full(y.shape, np.inf)
-    right = np.full(y.shape, -np.inf)
-    for p, q in ((a, b), (b, c), (c, a)):
-        py, qy, px, qx = p[tri, 1], q[tri, 1], p[tri, 0], q[tri, 0]
-        lo, hi = np.minimum(py, qy), np.maximum(py, qy)
-        hit = (y >= lo) & (y <= hi) & (hi > lo)
-        x = np.where(hit, px + (y - py) * (qx - px) / np.where(hi > lo, qy - py, 1.0), 0.0)
-        left = np.where(hit, np.minimum(left, x), left)
-        right = np.where(hit, np.maximum(right, x), right)
-    ilo = np.ceil(left - 0.5).astype(np.int64)
-    cols = np.maximum(np.floor(right - 0.5).astype(np.int64) - ilo + 1, 0)
-    sample = np.repeat(np.arange(len(cols)), cols)
-    i = ilo[sample] + _ranks(cols)
-    j = (y[sample] - 0.5).astype(np.int64)
-    t = tri[sample]
-    z = da[t] + (i + 0.5 - a[t, 0]) * gx[t] + (j + 0.5 - a[t, 1]) * gy[t]
-    index = (j - j0) * width + (i - i0)
-    np.minimum.at(zmin, index, z)
-    np.maximum.at(zmax, index, z)
-    zmin, zmax = zmin.reshape(height, width), zmax.reshape(height, width)
-    inner = _erode(zmax >= zmin, grazing)
-    if np.isfinite(jump):
-        inner &= ~_near_steps(zmin, zmax, inner, jump, grazing)
-    return _DepthMap(i0, j0, zmin, zmax, inner)
-
-
-def _near_steps(zmin: np.ndarray, zmax: np.ndarray, inner: np.ndarray, jump: float, grazing: int) -> np.ndarray:
-    """The pixels within ``grazing`` of a *step*: a pixel whose first or last depth differs from a
-    neighbour's by more than ``jump``. A step inside a part's outline is the rim of a bore or a stub seen
-    end on (a wheel's blind bore on its axle): two coaxial surfaces tessellated differently leave the same
-    slivers there as at an outline, so the same band is ignored."""
-    step = np.zeros(zmin.shape, dtype=bool)
-    for z in (zmin, zmax):
-        finite = np.where(inner, z, np.nan)
-        for dj, di in ((0, 1), (1, 0), (1, 1), (1, -1)):
-            a = finite[max(dj, 0):, max(di, 0):finite.shape[1] + min(di, 0)]
-            b = finite[:finite.shape[0] - dj, max(-di, 0):finite.shape[1] - max(di, 0)]
-            big = np.abs(a - b) > jump                  # NaN compares False: outline pixels are already out
-            step[max(dj, 0):, max(di, 0):finite.shape[1] + min(di, 0)] |= big
-            step[:finite.shape[0] - dj, max(-di, 0):finite.shape[1] - max(di, 0)] |= big
-    return ndimage.binary_dilation(step, structure=_SQUARE, iterations=grazing)
-
-
-def _ranks(counts: np.ndarray) -> np.ndarray:
-    """0, 1, ..., c - 1 for each count c, concatenated."""
-    total = int(counts.sum())
-    starts = np.repeat(np.cumsum(counts) - counts, counts)
-    return np.arange(total) - starts
-
-
-_SQUARE = ndimage.generate_binary_structure(2, 2)  # a pixel and its 8 neighbours
-
-
-def _erode(mask: np.ndarray, radius: int) -> np.ndarray:
-    """Binary erosion by ``radius`` pixels (8-neighbourhood): the pixels of ``mask`` whose every pixel within
-    ``radius`` (in both directions) is in ``mask``; the border counts as outside."""
-    if radius < 1:  # scipy reads 0 iterations as "until nothing changes"
-        return mask.copy()
-    return ndimage.binary_erosion(mask, structure=_SQUARE, iterations=radius, border_value=0)
 
 
 def _window(first: _DepthMap, second: _DepthMap):

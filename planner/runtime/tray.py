@@ -80,42 +80,75 @@ def render_tray(layout: TrayLayout, in_tray: Iterable[str], blur: float = 0.0, n
     """The ``(H, W, 3) uint8`` BGR view of the tray with the items ``in_tray`` covering their markers.
 
     ``blur``: Gaussian sigma in pixels; ``noise``: standard deviation of additive Gaussian noise (grey
-    levels, drawn from ``seed``); ``perspective``: each frame corner moves by up to this fraction of the frame
+    levels): the frame's window, at an offset drawn from ``seed``, of the camera's grain (:func:`_grain`, drawn
+    once from ``camera_seed``); ``perspective``: each frame corner moves by up to this fraction of the frame
     size (a tilted camera, drawn from ``camera_seed``: the same for every frame of one camera); ``occluders``
     are drawn over everything else. Cost: the scene without occluders is drawn, tilted and blurred once per
-    set of items in the tray (the last few are kept); then each frame costs its noise.
+    set of items in the tray (the last few are kept), and again around each occluder; then each frame costs
+    two saturated additions of its grain.
     """
     import cv2
 
     present = frozenset(in_tray) & frozenset(layout.slots)
-    key = (present, blur, perspective, camera_seed)
     if occluders:
         frame = _scene(layout, present, blur, perspective, occluders, camera_seed)
     else:
-        cache = _SCENES.setdefault(id(layout), (layout, {}))
-        if cache[0] is not layout:   # another layout took a freed one's id
-            _SCENES[id(layout)] = cache = (layout, {})
-        scenes = cache[1]
-        if key not in scenes:
-            if len(scenes) >= 8:
-                scenes.pop(next(iter(scenes)))
-            scenes[key] = _scene(layout, present, blur, perspective, (), camera_seed)
-        frame = scenes[key]
+        frame = _cached(layout, (present, blur, perspective, camera_seed),
+                        lambda: _scene(layout, present, blur, perspective, (), camera_seed))
     if noise > 0:
-        cv2.setRNGSeed(seed)
-        grain = np.empty(frame.shape[:2], np.int16)  # luminance noise: what survives the grey conversion
-        cv2.randn(grain, 0, noise)
-        # frame + grain saturated to 0..255 in one pass (the same bytes as numpy's clip, in half the time)
-        return cv2.add(frame, cv2.merge((grain, grain, grain)), dtype=cv2.CV_8U)
+        height, width = frame.shape[:2]
+        up, down = _grain(layout, (height, width), noise, camera_seed)
+        row, column = (int(k) for k in np.random.default_rng(seed).integers(0, _ROLL + 1, 2))
+        window = (slice(row, row + height), slice(column, column + width))
+        # frame + grain saturated to 0..255: the grain's positive part added, its negative part subtracted,
+        # each saturated (one of them is 0 at every pixel): numpy's clip of the sum, bytes for bytes
+        return cv2.subtract(cv2.add(frame, up[window]), down[window])
     return frame.copy()
 
 
-_SCENES: dict[int, tuple] = {}  # id(layout) -> (layout, {(items, blur, tilt, camera): frame}): drawn scenes
+_SCENES: dict[int, tuple] = {}  # id(layout) -> (layout, {key: frame}): drawn scenes, the last few
+_GRAINS: dict[int, tuple] = {}  # id(layout) -> (layout, {key: arrays}): the cameras' grains and maps, the last few
+_ROLL = 64  # the grain is this many pixels taller and wider than the frame: (_ROLL + 1) ** 2 windows
 
 
-def _scene(layout: TrayLayout, present: frozenset, blur: float, perspective: float,
-           occluders: Sequence[Occluder], camera_seed: int) -> np.ndarray:
-    """The frame of :func:`render_tray` before its noise."""
+def _cached(layout: TrayLayout, key: tuple, make, store: dict = _SCENES, keep: int = 12):
+    """``make()`` for ``layout`` and ``key``, kept in ``store`` with the ``keep`` latest of the layout (the
+    arrays are only read)."""
+    cache = store.setdefault(id(layout), (layout, {}))
+    if cache[0] is not layout:   # another layout took a freed one's id
+        store[id(layout)] = cache = (layout, {})
+    kept = cache[1]
+    if key not in kept:
+        if len(kept) >= keep:
+            kept.pop(next(iter(kept)))
+        kept[key] = make()
+    return kept[key]
+
+
+def _grain(layout: TrayLayout, size: tuple[int, int], noise: float, camera_seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """A camera's sensor grain: Gaussian noise of standard deviation ``noise`` grey levels, drawn once by OpenCV
+    from ``camera_seed`` (``cv2.setRNGSeed``, ``cv2.randn`` into ``int16``) for ``(H + _ROLL, W + _ROLL)``
+    pixels and the same on the three channels (luminance noise: what survives the grey conversion), as its
+    positive and its negative part in ``uint8`` (clipped at 255: the sum saturates anyway). Each frame adds a
+    window of it: drawing fresh noise for every frame cost more than the rest of the frame."""
+    def draw():
+        import cv2
+
+        cv2.setRNGSeed(camera_seed)
+        grain = np.empty((size[0] + _ROLL, size[1] + _ROLL), np.int16)
+        cv2.randn(grain, 0, noise)
+        up = np.clip(grain, 0, 255).astype(np.uint8)
+        down = np.clip(-grain.astype(np.int32), 0, 255).astype(np.uint8)
+        return cv2.merge((up, up, up)), cv2.merge((down, down, down))
+    return _cached(layout, (size, noise, camera_seed), draw, _GRAINS, keep=4)
+
+
+def _drawn(layout: TrayLayout, present: frozenset) -> np.ndarray:
+    """The tray, flat and sharp, with the items ``present`` covering their markers (kept: only read)."""
+    return _cached(layout, ("drawn", present), lambda: _draw(layout, present))
+
+
+def _draw(layout: TrayLayout, present: frozenset) -> np.ndarray:
     import cv2
 
     width, height = layout.size
@@ -136,17 +169,104 @@ def _scene(layout: TrayLayout, present: frozenset, blur: float, perspective: flo
             colour = tuple(int(c) for c in np.random.default_rng(k).integers(40, 220, 3))
             cv2.rectangle(frame, (x - margin, y - margin), (x + px + margin, y + px + margin), colour, -1)
             cv2.putText(frame, name, (x - margin + 4, y + px // 2), cv2.FONT_HERSHEY_SIMPLEX, px / 200, (0, 0, 0), 2)
+    return frame
+
+
+def _scene(layout: TrayLayout, present: frozenset, blur: float, perspective: float,
+           occluders: Sequence[Occluder], camera_seed: int) -> np.ndarray:
+    """The frame of :func:`render_tray` before its noise: the drawn tray, its occluders drawn over it, seen by
+    the tilted camera (:func:`_tilt`), blurred. With occluders, only the pixels they can reach are computed
+    again, on the scene without them: each occluder's box, tilted, grown by the interpolation's pixel and the
+    blur's reach (every step is local, so the pixels are those of the whole frame computed anew)."""
+    import cv2
+
+    drawn = _drawn(layout, present)
+    if not occluders:
+        return _blurred(_tilt(layout, perspective, camera_seed, drawn), blur)
+    bare = _cached(layout, (present, blur, perspective, camera_seed),
+                   lambda: _scene(layout, present, blur, perspective, (), camera_seed))
+    frame, drawn = bare.copy(), drawn.copy()
     for occluder in occluders:
-        cv2.ellipse(frame, occluder.center, occluder.axes, occluder.angle, 0, 360, (120, 150, 200), -1)
-    if perspective > 0:
+        cv2.ellipse(drawn, occluder.center, occluder.axes, occluder.angle, 0, 360, (120, 150, 200), -1)
+    width, height = layout.size
+    reach = math.ceil(4 * blur) + 1 if blur > 0 else 0   # beyond OpenCV's kernel radius (3 sigma for uint8)
+    for occluder in occluders:
+        x0, y0, x1, y1 = _tilted_box(layout, perspective, camera_seed, _ellipse_box(occluder))
+        out = (slice(max(y0 - reach, 0), min(y1 + reach, height)), slice(max(x0 - reach, 0), min(x1 + reach, width)))
+        if out[0].start >= out[0].stop or out[1].start >= out[1].stop:
+            continue
+        ys = slice(max(out[0].start - reach, 0), min(out[0].stop + reach, height))
+        xs = slice(max(out[1].start - reach, 0), min(out[1].stop + reach, width))
+        part = _blurred(_tilt(layout, perspective, camera_seed, drawn, (ys, xs)), blur)
+        frame[out] = part[out[0].start - ys.start:out[0].stop - ys.start,
+                          out[1].start - xs.start:out[1].stop - xs.start]
+    return frame
+
+
+def _blurred(frame: np.ndarray, blur: float) -> np.ndarray:
+    import cv2
+
+    return cv2.GaussianBlur(frame, (0, 0), blur) if blur > 0 else frame
+
+
+def _ellipse_box(occluder: Occluder) -> tuple[int, int, int, int]:
+    """``(x0, y0, x1, y1)``: pixels ``x0 <= x < x1``, ``y0 <= y < y1`` hold every pixel the ellipse fills (the
+    turned ellipse's box; OpenCV fills a polygon of points on it rounded to pixels: two pixels to spare)."""
+    a, b = occluder.axes
+    turn = math.radians(occluder.angle)
+    half_x = math.hypot(a * math.cos(turn), b * math.sin(turn))
+    half_y = math.hypot(a * math.sin(turn), b * math.cos(turn))
+    x, y = occluder.center
+    return (math.floor(x - half_x) - 2, math.floor(y - half_y) - 2, math.ceil(x + half_x) + 3,
+            math.ceil(y + half_y) + 3)
+
+
+def _camera(layout: TrayLayout, perspective: float, camera_seed: int):
+    """The tilted camera's homography (frame -> view) and its view -> frame maps for ``cv2.remap``, in OpenCV's
+    fixed point (drawn from ``camera_seed``: each corner moves by up to ``perspective`` of the frame's size)."""
+    def make():
+        import cv2
+
+        width, height = layout.size
         corners = np.float32([[0, 0], [width, 0], [width, height], [0, height]])
         shift = np.random.default_rng(camera_seed).uniform(-perspective, perspective, (4, 2))
         shift *= np.float32([width, height])
         homography = cv2.getPerspectiveTransform(corners, (corners + shift).astype(np.float32))
-        frame = cv2.warpPerspective(frame, homography, (width, height), borderValue=(70, 90, 110))
-    if blur > 0:
-        frame = cv2.GaussianBlur(frame, (0, 0), blur)
-    return frame
+        inverse = np.linalg.inv(homography)
+        ys, xs = np.mgrid[0:height, 0:width].astype(np.float64)
+        w = inverse[2, 0] * xs + inverse[2, 1] * ys + inverse[2, 2]
+        mx = ((inverse[0, 0] * xs + inverse[0, 1] * ys + inverse[0, 2]) / w).astype(np.float32)
+        my = ((inverse[1, 0] * xs + inverse[1, 1] * ys + inverse[1, 2]) / w).astype(np.float32)
+        return (homography, *cv2.convertMaps(mx, my, cv2.CV_16SC2))
+    return _cached(layout, ("camera", perspective, camera_seed), make, _GRAINS, keep=4)
+
+
+def _tilt(layout: TrayLayout, perspective: float, camera_seed: int, frame: np.ndarray, window=None) -> np.ndarray:
+    """``frame`` as the tilted camera sees it (:func:`_camera`; bilinear, the bench top beyond the frame), or
+    the ``window`` ``(rows, columns)`` of that view (the same pixels: each is read from its own map entry)."""
+    import cv2
+
+    if perspective <= 0:
+        return frame if window is None else frame[window]
+    _, xy, fraction = _camera(layout, perspective, camera_seed)
+    if window is not None:
+        xy, fraction = xy[window], fraction[window]
+    return cv2.remap(frame, xy, fraction, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                     borderValue=(70, 90, 110))
+
+
+def _tilted_box(layout: TrayLayout, perspective: float, camera_seed: int, box: tuple[int, int, int, int]):
+    """The pixels of the tilted view that read a pixel of ``box`` (``x0, y0, x1, y1``), as such a box: the
+    corners' images, with the interpolation's pixel to spare."""
+    if perspective <= 0:
+        return box
+    homography = _camera(layout, perspective, camera_seed)[0]
+    x0, y0, x1, y1 = box
+    corners = np.array([[x0 - 1, y0 - 1, 1], [x1 + 1, y0 - 1, 1], [x1 + 1, y1 + 1, 1], [x0 - 1, y1 + 1, 1]], float)
+    seen = corners @ homography.T
+    seen = seen[:, :2] / seen[:, 2:]
+    return (int(np.floor(seen[:, 0].min())) - 2, int(np.floor(seen[:, 1].min())) - 2,
+            int(np.ceil(seen[:, 0].max())) + 3, int(np.ceil(seen[:, 1].max())) + 3)
 
 
 @dataclass(frozen=True)

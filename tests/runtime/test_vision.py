@@ -334,12 +334,45 @@ def test_a_tray_layout_keeps_its_margin_and_every_marker_is_seen():
 
 
 def test_noise_is_added_with_saturation(markers):
-    """The frame is the noiseless scene plus the seed's grain, clipped to 0..255 on every channel."""
+    """The frame is the noiseless scene plus a window of the camera's grain, clipped to 0..255 on every channel:
+    the grain is drawn once from the camera's seed (OpenCV's randn), 64 pixels taller and wider than the frame,
+    and each frame's seed draws the window's corner."""
     layout = tray_layout(markers, *SMALL)
     clean = render_tray(layout, {"ink"}, blur=1.0)
-    noisy = render_tray(layout, {"ink"}, blur=1.0, noise=40, seed=7)
-    cv2.setRNGSeed(7)
-    grain = np.empty(clean.shape[:2], np.int16)
+    noisy = render_tray(layout, {"ink"}, blur=1.0, noise=40, seed=7, camera_seed=3)
+    cv2.setRNGSeed(3)
+    height, width = clean.shape[:2]
+    grain = np.empty((height + 64, width + 64), np.int16)
     cv2.randn(grain, 0, 40)
-    assert np.array_equal(noisy, np.clip(clean.astype(np.int16) + grain[:, :, None], 0, 255).astype(np.uint8))
+    row, column = np.random.default_rng(7).integers(0, 65, 2)
+    window = grain[row:row + height, column:column + width]
+    assert np.array_equal(noisy, np.clip(clean.astype(np.int16) + window[:, :, None], 0, 255).astype(np.uint8))
     assert noisy.min() == 0 and noisy.max() == 255   # saturated both ways
+    assert np.array_equal(render_tray(layout, {"ink"}, blur=1.0, noise=40, seed=7, camera_seed=3), noisy)
+    frames = [render_tray(layout, {"ink"}, blur=1.0, noise=6, seed=k, camera_seed=3).astype(int) - clean
+              for k in range(8)]
+    assert all(abs(f.std() - 6) < 0.3 for f in frames)     # the grain's deviation, on every frame
+    assert all(abs(np.corrcoef(a.ravel(), b.ravel())[0, 1]) < 0.05 for a, b in zip(frames, frames[1:]))
+
+
+@pytest.mark.parametrize("blur, perspective", [(1.2, 0.04), (0.0, 0.04), (1.5, 0.0)])
+def test_an_occluded_frame_equals_its_scene_drawn_again_whole(markers, blur, perspective):
+    """Occluders are tilted and blurred again only where they can reach: the frame equals the tray drawn with
+    them, tilted and blurred whole (hands at the frame's edges and beyond included)."""
+    from planner.runtime.tray import Occluder, _blurred, _drawn, _tilt
+
+    layout = tray_layout(markers, margin=0.06)
+    rng = np.random.default_rng(4)
+    width, height = layout.size
+    for trial in range(6):
+        in_tray = {name for name in layout.slots if rng.random() < 0.5}
+        occluders = tuple(Occluder((int(rng.integers(-50, width + 50)), int(rng.integers(-50, height + 50))),
+                                   (int(rng.integers(1, 300)), int(rng.integers(1, 60))), float(rng.uniform(0, 360)))
+                          for _ in range(int(rng.integers(1, 5))))
+        frame = render_tray(layout, in_tray, blur, 0, perspective, occluders, camera_seed=trial)
+        whole = _drawn(layout, frozenset(in_tray)).copy()
+        for o in occluders:
+            cv2.ellipse(whole, o.center, o.axes, o.angle, 0, 360, (120, 150, 200), -1)
+        whole = _blurred(_tilt(layout, perspective, trial, whole), blur)
+        assert np.array_equal(frame, whole), trial
+        assert not np.array_equal(frame, render_tray(layout, in_tray, blur, 0, perspective, camera_seed=trial))

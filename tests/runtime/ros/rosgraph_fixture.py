@@ -1,12 +1,16 @@
 """A real ROS 1 master (Debian's rosmaster) for one test, on a free loopback port, and the aplan nodes run
 against it as processes of their own; everything is stopped after the test (each process group killed).
+The whole runs of the cell are background jobs (:func:`ros_job`, tests/background.py): each on a master of
+its own, in the session's ROS lane, started with the session; the test asserts on what the job kept.
 
 Without ROS the tests skip, unless APLAN_REQUIRE_ROS=1 (CI), where they fail.
 """
 from __future__ import annotations
 
+import functools
 import json
 import os
+import re
 import shutil
 import signal
 import socket
@@ -15,6 +19,7 @@ import sys
 import time
 from pathlib import Path
 
+import background
 import pytest
 
 REPO = Path(__file__).resolve().parents[3]
@@ -48,12 +53,14 @@ def _free_port() -> int:
 class RosGraph:
     """The master and the nodes of one test (``env``: the environment every node gets)."""
 
-    def __init__(self, folder: Path, cache: Path, port: int | None = None):
+    def __init__(self, folder: Path, cache: Path, port: int | None = None, environment=None, tracked: bool = False):
         self.folder = folder
         self.port = port or _free_port()
+        self.tracked = tracked  # a background job's: background.stop() ends its processes with the session
         home = folder / "ros_home"
         home.mkdir()
-        self.env = {**os.environ, "ROS_MASTER_URI": f"http://127.0.0.1:{self.port}", "ROS_IP": "127.0.0.1",
+        self.env = {**(os.environ if environment is None else environment),
+                    "ROS_MASTER_URI": f"http://127.0.0.1:{self.port}", "ROS_IP": "127.0.0.1",
                     "ROS_HOSTNAME": "127.0.0.1", "ROS_HOME": str(home), "ROS_LOG_DIR": str(home / "log"),
                     "APLAN_ROS_CACHE": str(cache), "PYTHONUNBUFFERED": "1"}
         self.env.pop("ROS_NAMESPACE", None)
@@ -82,6 +89,8 @@ class RosGraph:
         process = subprocess.Popen(command, env=self.env, cwd=self.folder, stdout=out, stderr=subprocess.STDOUT,
                                    stdin=subprocess.DEVNULL, start_new_session=True)
         self.processes[name] = process
+        if self.tracked:
+            background.track(process)
         return process
 
     def output(self, name: str) -> str:
@@ -118,6 +127,42 @@ class RosGraph:
                 self.processes[name].wait(max(0.0, deadline - time.monotonic()))
             except subprocess.TimeoutExpired:
                 self.kill(name)
+        if self.tracked:
+            for process in self.processes.values():
+                background.track(process, running=False)
+
+
+class Ran:
+    """What a background run of the cell (:func:`ros_job`) kept: its graph (``folder``: the nodes' files), each
+    node's output as it was when the run ended (before its nodes were stopped), and what the run returned."""
+
+    def __init__(self, graph: RosGraph, outputs: dict[str, str], result):
+        self.graph, self.folder, self.outputs, self.result = graph, graph.folder, outputs, result
+
+    def output(self, name: str) -> str:
+        return self.outputs[name]
+
+
+def ros_job(name: str, work, lane: str = "ros") -> background.Job:
+    """A background job: ``work(graph)`` on a master of its own (a :class:`RosGraph` in a folder of the job's,
+    in the session start's environment), its nodes stopped afterwards; the job's result is a :class:`Ran`. A
+    test calls :func:`require_ros` before it asks for the result (a job never started runs then, in the test)."""
+    def run() -> Ran:
+        graph = RosGraph(background.folder(re.sub(r"[^a-z0-9]+", "-", name.lower())), _session_cache(),
+                         environment=background.ENVIRONMENT, tracked=True)
+        graph.start_master()
+        try:
+            result = work(graph)
+            return Ran(graph, {n: graph.output(n) for n in graph.processes}, result)
+        finally:
+            graph.stop()
+    return background.Job(f"ros: {name}", run, lane=lane)
+
+
+@functools.cache
+def _session_cache() -> Path:
+    """The background jobs' folder of generated aplan_msgs (one per session: the first job generates them)."""
+    return background.folder("aplan_msgs")
 
 
 def log_events(path: Path) -> list[dict]:
@@ -136,29 +181,6 @@ def wait_for(predicate, what: str, timeout: float = 120) -> None:
 def ros_cache(tmp_path_factory):
     """One folder of generated aplan_msgs for the test session."""
     return tmp_path_factory.mktemp("aplan_msgs")
-
-
-@pytest.fixture(scope="module")
-def ros_master(tmp_path_factory, ros_cache):
-    """One master for a module's tests (each starts its own master takes ~1 s and a process); the tests' nodes
-    are stopped after each (:func:`ros_shared`). Not for a test that stops the master."""
-    require_ros()
-    graph = RosGraph(tmp_path_factory.mktemp("rosmaster"), ros_cache)
-    graph.start_master()
-    try:
-        yield graph
-    finally:
-        graph.stop()
-
-
-@pytest.fixture
-def ros_shared(tmp_path, ros_cache, ros_master):
-    """The nodes of one test on the module's master (:func:`ros_master`); stopped after the test."""
-    graph = RosGraph(tmp_path, ros_cache, port=ros_master.port)
-    try:
-        yield graph
-    finally:
-        graph.stop()
 
 
 @pytest.fixture

@@ -1,5 +1,6 @@
-"""Whole runs on one real ROS master (tests/runtime/ros/rosgraph_fixture.py): a product of several levels
-through ``aplan ros`` in one run, and ``cell.launch`` really started with roslaunch beside the simulated cell."""
+"""Whole runs on a real ROS master (tests/runtime/ros/rosgraph_fixture.py): a product of several levels
+through ``aplan ros`` in one run, and ``cell.launch`` really started with roslaunch beside the simulated cell.
+Each run is a background job (:func:`rosgraph_fixture.ros_job`); the tests assert on what it kept."""
 from __future__ import annotations
 
 import os
@@ -13,8 +14,8 @@ from planner.assembly import make_plan
 from planner.decision.habits import habits_from_counts
 from planner.decision.io.habits_file import write_habits
 from planner.product import Part, Product, Subassembly, save_product
-from rosgraph_fixture import REPO, log_events, ros_cache, ros_master, ros_shared  # noqa: F401 - fixtures
-from test_ros_cell import _counts, _log_counts, _no_traceback, _replays
+from rosgraph_fixture import REPO, log_events, require_ros, ros_job
+from test_ros_cell import _counts, _habits, _log_counts, _no_traceback, _replay, _replays
 
 LAUNCH = REPO / "planner" / "runtime" / "ros"
 
@@ -29,27 +30,36 @@ def _two_chains(folder: Path) -> Path:
     return path
 
 
-def test_a_product_of_several_levels_in_one_run(ros_shared):
-    ros = ros_shared
+LEVELS = (("A", ["a1", "a2", "a3"]), ("B", ["b1", "b2", "b3"]), ("top", ["A", "B"]))
+
+
+def _levels_run(ros):
     product = str(_two_chains(ros.folder))
     model = [product, "--expansions", "20"]
     ros.aplan("vision", "ros-vision", product)
     ros.aplan("sim", "ros-sim", *model, "--demo", "0")
     ros.aplan("planner", "ros", *model, "--log", str(ros.folder / "s.jsonl"), "--frame-timeout", "120")
-    assert ros.wait("planner") == 0, ros.output("planner")
-    output = ros.output("planner")
+    status = ros.wait("planner")
+    return dict(status=status, replays={level: _replay(ros.folder / f"s-{level}.jsonl") for level, _ in LEVELS
+                                        if (ros.folder / f"s-{level}.jsonl").is_file()})
+
+
+def test_a_product_of_several_levels_in_one_run():
+    require_ros()
+    ran = LEVELS_RUN.result()
+    output = ran.output("planner")
+    assert ran.result["status"] == 0, output
     assert [line.split()[1] for line in output.splitlines() if line.startswith("level ")] == ["A", "B", "top"]
-    for level, parts in (("A", ["a1", "a2", "a3"]), ("B", ["b1", "b2", "b3"]), ("top", ["A", "B"])):
-        events = log_events(ros.folder / f"s-{level}.jsonl")
+    for level, parts in LEVELS:
+        events = log_events(ran.folder / f"s-{level}.jsonl")
         assert events[0]["settings"]["level"] == level
         assert [p["id"] for p in events[0]["product"]["parts"]] == parts
         assert events[-1]["event"] == "end" and events[-1]["reason"] == "assembled", events[-1]
-        assert "beliefs reproduced" in _replays(ros.folder / f"s-{level}.jsonl")
-    _no_traceback(ros)
+        assert "beliefs reproduced" in _replays(ran.result["replays"][level])
+    _no_traceback(ran)
 
 
-def test_cell_launch_started_by_roslaunch_assembles_the_pen(ros_shared):
-    ros = ros_shared
+def _launch_run(ros):
     aplan = ros.folder / "aplan"  # the shim's $APLAN: this repository's aplan under this Python
     aplan.write_text(f'#!/bin/sh\nexec "{sys.executable}" -m planner "$@"\n')
     aplan.chmod(0o755)
@@ -65,21 +75,37 @@ def test_cell_launch_started_by_roslaunch_assembles_the_pen(ros_shared):
     launch = ros._spawn("roslaunch", ["roslaunch", "aplan_ros", "cell.launch", "product:=pen", "planner:=online",
                                       "expansions:=50", f"log:={log}", f"habits:={habits}",
                                       f"habits_out:={learned}"])
-    assert ros.wait("roslaunch") == 0, ros.output("roslaunch")  # the planner is required: its end ends the launch
-    output = ros.output("roslaunch")
-    assert "assembled: the product is assembled" in output, output
-    events = log_events(log)
-    assert events[0]["settings"]["source"] == "ros /cell/markers"
-    assert events[0]["settings"]["robot"] == "ros /cell/perform"
-    assert events[-1]["reason"] == "assembled"
-    assert f"beliefs reproduced at all {events[-1]['step']} steps" in _replays(log)
-    # ~habits: the session's model had them; ~habits_out: them plus this session's steps (aplan habits on its log)
-    assert events[0]["settings"]["habits"]["file"] == str(habits)
-    assert _counts(learned) == _counts(habits, _log_counts(log, ros.folder / "log-habits.json"))
+    status = ros.wait("roslaunch")  # the planner is required: its end ends the launch
     try:  # nothing of the launch left running: roslaunch stopped the vision server too
         os.killpg(launch.pid, 0)
         left = True
     except ProcessLookupError:
         left = False
-    assert not left, "processes of the launch are still running"
-    _no_traceback(ros)
+    return dict(status=status, log=log, habits=habits, learned=learned, left=left,
+                replay=_replay(log) if log.is_file() else None,
+                log_habits=_habits(log, ros.folder / "log-habits.json") if log.is_file() else None)
+
+
+def test_cell_launch_started_by_roslaunch_assembles_the_pen():
+    require_ros()
+    ran = LAUNCH_RUN.result()
+    run, output = ran.result, ran.output("roslaunch")
+    assert run["status"] == 0, output
+    assert "assembled: the product is assembled" in output, output
+    events = log_events(run["log"])
+    assert events[0]["settings"]["source"] == "ros /cell/markers"
+    assert events[0]["settings"]["robot"] == "ros /cell/perform"
+    assert events[-1]["reason"] == "assembled"
+    assert f"beliefs reproduced at all {events[-1]['step']} steps" in _replays(run["replay"])
+    # ~habits: the session's model had them; ~habits_out: them plus this session's steps (aplan habits on its log)
+    assert events[0]["settings"]["habits"]["file"] == str(run["habits"])
+    assert _counts(run["learned"]) == _counts(run["habits"], _log_counts(run["log"], ran.folder / "log-habits.json",
+                                                                        run["log_habits"]))
+    assert not run["left"], "processes of the launch are still running"
+    _no_traceback(ran)
+
+
+LEVELS_RUN = ros_job("several levels", _levels_run)
+LAUNCH_RUN = ros_job("cell.launch", _launch_run)
+#: The runs, started with the session in its ROS lane (tests/background.py).
+BACKGROUND = (LEVELS_RUN, LAUNCH_RUN)
