@@ -5,6 +5,8 @@ from __future__ import annotations
 import FreeCAD
 import Part
 
+from planner.errors import PlannerError
+
 from .silhouettes import facing, revolution_axis, silhouette_cutters, split_face
 from .solids import bounding_box
 
@@ -72,16 +74,18 @@ def exact_prism(face, vector, flatness: float):
     return solid
 
 
-class SweepTooLarge(Exception):
-    """A face's polyhedral prism would have more triangles than its bound (``triangles``: the face's)."""
+class SweepTooLarge(PlannerError):
+    """A face's polyhedral prism would have more triangles than its bound (``triangles``: the face's). Caught by
+    the engine (the pair is undecided); a :class:`PlannerError`, as every workbench error, should one escape."""
 
     def __init__(self, triangles: int) -> None:
         super().__init__(f"{triangles} triangles")
         self.triangles = triangles
 
 
-class SweepStopped(Exception):
-    """The sweep was abandoned between two faces: its ``stop`` said so (the time limit passed)."""
+class SweepStopped(PlannerError):
+    """The sweep was abandoned between two faces: its ``stop`` said so (the time limit passed). Caught by the
+    engine, as :class:`SweepTooLarge` is."""
 
 
 def mesh_prism(face, d, length: float, deflection: float, triangles_bound: int | None = None):

@@ -63,4 +63,6 @@ def test_planner_runs_in_freecad_from_the_mod_folder(tmp_path):
     assert data["errors"] == {"freecad_aplan.archive.DamagedDocumentError": True,
                               "freecad_aplan.diagrams.RelationError": True, "freecad_aplan.document.DocumentError": True,
                               "freecad_aplan.intent.IntentError": True, "freecad_aplan.occt.analyze.BrepError": True,
+                                 "freecad_aplan.occt.prisms.SweepStopped": True,
+                                 "freecad_aplan.occt.prisms.SweepTooLarge": True,
                               "freecad_aplan.runner.FreeCADError": True}
