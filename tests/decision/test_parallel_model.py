@@ -93,13 +93,19 @@ def test_lumped_and_factored_agree_along_random_histories(plan, habits):
     lumped model (robot actions drawn among the pairs' half the time): the same beliefs, expected rewards and
     observation probabilities at every step."""
     weights = _weights(plan, 7) if habits else None
-    fact = factored_model(plan, weights=weights, parallel=True)
+    agree_along_random_histories(factored_model(plan, weights=weights, parallel=True), seed=11, episodes=10)
+
+
+def agree_along_random_histories(fact, seed: int, episodes: int) -> None:
+    """Assert that the factored model ``fact`` (with a parallel model) and its lumped POMDP give the same beliefs,
+    expected rewards, rewards, predictions and updates along ``episodes`` random histories drawn from the lumped
+    model, robot actions drawn among the pairs' half the time; and that some pair was taken."""
     lumped = lumped_pomdp(fact)
     T = [t.tocsr() for t in lumped.transition]
     O = lumped.observation[0].tocsr()
-    rng = np.random.default_rng(11)
+    rng = np.random.default_rng(seed)
     used = 0
-    for episode in range(10):
+    for _ in range(episodes):
         up_fact, up_lump = FactoredUpdater(fact), DiscreteUpdater(lumped)
         belief, c = up_fact.initialize(), up_lump.initialize()
         state = int(rng.choice(lumped.n_states, p=lumped.initial))

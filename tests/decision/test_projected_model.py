@@ -24,6 +24,7 @@ from planner.decision.online import OnlinePlanner, class_values, revealed_state_
 from planner.decision.budget import check_parallel_memory
 from planner.decision.projected import projected_bytes, projected_candidates, projected_rewrite
 from planner.errors import MemoryLimitError, PlannerError
+from test_parallel_model import _value_iteration, agree_along_random_histories
 
 TOLERANCE = 1e-9
 
@@ -195,43 +196,13 @@ def test_switched_off_it_is_the_papers_model(plan):
 @pytest.mark.parametrize("habits", [False, True])
 def test_lumped_and_factored_agree_along_random_histories(plan, habits):
     fact = factored_model(plan, weights=_weights(plan, 7) if habits else None, parallel="projected")
-    lumped = lumped_pomdp(fact)
-    T = [t.tocsr() for t in lumped.transition]
-    O = lumped.observation[0].tocsr()
-    rng = np.random.default_rng(13)
-    used = 0
-    for _ in range(8):
-        up_fact, up_lump = FactoredUpdater(fact), DiscreteUpdater(lumped)
-        belief, c = up_fact.initialize(), up_lump.initialize()
-        state = int(rng.choice(lumped.n_states, p=lumped.initial))
-        for _ in range(25):
-            assert np.abs(belief.dense(fact.n_classes) - c).max() <= TOLERANCE
-            assert np.abs(fact.expected_rewards(belief) - lumped.reward @ c).max() <= TOLERANCE
-            if state == fact.final_class:
-                break
-            pairs = np.flatnonzero(fact.parallel.pair_class == state)
-            if pairs.size and rng.random() < 0.5:
-                a = int(fact.parallel.action[rng.choice(pairs)])
-                used += 1
-            else:
-                a = int(rng.integers(lumped.n_actions))
-            row = T[a].getrow(state)
-            state = int(rng.choice(row.indices, p=row.data / row.data.sum()))
-            orow = O.getrow(state)
-            z = int(rng.choice(orow.indices, p=orow.data / orow.data.sum()))
-            assert np.abs(fact.predict(belief, a).dense(fact.n_classes) - lumped.transition[a].T @ c).max() <= TOLERANCE
-            belief, c = up_fact.update(belief, a, z), up_lump.update(c, a, z)
-        assert not up_fact.events and not up_lump.events
-    assert used > 0
+    agree_along_random_histories(fact, seed=13, episodes=8)
 
 
 def test_class_mdp_bound_is_value_iteration_and_the_solver_stays_below_the_bounds(pen):
     fact = factored_model(make_plan(pen, False), parallel="projected")
     lumped = lumped_pomdp(fact)
-    V = np.zeros(lumped.n_states)
-    for _ in range(3000):
-        Q = np.array([lumped.reward[a] + lumped.discount * (lumped.transition[a] @ V) for a in range(lumped.n_actions)])
-        V = Q.max(axis=0)
+    V, Q = _value_iteration(lumped)
     values = class_values(fact)
     assert np.abs(values.value - V).max() <= 1e-8 and np.abs(values.q_matrix(fact) - Q).max() <= 1e-8
     revealed = revealed_state_values(fact)
