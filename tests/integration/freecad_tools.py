@@ -85,6 +85,23 @@ def guarded(step):
 '''
 
 
+# Shared by the GUI test scripts that drive the workbench (after GUI_HELPERS; needs QtCore and FreeCADGui): what
+# the commands keep between them, and a step run once the workbench's background jobs have ended.
+WORKBENCH_HELPERS = '''
+def state():
+    return FreeCADGui.getWorkbench("AplanWorkbench").state
+
+
+def after_jobs(step):
+    def wait():
+        if state().jobs:
+            QtCore.QTimer.singleShot(100, guarded(wait))
+            return
+        step()
+    QtCore.QTimer.singleShot(100, guarded(wait))
+'''
+
+
 # Shared by the GUI test scripts that show task panels and dialogs (needs QtCore, QtGui and FreeCADGui): what
 # is cut off in a panel at the width it has, and the task view's visible part, the root those checks start from.
 LAYOUT_CHECK = '''

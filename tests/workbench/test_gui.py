@@ -9,7 +9,7 @@ import shutil
 
 import pytest
 from conftest import PEN_MODELS, REPO, require_shared, run_freecad_gui
-from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, aplan
+from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, WORKBENCH_HELPERS, aplan
 from pictures import read_picture
 
 ARTIFACTS = REPO / "tests" / "artifacts"
@@ -32,9 +32,7 @@ def status():
     return FreeCADGui.getMainWindow().statusBar().currentMessage()
 
 
-def state():
-    # What the commands keep between them, owned by the workbench.
-    return FreeCADGui.getWorkbench("AplanWorkbench").state
+{workbench_helpers}
 
 
 def snapshot(doc):
@@ -325,7 +323,7 @@ def test_workbench_in_the_real_freecad_window(tmp_path):
     ARTIFACTS.mkdir(exist_ok=True)
     out = tmp_path / "result.json"
     script = tmp_path / "gui_test.py"
-    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, layout_check=LAYOUT_CHECK, out=str(out), copy=str(copy),
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS, layout_check=LAYOUT_CHECK, out=str(out), copy=str(copy),
                                         artifacts=str(ARTIFACTS)))
     data = run_freecad_gui(tmp_path, script, out)
     assert data["workbench"] == "AplanWorkbench" and all(data["commands"].values())

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 from conftest import REPO, run_freecad_gui
-from integration.freecad_tools import GUI_HELPERS
+from integration.freecad_tools import GUI_HELPERS, WORKBENCH_HELPERS
 from pictures import read_picture
 
 ARTIFACTS = REPO / "tests" / "artifacts"
@@ -23,17 +23,7 @@ result = {{}}
 {gui_helpers}
 
 
-def state():
-    return FreeCADGui.getWorkbench("AplanWorkbench").state
-
-
-def after_jobs(step):
-    def wait():
-        if state().jobs:
-            QtCore.QTimer.singleShot(100, guarded(wait))
-            return
-        step()
-    QtCore.QTimer.singleShot(100, guarded(wait))
+{workbench_helpers}
 
 
 def turned(x, y, z):
@@ -136,7 +126,7 @@ def test_diagrams_panel_adds_a_direction_and_marks_a_relation(tmp_path):
     ARTIFACTS.mkdir(exist_ok=True)
     out = tmp_path / "result.json"
     script = tmp_path / "gui_designer.py"
-    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, out=str(out), copy=str(tmp_path / "wedge.FCStd"), artifacts=str(ARTIFACTS)))
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS, out=str(out), copy=str(tmp_path / "wedge.FCStd"), artifacts=str(ARTIFACTS)))
     data = run_freecad_gui(tmp_path, script, out)
     assert "zero vector" in data["bad_direction"][0] and data["bad_direction"][1] == 0
     text, shown, step, steps, directions = data["direction"]

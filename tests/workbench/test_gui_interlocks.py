@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from background import Job, folder, run
 from conftest import REPO, freecad_gui_result, freecad_gui_run, require_freecad_gui
-from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK
+from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, WORKBENCH_HELPERS
 from integration.interlock_documents import SCRIPT
 from pictures import hue_of, read_picture
 
@@ -39,17 +39,7 @@ MATERIALS = {{}}
 {layout_check}
 
 
-def state():
-    return FreeCADGui.getWorkbench("AplanWorkbench").state
-
-
-def after_jobs(step):
-    def wait():
-        if state().jobs:
-            QtCore.QTimer.singleShot(100, guarded(wait))
-            return
-        step()
-    QtCore.QTimer.singleShot(100, guarded(wait))
+{workbench_helpers}
 
 
 def settle(seconds=0.3):
@@ -251,7 +241,7 @@ def _in_the_window() -> tuple:
         return tmp, built
     ARTIFACTS.mkdir(exist_ok=True)
     script = tmp / "gui_interlocks.py"
-    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, layout_check=LAYOUT_CHECK,
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS, layout_check=LAYOUT_CHECK,
                                         out=str(tmp / "result.json"), copy=str(tmp / "press_fit.FCStd"),
                                         captured=str(tmp / "captured.FCStd"), artifacts=str(ARTIFACTS)))
     return tmp, freecad_gui_run(tmp, script, display=170)

@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 import pytest
 from conftest import PEN_MODELS, REPO, require_shared, run_freecad_gui
-from integration.freecad_tools import GUI_HELPERS
+from integration.freecad_tools import GUI_HELPERS, WORKBENCH_HELPERS
 from pictures import hue_of, read_picture
 from test_plan3d import pen_diagrams
 
@@ -38,8 +38,7 @@ MATERIALS = {{}}
 {gui_helpers}
 
 
-def state():
-    return FreeCADGui.getWorkbench("AplanWorkbench").state
+{workbench_helpers}
 
 
 def parts():
@@ -327,7 +326,7 @@ def test_plan_and_relation_in_the_3d_view(tmp_path):
     out = tmp_path / "result.json"
     script = tmp_path / "gui_plan3d.py"
     logged = _session_log(tmp_path / "session.jsonl", 13)
-    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, out=str(out), copy=str(copy), log=str(tmp_path / "session.jsonl"),
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS, out=str(out), copy=str(copy), log=str(tmp_path / "session.jsonl"),
                                         artifacts=str(ARTIFACTS), diagrams=pen_diagrams()))
     data = run_freecad_gui(tmp_path, script, out)
     before = data["before"]

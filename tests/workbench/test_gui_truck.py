@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 from background import Job, folder
 from conftest import REPO, SHARED, freecad_gui_result, freecad_gui_run, require_freecad_gui, require_shared
-from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, aplan
+from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, WORKBENCH_HELPERS, aplan
 from pictures import hue_of, read_picture
 from real_models import JOBS, real_bundles  # noqa: F401  (fixture: the truck exported once per session)
 
@@ -44,8 +44,7 @@ def at_default_width(name):
     return cut_off(viewport)
 
 
-def state():
-    return FreeCADGui.getWorkbench("AplanWorkbench").state
+{workbench_helpers}
 
 
 def status():
@@ -331,7 +330,7 @@ def _truck_in_the_window() -> tuple:
     shutil.copy(TRUCK, copy)
     ARTIFACTS.mkdir(exist_ok=True)
     script = tmp / "gui_truck.py"
-    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, layout_check=LAYOUT_CHECK,
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS, layout_check=LAYOUT_CHECK,
                                         out=str(tmp / "result.json"), copy=str(copy),
                                         bundle=str(tmp / "bundle"), artifacts=str(ARTIFACTS)))
     return tmp, freecad_gui_run(tmp, script, display=150, timeout=480)  # detection, levels and a session
