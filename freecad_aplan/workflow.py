@@ -148,11 +148,9 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
                                                            time_limit=tolerances.time_limit))
     else:
         report = None  # the engine runs in analyse_bundle
-    analysed, report = analyse_bundle(product, Path(folder) / PRODUCT_FILE, engine, tolerances, report)
     # The interlock rules' proposals, while the meshes are here: the interlocks panel lists them.
-    recorded = record_proposals(analysed)
-    if recorded is not analysed:
-        save_product(recorded, Path(folder) / PRODUCT_FILE)
+    _, report = analyse_bundle(product, Path(folder) / PRODUCT_FILE, engine, tolerances, report,
+                               then=record_proposals)
     return {"parts": len(report.parts), "contacts": len(report.contacts),
             "interferences": len(report.interferences), "seconds": round(report.seconds, 3)}
 

@@ -106,14 +106,18 @@ def analyze_product(product: Product, engine: str = "mesh", tolerances: Toleranc
 
 
 def analyse_bundle(product: Product, path: str | Path, engine: str = "mesh", tolerances: Tolerances = Tolerances(),
-                   report: GeometryReport | None = None) -> tuple[Product, GeometryReport]:
+                   report: GeometryReport | None = None,
+                   then: Callable[[Product], Product] | None = None) -> tuple[Product, GeometryReport]:
     """Analyse a bundle: the one way its diagrams are found and written, for the command line (``aplan
     analyze``), the workbench and the FreeCAD export. ``report``: an engine's answer found elsewhere (the
     workbench's OCCT run inside FreeCAD), else :func:`analyze_product` with ``engine`` and ``tolerances``;
-    applied to ``product`` (:func:`apply_report`) and the product written to ``path`` atomically. Returns the
-    analysed product and the report. Cost: the engine's."""
+    applied to ``product`` (:func:`apply_report`), then to ``then`` if given (what a caller adds while the
+    meshes are at hand, e.g. the workbench's interlock proposals), and the product written to ``path``
+    atomically, once. Returns the analysed product and the report. Cost: the engine's."""
     report = analyze_product(product, engine, tolerances) if report is None else report
     analysed = apply_report(product, report)
+    if then is not None:
+        analysed = then(analysed)
     save_product(analysed, path)
     return analysed, report
 
