@@ -14,7 +14,9 @@ The workbench runs what the command line runs, so these only pick arguments and 
   pipeline) on one level or on every level bottom-up, run in-process through :func:`planner.cli.main`, then
   ``aplan replay LOG --plot STEM`` for each level's belief plot; or the operator's picks typed in
   (``--keyboard``), read from standard input. A background job (``batch.py session``) runs it, its output
-  lines being the job's progress, the panel writing the picks to its input.
+  lines being the job's progress, the panel writing the picks to its input;
+- :func:`offered_picks` and :func:`typed_pick`: the keyboard's prompt as the panel shows it (the picks the
+  operator could make now, each as the line that types it).
 """
 from __future__ import annotations
 
@@ -29,7 +31,8 @@ from typing import Callable
 from planner.errors import PlannerError
 
 __all__ = ["LevelChoice", "ModelChoice", "level_choices", "level_of", "member_parts", "base_part_in", "model_choice",
-           "level_model", "flat_level", "session_arguments", "run_simulated_session", "ALL_LEVELS", "SOURCES"]
+           "level_model", "flat_level", "session_arguments", "run_simulated_session", "offered_picks", "typed_pick",
+           "is_prompt", "ALL_LEVELS", "SOURCES"]
 
 #: The level selector's entry for "every level, bottom-up" (the command line without ``--level``).
 ALL_LEVELS = "all levels"
@@ -145,6 +148,34 @@ def flat_level(product, level: str | None, technical: bool | None = None, base_p
 SOURCES = ("demo", "keyboard")
 
 
+def offered_picks(line: str) -> list[str] | None:
+    """The picks the keyboard offers in ``line`` (an output line of a keyboard session: ``the operator could
+    pick now: body+button+[hammer], cartridge+ink+[hammer]``, :data:`planner.runtime.console.COULD_PICK`), as
+    observations in text; ``[]`` when nothing that shows can be picked; None for any other line. Cost: O(len)."""
+    from planner.runtime.console import COULD_PICK
+
+    text, head = line.strip(), COULD_PICK.strip()
+    if not text.startswith(head):
+        return None
+    listed = text[len(head):].strip()
+    return [] if listed.startswith("nothing") else [pick.strip() for pick in listed.split(", ") if pick.strip()]
+
+
+def typed_pick(pick: str) -> str:
+    """The line that types ``pick`` (an observation as text, ``cartridge+ink+[hammer]``) at the keyboard:
+    ``cartridge ink hammer``; the blank observation (``blank``, or nothing) is the empty line."""
+    if pick.strip() in ("", "blank"):
+        return ""
+    return " ".join(name.strip("[]") for name in pick.split("+"))
+
+
+def is_prompt(line: str) -> bool:
+    """Whether ``line`` is the keyboard's prompt (the session waits for the operator's picks)."""
+    from planner.runtime.console import PROMPT
+
+    return line.startswith(PROMPT.split("(")[0])
+
+
 def session_arguments(product_file: str, log: str, level: str | None = None, sequence: int = 0,
                       expansions: int | None = None, max_steps: int | None = None,
                       base_part: str | None = None, source: str = "demo") -> list[str]:
@@ -184,6 +215,11 @@ class _Lines(io.TextIOBase):
 
     def isatty(self) -> bool:  # the session's status lines then end in newlines, one per step
         return False
+
+    def flush(self) -> None:  # a prompt, flushed without its newline (the session waits for a line): a line now
+        if self._partial.strip():
+            text, self._partial = self._partial, ""
+            self.write(text + "\n")
 
     def write(self, text: str) -> int:
         *done, self._partial = (self._partial + text).replace("\r", "\n").split("\n")

@@ -33,7 +33,7 @@ class BackgroundJob(QtCore.QObject):
         self.cancelled = False
         self.output = ""
         self.started = time.monotonic()
-        self.progress_text = ""
+        self.progress_text, self._partial = "", ""
         self.process = QtCore.QProcess(self)
         environment = QtCore.QProcessEnvironment.systemEnvironment()
         environment.insert(JOB_VARIABLE, encode_job(job))
@@ -78,7 +78,9 @@ class BackgroundJob(QtCore.QObject):
     def _read(self) -> None:
         chunk = bytes(self.process.readAllStandardOutput()).decode("utf-8", "replace")
         self.output += chunk
-        for line in chunk.splitlines():
+        # whole lines only: a chunk may end inside a line (its rest comes with the next chunk)
+        *lines, self._partial = (self._partial + chunk).split("\n")
+        for line in lines:
             progress = read_progress(line)
             if progress is not None:
                 self.progress_text = f"  (bounds {progress[1]} .. {progress[2]})"

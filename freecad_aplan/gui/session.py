@@ -6,6 +6,12 @@ and the online planner's expansions per decision, and runs it: the session runs 
 (``batch.py session``: :func:`freecad_aplan.sessions.run_simulated_session`, the command line in-process), its
 output lines show in the panel as it goes, Cancel ends it, and the belief plot of the last level shows in the
 panel when it ends. Nothing in the document changes.
+
+A keyboard session shows what the command line's keyboard prompt shows, in a read-only box: what the robot
+does at each step, what the operator could pick now, the prompt, a line refused and why (with the parts and
+tools there are), each step's belief and the robot's next action. The picks the operator could make are
+offered in a list (and "nothing"): choosing one puts its line in the picks field, a double click or Send sends
+it, so nothing needs typing exactly; any other line (a wrong pick, ``apart PART...``, ``q``) can be typed.
 """
 from __future__ import annotations
 
@@ -18,8 +24,12 @@ from PySide import QtCore, QtGui
 from planner.defaults import ONLINE_EXPANSIONS, PRODUCT_FILE
 
 from .. import workflow
-from ..sessions import ALL_LEVELS, base_part_in, level_choices, level_of
+from ..sessions import ALL_LEVELS, base_part_in, is_prompt, level_choices, level_of, offered_picks, typed_pick
 from .layout import button_rows, narrow_combo, panel_layout, stacked_field, wrapped_label
+from .plan3d_panel import _text_box
+
+#: Lines of the keyboard prompt's box (it scrolls; the last line, the prompt, stays in view).
+PROMPT_LINES = 8
 
 __all__ = ["SessionPanel", "ask_level"]
 
@@ -46,7 +56,8 @@ class SessionPanel:
         self.form.setWindowTitle("APLAN: session")
         layout = panel_layout(self.form)
         layout.addWidget(wrapped_label("A simulated camera cell: an operator follows a full sequence on a rendered "
-                                       "tray, the robot decides from what the camera sees (aplan session --demo)."))
+                                       "tray, the robot decides from what the camera sees (aplan session --demo); "
+                                       "or you type the operator's picks (--keyboard)."))
         self.level = narrow_combo(QtGui.QComboBox())
         self.level.setObjectName("AplanSessionLevel")
         for choice in self.levels:
@@ -59,10 +70,11 @@ class SessionPanel:
         self.source.addItem("simulated camera cell", "demo")
         self.source.addItem("keyboard: type the operator's picks", "keyboard")
         stacked_field(layout, "Observations from", self.source)
+        self.demo = _column(layout)  # what only the simulated cell needs
         self.sequence = QtGui.QSpinBox()
         self.sequence.setObjectName("AplanSessionSequence")
         self.sequence.setRange(0, 10**6)
-        stacked_field(layout, "Full sequence the operator follows (by rank)", self.sequence)
+        stacked_field(self.demo.layout(), "Full sequence the operator follows (by rank)", self.sequence)
         self.expansions = QtGui.QSpinBox()
         self.expansions.setObjectName("AplanSessionExpansions")
         self.expansions.setRange(1, 10**6)
@@ -76,6 +88,18 @@ class SessionPanel:
         self.cancel_button.setEnabled(False)
         self.cancel_button.clicked.connect(self.cancel)
         layout.addWidget(button_rows(self.run_button, self.cancel_button))
+        self.keyboard = _column(layout)  # the keyboard session: its prompt, the picks offered, the line sent
+        self.prompt = _text_box("AplanSessionPrompt", PROMPT_LINES)
+        self.prompt.setToolTip("What aplan session --keyboard shows: the robot's step, what the operator could "
+                               "pick, the prompt, a refused line and why, the belief after each step")
+        stacked_field(self.keyboard.layout(), "Keyboard session (aplan session --keyboard):", self.prompt)
+        self.choices = QtGui.QListWidget()
+        self.choices.setObjectName("AplanSessionChoices")
+        self.choices.setToolTip("What the operator could pick now: choose one (a double click sends it)")
+        self.choices.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarAlwaysOff)
+        self.choices.currentItemChanged.connect(self._chosen)
+        self.choices.itemDoubleClicked.connect(lambda item: (self._chosen(item), self.send_picks()))
+        stacked_field(self.keyboard.layout(), "The operator could pick now:", self.choices)
         self.picks = QtGui.QLineEdit()
         self.picks.setObjectName("AplanSessionPicks")
         self.picks.setPlaceholderText("parts and tool picked; empty: nothing")
@@ -83,8 +107,10 @@ class SessionPanel:
         self.send_button = QtGui.QPushButton("Send picks")
         self.send_button.setObjectName("AplanSendPicks")
         self.send_button.clicked.connect(self.send_picks)
-        stacked_field(layout, "Keyboard session: what the operator picked (Enter sends; q stops)", self.picks)
-        layout.addWidget(button_rows(self.send_button))
+        stacked_field(self.keyboard.layout(), "What the operator picked (Enter sends; q stops)", self.picks)
+        self.keyboard.layout().addWidget(button_rows(self.send_button))
+        self.source.currentIndexChanged.connect(lambda *_: self._show_source())
+        self._show_source()
         self._keyboard(False)
         self.progress = QtGui.QProgressBar()
         self.progress.setObjectName("AplanSessionProgress")
@@ -105,16 +131,43 @@ class SessionPanel:
     def selected_level(self) -> str | None:
         return self.level.currentData()
 
+    def _show_source(self) -> None:
+        """The fields of the source chosen: the sequence for the simulated cell, the prompt for the keyboard."""
+        keyboard = self.source.currentData() == "keyboard"
+        self.demo.setVisible(not keyboard)
+        self.keyboard.setVisible(keyboard)
+
     def _keyboard(self, running: bool) -> None:
-        self.picks.setEnabled(running)
-        self.send_button.setEnabled(running)
+        for widget in (self.picks, self.send_button, self.choices):
+            widget.setEnabled(running)
+
+    def _chosen(self, item) -> None:
+        if item is not None:
+            self.picks.setText(item.data(QtCore.Qt.UserRole))
+
+    def offer(self, picks: list[str]) -> None:
+        """List ``picks`` (observations as text, from the keyboard's prompt) and "nothing" as the choices, each
+        entry one name per line (a name is never broken at the panel's width), its line to send as data."""
+        self.choices.clear()
+        for pick in picks:
+            names = [f"{n.strip('[]')} (tool)" if n.startswith("[") else n for n in pick.split("+")]
+            item = QtGui.QListWidgetItem("\n+ ".join(names))
+            item.setData(QtCore.Qt.UserRole, typed_pick(pick))
+            self.choices.addItem(item)
+        nothing = QtGui.QListWidgetItem("nothing (a blank step)")
+        nothing.setData(QtCore.Qt.UserRole, "")
+        self.choices.addItem(nothing)
+        rows = sum(self.choices.sizeHintForRow(r) for r in range(min(self.choices.count(), 4)))
+        self.choices.setFixedHeight(rows + 2 * self.choices.frameWidth() + 4)  # four entries; the list scrolls
 
     def send_picks(self) -> None:
         """Send the typed picks to the keyboard session running (one step of the operator)."""
         if self.job is not None and self.running == "keyboard":
             self.lines.append(f"picked: {self.picks.text()}")
+            self.prompt.appendPlainText(f"> {self.picks.text()}")
             self.job.send(self.picks.text())
             self.picks.clear()
+            self.choices.clear()  # the next step's choices come with its prompt
 
     def run(self) -> None:
         """Start the selected level's session in the background (a second one waits for the first)."""
@@ -128,6 +181,8 @@ class SessionPanel:
         self.progress.setRange(0, count)
         self.progress.setValue(0)
         self.plot.clear()
+        self.prompt.clear()
+        self.choices.clear()
         self.status.setText(f"starting the session of {level or 'the product'}")
         # the designer's base part for the level that holds it (every level at once: each starts anywhere)
         base = self.base_part if len(self.levels) == 1 else None if level == ALL_LEVELS else base_part_in(
@@ -153,6 +208,15 @@ class SessionPanel:
         self.lines.append(line)
         if line.startswith("level ") and " of " in line:  # "level sa2 (1 of 5): ..." starts a level
             self.progress.setValue(int(line.split("(", 1)[1].split(" of ")[0]) - 1)
+        if self.running == "keyboard":  # the prompt's lines as the command line shows them
+            self.prompt.appendPlainText(line.strip())
+            self.prompt.verticalScrollBar().setValue(self.prompt.verticalScrollBar().maximum())
+            picks = offered_picks(line)
+            if picks is not None:
+                self.offer(picks)
+            if is_prompt(line):
+                self.status.setText("waiting for the operator's picks")
+                return
         self.status.setText(line)
 
     def _ended(self) -> None:
@@ -194,6 +258,15 @@ class SessionPanel:
 
     def reject(self) -> bool:
         return self.close()
+
+
+def _column(layout: QtGui.QBoxLayout) -> QtGui.QWidget:
+    """A widget added to ``layout`` holding a column of its own, without margins (shown or hidden as one)."""
+    column = QtGui.QWidget()
+    inner = QtGui.QVBoxLayout(column)
+    inner.setContentsMargins(0, 0, 0, 0)
+    layout.addWidget(column)
+    return column
 
 
 def ask_level(product) -> tuple[bool, str | None]:

@@ -175,7 +175,8 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
 
     events = EventLog(log_path, on_event=show)
     if args.keyboard:
-        source = KeyboardSource(plan.designed or plan.product)  # the fasteners are picked too
+        # the fasteners are picked too; a robot acting by itself says what it does (a console robot's person does)
+        source = KeyboardSource(plan.designed or plan.product, show_robot=args.robot == "auto")
     else:
         close_without_tool = any(o.parts and o.tool is None for o in plan.observations)
         source = VisionSource((), markers, detector, args.debounce, args.quiet_frames, close_without_tool,

@@ -14,7 +14,7 @@ from ..product import Product
 from .interfaces import Instruction, RobotReport
 from .undo import Apart
 
-__all__ = ["read_line", "ConsoleRobot", "KeyboardSource"]
+__all__ = ["read_line", "ConsoleRobot", "KeyboardSource", "PROMPT", "COULD_PICK"]
 
 
 def read_line(prompt: str) -> str:
@@ -55,24 +55,39 @@ class ConsoleRobot:
         return RobotReport(True)
 
 
+#: How the keyboard's prompt starts, and the line before it listing what the operator could pick now (a front
+#: end that shows the prompt, the workbench's session panel, finds them by these).
+PROMPT = "operator picked (parts and tool; Enter: nothing; apart PART...: came off; q: stop): "
+COULD_PICK = "  the operator could pick now: "
+
+
 class KeyboardSource:
     """The operator's picks typed in, one line per step: part and tool ids separated by spaces or commas
     (``ink cartridge hammer``), an empty line for nothing, ``q`` to stop, ``apart PART...`` when those parts
     came off the piece that held them (a step undone: :class:`~planner.runtime.undo.Apart`). A line naming
-    something that is not a part or tool, or two tools, is refused and asked again."""
+    something that is not a part or tool, or two tools, is refused and asked again.
+
+    Before each prompt the person sees what the operator could pick now (:meth:`offer`: the observations of the
+    operations possible in the assembly state, ``cartridge+ink+[hammer]``) and, with ``show_robot`` (a robot
+    that performs by itself, ``--robot auto``), what the robot does at this step: the person at the keyboard
+    needs both to type what the operator did next to it."""
 
     def __init__(self, product: Product, read: Callable[[str], str] = read_line,
-                 write: Callable[[str], None] | None = None):
+                 write: Callable[[str], None] | None = None, show_robot: bool = False):
         self.parts = set(product.part_ids)
         self.tools = {t.id for t in product.tools}
         self._read = read
         self._write = write or _to_stderr
+        self.show_robot = show_robot
+
+    def offer(self, picks: list[str]) -> None:
+        """Show ``picks`` (observations as text, e.g. ``body+button+[hammer]``) as what the operator could pick."""
+        self._write(COULD_PICK + (", ".join(picks) if picks else "nothing that shows (Enter)"))
 
     def observe(self) -> Observation | Apart | None:
         while True:
             try:
-                line = self._read("operator picked (parts and tool; Enter: nothing; apart PART...: came off; "
-                                  "q: stop): ")
+                line = self._read(PROMPT)
             except EOFError:
                 return None
             names = line.replace(",", " ").split()
@@ -96,4 +111,6 @@ class KeyboardSource:
                 return Observation(tuple(sorted(set(n for n in names if n in self.parts))), tools[0] if tools else None)
 
     def robot_acting(self, instruction: Instruction) -> None:
-        """Nothing to do: the person types only the operator's picks."""
+        """With ``show_robot``, say what the robot does at this step (the person types only the operator's picks)."""
+        if self.show_robot:
+            self._write(f"robot, step {instruction.step}: {instruction.text}")

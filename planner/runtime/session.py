@@ -6,7 +6,8 @@ One decision step (as in :func:`planner.decision.simulate.simulate_episode` and 
 2. the observation source is told what the robot is about to do (its marker events are not the
    operator's), then the robot performs it and reports success or failure;
 3. the source delivers the operator's observation for the step (what the operator was seen picking, or
-   blank);
+   blank); a source with an ``offer(picks)`` method (the keyboard) is first given what the operator could be
+   seen picking in the assembly state (:meth:`~planner.runtime.progress.AssemblyProgress.possible`);
 4. the Bayes filter updates the belief with (action, observation).
 
 *Assembled*: the session follows the assembly state from the operations actually done
@@ -204,6 +205,10 @@ class _Run:
         to the assembly state with the robot's ``operation``. An observation no operation explains there is
         logged (``ignored``), with a warning naming what the operator could do, and counts as blank; the source
         ending stops the loop."""
+        before, possible = self.progress.describe(), self.progress.possible()
+        offer = getattr(source, "offer", None)  # a source a person types into (the keyboard) shows the choices
+        if offer is not None:
+            offer(possible)
         observation = source.observe()
         if observation is None:
             raise _Stop("source ended", f"the observations ended at step {step}, with {self.operations} of "
@@ -211,7 +216,6 @@ class _Run:
         if isinstance(observation, Apart):
             return observation, None
         z = self.index.get(observation)
-        before, possible = self.progress.describe(), self.progress.possible()
         outcome = self.progress.step(operation, z)
         self.log.write("observation", step=step, observation=str(observation), index=z,
                        ignored=not outcome.explained)

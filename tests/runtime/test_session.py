@@ -220,6 +220,15 @@ def test_console_robot_and_keyboard(setup):
     assert keyboard.observe() == Observation(("cartridge", "ink"), "hammer")
     assert keyboard.observe() == BLANK and "not a part or tool: pen" in said[0]
     assert keyboard.observe() is None
+    # What the person at the keyboard is shown before the prompt: the robot acting by itself, the picks.
+    shown = []
+    keyboard = KeyboardSource(plan.product, read=lambda prompt: "", write=shown.append, show_robot=True)
+    keyboard.robot_acting(join)
+    keyboard.offer(["cartridge+ink+[hammer]"])
+    keyboard.offer([])
+    assert shown[0] == f"robot, step 1: {join.text}" and shown[1].endswith("could pick now: cartridge+ink+[hammer]")
+    assert "nothing that shows" in shown[2]
+    assert KeyboardSource(plan.product, write=shown.append).robot_acting(join) is None and len(shown) == 3
 
 
 def test_log_is_never_overwritten_and_replay_checks(setup, tmp_path):
@@ -325,6 +334,12 @@ def test_cli_session_keyboard_and_console_robot(setup, policy_file, tmp_path):
     assert done.returncode == 0, done.stderr
     assert "ROBOT, step" in done.stderr and "press Enter when done" in done.stderr
     assert replay(log).observations == expected.observations
+    # Before each prompt, what the operator could pick in the assembly state (the pen's first four operations
+    # from its six parts, at step 1); the robot's instructions once, by the person standing in for it.
+    offered = [line for line in done.stderr.splitlines() if "could pick now: " in line]
+    assert len(offered) == len(expected.actions) and offered[0].endswith(
+        "body+button+[hammer], body+head+[hammer], cartridge+head+[hammer], cartridge+ink+[hammer]"), offered
+    assert "robot, step" not in done.stderr
 
 
 def test_cli_session_errors(policy_file, tmp_path):
@@ -360,6 +375,7 @@ def test_cli_reports_an_ignored_observation_once(policy_file, tmp_path):
     assert done.returncode == 1 and done.stdout.startswith("source ended")
     shown = [line for line in done.stderr.splitlines() if "ignored" in line]
     assert len(shown) == 1 and "aplan: warning: step 1: [hammer] ignored: " in shown[0], done.stderr
+    assert "robot, step 1: " in done.stderr  # a robot acting by itself: the keyboard says what it does
     assert [e["event"] for e in map(json.loads, log.read_text().splitlines())].count("warning") == 1
     replayed = _aplan("replay", log)
     assert replayed.returncode == 0 and replayed.stderr == "" and "[hammer] (ignored)" in replayed.stdout

@@ -16,13 +16,16 @@ from freecad_aplan.sessions import (
     ALL_LEVELS,
     base_part_in,
     flat_level,
+    is_prompt,
     level_choices,
     level_model,
     level_of,
     member_parts,
     model_choice,
+    offered_picks,
     run_simulated_session,
     session_arguments,
+    typed_pick,
 )
 from planner import api
 from planner.assembly.guards import SizeLimits
@@ -145,6 +148,28 @@ def test_keyboard_session_reads_the_picks_from_standard_input(tmp_path, monkeypa
     assert any("not a part or tool: nothing" in line for line in lines), lines
     with pytest.raises(PlannerError, match="unknown session source"):
         session_arguments("p.json", "s.jsonl", source="camera")
+    # What the panel shows of the prompt: the robot's step, the one pick s1 allows (p1 joined to p2: the
+    # chain's single operation), then the prompt, a line of its own although printed without a newline; asked
+    # twice (the bad line refused), once offered per step.
+    robot = [k for k, line in enumerate(lines) if line.startswith("robot, step 1: ")]
+    offered = [(k, offered_picks(line)) for k, line in enumerate(lines) if offered_picks(line) is not None]
+    prompts = [k for k, line in enumerate(lines) if is_prompt(line)]
+    assert len(robot) == 1 and offered == [(robot[0] + 1, ["p1+p2"])] and prompts[:1] == [robot[0] + 2], lines
+    assert len(prompts) == 2 and all(lines[k].rstrip().endswith("q: stop):") for k in prompts)
+
+
+def test_offered_picks_and_the_lines_that_type_them():
+    """The keyboard's line of picks as the panel reads it, and each pick as the line that types it (what
+    KeyboardSource reads back as the same observation)."""
+    from planner.runtime.console import COULD_PICK, KeyboardSource
+
+    picks = offered_picks(COULD_PICK + "body+button+[hammer], cartridge+ink")
+    assert picks == ["body+button+[hammer]", "cartridge+ink"]
+    assert offered_picks(COULD_PICK + "nothing that shows (Enter)") == [] and offered_picks("step 1 | x") is None
+    assert [typed_pick(p) for p in picks] == ["body button hammer", "cartridge ink"] and typed_pick("blank") == ""
+    typed = iter([typed_pick(p) for p in picks])
+    keyboard = KeyboardSource(api.resolve_product("pen"), read=lambda prompt: next(typed), write=print)
+    assert [str(keyboard.observe()), str(keyboard.observe())] == picks
 
 
 def test_a_base_part_applies_to_the_levels_that_hold_it():
