@@ -48,6 +48,8 @@ class BackgroundJob(QtCore.QObject):
         self.dialog.setWindowModality(QtCore.Qt.WindowModal)
         self.dialog.setMinimumDuration(0)
         self.dialog.canceled.connect(self.cancel)
+        if on_progress is not None:  # a panel shows the progress: no dialog (Qt shows one after its minimum duration)
+            self.dialog.reset()
         self.timer = QtCore.QTimer(self)
         self.timer.timeout.connect(self._tick)
         self.program, self.arguments = command[0], command[1:]

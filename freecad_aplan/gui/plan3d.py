@@ -10,6 +10,9 @@ panel closes, when its widget goes away.
 """
 from __future__ import annotations
 
+import os
+import tempfile
+
 import FreeCAD
 import FreeCADGui
 from PySide import QtCore, QtGui
@@ -74,6 +77,7 @@ class PlanView:
         self.scene: SceneChanges | None = None
         self.arrow = None
         self.camera: str | None = None  # the user's camera, while :meth:`fit` has changed it
+        self.overview = None  # the last step's picture of where the moving parts go (a QImage), if asked for
         self.use_members(members)
 
     def use_members(self, members: dict[str, tuple[str, ...]] | None) -> None:
@@ -109,11 +113,16 @@ class PlanView:
     def _centre(self, parts) -> FreeCAD.Vector:
         return bound_box([o for p in parts for o in self.objects.get(p, [])]).Center
 
-    def show_step(self, exploded, k: int) -> None:
+    def show_step(self, exploded, k: int, overview_width: int | None = None) -> None:
         """Step ``k`` of an :class:`~planner.assembly.explode.ExplodedView`: every part at its offset, the moving
         ones highlighted, the rest dimmed, an arrow along the insertion direction, the view fitted to the
-        moving parts; after the last step the assembled product
-        as it is, fitted whole."""
+        moving parts; after the last step the assembled product as it is, fitted whole.
+
+        ``overview_width``: also render, ``overview_width`` pixels wide at the view's aspect, the same scene
+        fitted to both sides of the operation (:attr:`overview`, a ``QImage``; None after the last step): the
+        parts the moving ones join, which the view fitted to the moving parts leaves out (the exploded offsets
+        put them about a product's length away). Cost: one more off-screen rendering."""
+        self.overview = None
         done = k >= len(exploded.steps)  # the assembled product, in its own colours
         looks = {p: (None, None) for p in self.objects} if done else step_looks(exploded.roles(k))
         self._begin().apply({**self.others, **self.objects}, exploded.offsets[k],
@@ -130,7 +139,11 @@ class PlanView:
         self._add_arrow(start, tuple(reverse), COLOURS["moving"])
         # Fitted to the parts that move: fitted to every part, the exploded product is a long thin line in which
         # the moving part is a few pixels (issue 22), and fitted to the side they join too, a small part still
-        # was (issue 24); the arrow and the other parts may leave the view, its start stays in.
+        # was (issue 24); the arrow and the other parts may leave the view, its start stays in. Where they go (the
+        # side they join, in its own colours) is the overview's, fitted to the operation.
+        if overview_width:
+            self.fit(exploded.offsets[k], set(step.moving) | set(step.fixed), [start], outline=True)
+            self.overview = _render(self.document, overview_width)
         self.fit(exploded.offsets[k], set(step.moving), [start], outline=True)
 
     def show_relation(self, kind: str, first: str, second: str) -> None:
@@ -230,6 +243,23 @@ def _view(document):
         return gui.ActiveView if gui is not None and hasattr(gui.ActiveView, "getSceneGraph") else None
     except (ReferenceError, RuntimeError, NameError, AttributeError):  # a closed document
         return None
+
+
+def _render(document, width: int):
+    """The 3D view of ``document`` rendered off screen, ``width`` pixels wide at the view's aspect, on white (a
+    ``QImage``; None without a view). The view's own picture does not change. Cost: one rendering."""
+    view = _view(document)
+    if view is None:
+        return None
+    size = view.getSize()
+    handle, path = tempfile.mkstemp(prefix="aplan-overview-", suffix=".png")
+    os.close(handle)
+    try:
+        view.saveImage(path, int(width), max(1, int(width * size[1] / max(size[0], 1))), "White")
+        image = QtGui.QImage(path)
+        return None if image.isNull() else image
+    finally:
+        os.remove(path)
 
 
 def restore_when_gone(widget, view: PlanView) -> None:

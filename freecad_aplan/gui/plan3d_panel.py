@@ -13,12 +13,14 @@ from ..sessions import base_part_in, level_choices, level_of, member_parts
 from .layout import button_rows, narrow_combo, panel_layout
 from .plan3d import PlanView, redraw, restore_when_gone
 
-__all__ = ["PLAY_INTERVAL", "SEQUENCE_LIST_LIMIT", "Plan3DPanel"]
+__all__ = ["OVERVIEW_WIDTH", "PLAY_INTERVAL", "SEQUENCE_LIST_LIMIT", "Plan3DPanel"]
 
 #: Up to this many full sequences the panel lists them; past it, a spin box over the rank.
 SEQUENCE_LIST_LIMIT = 200
 #: Milliseconds between steps when playing.
 PLAY_INTERVAL = 900
+#: Pixels across of each step's overview as rendered (shown at the panel's width).
+OVERVIEW_WIDTH = 480
 
 
 def _text_box(name: str, lines: int) -> QtGui.QPlainTextEdit:
@@ -34,6 +36,34 @@ def _text_box(name: str, lines: int) -> QtGui.QPlainTextEdit:
     box.setFixedHeight(int(lines * box.fontMetrics().lineSpacing() + margins + 4))
     box.setMinimumWidth(0)
     return box
+
+
+class _Picture(QtGui.QLabel):
+    """A picture at the label's width, scaled again when the label is resized (a scroll bar appearing in the
+    task view narrows it); it never asks for more width than the panel has."""
+
+    def __init__(self):
+        super().__init__()
+        self.image = None
+        self.setSizePolicy(QtGui.QSizePolicy.Ignored, QtGui.QSizePolicy.Fixed)
+
+    def show_image(self, image, width: int) -> None:
+        """Show ``image`` (a ``QImage``; None: nothing) ``width`` pixels wide at most."""
+        self.image = image
+        if image is None:
+            self.clear()
+            self.setFixedHeight(0)
+            return
+        picture = QtGui.QPixmap.fromImage(image).scaledToWidth(max(1, min(width, image.width())),
+                                                                QtCore.Qt.SmoothTransformation)
+        self.setPixmap(picture)
+        self.setFixedHeight(picture.height())
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        shown = self.pixmap()
+        if self.image is not None and shown is not None and shown.width() != min(self.width(), self.image.width()):
+            self.show_image(self.image, self.width())
 
 
 class Plan3DPanel:
@@ -78,6 +108,12 @@ class Plan3DPanel:
         layout.addWidget(button_rows(*self.buttons.values()))  # above the step text: in view when the view is short
         self.label = _text_box("AplanStepLabel", 7)
         layout.addWidget(self.label)
+        self.overview = _Picture()  # where the moving parts go: the view fitted to both sides of the operation
+        self.overview.setObjectName("AplanStepOverview")
+        self.overview.setToolTip("Where it goes: the operation's two sides, the moving parts orange, the side "
+                                 "they join see-through in its own colours, the arrow the way they go in")
+        self.overview.setAlignment(QtCore.Qt.AlignHCenter | QtCore.Qt.AlignTop)
+        layout.addWidget(self.overview)
         layout.addStretch(1)
         self.timer = QtCore.QTimer(self.form)
         self.timer.setInterval(PLAY_INTERVAL)
@@ -175,7 +211,8 @@ class Plan3DPanel:
         """Step ``k`` (0 .. the number of operations: the assembled product)."""
         exploded = self.exploded
         self.k = max(0, min(int(k), len(exploded.steps)))
-        self.view.show_step(exploded, self.k)
+        self.view.show_step(exploded, self.k, OVERVIEW_WIDTH)
+        self._show_overview()
         total = len(exploded.steps)
         if self.k == total:
             text = f"{self.title}: assembled ({total} operations)."
@@ -189,6 +226,10 @@ class Plan3DPanel:
         self.buttons["Back"].setEnabled(self.k > 0)
         self.buttons["Forward"].setEnabled(self.k < total)
         redraw(self.analysis.Document)
+
+    def _show_overview(self) -> None:
+        """The step's overview (:attr:`PlanView.overview`) at the panel's width, or nothing (assembled)."""
+        self.overview.show_image(self.view.overview, self.overview.width() if self.form.isVisible() else 218)
 
     def forward(self) -> None:
         self.show(self.k + 1)

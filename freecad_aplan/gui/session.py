@@ -29,7 +29,7 @@ from .layout import button_rows, narrow_combo, panel_layout, stacked_field, wrap
 from .plan3d_panel import _text_box
 
 #: Lines of the keyboard prompt's box (it scrolls; the last line, the prompt, stays in view).
-PROMPT_LINES = 8
+PROMPT_LINES = 11
 
 __all__ = ["SessionPanel", "ask_level"]
 
@@ -47,6 +47,7 @@ class SessionPanel:
 
         self.product, self.base_part, self.jobs = product, base_part, jobs
         self.job, self.result, self.error, self.lines, self.running = None, None, None, [], None
+        self.scrolled = False
         self.folder = tempfile.mkdtemp(prefix="aplan-session-")
         self.product_file = os.path.join(self.folder, PRODUCT_FILE)
         save_product(product, self.product_file)
@@ -92,14 +93,14 @@ class SessionPanel:
         self.prompt = _text_box("AplanSessionPrompt", PROMPT_LINES)
         self.prompt.setToolTip("What aplan session --keyboard shows: the robot's step, what the operator could "
                                "pick, the prompt, a refused line and why, the belief after each step")
-        stacked_field(self.keyboard.layout(), "Keyboard session (aplan session --keyboard):", self.prompt)
+        self.keyboard.layout().addWidget(self.prompt)
         self.choices = QtGui.QListWidget()
         self.choices.setObjectName("AplanSessionChoices")
         self.choices.setToolTip("What the operator could pick now: choose one (a double click sends it)")
         self.choices.setHorizontalScrollBarPolicy(QtCore.Qt.ScrollBarAlwaysOff)
         self.choices.currentItemChanged.connect(self._chosen)
         self.choices.itemDoubleClicked.connect(lambda item: (self._chosen(item), self.send_picks()))
-        stacked_field(self.keyboard.layout(), "The operator could pick now:", self.choices)
+        stacked_field(self.keyboard.layout(), "Picks (a double click sends):", self.choices)
         self.picks = QtGui.QLineEdit()
         self.picks.setObjectName("AplanSessionPicks")
         self.picks.setPlaceholderText("parts and tool picked; empty: nothing")
@@ -157,8 +158,8 @@ class SessionPanel:
         nothing = QtGui.QListWidgetItem("nothing (a blank step)")
         nothing.setData(QtCore.Qt.UserRole, "")
         self.choices.addItem(nothing)
-        rows = sum(self.choices.sizeHintForRow(r) for r in range(min(self.choices.count(), 4)))
-        self.choices.setFixedHeight(rows + 2 * self.choices.frameWidth() + 4)  # four entries; the list scrolls
+        rows = sum(self.choices.sizeHintForRow(r) for r in range(min(self.choices.count(), 3)))
+        self.choices.setFixedHeight(rows + 2 * self.choices.frameWidth() + 4)  # three entries; the list scrolls
 
     def send_picks(self) -> None:
         """Send the typed picks to the keyboard session running (one step of the operator)."""
@@ -183,6 +184,7 @@ class SessionPanel:
         self.plot.clear()
         self.prompt.clear()
         self.choices.clear()
+        self.scrolled = False
         self.status.setText(f"starting the session of {level or 'the product'}")
         # the designer's base part for the level that holds it (every level at once: each starts anywhere)
         base = self.base_part if len(self.levels) == 1 else None if level == ALL_LEVELS else base_part_in(
@@ -216,6 +218,8 @@ class SessionPanel:
                 self.offer(picks)
             if is_prompt(line):
                 self.status.setText("waiting for the operator's picks")
+                if not self.scrolled:  # the first prompt: the keyboard's part of the panel in view, once
+                    self.scrolled = _scroll_to(self.keyboard)
                 return
         self.status.setText(line)
 
@@ -258,6 +262,19 @@ class SessionPanel:
 
     def reject(self) -> bool:
         return self.close()
+
+
+def _scroll_to(widget: QtGui.QWidget) -> bool:
+    """Scroll the task view (the scroll area around ``widget``) so that ``widget``'s top is at the top of its
+    visible part, as far as it scrolls; False when ``widget`` is in no scroll area."""
+    scroll = widget.parentWidget()
+    while scroll is not None and not isinstance(scroll, QtGui.QScrollArea):
+        scroll = scroll.parentWidget()
+    if scroll is None or scroll.widget() is None:
+        return False
+    bar = scroll.verticalScrollBar()
+    bar.setValue(min(bar.maximum(), widget.mapTo(scroll.widget(), QtCore.QPoint(0, 0)).y()))
+    return True
 
 
 def _column(layout: QtGui.QBoxLayout) -> QtGui.QWidget:

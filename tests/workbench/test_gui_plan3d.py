@@ -11,7 +11,7 @@ import cv2
 import numpy as np
 import pytest
 from conftest import PEN_MODELS, REPO, require_shared, run_freecad_gui
-from integration.freecad_tools import GUI_HELPERS, WORKBENCH_HELPERS
+from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, WORKBENCH_HELPERS
 from pictures import hue_of, read_picture
 from test_plan3d import pen_diagrams
 
@@ -39,6 +39,8 @@ MATERIALS = {{}}
 
 
 {workbench_helpers}
+
+{layout_check}
 
 
 def parts():
@@ -135,6 +137,11 @@ def start():
             forward.click()
         QtGui.QApplication.processEvents()
         view.saveImage(os.path.join(ARTIFACTS, f"plan3d_step_{{k}}.png"), *view.getSize(), "White")  # as seen
+        overview = form.findChild(QtGui.QLabel, "AplanStepOverview")  # where it goes, as the panel shows it
+        shown = overview.pixmap() is not None and not overview.pixmap().isNull() and overview.height() > 0
+        if shown:
+            overview.pixmap().save(os.path.join(ARTIFACTS, f"plan3d_overview_{{k}}.png"))
+        result.setdefault("overviews", []).append([overview.width(), overview.height()] if shown else None)
         result["steps"].append({{"k": panel.k, "label": label.toPlainText(), "snapshot": snapshot(), "looks": looks(),
                                 "arrows": len(arrows()),
                                 "arrow": arrow_points(), "forward": forward.isEnabled(), "flags": undo_and_modified()}})
@@ -152,6 +159,9 @@ def start():
     corner, panel_corner = area.mapToGlobal(QtCore.QPoint(0, 0)), form.mapToGlobal(QtCore.QPoint(0, 0))
     result["screen_view"] = [corner.x(), corner.y(), area.width(), area.height()]
     result["screen_panel"] = [panel_corner.x(), panel_corner.y(), form.width(), form.height()]
+    overview = form.findChild(QtGui.QLabel, "AplanStepOverview")
+    overview_corner = overview.mapToGlobal(QtCore.QPoint(0, 0))
+    result["screen_overview"] = [overview_corner.x(), overview_corner.y(), overview.width(), overview.height()]
     result["bad_log"] = [panel.load_log(COPY), label.toPlainText()]
     result["log"] = [panel.load_log(LOG), label.toPlainText(), [s.operation for s in panel.exploded.steps],
                      [s.description for s in panel.exploded.steps]]
@@ -225,7 +235,63 @@ def statistics():
     dialog.close()
     QtGui.QApplication.processEvents()
     result["after_dialog"] = [snapshot(), undo_and_modified(), looks()]
-    finish(0)
+    keyboard_session()
+
+
+def keyboard_session():
+    # The session panel on the pen, from the keyboard: the prompt shown as the command line shows it, the picks
+    # the operator could make offered in a list; the first one chosen and sent at every step, to the end.
+    FreeCADGui.runCommand("Aplan_Session")
+    window = FreeCADGui.getMainWindow()
+    source = window.findChild(QtGui.QComboBox, "AplanSessionSource")
+    source.setCurrentIndex(source.findData("keyboard"))
+    window.findChild(QtGui.QSpinBox, "AplanSessionExpansions").setValue(20)
+    result["keyboard_hidden"] = window.findChild(QtGui.QSpinBox, "AplanSessionSequence").isVisibleTo(
+        state().panel.form)
+    window.findChild(QtGui.QPushButton, "AplanRunSession").click()
+    result["keyboard_steps"] = []
+    QtCore.QTimer.singleShot(200, guarded(wait_prompt))
+
+
+def wait_prompt():
+    panel = state().panel
+    window = FreeCADGui.getMainWindow()
+    choices = panel.choices
+    if panel.job is None:
+        result["keyboard_result"], result["keyboard_error"] = panel.result, panel.error
+        result["keyboard_prompt_end"] = panel.prompt.toPlainText()
+        finish(0)
+    if choices.count() == 0 or not panel.lines or not panel.lines[-1].startswith("operator picked"):
+        QtCore.QTimer.singleShot(100, guarded(wait_prompt))
+        return
+    entries = [choices.item(r).text() for r in range(choices.count())]
+    step = {{"prompt": panel.prompt.toPlainText(), "entries": entries, "status": panel.status.text(),
+            "enabled": [choices.isEnabled(), panel.send_button.isEnabled()]}}
+    if not result["keyboard_steps"]:  # what a person sees at the first prompt: a screenshot, what is in view
+        QtGui.QApplication.processEvents()
+        box = panel.prompt
+        top = box.cursorForPosition(QtCore.QPoint(4, 4)).block().blockNumber()  # the first line in view
+        step["visible_lines"] = [box.document().findBlockByNumber(b).text() for b in
+                                 range(top, box.document().blockCount())]
+        step["dialogs"] = [d.isVisible() for d in window.findChildren(QtGui.QProgressDialog, "AplanJobProgress")]
+        viewport = task_view_viewport()
+        step["cut_off"], step["broken"] = cut_off(viewport), broken_words(viewport)
+        step["viewport"] = [viewport.width(), viewport.height()]
+        for name, widget in (("prompt_box", panel.prompt), ("choices_box", choices)):
+            corner = widget.mapTo(viewport, QtCore.QPoint(0, 0))
+            step[name] = [corner.x(), corner.y(), widget.width(), widget.height()]
+            screen = widget.mapToGlobal(QtCore.QPoint(0, 0))
+            step[name + "_screen"] = [screen.x(), screen.y(), widget.width(), widget.height()]
+        QtGui.QApplication.primaryScreen().grabWindow(0).save(os.path.join(ARTIFACTS, "gui_session_keyboard.png"))
+    result["keyboard_steps"].append(step)
+    if len(result["keyboard_steps"]) > 12:  # the pen has five operations: a session that never ends
+        panel.cancel()
+        QtCore.QTimer.singleShot(100, guarded(wait_prompt))
+        return
+    choices.setCurrentRow(0)  # chosen in the list, sent as the field shows it
+    step["sent"] = panel.picks.text()
+    panel.send_button.click()
+    QtCore.QTimer.singleShot(100, guarded(wait_prompt))
 
 
 FreeCADGui.getMainWindow().showMaximized()
@@ -291,6 +357,23 @@ def _assert_step_picture(k: int, assembled: bool) -> None:
     assert picture.share(_opened(orange)) >= 0.10, (k, picture.share(_opened(orange)))
 
 
+def _assert_overview(k: int, shown) -> None:
+    """Where the moving parts go, as the panel shows it below the step's text (tests/artifacts/
+    plan3d_overview_K.png): the scene fitted to both sides of the operation, which the 3D view, fitted to the
+    moving parts, leaves out (there the dimmed parts cover 0.2 to 1.1 % of the view). Thresholds: half of what
+    was measured on sequence 7 (orange 0.5 to 1.6 %, the other parts 3.2 to 4.9 % of the picture)."""
+    if k == 5:  # assembled: the 3D view shows it all, no overview
+        assert shown is None
+        return
+    width, height = shown
+    assert 150 <= width <= 250 and height >= 60, shown  # the panel's width (the default task view: 218 px)
+    picture = read_picture(ARTIFACTS / f"plan3d_overview_{k}.png")
+    orange, drawn = picture.coloured(hue_of(ORANGE)), picture.differs_from((255, 255, 255))
+    assert picture.size[0] <= width and picture.size[1] == height, (picture.size, shown)  # whole, not cut
+    assert picture.share(orange) >= 0.0025, (k, picture.share(orange))
+    assert picture.share(drawn & ~orange) >= 0.015, (k, picture.share(drawn & ~orange))  # the side it joins
+
+
 def _assert_relation_picture() -> None:
     """The head (red, seen through the see-through blue body: magenta to purple) inside the body (blue)."""
     picture = read_picture(ARTIFACTS / "plan3d_relation.png")
@@ -326,8 +409,12 @@ def test_plan_and_relation_in_the_3d_view(tmp_path):
     out = tmp_path / "result.json"
     script = tmp_path / "gui_plan3d.py"
     logged = _session_log(tmp_path / "session.jsonl", 13)
-    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS, out=str(out), copy=str(copy), log=str(tmp_path / "session.jsonl"),
-                                        artifacts=str(ARTIFACTS), diagrams=pen_diagrams()))
+    for stale in ARTIFACTS.glob("plan3d_overview_*.png"):
+        stale.unlink()
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS,
+                                        layout_check=LAYOUT_CHECK, out=str(out), copy=str(copy),
+                                        log=str(tmp_path / "session.jsonl"), artifacts=str(ARTIFACTS),
+                                        diagrams=pen_diagrams()))
     data = run_freecad_gui(tmp_path, script, out)
     before = data["before"]
     assert data["before_flags"][1] is False  # saved: not modified
@@ -364,6 +451,7 @@ def test_plan_and_relation_in_the_3d_view(tmp_path):
             assert [c / norm for c in direction] == pytest.approx([-c for c in exploded["directions"][k]], abs=1e-6)
             assert f"step {k + 1} of 5" in step["label"]
         _assert_step_picture(k, k == 5)
+        _assert_overview(k, data["overviews"][k])
     assert any(any(abs(c) > 100 for c in shift) for _, _, shift in data["steps"][0]["looks"].values())
     assert "assembled (5 operations)" in data["steps"][5]["label"]
     assert data["back"] == [4, data["steps"][4]["looks"]]
@@ -404,3 +492,49 @@ def test_plan_and_relation_in_the_3d_view(tmp_path):
     _assert_panel_picture(data["screen_view"], data["screen_panel"])
     narrowest, scroll = data["panel_fits"]
     assert narrowest <= 250 and scroll == 0, data["panel_fits"]  # fits the default task view; the step text shows
+    _assert_keyboard_session(data)
+
+
+def _assert_keyboard_session(data: dict) -> None:
+    """The session panel's keyboard session on the pen: what the command line's prompt says, in the panel and on
+    the screen (tests/artifacts/gui_session_keyboard.png), the picks offered in a list, the first one sent at
+    each step until the pen is assembled. The picks offered first: the observations of the operations possible
+    from the six loose parts (the planner's plan of the document's pen)."""
+    from planner.runtime.console import COULD_PICK, PROMPT
+    from planner.runtime.progress import AssemblyProgress
+
+    text = json.dumps(product_to_dict(api.resolve_product("pen")))
+    for part in ("ink", "cartridge", "head", "body", "cap", "button"):
+        text = text.replace(f'"{part}"', f'"{part}_001"')
+    data_pen = json.loads(text)  # the analysis stores no tools: its observations are parts only
+    data_pen = {**{k: v for k, v in data_pen.items() if k != "markers"}, "tools": [],
+                "defaults": {k: v for k, v in data_pen["defaults"].items() if k != "tool"}}
+    first = AssemblyProgress(api.plan_of(product_from_dict(data_pen))).possible()
+    assert first == ["body_001+button_001", "body_001+head_001", "cartridge_001+head_001", "cartridge_001+ink_001"]
+    assert data["keyboard_hidden"] is False  # the simulated operator's sequence is not asked for
+    steps = data["keyboard_steps"]
+    shown = steps[0]
+    lines = shown["prompt"].splitlines()
+    assert lines[-1] == PROMPT.strip() and lines[-2] == COULD_PICK.strip() + " " + ", ".join(first), lines
+    assert lines[-3].startswith("robot, step 1: ") and shown["status"] == "waiting for the operator's picks"
+    assert shown["visible_lines"] == lines[-3:], shown["visible_lines"]  # the step's three lines, in the box's view
+    assert True not in shown["dialogs"]  # no progress dialog over the window: the panel can be used
+    assert shown["entries"] == [p.replace("+", "\n+ ") for p in first] + ["nothing (a blank step)"]
+    assert shown["enabled"] == [True, True] and shown["sent"] == "body_001 button_001"
+    assert shown["cut_off"] == [] and shown["broken"] == [], (shown["cut_off"], shown["broken"])
+    width, height = shown["viewport"]
+    for name in ("prompt_box", "choices_box"):  # in the task view's visible part, whole
+        x, y, w, h = shown[name]
+        assert 0 <= x and x + w <= width and 0 <= y and y + h <= height and w >= 200, (name, shown[name], width, height)
+    screen = read_picture(ARTIFACTS / "gui_session_keyboard.png")
+    for name, least in (("prompt_box_screen", 0.02), ("choices_box_screen", 0.02)):  # text on the screen there
+        box = screen.crop(*shown[name])
+        assert box.share(box.dark()) >= least, (name, box.share(box.dark()))
+    assert data["keyboard_error"] is None, data["keyboard_error"]
+    done = data["keyboard_result"]
+    assert done["assembled"] is True and done["levels"][0]["steps"] == len(steps), [s["sent"] for s in steps]
+    assert all(f"robot, step {k}: " in step["prompt"] for k, step in enumerate(steps, start=1))
+    events = [json.loads(line) for line in open(done["levels"][0]["log"])]
+    seen = [e["observation"] for e in events if e["event"] == "observation"]
+    assert [s["sent"] for s in steps] == [" ".join(o.split("+")) if o != "blank" else "" for o in seen]
+    assert "the product is assembled" in data["keyboard_prompt_end"]
