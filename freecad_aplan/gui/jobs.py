@@ -81,7 +81,9 @@ class BackgroundJob(QtCore.QObject):
         chunk = bytes(self.process.readAllStandardOutput()).decode("utf-8", "replace")
         self.output += chunk
         # whole lines only: a chunk may end inside a line (its rest comes with the next chunk)
-        *lines, self._partial = (self._partial + chunk).split("\n")
+        text = self._partial + chunk
+        cut = max(text.rfind("\n"), text.rfind("\r")) + 1  # a line ends at either (a progress line at \r)
+        lines, self._partial = text[:cut].splitlines(), text[cut:]
         for line in lines:
             progress = read_progress(line)
             if progress is not None:

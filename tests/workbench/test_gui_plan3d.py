@@ -277,7 +277,7 @@ def wait_prompt():
         viewport = task_view_viewport()
         step["cut_off"], step["broken"] = cut_off(viewport), broken_words(viewport)
         step["viewport"] = [viewport.width(), viewport.height()]
-        for name, widget in (("prompt_box", panel.prompt), ("choices_box", choices)):
+        for name, widget in (("prompt_box", panel.prompt), ("choices_box", choices), ("send", panel.send_button)):
             corner = widget.mapTo(viewport, QtCore.QPoint(0, 0))
             step[name] = [corner.x(), corner.y(), widget.width(), widget.height()]
             screen = widget.mapToGlobal(QtCore.QPoint(0, 0))
@@ -288,9 +288,12 @@ def wait_prompt():
         panel.cancel()
         QtCore.QTimer.singleShot(100, guarded(wait_prompt))
         return
-    choices.setCurrentRow(0)  # chosen in the list, sent as the field shows it
+    choices.setCurrentRow(0)  # chosen in the list, sent as the field shows it (at the second step, double-clicked)
     step["sent"] = panel.picks.text()
-    panel.send_button.click()
+    if len(result["keyboard_steps"]) == 2:
+        choices.itemDoubleClicked.emit(choices.item(0))
+    else:
+        panel.send_button.click()
     QtCore.QTimer.singleShot(100, guarded(wait_prompt))
 
 
@@ -523,9 +526,10 @@ def _assert_keyboard_session(data: dict) -> None:
     assert shown["enabled"] == [True, True] and shown["sent"] == "body_001 button_001"
     assert shown["cut_off"] == [] and shown["broken"] == [], (shown["cut_off"], shown["broken"])
     width, height = shown["viewport"]
-    for name in ("prompt_box", "choices_box"):  # in the task view's visible part, whole
+    for name in ("prompt_box", "choices_box", "send"):  # in the task view's visible part, whole
         x, y, w, h = shown[name]
-        assert 0 <= x and x + w <= width and 0 <= y and y + h <= height and w >= 200, (name, shown[name], width, height)
+        assert 0 <= x and x + w <= width and 0 <= y and y + h <= height, (name, shown[name], width, height)
+    assert shown["prompt_box"][2] >= 200 and shown["choices_box"][2] >= 200  # the panel's width
     screen = read_picture(ARTIFACTS / "gui_session_keyboard.png")
     for name, least in (("prompt_box_screen", 0.02), ("choices_box_screen", 0.02)):  # text on the screen there
         box = screen.crop(*shown[name])
