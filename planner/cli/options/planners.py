@@ -1,6 +1,7 @@
 """The planner bundle (who decides: ``--planner``, ``--policy``, ``--time-limit``, ``--decision-time``,
 ``--expansions``, read into one :class:`~planner.api.specs.PlannerChoice`) and the episode options of simulate and
-evaluate."""
+evaluate (read with simulate's ``--sequence``, ``--all``, ``--random`` and ``--operator``, or evaluate's
+``--episodes``, into one :class:`~planner.api.specs.EpisodeChoice`)."""
 from __future__ import annotations
 
 import argparse
@@ -13,7 +14,8 @@ from ...errors import PlannerError
 from .models import add_decision_options
 from .values import decision_seconds, number, positive_seconds, whole
 
-__all__ = ["add_policy_options", "planner_choice_from", "online_budget", "add_episode_options", "operator_model"]
+__all__ = ["add_policy_options", "planner_choice_from", "online_budget", "add_episode_options", "episode_choice_from",
+           "operator_model"]
 
 
 def add_policy_options(parser: argparse.ArgumentParser) -> None:
@@ -70,6 +72,16 @@ def add_episode_options(parser: argparse.ArgumentParser) -> None:
                              "--seed before any episode, so two planners face the same operators. Default: the "
                              "model's initial belief (with --habits, the habits)")
     add_decision_options(parser)
+
+
+def episode_choice_from(args: argparse.Namespace) -> api.EpisodeChoice:
+    """The episodes ``args`` ask for, as one :class:`~planner.api.specs.EpisodeChoice`: simulate's
+    ``--sequence``, ``--all`` or ``--random`` and ``--operator``, or evaluate's ``--episodes`` (drawn at random),
+    with :func:`add_episode_options`' ``--seed``, ``--max-steps`` and ``--operator-sequence``."""
+    return api.EpisodeChoice(sequences=tuple(getattr(args, "sequence", None) or ()), every=getattr(args, "all", False),
+                             random=getattr(args, "random", None) or getattr(args, "episodes", None), seed=args.seed,
+                             max_steps=args.max_steps, operator=getattr(args, "operator", "model"),
+                             operator_model=args.operator_model)
 
 
 def operator_model(text: str):
