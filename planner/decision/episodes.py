@@ -167,14 +167,15 @@ def evaluate(model: Model, policy, choice: EpisodeChoice) -> tuple[float, float]
         worlds = (PathWorld(model, path) for path in truths)
     else:  # the tables' states, all drawn first; the operator's operations are not counted
         pomdp, final = tables(model), final_of(model)
-        world = model.world if is_flat(model) else None  # deviations: the operator's own
-        worlds = (IntentionWorld(pomdp, int(start), final=final, world=world)
-                  for start in rng.choice(pomdp.n_states, size=episodes, p=pomdp.initial))
+        deviating = model.world if is_flat(model) else None  # deviations: the operator's own tables
+        starts = rng.choice(pomdp.n_states, size=episodes, p=pomdp.initial)
+        worlds = (IntentionWorld(pomdp, int(start), final=final, world=deviating) for start in starts)
     progress = Progress(log, after=5.0, every=10.0)
-    returns = []
-    for k, world in enumerate(worlds):
-        returns.append(simulate_episode(world, policy, rng, choice.max_steps, choice.operator).discounted_return)
-        progress.report("evaluate: %d of %d episodes, mean return so far %.4f", k + 1, episodes, np.mean(returns))
+    returns, total = [], 0.0
+    for k, played in enumerate(worlds):
+        returns.append(simulate_episode(played, policy, rng, choice.max_steps, choice.operator).discounted_return)
+        total += returns[-1]  # a running sum: the progress line costs O(1) per episode
+        progress.report("evaluate: %d of %d episodes, mean return so far %.4f", k + 1, episodes, total / (k + 1))
     return _mean_and_half(returns)
 
 
