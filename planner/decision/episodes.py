@@ -59,13 +59,11 @@ class EpisodeChoice:
     what: str = "--sequence"
 
     def __post_init__(self) -> None:
-        whole = lambda value, name, low, high=None: check_number(  # noqa: E731
-            _not_bool(value, name), f"episodes: {name}", low, high, integer=True)
-        object.__setattr__(self, "sequences", tuple(whole(k, self.what, 0) for k in self.sequences or ()))
+        object.__setattr__(self, "sequences", tuple(_whole(k, self.what, 0) for k in self.sequences or ()))
         if self.random is not None:
-            object.__setattr__(self, "random", whole(self.random, "random", 1, EPISODE_LIMIT))
-        object.__setattr__(self, "seed", whole(self.seed, "seed", 0))
-        object.__setattr__(self, "max_steps", whole(self.max_steps, "max_steps", 1, STEP_LIMIT))
+            object.__setattr__(self, "random", _whole(self.random, "random", 1, EPISODE_LIMIT))
+        object.__setattr__(self, "seed", _whole(self.seed, "seed", 0))
+        object.__setattr__(self, "max_steps", _whole(self.max_steps, "max_steps", 1, STEP_LIMIT))
         if not isinstance(self.every, bool):
             raise UsageError(f"episodes: every must be True or False, got {self.every!r}")
         if self.operator not in OPERATORS:
@@ -77,10 +75,11 @@ class EpisodeChoice:
                                "(not --sequence or --all)")
 
 
-def _not_bool(value, name: str):
+def _whole(value, name: str, low: int, high: int | None = None) -> int:
+    """``value`` as a whole number in ``[low, high]`` (a bool is not one), else the error naming ``name``."""
     if isinstance(value, (bool, np.bool_)):
         raise UsageError(f"episodes: {name} must be a whole number, got {value!r}")
-    return value
+    return check_number(value, f"episodes: {name}", low, high, integer=True)
 
 
 def world_of(model: Model, truth) -> IntentionWorld | PathWorld:

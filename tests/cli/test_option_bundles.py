@@ -3,6 +3,8 @@ value, built once per command: the decision model into a ModelSpec, who decides 
 played into an EpisodeChoice."""
 from __future__ import annotations
 
+import pytest
+
 from planner import api
 from planner.cli import build_parser
 from planner.cli import options
@@ -47,6 +49,9 @@ def test_the_episode_bundle_reads_into_one_choice():
                                                "changing:0.2"))
     assert (played.random, played.operator, repr(played.operator_model)) == (20, "model", "uniform,changing:0.2")
     assert options.episode_choice_from(_args("evaluate", "pen")).random == 1000  # the default --episodes
+    with pytest.raises(SystemExit) as refused:  # numpy seeds from 0: a usage error, not a traceback
+        _args("simulate", "pen", "--seed", "-1")
+    assert refused.value.code == 2
 
 
 def test_the_product_bundle_is_one_set_of_options_for_stats_intentions_and_sequence():

@@ -12,7 +12,7 @@ from ...defaults import DECISION_TIME, DECISION_TIME_MAX, EXPANSION_LIMIT, POLIC
 from ...errors import PlannerError
 
 from .models import add_decision_options
-from .values import decision_seconds, number, positive_seconds, whole
+from .values import decision_seconds, index, number, positive_seconds
 
 __all__ = ["add_policy_options", "planner_choice_from", "online_budget", "add_episode_options", "episode_choice_from",
            "operator_model"]
@@ -56,7 +56,8 @@ def online_budget(args: argparse.Namespace) -> tuple[float | None, int | None]:
 
 def add_episode_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by simulate and evaluate."""
-    parser.add_argument("--seed", type=whole, default=0)
+    parser.add_argument("--seed", type=index, default=0, help="the random stream's seed, a whole number from 0 "
+                        "(default 0): the same seed plays the same episodes")
     parser.add_argument("--max-steps", type=number(1, STEP_LIMIT, integer=True), default=100, metavar="N",
                         help=f"steps per episode at most, 1 to {STEP_LIMIT:,} (default 100)")
     parser.add_argument("--operator-sequence", type=operator_model, metavar="SPEC", dest="operator_model",
