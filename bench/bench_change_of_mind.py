@@ -66,8 +66,9 @@ def state_known_after_switch(model, episode, threshold: float = 0.9) -> bool | N
 def _run(model, robot, args) -> dict:
     planner = api.online_planner(model, None, args.expansions) if robot == "online" else _Observer(model.wait)
     began = time.process_time()
-    mean, half, played = api.evaluate_operator(model, planner, parse_operator(args.operator), args.episodes,
-                                               args.seed, args.max_steps)
+    choice = api.EpisodeChoice(random=args.episodes, seed=args.seed, max_steps=args.max_steps,
+                               operator_model=parse_operator(args.operator))
+    mean, half, played = api.evaluate_operator(model, planner, choice)
     measures = [episode_measures(e) for e in played]
     totals = run_totals(measures)
     return {"mean": mean, "half": half, "cpu": time.process_time() - began,

@@ -27,7 +27,7 @@ import numpy as np  # noqa: E402
 
 from planner import make_plan, resolve_product  # noqa: E402
 from planner.decision import intention_model  # noqa: E402
-from planner.decision.simulate import simulate_episode  # noqa: E402
+from planner.decision.simulate import IntentionWorld, simulate_episode  # noqa: E402
 from planner.decision.solvers import PointBasedSolver  # noqa: E402
 
 
@@ -50,7 +50,7 @@ def main() -> None:
     for start in graph.full_sequences():
         start = int(start)
         steps = decision.describe_operations(start)
-        counts = [simulate_episode(model, result.policy, start, rng, 100, graph.successor, 0, "turns")
+        counts = [simulate_episode(IntentionWorld(model, start, graph.successor, 0), result.policy, rng, 100, "turns")
                   .first_confident(0.9) for _ in range(args.episodes)]
         known = [c for c in counts if c is not None]
         median = statistics.median(known) if known else None

@@ -22,7 +22,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner import api, chain_product, complete_product, make_plan  # noqa: E402
-from planner.decision.factored_simulate import simulate_factored_episode  # noqa: E402
+from planner.decision.factored_simulate import PathWorld  # noqa: E402
+from planner.decision.simulate import simulate_episode  # noqa: E402
 
 
 def main() -> None:
@@ -44,7 +45,7 @@ def main() -> None:
     planner.search = timed
     rng = np.random.default_rng(0)
     for _ in range(episodes):
-        simulate_factored_episode(model, planner, model.sample_sequence(rng), rng, 400)
+        simulate_episode(PathWorld(model, model.sample_sequence(rng)), planner, rng, 400)
     seconds = np.array([d[0] for d in decisions])
     print(json.dumps({"product": name, "episodes": episodes, "decisions": len(decisions),
                       "median_ms": round(1000 * float(np.median(seconds)), 1),

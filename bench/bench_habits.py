@@ -47,7 +47,8 @@ import numpy as np  # noqa: E402
 from planner import api  # noqa: E402
 from planner.decision.episode_measures import episode_measures, run_totals  # noqa: E402
 from planner.decision.factored_model import factored_model  # noqa: E402
-from planner.decision.factored_simulate import simulate_factored_episode  # noqa: E402
+from planner.decision.factored_simulate import PathWorld  # noqa: E402
+from planner.decision.simulate import simulate_episode  # noqa: E402
 from planner.decision.habits import habit_weights  # noqa: E402
 from planner.decision.io.habits_file import read_habits  # noqa: E402
 from planner.decision.operators import HabitualOperator, UniformOperator  # noqa: E402
@@ -164,8 +165,8 @@ def paid_share(model, plans) -> float:
 
 def _run(model, policy, plans, seed: int) -> list:
     """One episode per plan, each with its own world stream: the same draws for every model given them."""
-    return [simulate_factored_episode(model, policy, p.sequence, np.random.default_rng([seed, 12, k]),
-                                      switch=p.switch) for k, p in enumerate(plans)]
+    return [simulate_episode(PathWorld(model, p.sequence), policy, np.random.default_rng([seed, 12, k]),
+                             switch=p.switch) for k, p in enumerate(plans)]
 
 
 def paper_return(episode, discount: float, wrong: float = -50.0) -> float:

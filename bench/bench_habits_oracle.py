@@ -27,7 +27,7 @@ from planner.decision.factored_model import factored_model  # noqa: E402
 from planner.decision.intention_model import intention_model  # noqa: E402
 from planner.decision.operators import HabitualOperator  # noqa: E402
 from planner.decision.presets import preset_rewards  # noqa: E402
-from planner.decision.simulate import simulate_episode  # noqa: E402
+from planner.decision.simulate import IntentionWorld, simulate_episode  # noqa: E402
 from planner.decision.solvers import PointBasedSolver  # noqa: E402
 
 
@@ -47,8 +47,8 @@ def oracle_rows(product: str, confidences: list[float], episodes: int, seed: int
         result = PointBasedSolver(max_iterations=trials, time_limit=None, precision=1e-3).solve(truth)
         plans = HabitualOperator(k, share).plans(flat, episodes, np.random.default_rng([seed, 14]),
                                                  np.random.default_rng([seed, 15]))
-        played = [simulate_episode(truth, result.policy, p.sequence, np.random.default_rng([seed, 12, j]), 100,
-                                   flat.graph.successor, flat.final_state) for j, p in enumerate(plans)]
+        played = [simulate_episode(IntentionWorld(truth, p.sequence, flat.graph.successor, flat.final_state),
+                                   result.policy, np.random.default_rng([seed, 12, j])) for j, p in enumerate(plans)]
         totals = run_totals([episode_measures(e) for e in played])
         mean, half = _mean([paper_return(e, truth.discount) for e in played])
         yield c, totals, mean, half, result

@@ -41,7 +41,7 @@ def _one(name: str, episodes: int, decision_time: float, seed: int) -> dict:
     model = api.factored_decision_model(plan)
     planner = api.online_planner(model, decision_time)
     build = time.perf_counter() - started
-    runs = api.simulate(model, planner, random=episodes, seed=seed, max_steps=400)
+    runs = api.simulate(model, planner, api.EpisodeChoice(random=episodes, seed=seed, max_steps=400))
     times = np.array([s.decision_seconds for e in runs for s in e.steps])
     return {"product": name, "parts": len(plan.product.parts), "intentions": count_intentions(plan.states),
             "classes": model.n_classes, "build_s": build, "episodes": episodes,

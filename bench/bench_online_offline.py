@@ -21,7 +21,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from planner import api, chain_product, complete_product, make_plan, resolve_product  # noqa: E402
-from planner.decision.factored_simulate import evaluate_factored  # noqa: E402
+from planner.decision.episodes import EpisodeChoice, evaluate  # noqa: E402
 from planner.decision.solvers.warm_start import solver_start  # noqa: E402
 from planner.decision.online import OnlinePlanner  # noqa: E402
 from planner.decision.solvers import PointBasedSolver  # noqa: E402
@@ -45,10 +45,11 @@ def _one(name: str, episodes: int, solve_time: float, expansions: int, seed: int
     start = solver_start(lumped, deadline=started + limit / 4, clock=solver.clock)
     result = solver.solve(lumped.pomdp, started=started, **start.solve_options)
     started = time.perf_counter()
-    offline = evaluate_factored(lumped.factored, result.policy, episodes, seed)
+    offline = evaluate(lumped.factored, result.policy, EpisodeChoice(random=episodes, seed=seed))
     offline_s = time.perf_counter() - started
     started = time.perf_counter()
-    online = evaluate_factored(lumped.factored, OnlinePlanner(lumped.factored, expansions), episodes, seed)
+    online = evaluate(lumped.factored, OnlinePlanner(lumped.factored, expansions),
+                      EpisodeChoice(random=episodes, seed=seed))
     online_s = time.perf_counter() - started
     return {"product": name, "classes": lumped.factored.n_classes, "solve_s": result.seconds,
             "lower": result.lower_bound, "upper": result.upper_bound, "episodes": episodes,

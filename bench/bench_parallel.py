@@ -88,7 +88,8 @@ def _run(plan, parallel: bool | str, episodes: int, expansions: int, seed: int, 
     model = factored_model(plan, rewards, weights=weights, parallel=parallel)
     planner = OnlinePlanner(model, expansions, None)
     began = time.perf_counter()
-    mean, half, played = api.evaluate_operator(model, planner, operator, episodes, seed)
+    mean, half, played = api.evaluate_operator(model, planner, api.EpisodeChoice(random=episodes, seed=seed,
+                                                                             operator_model=operator))
     totals = run_totals([episode_measures(e) for e in played])
     pairs = "- | - | -"
     if parallel:  # and those whose expected reward beats waiting's (q r + (1 - q) wrong > wait)

@@ -31,7 +31,7 @@ from typing import Callable
 from planner.errors import PlannerError
 
 __all__ = ["LevelChoice", "ModelChoice", "level_choices", "level_of", "member_parts", "base_part_in", "model_choice",
-           "level_model", "flat_level", "session_arguments", "run_simulated_session", "offered_picks", "typed_pick",
+           "level_model", "session_arguments", "run_simulated_session", "offered_picks", "typed_pick",
            "is_prompt", "ALL_LEVELS", "SOURCES"]
 
 #: The level selector's entry for "every level, bottom-up" (the command line without ``--level``).
@@ -129,19 +129,6 @@ def level_model(product, level: str | None = None, technical: bool | None = None
     base_part = base_part_in(level_product, base_part) if level is not None else base_part
     choice = model_choice(level_product, technical, base_part)
     return api.load_model(level_product, technical, base_part=base_part, lumped=choice.kind == "lumped"), choice
-
-
-def flat_level(product, level: str | None, technical: bool | None = None, base_part: str | None = None):
-    """``(level product, base part)`` of level ``level`` (:func:`level_of`, :func:`base_part_in`) when its flat
-    model fits (Simulate plays a sequence on it); else a :class:`~planner.errors.PlannerError` naming the session
-    panel, whose online planner decides on the factored model. Cost: that of :func:`model_choice`."""
-    level_product = level_of(product, level)
-    base_part = base_part_in(level_product, base_part) if level is not None else base_part
-    choice = model_choice(level_product, technical, base_part)
-    if choice.kind != "flat":
-        raise PlannerError(f"{'level ' + level if level else level_product.name}: {choice.note}; a policy over "
-                           "classes is simulated by a session: run it with APLAN > Run a session (the online planner)")
-    return level_product, base_part
 
 
 #: Where a session's observations come from: the simulated camera cell, or the operator's picks typed in.

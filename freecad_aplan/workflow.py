@@ -47,14 +47,14 @@ from .designer_edits import add_analysis_direction, edit_analysis_diagrams, mark
 from .diagrams import stored_analysis
 from .protocol import BATCH_SCRIPT
 from .runner import FreeCADError, find_freecadcmd
-from .sessions import flat_level, level_model
+from .sessions import base_part_in, level_model, level_of
 
 __all__ = ["require_analysis", "export_for_detection", "detection_copy", "worker_command", "analyze_bundle",
            "store_detection", "edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking",
            "unmark_not_blocking", "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report",
            "has_levels", "level_statistics_report",
            "export_analysis_bundle", "export_decision_model",
-           "solve_product", "simulate_sequence", "analysis_spec", "spec_fields", "BATCH_SCRIPT"]
+           "solve_product", "simulate_sequence", "SIMULATE_EPISODE", "analysis_spec", "spec_fields", "BATCH_SCRIPT"]
 
 
 
@@ -292,26 +292,40 @@ def solve_product(product: str, output: str, time_limit: float = WORKBENCH_SOLVE
             **({"warning": warning} if warning else {})}
 
 
-def simulate_sequence(product, policy_path: str, stem: str, sequence: int | None = None, seed: int = 0,
-                      technical: bool | None = None, base_part: str | None = None, level: str | None = None,
-                      spec=None) -> dict:
-    """Play the operator through full sequence ``sequence`` (default: the first) against the policy, taking
-    turns with the robot, and write the belief plot ``stem.png``/``stem.svg``; returns the steps and the plot
-    paths. ``base_part`` (or ``spec``, :func:`analysis_spec`): the model's, as the policy was solved for;
-    ``level``: that workstation's flat model (a level whose flat model does not fit is refused, naming the
-    session panel, which runs the online planner)."""
-    from planner.decision.belief_plot import episode_trace, plot_beliefs
+#: The episode Simulate plays by default: the first full sequence, the operator taking turns with the robot as in
+#: the paper's experiment (the command line's ``aplan simulate PRODUCT --operator turns``).
+SIMULATE_EPISODE = api.EpisodeChoice(operator="turns", what="sequence")
 
+
+def simulate_sequence(product, policy_path: str, stem: str, choice=SIMULATE_EPISODE, technical: bool | None = None,
+                      base_part: str | None = None, level: str | None = None, spec=None) -> dict:
+    """Play the operator through the one full sequence ``choice`` lists (an :class:`~planner.api.specs.EpisodeChoice`
+    built from the command's input; default :data:`SIMULATE_EPISODE`) against the policy file ``policy_path``, and
+    write the belief plot ``stem.png``/``stem.svg``. The policy decides as ``aplan simulate --policy`` makes it
+    (:func:`planner.api.decision_maker`): one over intentions on the flat model, one over the lumped model's
+    classes (what Solve writes where the flat model does not fit) on the factored model, whose sequences are
+    numbered by rank from 0 and whose plot is summed over assembly states. ``base_part`` (or ``spec``,
+    :func:`analysis_spec`): the model's, as the policy was solved for; ``level``: that workstation's model.
+    Returns ``sequence`` (the intention number, or the rank), ``model`` (``flat`` or ``lumped``), ``operations``,
+    the ``steps`` (action, observation, belief on the truth), ``confident_after`` and the ``plots``."""
+    from planner.decision.belief_plot import episode_trace, path_trace, plot_beliefs
+    from planner.decision.models import is_flat
+
+    if choice.every or choice.random is not None or len(choice.sequences) > 1:
+        raise PlannerError("Simulate plays one full sequence: give one sequence number, or none for the first")
     spec = _spec(spec, technical, base_part)
-    product, base_part = flat_level(product, level, spec.technical, spec.base_part)
-    model = api.model_of(product, replace(spec, base_part=base_part), flat=True)
-    policy, _ = api.policy_for(model, policy_path, inputs=spec.inputs)
-    episode, = api.simulate(model, policy, None if sequence is None else [sequence], seed=seed, operator="turns",
-                            what="sequence")
-    operations = " ; ".join(model.describe_operations(episode.start))
-    written = plot_beliefs([episode_trace(model, episode, f"sequence {episode.start}: {operations}")], stem,
-                           model.plan.product.name or model.name)
-    return {"sequence": episode.start,
+    level_product = level_of(product, level)
+    base = base_part_in(level_product, spec.base_part) if level is not None else spec.base_part
+    model, policy, _ = api.decision_maker(level_product, replace(spec, base_part=base),
+                                          api.PlannerChoice("offline", policy_path))
+    episode, = api.simulate(model, policy, choice)
+    flat = is_flat(model)
+    operations = model.describe_operations(episode.start if flat else episode.path)
+    sequence = episode.start if flat else (choice.sequences or (0,))[0]
+    title = f"sequence {sequence}: " + " ; ".join(operations)
+    trace = episode_trace(model, episode, title) if flat else path_trace(model, episode, title)
+    written = plot_beliefs([trace], stem, model.plan.product.name or model.name)
+    return {"sequence": sequence, "model": "flat" if flat else "lumped", "operations": operations,
             "steps": [(model.actions[s.action], str(model.observations[s.observation]), round(s.p_true, 3))
                       for s in episode.steps],
             "confident_after": episode.first_confident(CONFIDENCE), "plots": written}

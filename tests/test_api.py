@@ -103,22 +103,22 @@ def test_policy_from_a_file_or_solved(tmp_path, model, policy):
 
 def test_simulate_chooses_and_checks_sequences(model, policy):
     starts = [int(s) for s in model.full_sequences()]
-    assert [e.start for e in api.simulate(model, policy, every=True)] == starts
+    assert [e.start for e in api.simulate(model, policy, api.EpisodeChoice(every=True))] == starts
     assert [e.start for e in api.simulate(model, policy)] == starts[:1]
-    drawn = [e.start for e in api.simulate(model, policy, random=4, seed=3)]
+    drawn = [e.start for e in api.simulate(model, policy, api.EpisodeChoice(random=4, seed=3))]
     assert len(drawn) == 4 and set(drawn) <= set(starts)
-    assert drawn == [e.start for e in api.simulate(model, policy, random=4, seed=3)]
+    assert drawn == [e.start for e in api.simulate(model, policy, api.EpisodeChoice(random=4, seed=3))]
     with pytest.raises(PlannerError, match=r"--sequence 1 is not a full assembly sequence"):
-        api.simulate(model, policy, [starts[0], 1])
-    for episode in api.simulate(model, policy, [starts[2]], operator="turns"):
+        api.simulate(model, policy, api.EpisodeChoice(sequences=[starts[0], 1]))
+    for episode in api.simulate(model, policy, api.EpisodeChoice(sequences=[starts[2]], operator="turns")):
         assert episode.steps[-1].state == model.final_state  # the operator finished the product
 
 
 def test_evaluate_a_model_or_its_tables(model, policy):
     # 50 episodes are enough for a finite mean and a confidence interval (the brackets are checked with 2,000 in
     # tests/decision/test_simulate.py).
-    mean, half = api.evaluate(model, policy, 50, seed=1)
-    bare_mean, bare_half = api.evaluate(model.pomdp, policy, 50, seed=1)
+    mean, half = api.evaluate(model, policy, api.EpisodeChoice(random=50, seed=1))
+    bare_mean, bare_half = api.evaluate(model.pomdp, policy, api.EpisodeChoice(random=50, seed=1))
     assert math.isfinite(mean) and half > 0 and math.isfinite(bare_mean) and bare_half > 0
 
 

@@ -85,7 +85,8 @@ def test_the_pens_figures_are_unchanged():
 def test_the_decision_maker_of_a_spec_plays_as_before(key, spec, expansions, episodes, seed):
     model, policy, note = api.decision_maker("pen", spec, api.PlannerChoice("online", None, None, expansions))
     assert note is None  # asked for: nothing to explain
-    assert _digest(_trace(api.simulate(model, policy, random=episodes, seed=seed))) == REFERENCE[key]
+    played = api.simulate(model, policy, api.EpisodeChoice(random=episodes, seed=seed))
+    assert _digest(_trace(played)) == REFERENCE[key]
 
 
 def test_model_of_is_the_model_the_stage_functions_build():

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import shutil
 import tempfile
+from dataclasses import replace
 
 import FreeCAD
 import FreeCADGui
@@ -87,7 +88,8 @@ class Solve(_Command):
 
 class Simulate(_Command):
     name, menu = "Aplan_Simulate", "Simulate an operator sequence"
-    tooltip = "Play the operator through a full assembly sequence against the policy; show the belief plot"
+    tooltip = ("Play the operator through a full assembly sequence against the policy (over intentions, or over "
+               "the lumped model's classes); show the belief plot")
 
     def run(self):
         from .panels import ImageDialog
@@ -104,16 +106,18 @@ class Simulate(_Command):
             if not policy:
                 return
         sequence, ok = QtGui.QInputDialog.getInt(FreeCADGui.getMainWindow(), "Simulate",
-                                                 "Full sequence (intention number; -1: the first)", -1, -1)
+                                                 "Full sequence (its intention number with a policy over intentions, "
+                                                 "its rank from 0 with one over classes; -1: the first)", -1, -1)
         if not ok:
             return
+        choice = replace(workflow.SIMULATE_EPISODE, sequences=() if sequence < 0 else (sequence,))
         stem = os.path.join(tempfile.mkdtemp(prefix="aplan-simulate-"), "belief")
-        result = workflow.simulate_sequence(product, policy, stem, None if sequence < 0 else sequence,
-                                            spec=workflow.analysis_spec(analysis), level=level)
+        result = workflow.simulate_sequence(product, policy, stem, choice, spec=workflow.analysis_spec(analysis),
+                                            level=level)
         from planner.decision.simulate import confidence_text
 
         said = confidence_text(result["confident_after"], CONFIDENCE)
-        caption = (f"Sequence {result['sequence']}: {said}. Steps: "
+        caption = (f"Sequence {result['sequence']} ({result['model']} model): {said}. Steps: "
                    + "; ".join(f"{a} / {o} / {p}" for a, o, p in result["steps"]))
         self.state.belief_dialog = ImageDialog("APLAN belief", caption, result["plots"][0], FreeCADGui.getMainWindow())
         self.state.belief_dialog.show()

@@ -22,7 +22,8 @@ Front ends only parse their input and show results; the steps of the method live
    operator against a policy.
 
 :mod:`~planner.api.specs` holds the values a front end builds once and passes down: :class:`ModelSpec` (which
-decision model) and :class:`PlannerChoice` (who decides). Every name is importable from ``planner.api`` itself.
+decision model), :class:`PlannerChoice` (who decides) and :class:`EpisodeChoice` (which episodes are played).
+Every name is importable from ``planner.api`` itself.
 
 >>> from planner import api
 >>> model = api.decision_model("pen")
@@ -75,7 +76,7 @@ from .plans import (
 )
 from .policies import SOLVER_ENGINES, check_solved, policy_for, solve
 from .products import DEFAULT_MODE, FASTENER_MODES, accept_fasteners, fastener_report, resolve_product
-from .specs import ModelSpec, PlannerChoice
+from .specs import EpisodeChoice, ModelSpec, PlannerChoice
 
 # Private names other modules of the planner read from here (the command line's habits, its model files).
 _PRIVATE = (_decidable, _model_file_kind)
@@ -89,6 +90,7 @@ __all__ = ["resolve_product", "DEFAULT_MODE", "fastener_report", "accept_fastene
            "choose_planner", "decision_maker", "arranged", "levels_of", "level_product", "hierarchy_statistics_of",
            "sequence_choices", "plan_in_3d", "sequence_from_log", "InputLimits",
            # the stages' values (issue 24), and names front ends read from here
-           "ModelSpec", "PlannerChoice", "model_of", "check_parallel_flat", "Model", "Product", "Plan", "AUTO_BASE_PART",
+           "ModelSpec", "PlannerChoice", "EpisodeChoice", "model_of", "check_parallel_flat", "Model", "Product",
+           "Plan", "AUTO_BASE_PART",
            "FILE_OPTION",
            "PlannerError"]

@@ -1,8 +1,10 @@
 """The values a front end builds once from its input and passes down the API's stages: which decision model a
-product gets (:class:`ModelSpec`) and who decides on it (:class:`PlannerChoice`).
+product gets (:class:`ModelSpec`), who decides on it (:class:`PlannerChoice`) and which episodes a simulation or an
+evaluation plays (:class:`~planner.decision.episodes.EpisodeChoice`, defined beside the simulator that reads it).
 
 The command line builds them from its options (:func:`planner.cli.options.model_spec_from`,
-:func:`planner.cli.options.planner_choice_from`), the workbench from its analysis; the stages read them and
+:func:`planner.cli.options.planner_choice_from`, :func:`planner.cli.options.episode_choice_from`), the workbench
+from its analysis and its panels' values; the stages read them and
 never the front end's arguments, so one ``aplan session`` turns its options into a model once, however many
 levels it runs.
 """
@@ -13,13 +15,14 @@ from dataclasses import dataclass, field
 
 from ..assembly.guards import SizeLimits
 from ..decision.deviations import Deviations
+from ..decision.episodes import EpisodeChoice
 from ..decision.habits import Habits
 from ..decision.intention_model import Rewards
 from ..defaults import DECISION_TIME, DISCOUNT, INTENTION_LIMIT, POLICY_TIME_LIMIT
 from ..errors import PlannerError
 from ..validation import InputLimits
 
-__all__ = ["ModelSpec", "PlannerChoice", "PLANNERS"]
+__all__ = ["ModelSpec", "PlannerChoice", "EpisodeChoice", "PLANNERS"]
 
 #: Who decides: ``offline`` follows a policy (a file, or the solver's), ``online`` searches at every decision.
 PLANNERS = ("offline", "online")

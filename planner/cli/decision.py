@@ -10,7 +10,7 @@ import sys
 import time
 
 from .. import api
-from ..decision.belief_plot import episode_trace, plot_beliefs, state_trace
+from ..decision.belief_plot import episode_trace, path_trace, plot_beliefs
 from ..decision.episode_measures import episode_measures, run_totals
 from ..decision.models import is_flat, is_online_planner
 from ..decision.policy import WRITE_SECONDS, write_policy
@@ -32,6 +32,7 @@ from .options import (
     add_episode_options,
     add_force,
     add_policy_options,
+    episode_choice_from,
     gibibytes,
     index,
     inputs_from,
@@ -178,14 +179,14 @@ def _simulate(args: argparse.Namespace) -> int:
     if api._model_file_kind(args.model):
         raise PlannerError("simulate needs a PRODUCT (the intention graph names the sequences), not a model file")
     levels = levels_from(args)
-    spec, choice = model_spec_from(args), planner_choice_from(args)  # once, for every level
+    spec, choice, episodes = model_spec_from(args), planner_choice_from(args), episode_choice_from(args)  # once
     played = []
     for k, (level, product) in enumerate(levels, start=1):
         if len(levels) > 1 and not args.json:
             print(f"level {level} ({k} of {len(levels)}): {', '.join(product.part_ids)}")
         if args.plot and len(levels) > 1:
             raise PlannerError("--plot draws one product's beliefs: pick one subassembly with --level ID")
-        played += _simulate_level(args, product, spec, choice)
+        played += _simulate_level(args, product, spec, choice, episodes)
     _print_run(played, args)
     return 0
 
@@ -209,10 +210,10 @@ def _times_text(times: dict) -> str:
             f"{1000 * times['decision_seconds_p95']:.1f} ms, max {1000 * times['decision_seconds_max']:.1f} ms")
 
 
-def _simulate_level(args: argparse.Namespace, product, spec: api.ModelSpec, choice: api.PlannerChoice) -> list:
+def _simulate_level(args: argparse.Namespace, product, spec: api.ModelSpec, choice: api.PlannerChoice,
+                    played: api.EpisodeChoice) -> list:
     model, policy = decision_maker_from(args, product, spec, choice)
-    episodes = api.simulate(model, policy, args.sequence, args.all, args.random, args.seed, args.max_steps,
-                            args.operator, operator_model=args.operator_model)
+    episodes = api.simulate(model, policy, played)
     if not is_flat(model):
         return _print_factored(model, episodes, args)
     for episode in episodes:
@@ -309,32 +310,25 @@ def _print_factored(model, episodes, args: argparse.Namespace) -> list:
     if not args.json:
         _say_sampled(model, episodes)
     if args.plot:
-        traces = [state_trace(model, e.beliefs, [_true_state(model, e.path, s) for s in [None] + e.steps],
-                              [s.action for s in e.steps], [s.observation for s in e.steps],
-                              "sequence: " + " ; ".join(model.describe_operations(e.path))) for e in episodes]
+        traces = [path_trace(model, e, "sequence: " + " ; ".join(model.describe_operations(e.path)))
+                  for e in episodes]
         _write_plot(args, traces, model.plan.product.name or model.name)
     return episodes
-
-
-def _true_state(model, path: list[int], step) -> int:
-    """The assembly state the operator is in after ``step`` (``None``: before the first) of a factored episode."""
-    position = 0 if step is None else step.position
-    return int(model.class_source[path[position]]) if position < len(path) else model.final_state
 
 
 def _evaluate(args: argparse.Namespace) -> int:
     if args.operator_model is not None and api._model_file_kind(args.model):  # refused before any solving
         raise PlannerError(f"{args.model}: --operator-sequence needs a PRODUCT (its full sequences), not a model file")
+    played = episode_choice_from(args)
     model, policy = decision_maker_from(args)
     if is_online_planner(policy) and policy.decision_time is not None:
         log.info("the online planner takes up to %g s per decision: %d episodes can take minutes (progress below); "
                  "--expansions N bounds the work per decision instead", policy.decision_time, args.episodes)
     if args.operator_model is not None:
-        mean, half, played = api.evaluate_operator(model, policy, args.operator_model, args.episodes, args.seed,
-                                                   args.max_steps)
-        totals = run_totals([episode_measures(e) for e in played])
+        mean, half, episodes = api.evaluate_operator(model, policy, played)
+        totals = run_totals([episode_measures(e) for e in episodes])
     else:
-        (mean, half), totals = api.evaluate(model, policy, args.episodes, args.seed, args.max_steps), None
+        (mean, half), totals = api.evaluate(model, policy, played), None
     if args.json:
         extra = {} if totals is None else {"operator": repr(args.operator_model), **totals}
         print(json.dumps({"mean_return": mean, "ci95": half, "episodes": args.episodes, **extra}))

@@ -29,7 +29,7 @@ from ..errors import PlannerError
 from ..files import save_figure
 
 __all__ = ["LOG_FLOOR", "MAX_ROWS", "MIN_WIDTH_PX", "BeliefTrace", "action_marks", "belief_figure", "episode_trace",
-           "observation_marks", "plot_beliefs", "short_action", "state_trace", "step_outline", "top_rows"]
+           "observation_marks", "path_trace", "plot_beliefs", "short_action", "state_trace", "step_outline", "top_rows"]
 
 MIN_WIDTH_PX = 1300  # the PNG's width: a report's full text width at 150 dpi and more
 DPI = 100
@@ -133,6 +133,18 @@ def state_trace(model, beliefs: list, line: list[int] | None, actions: list[int]
                        line_label="true assembly state" if line is not None else "most probable assembly state",
                        note="belief summed over assembly states (the factored model: intentions are not "
                             "enumerated)")
+
+
+def path_trace(model, episode, title: str) -> BeliefTrace:
+    """The :func:`state_trace` of an :class:`~planner.decision.episode.Episode` on the factored model (its
+    ``path``; the lumped model's policies too), the line following the true assembly state: the source of the
+    path's class at each step's ``position``, the finished product after the last. Cost: O(classes) per step."""
+    def state(position: int) -> int:
+        path = episode.path
+        return int(model.class_source[path[position]]) if position < len(path) else model.final_state
+
+    return state_trace(model, episode.beliefs, [state(0)] + [state(s.position) for s in episode.steps],
+                       [s.action for s in episode.steps], [s.observation for s in episode.steps], title)
 
 
 def _colormap():

@@ -1,16 +1,29 @@
-"""Play an operator against a policy: episodes and evaluation (their Fig. 7 plot: :mod:`.belief_plot`).
+"""The one episode loop (POMDPs.jl's simulator): any world, any policy, any belief updater; and the world over
+intentions (a flat model's or a file's POMDP). Their Fig. 7 plot: :mod:`.belief_plot`.
 
-The true intention evolves by the model's transitions (the operator's timing is random: it acts with
-probability 1/2 per step, as the model says) and emits observations by the model's observation table; the
-robot acts by the policy on the Bayes filter's belief. With a plan's intention graph at hand, the episode
-also counts the operator's own operations, to report after how many of them the belief on the true
-intention first exceeds a threshold before the product is finished (the paper saw 2, 2 and 4 in its three
-runs); :func:`decision_times` sums up the time the policy took per decision.
+:func:`simulate_episode` runs one episode: at each step the robot acts by the policy on the updater's belief,
+the *world* (the operator's side, in the model's own terms) moves its true state and emits an observation, and
+the updater folds it in. A world is the generative half of a decision model (POMDPs.jl's ``gen``):
+
+- :class:`IntentionWorld` (here): the true state is an intention (or a file's state); it moves by the tables'
+  transitions and emits by their observations, so the operator's timing is random (it acts with probability
+  1/2 per step, as the model says); its updater is the :class:`~.belief.DiscreteUpdater`;
+- :class:`~.factored_simulate.PathWorld`: the true state is a position along one full sequence's state edges
+  (the factored model and the lumped model's policies); its updater is the
+  :class:`~.factored_updater.FactoredUpdater`.
+
+:mod:`.episodes` picks the world of a model and draws which ones are played. With a plan at hand, the world
+also counts the operator's own operations, to report after how many of them the belief on the true intention
+first exceeds a threshold before the product is finished (the paper saw 2, 2 and 4 in its three runs);
+:func:`decision_times` sums up the time the policy took per decision. The random draws of a step come in one
+order on every world: the world's move, then its observation (then the operator's mistake, from its own
+stream), so a seed gives the same episodes whatever the caller.
 """
 from __future__ import annotations
 
-import math
 import time
+from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -18,11 +31,14 @@ from ..defaults import CONFIDENCE
 from .belief import DiscreteUpdater
 from .episode import Episode, Step
 from .operators import mistaken_observation, switch_intention
-from .policy import AlphaVectorPolicy
 from .pomdp import POMDP
 
-__all__ = ["Step", "Episode", "confidence_text", "decision_times", "evaluate_policy", "simulate_episode",
-           "operator_mistake"]
+__all__ = ["Step", "Episode", "World", "Move", "IntentionWorld", "OPERATORS", "confidence_text", "decision_times",
+           "simulate_episode", "operator_mistake"]
+
+#: How the simulated operator times its operations: ``model`` (with the model's probability, 1/2 per step) or
+#: ``turns`` (whenever the model lets it: human and robot take turns, as in the paper's experiment).
+OPERATORS = ("turns", "model")
 
 
 def confidence_text(operations: int | None, threshold: float = CONFIDENCE) -> str:
@@ -46,72 +62,93 @@ def decision_times(seconds) -> dict[str, float | None]:
             "decision_seconds_max": round(float(times.max()), 6)}
 
 
-OPERATORS = ("turns", "model")
+@dataclass(frozen=True)
+class Move:
+    """What one robot action did in the world: its ``reward``, whether it was the intention's next step
+    (``robot``: the robot helped), the operator's ``operations`` in the move and the operations done that some
+    robot action does (``capable``)."""
+
+    reward: float
+    robot: bool
+    operations: int
+    capable: int
 
 
-def simulate_episode(model: POMDP, policy: AlphaVectorPolicy, start: int, rng: np.random.Generator,
-                     max_steps: int = 100, successor: np.ndarray | None = None,
-                     final: int | None = None, operator: str = "model", switch=None,
-                     first_state: np.ndarray | None = None, mistakes=None, world: POMDP | None = None) -> Episode:
-    """One episode from the true intention ``start`` until ``final`` (the finished product) or ``max_steps``.
+class World(Protocol):
+    """The operator's side of an episode, in the model's terms (a world is used for one episode).
 
-    ``operator``: ``"model"`` draws the operator's timing from the model (it acts with probability 1/2 per
-    step); ``"turns"`` makes it act whenever the model lets it (human and robot take turns, as in the
-    paper's experiment; needs ``successor``). Observations are always drawn from the model.
-    ``successor`` (the intention graph's successor array) lets the episode count operator operations: a
-    move of the true intention that the robot's own action does not explain. ``switch`` (an
-    :class:`~planner.decision.operators.Switch`; needs ``successor`` and the graph's ``first_state``): the
-    operator changes its mind once, after that many operations, to another intention of its assembly state.
-    ``mistakes`` (rate, generator): at each step, with that probability, the observation is a wrong part's
-    (:func:`~planner.decision.operators.mistaken_observation`); its draws come from that generator alone.
-    ``world``: the tables the world plays when they are not the robot's model's (a model with deviations:
-    :attr:`~planner.decision.intention_model.IntentionModel.world`, the paper's; the operator deviates itself).
+    ``wait`` (the wait action, -1 without one), ``discount``, ``n_observations``; ``done`` (operations done so
+    far, by anyone); :meth:`finished`; :meth:`switch` (the operator changes its mind, by ``draw``; False when
+    its state has no other completion); :meth:`act` (the world's move after the robot's action: a
+    :class:`Move`); :meth:`observe` (the observation drawn after it); :meth:`p_true` (the belief on the true
+    intention); :meth:`truth` (the :class:`~.episode.Step` fields of the true state); :meth:`updater` (its
+    Bayes filter); :meth:`record` (the episode's fields of the truth, at the end)."""
+
+    wait: int
+    discount: float
+    n_observations: int
+    done: int
+
+    def finished(self) -> bool: ...
+
+    def switch(self, draw: float) -> bool: ...
+
+    def act(self, action: int, rng: np.random.Generator, operator: str) -> Move: ...
+
+    def observe(self, action: int, rng: np.random.Generator) -> int: ...
+
+    def p_true(self, belief) -> float: ...
+
+    def truth(self) -> dict: ...
+
+    def updater(self, deviating: bool): ...
+
+    def record(self, episode: Episode) -> None: ...
+
+
+def simulate_episode(world: World, policy, rng: np.random.Generator, max_steps: int = 100, operator: str = "model",
+                     switch=None, mistakes=None, updater=None) -> Episode:
+    """One episode in ``world`` until the product is finished or ``max_steps``; ``policy.action(belief)`` picks
+    the robot's actions on the belief of ``updater`` (default: the world's own Bayes filter).
+
+    ``operator`` (:data:`OPERATORS`): ``"model"`` draws the operator's timing from the model; ``"turns"``
+    makes it act whenever the model lets it (on a world over intentions, with the intention graph's
+    successors). ``switch`` (an :class:`~planner.decision.operators.Switch`): the operator changes its mind
+    once, at the first step with ``switch.after`` operations done, to another completion of its assembly state
+    (at a later state when that one has none). ``mistakes`` (rate, generator): at each step, with that
+    probability, the observation is a wrong part's (:func:`~planner.decision.operators.mistaken_observation`);
+    its draws come from that generator alone. Cost: ``max_steps`` decisions, updates and world moves.
     """
     if operator not in OPERATORS:
         raise ValueError(f"operator must be one of {OPERATORS}, got {operator!r}")
-    updater = DiscreteUpdater(model) if mistakes is None and switch is None else \
-        DiscreteUpdater(model, on_reset=lambda event: None)  # a deviating operator's resets are counted instead
+    if updater is None:  # a deviating operator's resets are counted, not warned about
+        updater = world.updater(mistakes is not None or switch is not None)
     belief = updater.initialize()
-    episode = Episode(beliefs=[belief], start=start, final=final)
-    wait = model.actions.index("wait") if "wait" in model.actions else -1
-    state, operations, discount, done = start, 0, 1.0, 0
-    tables = world if world is not None else model
-    transition = [t.tocsr() for t in tables.transition]
-    observation = [o.tocsr() for o in tables.observation]
+    episode = Episode(beliefs=[belief])
+    operations, discount = 0, 1.0
     for _ in range(max_steps):
-        if final is not None and state == final:
+        if world.finished():
             break
-        if switch is not None and episode.switched_at is None and done >= switch.after:
-            other = switch_intention(first_state, state, switch.draw)
-            if other != state:  # else at the next state that has another completion
-                state = episode.switched_to = other
-                episode.switched_at = len(episode.steps) + 1
+        if switch is not None and episode.switched_at is None and world.done >= switch.after \
+                and world.switch(switch.draw):  # else at the next state that has another completion
+            episode.switched_at = len(episode.steps) + 1
         started = time.perf_counter()
-        action = policy.action(belief)
+        action = int(policy.action(belief))
         seconds = time.perf_counter() - started
-        reward = float(model.reward[action, state])
-        row = transition[action].getrow(state)
-        if operator == "turns" and successor is not None:
-            nxt = int(max(row.indices, key=lambda t: _moves(successor, state, int(t))))
-        else:
-            nxt = int(rng.choice(row.indices, p=row.data / row.data.sum()))
-        robot_did_step = action != wait and _moves_intention(tables, action, state)
-        if successor is not None and nxt != state:
-            done += _moves(successor, state, nxt)
-            operations += _moves(successor, state, nxt) - (1 if robot_did_step else 0)
-            episode.robot_capable += _capable_between(model, successor, state, nxt, wait)
-        orow = observation[action].getrow(nxt)
-        z = int(rng.choice(orow.indices, p=orow.data / orow.data.sum()))
-        z, mistake = operator_mistake(z, len(model.observations), mistakes)
+        move = world.act(action, rng, operator)
+        z = world.observe(action, rng)
+        z, mistake = operator_mistake(z, world.n_observations, mistakes)
         belief = updater.update(belief, action, z)
-        episode.discounted_return += discount * reward
-        discount *= model.discount
-        state = nxt
-        episode.steps.append(Step(action, z, float(belief[state]), operations, reward, seconds,
-                                  robot_operation=robot_did_step, wrong_action=action != wait and not robot_did_step,
-                                  mistake=mistake, state=state))
+        episode.discounted_return += discount * move.reward
+        discount *= world.discount
+        operations += move.operations
+        episode.robot_capable += move.capable
+        episode.steps.append(Step(action, z, world.p_true(belief), operations, move.reward, seconds,
+                                  robot_operation=move.robot, wrong_action=action != world.wait and not move.robot,
+                                  mistake=mistake, **world.truth()))
         episode.beliefs.append(belief)
     episode.resets = len(updater.events)
+    world.record(episode)
     return episode
 
 
@@ -125,6 +162,74 @@ def operator_mistake(observation: int, n_observations: int, mistakes) -> tuple[i
     if happens >= rate:
         return observation, False
     return mistaken_observation(observation, n_observations, float(pick)), True
+
+
+class IntentionWorld:
+    """The world over intentions: the true intention ``start`` of ``model`` (a POMDP: the flat model's tables, or
+    a file's) moves by the transitions and emits by the observations of ``world`` (default: ``model``'s own; a
+    model with deviations plays the paper's tables, :attr:`~planner.decision.intention_model.IntentionModel.world`,
+    the operator deviating itself), the rewards being the robot model's.
+
+    ``final``: the finished product's intention (None: the episode runs to its step limit). ``successor`` (the
+    intention graph's successor array) lets it count operator operations (a move of the true intention that
+    the robot's action does not explain) and the operator take turns; ``first_state`` (the graph's) lets it
+    change its mind. Cost per step: a row of each table, plus O(length x actions) to count the operations.
+    """
+
+    def __init__(self, model: POMDP, start: int, successor: np.ndarray | None = None, final: int | None = None,
+                 first_state: np.ndarray | None = None, world: POMDP | None = None):
+        self.model, self.state, self.start, self.final = model, int(start), int(start), final
+        self.successor, self.first_state = successor, first_state
+        self.tables = world if world is not None else model
+        self.transition = [t.tocsr() for t in self.tables.transition]
+        self.observation = [o.tocsr() for o in self.tables.observation]
+        self.wait = model.actions.index("wait") if "wait" in model.actions else -1
+        self.discount, self.n_observations = model.discount, len(model.observations)
+        self.done, self.switched_to = 0, None
+
+    def finished(self) -> bool:
+        return self.final is not None and self.state == self.final
+
+    def switch(self, draw: float) -> bool:
+        other = switch_intention(self.first_state, self.state, draw)
+        if other == self.state:
+            return False
+        self.state = self.switched_to = other
+        return True
+
+    def act(self, action: int, rng: np.random.Generator, operator: str) -> Move:
+        state, successor = self.state, self.successor
+        reward = float(self.model.reward[action, state])
+        row = self.transition[action].getrow(state)
+        if operator == "turns" and successor is not None:
+            nxt = int(max(row.indices, key=lambda t: _moves(successor, state, int(t))))
+        else:
+            nxt = int(rng.choice(row.indices, p=row.data / row.data.sum()))
+        robot = action != self.wait and _moves_intention(self.tables, action, state)
+        operations = capable = 0
+        if successor is not None and nxt != state:
+            moved = _moves(successor, state, nxt)
+            self.done += moved
+            operations = moved - (1 if robot else 0)
+            capable = _capable_between(self.model, successor, state, nxt, self.wait)
+        self.state = nxt
+        return Move(reward, robot, operations, capable)
+
+    def observe(self, action: int, rng: np.random.Generator) -> int:
+        row = self.observation[action].getrow(self.state)
+        return int(rng.choice(row.indices, p=row.data / row.data.sum()))
+
+    def p_true(self, belief: np.ndarray) -> float:
+        return float(belief[self.state])
+
+    def truth(self) -> dict:
+        return {"state": self.state}
+
+    def updater(self, deviating: bool) -> DiscreteUpdater:
+        return DiscreteUpdater(self.model, on_reset=(lambda event: None) if deviating else None)
+
+    def record(self, episode: Episode) -> None:
+        episode.start, episode.final, episode.switched_to = self.start, self.final, self.switched_to
 
 
 def _moves_intention(model: POMDP, action: int, state: int) -> bool:
@@ -152,18 +257,3 @@ def _moves(successor: np.ndarray, a: int, b: int) -> int:
         a = successor[a]
         steps += 1
     return steps
-
-
-def evaluate_policy(model: POMDP, policy: AlphaVectorPolicy, episodes: int, seed: int = 0, max_steps: int = 100,
-                    final: int | None = None, world: POMDP | None = None) -> tuple[float, float, list[float]]:
-    """Mean discounted return over ``episodes`` episodes (start drawn from the initial belief) and the
-    half-width of its 95 % confidence interval (normal approximation); ``world``: :func:`simulate_episode`'s."""
-    rng = np.random.default_rng(seed)
-    returns = []
-    starts = rng.choice(model.n_states, size=episodes, p=model.initial)
-    for start in starts:
-        returns.append(simulate_episode(model, policy, int(start), rng, max_steps, final=final,
-                                        world=world).discounted_return)
-    mean = float(np.mean(returns))
-    half = 1.96 * float(np.std(returns, ddof=1)) / math.sqrt(episodes) if episodes > 1 else float("nan")
-    return mean, half, returns

@@ -1,6 +1,9 @@
 """The command line's option bundles (planner/cli/options/, issue 24): each kind of argument is read into one
-value, built once per command: the decision model into a ModelSpec, who decides into a PlannerChoice."""
+value, built once per command: the decision model into a ModelSpec, who decides into a PlannerChoice, the episodes
+played into an EpisodeChoice."""
 from __future__ import annotations
+
+import pytest
 
 from planner import api
 from planner.cli import build_parser
@@ -33,6 +36,22 @@ def test_the_planner_bundle_reads_into_one_choice():
         api.PlannerChoice("online", None, None, 30)
     default = options.planner_choice_from(_args("evaluate", "pen"))
     assert default == api.PlannerChoice() and default.planner is None  # chosen by choose_planner
+
+
+def test_the_episode_bundle_reads_into_one_choice():
+    """simulate's --sequence/--all/--random and --operator, evaluate's --episodes (drawn at random), both commands'
+    --seed, --max-steps and --operator-sequence: one EpisodeChoice."""
+    assert options.episode_choice_from(_args("simulate", "pen", "--sequence", "45", "50", "--operator", "turns",
+                                             "--seed", "3", "--max-steps", "40")) == \
+        api.EpisodeChoice(sequences=(45, 50), seed=3, max_steps=40, operator="turns")
+    assert options.episode_choice_from(_args("simulate", "pen", "--all")) == api.EpisodeChoice(every=True)
+    played = options.episode_choice_from(_args("evaluate", "pen", "--episodes", "20", "--operator-sequence",
+                                               "changing:0.2"))
+    assert (played.random, played.operator, repr(played.operator_model)) == (20, "model", "uniform,changing:0.2")
+    assert options.episode_choice_from(_args("evaluate", "pen")).random == 1000  # the default --episodes
+    with pytest.raises(SystemExit) as refused:  # numpy seeds from 0: a usage error, not a traceback
+        _args("simulate", "pen", "--seed", "-1")
+    assert refused.value.code == 2
 
 
 def test_the_product_bundle_is_one_set_of_options_for_stats_intentions_and_sequence():

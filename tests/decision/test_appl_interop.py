@@ -106,7 +106,7 @@ def test_round_trip_through_appl(tmp_path):
     assert done.returncode == 0, done.stdout + done.stderr
     rows = [line for line in done.stdout.splitlines() if re.match(r"\s*\d+\s", line)]
     appl_value = float(rows[-1].split()[1])
-    mean, half = api.evaluate(tables, result.policy, 2000, 0, 100)
+    mean, half = api.evaluate(tables, result.policy, api.EpisodeChoice(random=2000, seed=0, max_steps=100))
     assert abs(appl_value - mean) <= 3 * half + 0.05, (appl_value, mean, half)
     sarsop = tmp_path / "sarsop.policy"
     done = subprocess.run([APPL[0], "--timeout", "5", "--output", str(sarsop), str(model)], capture_output=True,

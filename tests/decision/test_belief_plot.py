@@ -29,10 +29,10 @@ from planner.decision.belief_plot import (
     top_rows,
 )
 from planner.decision.factored_model import factored_model
-from planner.decision.factored_simulate import simulate_factored_episode
+from planner.decision.factored_simulate import PathWorld
 from planner.decision.online import OnlinePlanner
 from planner.decision.policy import AlphaVectorPolicy
-from planner.decision.simulate import simulate_episode
+from planner.decision.simulate import IntentionWorld, simulate_episode
 from planner.errors import PlannerError
 
 
@@ -50,8 +50,8 @@ def episode(decision):
     alphas = np.zeros((2, model.n_states))
     alphas[1, 2] = 1.0
     policy = AlphaVectorPolicy(alphas, np.array([model.actions.index("wait"), a1]))
-    return simulate_episode(model, policy, 57, np.random.default_rng(0), successor=decision.graph.successor,
-                            final=decision.final_state, operator="turns")
+    return simulate_episode(IntentionWorld(model, 57, decision.graph.successor, decision.final_state), policy,
+                            np.random.default_rng(0), operator="turns")
 
 
 def _png_size(path) -> tuple[int, int]:
@@ -133,8 +133,8 @@ def test_many_rows_are_summarised_and_the_figure_says_so(tmp_path):
 def test_the_factored_figure_is_over_assembly_states(pen):
     model = factored_model(make_plan(pen))
     path = model.sequence(3)
-    episode = simulate_factored_episode(model, OnlinePlanner(model, expansions=20), path, np.random.default_rng(0),
-                                        operator="turns")
+    episode = simulate_episode(PathWorld(model, path), OnlinePlanner(model, expansions=20), np.random.default_rng(0),
+                               operator="turns")
     assert len(episode.beliefs) == len(episode.steps) + 1
     truth = [int(model.class_source[path[0]])] + [
         int(model.class_source[path[s.position]]) if s.position < len(path) else model.final_state

@@ -310,15 +310,15 @@ def test_a_change_of_mind_moves_no_belief_while_the_robot_waits(pen, kind):
     only), and a redraw draws from that prior: so while the robot never rules a completion out, ``--switch``
     leaves every belief as the paper's (seeded paired episodes of a changing operator, switched ones among
     them); it does move mass after a wrong robot action (the ruled-out class comes back)."""
-    from planner.decision.episodes import simulate
+    from planner.decision.episodes import EpisodeChoice, simulate
     from planner.decision.operators import parse_operator
 
     plan = make_plan(pen, True)
     build = intention_model if kind == "flat" else factored_model
     paper, switching = build(plan), build(plan, deviations=Deviations(0.3, 0.0))
     wait = len(paper.actions) - 1
-    played = [simulate(m, _Waiting(wait), random=40, seed=3, operator_model=parse_operator("uniform,changing:0.3"))
-              for m in (paper, switching)]
+    choice = EpisodeChoice(random=40, seed=3, operator_model=parse_operator("uniform,changing:0.3"))
+    played = [simulate(m, _Waiting(wait), choice) for m in (paper, switching)]
     assert sum(e.switched_at is not None for e in played[0]) >= 5
     for one, two in zip(*played):
         assert [s.observation for s in one.steps] == [s.observation for s in two.steps]

@@ -10,7 +10,9 @@ import pytest
 from planner import PlannerError, chain_product, count_intentions, make_plan
 from planner.decision import FactoredUpdater, factored_model, intention_model
 from planner.decision.factored_model import FactoredBelief
-from planner.decision.factored_simulate import evaluate_factored, simulate_factored_episode
+from planner.decision.episodes import EpisodeChoice, evaluate
+from planner.decision.factored_simulate import PathWorld
+from planner.decision.simulate import simulate_episode
 from planner.decision.online import OnlinePlanner, class_values, observation_split
 from planner.decision.solvers import PointBasedSolver
 
@@ -76,7 +78,7 @@ def test_reproducible_at_a_fixed_amount_of_work(pen_factored):
     def actions():
         planner = OnlinePlanner(pen_factored, expansions=30)
         rng = np.random.default_rng(7)
-        episode = simulate_factored_episode(pen_factored, planner, pen_factored.sample_sequence(rng), rng)
+        episode = simulate_episode(PathWorld(pen_factored, pen_factored.sample_sequence(rng)), planner, rng)
         return [s.action for s in episode.steps], [s.observation for s in episode.steps]
 
     assert actions() == actions()
@@ -85,7 +87,7 @@ def test_reproducible_at_a_fixed_amount_of_work(pen_factored):
 def test_the_planner_helps(pen):
     """On the pen, acting by the planner earns more than never acting (return 0) beyond the 95 % interval."""
     model = factored_model(make_plan(pen))
-    mean, half, _ = evaluate_factored(model, OnlinePlanner(model, expansions=3), 150, seed=3)
+    mean, half = evaluate(model, OnlinePlanner(model, expansions=3), EpisodeChoice(random=150, seed=3))
     assert mean - half > 0
 
 
@@ -98,7 +100,7 @@ def test_finishes_a_product_beyond_the_flat_model():
     planner = OnlinePlanner(model, expansions=4)
     rng = np.random.default_rng(0)
     for _ in range(2):
-        episode = simulate_factored_episode(model, planner, model.sample_sequence(rng), rng, max_steps=200)
+        episode = simulate_episode(PathWorld(model, model.sample_sequence(rng)), planner, rng, max_steps=200)
         assert episode.finished and episode.resets == 0
         assert all(step.p_true > 0 for step in episode.steps)
 

@@ -19,7 +19,8 @@ from planner.decision.intention_model import Rewards
 from planner.decision.online import OnlinePlanner
 from planner.decision.operators import (ChangingOperator, HabitualOperator, UniformOperator, parse_operator,
                                         switch_path, switch_points)
-from planner.decision.simulate import simulate_episode
+from planner.decision.episodes import EpisodeChoice
+from planner.decision.simulate import IntentionWorld, simulate_episode
 from planner.decision.solvers import PointBasedSolver
 from planner.errors import PlannerError
 
@@ -72,17 +73,18 @@ def test_uniform_operator_plays_todays_flat_episodes(flat):
     for seed in (0, 7):
         rng = np.random.default_rng(seed)  # today's recipe: the starts drawn at once, then the episodes
         starts = rng.choice(model.full_sequences(), size=6)
-        today = [simulate_episode(model.pomdp, policy, int(s), rng, 100, model.graph.successor, model.final_state)
+        today = [simulate_episode(IntentionWorld(model.pomdp, s, model.graph.successor, model.final_state), policy, rng)
                  for s in starts]
-        played = api.simulate(model, policy, random=6, seed=seed, operator_model=UniformOperator())
+        played = api.simulate(model, policy, EpisodeChoice(random=6, seed=seed, operator_model=UniformOperator()))
         assert [e.start for e in played] == [int(s) for s in starts]
-        assert _trace(played) == _trace(today) == _trace(api.simulate(model, policy, random=6, seed=seed))
+        assert _trace(played) == _trace(today) == \
+            _trace(api.simulate(model, policy, EpisodeChoice(random=6, seed=seed)))
 
 
 def test_uniform_operator_plays_todays_factored_episodes(factored):
     model, planner = factored
-    today = api.simulate(model, planner, random=4, seed=3)  # no operator model: today's code
-    played = api.simulate(model, planner, random=4, seed=3, operator_model=UniformOperator())
+    today = api.simulate(model, planner, EpisodeChoice(random=4, seed=3))  # no operator model: today's code
+    played = api.simulate(model, planner, EpisodeChoice(random=4, seed=3, operator_model=UniformOperator()))
     assert [e.path for e in played] == [e.path for e in today]
     assert _trace(played) == _trace(today)
 
@@ -99,7 +101,7 @@ def test_uniform_operator_ignores_the_robots_habits(plan):
 def test_habitual_operator_of_strength_one_always_does_its_sequence(kind, flat, factored):
     model, policy = flat if kind == "flat" else factored
     habit = int(model.full_sequences()[3]) if kind == "flat" else 3
-    played = api.simulate(model, policy, random=5, seed=2, operator_model=HabitualOperator(habit, 1.0))
+    played = api.simulate(model, policy, EpisodeChoice(random=5, seed=2, operator_model=HabitualOperator(habit, 1.0)))
     if kind == "flat":
         assert [e.start for e in played] == [habit] * 5
         assert all(e.steps[-1].state == model.final_state for e in played)
@@ -121,16 +123,16 @@ def test_habitual_operator_follows_with_the_closed_form_frequency(factored):
 def test_changing_operator_with_p_zero_is_its_base(kind, flat, factored):
     model, policy = flat if kind == "flat" else factored
     habit = int(model.full_sequences()[0]) if kind == "flat" else 0
-    base = api.simulate(model, policy, random=5, seed=4, operator_model=HabitualOperator(habit, 0.5))
-    changing = api.simulate(model, policy, random=5, seed=4,
-                            operator_model=ChangingOperator(0.0, HabitualOperator(habit, 0.5)))
+    base = api.simulate(model, policy, EpisodeChoice(random=5, seed=4, operator_model=HabitualOperator(habit, 0.5)))
+    changing = api.simulate(model, policy, EpisodeChoice(
+        random=5, seed=4, operator_model=ChangingOperator(0.0, HabitualOperator(habit, 0.5))))
     assert _trace(changing) == _trace(base) and all(e.switched_at is None for e in changing)
 
 
 def test_a_switch_keeps_the_operations_done_and_takes_another_completion(factored):
     model, planner = factored
     operator = ChangingOperator(0.99)
-    played = api.simulate(model, planner, random=6, seed=1, operator_model=operator)
+    played = api.simulate(model, planner, EpisodeChoice(random=6, seed=1, operator_model=operator))
     plans = operator.plans(model, 6, np.random.default_rng(1), np.random.default_rng([1, 1]))  # as simulate draws
     # A switch happens where the state has another completion: at ``after`` operations, or at a later state.
     assert 1 <= sum(e.switched_at is not None for e in played) <= sum(p.switch is not None for p in plans)
@@ -182,7 +184,8 @@ def test_a_changing_operator_switches_in_a_share_p_of_the_episodes(flat, factore
 def test_measures_add_up(kind, flat, factored):
     model, _ = flat if kind == "flat" else factored
     policy = RandomActions(len(model.actions), 11)
-    played = api.simulate(model, policy, random=8, seed=5, max_steps=400, operator_model=ChangingOperator(0.5))
+    played = api.simulate(model, policy,
+                          EpisodeChoice(random=8, seed=5, max_steps=400, operator_model=ChangingOperator(0.5)))
     wrong_reward = Rewards().wrong
     measures = [episode_measures(e) for e in played]
     for episode, m in zip(played, measures):
@@ -212,8 +215,8 @@ def test_robot_capable_operations_follow_the_tags(kind, plan):
     assert 0 < robot.sum() < robot.size
     tagged = replace(plan, tags=replace(plan.tags, robot=robot))
     model = intention_model(tagged) if kind == "flat" else factored_model(tagged)
-    played = api.simulate(model, RandomActions(len(model.actions), 3), random=12, seed=2, max_steps=400,
-                          operator_model=ChangingOperator(0.5))
+    played = api.simulate(model, RandomActions(len(model.actions), 3),
+                          EpisodeChoice(random=12, seed=2, max_steps=400, operator_model=ChangingOperator(0.5)))
     seen = set()
     for episode in played:
         m = episode_measures(episode)
@@ -241,12 +244,14 @@ def test_mistakes_change_only_the_observations(kind, flat, factored):
     """q = 0 plays the base's episodes; with q > 0 the mistaken steps see another non-blank observation, the
     assembly goes on by the same draws until the robot acts otherwise, and the operations still add up."""
     model, policy = flat if kind == "flat" else factored
-    base = api.simulate(model, policy, random=4, seed=9, operator_model=parse_operator("uniform"))
-    assert _trace(api.simulate(model, policy, random=4, seed=9, operator_model=parse_operator("mistakes:0"))) == \
+    base = api.simulate(model, policy, EpisodeChoice(random=4, seed=9, operator_model=parse_operator("uniform")))
+    assert _trace(api.simulate(model, policy,
+                               EpisodeChoice(random=4, seed=9, operator_model=parse_operator("mistakes:0")))) == \
         _trace(base)
     waiting = Waiting(model.actions.index("wait"))  # the robot never acts: the world's draws stay aligned
-    calm = api.simulate(model, waiting, random=4, seed=9, operator_model=parse_operator("uniform"))
-    mistaken = api.simulate(model, waiting, random=4, seed=9, operator_model=parse_operator("mistakes:0.3"))
+    calm = api.simulate(model, waiting, EpisodeChoice(random=4, seed=9, operator_model=parse_operator("uniform")))
+    mistaken = api.simulate(model, waiting,
+                            EpisodeChoice(random=4, seed=9, operator_model=parse_operator("mistakes:0.3")))
     made = 0
     for a, b in zip(calm, mistaken):
         assert [s.operator_operations for s in a.steps] == [s.operator_operations for s in b.steps]

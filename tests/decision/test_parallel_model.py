@@ -15,7 +15,8 @@ from planner import chain_product, complete_product, make_plan
 from planner.decision import DiscreteUpdater, FactoredUpdater, PointBasedSolver, factored_model, lumped_pomdp
 from planner.decision.delayed_reveal import delayed_reveal_bound
 from planner.decision.episode_measures import episode_measures
-from planner.decision.factored_simulate import simulate_factored_episode
+from planner.decision.factored_simulate import PathWorld
+from planner.decision.simulate import simulate_episode
 from planner.decision.habits import habit_weights_from
 from planner.decision.solvers.warm_start import solver_bounds
 from planner.decision.online import OnlinePlanner, class_values, revealed_state_values
@@ -202,7 +203,7 @@ def test_a_simulated_step_after_next_is_the_robots_and_right(pen):
     model = factored_model(make_plan(pen, False), parallel=True)
     path, p = _right_pair(model)
     a = int(model.parallel.action[p])
-    episode = simulate_factored_episode(model, _Script([a], model.wait), path, np.random.default_rng(0))
+    episode = simulate_episode(PathWorld(model, path), _Script([a], model.wait), np.random.default_rng(0))
     first = episode.steps[0]
     assert first.robot_operation and not first.wrong_action
     assert first.reward == model.parallel.reward[p]
@@ -218,8 +219,8 @@ def test_a_simulated_step_after_next_the_operator_does_not_take_is_wrong(pen):
     path, p = _right_pair(model)
     par = model.parallel
     other = next(int(q) for q in range(par.size) if par.pair_class[q] == path[0] and int(par.step[q]) != path[1])
-    episode = simulate_factored_episode(model, _Script([int(par.action[other])], model.wait), path,
-                                        np.random.default_rng(0))
+    episode = simulate_episode(PathWorld(model, path), _Script([int(par.action[other])], model.wait),
+                               np.random.default_rng(0))
     first = episode.steps[0]
     assert first.wrong_action and not first.robot_operation and first.reward == model.rewards.wrong
     assert episode.path == path and first.position == 0

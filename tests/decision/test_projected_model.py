@@ -18,7 +18,8 @@ from planner import chain_product, complete_product, make_plan
 from planner.decision import DiscreteUpdater, FactoredUpdater, PointBasedSolver, factored_model, lumped_pomdp
 from planner.decision.delayed_reveal import delayed_reveal_bound
 from planner.decision.episode_measures import episode_measures
-from planner.decision.factored_simulate import simulate_factored_episode
+from planner.decision.factored_simulate import PathWorld
+from planner.decision.simulate import simulate_episode
 from planner.decision.habits import habit_weights_from
 from planner.decision.online import OnlinePlanner, class_values, revealed_state_values
 from planner.decision.budget import check_parallel_memory
@@ -252,8 +253,8 @@ def test_a_simulated_certain_help_is_the_robots_and_right():
     path = model.sequence(0)
     par = model.parallel
     p = int(np.flatnonzero(par.pair_class == path[0])[0])
-    episode = simulate_factored_episode(model, _Script([int(par.action[p])], model.wait), path,
-                                        np.random.default_rng(0))
+    episode = simulate_episode(PathWorld(model, path), _Script([int(par.action[p])], model.wait),
+                               np.random.default_rng(0))
     first = episode.steps[0]
     assert first.robot_operation and not first.wrong_action and first.reward == par.reward[p]
     assert episode.path[0] == int(par.robot_edge[p]) and episode.finished

@@ -12,7 +12,8 @@ from planner import make_plan
 from planner.decision import intention_model
 from planner.decision.belief_plot import episode_trace, plot_beliefs
 from planner.decision.episode import Episode, Step
-from planner.decision.simulate import confidence_text, decision_times, evaluate_policy, simulate_episode
+from planner.decision.episodes import EpisodeChoice, evaluate
+from planner.decision.simulate import IntentionWorld, confidence_text, decision_times, simulate_episode
 from planner.decision.solvers import PointBasedSolver
 
 MEASURES = {"robot_operations", "operator_operations", "wrong_robot_actions", "first_help_step", "confident_step",
@@ -37,7 +38,7 @@ def test_episodes_reach_the_finished_product(solved, decision):
     graph = decision.graph
     rng = np.random.default_rng(0)
     for start in graph.full_sequences():
-        episode = simulate_episode(model, result.policy, int(start), rng, successor=graph.successor, final=0)
+        episode = simulate_episode(IntentionWorld(model, start, graph.successor, final=0), result.policy, rng)
         assert episode.steps[-1].state == 0  # the finished product
         assert episode.steps[-1].operator_operations <= 5  # the pen takes five operations in all
         assert all(abs(b.sum() - 1) < 1e-9 for b in episode.beliefs)
@@ -49,18 +50,18 @@ def test_operator_taking_turns_acts_every_step(solved, decision):
     model, result = solved
     graph = decision.graph
     wait = model.actions.index("wait")
-    episode = simulate_episode(model, result.policy, int(graph.full_sequences()[0]), np.random.default_rng(0),
-                               successor=graph.successor, final=0, operator="turns")
+    episode = simulate_episode(IntentionWorld(model, graph.full_sequences()[0], graph.successor, final=0),
+                               result.policy, np.random.default_rng(0), operator="turns")
     for before, step in zip([None] + episode.steps, episode.steps):
         if step.action == wait:  # waiting, the operator always does its next operation
             previous = before.operator_operations if before else 0
             assert step.operator_operations == previous + 1
 
 
-def test_evaluation_brackets_the_bounds(solved):
+def test_evaluation_brackets_the_bounds(solved, decision):
     model, result = solved
-    mean, half, returns = evaluate_policy(model, result.policy, 2000, seed=1, final=0)
-    assert len(returns) == 2000 and half > 0
+    mean, half = evaluate(decision, result.policy, EpisodeChoice(random=2000, seed=1))  # to the finished product
+    assert half > 0
     # The policy's value at b0 is at least its lower bound; the upper bound caps every policy.
     assert result.lower_bound - 3 * half <= mean <= result.upper_bound + 3 * half
 
@@ -68,8 +69,8 @@ def test_evaluation_brackets_the_bounds(solved):
 def test_plot_files(tmp_path, solved, decision, monkeypatch):
     model, result = solved
     graph = decision.graph
-    episodes = [simulate_episode(model, result.policy, int(s), np.random.default_rng(2), successor=graph.successor,
-                                 final=0) for s in graph.full_sequences()[:3]]
+    episodes = [simulate_episode(IntentionWorld(model, s, graph.successor, final=0), result.policy,
+                                 np.random.default_rng(2)) for s in graph.full_sequences()[:3]]
     with pyplot_untouched(monkeypatch):
         written = plot_beliefs([episode_trace(model, e, f"sequence {e.start}") for e in episodes],
                                str(tmp_path / "fig7"), "pen")
@@ -154,7 +155,8 @@ def test_the_pen_robot_is_confident_within_the_papers_range():
     from planner.decision.factored_model import factored_model
 
     model = factored_model(make_plan(api.resolve_product("pen")))
-    episodes = api.simulate(model, api.online_planner(model, None, 100), every=True, operator="turns")
+    episodes = api.simulate(model, api.online_planner(model, None, 100),
+                            api.EpisodeChoice(every=True, operator="turns"))
     confident = [e.first_confident(0.9) for e in episodes]
     assert len(episodes) == 24 and all(e.finished for e in episodes)
     assert {c for c in confident if c is not None} <= {2, 3, 4} and 2 in confident and 4 in confident

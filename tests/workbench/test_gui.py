@@ -177,6 +177,22 @@ def panels_at_default_width():
     plan = state().plan
     product = workflow.analysis_product(find_analysis(FreeCAD.ActiveDocument))
     levels = replace(product, subassemblies=(Subassembly("writing unit", ("ink_001", "cartridge_001", "head_001")),))
+    # Simulate with a policy over the lumped model's classes (aplan solve --lumped; 20 trials, no clock): played
+    # on the factored model as aplan simulate --policy plays it, its belief plot in the dialog.
+    from planner import api as planner_api
+    from planner.decision.policy import write_policy
+    lumped = planner_api.lumped_model(product)
+    state().policy = os.path.join(os.path.dirname(COPY), "lumped.policy")
+    write_policy(planner_api.solve(lumped, None, iterations=20).policy, state().policy, lumped.pomdp.name)
+    ask, QtGui.QInputDialog.getInt = QtGui.QInputDialog.getInt, lambda *args, **kwargs: (3, True)
+    FreeCADGui.runCommand("Aplan_Simulate")
+    QtGui.QInputDialog.getInt = ask
+    settle()
+    shown = getattr(state(), "belief_dialog", None)
+    result["simulate"] = [status(), shown.findChild(QtGui.QLabel).text() if shown else None]
+    if shown:
+        shown.grab().save(os.path.join(ARTIFACTS, "gui_simulate_lumped.png"))
+        shown.close()
     caption = "The AND/OR graph, in the belief dialog of Simulate (a picture with its caption)."
     for name, dialog in (("plan", PlanDialog(product.name, plan["statistics"], plan["images"], window)),
                          ("levels", LevelsDialog(product.name, level_report(levels), window)),
@@ -402,6 +418,10 @@ def test_workbench_in_the_real_freecad_window(tmp_path):
     assert all(width <= data["combo_view_width"] for width in data["task_view_width"].values())
     assert data["cut_off"] == {name: [] for name in ("diagrams", "intent", "fasteners", "subassemblies", "plan3d",
                                                      "plan", "levels", "image")}, data["cut_off"]
+    # Simulate ran the lumped policy (before issue 24 it was refused, naming the session panel).
+    assert data["simulate"][1].startswith("Sequence 3 (lumped model): belief on the true intention"), data["simulate"]
+    belief = read_picture(ARTIFACTS / "gui_simulate_lumped.png")
+    assert belief.share(belief.dark()) >= 0.002 and belief.colours() >= 30
     for name in data["cut_off"]:
         # Text a person can read, not a blank or one-colour grab (measured: 0.37 to 3.5 % dark, 46 to 185 colours).
         panel = read_picture(ARTIFACTS / f"gui_panel_{name}.png")

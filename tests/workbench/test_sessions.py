@@ -15,7 +15,6 @@ from conftest import REPO
 from freecad_aplan.sessions import (
     ALL_LEVELS,
     base_part_in,
-    flat_level,
     is_prompt,
     level_choices,
     level_model,
@@ -179,11 +178,3 @@ def test_a_base_part_applies_to_the_levels_that_hold_it():
     assert base_part_in(top, "p1") is None  # p1 is built in s1, not at the top level
     model, _ = level_model(product, "top", base_part="p1")  # not refused: the top level starts anywhere
     assert model.pomdp.n_states == level_model(product, "top")[0].pomdp.n_states
-
-
-def test_simulate_takes_a_flat_level_and_names_the_session_panel_otherwise():
-    product = _chain_with_levels()
-    level_product, base = flat_level(product, "top", base_part="p1")
-    assert sorted(level_product.part_ids) == ["p3", "p4", "s1"] and base is None
-    with pytest.raises(PlannerError, match="Run a session"):
-        flat_level(chain_product(10), None)  # a chain of 10 parts: 986,410 intentions, past the limit

@@ -5,7 +5,7 @@ them into one value, built once per command and passed down.
 - :mod:`.products`: PRODUCT -> the product planned (:func:`product_from`; :func:`add_product_options`);
 - :mod:`.models`: the decision model -> :class:`~planner.api.specs.ModelSpec` (:func:`model_spec_from`);
 - :mod:`.planners`: who decides -> :class:`~planner.api.specs.PlannerChoice` (:func:`planner_choice_from`), and
-  the episodes of simulate and evaluate;
+  the episodes of simulate and evaluate -> :class:`~planner.api.specs.EpisodeChoice` (:func:`episode_choice_from`);
 - :mod:`.limits`: size limits (:func:`limits_from`) and input limits (:func:`inputs_from`);
 - :mod:`.geometry`: the engines' tolerances (:func:`tolerances_from`, :func:`contact_tolerances_from`);
 - :mod:`.outputs`: ``--force`` and the outputs checked before any work; :mod:`.values`: argparse types;
@@ -53,7 +53,14 @@ from .models import (
     parallel_from,
     rewards_from,
 )
-from .planners import add_episode_options, add_policy_options, online_budget, operator_model, planner_choice_from
+from .planners import (
+    add_episode_options,
+    add_policy_options,
+    episode_choice_from,
+    online_budget,
+    operator_model,
+    planner_choice_from,
+)
 from .advice import LONG_MESSAGE, add_verbose, advice, explain, offer_options
 
 __all__ = ["contact_tolerance", "decision_seconds", "designer_direction", "finite", "gibibytes", "index", "number",
@@ -64,5 +71,6 @@ __all__ = ["contact_tolerance", "decision_seconds", "designer_direction", "finit
            "add_tolerance_options", "contact_tolerances_from", "tolerances_from", "add_decision_options",
            "add_deviation_options", "add_habits_options", "add_parallel_options", "deviations_from", "habits_from",
            "model_spec_from", "parallel_from", "rewards_from", "add_episode_options", "add_policy_options",
+           "episode_choice_from",
            "online_budget", "operator_model", "planner_choice_from", "LONG_MESSAGE", "add_verbose", "advice",
            "explain", "offer_options"]

@@ -1,6 +1,7 @@
 """The planner bundle (who decides: ``--planner``, ``--policy``, ``--time-limit``, ``--decision-time``,
 ``--expansions``, read into one :class:`~planner.api.specs.PlannerChoice`) and the episode options of simulate and
-evaluate."""
+evaluate (read with simulate's ``--sequence``, ``--all``, ``--random`` and ``--operator``, or evaluate's
+``--episodes``, into one :class:`~planner.api.specs.EpisodeChoice`)."""
 from __future__ import annotations
 
 import argparse
@@ -11,9 +12,10 @@ from ...defaults import DECISION_TIME, DECISION_TIME_MAX, EXPANSION_LIMIT, POLIC
 from ...errors import PlannerError
 
 from .models import add_decision_options
-from .values import decision_seconds, number, positive_seconds, whole
+from .values import decision_seconds, index, number, positive_seconds
 
-__all__ = ["add_policy_options", "planner_choice_from", "online_budget", "add_episode_options", "operator_model"]
+__all__ = ["add_policy_options", "planner_choice_from", "online_budget", "add_episode_options", "episode_choice_from",
+           "operator_model"]
 
 
 def add_policy_options(parser: argparse.ArgumentParser) -> None:
@@ -54,7 +56,8 @@ def online_budget(args: argparse.Namespace) -> tuple[float | None, int | None]:
 
 def add_episode_options(parser: argparse.ArgumentParser) -> None:
     """Options shared by simulate and evaluate."""
-    parser.add_argument("--seed", type=whole, default=0)
+    parser.add_argument("--seed", type=index, default=0, help="the random stream's seed, a whole number from 0 "
+                        "(default 0): the same seed plays the same episodes")
     parser.add_argument("--max-steps", type=number(1, STEP_LIMIT, integer=True), default=100, metavar="N",
                         help=f"steps per episode at most, 1 to {STEP_LIMIT:,} (default 100)")
     parser.add_argument("--operator-sequence", type=operator_model, metavar="SPEC", dest="operator_model",
@@ -70,6 +73,16 @@ def add_episode_options(parser: argparse.ArgumentParser) -> None:
                              "--seed before any episode, so two planners face the same operators. Default: the "
                              "model's initial belief (with --habits, the habits)")
     add_decision_options(parser)
+
+
+def episode_choice_from(args: argparse.Namespace) -> api.EpisodeChoice:
+    """The episodes ``args`` ask for, as one :class:`~planner.api.specs.EpisodeChoice`: simulate's
+    ``--sequence``, ``--all`` or ``--random`` and ``--operator``, or evaluate's ``--episodes`` (drawn at random),
+    with :func:`add_episode_options`' ``--seed``, ``--max-steps`` and ``--operator-sequence``."""
+    return api.EpisodeChoice(sequences=tuple(getattr(args, "sequence", None) or ()), every=getattr(args, "all", False),
+                             random=getattr(args, "random", None) or getattr(args, "episodes", None), seed=args.seed,
+                             max_steps=args.max_steps, operator=getattr(args, "operator", "model"),
+                             operator_model=args.operator_model)
 
 
 def operator_model(text: str):
