@@ -11,6 +11,7 @@ from ...decision.deviations import Deviations, deviations_of
 from ...decision.habits import Habits
 from ...decision.io.habits_file import read_habits
 from ...decision.presets import CONFIDENT, PRESETS, preset_habits, preset_rewards
+from ...decision.projected import PROJECTED, PROJECTED_CONFIDENCE
 from ...defaults import DISCOUNT
 from ...errors import PlannerError, UsageError
 
@@ -74,8 +75,9 @@ def add_parallel_options(group) -> None:
     group.add_argument("--projected", action="store_true",
                        help="the projected model: the robot may do any operation now, right when the operator's "
                             "sequence projected onto the new state (the parts it joined, joined) stays feasible "
-                            "(docs/parallel.md, The projected model; on the classes, as --parallel); --model paper "
-                            "turns it off")
+                            "(docs/parallel.md, The projected model; on the classes, as --parallel); acts from a "
+                            f"belief of {PROJECTED_CONFIDENCE:g} (--act-confidence {PROJECTED_CONFIDENCE:g}) unless "
+                            "--act-confidence or --reward-wrong is given; --model paper turns it off")
 
 
 def parallel_from(args: argparse.Namespace) -> bool | str:
@@ -92,11 +94,13 @@ def parallel_from(args: argparse.Namespace) -> bool | str:
 
 
 def rewards_from(args: argparse.Namespace) -> Rewards:
-    """The rewards of ``args``: ``--reward-wrong``, else ``--act-confidence``'s, else the ``--model`` preset's
-    (:func:`planner.decision.presets.preset_rewards`)."""
+    """The rewards of ``args``: ``--reward-wrong``, else ``--act-confidence``'s, else the more careful of the
+    ``--model`` preset's and the projected model's own (``--projected``: :data:`~planner.decision.projected.
+    PROJECTED_CONFIDENCE`), else the paper's (:func:`planner.decision.presets.preset_rewards`)."""
+    own = ("--projected", PROJECTED_CONFIDENCE) if parallel_from(args) == PROJECTED else None
     return preset_rewards(PRESETS.get(getattr(args, "habit_model", None)), args.reward_unfavorable,
                           args.reward_favorable, args.reward_wait, args.reward_wrong,
-                          getattr(args, "act_confidence", None))
+                          getattr(args, "act_confidence", None), own)
 
 
 def habits_from(args: argparse.Namespace) -> Habits | None:
