@@ -60,7 +60,7 @@ from .factored_belief import FactoredBelief, _sum_by
 from .factored_sequences import FactoredSequences
 from .habits import weighted_fractions
 from .intention_model import WAIT, Rewards
-from .parallel import (ParallelTable, parallel_expected_rewards, parallel_flag, parallel_predict, parallel_rewards,
+from .parallel import (ParallelTable, parallel_expected_rewards, parallel_predict, parallel_rewards,
                        parallel_table)
 from .projected import PROJECTED, projected_table
 
@@ -403,12 +403,6 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     if parallel not in (False, True, "next", PROJECTED):
         raise PlannerError(f"unknown parallel model {parallel!r}: use False (the paper's), True or 'next' (the step "
                            f"after next) or {PROJECTED!r}")
-    if parallel and deviations is not None and deviations.switch:
-        # The bounds of the online planner and the solver are derived for each on its own; combined, waiting's
-        # redraw would also follow a parallel step, which no bound here accounts for yet.
-        flag = parallel_flag(parallel)
-        raise PlannerError(f"the parallel model ({flag}) and a change of mind (--switch) are not combined yet: "
-                           f"leave out one of them (--mistakes works with {flag})")
     if parallel:
         model = dataclasses.replace(model, parallel=projected_table(model) if parallel == PROJECTED
                                     else parallel_table(model))
