@@ -174,9 +174,10 @@ def _completion_share(model, projector: Projector, a: int, b: int) -> tuple[np.n
     return np.minimum(g, 1.0), phi
 
 
-def projected_table(model):
+def projected_table(model, rule: str = PROJECTED):
     """The projected model's pairs of a :class:`~planner.decision.factored_model.FactoredIntentionModel`
-    (module docstring) as a :class:`~planner.decision.parallel.ParallelTable` with ``rule = "projected"``
+    (module docstring) as a :class:`~planner.decision.parallel.ParallelTable` with ``rule`` (``"projected"``, or
+    ``"joins"`` when the model's actions are named by joins: the same pairs, read through ``class_action``)
     (``step`` is -1: the step that disappears depends on the whole sequence). Cost: module docstring."""
     from .parallel_table import ParallelTable
 
@@ -219,7 +220,7 @@ def projected_table(model):
               f, start)
     for x in arrays:
         x.flags.writeable = False
-    return ParallelTable(A, *arrays, rule=PROJECTED, projector=projector)
+    return ParallelTable(A, *arrays, rule=rule, projector=projector)
 
 
 def project_path(model, projector: Projector, path: list[int], position: int, robot_edge: int) -> list[int] | None:
