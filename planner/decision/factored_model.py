@@ -150,7 +150,7 @@ class FactoredIntentionModel(FactoredSequences):
 
     def operation(self, action: int) -> int | None:
         """The AND/OR operation the robot performs for ``action``; None for ``wait``. With actions named by joins,
-        the join's first operation (the one at the state the join's own AND/OR operation names)."""
+        the first operation of the join (one of the states it applies in: a session refuses joins for that)."""
         operation = int(self.action_operations[action])
         return None if operation < 0 else operation
 
