@@ -11,6 +11,10 @@ set) and reads the decision times from its ``run`` line (the CLI's default budge
 is passed through unchanged: ``-- --parallel`` or change-of-mind options as other parts of the model land
 (``-- --model paper`` measures the paper's model the same way). Targets (printed): median <= 100 ms, p95 <= 250
 ms, peak <= 2 GiB. Prints one line per product, or JSON with ``--json``.
+
+``--every-part RULE,...`` (``projected``, ``joins``, ``parallel``): every new part switched on, one run per
+rule on the same habits: ``--RULE --switch 0.05 --mistakes 0.02`` (help before the last step, a change of mind
+and mistakes, beside the habits), then EXTRA.
 """
 from __future__ import annotations
 
@@ -29,6 +33,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 from bench_habits import APLAN, learn_habits, synth_product  # noqa: E402
 
 TARGETS = {"median_ms": 100.0, "p95_ms": 250.0, "peak_mib": 2048.0}
+EVERY_PART = ["--switch", "0.05", "--mistakes", "0.02"]  # beside the habits and one rule of help (--every-part)
 
 
 def _simulate(product: Path, habits: Path, favourite: int, episodes: int, seed: int, extra: list[str]) -> dict:
@@ -56,23 +61,32 @@ def main() -> None:
     parser.add_argument("--logs", type=int, default=20)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--every-part", metavar="RULE,...", default=None,
+                        help="one run per rule (projected, joins, parallel) with --switch 0.05 --mistakes 0.02")
     args = parser.parse_args(argv)
+    runs = [extra] if args.every_part is None else \
+        [[f"--{rule}", *EVERY_PART, *extra] for rule in args.every_part.split(",") if rule]
     with tempfile.TemporaryDirectory() as folder:
         for k, spec in enumerate(args.products):
             path = synth_product(spec, Path(folder)) if ":" in spec else Path(spec)
             habits_path, favourite = learn_habits(path, args.logs, args.seed, Path(folder) / f"logs-{k}")
-            row = {"product": spec, "episodes": args.episodes, "extra": extra,
-                   **_simulate(path, habits_path, favourite, args.episodes, args.seed, extra)}
-            met = {key: row[key] <= limit for key, limit in TARGETS.items()}
-            row["targets_met"] = all(met.values())
-            if args.json:
-                print(json.dumps(row))
-            else:
-                print(f"{spec}: {row['decisions']} decisions, median {row['median_ms']:.1f} ms, p95 "
-                      f"{row['p95_ms']:.1f} ms, max {row['max_ms']:.1f} ms, peak {row['peak_mib']:.0f} MiB; targets "
-                      + ("met" if row["targets_met"] else "MISSED: " + ", ".join(k for k, ok in met.items() if not ok)))
-                print(f"  {row['command']}")
-            sys.stdout.flush()
+            for flags in runs:
+                _report(args, spec, flags, _simulate(path, habits_path, favourite, args.episodes, args.seed, flags))
+
+
+def _report(args, spec: str, extra: list[str], measured: dict) -> None:
+    """One line (or JSON row) per run: the figures against the targets, and the command."""
+    row = {"product": spec, "episodes": args.episodes, "extra": extra, **measured}
+    met = {key: row[key] <= limit for key, limit in TARGETS.items()}
+    row["targets_met"] = all(met.values())
+    if args.json:
+        print(json.dumps(row))
+    else:
+        print(f"{spec} {' '.join(extra)}: {row['decisions']} decisions, median {row['median_ms']:.1f} ms, p95 "
+              f"{row['p95_ms']:.1f} ms, max {row['max_ms']:.1f} ms, peak {row['peak_mib']:.0f} MiB; targets "
+              + ("met" if row["targets_met"] else "MISSED: " + ", ".join(k for k, ok in met.items() if not ok)))
+        print(f"  {row['command']}")
+    sys.stdout.flush()
 
 
 if __name__ == "__main__":

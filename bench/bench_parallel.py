@@ -5,8 +5,9 @@ share of the operations and of the operations it is able to do, its wrong action
 the mean discounted return.
 
 Run: ``.venv/bin/python bench/bench_parallel.py [--episodes 20] [--expansions 100] [--products pen,chain9,complete7]
-[--truck BUNDLE] [--pump BUNDLE] [--levels sa1,top] [--models paper,parallel,projected] [--habitual K]
-[--rewards U,F,W]`` (``BUNDLE``: ``aplan export-freecad ../shared/models/toy_truck/asm_cement_mixer_truck.FCStd
+[--truck BUNDLE] [--pump BUNDLE] [--levels sa1,top] [--models paper,parallel,projected,joins] [--habitual K]
+[--rewards U,F,W]`` (default: the paper's rewards, and the projected model's own act confidence for it, -490
+as ``aplan --projected``; ``BUNDLE``: ``aplan export-freecad ../shared/models/toy_truck/asm_cement_mixer_truck.FCStd
 -o BUNDLE``, the pump's with ``--group outlet=21_001,26_001``; its levels as ``aplan session BUNDLE --fasteners
 auto --subassemblies auto`` plans them; ``--levels``: only those). ``--habitual K``: instead, an operator who does sequence ``K``
 80 % of the time (``habitual:K:0.8``), both models with the habits counted from 20 other plans of that operator
@@ -32,6 +33,8 @@ from planner.decision.habits import add_sequence, habit_weights_from  # noqa: E4
 from planner.decision.intention_model import Rewards  # noqa: E402
 from planner.decision.online import OnlinePlanner  # noqa: E402
 from planner.decision.operators import parse_operator  # noqa: E402
+from planner.decision.presets import preset_rewards  # noqa: E402
+from planner.decision.projected import PROJECTED_CONFIDENCE  # noqa: E402
 
 
 def _products(names: list[str], bundles: list[tuple[str, str]], levels: set[str] | None):
@@ -95,7 +98,7 @@ def _run(plan, parallel: bool | str, episodes: int, expansions: int, seed: int, 
     if parallel:  # and those whose expected reward beats waiting's (q r + (1 - q) wrong > wait)
         par = model.parallel
         worth = int((rewards.wrong + par.fraction * (par.reward - rewards.wrong) > rewards.wait).sum())
-        if parallel == "projected":  # the certain ones (q = 1: right for every completion of the class)
+        if parallel in ("projected", "joins"):  # the certain ones (q = 1: right for every completion of the class)
             certain = int((par.fraction > 1 - 1e-9).sum())
             pairs = f"{par.size:,} ({worth:,}) | {par.fraction.max(initial=0.0):.3f} | {certain:,} certain"
         else:
@@ -112,13 +115,14 @@ def main() -> int:
     parser.add_argument("--truck", metavar="BUNDLE")
     parser.add_argument("--pump", metavar="BUNDLE")
     parser.add_argument("--levels", metavar="ID,ID", help="only these levels of the bundles")
-    parser.add_argument("--models", default="paper,parallel", help="of paper, parallel, projected")
+    parser.add_argument("--models", default="paper,parallel", help="of paper, parallel, projected, joins")
     parser.add_argument("--habitual", type=int, metavar="K")
-    parser.add_argument("--rewards", default="10,-2,-50", metavar="U,F,W",
-                        help="unfavorable, favorable and wrong rewards (default the paper's 10,-2,-50)")
+    parser.add_argument("--rewards", default=None, metavar="U,F,W",
+                        help="unfavorable, favorable and wrong rewards (default the paper's 10,-2,-50, and for the "
+                             "projected model its own act confidence, as aplan's --projected: -490)")
     args = parser.parse_args()
-    rewards = Rewards(*(float(x) for x in args.rewards.split(",")), 0.0)
-    kinds = {"paper": False, "parallel": True, "projected": "projected"}
+    given = None if args.rewards is None else Rewards(*(float(x) for x in args.rewards.split(",")), 0.0)
+    kinds = {"paper": False, "parallel": True, "projected": "projected", "joins": "joins"}
     models = [m for m in args.models.split(",") if m]
     if not models or any(m not in kinds for m in models):
         raise SystemExit(f"--models: a list of {', '.join(kinds)}, got {args.models!r}")
@@ -130,6 +134,8 @@ def main() -> int:
     for name, product in _products([p for p in args.products.split(",") if p], bundles, levels):
         plan = make_plan(product)
         for label in models:
+            own = (f"--{label}", PROJECTED_CONFIDENCE) if label in ("projected", "joins") else None
+            rewards = given if given is not None else preset_rewards(None, 10.0, -2.0, 0.0, None, None, own)
             cpu = time.process_time()
             mean, half, t, pairs, _ = _run(plan, kinds[label], args.episodes, args.expansions, args.seed,
                                            args.habitual, rewards)

@@ -111,6 +111,12 @@ def _session(args: argparse.Namespace) -> int:
     level's id before the suffix), whose start event records the level."""
     if args.demo is not None and args.robot is not None:
         raise UsageError("--demo simulates the robot too; leave out --robot")
+    if getattr(args, "joins", False) and getattr(args, "habit_model", None) != "paper":
+        # A join is one AND/OR operation per state, and a session's robot is told the operation: which one
+        # depends on a state the session does not know for sure (docs/parallel.md, Actions named by joins).
+        raise UsageError("--joins names the robot's actions by the parts they join; a session's robot performs "
+                         "AND/OR operations, so it is not combined with aplan session yet: use --projected here "
+                         "(aplan simulate and evaluate take --joins)")
     if args.keyboard is False and args.quiet_frames <= args.debounce:
         raise UsageError(f"--quiet-frames {args.quiet_frames} must be more than --debounce {args.debounce} (a quiet "
                          "period is counted in debounced frames); raise --quiet-frames or lower --debounce")

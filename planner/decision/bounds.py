@@ -142,6 +142,7 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
     arrive = np.full(len(model.paths), np.nan)  # W(t)
     later = np.full(len(model.paths), np.nan)   # W2(t)
     arrive[model.final_state] = later[model.final_state] = run.final_value
+    redraws = np.full(len(model.paths), np.nan) if sigma else None  # a redraw's value per state (the pairs')
     for lo, hi in _level_blocks(model):  # states with k + 1 blocks: their targets are done already
         classes = model.state_classes[model.state_class_start[lo]:model.state_class_start[hi]]
         target, source = model.class_target[classes], model.class_source[classes]
@@ -151,11 +152,15 @@ def class_values(model: FactoredIntentionModel) -> ClassValues:
         can = model.class_action[classes] >= 0
         m = np.where(can, model.class_match_reward[classes] + g * (w + w2) / 2, -np.inf)
         v = np.maximum(np.maximum(stay_wait, stall), m)
-        parallel_level(model, classes, v, value, arrive, pair_q)
+        other = np.maximum(stall, m)
+        parallel_level(model, classes, v, value, arrive, pair_q, redraws, other)
         wait[classes] = r.wait + g * (v + w) / 2
         if sigma:  # a change of mind couples a state's classes: waiting's value by a fixed point per state
-            v, x = switch_wait_values(model, classes, source - lo, hi - lo, w, np.maximum(stall, m), top)
+            v, x = switch_wait_values(model, classes, source - lo, hi - lo, w, other, top)
             wait[classes] = r.wait + g * ((1 - sigma) * (v + w) + sigma * x) / 2
+            if pair_q is not None:  # the pairs' Q-values with the final V(c) (their fixed points are in it)
+                redraws[source] = x
+                parallel_level(model, classes, v, value, arrive, pair_q, redraws)
         value[classes], match[classes] = v, m
         wrong[classes] = r.wrong + g * v
         fraction = model.class_fraction[classes]
@@ -190,6 +195,7 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
     revealed = np.full(S, np.nan)   # VT(t)
     arrive = np.full(S, np.nan)     # A(t)
     revealed[model.final_state] = arrive[model.final_state] = run.final_value
+    redraws = np.full(S, np.nan) if sigma else None  # a redraw's value per state (the pairs')
     for lo, hi in _level_blocks(model):
         classes = model.state_classes[model.state_class_start[lo]:model.state_class_start[hi]]
         target, source, f = model.class_target[classes], model.class_source[classes] - lo, model.class_fraction[classes]
@@ -203,14 +209,20 @@ def revealed_state_values(model: FactoredIntentionModel, known: ClassValues | No
         best = np.full(hi - lo, -np.inf)
         np.maximum.at(best, source, tried)
         v = np.maximum(np.maximum((r.wait + g * revealed[target] / 2) / (1 - g / 2), stall), m)
+        other = np.maximum(stall, m)
+        if sigma:  # after a redraw the robot knows the state, not the class: at most the classes' mean
+            if pair_q is not None:
+                parallel_level(model, classes, v, value, revealed, pair_q, redraws, other)
+            v, x = switch_wait_values(model, classes, source, hi - lo, revealed[target], other, top)
+            wait[classes] = r.wait + g * ((1 - sigma) * (v + revealed[target]) + sigma * x) / 2
+            if pair_q is not None:
+                redraws[lo + source] = x
         if pair_q is not None:  # the parallel model: the pairs in V(c), and every try (a match or a pair) at t
-            parallel_level(model, classes, v, value, revealed, pair_q)
+            parallel_level(model, classes, v, value, revealed, pair_q, redraws)
             best = parallel_tries(model, classes, source, hi - lo, m, can, pair_q, known_value)
         revealed[lo:hi] = np.maximum(np.maximum((r.wait + g * arrive[lo:hi] / 2) / (1 - g / 2), stall), best)
-        wait[classes] = r.wait + g * (v + revealed[target]) / 2
-        if sigma:  # after a redraw the robot knows the state, not the class: at most the classes' mean
-            v, x = switch_wait_values(model, classes, source, hi - lo, revealed[target], np.maximum(stall, m), top)
-            wait[classes] = r.wait + g * ((1 - sigma) * (v + revealed[target]) + sigma * x) / 2
+        if not sigma:
+            wait[classes] = r.wait + g * (v + revealed[target]) / 2
         value[classes], match[classes] = v, m
         wrong[classes] = r.wrong + g * v
     return run.values(revealed)

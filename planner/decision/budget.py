@@ -24,6 +24,7 @@ from .intention_model import _BYTES_PER_INTENTION, _BYTES_PER_INTENTION_ACTION, 
 from .lumped_model import lumped_pomdp_bytes
 from .bounds import VALUE_BLOCK
 from .parallel import parallel_bytes, parallel_candidates, parallel_flag
+from .joins import JOINS
 from .projected import PROJECTED, projected_bytes, projected_candidates
 from .pomdp import POMDP
 from .solvers.tables import pomdp_bytes, solver_bytes
@@ -190,7 +191,7 @@ def check_parallel_memory(plan, budget: int, rule: bool | str = True) -> None:
     with the plan held, would not fit in ``budget`` bytes (:class:`~planner.errors.MemoryLimitError`, with the
     estimate and the options). Cost: O(E)."""
     states = plan.states
-    projected = rule == PROJECTED
+    projected = rule in (PROJECTED, JOINS)
     pairs = projected_bytes(states) if projected else parallel_bytes(states)
     needed = plan_bytes(plan) + online_bytes(states.n_states, states.n_edges) + pairs
     if needed > budget:

@@ -60,8 +60,9 @@ from .factored_belief import FactoredBelief, _sum_by
 from .factored_sequences import FactoredSequences
 from .habits import weighted_fractions
 from .intention_model import WAIT, Rewards
-from .parallel import (ParallelTable, parallel_expected_rewards, parallel_flag, parallel_predict, parallel_rewards,
+from .parallel import (ParallelTable, parallel_expected_rewards, parallel_predict, parallel_rewards,
                        parallel_table)
+from .joins import JOINS, join_actions
 from .projected import PROJECTED, projected_table
 
 __all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model", "factored_model_bytes"]
@@ -108,6 +109,7 @@ class FactoredIntentionModel(FactoredSequences):
     parallel: ParallelTable | None = None  # the parallel model's pairs (docs/parallel.md); None: the paper's
     deviations: Deviations | None = None  # change of mind and mistakes (deviations.py), None for the paper's
     switch_share: np.ndarray | None = None  # per class, its share of a redraw at its state (with deviations)
+    action_names: tuple[str, ...] | None = None  # actions named by joins (joins.py): their names; None: operations
 
     @property
     def name(self) -> str:
@@ -115,7 +117,10 @@ class FactoredIntentionModel(FactoredSequences):
 
     @property
     def actions(self) -> tuple[str, ...]:
-        """The robot-capable operations in AND/OR order (named as in the flat model), then ``wait``."""
+        """The robot-capable operations in AND/OR order (named as in the flat model), then ``wait``; with actions
+        named by joins (:mod:`~planner.decision.joins`), the joins."""
+        if self.action_names is not None:
+            return tuple(f"a{k}:{name}" for k, name in enumerate(self.action_names)) + (WAIT,)
         describe = self.plan.andor.describe
         robot = self.action_operations[:-1]
         return tuple(f"a{k}:" + describe(int(op)).replace(" ", "") for k, op in enumerate(robot)) + (WAIT,)
@@ -144,7 +149,8 @@ class FactoredIntentionModel(FactoredSequences):
         return len(self.action_operations) - 1
 
     def operation(self, action: int) -> int | None:
-        """The AND/OR operation the robot performs for ``action``; None for ``wait``."""
+        """The AND/OR operation the robot performs for ``action``; None for ``wait``. With actions named by joins,
+        the first operation of the join (one of the states it applies in: a session refuses joins for that)."""
         operation = int(self.action_operations[action])
         return None if operation < 0 else operation
 
@@ -344,7 +350,8 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     habits, :func:`~planner.decision.habits.habit_weights`; module docstring), None for the paper's model.
     ``parallel``: the parallel model (True or ``"next"``, :mod:`~planner.decision.parallel`: the robot may do the
     step after next) or ``"projected"`` (:mod:`~planner.decision.projected`: any operation, the operator's
-    sequence projected onto the new state); False: the paper's.
+    sequence projected onto the new state) or ``"joins"`` (the same, the actions named by the parts they join:
+    :mod:`~planner.decision.joins`); False: the paper's.
     ``deviations``: change of mind and mistakes (:mod:`~planner.decision.deviations`), None for the paper's.
 
     Cost: O(S + E log E) time and O(S + E) memory for S states and E state edges (one sort of the edges by
@@ -376,9 +383,18 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     keys = np.sort(states.edge_target.astype(np.int64)[seen != 0] * Z + seen[seen != 0])
     keys = keys[np.r_[True, keys[1:] != keys[:-1]]] if keys.size else keys  # distinct (a sort beats hashing)
     emit_weight = 1.0 / (np.bincount(keys // Z, minlength=S) + BLANK_WEIGHT)
+    if parallel not in (False, True, "next", PROJECTED, JOINS):
+        raise PlannerError(f"unknown parallel model {parallel!r}: use False (the paper's), True or 'next' (the step "
+                           f"after next), {PROJECTED!r} or {JOINS!r} (the projected model, actions named by joins)")
     robot_ops = np.flatnonzero(plan.tags.robot)
     action_of_op = np.full(len(plan.andor.operations), -1, dtype=np.int64)
-    action_of_op[robot_ops] = np.arange(len(robot_ops))
+    action_names = None
+    if parallel == JOINS:  # one action per join (joins.py): the operations that share it share the action
+        joined, first, action_names = join_actions(plan, robot_ops)
+        action_of_op[robot_ops] = joined
+        robot_ops = first
+    else:
+        action_of_op[robot_ops] = np.arange(len(robot_ops))
     class_action = np.where(operation >= 0, action_of_op[np.maximum(operation, 0)], -1).astype(index)
     match = np.where(plan.tags.unfavorable[np.maximum(operation, 0)], rewards.unfavorable, rewards.favorable)
     action_operations = np.append(robot_ops, -1)
@@ -399,18 +415,9 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     for a in arrays + tuple(a for a in (class_weights, log_weight) if a is not None):
         a.flags.writeable = False
     model = FactoredIntentionModel(plan, rewards, discount, *arrays, base_part=base_part, weights=class_weights,
-                                   class_log_weight=log_weight)
-    if parallel not in (False, True, "next", PROJECTED):
-        raise PlannerError(f"unknown parallel model {parallel!r}: use False (the paper's), True or 'next' (the step "
-                           f"after next) or {PROJECTED!r}")
-    if parallel and deviations is not None and deviations.switch:
-        # The bounds of the online planner and the solver are derived for each on its own; combined, waiting's
-        # redraw would also follow a parallel step, which no bound here accounts for yet.
-        flag = parallel_flag(parallel)
-        raise PlannerError(f"the parallel model ({flag}) and a change of mind (--switch) are not combined yet: "
-                           f"leave out one of them (--mistakes works with {flag})")
+                                   class_log_weight=log_weight, action_names=action_names)
     if parallel:
-        model = dataclasses.replace(model, parallel=projected_table(model) if parallel == PROJECTED
+        model = dataclasses.replace(model, parallel=projected_table(model, parallel) if parallel in (PROJECTED, JOINS)
                                     else parallel_table(model))
     if deviations is None:
         return model

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..assembly.intentions import allowed_edges
 from .parallel_table import ParallelTable
+from .joins import JOINS
 from .projected import PROJECTED, projected_rewrite
 
 __all__ = ["ParallelTable", "parallel_table", "parallel_flag", "parallel_rewrite", "parallel_bytes",
@@ -40,8 +41,10 @@ CANDIDATE_BYTES = 100
 
 
 def parallel_flag(rule: bool | str) -> str:
-    """The command-line flag of a parallel model (``True``/``next``: ``--parallel``, ``projected``: ``--projected``)."""
-    return "--projected" if rule == PROJECTED else "--parallel"
+    """The command-line flag of a parallel model (``True``/``next``: ``--parallel``, ``projected``: ``--projected``,
+    ``joins``: ``--joins``)."""
+    return {PROJECTED: "--projected", JOINS: "--joins"}.get(rule, "--parallel") if isinstance(rule, str) \
+        else "--parallel"
 
 
 def parallel_candidates(states) -> int:
@@ -140,7 +143,7 @@ def parallel_rewrite(model, path: list[int], position: int, action: int) -> list
     path's next one: the episode counts it as the robot's, with its reward), else ``path`` itself."""
     if model.parallel is None or position >= len(path):
         return path
-    if model.parallel.rule == PROJECTED:
+    if model.parallel.rule in (PROJECTED, JOINS):
         return projected_rewrite(model, path, position, action)
     if position + 1 >= len(path):
         return path

@@ -38,10 +38,17 @@ def parallel_rows(model, wait: sp.csr_matrix) -> list[tuple[sp.csr_matrix, np.nd
 
 
 def parallel_level(model, classes: np.ndarray, v: np.ndarray, value: np.ndarray, arrive: np.ndarray,
-                   out: np.ndarray) -> None:
+                   out: np.ndarray, redraw: np.ndarray | None = None, other: np.ndarray | None = None) -> None:
     """One level block of a backward pass (module docstring): raise ``v`` (the values of ``classes``, in
     place) to each pair's self-loop fixed point, then write each pair's Q-value into ``out`` (per pair).
-    ``value``: per class, ``arrive``: per state, both known on the levels nearer the finished product."""
+    ``value``: per class, ``arrive``: per state, both known on the levels nearer the finished product.
+
+    With a change of mind (``sigma``, :mod:`~planner.decision.deviations`) the operator's step after the robot's
+    is a redraw first: ``X = r + g ((1 - sigma) (V(e') + arrive(target e')) + sigma redraw(s')) / 2``, ``redraw``
+    per state the redraw's value ``sum over the classes c' of s' of share(c') (V(c') + arrive(target c'))``
+    (:func:`~planner.decision.deviations.switch_wait_values`' ``X``, known at ``s' = source(e')``, one level
+    nearer). ``other`` (per class of ``classes``, in place): also raised to the pairs' fixed points, for the
+    caller's fixed point of waiting."""
     par = model.parallel
     if par is None:
         return
@@ -50,9 +57,16 @@ def parallel_level(model, classes: np.ndarray, v: np.ndarray, value: np.ndarray,
         return
     g, wrong = model.discount, model.rewards.wrong
     after = par.target[p].astype(np.int64)
-    x = par.reward[p] + g * (value[after] + arrive[model.class_target[after]]) / 2
+    stay_or_advance = value[after] + arrive[model.class_target[after]]
+    if redraw is not None:
+        sigma = model.deviations.switch
+        stay_or_advance = (1 - sigma) * stay_or_advance + sigma * redraw[model.class_source[after]]
+    x = par.reward[p] + g * stay_or_advance / 2
     q = par.fraction[p]
-    np.maximum.at(v, k, (q * x + (1 - q) * wrong) / (1 - (1 - q) * g))
+    fixed = (q * x + (1 - q) * wrong) / (1 - (1 - q) * g)
+    np.maximum.at(v, k, fixed)
+    if other is not None:
+        np.maximum.at(other, k, fixed)
     out[p] = q * x + (1 - q) * (wrong + g * v[k])
 
 

@@ -76,14 +76,23 @@ def act_confidence_of(rewards: Rewards) -> float:
 
 
 def preset_rewards(preset: ModelPreset | None, unfavorable: float, favorable: float, wait: float,
-                   wrong: float | None, act_confidence: float | None) -> Rewards:
+                   wrong: float | None, act_confidence: float | None,
+                   model_confidence: tuple[str, float] | None = None) -> Rewards:
     """The rewards of a command: ``wrong`` if given, else the one of ``act_confidence`` if given, else the
-    preset's confidence, else the paper's -50 (the user's explicit choice wins over the preset's)."""
+    larger (the more careful) of the preset's confidence and ``model_confidence`` (``(flag, C)``: the default
+    a model sets for itself, e.g. ``("--projected", 0.98)``), else the paper's -50 (the user's explicit choice
+    wins over both)."""
     if wrong is None:
-        confidence = act_confidence if act_confidence is not None else (
-            preset.act_confidence if preset is not None else None)
+        confidence, source = act_confidence, None
+        if confidence is None:
+            defaults = []
+            if preset is not None and preset.act_confidence is not None:
+                defaults.append((preset.act_confidence, f"--model {preset.name}"))
+            if model_confidence is not None:
+                defaults.append((model_confidence[1], model_confidence[0]))
+            confidence, source = max(defaults, default=(None, None))
         if confidence is not None and act_confidence is None and not unfavorable > wait:
-            raise UsageError(f"--model {preset.name} sets --act-confidence {confidence:g}, which needs a right "
+            raise UsageError(f"{source} sets --act-confidence {confidence:g}, which needs a right "
                              f"operation that pays more than waiting: --reward-unfavorable {unfavorable:g} is not "
                              f"above --reward-wait {wait:g}; give --reward-wrong too")
         wrong = Rewards.wrong if confidence is None else wrong_for_confidence(confidence, unfavorable, wait)

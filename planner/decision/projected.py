@@ -53,10 +53,17 @@ import numpy as np
 
 from ..assembly.intentions import allowed_edges
 
-__all__ = ["PROJECTED", "Projector", "projected_table", "projected_candidates", "projected_bytes",
-           "projected_rewrite"]
+__all__ = ["PROJECTED", "PROJECTED_CONFIDENCE", "Projector", "projected_table", "projected_candidates",
+           "projected_bytes", "projected_rewrite"]
 
 PROJECTED = "projected"
+
+# The projected model's own default act confidence (docs/parallel.md, "How sure before a bet"): a robot that
+# may do any operation bets wherever its belief is spread over assembly states (the operation exists in some
+# of them only), and under the paper's -50 (C = 5/6) a calibrated bet is wrong up to 1/6 of the time. The issue's
+# tolerance for wrong actions (2 % of the robot's actions) as the one-step break-even belief: C = 0.98, wrong =
+# -490 with the paper's +10. The user's --reward-wrong or --act-confidence wins.
+PROJECTED_CONFIDENCE = 0.98
 
 # projected_table's peak per candidate (class, robot edge at its state), all included: measured 126 to 128
 # bytes on chain 13 and complete 8 (tracemalloc; 20 MB for 159,744 candidates, 32 MB for 248,039), the table
@@ -167,9 +174,10 @@ def _completion_share(model, projector: Projector, a: int, b: int) -> tuple[np.n
     return np.minimum(g, 1.0), phi
 
 
-def projected_table(model):
+def projected_table(model, rule: str = PROJECTED):
     """The projected model's pairs of a :class:`~planner.decision.factored_model.FactoredIntentionModel`
-    (module docstring) as a :class:`~planner.decision.parallel.ParallelTable` with ``rule = "projected"``
+    (module docstring) as a :class:`~planner.decision.parallel.ParallelTable` with ``rule`` (``"projected"``, or
+    ``"joins"`` when the model's actions are named by joins: the same pairs, read through ``class_action``)
     (``step`` is -1: the step that disappears depends on the whole sequence). Cost: module docstring."""
     from .parallel_table import ParallelTable
 
@@ -212,7 +220,7 @@ def projected_table(model):
               f, start)
     for x in arrays:
         x.flags.writeable = False
-    return ParallelTable(A, *arrays, rule=PROJECTED, projector=projector)
+    return ParallelTable(A, *arrays, rule=rule, projector=projector)
 
 
 def project_path(model, projector: Projector, path: list[int], position: int, robot_edge: int) -> list[int] | None:

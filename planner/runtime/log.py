@@ -5,7 +5,7 @@ seconds, to the millisecond):
 
 - ``start``: ``version``, ``product`` (the product itself, in the product file format), ``settings``
   (``base_part``: the part the model's sequences start from, or null; ``habits``: the operator habits the model
-  used, as the habits file holds them, or null; ``parallel``: the parallel model (true, or "projected"),
+  used, as the habits file holds them, or null; ``parallel``: the parallel model (true, "projected" or "joins"),
   docs/parallel.md; ``deviations``: ``{"switch": P, "mistake": Q}`` or null, docs/deviations.md; replay rebuilds
   the same model),
   ``n_intentions``, ``actions`` and ``observations`` (the model's names), ``top``;
@@ -232,9 +232,9 @@ def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel | Factor
     plan = make_plan(product)
     weights = _habit_weights(path, plan, settings.get("habits"))
     parallel = settings.get("parallel", False)  # logs before the parallel model have none: the paper's
-    if not (isinstance(parallel, bool) or parallel == "projected"):
-        raise SessionError(f"{path}: the start event's 'parallel' setting {parallel!r} is not true, false or "
-                           "\"projected\"; the log is damaged")
+    if not (isinstance(parallel, bool) or parallel in ("projected", "joins")):
+        raise SessionError(f"{path}: the start event's 'parallel' setting {parallel!r} is not true, false, "
+                           "\"projected\" or \"joins\"; the log is damaged")
     deviations = _deviations(path, settings.get("deviations"))
     model = (factored_model(plan, base_part=base_part, weights=weights, parallel=parallel, deviations=deviations)
              if start.get("belief_over") == BELIEF_OVER["factored"]

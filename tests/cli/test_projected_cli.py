@@ -7,11 +7,15 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from aplan_runner import run_aplan
 from planner import make_plan
 from planner.decision import factored_model, lumped_pomdp
+from planner.decision.intention_model import Rewards
 from planner.decision.io.pomdpx import read_pomdpx
+from planner.decision.presets import wrong_for_confidence
+from planner.decision.projected import PROJECTED_CONFIDENCE
 
 
 def test_model_paper_is_the_papers_file_and_on_the_projected_tables(pen, tmp_path):
@@ -22,7 +26,10 @@ def test_model_paper_is_the_papers_file_and_on_the_projected_tables(pen, tmp_pat
     done = run_aplan("pomdp", "pen", "--projected", "-o", c)  # the lumped model, without --lumped
     assert done.returncode == 0, done.stderr
     read = read_pomdpx(c)
-    expected = lumped_pomdp(factored_model(make_plan(pen), parallel="projected"))
+    # the projected model's own act confidence (0.98: -490) unless --reward-wrong or --act-confidence is given
+    rewards = Rewards(wrong=wrong_for_confidence(PROJECTED_CONFIDENCE))
+    assert rewards.wrong == pytest.approx(-490, rel=1e-12)
+    expected = lumped_pomdp(factored_model(make_plan(pen), rewards, parallel="projected"))
     assert np.abs(np.asarray(read.reward) - expected.reward).max() <= 1e-9
     for x, y in zip(read.transition, expected.transition):
         assert abs(x - y).max() <= 1e-9

@@ -131,6 +131,16 @@ def test_presets():
     assert preset_rewards(CONFIDENT, 10, -2, 0, None, None).wrong == pytest.approx(-10 * c / (1 - c), rel=1e-12)
     assert preset_rewards(CONFIDENT, 10, -2, 0, -70.0, None).wrong == -70.0
     assert preset_rewards(CONFIDENT, 10, -2, 0, None, 0.9).wrong == pytest.approx(-90, rel=1e-12)
+    # a model's own default confidence (--projected: 0.98): the more careful of it and the preset's; the user's wins
+    own = ("--projected", 0.98)
+    assert preset_rewards(None, 10, -2, 0, None, None, own).wrong == pytest.approx(-490, rel=1e-12)
+    assert preset_rewards(CONFIDENT, 10, -2, 0, None, None, own).wrong == pytest.approx(-490, rel=1e-12)
+    assert preset_rewards(CONFIDENT, 10, -2, 0, None, None, ("--projected", 0.9)).wrong == \
+        pytest.approx(-10 * c / (1 - c), rel=1e-12)
+    assert preset_rewards(None, 10, -2, 0, -70.0, None, own).wrong == -70.0
+    assert preset_rewards(None, 10, -2, 0, None, 0.9, own).wrong == pytest.approx(-90, rel=1e-12)
+    with pytest.raises(UsageError, match="--projected sets --act-confidence 0.98"):
+        preset_rewards(None, 0, -2, 0, None, None, own)
     h = Habits("pen", "0" * 16, 3.0, (("s", "o", 2.0),))
     assert preset_habits(PRESETS["paper"], h) is None
     assert preset_habits(PRESETS["habits"], h) is h

@@ -314,8 +314,19 @@ def test_a_growing_subassembly_the_step_after_next_sees_nothing_the_projection_e
     assert np.all(np.abs(par.fraction - 1) < 1e-9)
 
 
-def test_with_a_change_of_mind_it_is_refused_naming_its_flag():
+@pytest.mark.parametrize("rule", ["projected", True])
+def test_with_a_change_of_mind_the_bounds_are_value_iteration_and_lumped_agrees(pen, rule):
+    """A change of mind (``--switch``) with either parallel model: the pairs' right step is followed by the
+    operator's redraw, in the factored prediction and the lumped rows alike (they agree along random histories);
+    the class-MDP bound is value iteration on that lumped POMDP (the pairs' Q-values included) and the revealed
+    bound stays below it."""
     from planner.decision.deviations import Deviations
 
-    with pytest.raises(PlannerError, match=r"\(--projected\) and a change of mind"):
-        factored_model(make_plan(chain_product(4)), parallel="projected", deviations=Deviations(switch=0.1))
+    fact = factored_model(make_plan(pen, False), parallel=rule, deviations=Deviations(switch=0.2))
+    agree_along_random_histories(fact, seed=5, episodes=4)
+    V, Q = _value_iteration(lumped_pomdp(fact))
+    values = class_values(fact)
+    assert np.abs(values.value - V).max() <= 1e-8 and np.abs(values.q_matrix(fact) - Q).max() <= 1e-8
+    revealed = revealed_state_values(fact)
+    assert np.all(revealed.value <= values.value + 1e-9)
+    assert np.all(revealed.q_matrix(fact) <= Q + 1e-9)

@@ -11,6 +11,9 @@ from ...decision.deviations import Deviations, deviations_of
 from ...decision.habits import Habits
 from ...decision.io.habits_file import read_habits
 from ...decision.presets import CONFIDENT, PRESETS, preset_habits, preset_rewards
+from ...decision.joins import JOINS
+from ...decision.parallel import parallel_flag
+from ...decision.projected import PROJECTED, PROJECTED_CONFIDENCE
 from ...defaults import DISCOUNT
 from ...errors import PlannerError, UsageError
 
@@ -74,29 +77,38 @@ def add_parallel_options(group) -> None:
     group.add_argument("--projected", action="store_true",
                        help="the projected model: the robot may do any operation now, right when the operator's "
                             "sequence projected onto the new state (the parts it joined, joined) stays feasible "
-                            "(docs/parallel.md, The projected model; on the classes, as --parallel); --model paper "
-                            "turns it off")
+                            "(docs/parallel.md, The projected model; on the classes, as --parallel); acts from a "
+                            f"belief of {PROJECTED_CONFIDENCE:g} (--act-confidence {PROJECTED_CONFIDENCE:g}) unless "
+                            "--act-confidence or --reward-wrong is given; --model paper turns it off")
+    group.add_argument("--joins", action="store_true",
+                       help="the projected model with the robot's actions named by the parts they join (join P to "
+                            "Q: right in every state where that join is the next or a projected step), so the robot "
+                            "can act while unsure of the state (docs/parallel.md, Actions named by the parts they "
+                            "join); as --projected otherwise")
 
 
 def parallel_from(args: argparse.Namespace) -> bool | str:
     """The parallel model ``args`` ask for, as :func:`~planner.decision.factored_model.factored_model` takes it:
-    True (``--parallel``), ``"projected"`` (``--projected``) or False (neither, or ``--model paper``); both at
-    once is a :class:`~planner.errors.UsageError`."""
-    parallel, projected = bool(getattr(args, "parallel", False)), bool(getattr(args, "projected", False))
-    if parallel and projected:
-        raise UsageError("--parallel and --projected are two models of the robot's help before the last step: "
-                         "give one of them (docs/parallel.md)")
-    if getattr(args, "habit_model", None) == "paper":
+    True (``--parallel``), ``"projected"`` (``--projected``), ``"joins"`` (``--joins``) or False (none, or ``--model
+    paper``); two at once is a :class:`~planner.errors.UsageError`."""
+    given = [flag for flag in ("parallel", "projected", "joins") if getattr(args, flag, False)]
+    if len(given) > 1:
+        raise UsageError(f"{' and '.join('--' + f for f in given)} are models of the robot's help before the last "
+                         "step: give one of them (docs/parallel.md)")
+    if getattr(args, "habit_model", None) == "paper" or not given:
         return False
-    return "projected" if projected else parallel
+    return True if given[0] == "parallel" else given[0]
 
 
 def rewards_from(args: argparse.Namespace) -> Rewards:
-    """The rewards of ``args``: ``--reward-wrong``, else ``--act-confidence``'s, else the ``--model`` preset's
-    (:func:`planner.decision.presets.preset_rewards`)."""
+    """The rewards of ``args``: ``--reward-wrong``, else ``--act-confidence``'s, else the more careful of the
+    ``--model`` preset's and the projected model's own (``--projected``: :data:`~planner.decision.projected.
+    PROJECTED_CONFIDENCE`), else the paper's (:func:`planner.decision.presets.preset_rewards`)."""
+    rule = parallel_from(args)
+    own = (parallel_flag(rule), PROJECTED_CONFIDENCE) if rule in (PROJECTED, JOINS) else None
     return preset_rewards(PRESETS.get(getattr(args, "habit_model", None)), args.reward_unfavorable,
                           args.reward_favorable, args.reward_wait, args.reward_wrong,
-                          getattr(args, "act_confidence", None))
+                          getattr(args, "act_confidence", None), own)
 
 
 def habits_from(args: argparse.Namespace) -> Habits | None:
