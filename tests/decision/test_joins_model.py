@@ -11,9 +11,10 @@ import pytest
 from aplan_runner import run_aplan
 from planner import chain_product, make_plan
 from planner.decision import factored_model, lumped_pomdp
-from planner.decision.factored_simulate import simulate_factored_episode
+from planner.decision.factored_simulate import PathWorld
 from planner.decision.joins import join_actions
 from planner.decision.online import class_values
+from planner.decision.simulate import simulate_episode
 from test_parallel_model import _value_iteration, agree_along_random_histories
 from test_projected_model import _Script, _plan, _star
 
@@ -68,7 +69,7 @@ def test_a_join_the_sequence_needs_later_is_the_robots_operation():
     model = factored_model(make_plan(_star(4)), parallel="joins")
     path = model.sequence(0)
     last = int(model.class_action[path[-1]])
-    episode = simulate_factored_episode(model, _Script([last], model.wait), path, np.random.default_rng(0))
+    episode = simulate_episode(PathWorld(model, path), _Script([last], model.wait), np.random.default_rng(0))
     first = episode.steps[0]
     assert first.robot_operation and not first.wrong_action and episode.finished
     assert int(model.class_action[episode.path[0]]) == last and len(episode.path) == len(path)
