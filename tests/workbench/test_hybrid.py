@@ -83,3 +83,25 @@ def test_the_occt_bounds_are_whole_numbers_of_at_least_one():
         for bad in (0, -1, 2.5, True):
             with pytest.raises(GeometryError, match=f"{name} must be a whole number >= 1"):
                 Tolerances(**{name: bad})
+
+
+def test_the_face_weight_reaches_the_export(monkeypatch, tmp_path):
+    # export-freecad --occt-face-weight: the export job gets it too (its fallback rules: freecad_aplan.export).
+    from conftest import PEN_MODELS, require_shared
+
+    from freecad_aplan import plugin
+    from freecad_aplan.runner import FreeCADError
+
+    model = require_shared(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd")
+    jobs = []
+
+    def run_batch(action, arguments, freecadcmd=None):
+        jobs.append((action, arguments))
+        raise FreeCADError("stopped here")
+
+    monkeypatch.setattr(plugin, "run_batch", run_batch)
+    for tolerances in ({"face_weight": 123}, Tolerances(face_weight=456)):
+        with pytest.raises(FreeCADError, match="stopped here"):
+            plugin.export_bundle(model, tmp_path / "b", "occt", tolerances)
+    assert [(action, arguments["face_weight"]) for action, arguments in jobs] == [("export", 123), ("export", 456)]
+    assert list(tmp_path.iterdir()) == []  # nothing written
