@@ -1,8 +1,8 @@
 """Messy real CAD (issue 13, item 4): each part's mesh against its B-rep before and after the mesh check, and
 the exact (OCCT) engine on the real models, with its per-pair budget (needs FreeCAD).
 
-Run: ``.venv/bin/python bench/bench_messy_cad.py [--parts] [--occt] [--springs]`` (about a minute; with
---occt, several).
+Run: ``.venv/bin/python bench/bench_messy_cad.py [--parts] [--occt] [--springs] [--documents [--models]]``
+(about a minute; with --occt, several; --documents about 15 minutes on a loaded machine, --models adds 40).
 
 - *before*: the export's former tessellation (MeshPart Standard at the default deflections, duplicated
   points merged, holes filled); *after*: :func:`freecad_aplan.tessellation.checked_mesh` (the same first,
@@ -14,17 +14,27 @@ Run: ``.venv/bin/python bench/bench_messy_cad.py [--parts] [--occt] [--springs]`
   ``aplan export-freecad DOC -o BUNDLE --engine mesh|occt`` with the default flags otherwise, under
   ``prlimit --as`` 6 GiB: CPU seconds (the command and FreeCADCmd), peak memory, parts per fallback rule
   and the pairs OCCT left undecided. Before the OCCT bounds, the 10-turn spring ran past 10 minutes and 11 GB.
+- ``--documents [--engines mesh,occt] [--models]``: issue 26's test documents, built in FreeCAD as the tests
+  build them (tests/integration/interlock_documents.py: press fit, splined hub, captured part, caged ball;
+  tests/integration/test_cad_documents.py: a group with non-parts, a bearing with balls, linked documents;
+  the 10-turn spring of tests/workbench/spring_document.py), with ``--models`` the pen, the truck and the pump
+  too: per document and engine, ``aplan export-freecad DOC -o BUNDLE --engine E`` with the default flags: CPU
+  seconds of the command and its FreeCADCmd children (wall beside), the parts per fallback rule, the interlocked
+  pairs and what the interlock rules did with them, and the pairs OCCT left undecided (of them, those of a
+  sweep that lost a face).
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
+import resource
 import shutil
 import subprocess
 import sys
 import tempfile
 import time
+from collections import Counter
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -131,13 +141,77 @@ def _spring_rows(pitch: float = 4.0, turns=(10, 20)) -> list[str]:
     return rows
 
 
+def _document_row(name: str, model: Path, bundle: Path, engine: str) -> str:
+    """One row of ``--documents`` (module docstring)."""
+    from planner import load_product
+    from planner.assembly.feasibility import interlocked_pairs
+    from planner.assembly.interlocks import resolve_interlocks
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    done = subprocess.run([sys.executable, "-m", "planner", "export-freecad", str(model), "-o", str(bundle),
+                           "--engine", engine], capture_output=True, text=True, timeout=3600, cwd=ROOT)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
+    if done.returncode != 0:
+        return f"| {name} | {engine} | failed: {(done.stderr or done.stdout).strip()[-160:]} | | | | |"
+    product = load_product(bundle / "product.json")
+    rules = product.geometry.get("mesh_check", {}).get("rules", {})
+    pairs = product.geometry.get("analysis", {}).get("tolerances", {}).get("pairs", {})
+    found = interlocked_pairs(product)
+    _, decisions, unresolved = resolve_interlocks(product)
+    resolved = ", ".join(f"{rule} {n}" for rule, n in sorted(Counter(d.rule for d in decisions).items()))
+    lost = {frozenset((part, other)) for part, _, _ in pairs.get("sweeps_lost", ())
+            for other in product.part_ids if other != part} & {frozenset(p) for p in pairs.get("undecided", ())}
+    undecided = "-" if engine == "mesh" else f"{len(pairs.get('undecided', []))} ({len(lost)} with a part whose sweep lost a face)"
+    return (f"| {name} | {engine} | {len(product.parts)} | {cpu:.1f} ({wall:.0f}) | "
+            f"{', '.join(f'{rule} {len(ids)}' for rule, ids in rules.items() if ids)} | {len(found)}: "
+            f"{resolved or 'none'}{f', {len(unresolved)} unresolved' if unresolved else ''} | {undecided} |")
+
+
+def _documents(engines: list[str], models: bool) -> None:
+    """The ``--documents`` table (module docstring)."""
+    sys.path.insert(0, str(ROOT / "tests"))
+    from integration.interlock_documents import DOCUMENTS as INTERLOCKS
+    from integration.interlock_documents import SCRIPT as INTERLOCK_SCRIPT
+    from integration.test_cad_documents import BALLS, BUILD
+    from integration.test_cad_documents import DOCUMENTS as STRUCTURE
+
+    print("| document | engine | parts | export CPU s (wall s) | parts per rule | interlocked: resolved by rule "
+          "| OCCT pairs undecided |\n|---|---|---:|---:|---|---|---|")
+    with tempfile.TemporaryDirectory(prefix="aplan-documents-") as tmp:
+        folder = Path(tmp)
+        for name, script in (("interlocks", f"TMP = {tmp!r}\n" + INTERLOCK_SCRIPT),
+                             ("structure", BUILD.format(folder=tmp, repo=str(ROOT), balls=BALLS)),
+                             ("spring", SPRING_SCRIPT)):
+            path = folder / f"{name}_build.py"
+            path.write_text(script)
+            subprocess.run(["freecadcmd", str(path)], check=True, capture_output=True, timeout=900,
+                           env={**os.environ, "ROOT": str(ROOT), "OUT": str(folder / "spring.FCStd"),
+                                "PITCH": "4", "HEIGHT": "40"})
+        cases = [(n, folder / f"{n}.FCStd") for n in (*INTERLOCKS, *STRUCTURE, "spring")]
+        if models:
+            cases += [("pen (simplified)", MODELS / "bourjault_pen/simplified/asm_bourjault_ballpoint.FCStd"),
+                      *CASES]
+        for name, model in cases:
+            for engine in engines:
+                print(_document_row(name, model, folder / f"{name}_{engine}".replace(" ", "_"), engine), flush=True)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--parts", action="store_true", help="print the volume error of every part")
     parser.add_argument("--occt", action="store_true", help="also time the OCCT engine on both models")
     parser.add_argument("--pair-budget", type=float, help="the OCCT engine's budget per pair (default: its own)")
     parser.add_argument("--springs", action="store_true", help="only the helical springs of pitch 4 (10, 20 turns)")
+    parser.add_argument("--documents", action="store_true", help="issue 26's test documents (module docstring)")
+    parser.add_argument("--engines", default="mesh,occt", help="--documents: the engines, comma-separated")
+    parser.add_argument("--models", action="store_true", help="--documents: the pen, the truck and the pump too")
     args = parser.parse_args()
+    if args.documents:
+        _documents(args.engines.split(","), args.models)
+        return
     if args.springs:
         print("| turns | engine | CPU s | peak MB | parts per rule | pairs undecided |\n|---:|---|---:|---:|---|---:|")
         print("\n".join(_spring_rows()))

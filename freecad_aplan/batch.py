@@ -35,7 +35,9 @@ def _run(job: dict) -> dict:
         product, intent = export_model(**job, progress=(lambda text: print(note_line(text), flush=True))
                                        if notes else None)
         stored = None if intent is None else {"engine": intent.engine, "contact": intent.contact,
-                                              "interference": intent.interference, "depth": intent.depth}
+                                              "interference": intent.interference, "depth": intent.depth,
+                                              "face_weight": intent.occt_face_weight,
+                                              "prism_triangles": intent.occt_prism_triangles}
         return {"parts": len(product["parts"]), "warnings": product["geometry"]["warnings"], "intent": stored,
                 "diagrams": product["geometry"].get("analysis", {}).get("diagrams")}
     if action == "analyze-occt":

@@ -114,14 +114,14 @@ def _fallback_record(shape, mesh, rule: str) -> dict:
     return record
 
 
-def _fallback_detail(record: dict) -> str:
+def _fallback_detail(record: dict, face_weight: int = OCCT_FACE_WEIGHT) -> str:
     """The warning's words for a heavy part (:func:`_fallback_record`): why its exact shape is not used."""
     weight = record.get("weight", 0)
-    if weight <= OCCT_FACE_WEIGHT:
+    if weight <= face_weight:
         return ""
     ring = f"; its ring is {record['hull_ratio']:g} times its volume" if "hull_ratio" in record else ""
     return (f" (its exact shape is beyond the OCCT engine's bound: heaviest face weight {weight:,} > "
-            f"{OCCT_FACE_WEIGHT:,}{ring})")
+            f"{face_weight:,}, --occt-face-weight{ring})")
 
 
 def _report_check(part_id: str, check, rule: str, tolerance: float, warnings: list[str], detail: str = "") -> None:
@@ -150,7 +150,7 @@ def export_components(components, folder: str, source: str, warnings: list[str],
                       linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
                       angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION, extra: dict | None = None,
                       analysis: dict | None = None, mesh_tolerance: float = MESH_TOLERANCE,
-                      designer: dict | None = None, progress=None) -> dict:
+                      designer: dict | None = None, progress=None, face_weight: int = OCCT_FACE_WEIGHT) -> dict:
     """Write meshes, B-reps and ``product.json`` for ``components`` into ``folder`` (which must exist).
 
     Each mesh is checked against its B-rep (:func:`~freecad_aplan.tessellation.checked_mesh`): re-tessellated
@@ -162,7 +162,8 @@ def export_components(components, folder: str, source: str, warnings: list[str],
     ``extra``: more top-level keys of the product file (the designer intent's constraints and tags, stored
     diagrams); ``analysis``: the ``geometry.analysis`` record of where those diagrams came from; ``designer``:
     the ``geometry.designer`` record (the designer's directions and not-blocking marks);
-    ``progress(text)``, when given, is told each part before it is tessellated.
+    ``progress(text)``, when given, is told each part before it is tessellated; ``face_weight``: the OCCT
+    engine's bound that makes a part heavy (:func:`fallback_mesh`).
     """
     os.makedirs(os.path.join(folder, "meshes"), exist_ok=True)
     os.makedirs(os.path.join(folder, "breps"), exist_ok=True)
@@ -177,9 +178,10 @@ def export_components(components, folder: str, source: str, warnings: list[str],
         if mesh is None:
             raise GeometryError(f"part {component.id!r}: tessellation produced no triangles (tried "
                                 f"{', '.join(method for method, _, _ in check.tried)})")
-        rule, mesh = fallback_mesh(component.shape, mesh, check, linear_deflection, angular_deflection)
+        rule, mesh = fallback_mesh(component.shape, mesh, check, linear_deflection, angular_deflection, face_weight)
         checks[component.id] = {**check.as_dict(), "rule": rule, **_fallback_record(component.shape, mesh, rule)}
-        _report_check(component.id, check, rule, mesh_tolerance, warnings, _fallback_detail(checks[component.id]))
+        _report_check(component.id, check, rule, mesh_tolerance, warnings,
+                      _fallback_detail(checks[component.id], face_weight))
         mesh.write(os.path.join(folder, "meshes", name + ".stl"))
         component.shape.exportBrep(os.path.join(folder, "breps", name + ".brep"))
         part = {"id": component.id, "label": component.label, "mesh": f"meshes/{name}.stl",
@@ -238,13 +240,15 @@ def _stored_diagrams(intent, components, extra: dict) -> tuple[dict | None, str 
 def export_document(document, folder: str, source: str, groups=None, exclude=None, split_solids: bool = False,
                     linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
                     angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION,
-                    redetect: bool = False, progress=None) -> tuple[dict, "Intent | None"]:
+                    redetect: bool = False, progress=None, face_weight: int | None = None) -> tuple[dict, "Intent | None"]:
     """Export an open ``document`` with its stored designer intent into ``folder``.
 
     ``groups``, ``exclude`` and ``split_solids`` add to what the document's APLAN analysis says. The
     analysis' stored diagrams go into ``product.json`` when they cover exactly the exported components
     (same ids, made of the same objects) and ``redetect`` is False; when they do not fit, a warning in
     ``geometry.warnings`` says why, and the product has no contacts yet (a geometry engine fills them in).
+    ``face_weight``: the OCCT bound of the fallback rules (:func:`fallback_mesh`; None: the analysis'
+    ``OcctFaceWeight``, else the default).
     Returns the product (as written) and the intent (None without an analysis). Raises
     :class:`~freecad_aplan.intent.IntentError` when the intent names components the document does not have.
     """
@@ -300,21 +304,23 @@ def export_document(document, folder: str, source: str, groups=None, exclude=Non
     extra["x-freecad-objects"] = {c.id: list(c.objects) for c in result.components}
     product = export_components(result.components, folder, source, result.warnings, linear_deflection,
                                 angular_deflection, extra, recorded,
-                                designer=designer_record(intent) if intent is not None else None, progress=progress)
+                                designer=designer_record(intent) if intent is not None else None, progress=progress,
+                                face_weight=face_weight or (intent.occt_face_weight if intent is not None
+                                                            else OCCT_FACE_WEIGHT))
     return product, intent
 
 
 def export_model(model: str, folder: str, groups=None, exclude=None, split_solids: bool = False,
                  linear_deflection: float = DEFAULT_LINEAR_DEFLECTION,
                  angular_deflection: float = DEFAULT_ANGULAR_DEFLECTION,
-                 redetect: bool = False, progress=None) -> tuple[dict, "Intent | None"]:
+                 redetect: bool = False, progress=None, face_weight: int | None = None) -> tuple[dict, "Intent | None"]:
     """Open ``model`` (.FCStd or STEP) and export it with its stored intent into ``folder`` (see
     :func:`export_document`); returns the product and the intent."""
     already_open = {d.FileName for d in FreeCAD.listDocuments().values()}
     document = open_model(model)
     try:
         return export_document(document, folder, model, groups, exclude, split_solids, linear_deflection,
-                               angular_deflection, redetect, progress)
+                               angular_deflection, redetect, progress, face_weight)
     finally:
         if document.FileName not in already_open or not document.FileName:
             FreeCAD.closeDocument(document.Name)

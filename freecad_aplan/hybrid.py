@@ -21,7 +21,10 @@ Definitions
 - A relation OCCT leaves undecided (bounds, time limit) keeps the mesh engine's answer, relation by
   relation (a pair's contact; each motion of one part along one direction), and is reported: in the
   warnings, and in ``tolerances["pairs"]`` of the report (``mesh``: pairs settled on the meshes, ``occt``:
-  wholly decided by OCCT, ``undecided``: the pairs with a relation left, ``timed_out``).
+  wholly decided by OCCT, ``undecided``: the pairs with a relation left, ``timed_out``; and OCCT's bounds
+  ``face_weight``, ``prism_triangles`` with what they left undecided: ``heavy`` parts, ``sweeps_over`` their
+  triangle bound, ``sweeps_lost``: sweeps that lost a face OCCT could not sweep at all, e.g. a sphere or a
+  torus as NURBS, whose every pair along that direction keeps the mesh answer).
 
 This module does not import FreeCAD: OCCT runs in FreeCADCmd (:mod:`freecad_aplan.runner`).
 """
@@ -123,7 +126,9 @@ def merge_reports(mesh: GeometryReport, occt: dict, pairs, engine: str, fallback
               "occt": len(asked - undecided), "undecided": sorted(sorted(p) for p in undecided),
               "undecided_relations": len(occt.get("undecided_relations", [])),
               "timed_out": bool(occt.get("timed_out")), "time_limit": occt.get("time_limit"),
-              "fallback": dict(sorted(fallback.items()))}
+              "fallback": dict(sorted(fallback.items())),
+              **{k: occt[k] for k in ("face_weight", "prism_triangles", "sweeps_over", "sweeps_lost", "heavy")
+                 if occt.get(k)}}
     tolerances = {**mesh.tolerances, "pairs": record,
                   **({"occt": occt["tolerances"]} if engine == "occt" and "tolerances" in occt else {})}
     summary = (f"{engine} engine: {record['mesh']} pairs settled on the meshes, {record['occt']} decided by OCCT"
@@ -152,7 +157,8 @@ def mesh_then_occt(product: Product, meshes: list[PartMesh], tolerances: Toleran
         return merge_reports(report, {"contacts": [], "interferences": [], "obstructions": {}}, [], engine, fallback)
     arguments = {"contact": tolerances.contact, "interference": tolerances.interference, "depth": tolerances.depth,
                  "pair_budget": tolerances.pair_budget, "pair_steps": tolerances.pair_steps,
-                 "time_limit": tolerances.time_limit, "pairs": [list(p) for p in pairs],
+                 "time_limit": tolerances.time_limit, "face_weight": tolerances.face_weight,
+                 "prism_triangles": tolerances.prism_triangles, "pairs": [list(p) for p in pairs],
                  "directions": [list(v) for v in report.directions.values()]}
     print(f"occt: deciding {len(pairs)} of {len(meshes) * (len(meshes) - 1) // 2} pairs on the exact shapes "
           f"(at most {tolerances.time_limit:g} s)", file=sys.stderr, flush=True)

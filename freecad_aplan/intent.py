@@ -13,7 +13,9 @@ top of the geometry (everything is saved in the ``.FCStd`` and restored on reope
   none, ``auto`` for the most connected part, or a component id (an analysis saved before it existed gets
   the property, empty, when it is read or restored);
 - ``Engine`` and the tolerances of the geometry engines (``ContactTolerance``, ``InterferenceVolume``,
-  ``DepthTolerance``);
+  ``DepthTolerance``), and the exact engine's two bounds (``OcctFaceWeight``, ``OcctPrismTriangles``: the CLI's
+  ``--occt-face-weight`` and ``--occt-prism-triangles``, :class:`planner.geometry.Tolerances`; an analysis
+  saved before them gets them with their defaults);
 - ``Diagrams``: the connection and obstruction diagrams the last detection found (product-format JSON);
 - ``DesignerDirections`` (``X,Y,Z`` per entry) and ``NotBlocking`` (one JSON mark per entry): the designer's
   motion directions, tested like the axes, and relations marked not blocking, applied after every detection
@@ -41,7 +43,8 @@ from dataclasses import dataclass, field, fields, replace
 
 import FreeCAD
 
-from planner.defaults import BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME
+from planner.defaults import (BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, OCCT_FACE_WEIGHT,
+                              OCCT_PRISM_TRIANGLES)
 
 from .document import DocumentError
 
@@ -73,6 +76,8 @@ class Intent:
     contact: float = CONTACT_TOLERANCE
     interference: float = INTERFERENCE_VOLUME
     depth: float = BLOCKING_DEPTH
+    occt_face_weight: int = OCCT_FACE_WEIGHT
+    occt_prism_triangles: int = OCCT_PRISM_TRIANGLES
     diagrams: dict = field(default_factory=dict)
     directions: list[list[float]] = field(default_factory=list)
     not_blocking: list[dict] = field(default_factory=list)
@@ -99,6 +104,12 @@ _PROPERTIES = (
     ("ContactTolerance", "App::PropertyFloat", "Detection", "surfaces closer than this touch (mm)"),
     ("InterferenceVolume", "App::PropertyFloat", "Detection", "overlaps above this volume are reported (mm^3)"),
     ("DepthTolerance", "App::PropertyFloat", "Detection", "overlaps shallower than this do not block (mm)"),
+    ("OcctFaceWeight", "App::PropertyInteger", "Detection",
+     "occt engine: no OCCT call on a part whose heaviest face weighs more (B-spline poles x (degree + 1)^2): its "
+     "pairs keep the mesh engine's answer, and the export gives it a ring hull or its closest mesh"),
+    ("OcctPrismTriangles", "App::PropertyInteger", "Detection",
+     "occt engine: a face swept as triangles has at most this many, else that sweep's pairs keep the mesh "
+     "engine's answer"),
     ("Diagrams", "App::PropertyString", "Detection", "connection and obstruction diagrams found by the last detection"),
     ("DesignerDirections", "App::PropertyStringList", "Detection",
      "motion directions X,Y,Z tested like the axes at every detection (added in the diagrams panel)"),
@@ -130,6 +141,7 @@ class AnalysisProxy:
         defaults = Intent()
         obj.ContactTolerance, obj.InterferenceVolume, obj.DepthTolerance = (
             defaults.contact, defaults.interference, defaults.depth)
+        obj.OcctFaceWeight, obj.OcctPrismTriangles = defaults.occt_face_weight, defaults.occt_prism_triangles
         obj.setEditorMode("Diagrams", 2)  # hidden: edited through the task panel
 
     def execute(self, obj):
@@ -148,12 +160,17 @@ class AnalysisProxy:
     dumps, loads = __getstate__, __setstate__  # FreeCAD 0.21 and later
 
 
+_ADDED_DEFAULTS = {"OcctFaceWeight": OCCT_FACE_WEIGHT, "OcctPrismTriangles": OCCT_PRISM_TRIANGLES}  # not 0
+
+
 def _add_missing_properties(obj) -> None:
-    """Properties added since the analysis was saved (``BasePart``), with their defaults: an older analysis
-    reads as it did."""
+    """Properties added since the analysis was saved (``BasePart``, the OCCT bounds), with their defaults: an
+    older analysis reads as it did."""
     for name, kind, group, tip in _PROPERTIES:
         if name not in obj.PropertiesList:
             obj.addProperty(kind, name, group, tip)
+            if name in _ADDED_DEFAULTS:
+                setattr(obj, name, _ADDED_DEFAULTS[name])
 
 
 def is_analysis(obj) -> bool:
@@ -231,6 +248,15 @@ def _json_entries(analysis, prop: str) -> list[dict]:
     return entries
 
 
+def _bound(analysis, prop: str) -> int:
+    """The OCCT bound ``prop`` of ``analysis`` (its default when the analysis predates it); IntentError below 1."""
+    value = int(getattr(analysis, prop, _ADDED_DEFAULTS[prop]))
+    if value < 1:
+        raise IntentError(f"{analysis.Label}.{prop} must be a whole number >= 1, got {value} (default "
+                          f"{_ADDED_DEFAULTS[prop]:,}); set it in the analysis' properties (Detection)")
+    return value
+
+
 def read_intent(analysis) -> Intent:
     """The designer intent held by ``analysis``; raises :class:`IntentError` for a newer format or bad entries."""
     _check_version(analysis)
@@ -256,7 +282,10 @@ def read_intent(analysis) -> Intent:
                   operations=_json_entries(analysis, "OperationTags"),
                   base_part=str(getattr(analysis, "BasePart", "")).strip(), engine=str(analysis.Engine),
                   contact=float(analysis.ContactTolerance), interference=float(analysis.InterferenceVolume),
-                  depth=float(analysis.DepthTolerance), diagrams=diagrams, directions=directions,
+                  depth=float(analysis.DepthTolerance),
+                  occt_face_weight=_bound(analysis, "OcctFaceWeight"),
+                  occt_prism_triangles=_bound(analysis, "OcctPrismTriangles"),
+                  diagrams=diagrams, directions=directions,
                   not_blocking=not_blocking,
                   fasteners=_json_entries(analysis, "Fasteners") if "Fasteners" in analysis.PropertiesList else [],
                   subassemblies=(_json_entries(analysis, "Subassemblies")
@@ -273,6 +302,10 @@ def _write(analysis, intent: Intent) -> None:
     for name in ("contact", "interference", "depth"):
         if not getattr(intent, name) >= 0:
             raise IntentError(f"tolerance {name} must be >= 0, got {getattr(intent, name)!r}")
+    for name, prop in (("occt_face_weight", "OcctFaceWeight"), ("occt_prism_triangles", "OcctPrismTriangles")):
+        value = getattr(intent, name)
+        if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
+            raise IntentError(f"{analysis.Label}.{prop} must be a whole number >= 1, got {value!r}")
     parts = intent.diagrams.get("parts") or []
     base = intent.base_part.strip()
     if base not in ("", BASE_PART_AUTO) and parts and base not in parts:
@@ -291,6 +324,8 @@ def _write(analysis, intent: Intent) -> None:
         "ContactTolerance": float(intent.contact),
         "InterferenceVolume": float(intent.interference),
         "DepthTolerance": float(intent.depth),
+        "OcctFaceWeight": int(intent.occt_face_weight),
+        "OcctPrismTriangles": int(intent.occt_prism_triangles),
         "Diagrams": json.dumps(intent.diagrams, sort_keys=True) if intent.diagrams else "",
         "DesignerDirections": [",".join(f"{c:.9g}" for c in v) for v in intent.directions],
         "NotBlocking": [json.dumps(m, sort_keys=True) for m in intent.not_blocking],

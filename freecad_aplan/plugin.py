@@ -88,6 +88,10 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
             arguments["linear_deflection"] = linear_deflection
         if angular_deflection is not None:
             arguments["angular_deflection"] = angular_deflection
+        given = tolerances if isinstance(tolerances, dict) else {} if tolerances is None else \
+            {"face_weight": tolerances.face_weight}
+        if given.get("face_weight") is not None:  # the export's fallback rules (a heavy part's ring or mesh)
+            arguments["face_weight"] = given["face_weight"]
         answer = run_batch("export", arguments, freecadcmd)
         stored = answer.get("intent") or {}
         product = load_bundle(work)
@@ -98,7 +102,8 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
             save_product(product, work / PRODUCT_FILE)
         engine = engine or stored.get("engine", "mesh")
         if not isinstance(tolerances, Tolerances):
-            chosen = {k: stored[k] for k in ("contact", "interference", "depth") if k in stored}
+            chosen = {k: stored[k] for k in ("contact", "interference", "depth", "face_weight", "prism_triangles")
+                      if k in stored}
             tolerances = Tolerances(**{**chosen, **(tolerances or {})})
         if engine != "none" and (not answer.get("diagrams") or directions):  # no stored diagrams that fit: detect
             analyse_bundle(product, work / PRODUCT_FILE, engine, tolerances)
@@ -154,6 +159,7 @@ def _occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
     data = _run_occt(product, {"contact": tolerances.contact, "interference": tolerances.interference,
                                "depth": tolerances.depth, "pair_budget": tolerances.pair_budget,
                                "pair_steps": tolerances.pair_steps, "time_limit": tolerances.time_limit,
+                               "face_weight": tolerances.face_weight, "prism_triangles": tolerances.prism_triangles,
                                "directions": _occt_directions(product, tolerances)})
     return occt_report(product, data)
 
@@ -265,7 +271,7 @@ def _export_command(subparsers) -> None:
                              "objects that cannot be read, naming them in a warning (default: an error)")
     add_tolerance_options(parser)
     # Tolerances not given on the command line come from the document's APLAN analysis.
-    parser.set_defaults(contact=None, interference=None, depth=None)
+    parser.set_defaults(contact=None, interference=None, depth=None, occt_face_weight=None, occt_prism_triangles=None)
 
     def run(args: argparse.Namespace) -> int:
         from planner.cli.geometry import contact_choice
@@ -274,7 +280,9 @@ def _export_command(subparsers) -> None:
                  if getattr(args, k) is not None}
         product = export_bundle(args.model, args.output, args.engine,
                                 {**given, "resolution": args.resolution, "directions": args.directions,
-                                 "pair_budget": args.pair_budget, "time_limit": args.time_limit},
+                                 "pair_budget": args.pair_budget, "time_limit": args.time_limit,
+                                 **{k: v for k, v in (("face_weight", args.occt_face_weight),
+                                                      ("prism_triangles", args.occt_prism_triangles)) if v is not None}},
                                 dict(args.group),
                                 args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
                                 args.freecadcmd, args.force, args.redetect, args.direction, args.skip_damaged)

@@ -32,6 +32,8 @@ from planner.defaults import (
     CONFIDENCE,
     CONTACT_TOLERANCE,
     INTERFERENCE_VOLUME,
+    OCCT_FACE_WEIGHT,
+    OCCT_PRISM_TRIANGLES,
     PRODUCT_FILE,
     SOLVE_PRECISION,
     WORKBENCH_SOLVE_TIME_LIMIT,
@@ -126,8 +128,11 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
 
 
 def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_TOLERANCE,
-                   interference: float = INTERFERENCE_VOLUME, depth: float = BLOCKING_DEPTH) -> dict:
-    """Run a geometry engine on the bundle ``folder`` and write the result into its ``product.json``.
+                   interference: float = INTERFERENCE_VOLUME, depth: float = BLOCKING_DEPTH,
+                   face_weight: int = OCCT_FACE_WEIGHT, prism_triangles: int = OCCT_PRISM_TRIANGLES) -> dict:
+    """Run a geometry engine on the bundle ``folder`` and write the result into its ``product.json``
+    (``face_weight``, ``prism_triangles``: the occt engine's bounds, the analysis' ``OcctFaceWeight`` and
+    ``OcctPrismTriangles``).
 
     Returns the counts (parts, contacts, interferences, seconds). The interlock rules' proposals are recorded
     with the diagrams (:func:`planner.assembly.interlock_proposals.record_proposals`). Runs in a background job.
@@ -136,7 +141,8 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
     from planner.geometry.bundle import PRODUCT_FILE, analyse_bundle, load_bundle
 
     product = load_bundle(folder)
-    tolerances = Tolerances(contact=contact, interference=interference, depth=depth)
+    tolerances = Tolerances(contact=contact, interference=interference, depth=depth, face_weight=face_weight,
+                            prism_triangles=prism_triangles)
     if engine == "occt":
         from .occt import analyze_bundle_breps
         from .plugin import occt_report
@@ -145,7 +151,9 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
         report = occt_report(product, analyze_bundle_breps(folder, contact=contact, interference=interference,
                                                            depth=depth, directions=designer,
                                                            pair_steps=tolerances.pair_steps,
-                                                           time_limit=tolerances.time_limit))
+                                                           time_limit=tolerances.time_limit,
+                                                           face_weight=face_weight,
+                                                           prism_triangles=prism_triangles))
     else:
         report = None  # the engine runs in analyse_bundle
     # The interlock rules' proposals, while the meshes are here: the interlocks panel lists them.

@@ -129,7 +129,8 @@ class Detect(_Command):
                     shutil.rmtree(folder, ignore_errors=True)
 
             job = {"action": "analyze", "folder": bundle, "engine": engine, "contact": intent.contact,
-                   "interference": intent.interference, "depth": intent.depth}
+                   "interference": intent.interference, "depth": intent.depth,
+                   "face_weight": intent.occt_face_weight, "prism_triangles": intent.occt_prism_triangles}
             BackgroundJob(f"Detecting contacts and obstructions of {result['parts']} parts ({engine} engine)",
                           command, job, done, failed, self.state.jobs, parent).start()
 

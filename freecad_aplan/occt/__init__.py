@@ -24,7 +24,10 @@ OCCT needs some help to get there:
   the axis of cylinders and cones, through the centre of spheres, across or through the axis of tori and
   surfaces of revolution, and by cylinders around the axis where a profile's normal is along it. A piece
   that still folds (B-splines, a torus in a general position), or whose prism OCCT cannot build, is swept as
-  the polyhedral prism of its tessellation (within ``contact / 2``), and the warnings say so.
+  the polyhedral prism of its tessellation (within ``contact / 2``), and the warnings say so. A piece that
+  cannot be swept that way either (the prism of its triangles comes out with the wrong volume: a torus as one
+  closed B-spline, whose patch overlaps itself along ``d``, or such a sphere) leaves a hole in the sweep, so a pair it misses is not shown free: every candidate pair of that
+  sweep is undecided (the mesh engine's answer stands, :mod:`freecad_aplan.hybrid`).
 - Planar sides of prisms that OCCT makes as extrusion surfaces are rebuilt as planes, and faces whose
   normal or axis is within 1e-6 rad of ``d`` (models assembled by constraints are 1e-8 rad off) are swept
   along that normal or axis: booleans do not match an extrusion surface with a coplanar plane or a coaxial

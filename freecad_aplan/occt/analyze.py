@@ -67,7 +67,10 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
     undecided at once and listed under ``heavy`` (id: weight); and a face swept as triangles may have at
     most ``prism_triangles`` of them (None: no bound), else every pair of its part along that direction is
     undecided (listed under ``sweeps_over``: [id, direction, triangles]). Decided pairs are decided as
-    without these bounds.
+    without these bounds. A sweep that lost a face (one OCCT can sweep neither exactly nor as triangles, e.g. a
+    closed B-spline patch: a sphere or a torus as NURBS) leaves every pair of its part along that direction
+    undecided too (listed under ``sweeps_lost``: [id, direction, face pieces]): with a hole in the sweep, no
+    pair can be shown free.
 
     Raises :class:`BrepError` naming the part when
     a shape holds no solid or no volume, :class:`~planner.errors.GeometryError` for a negative tolerance.
@@ -138,8 +141,9 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
                         f"(more than the interference tolerance {interference:g})")
     extra = _named_directions(directions)
     over: list = []
+    lost: list = []
     obstructions = find_obstructions(ids, shapes, boxes, faces, overlap, contact, depth, fuzzies, warnings, clock,
-                                     list(extra.items()), prism_triangles, over)
+                                     list(extra.items()), prism_triangles, over, lost)
     warnings.extend(clock.warnings() if pairs is None else clock.warnings("the mesh engine's answer stands"))
     return {
         "engine": "occt", "parts": len(ids),
@@ -156,6 +160,7 @@ def analyze_shapes(parts: list[tuple[str, "Part.Shape"]], contact: float = CONTA
         "timed_out": clock.timed_out, "selected": None if clock.selected is None else len(clock.selected),
         "heavy": heavy, "face_weight": face_weight, "prism_triangles": prism_triangles,
         "sweeps_over": [[ids[i], name, count] for i, name, count in over],
+        "sweeps_lost": [[ids[i], name, count] for i, name, count in lost],
         "warnings": warnings, "seconds": round(time.perf_counter() - start, 3),
     }
 

@@ -19,7 +19,7 @@ AXES = ("+X", "+Y", "+Z")
 
 def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth: float, fuzzies,
                       warnings: list[str], clock: PairClock, directions=(), prism_triangles: int | None = None,
-                      over: list | None = None):
+                      over: list | None = None, lost: list | None = None):
     """Per direction (the axes, then ``directions``: (name, unit vector) pairs), the pairs (i, j): part i
     moving along it collides with part j.
 
@@ -30,8 +30,10 @@ def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth:
     included); a pair out of time is counted as blocking and reported. A candidate with a heavy part
     (``clock.heavy``) is undecided before any prism is built; a sweep with a face of more than
     ``prism_triangles`` triangles (:class:`~.prisms.SweepTooLarge`) leaves every candidate of its part along
-    that direction undecided, appended to ``over`` as (i, name, triangles); the time limit is checked
-    between the faces of a sweep too."""
+    that direction undecided, appended to ``over`` as (i, name, triangles); so does a sweep that lost a face
+    (a piece OCCT could not sweep, neither exactly nor as triangles: a closed B-spline patch), appended to
+    ``lost`` as (i, name, pieces), since a sweep with a hole cannot show that a pair is free; the time limit
+    is checked between the faces of a sweep too."""
     volume_tolerance = depth ** 3
     result = {}
     tested = [(name, AXIS_DIRECTIONS[name]) for name in AXES] + list(directions)
@@ -84,10 +86,16 @@ def find_obstructions(ids, shapes, boxes, faces, overlap, contact: float, depth:
                 warnings.append(f"part {ids[i]!r}: {meshed} face piece(s) swept along {name} as triangles within "
                                 f"{contact / 2:g} (no exact silhouette, or OCCT could not build their prism)")
             missing = meshed - sum(1 for prism in prisms if not prism.exact_built)
-            if missing:  # e.g. a closed B-spline face (a torus as NURBS): its sweep is incomplete
-                warnings.append(f"part {ids[i]!r}: {missing} face piece(s) could not be swept along {name} at all "
-                                "(neither exactly nor as triangles): what it blocks through them is missed; check "
-                                "its pairs with --engine mesh")
+            if missing:  # e.g. a closed B-spline face (a sphere, a torus as NURBS): the sweep has a hole, so a
+                # "free" from it proves nothing: every candidate is undecided (the mesh answer, or blocking)
+                reason = (f"the sweep of {ids[i]!r} along {name} lost {missing} face piece(s) that OCCT could not "
+                          "sweep, neither exactly nor as triangles")
+                if lost is not None:
+                    lost.append((i, name, missing))
+                for j in candidates:
+                    clock.give_up(i, j, f"{ids[i]} moving along {name}", reason)
+                    pairs.append((i, j))
+                continue
             for j in candidates:
                 if clock.exhausted(i, j):
                     clock.give_up(i, j, f"{ids[i]} moving along {name}")

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import math
 
-from ..defaults import (BLOCKING_DEPTH, CANDIDATE_DIRECTIONS, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, OCCT_PAIR_BUDGET,
-                        OCCT_PAIR_STEPS, OCCT_TIME_LIMIT, RASTER_RESOLUTION)
+from ..defaults import (BLOCKING_DEPTH, CANDIDATE_DIRECTIONS, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, OCCT_FACE_WEIGHT,
+                        OCCT_PAIR_BUDGET, OCCT_PAIR_STEPS, OCCT_PRISM_TRIANGLES, OCCT_TIME_LIMIT, RASTER_RESOLUTION)
 from ..errors import GeometryError
 
 __all__ = ["AUTO", "Tolerances"]
@@ -33,7 +33,11 @@ class Tolerances:
     :mod:`planner.product.designer`), tested like the axes besides the ``directions`` found on the geometry.
     ``pair_budget``: OCCT engine: seconds of work per pair of parts before the pair is reported undecided;
     ``pair_steps``: OCCT operations per pair likewise; ``time_limit``: seconds over all the pairs OCCT
-    decides, after which the pairs left keep the mesh engine's answer (:mod:`freecad_aplan.hybrid`).
+    decides, after which the pairs left keep the mesh engine's answer (:mod:`freecad_aplan.hybrid`);
+    ``face_weight``: no OCCT call on a part whose heaviest face weighs more (poles x (degree + 1) squared of a
+    B-spline, :mod:`freecad_aplan.occt.complexity`): its pairs keep the mesh answer, and the export gives it a
+    fallback mesh (:func:`freecad_aplan.export.fallback_mesh`); ``prism_triangles``: no face swept as more
+    triangles than this (the sweep's pairs keep the mesh answer). Both whole numbers >= 1.
     """
 
     contact: float | str = CONTACT_TOLERANCE
@@ -45,6 +49,8 @@ class Tolerances:
     pair_budget: float = OCCT_PAIR_BUDGET
     pair_steps: int = OCCT_PAIR_STEPS
     time_limit: float = OCCT_TIME_LIMIT
+    face_weight: int = OCCT_FACE_WEIGHT
+    prism_triangles: int = OCCT_PRISM_TRIANGLES
     contact_ceiling: float | None = None
     designer_directions: tuple[tuple[float, float, float], ...] = ()
 
@@ -63,8 +69,10 @@ class Tolerances:
                 raise GeometryError(f"tolerance {name} must be >= 0, got {getattr(self, name)!r}")
         if not (isinstance(self.time_limit, (int, float)) and self.time_limit > 0 and math.isfinite(self.time_limit)):
             raise GeometryError(f"the OCCT time limit must be a finite number of seconds above 0, got {self.time_limit!r}")
-        if not (isinstance(self.pair_steps, int) and self.pair_steps >= 1):
-            raise GeometryError(f"pair_steps must be a whole number >= 1, got {self.pair_steps!r}")
+        for name in ("pair_steps", "face_weight", "prism_triangles"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
+                raise GeometryError(f"{name} must be a whole number >= 1, got {value!r}")
         if self.resolution < 16:
             raise GeometryError(f"resolution must be at least 16 pixels, got {self.resolution}")
         if not (isinstance(self.directions, int) and 0 <= self.directions <= 64):

@@ -3,7 +3,10 @@ answer is taken relation by relation for the pairs it was asked, the mesh engine
 and for every relation OCCT left undecided."""
 from __future__ import annotations
 
-from freecad_aplan.hybrid import exact_pairs, fallback_parts, merge_reports
+import pytest
+
+from freecad_aplan.hybrid import exact_pairs, fallback_parts, merge_reports, mesh_then_occt
+from planner.errors import GeometryError
 from planner.geometry import Tolerances
 from planner.geometry.mesh_engine import analyze_meshes
 from planner.product import product_from_dict
@@ -49,3 +52,56 @@ def test_fallback_parts_come_from_the_bundle_rules():
                                                                        "h": {"method": "exact", "rule": "hull"},
                                                                        "old": {"method": "exact"}}}}}, "t")
     assert fallback_parts(product) == {"s": "exact", "old": "exact"}
+
+
+def test_the_occt_bounds_reach_the_exact_engine_and_the_record():
+    # --occt-face-weight and --occt-prism-triangles (Tolerances) go to the analyze-occt job with the pairs it
+    # decides; what they left undecided (a sweep that lost a face) is kept in the record beside them.
+    product = product_from_dict({"format": "aplan-product", "version": 1, "contacts": [],
+                                 "parts": [{"id": m.id} for m in box_meshes()]}, "t")
+    asked = []
+
+    def run_occt(arguments):
+        asked.append(arguments)
+        return {"contacts": [["a", "b"], ["b", "c"]], "interferences": [], "obstructions": {"+X": [], "+Y": [], "+Z": []},
+                "undecided": [["a", "b"]], "undecided_relations": [["a", "b", "a moving along +X"]],
+                "face_weight": 7, "prism_triangles": 9, "sweeps_lost": [["a", "+X", 1]], "sweeps_over": []}
+
+    merged = mesh_then_occt(product, box_meshes(), Tolerances(directions=0, face_weight=7, prism_triangles=9), "occt",
+                            run_occt)
+    (arguments,) = asked
+    assert (arguments["face_weight"], arguments["prism_triangles"]) == (7, 9)
+    assert arguments["pairs"] == [["a", "b"], ["b", "c"]]
+    record = merged.tolerances["pairs"]
+    assert (record["face_weight"], record["prism_triangles"], record["sweeps_lost"]) == (7, 9, [["a", "+X", 1]])
+    assert "sweeps_over" not in record  # empty: not recorded
+    assert ("a", "b") in merged.obstructions["+X"]  # the lost sweep's relation: the mesh answer
+
+
+def test_the_occt_bounds_are_whole_numbers_of_at_least_one():
+    for name in ("face_weight", "prism_triangles"):
+        for bad in (0, -1, 2.5, True):
+            with pytest.raises(GeometryError, match=f"{name} must be a whole number >= 1"):
+                Tolerances(**{name: bad})
+
+
+def test_the_face_weight_reaches_the_export(monkeypatch, tmp_path):
+    # export-freecad --occt-face-weight: the export job gets it too (its fallback rules: freecad_aplan.export).
+    from conftest import PEN_MODELS, require_shared
+
+    from freecad_aplan import plugin
+    from freecad_aplan.runner import FreeCADError
+
+    model = require_shared(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd")
+    jobs = []
+
+    def run_batch(action, arguments, freecadcmd=None):
+        jobs.append((action, arguments))
+        raise FreeCADError("stopped here")
+
+    monkeypatch.setattr(plugin, "run_batch", run_batch)
+    for tolerances in ({"face_weight": 123}, Tolerances(face_weight=456)):
+        with pytest.raises(FreeCADError, match="stopped here"):
+            plugin.export_bundle(model, tmp_path / "b", "occt", tolerances)
+    assert [(action, arguments["face_weight"]) for action, arguments in jobs] == [("export", 123), ("export", 456)]
+    assert list(tmp_path.iterdir()) == []  # nothing written

@@ -12,6 +12,7 @@ from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
 from integration.freecad_tools import aplan, aplan_process, freecad_result, freecadcmd_job, succeeded
 
 from planner import load_product
+from planner.defaults import OCCT_PRISM_TRIANGLES
 
 PEN = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
 # The pen's technical constraint (paper Sec. V): ink and cartridge only together with the head.
@@ -39,7 +40,8 @@ except IntentError as exc:
 update_intent(analysis, "group refill", groups={{"refill": ["b_ink_001_", "b_cartridge_001_"]}})
 update_intent(analysis, "exclude cap", excluded=["b_cap_001_"])
 update_intent(analysis, "tag", tools=["screwdriver"], operations=[{tag!r}])
-update_intent(analysis, "constraint", technical_constraints=[{constraint!r}], engine="occt", contact=0.05)
+update_intent(analysis, "constraint", technical_constraints=[{constraint!r}], engine="occt", contact=0.05,
+              occt_face_weight=5000)
 out["undo_names"] = list(doc.UndoNames)
 doc.undo()
 out["after_undo"] = [analysis.TechnicalConstraints, analysis.Engine]
@@ -48,7 +50,18 @@ try:
     update_intent(analysis, "bad", engine="magic")
 except IntentError as exc:
     out["bad_engine"] = str(exc)
+try:
+    update_intent(analysis, "bad", occt_prism_triangles=0)
+except IntentError as exc:
+    out["bad_bound"] = str(exc)
+analysis.OcctFaceWeight = 0  # as the property editor may leave it
+try:
+    read_intent(analysis)
+except IntentError as exc:
+    out["zero_bound"] = str(exc)
+analysis.OcctFaceWeight = 5000
 written = asdict(read_intent(analysis))
+analysis.removeProperty("OcctPrismTriangles")  # an analysis saved before it: back with its default, not 0
 doc.save()
 FreeCAD.closeDocument(doc.Name)
 doc = FreeCAD.openDocument({copy!r})
@@ -100,6 +113,9 @@ def test_intent_round_trip_undo_and_newer_format():
     assert intent["operations"] == [TAG] and intent["tools"] == ["screwdriver"]
     assert intent["technical_constraints"] == [CONSTRAINT]
     assert (intent["engine"], intent["contact"]) == ("occt", 0.05)
+    assert (intent["occt_face_weight"], intent["occt_prism_triangles"]) == (5000, OCCT_PRISM_TRIANGLES)
+    assert "OcctPrismTriangles must be a whole number >= 1, got 0" in data["bad_bound"]
+    assert "OcctFaceWeight must be a whole number >= 1, got 0 (default 20,000)" in data["zero_bound"]
     for key in ("newer_read", "newer_update"):
         assert "format version 2, written by a newer APLAN" in data[key] and "update the APLAN workbench" in data[key]
     assert data["newer_unchanged"] is True

@@ -111,9 +111,10 @@ def test_report_layout(occt):
     assert set(report) == {"engine", "parts", "contacts", "interferences", "obstructions", "tolerances",
                            "warnings", "seconds", "undecided", "pairs", "pair_budget", "pair_steps", "time_limit",
                            "timed_out", "selected", "undecided_relations", "heavy", "face_weight",
-                           "prism_triangles", "sweeps_over"}
+                           "prism_triangles", "sweeps_over", "sweeps_lost"}
     assert report["undecided"] == [] and report["pair_budget"] == 30.0
-    assert report["heavy"] == {} and report["sweeps_over"] == [] and report["face_weight"] == OCCT_FACE_WEIGHT
+    assert report["heavy"] == {} and report["sweeps_over"] == report["sweeps_lost"] == []
+    assert report["face_weight"] == OCCT_FACE_WEIGHT
     assert report["timed_out"] is False and report["undecided_relations"] == [] and report["selected"] is None
     assert report["engine"] == "occt" and report["parts"] == 2 and list(report["obstructions"]) == ["+X", "+Y", "+Z"]
     assert report["tolerances"]["contact"] == 0.1 and report["warnings"] == []

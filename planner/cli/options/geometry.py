@@ -8,7 +8,8 @@ from ...defaults import CONTACT_CEILING_FRACTION, RESOLUTION_LIMIT
 from ...errors import PlannerError
 from ...geometry.mesh_engine import Tolerances
 
-from .values import _direction_count, contact_tolerance, designer_direction, number, positive_length, positive_seconds
+from .values import (_direction_count, contact_tolerance, designer_direction, number, positive, positive_length,
+                     positive_seconds)
 
 __all__ = ["add_tolerance_options", "tolerances_from", "add_contact_options", "contact_tolerances_from"]
 
@@ -39,6 +40,15 @@ def add_tolerance_options(parser: argparse.ArgumentParser) -> None:
                        help="occt engine (and the pairs of parts without a good mesh): CPU seconds for all the pairs "
                             "OCCT decides, above 0; the pairs left then keep the mesh engine's answer and are reported "
                             f"(default {d.time_limit:g})")
+    group.add_argument("--occt-face-weight", type=positive, default=d.face_weight, metavar="N",
+                       help="occt engine: no OCCT call on a part whose heaviest face weighs more than N (a B-spline's "
+                            "poles x (degree + 1) squared; a helical spring's sweep 54,600): its pairs keep the mesh "
+                            "engine's answer, reported, and the export gives it a ring hull or its closest mesh; a "
+                            f"whole number >= 1 (default {d.face_weight:,})")
+    group.add_argument("--occt-prism-triangles", type=positive, default=d.prism_triangles, metavar="N",
+                       help="occt engine: a face it cannot sweep exactly is swept as its triangles, at most N of "
+                            "them; past N the pairs of that sweep keep the mesh engine's answer, reported; a whole "
+                            f"number >= 1 (default {d.prism_triangles:,})")
     group.add_argument("--directions", type=_direction_count, default=d.directions, metavar="N",
                        help="mesh and occt engines: motion directions besides the axes to find on the parts' faces and "
                             f"axes and test like the axes, 0 to 64 (default {d.directions}; 0: the axes only)")
@@ -72,4 +82,5 @@ def contact_tolerances_from(args: argparse.Namespace) -> Tolerances | None:
 def tolerances_from(args: argparse.Namespace) -> Tolerances:
     return Tolerances(contact=args.contact, interference=args.interference, depth=args.depth,
                       resolution=args.resolution, directions=args.directions,
-                      contact_ceiling=args.contact_ceiling, pair_budget=args.pair_budget, time_limit=args.time_limit)
+                      contact_ceiling=args.contact_ceiling, pair_budget=args.pair_budget, time_limit=args.time_limit,
+                      face_weight=args.occt_face_weight, prism_triangles=args.occt_prism_triangles)
