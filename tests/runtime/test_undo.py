@@ -181,6 +181,13 @@ def test_a_probability_outside_zero_one_is_a_usage_error(option, value):
     assert done.returncode == 2 and f"argument {option}" in done.stderr and "below 1" in done.stderr
 
 
+@pytest.mark.parametrize("command", [("pomdp", "pen", "-o"), ("session", "pen", "--demo", "0", "--log")])
+def test_a_probability_outside_zero_one_writes_nothing(command, tmp_path):
+    out = tmp_path / "out"
+    done = run_aplan(*command, out, "--switch", "0.5", "--mistakes", "1")
+    assert done.returncode == 2 and "argument --mistakes" in done.stderr and not out.exists()
+
+
 @pytest.mark.parametrize("recorded", [{"switch": 1.5, "mistake": 0.0}, {"switch": "0.1", "mistake": 0.0},
                                       {"switch": 0.1}, [0.1, 0.0]])
 def test_a_log_with_damaged_deviations_is_refused(pen, tmp_path, recorded):
