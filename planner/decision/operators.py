@@ -163,7 +163,9 @@ class CrossingOperator:
     other's completion (the first one's operations up to the crossing, then the second one's). So an operator
     with two habits who switches between them: its habits learned from its own logs put weight on both
     completions at the crossing and on one at each state after it, so the belief can concentrate on the whole new
-    sequence (docs/deviations.md, reading (c)). See :func:`crossing_pair`. Cost: O(count x length x degree)."""
+    sequence (docs/deviations.md, reading (c)). A step that passes the crossing (the robot's operation and the
+    operator's at once) moves the switch to the next state with another completion, as for
+    :class:`ChangingOperator`. See :func:`crossing_pair`. Cost: O(count x length x degree)."""
 
     def __init__(self, first: list[int], second: list[int], position: int, p: float):
         if not 0.0 <= p < 1.0:
