@@ -126,7 +126,7 @@ def main() -> None:
     parser.add_argument("--expansions", type=int, default=200)
     parser.add_argument("--switch", type=float, default=0.05)
     parser.add_argument("--mistakes", type=float, default=0.02)
-    parser.add_argument("--operator", default="uniform,changing:0.3")
+    parser.add_argument("--operator", help="an --operator-sequence spelling (default uniform,changing:0.3)")
     parser.add_argument("--crossing", type=float, metavar="P",
                         help="instead of --operator: two habitual sequences that cross, switching with probability P")
     parser.add_argument("--logs", type=int, default=20, help="--crossing: the sessions its habits are learned from")
@@ -136,6 +136,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--max-steps", type=int, default=100)
     args = parser.parse_args()
+    if args.crossing is not None and args.operator is not None:
+        parser.error("--operator and --crossing are two operators: give one")
+    args.operator = args.operator or "uniform,changing:0.3"
     plan = api.plan_of(_product(args.product, args.level))
     operator, models = _models(plan, args)
     print(f"{args.product}{' ' + args.level if args.level else ''}: operator {operator!r}, {args.episodes} "

@@ -33,7 +33,8 @@ def model(pen):
 
 @pytest.fixture(scope="module")
 def played(model):
-    return simulate(model, _Waiting(model.wait), random=30, seed=5, operator_model=parse_operator("uniform,changing:0.3"))
+    changing = parse_operator("uniform,changing:0.3")
+    return simulate(model, _Waiting(model.wait), random=30, seed=5, operator_model=changing)
 
 
 def _steps(episode):
