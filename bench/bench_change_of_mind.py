@@ -1,26 +1,34 @@
-"""Change of mind (issue 23 item 3, docs/deviations.md): an operator who switches sequence once per episode with
-probability 0.3 (``--operator-sequence uniform,changing:0.3``: after a uniformly drawn number of operations, to
-another completion of its state), against the paper's model and the model with a change of mind and mistakes
+"""Change of mind (issue 23 item 3, docs/deviations.md, "What is measured"): an operator who switches sequence
+once per episode with probability 0.3, against the paper's model and the model with a change of mind and mistakes
 (``--switch``, ``--mistakes``), on the same seeded episodes. Two robots per model: the online planner (a fixed
 number of expansions per decision: the same actions on any machine) and an observer that always waits (its
 belief is the model's Bayes filter on the operator's own work: what the model's belief can reach by itself).
 
-Per model and robot: the episodes with a belief reset (an observation of probability 0 under the belief) and the
-resets; the switched episodes whose belief on the new true intention (the flat model's belief on the current
-assembly state and the new remaining sequence, ``confident_after_switch``) passed 0.9 at or after the switch
-and before the product was finished; the switched episodes whose belief on the true assembly state passed 0.9
-in those steps (what the operator has done, not what it will do); the robot's share of the operations, its
-wrong actions (and their share of its actions) and the mean return; for context, the episodes (all) whose
-belief on the true intention passed 0.9 before the product was finished.
+Operators: ``--operator SPELLING`` (default ``uniform,changing:0.3``: after a switch point drawn uniformly, to
+another completion of its state, uniformly), or ``--crossing P``: an operator with two habitual sequences that
+cross at one state (``CrossingOperator``), who sets out on one, 1/2 each, and with probability P switches there
+to the other's completion; its habits are learned from ``--logs`` sessions of its own (the session loop and its
+log writer, the robot waiting, then counted as ``aplan habits`` counts them), and the models are the paper's,
+the habits' and the habits' with ``--switch`` and ``--mistakes``.
+
+Per model and robot: the switched episodes; the episodes with a belief reset (an observation of probability 0
+under the belief: the filter restarts from the prior) and the resets; per reading of "the belief on the new true
+sequence" (planner/decision/mind_measures.py: the whole remaining sequence, ``intention``; the lumped model's
+class of the next step, ``next class``; the next operation, ``next op``; the assembly state, ``state``) the
+switched episodes in which it passed 0.9 at or after the switch and before the product was finished; the robot's
+share of the operations, its wrong actions (and their share of its actions) and the mean return.
 
 Run: ``.venv/bin/python bench/bench_change_of_mind.py [--product pen|chain:N|complete:N|FILE|BUNDLE] [--level ID]
-[--episodes 200] [--expansions 200] [--switch 0.05] [--mistakes 0.02] [--operator uniform,changing:0.3]
-[--robots online,observer]`` (a bundle is planned with ``--fasteners auto --subassemblies auto``).
+[--episodes 200] [--expansions 200] [--switch 0.05] [--mistakes 0.02] [--operator uniform,changing:0.3 |
+--crossing 0.3 [--logs 20] [--prior-per edge|state]] [--robots online,observer]`` (a bundle is planned with
+``--fasteners auto --subassemblies auto``).
 """
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -32,7 +40,12 @@ import numpy as np  # noqa: E402
 from planner import api, chain_product, complete_product  # noqa: E402
 from planner.decision.deviations import Deviations  # noqa: E402
 from planner.decision.episode_measures import episode_measures, run_totals  # noqa: E402
-from planner.decision.operators import parse_operator  # noqa: E402
+from planner.decision.mind_measures import READINGS, switch_totals  # noqa: E402
+from planner.decision.operators import CrossingOperator, crossing_pair, parse_operator  # noqa: E402
+from planner.runtime.habits_logs import habits_from_logs  # noqa: E402
+from planner.runtime.log import EventLog  # noqa: E402
+from planner.runtime.scripted import ScriptedOperator, ScriptedRobot  # noqa: E402
+from planner.runtime.session import run_session  # noqa: E402
 
 
 class _Observer:
@@ -45,35 +58,15 @@ class _Observer:
         return self.wait
 
 
-def state_known_after_switch(model, episode, threshold: float = 0.9) -> bool | None:
-    """Whether the belief on the true assembly state (the mass of the classes that start there) passed
-    ``threshold`` at or after the switch, before the product was finished; None without a switch."""
-    if episode.switched_at is None:
-        return None
-    final = model.final_class
-    for k in range(episode.switched_at, len(episode.steps) + 1):
-        step, belief = episode.steps[k - 1], episode.beliefs[k]
-        if not episode.unfinished(step):
-            return False
-        state = int(model.class_source[episode.path[step.position]])
-        source = np.where(belief.classes == final, model.final_state,
-                          model.class_source[np.minimum(belief.classes, final - 1)])
-        if float(belief.mass[source == state].sum()) > threshold:
-            return True
-    return False
-
-
-def _run(model, robot, args) -> dict:
+def _run(model, robot, operator, args) -> dict:
     planner = api.online_planner(model, None, args.expansions) if robot == "online" else _Observer(model.wait)
     began = time.process_time()
     choice = api.EpisodeChoice(random=args.episodes, seed=args.seed, max_steps=args.max_steps,
-                               operator_model=parse_operator(args.operator))
+                               operator_model=operator)
     mean, half, played = api.evaluate_operator(model, planner, choice)
-    measures = [episode_measures(e) for e in played]
-    totals = run_totals(measures)
-    return {"mean": mean, "half": half, "cpu": time.process_time() - began,
-            "reset_episodes": sum(m["resets"] > 0 for m in measures),
-            "state_known": sum(bool(state_known_after_switch(model, e)) for e in played), **totals}
+    totals = run_totals([episode_measures(e) for e in played])
+    return {"mean": mean, "half": half, "cpu": time.process_time() - began, **totals,
+            **switch_totals(model, played)}
 
 
 def _product(spec: str, level: str | None):
@@ -86,8 +79,45 @@ def _product(spec: str, level: str | None):
     return api.level_product(product, "designer", level) if level else product
 
 
+def learned_habits(plan, model, operator: CrossingOperator, logs: int, seed: int, prior_per: str):
+    """The habits of ``operator`` counted from ``logs`` session logs of its own (the session loop with a robot
+    that waits, so every step is the operator's; each session does the sequence its plan says, switch
+    included), as ``aplan habits LOG... --prior-per PRIOR_PER`` counts them."""
+    plans = operator.plans(model, logs, np.random.default_rng([seed, 10]), np.random.default_rng([seed, 11]))
+    with tempfile.TemporaryDirectory() as folder:
+        paths = []
+        for k, drawn in enumerate(plans):
+            path = Path(folder) / f"session-{k:02d}.jsonl"
+            person = ScriptedOperator(plan, model.sequence_operations(operator.done(drawn)))
+            result = run_session(model, _Observer(model.wait), person, ScriptedRobot(), EventLog(path))
+            if not result.assembled:
+                raise SystemExit(f"learning session {k} did not finish: {result.message}")
+            paths.append(path)
+        habits, _ = habits_from_logs(plan, paths)
+    return dataclasses.replace(habits, prior_per=prior_per)
+
+
+def _models(plan, args) -> tuple[object, list[tuple[str, object]]]:
+    """The operator and ``(label, model)`` per model measured."""
+    deviations = Deviations(args.switch, args.mistakes)
+    dev = f"switch {args.switch:g}, mistakes {args.mistakes:g}"
+    if args.crossing is None:
+        return parse_operator(args.operator), [("paper", api.factored_decision_model(plan)),
+                                               (dev, api.factored_decision_model(plan, deviations=deviations))]
+    paper = api.factored_decision_model(plan)
+    first, second, position = crossing_pair(paper, np.random.default_rng([args.seed, 20]))
+    operator = CrossingOperator(first, second, position, args.crossing)
+    habits = learned_habits(plan, paper, operator, args.logs, args.seed, args.prior_per)
+    print(f"crossing at operation {position} of {len(first)} (state {int(paper.class_source[first[position]])}, "
+          f"{int(paper.paths[paper.class_source[first[position]]])} completions); the sequences share "
+          f"{'their start' if first[:position] == second[:position] else 'only the crossing state'}; habits "
+          f"from {args.logs} logs, {habits.total:g} choices counted, prior {habits.prior:g} per {habits.prior_per}")
+    return operator, [("paper", paper), ("habits", api.factored_decision_model(plan, habits=habits)),
+                      (f"habits, {dev}", api.factored_decision_model(plan, habits=habits, deviations=deviations))]
+
+
 def _share(count: int, of: int) -> str:
-    return f"{count} of {of} ({100 * count / of:.0f} %)" if of else "-"
+    return f"{count} ({100 * count / of:.0f} %)" if of else "-"
 
 
 def main() -> None:
@@ -98,30 +128,36 @@ def main() -> None:
     parser.add_argument("--expansions", type=int, default=200)
     parser.add_argument("--switch", type=float, default=0.05)
     parser.add_argument("--mistakes", type=float, default=0.02)
-    parser.add_argument("--operator", default="uniform,changing:0.3")
+    parser.add_argument("--operator", help="an --operator-sequence spelling (default uniform,changing:0.3)")
+    parser.add_argument("--crossing", type=float, metavar="P",
+                        help="instead of --operator: two habitual sequences that cross, switching with probability P")
+    parser.add_argument("--logs", type=int, default=20, help="--crossing: the sessions its habits are learned from")
+    parser.add_argument("--prior-per", choices=("edge", "state"), default="edge",
+                        help="--crossing: the habits' prior spread (aplan habits --prior-per)")
     parser.add_argument("--robots", default="online,observer", help="online, observer or both (comma-separated)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--max-steps", type=int, default=100)
     args = parser.parse_args()
+    if args.crossing is not None and args.operator is not None:
+        parser.error("--operator and --crossing are two operators: give one")
+    args.operator = args.operator or "uniform,changing:0.3"
     plan = api.plan_of(_product(args.product, args.level))
-    print(f"{args.product}{' ' + args.level if args.level else ''}: operator {args.operator}, {args.episodes} "
+    operator, models = _models(plan, args)
+    print(f"{args.product}{' ' + args.level if args.level else ''}: operator {operator!r}, {args.episodes} "
           f"episodes, online planner {args.expansions} expansions per decision")
-    print("| model | robot | episodes with a reset (resets) | confident on the new intention | state known after "
-          "the switch | confident (all) | robot share | wrong robot actions | mean return | CPU s |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    for name, deviations in (("paper", None),
-                             (f"switch {args.switch:g}, mistakes {args.mistakes:g}",
-                              Deviations(args.switch, args.mistakes))):
-        model = api.factored_decision_model(plan, deviations=deviations)
+    print("| model | robot | switched | episodes with a reset (resets) | "
+          + " | ".join(f"{name.replace('_', ' ')} > 0.9" for name in READINGS)
+          + " | robot share | wrong robot actions | mean return | CPU s |")
+    print("|---|---|---:|---:|" + "---:|" * len(READINGS) + "---:|---:|---:|---:|")
+    for name, model in models:
         for robot in args.robots.split(","):
-            r = _run(model, robot, args)
+            r = _run(model, robot, operator, args)
             share = "-" if r["robot_share"] is None else f"{100 * r['robot_share']:.1f} %"
             wrong = "-" if r["wrong_share"] is None else f"{100 * r['wrong_share']:.1f} %"
-            print(f"| {name} | {robot} | {r['reset_episodes']} ({r['resets']}) | "
-                  f"{_share(r['confident_after_switch'], r['switched'])} | {_share(r['state_known'], r['switched'])} "
-                  f"| {_share(r['episodes'] - r['never_confident'], r['episodes'])} | {share} | "
-                  f"{r['wrong_robot_actions']} ({wrong}) | {r['mean']:.3f} +- {r['half']:.3f} | {r['cpu']:.0f} |",
-                  flush=True)
+            print(f"| {name} | {robot} | {r['switched']} of {r['episodes']} | {r['reset_episodes']} ({r['resets']}) | "
+                  + " | ".join(_share(r[reading], r["switched"]) for reading in READINGS)
+                  + f" | {share} | {r['wrong_robot_actions']} ({wrong}) | {r['mean']:.3f} +- {r['half']:.3f} | "
+                  f"{r['cpu']:.0f} |", flush=True)
 
 
 if __name__ == "__main__":

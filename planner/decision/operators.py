@@ -34,9 +34,9 @@ import numpy as np
 
 from ..errors import PlannerError
 
-__all__ = ["Switch", "OperatorPlan", "UniformOperator", "HabitualOperator", "ChangingOperator", "parse_operator",
-           "switch_intention", "switch_path", "switch_points", "mistaken_observation", "mistake_stream",
-           "OPERATOR_SPELLING"]
+__all__ = ["Switch", "OperatorPlan", "UniformOperator", "HabitualOperator", "ChangingOperator", "CrossingOperator",
+           "crossing_pair", "parse_operator", "switch_intention", "switch_path", "switch_points",
+           "mistaken_observation", "mistake_stream", "OPERATOR_SPELLING"]
 
 OPERATOR_SPELLING = ("uniform, habitual:K:STRENGTH, changing:P, mistakes:Q, or a base (uniform or habitual) "
                      "followed by changing and mistakes, comma-separated (habitual:5:0.8,changing:0.1,mistakes:0.05)")
@@ -154,6 +154,78 @@ class ChangingOperator:
 
     def __repr__(self) -> str:
         return f"{self.base!r},changing:{self.p:g}" + _mistakes(self)
+
+
+class CrossingOperator:
+    """Two habitual full sequences of a factored model, ``first`` and ``second`` (state edges), that cross: both
+    are at the same assembly state after ``position`` operations and go on differently from it. Each episode's
+    operator sets out on one of them, 1/2 each, and with probability ``p`` changes its mind at that state, to the
+    other's completion (the first one's operations up to the crossing, then the second one's). So an operator
+    with two habits who switches between them: its habits learned from its own logs put weight on both
+    completions at the crossing and on one at each state after it, so the belief can concentrate on the whole new
+    sequence (docs/deviations.md, reading (c)). A step that passes the crossing (the robot's operation and the
+    operator's at once) moves the switch to the next state with another completion, as for
+    :class:`ChangingOperator`. See :func:`crossing_pair`. Cost: O(count x length x degree)."""
+
+    def __init__(self, first: list[int], second: list[int], position: int, p: float):
+        if not 0.0 <= p < 1.0:
+            raise PlannerError(f"crossing operator: probability {p!r} is not in [0, 1)")
+        self.first, self.second, self.position, self.p = list(first), list(second), int(position), float(p)
+        self.mistakes = 0.0
+
+    def plans(self, model, count: int, rng: np.random.Generator, switch_rng: np.random.Generator
+              ) -> list[OperatorPlan]:
+        second = rng.random(count) < 0.5
+        switches = switch_rng.random(count) < self.p
+        out = []
+        for b, s in zip(second, switches):
+            own, other = (self.second, self.first) if b else (self.first, self.second)
+            switch = Switch(self.position, completion_draw(model, own, self.position, other)) if s else None
+            out.append(OperatorPlan(list(own), switch))
+        return out
+
+    def done(self, plan: OperatorPlan) -> list[int]:
+        """The sequence the operator of ``plan`` does when nothing jumps over the crossing (an observer)."""
+        if plan.switch is None:
+            return list(plan.sequence)
+        other = self.second if plan.sequence == self.first else self.first
+        return list(plan.sequence[:self.position]) + list(other[self.position:])
+
+    def __repr__(self) -> str:
+        return f"crossing:{self.p:g}" + _mistakes(self)
+
+
+def completion_draw(model, path: list[int], position: int, other: list[int]) -> float:
+    """The ``draw`` of a :class:`Switch` at ``position`` of ``path`` that :func:`switch_path` turns into
+    ``other``'s completion (``other`` at the same state there, with another completion)."""
+    total = int(model.paths[model.class_source[path[position]]])
+    own, target = _completion_rank(model, path[position:]), _completion_rank(model, other[position:])
+    if target == own or total < 2:
+        raise PlannerError("crossing operator: the two sequences do not part at the crossing")
+    return (target - (target > own) + 0.5) / (total - 1)
+
+
+def crossing_pair(model, rng: np.random.Generator, tries: int = 400) -> tuple[list[int], list[int], int]:
+    """Two full sequences of a factored model that cross (:class:`CrossingOperator`) and the crossing position:
+    the first drawn uniformly; the crossing the switch point of it nearest its middle (:func:`switch_points`);
+    the second's operations up to the crossing those of a uniformly drawn sequence through that state at that
+    position, other than the first's when one is found in ``tries`` draws (else the first's: they share their
+    start), and from there another completion of the state, drawn uniformly. Raises a :class:`PlannerError`
+    when the first has no switch point (a single sequence from every state). Cost: O(tries x length x degree)."""
+    first = model.sample_sequence(rng)
+    points = switch_points(model, first)
+    if not points:
+        raise PlannerError("crossing operator: no state of the sequence has another completion")
+    position = min(points, key=lambda q: (abs(2 * q - len(first)), q))
+    state = int(model.class_source[first[position]])
+    start = first[:position]
+    for _ in range(tries):
+        drawn = model.sample_sequence(rng)
+        if len(drawn) > position and int(model.class_source[drawn[position]]) == state and drawn[:position] != start:
+            start = drawn[:position]
+            break
+    rest = switch_path(model, first, position, float(rng.random()))[position:]
+    return first, list(start) + rest, position
 
 
 def _mistakes(operator) -> str:

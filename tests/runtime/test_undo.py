@@ -103,6 +103,27 @@ def test_a_step_the_product_cannot_recover_from_stops_and_replays(pen, tmp_path)
     assert shown.returncode == 0 and f"unrecoverable: {result.message}" in shown.stdout
 
 
+def test_the_person_is_told_when_the_product_cannot_be_finished(pen, tmp_path):
+    """From the keyboard (the person's own session): the step that leaves no plan is told on one line, the
+    session exits with status 1 and logs it, and ``aplan replay`` shows the same line after the same beliefs."""
+    plan = make_plan(pen)
+    state, parts = _unrecoverable(plan)
+    picks = []
+    for operation in _path_to(plan, state):
+        seen = plan.observations[int(plan.operation_observation[operation])]
+        picks.append(" ".join(seen.parts + ((seen.tool,) if seen.tool else ())))
+    log = tmp_path / "told.jsonl"
+    done = run_aplan("session", "pen", "--keyboard", "--robot", "auto", "--planner", "online", "--expansions", "20",
+                     "--log", log, stdin="\n".join(picks + ["apart " + " ".join(parts), ""]) + "\n")
+    told = [line for line in done.stdout.splitlines() if line.startswith("unrecoverable: ")]
+    assert done.returncode == 1 and len(told) == 1, done.stdout + done.stderr
+    assert f"step {len(picks) + 1}: apart {' '.join(parts)}" in told[0] and "start a new session" in told[0]
+    events = [json.loads(line) for line in log.read_text().splitlines()]
+    assert [e["message"] for e in events if e["event"] == "unrecoverable"] == [told[0].removeprefix("unrecoverable: ")]
+    shown = run_aplan("replay", log)
+    assert shown.returncode == 0 and told[0] in shown.stdout and f"reproduced at all {len(picks)} steps" in shown.stdout
+
+
 def _path_to(plan, target):
     """The operations of a path from the initial state to ``target`` (breadth first over the state edges)."""
     states = plan.states
@@ -158,6 +179,13 @@ def test_keyboard_apart_session_and_replay(pen, tmp_path):
 def test_a_probability_outside_zero_one_is_a_usage_error(option, value):
     done = run_aplan("simulate", "pen", "--random", "1", option, value)
     assert done.returncode == 2 and f"argument {option}" in done.stderr and "below 1" in done.stderr
+
+
+@pytest.mark.parametrize("command", [("pomdp", "pen", "-o"), ("session", "pen", "--demo", "0", "--log")])
+def test_a_probability_outside_zero_one_writes_nothing(command, tmp_path):
+    out = tmp_path / "out"
+    done = run_aplan(*command, out, "--switch", "0.5", "--mistakes", "1")
+    assert done.returncode == 2 and "argument --mistakes" in done.stderr and not out.exists()
 
 
 @pytest.mark.parametrize("recorded", [{"switch": 1.5, "mistake": 0.0}, {"switch": "0.1", "mistake": 0.0},
