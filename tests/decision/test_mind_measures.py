@@ -12,7 +12,7 @@ import pytest
 
 from planner import make_plan
 from planner.decision import factored_model
-from planner.decision.episodes import simulate
+from planner.decision.episodes import EpisodeChoice, simulate
 from planner.decision.mind_measures import READINGS, passes_after_switch, step_readings, switch_totals
 from planner.decision.operators import CrossingOperator, crossing_pair, parse_operator
 from planner.errors import PlannerError
@@ -34,7 +34,7 @@ def model(pen):
 @pytest.fixture(scope="module")
 def played(model):
     changing = parse_operator("uniform,changing:0.3")
-    return simulate(model, _Waiting(model.wait), random=30, seed=5, operator_model=changing)
+    return simulate(model, _Waiting(model.wait), EpisodeChoice(random=30, seed=5, operator_model=changing))
 
 
 def _steps(episode):
@@ -91,7 +91,7 @@ def test_crossing_pair_meets_at_one_state_and_parts(model):
 def test_crossing_operator_switches_to_the_other_completion(model):
     first, second, q = crossing_pair(model, np.random.default_rng(1))
     operator = CrossingOperator(first, second, q, 0.5)
-    episodes = simulate(model, _Waiting(model.wait), random=40, seed=2, operator_model=operator)
+    episodes = simulate(model, _Waiting(model.wait), EpisodeChoice(random=40, seed=2, operator_model=operator))
     plans = operator.plans(model, 40, np.random.default_rng(2), np.random.default_rng([2, 1]))
     switched = sum(p.switch is not None for p in plans)
     assert 0 < switched < 40
