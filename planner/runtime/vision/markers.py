@@ -6,7 +6,8 @@
   use); :func:`detections` maps it over a stream of frames.
 
 Cost: detection dominates the vision pipeline (about 15 ms per 1920x1080 frame on one core, see
-``bench/bench_vision.py``).
+``bench/bench_vision.py``); most of it goes to the contours of the grain in the frame's uniform areas, which a
+detector told where the scene is (:meth:`MarkerDetector.within`: the demo's tray) no longer looks at.
 """
 from __future__ import annotations
 
