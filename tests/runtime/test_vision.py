@@ -171,7 +171,7 @@ def test_detection_within_the_scene_box_is_that_of_the_whole_frame(plan, model, 
     outside = np.ones(layout.size[::-1], bool)
     outside[y0:y1, x0:x1] = False
     sequence = int(model.full_sequences()[camera.seed])
-    cells = [SimulatedCell(layout, ScriptedOperator.following(model, sequence), c)
+    cells = [SimulatedCell(layout, ScriptedOperator.following(model, sequence), c, hold=5)
              for c in (camera, dataclasses.replace(camera, noise=0))]
     whole = MarkerDetector(markers.dictionary)
     within = whole.within(box, BENCH)
@@ -184,7 +184,7 @@ def test_detection_within_the_scene_box_is_that_of_the_whole_frame(plan, model, 
         points = np.concatenate([c.reshape(-1, 2) for c in (*corners, *rejected)])  # the tray's edge among them
         reach = whole.threshold_windows[-1] // 2 + 1  # a pixel's threshold reads the box from there
         assert ((points >= (x0 - reach, y0 - reach)) & (points < (x1 + reach, y1 + reach))).all()
-    first = cells[0].operator_observations[0]  # 10 frames: two reaches into the tray (8 frames each), hands over both
+    first = cells[0].operator_observations[0]  # 10 frames: two reaches into the tray (5 frames each), hands over both
     assert len(first.parts) + (first.tool is not None) >= 2
 
 
