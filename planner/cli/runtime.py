@@ -52,7 +52,7 @@ def _source_name(args: argparse.Namespace) -> str:
 def _open_stream(args: argparse.Namespace, model: IntentionModel, markers, detector):
     """The marker detections of each frame, and the robot: a simulated one for ``--demo``, else None."""
     from ..runtime.scripted import ScriptedOperator, ScriptedRobot
-    from ..runtime.tray import CameraModel, SimulatedCell, tray_layout
+    from ..runtime.tray import BENCH, CameraModel, SimulatedCell, scene_box, tray_layout
     from ..runtime.vision import camera_frames, detections, image_frames, in_background, video_frames
 
     if args.camera is not None:
@@ -64,7 +64,8 @@ def _open_stream(args: argparse.Namespace, model: IntentionModel, markers, detec
         # Slots clear of the frame's edges by the camera's tilt and 2 % more (a 35-marker tray reached them).
         layout = tray_layout(markers, margin=camera.perspective + 0.02)
         cell = SimulatedCell(layout, operator, camera, settle=args.quiet_frames + 5)
-        return detections(cell, detector), ScriptedRobot(on_perform=cell.robot)
+        # The bench top around the tray holds no marker: detection looks at the tray alone (the same markers)
+        return detections(cell, detector.within(scene_box(layout, camera), BENCH)), ScriptedRobot(on_perform=cell.robot)
     frames = video_frames(args.video) if args.video is not None else image_frames(args.images)
     return _Primed(detections(frames, detector)), None
 
@@ -297,7 +298,7 @@ def _replay(args: argparse.Namespace) -> int:
 
 
 def _markers(args: argparse.Namespace) -> int:
-    from ..runtime.tray import write_marker_sheet
+    from ..runtime.sheet import write_marker_sheet
 
     product = api.resolve_product(args.product)
     count = write_marker_sheet(product, args.output, args.size)

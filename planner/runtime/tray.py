@@ -1,30 +1,31 @@
-"""The parts tray: marker images, the printable marker sheet, and synthetic camera views of the tray.
+"""The parts tray: marker images and synthetic camera views of the tray (the printable sheet: ``sheet``).
 
 A *tray layout* places one slot per part and tool on a grid; each slot holds the item's ArUco marker, and
 the item, while it lies in the tray, covers it (the paper's Fig. 6). :func:`render_tray` draws what an
 overhead camera sees, with optional blur, sensor noise, a perspective tilt and occluders (hands);
 :class:`SimulatedCell` films a scripted operator and a scripted robot working from the tray. Tests, demos
 and benchmarks render their frames with them, so the vision pipeline runs on images whose truth is known.
+:func:`scene_box` bounds what such frames show besides the bench top (a detector need look nowhere else).
 """
 from __future__ import annotations
 
 import math
 from collections import deque
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Iterable, Sequence
 
 import numpy as np
 
 from ..errors import PlannerError
-from ..files import open_atomic, save_figure
-from ..product import Product
 from .interfaces import Instruction
 from .scripted import ScriptedOperator
-from .vision.markers import MarkerMap, marker_map
+from .vision.markers import MarkerMap
 
 __all__ = ["marker_image", "TrayLayout", "tray_layout", "render_tray", "Occluder", "CameraModel", "SimulatedCell",
-           "write_marker_sheet"]
+           "scene_box", "BENCH"]
+
+
+BENCH = (70, 90, 110)  # BGR of the bench top around the tray (and beyond a tilted camera's frame)
 
 
 def marker_image(dictionary: str, marker: int, pixels: int) -> np.ndarray:
@@ -153,7 +154,7 @@ def _draw(layout: TrayLayout, present: frozenset) -> np.ndarray:
 
     width, height = layout.size
     frame = np.empty((height, width, 3), np.uint8)
-    frame[:] = (70, 90, 110)  # bench top
+    frame[:] = BENCH
     px = layout.marker_px
     margin = px // 3
     xs = [x for x, _ in layout.slots.values()]
@@ -252,7 +253,7 @@ def _tilt(layout: TrayLayout, perspective: float, camera_seed: int, frame: np.nd
     if window is not None:
         xy, fraction = xy[window], fraction[window]
     return cv2.remap(frame, xy, fraction, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-                     borderValue=(70, 90, 110))
+                     borderValue=BENCH)
 
 
 def _tilted_box(layout: TrayLayout, perspective: float, camera_seed: int, box: tuple[int, int, int, int]):
@@ -350,14 +351,10 @@ class SimulatedCell:
             occluders = ()
             if self.camera.hands and reach is not None and k < 2:
                 # a hand over the slot just reached into, and an arm across the tray, for two frames
-                x, y = self.layout.slots[reach]
-                px = self.layout.marker_px
-                occluders = (Occluder((x + px // 2, y + px // 2), (px // 2, px // 3), 30.0),
-                             Occluder((self.layout.size[0] // 2, self.layout.size[1] // 2), (px * 3, px // 4), 10.0))
+                occluders = (_hand(self.layout, reach), _arm(self.layout))
             elif self.camera.hands and k == count // 2 + 1:
                 # a corner of every slot covered, for one frame (a marker flickers)
-                px = self.layout.marker_px
-                occluders = tuple(Occluder((x, y), (px // 3, px // 3)) for x, y in self.layout.slots.values())
+                occluders = tuple(_corner(self.layout, item) for item in self.layout.slots)
             self.frames += 1
             self.queue.append(render_tray(self.layout, self.in_tray, self.camera.blur, self.camera.noise,
                                           self.camera.perspective, occluders,
@@ -365,62 +362,46 @@ class SimulatedCell:
                                           camera_seed=self.camera.seed))
 
 
-def write_marker_sheet(product: Product, path: str | Path, marker_mm: float = 40.0) -> int:
-    """Write the markers of ``product`` (one per part and tool, with its name and id) on A4 pages as a PDF
-    or a PNG (by the suffix; a PNG holds the first page only when they do not fit one), atomically.
+def _hand(layout: TrayLayout, item: str) -> Occluder:
+    """A hand over ``item``'s slot."""
+    x, y = layout.slots[item]
+    px = layout.marker_px
+    return Occluder((x + px // 2, y + px // 2), (px // 2, px // 3), 30.0)
 
-    Returns the number of markers. Markers are ``marker_mm`` wide when printed at 100 %.
+
+def _arm(layout: TrayLayout) -> Occluder:
+    """An arm across the middle of the tray."""
+    px = layout.marker_px
+    return Occluder((layout.size[0] // 2, layout.size[1] // 2), (px * 3, px // 4), 10.0)
+
+
+def _corner(layout: TrayLayout, item: str) -> Occluder:
+    """Something over the top-left corner of ``item``'s marker."""
+    px = layout.marker_px
+    return Occluder(layout.slots[item], (px // 3, px // 3))
+
+
+def scene_box(layout: TrayLayout, camera: CameraModel = CameraModel()) -> tuple[int, int, int, int]:
+    """``(x0, y0, x1, y1)``: every frame of a :class:`SimulatedCell` on ``layout`` filmed by ``camera`` shows the
+    bench top alone (:data:`BENCH`, plus the camera's grain) at each pixel outside ``x0 <= x < x1``,
+    ``y0 <= y < y1``, within the frame.
+
+    The box holds every pixel the tray's drawing changes (each slot with its marker or with its item, named),
+    and every hand and arm the cell can draw, seen through the tilted camera (:func:`_tilted_box`) and grown
+    by the blur's reach (as :func:`_scene` redraws an occluder). Cost: the tray drawn twice, once per layout.
     """
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix not in (".pdf", ".png"):
-        raise PlannerError(f"{path}: the marker sheet is written as .pdf or .png; change the file name")
-    markers = marker_map(product, require_all=False)
-    pages = _sheet_pages(product, markers, marker_mm)
-    if suffix == ".png":
-        save_figure(pages[0], path, dpi=300)
-    else:
-        from matplotlib.backends.backend_pdf import PdfPages
-
-        with open_atomic(path) as handle:
-            pdf = PdfPages(handle)  # closed only on success: closing after a write error hides the error
-            for page in pages:
-                pdf.savefig(page)
-            pdf.close()
-    return len(markers.items)
+    boxes = [_changed(_draw(layout, frozenset(layout.slots))), _changed(_draw(layout, frozenset()))]
+    if camera.hands:
+        occluders = [_arm(layout)] + [f(layout, item) for item in layout.slots for f in (_hand, _corner)]
+        boxes += [_ellipse_box(occluder) for occluder in occluders]
+    box = (min(b[0] for b in boxes), min(b[1] for b in boxes), max(b[2] for b in boxes), max(b[3] for b in boxes))
+    x0, y0, x1, y1 = _tilted_box(layout, camera.perspective, camera.seed, box)
+    reach = math.ceil(4 * camera.blur) + 1 if camera.blur > 0 else 0
+    width, height = layout.size
+    return max(x0 - reach, 0), max(y0 - reach, 0), min(x1 + reach, width), min(y1 + reach, height)
 
 
-_A4 = (210.0, 297.0)  # page width and height, mm
-
-
-def _sheet_pages(product: Product, markers: MarkerMap, marker_mm: float) -> list:
-    """The marker sheet's pages as matplotlib ``Figure`` objects (no pyplot: its state is process-wide), as many
-    markers per A4 page as fit in cells of ``marker_mm`` + 20 by ``marker_mm`` + 22 mm under a 22 mm title."""
-    from matplotlib.figure import Figure
-
-    page_w, page_h = _A4
-    cell_w, cell_h = marker_mm + 20.0, marker_mm + 22.0
-    columns = max(1, int((page_w - 20) // cell_w))
-    rows = max(1, int((page_h - 30) // cell_h))
-    entries = sorted(markers.items.items())
-    chunks = [entries[i:i + columns * rows] for i in range(0, len(entries), columns * rows)]
-    labels = {p.id: p.label or p.id for p in product.parts} | {t.id: t.label or t.id for t in product.tools}
-    figures = []
-    for number, chunk in enumerate(chunks, start=1):
-        fig = Figure(figsize=(page_w / 25.4, page_h / 25.4))
-        fig.text(0.5, 1 - 12 / page_h, f"{product.name or 'APLAN product'}: tray markers ({markers.dictionary}, "
-                 f"{marker_mm:g} mm){f', page {number}/{len(chunks)}' if len(chunks) > 1 else ''}",
-                 ha="center", va="center", fontsize=10)
-        for k, (marker, name) in enumerate(chunk):
-            left = 10 + (k % columns) * cell_w + (cell_w - marker_mm) / 2
-            top = 22 + (k // columns) * cell_h
-            ax = fig.add_axes((left / page_w, 1 - (top + marker_mm) / page_h, marker_mm / page_w, marker_mm / page_h))
-            ax.imshow(marker_image(markers.dictionary, marker, 240), cmap="gray", vmin=0, vmax=255,
-                      interpolation="nearest")
-            ax.set_axis_off()
-            kind = "tool" if name in markers.tools else "part"
-            fig.text((left + marker_mm / 2) / page_w, 1 - (top + marker_mm + 6) / page_h,
-                     f"{labels.get(name, name)} ({kind} {name!r}, marker {marker})", ha="center", va="center",
-                     fontsize=8)
-        figures.append(fig)
-    return figures
+def _changed(frame: np.ndarray) -> tuple[int, int, int, int]:
+    """The box ``(x0, y0, x1, y1)`` of the pixels of ``frame`` that are not the bench top's."""
+    rows, columns = np.nonzero(np.any(frame != np.uint8(BENCH), axis=2))
+    return int(columns.min()), int(rows.min()), int(columns.max()) + 1, int(rows.max()) + 1

@@ -13,7 +13,8 @@ from planner import BLANK, Observation, make_plan, product_from_dict, product_to
 from planner.decision import intention_model
 from planner.runtime.interfaces import Instruction
 from planner.runtime.scripted import ScriptedOperator
-from planner.runtime.tray import CameraModel, SimulatedCell, render_tray, tray_layout, write_marker_sheet
+from planner.runtime.sheet import write_marker_sheet
+from planner.runtime.tray import BENCH, CameraModel, SimulatedCell, render_tray, scene_box, tray_layout
 from planner.runtime.vision import (
     MarkerDetector,
     MarkerTracker,
@@ -152,6 +153,39 @@ def test_detection_at_1080p(markers):
     for in_tray in ({"ink", "cap", "hammer"}, {"body"}):
         frame = render_tray(layout, in_tray, camera.blur, camera.noise, camera.perspective, camera_seed=camera.seed)
         assert detector.detect(frame) == {k for k, name in markers.items.items() if name not in in_tray}
+
+
+@pytest.mark.parametrize("size, camera", [((1920, 1080), CameraModel(1.2, 6, 0.04, hands=True, seed=0)),
+                                          ((1280, 720), CameraModel(0.8, 10, 0.07, hands=True, seed=3))],
+                         ids=["demo", "tilted"])
+def test_detection_within_the_scene_box_is_that_of_the_whole_frame(plan, model, markers, size, camera):
+    """Frames of the simulated cell (hands and arms over the tray, a corner of every slot covered): outside
+    scene_box they show the bench top alone (and the grain), and a detector looking at the box only finds the
+    markers of the whole frame at the same corners; the whole frame holds no candidate square beyond a threshold
+    window from the box."""
+    import dataclasses
+    import itertools
+
+    layout = tray_layout(markers, size, margin=camera.perspective + 0.02)
+    x0, y0, x1, y1 = box = scene_box(layout, camera)
+    outside = np.ones(layout.size[::-1], bool)
+    outside[y0:y1, x0:x1] = False
+    sequence = int(model.full_sequences()[camera.seed])
+    cells = [SimulatedCell(layout, ScriptedOperator.following(model, sequence), c, hold=5)
+             for c in (camera, dataclasses.replace(camera, noise=0))]
+    whole = MarkerDetector(markers.dictionary)
+    within = whole.within(box, BENCH)
+    for frame, bare in itertools.islice(zip(*cells), 10):
+        assert (bare[outside] == BENCH).all()
+        corners, ids, rejected = whole._detector.detectMarkers(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY))
+        found = within.found(frame)
+        assert [i for i, _ in found] == ([] if ids is None else ids.ravel().tolist())
+        assert all(np.array_equal(c.reshape(4, 2), f) for c, (_, f) in zip(corners, found))
+        points = np.concatenate([c.reshape(-1, 2) for c in (*corners, *rejected)])  # the tray's edge among them
+        reach = whole.threshold_windows[-1] // 2 + 1  # a pixel's threshold reads the box from there
+        assert ((points >= (x0 - reach, y0 - reach)) & (points < (x1 + reach, y1 + reach))).all()
+    first = cells[0].operator_observations[0]  # 10 frames: two reaches into the tray (5 frames each), hands over both
+    assert len(first.parts) + (first.tool is not None) >= 2
 
 
 def test_without_debounce_flickers_become_operations(plan, model, markers):

@@ -5,14 +5,19 @@ hidden from FreeCAD's Python, loads in FreeCADCmd and in the FreeCAD window, say
 the pen is detected (the occt engine standing in for the mesh engine), its decision model and bundle exported.
 
 The clone is of the repository's last commit (HEAD), as a user would get it: uncommitted changes are not in it.
+FreeCADCmd's and the window's runs are background jobs (tests/background.py).
 """
 from __future__ import annotations
 
+import atexit
 import json
 import shutil
 import subprocess
+import tempfile
+from pathlib import Path
 
 import pytest
+from background import ENVIRONMENT, Job, run
 from conftest import PEN_MODELS, REPO, require_freecad_gui, require_freecadcmd, require_shared
 from integration.freecad_tools import GUI_HELPERS
 
@@ -106,12 +111,16 @@ QtCore.QTimer.singleShot(1000, guarded(start))
 """
 
 
+NOT_A_CLONE = "not a git checkout: the Addon Manager installs with git clone"
+
+
 def _installed(tmp_path):
     """A home whose FreeCAD Mod folder holds a git clone of this repository's HEAD (no .venv), and the
-    environment FreeCAD runs in: that home, the optional packages hidden, no APLAN_PYTHON."""
+    environment FreeCAD runs in (the session start's): that home, the optional packages hidden, no
+    APLAN_PYTHON. None when this is not a git checkout."""
     head = subprocess.run(["git", "-C", str(REPO), "rev-parse", "HEAD"], capture_output=True, text=True)
     if head.returncode != 0 or shutil.which("git") is None:
-        pytest.skip("not a git checkout: the Addon Manager installs with git clone")
+        return None
     home = tmp_path / "home"
     addon = home / ".local" / "share" / "FreeCAD" / "Mod" / "APLAN"
     addon.parent.mkdir(parents=True)
@@ -121,7 +130,7 @@ def _installed(tmp_path):
     blocker = tmp_path / "blocker"
     blocker.mkdir()
     write_atomic(blocker / "sitecustomize.py", BLOCKER.format(names=sorted(o.module for o in dependencies.OPTIONAL)))
-    env = {k: v for k, v in __import__("os").environ.items() if not k.startswith(("APLAN_", "PYTHON", "VIRTUAL_ENV"))}
+    env = {k: v for k, v in ENVIRONMENT.items() if not k.startswith(("APLAN_", "PYTHON", "VIRTUAL_ENV"))}
     env.update(HOME=str(home), PYTHONPATH=str(blocker), LANG="C.UTF-8")
     env["PATH"] = ":".join(p for p in env.get("PATH", "").split(":") if ".venv" not in p)
     return addon, env
@@ -161,16 +170,65 @@ def test_dependencies_message_and_the_engine_fallback(monkeypatch):
     assert dependencies.detection_engine("occt", None) == ("occt", "")
 
 
-@pytest.mark.freecad
-def test_a_git_clone_in_a_fresh_mod_folder_works_in_freecadcmd(tmp_path):
-    freecadcmd = require_freecadcmd()
-    require_shared(PEN)
-    addon, env = _installed(tmp_path)
+def _folder(name: str) -> Path:
+    """A new folder for a job, removed at exit; unlike background.folder's, its name does not hold "aplan" (the
+    window's test looks for APLAN's errors in the Report view, where FreeCAD names the script's path)."""
+    path = Path(tempfile.mkdtemp(prefix=f"addon-{name}-"))
+    atexit.register(shutil.rmtree, path, True)
+    return path
+
+
+def _in_freecadcmd():
+    """The clone's run in FreeCADCmd (a background job): its folder, the addon's folder and FreeCAD's run."""
+    tmp_path = _folder("cmd")
+    installed = _installed(tmp_path)
+    if installed is None:
+        return None
+    addon, env = installed
     shutil.copy(PEN, tmp_path / "pen.FCStd")
     script = tmp_path / "install.py"
     script.write_text(SCRIPT.format(tmp=str(tmp_path)))
-    done = subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=900, env=env,
-                          cwd=tmp_path)
+    freecadcmd = shutil.which("freecadcmd") or shutil.which("FreeCADCmd")
+    return tmp_path, addon, run([freecadcmd, str(script)], timeout=900, env=env, cwd=tmp_path)
+
+
+def _in_the_window():
+    """The clone's run in the FreeCAD window under Xvfb (a background job), as :func:`_in_freecadcmd`."""
+    tmp_path = _folder("window")
+    installed = _installed(tmp_path)
+    if installed is None:
+        return None
+    addon, env = installed
+    shutil.copy(PEN, tmp_path / "pen.FCStd")
+    script = tmp_path / "gui.py"
+    blocker = BLOCKER.format(names=sorted(o.module for o in dependencies.OPTIONAL))
+    script.write_text(GUI_SCRIPT.format(out=str(tmp_path / "result.json"), copy=str(tmp_path / "pen.FCStd"),
+                                        gui_helpers=GUI_HELPERS, blocker=blocker))
+    env["QTWEBENGINE_CHROMIUM_FLAGS"] = "--no-sandbox --disable-gpu"
+    command = [shutil.which("xvfb-run"), "-n", "180", "-a", "-s", "-screen 0 1280x800x24", shutil.which("freecad"),
+               str(script)]  # displays from 180: the tests' own start at 99 (conftest.freecad_gui_run)
+    return tmp_path, addon, run(command, timeout=300, env=env, cwd=tmp_path)
+
+
+RUNS = {"freecadcmd": Job("a git clone of the addon in FreeCADCmd", _in_freecadcmd),
+        "window": Job("a git clone of the addon in the FreeCAD window", _in_the_window)}
+#: FreeCAD's runs, done in the background (tests/background.py).
+BACKGROUND = tuple(RUNS.values())
+
+
+def _result(name: str):
+    """The run ``name`` of :data:`RUNS`; skips when this is not a git checkout."""
+    result = RUNS[name].result()
+    if result is None:
+        pytest.skip(NOT_A_CLONE)
+    return result
+
+
+@pytest.mark.freecad
+def test_a_git_clone_in_a_fresh_mod_folder_works_in_freecadcmd():
+    require_freecadcmd()
+    require_shared(PEN)
+    tmp_path, addon, done = _result("freecadcmd")
     lines = [line for line in done.stdout.splitlines() if line.startswith("APLAN-RESULT ")]
     assert lines, f"FreeCADCmd wrote no result:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
     data = json.loads(lines[-1].split(" ", 1)[1])
@@ -185,19 +243,11 @@ def test_a_git_clone_in_a_fresh_mod_folder_works_in_freecadcmd(tmp_path):
 
 
 @pytest.mark.freecad
-def test_a_git_clone_in_a_fresh_mod_folder_loads_in_the_freecad_window(tmp_path):
+def test_a_git_clone_in_a_fresh_mod_folder_loads_in_the_freecad_window():
     require_freecad_gui()
     require_shared(PEN)
-    addon, env = _installed(tmp_path)
-    shutil.copy(PEN, tmp_path / "pen.FCStd")
+    tmp_path, addon, done = _result("window")
     out = tmp_path / "result.json"
-    script = tmp_path / "gui.py"
-    blocker = BLOCKER.format(names=sorted(o.module for o in dependencies.OPTIONAL))
-    script.write_text(GUI_SCRIPT.format(out=str(out), copy=str(tmp_path / "pen.FCStd"), gui_helpers=GUI_HELPERS,
-                                        blocker=blocker))
-    env["QTWEBENGINE_CHROMIUM_FLAGS"] = "--no-sandbox --disable-gpu"
-    done = subprocess.run([shutil.which("xvfb-run"), "-a", "-s", "-screen 0 1280x800x24", shutil.which("freecad"),
-                           str(script)], capture_output=True, text=True, timeout=300, env=env, cwd=tmp_path)
     assert out.is_file(), f"the GUI wrote no result:\n{done.stdout[-3000:]}\n{done.stderr[-3000:]}"
     data = json.loads(out.read_text())
     assert "error" not in data, data.get("error")

@@ -1,14 +1,15 @@
 """The workbench in the real FreeCAD window (under Xvfb): activate APLAN, run its commands on the pen up to
 the statistics, take screenshots (tests/artifacts/), and check that the user's parts did not move; open every
 task panel and dialog at FreeCAD's default size, save a picture of each (tests/artifacts/gui_panel_*.png) and
-check that nothing in them is cut off."""
+check that nothing in them is cut off. The window runs as a background job (tests/background.py)."""
 from __future__ import annotations
 
 import json
 import shutil
 
 import pytest
-from conftest import PEN_MODELS, REPO, require_shared, run_freecad_gui
+from background import Job, folder
+from conftest import PEN_MODELS, REPO, freecad_gui_result, freecad_gui_run, require_freecad_gui, require_shared
 from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, WORKBENCH_HELPERS, aplan
 from pictures import read_picture
 
@@ -332,16 +333,32 @@ QtCore.QTimer.singleShot(1500, guarded(start))
 """
 
 
-@pytest.mark.freecad
-def test_workbench_in_the_real_freecad_window(tmp_path):
-    copy = tmp_path / "pen.FCStd"
-    shutil.copy(require_shared(PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"), copy)
+PEN = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
+
+
+def _in_the_window():
+    """The script in the FreeCAD window on a copy of the pen (a background job): its folder and FreeCAD's run."""
+    tmp_path = folder("gui")
+    shutil.copy(PEN, tmp_path / "pen.FCStd")
     ARTIFACTS.mkdir(exist_ok=True)
-    out = tmp_path / "result.json"
     script = tmp_path / "gui_test.py"
-    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS, layout_check=LAYOUT_CHECK, out=str(out), copy=str(copy),
-                                        artifacts=str(ARTIFACTS)))
-    data = run_freecad_gui(tmp_path, script, out)
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS,
+                                        layout_check=LAYOUT_CHECK, out=str(tmp_path / "result.json"),
+                                        copy=str(tmp_path / "pen.FCStd"), artifacts=str(ARTIFACTS)))
+    return tmp_path, freecad_gui_run(tmp_path, script, display=160)
+
+
+#: The window's run, done in the background (tests/background.py).
+BACKGROUND = (Job("the pen in the FreeCAD window", _in_the_window),)
+
+
+@pytest.mark.freecad
+def test_workbench_in_the_real_freecad_window():
+    require_shared(PEN)
+    require_freecad_gui()
+    tmp_path, done = BACKGROUND[0].result()
+    copy = tmp_path / "pen.FCStd"
+    data = freecad_gui_result(done, tmp_path / "result.json")
     assert data["workbench"] == "AplanWorkbench" and all(data["commands"].values())
     # Bad input: one clear line each, and the document untouched.
     assert data["active_without_document"] == [False] * len(data["commands"])

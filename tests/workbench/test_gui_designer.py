@@ -1,11 +1,12 @@
 """The designer's directions and not-blocking marks in the diagrams panel, in the real FreeCAD window (under
 Xvfb): a block with a peg in a slot inclined by 30 degrees is detected, the panel adds the slot's direction and
 marks a relation not blocking (one undo step each), and a second detection keeps both. Screenshot:
-tests/artifacts/gui_designer_directions.png."""
+tests/artifacts/gui_designer_directions.png. The window runs as a background job (tests/background.py)."""
 from __future__ import annotations
 
 import pytest
-from conftest import REPO, run_freecad_gui
+from background import Job, folder
+from conftest import REPO, freecad_gui_result, freecad_gui_run, require_freecad_gui
 from integration.freecad_tools import GUI_HELPERS, WORKBENCH_HELPERS
 from pictures import read_picture
 
@@ -121,13 +122,26 @@ QtCore.QTimer.singleShot(1500, guarded(start))
 """
 
 
-@pytest.mark.freecad
-def test_diagrams_panel_adds_a_direction_and_marks_a_relation(tmp_path):
+def _in_the_window():
+    """The script in the FreeCAD window (a background job): its folder and FreeCAD's run."""
+    tmp = folder("gui-designer")
     ARTIFACTS.mkdir(exist_ok=True)
-    out = tmp_path / "result.json"
-    script = tmp_path / "gui_designer.py"
-    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS, out=str(out), copy=str(tmp_path / "wedge.FCStd"), artifacts=str(ARTIFACTS)))
-    data = run_freecad_gui(tmp_path, script, out)
+    script = tmp / "gui_designer.py"
+    script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS,
+                                        out=str(tmp / "result.json"), copy=str(tmp / "wedge.FCStd"),
+                                        artifacts=str(ARTIFACTS)))
+    return tmp, freecad_gui_run(tmp, script, display=190)
+
+
+#: The window's run, done in the background (tests/background.py).
+BACKGROUND = (Job("the designer's directions in the FreeCAD window", _in_the_window),)
+
+
+@pytest.mark.freecad
+def test_diagrams_panel_adds_a_direction_and_marks_a_relation():
+    require_freecad_gui()
+    tmp, done = BACKGROUND[0].result()
+    data = freecad_gui_result(done, tmp / "result.json")
     assert "zero vector" in data["bad_direction"][0] and data["bad_direction"][1] == 0
     text, shown, step, steps, directions = data["direction"]
     assert text == "added direction 0, -0.5, 0.8660254 (stored; detect again to test it)"

@@ -6,7 +6,8 @@
   use); :func:`detections` maps it over a stream of frames.
 
 Cost: detection dominates the vision pipeline (about 15 ms per 1920x1080 frame on one core, see
-``bench/bench_vision.py``).
+``bench/bench_vision.py``); most of it goes to the contours of the grain in the frame's uniform areas, which a
+detector told where the scene is (:meth:`MarkerDetector.within`: the demo's tray) no longer looks at.
 """
 from __future__ import annotations
 
@@ -88,10 +89,19 @@ class MarkerDetector:
     single window 23 finds markers 40 pixels wide and more under blur, noise and perspective at more than
     twice OpenCV's default frame rate (``bench/bench_vision.py``); ``(13, 23)`` reaches down to about 32
     pixels. ``downscale``: detect on the frame shrunk by this factor (1: full size).
+
+    ``region`` ``(x0, y0, x1, y1)``: the box of the frame outside which every frame shows only a uniform
+    ``background`` (a BGR colour, or a grey level), give or take noise: the simulated tray's
+    (:func:`planner.runtime.tray.scene_box`). The pixels farther than two threshold windows from the box are
+    then set to the background's grey before detection, and cost nothing more. The markers found and their
+    corners are those of the whole frame (the same image size, coordinates and parameters; the threshold of
+    a pixel reads one window around it), as long as no marker lies out there: a uniform area has no contour.
+    One detector per thread (it keeps that image between frames).
     """
 
     def __init__(self, dictionary: str = DEFAULT_MARKER_DICTIONARY, threshold_windows: Sequence[int] = (23,),
-                 downscale: float = 1.0):
+                 downscale: float = 1.0, region: tuple[int, int, int, int] | None = None,
+                 background: int | tuple[int, int, int] = 0):
         import cv2
 
         if dictionary not in MARKER_DICTIONARIES or not hasattr(cv2.aruco, dictionary):
@@ -104,8 +114,17 @@ class MarkerDetector:
         if not windows or windows[0] < 3 or any(w % 2 == 0 for w in windows) or len(steps) > 1 or 0 in steps:
             raise VisionError("threshold windows must be distinct odd sizes >= 3, evenly spaced; "
                               f"got {threshold_windows}")
+        if region is not None and not (0 <= region[0] < region[2] and 0 <= region[1] < region[3]):
+            raise VisionError(f"region must be (x0, y0, x1, y1) with 0 <= x0 < x1 and 0 <= y0 < y1; got {region}")
         self.dictionary = dictionary
+        self.threshold_windows = tuple(windows)
         self.downscale = downscale
+        self.region = None if region is None else tuple(int(v) for v in region)
+        self.background = background
+        if region is not None:
+            colour = np.array(background if isinstance(background, tuple) else (background,) * 3, np.uint8)
+            self._background = int(cv2.cvtColor(colour.reshape(1, 1, 3), cv2.COLOR_BGR2GRAY)[0, 0])
+            self._canvas = np.empty((0, 0), np.uint8)
         parameters = cv2.aruco.DetectorParameters()
         parameters.adaptiveThreshWinSizeMin = windows[0]
         parameters.adaptiveThreshWinSizeMax = windows[-1]
@@ -114,16 +133,42 @@ class MarkerDetector:
                                                  parameters)
         self._cv2 = cv2
 
+    def within(self, region: tuple[int, int, int, int], background: int | tuple[int, int, int]) -> MarkerDetector:
+        """This detector's settings, looking at ``region`` of a ``background`` frame only (see the class)."""
+        return MarkerDetector(self.dictionary, self.threshold_windows, self.downscale, region, background)
+
     def detect(self, frame: np.ndarray) -> set[int]:
         """The ids of the markers found in ``frame``."""
+        return {marker for marker, _ in self.found(frame)}
+
+    def found(self, frame: np.ndarray) -> list[tuple[int, np.ndarray]]:
+        """Each marker found in ``frame``: its id and its four corners, ``(4, 2) float32`` pixels of ``frame``
+        (of the shrunk frame with ``downscale``), in OpenCV's order."""
         cv2 = self._cv2
-        grey = frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        grey = self._grey(frame)
         if self.downscale > 1:
             height, width = grey.shape
             grey = cv2.resize(grey, (round(width / self.downscale), round(height / self.downscale)),
                               interpolation=cv2.INTER_AREA)
-        _, ids, _ = self._detector.detectMarkers(grey)
-        return set() if ids is None else {int(i) for i in ids.ravel()}
+        corners, ids, _ = self._detector.detectMarkers(grey)
+        return [] if ids is None else [(int(i), c.reshape(4, 2)) for i, c in zip(ids.ravel(), corners)]
+
+    def _grey(self, frame: np.ndarray) -> np.ndarray:
+        """``frame`` in grey; with a region, the background's grey beyond two threshold windows from it (the
+        pixels within them are read by the thresholds of the pixels within one window of the region)."""
+        cv2 = self._cv2
+        if self.region is None:
+            return frame if frame.ndim == 2 else cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY)
+        height, width = frame.shape[:2]
+        reach = 2 * self.threshold_windows[-1]
+        x0, y0, x1, y1 = self.region
+        rows = slice(max(y0 - reach, 0), min(y1 + reach, height))
+        columns = slice(max(x0 - reach, 0), min(x1 + reach, width))
+        if self._canvas.shape != (height, width):
+            self._canvas = np.full((height, width), self._background, np.uint8)
+        part = frame[rows, columns]
+        self._canvas[rows, columns] = part if frame.ndim == 2 else cv2.cvtColor(part, cv2.COLOR_BGR2GRAY)
+        return self._canvas
 
 
 def detections(frames: Iterable[np.ndarray], detector: MarkerDetector) -> Iterator[set[int]]:

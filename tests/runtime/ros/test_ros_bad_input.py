@@ -1,17 +1,20 @@
 """What aplan ros refuses, against a real ROS master: no master, a server of another type under the robot's
-name, a parameter that does not fit, an image the detector cannot read. A message each, never a traceback."""
+name, a parameter that does not fit, an image the detector cannot read. A message each, never a traceback.
+The runs on a master are background jobs in the ROS lane (:func:`rosgraph_fixture.ros_job`), each on a master of
+its own; each test asserts on what its run kept."""
 from __future__ import annotations
 
 import subprocess
 import sys
 import textwrap
 
-from rosgraph_fixture import REPO, log_events, require_ros, ros, ros_cache  # noqa: F401 - fixtures
+from rosgraph_fixture import REPO, log_events, require_ros, ros_cache, ros_job  # noqa: F401 - fixtures
 
 
-def _no_traceback(ros) -> None:
-    for name in ros.processes:
-        assert "Traceback" not in ros.output(name), ros.output(name)
+def _no_traceback(ran) -> None:
+    """No node of the run (a :class:`rosgraph_fixture.Ran`) printed a traceback."""
+    for name in ran.outputs:
+        assert "Traceback" not in ran.output(name), ran.output(name)
 
 
 def test_no_master_is_refused_at_once(tmp_path, ros_cache):
@@ -30,7 +33,7 @@ def _python(ros, name: str, code: str):
     return ros._spawn(name, [sys.executable, "-c", textwrap.dedent(code)])
 
 
-def test_a_server_of_another_type_under_the_robots_name(ros):
+def _impostor_run(ros) -> dict:
     _python(ros, "impostor", """
         import sys; sys.path.append('/usr/lib/python3/dist-packages')
         import rospy; from std_msgs.msg import String
@@ -43,24 +46,37 @@ def test_a_server_of_another_type_under_the_robots_name(ros):
                                               text=True).stdout:
             break
     ros.aplan("planner", "ros", "pen", "--log", str(log), "--server-timeout", "5")
-    assert ros.wait("planner") == 1
-    output = ros.output("planner")
+    return dict(status=ros.wait("planner"), log=log)
+
+
+def test_a_server_of_another_type_under_the_robots_name():
+    require_ros()
+    ran = IMPOSTOR.result()
+    assert ran.result["status"] == 1
+    output = ran.output("planner")
     assert "/perform/result is published as std_msgs/String, not aplan_msgs/PerformActionResult" in output, output
-    assert not log.exists()
-    _no_traceback(ros)
+    assert not ran.result["log"].exists()
+    _no_traceback(ran)
 
 
-def test_a_parameter_that_does_not_fit(ros):
+def _parameter_run(ros) -> dict:
     ros.aplan("planner", "ros", "pen", "_planner:=sideways")  # a private parameter, as rospy reads it
-    assert ros.wait("planner") == 2
-    assert "parameter ~planner = 'sideways': use offline or online" in ros.output("planner")
+    status = ros.wait("planner")
     ros.aplan("planner2", "ros", "_product:=no-such-product", "--node", "p2")
-    assert ros.wait("planner2") == 1
-    assert "no-such-product" in ros.output("planner2")
-    _no_traceback(ros)
+    return dict(status=status, status2=ros.wait("planner2"))
 
 
-def test_an_image_the_detector_cannot_read_ends_the_session_with_that_message(ros):
+def test_a_parameter_that_does_not_fit():
+    require_ros()
+    ran = PARAMETER.result()
+    assert ran.result["status"] == 2
+    assert "parameter ~planner = 'sideways': use offline or online" in ran.output("planner")
+    assert ran.result["status2"] == 1
+    assert "no-such-product" in ran.output("planner2")
+    _no_traceback(ran)
+
+
+def _unreadable_run(ros) -> dict:
     _python(ros, "camera", """
         import sys, time; sys.path.append('/usr/lib/python3/dist-packages')
         import rospy; from sensor_msgs.msg import Image
@@ -72,12 +88,18 @@ def test_an_image_the_detector_cannot_read_ends_the_session_with_that_message(ro
     ros.aplan("robot", "ros-robot", "--auto")
     log = ros.folder / "ros.jsonl"
     ros.aplan("planner", "ros", "pen", "--expansions", "50", "--log", str(log))
-    assert ros.wait("planner") == 1
-    output = ros.output("planner")
+    return dict(status=ros.wait("planner"), log=log)
+
+
+def test_an_image_the_detector_cannot_read_ends_the_session_with_that_message():
+    require_ros()
+    ran = UNREADABLE.result()
+    assert ran.result["status"] == 1
+    output = ran.output("planner")
     assert "image encoding '16UC1' cannot be read by the marker detector" in output, output
-    end = log_events(log)[-1]
+    end = log_events(ran.result["log"])[-1]
     assert end["event"] == "end" and end["reason"] == "error" and end["step"] == 1
-    _no_traceback(ros)
+    _no_traceback(ran)
 
 
 def test_the_launch_file_starts_the_planner_and_the_vision_server_through_aplan(tmp_path):
@@ -96,7 +118,7 @@ def test_the_launch_file_starts_the_planner_and_the_vision_server_through_aplan(
     assert args.stdout.strip().endswith("aplan_ros/aplan ros --node planner __name:=planner"), args.stdout
 
 
-def test_markers_outside_the_products_map_are_a_logged_warning(ros):
+def _unknown_marker_run(ros) -> dict:
     _python(ros, "camera", """
         import sys, time
         import numpy as np
@@ -114,9 +136,23 @@ def test_markers_outside_the_products_map_are_a_logged_warning(ros):
     log = ros.folder / "ros.jsonl"
     ros.aplan("planner", "ros", "pen", "--expansions", "50", "--log", str(log), "--max-steps", "1",
               "--quiet-frames", "10", "--frame-timeout", "120")
-    assert ros.wait("planner") == 1
-    events = log_events(log)
+    return dict(status=ros.wait("planner"), log=log)
+
+
+def test_markers_outside_the_products_map_are_a_logged_warning():
+    require_ros()
+    ran = UNKNOWN_MARKER.result()
+    assert ran.result["status"] == 1
+    events = log_events(ran.result["log"])
     warnings = [e["message"] for e in events if e["event"] == "warning"]
     assert warnings == ["marker 40 is not in the product's marker map (DICT_4X4_50); ignored"], warnings  # once
     assert events[-1]["reason"] == "step limit"
-    _no_traceback(ros)
+    _no_traceback(ran)
+
+
+IMPOSTOR = ros_job("an impostor server", _impostor_run)
+PARAMETER = ros_job("a parameter that does not fit", _parameter_run)
+UNREADABLE = ros_job("an unreadable image", _unreadable_run)
+UNKNOWN_MARKER = ros_job("a marker outside the map", _unknown_marker_run)
+#: The runs, started with the session in its ROS lane (tests/background.py), in this module's order.
+BACKGROUND = (IMPOSTOR, PARAMETER, UNREADABLE, UNKNOWN_MARKER)
