@@ -160,7 +160,8 @@ class AnalysisProxy:
     dumps, loads = __getstate__, __setstate__  # FreeCAD 0.21 and later
 
 
-_ADDED_DEFAULTS = {"OcctFaceWeight": OCCT_FACE_WEIGHT, "OcctPrismTriangles": OCCT_PRISM_TRIANGLES}  # not 0
+#: Defaults of properties added since an analysis may have been saved (not 0); pairs, so no module state changes.
+_ADDED_DEFAULTS = (("OcctFaceWeight", OCCT_FACE_WEIGHT), ("OcctPrismTriangles", OCCT_PRISM_TRIANGLES))
 
 
 def _add_missing_properties(obj) -> None:
@@ -169,8 +170,8 @@ def _add_missing_properties(obj) -> None:
     for name, kind, group, tip in _PROPERTIES:
         if name not in obj.PropertiesList:
             obj.addProperty(kind, name, group, tip)
-            if name in _ADDED_DEFAULTS:
-                setattr(obj, name, _ADDED_DEFAULTS[name])
+            if name in dict(_ADDED_DEFAULTS):
+                setattr(obj, name, dict(_ADDED_DEFAULTS)[name])
 
 
 def is_analysis(obj) -> bool:
@@ -250,10 +251,10 @@ def _json_entries(analysis, prop: str) -> list[dict]:
 
 def _bound(analysis, prop: str) -> int:
     """The OCCT bound ``prop`` of ``analysis`` (its default when the analysis predates it); IntentError below 1."""
-    value = int(getattr(analysis, prop, _ADDED_DEFAULTS[prop]))
+    value = int(getattr(analysis, prop, dict(_ADDED_DEFAULTS)[prop]))
     if value < 1:
         raise IntentError(f"{analysis.Label}.{prop} must be a whole number >= 1, got {value} (default "
-                          f"{_ADDED_DEFAULTS[prop]:,}); set it in the analysis' properties (Detection)")
+                          f"{dict(_ADDED_DEFAULTS)[prop]:,}); set it in the analysis' properties (Detection)")
     return value
 
 
