@@ -84,6 +84,7 @@ class BackgroundJob(QtCore.QObject):
         text = self._partial + chunk
         cut = max(text.rfind("\n"), text.rfind("\r")) + 1  # a line ends at either (a progress line at \r)
         lines, self._partial = text[:cut].splitlines(), text[cut:]
+        shown = self.progress_text
         for line in lines:
             progress = read_progress(line)
             if progress is not None:
@@ -93,6 +94,8 @@ class BackgroundJob(QtCore.QObject):
                 self.progress_text = f"\n{note}"
                 if self.on_progress is not None:
                     self.on_progress(note)
+        if self.progress_text != shown:  # the label shows a new note at once, not at the next tick
+            self._tick()
 
     def _close(self) -> None:
         self.timer.stop()

@@ -74,6 +74,12 @@ def wait_detection():
         text = progress_text()  # title, seconds, the job's last note
         if text and (not result["progress"] or result["progress"][-1] != text.splitlines()[-1]):
             result["progress"].append(text.splitlines()[-1])
+        # Every note each job has sent so far (its output is kept whole): what the dialog was fed, whatever
+        # the moments at which its label was sampled above.
+        from freecad_aplan.protocol import read_note
+        for job in state().jobs:
+            notes = [read_note(line) for line in job.output.splitlines()]
+            result.setdefault("notes", {{}})[job.title] = [n for n in notes if n is not None]
         QtCore.QTimer.singleShot(200, guarded(wait_detection))
         return
     from freecad_aplan.intent import find_analysis, read_intent
@@ -174,6 +180,11 @@ def wait_plan():
         text = progress_text()
         if text:
             result.setdefault("plan_progress", []).append(text.splitlines()[-1])
+        from freecad_aplan.protocol import read_note
+        for job in state().jobs:  # every note the planning job has sent so far (see wait_detection)
+            notes = [read_note(line) for line in job.output.splitlines()]
+            result.setdefault("plan_notes", []).extend(n for n in notes if n is not None
+                                                       and n not in result["plan_notes"])
         QtCore.QTimer.singleShot(200, guarded(wait_plan))
         return
     result["plan"] = state().plan
@@ -351,7 +362,11 @@ def test_truck_structure_in_the_workbench(real_bundles):  # noqa: F811
     # of the document), the event loop kept running, the dialog showed the parts being tessellated.
     assert data["detect_returned"] < 10, data["detect_returned"]
     assert data["ticks"] >= 10
-    assert any(p.startswith("tessellating part ") for p in data["progress"]), data["progress"]
+    # The parts being tessellated reached the dialog as its job's notes, and its label showed the job's notes
+    # (sampled every 200 ms: on an idle machine the tessellation can pass between two samples).
+    notes = [n for job in data["notes"].values() for n in job]
+    assert any(n.startswith("tessellating part ") for n in notes), data["notes"]
+    assert set(data["progress"]) & set(notes), (data["progress"], data["notes"])
     assert data["parts"] == 61 and "61 parts, 113 contacts" in data["detected"]
     # The fastener groups the panel listed and accepted are those `aplan fasteners` proposes for the truck.
     proposals = json.loads(aplan("fasteners", str(real_bundles["toy_truck"]), "--json").stdout)["proposed"]
@@ -407,8 +422,10 @@ def test_truck_structure_in_the_workbench(real_bundles):  # noqa: F811
     # The per-level statistics, computed in the background, are those of `aplan stats` on the exported bundle
     # with the defaults (--fasteners tagged --subassemblies designer).
     assert data["plan_jobs"] == 1 and data["plan_ticks"] >= 1
-    assert any(p.startswith(("level ", "the product planned flat")) for p in data.get("plan_progress", [])), \
-        data.get("plan_progress")
+    assert any(n.startswith(("level ", "the product planned flat")) for n in data.get("plan_notes", [])), \
+        data.get("plan_notes")
+    assert set(data.get("plan_progress", [])) & set(data["plan_notes"]), (data.get("plan_progress"),
+                                                                          data["plan_notes"])
     report = data["plan"]["levels"]
     stats = json.loads(aplan("stats", str(bundle), "--json", "--fasteners", "tagged", "--subassemblies",
                              "designer").stdout)
