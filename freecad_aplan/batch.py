@@ -14,7 +14,8 @@ bundle, written into its ``product.json``), ``level-stats`` (the per-level figur
 product of several workstations, with a note line per level) and ``solve`` (the point-based solver on a product
 file, written as a ``.policy``, with progress lines), ``session`` (``aplan session --demo`` in the simulated
 camera cell and each level's belief plot, :func:`freecad_aplan.sessions.run_simulated_session`, a note line
-per output line). ``export`` with ``"notes": true`` prints a note line per
+per output line), ``habits`` (``aplan habits`` on the session panel's logs,
+:func:`freecad_aplan.sessions.learn_session_habits`). ``export`` with ``"notes": true`` prints a note line per
 part tessellated (the workbench's background detection).
 """
 import os
@@ -56,6 +57,10 @@ def _run(job: dict) -> dict:
         from freecad_aplan.sessions import run_simulated_session
 
         return run_simulated_session(**job, progress=lambda text: print(note_line(text), flush=True))
+    if action == "habits":
+        from freecad_aplan.sessions import learn_session_habits
+
+        return learn_session_habits(**job)
     if action == "solve":
         from freecad_aplan.workflow import solve_product
 

@@ -16,7 +16,13 @@ The workbench runs what the command line runs, so these only pick arguments and 
   (``--keyboard``), read from standard input. A background job (``batch.py session``) runs it, its output
   lines being the job's progress, the panel writing the picks to its input;
 - :func:`offered_picks` and :func:`typed_pick`: the keyboard's prompt as the panel shows it (the picks the
-  operator could make now, each as the line that types it).
+  operator could make now, each as the line that types it);
+- operator habits (issue 23, docs/habits.md): :func:`model_names` and :func:`model_label`, the named models
+  (``--model``, :data:`planner.api.MODEL_PRESETS`: a preset added there is offered without a change here);
+  :func:`check_habits`, what the panel checks before it starts a session with ``--habits FILE --model NAME``
+  (through :func:`planner.api.session_habits`, as the session reads them); :func:`habits_path` and
+  :func:`learn_session_habits`, ``aplan habits LOG...`` (:func:`planner.api.learn_habits`) on the panel's
+  session logs, into a file beside the document.
 """
 from __future__ import annotations
 
@@ -32,7 +38,8 @@ from planner.errors import PlannerError
 
 __all__ = ["LevelChoice", "ModelChoice", "level_choices", "level_of", "member_parts", "base_part_in", "model_choice",
            "level_model", "session_arguments", "run_simulated_session", "offered_picks", "typed_pick",
-           "is_prompt", "ALL_LEVELS", "SOURCES"]
+           "is_prompt", "ALL_LEVELS", "SOURCES", "model_names", "model_label", "check_habits", "habits_path",
+           "learn_session_habits"]
 
 #: The level selector's entry for "every level, bottom-up" (the command line without ``--level``).
 ALL_LEVELS = "all levels"
@@ -165,17 +172,21 @@ def is_prompt(line: str) -> bool:
 
 def session_arguments(product_file: str, log: str, level: str | None = None, sequence: int = 0,
                       expansions: int | None = None, max_steps: int | None = None,
-                      base_part: str | None = None, source: str = "demo") -> list[str]:
+                      base_part: str | None = None, source: str = "demo", habits: str | None = None,
+                      model: str | None = None) -> list[str]:
     """The ``aplan session`` arguments of a session of ``product_file``: ``source`` ``demo``, the simulated
     camera cell (``--demo sequence``), or ``keyboard``, the operator's picks typed in one line a step on
     standard input, the robot's instructions confirmed at once (``--keyboard --robot auto``); ``level`` None or
     :data:`ALL_LEVELS`: every level bottom-up, each with its log ``LOG-<level>.jsonl``. With ``expansions`` the
     online planner does that many expansions per decision and nothing else (no clock: the same decisions on
-    any machine); without, the command line's decision time."""
+    any machine); without, the command line's decision time. ``habits`` (a habits file) and ``model`` (a name of
+    :func:`model_names`; None: the command line's default) are ``--habits FILE`` and ``--model NAME``."""
     if source not in SOURCES:
         raise PlannerError(f"unknown session source {source!r}; use one of {', '.join(SOURCES)}")
     if not (isinstance(sequence, int) and sequence >= 0):
         raise PlannerError(f"sequence {sequence!r}: a full sequence is a number from 0")
+    if model is not None and model not in model_names():
+        raise PlannerError(f"unknown model {model!r}; use one of {', '.join(model_names())}")
     picked = ["--demo", str(sequence)] if source == "demo" else ["--keyboard", "--robot", "auto"]
     arguments = ["session", str(product_file), *picked, "--log", str(log)]
     if level not in (None, ALL_LEVELS):
@@ -186,7 +197,89 @@ def session_arguments(product_file: str, log: str, level: str | None = None, seq
         arguments += ["--max-steps", str(int(max_steps))]
     if base_part:
         arguments += ["--base-part", base_part]
+    if habits:
+        arguments += ["--habits", str(habits)]
+    if model is not None:
+        arguments += ["--model", model]
     return arguments
+
+
+def model_names() -> tuple[str, ...]:
+    """The named models a session can run (``aplan session --model NAME``), as the planner defines them
+    (:data:`planner.api.MODEL_PRESETS`), in its order."""
+    from planner import api
+
+    return tuple(api.MODEL_PRESETS)
+
+
+def model_label(name: str) -> str:
+    """What the model choice shows for the named model ``name``, from the preset's own fields: whether it needs
+    habits, the habits' prior it uses and the act confidence it sets (so a new preset is described too)."""
+    from planner import api
+
+    preset = api.MODEL_PRESETS[name]
+    if not preset.habits:
+        return f"{name}: the paper's model (no habits)"
+    prior = "the file's prior" if preset.prior is None else f"prior {preset.prior:g} per {preset.prior_per}"
+    acts = "" if preset.act_confidence is None else f", acts at {preset.act_confidence:g}"
+    return f"{name}: habits, {prior}{acts}"
+
+
+def _session_product(product_file: str, level: str | None):
+    """The product a session of ``level`` plans, as ``aplan session PRODUCT_FILE [--level LEVEL]`` resolves it."""
+    from planner import api
+
+    resolved = api.resolve_product(product_file, fasteners=api.DEFAULT_MODE, subassemblies=api.DEFAULT_MODE)
+    if level in (None, ALL_LEVELS):
+        levels = api.levels_of(resolved)
+        if len(levels) > 1:
+            return None
+        return api.level_product(resolved)
+    return api.level_product(resolved, "designer", level)
+
+
+def check_habits(product_file: str, level: str | None, habits: str | None, model: str | None):
+    """What a session with ``--habits habits --model model`` on ``level`` of ``product_file`` checks before it
+    starts, checked before the panel starts one: the file read through the planner's reader and checked against
+    the level's plan (:func:`planner.api.session_habits`: another product or version, a damaged file), a model
+    that needs habits without a file, habits on every level at once (habits are of one workstation's plan).
+    Returns the habits (None: the model uses none); raises :class:`~planner.errors.PlannerError` with the
+    message to show. Cost: reading the file and one plan of the level."""
+    from planner import api
+
+    habits = habits or None
+    product = _session_product(product_file, level)
+    if product is not None:
+        return api.session_habits(product, model, habits)
+    if api.habits_for(model, habits) is not None:  # every level at once: one file cannot be of each
+        raise PlannerError(f"{habits}: habits are of one workstation's plan; choose a level, not {ALL_LEVELS}")
+    return None
+
+
+def habits_path(document_file: str | None, level: str | None, folder: str) -> str:
+    """Where the panel keeps the habits it learns: beside the document (``pen.FCStd`` -> ``pen-habits.json``;
+    a level's ``pen-sa1-habits.json``), or in ``folder`` when the document was never saved."""
+    stem = Path(document_file).with_suffix("") if document_file else Path(folder) / "product"
+    return f"{stem}{'' if level in (None, ALL_LEVELS) else '-' + level}-habits.json"
+
+
+def learn_session_habits(product_file: str, level: str | None, logs: list[str], output: str) -> dict:
+    """``aplan habits LOG... --product LEVEL -o OUTPUT`` (:func:`planner.api.learn_habits`) on the session logs
+    ``logs`` of ``level`` of ``product_file``, added to the counts ``output`` holds already (the logs counted
+    before stay counted; each log is to be given once), written atomically. Returns ``{"file", "product",
+    "steps", "logs", "edges", "added"}`` (``added``: to the counts of a file there before). Raises :class:`~planner.errors.PlannerError` (a log of another
+    product version, no step to learn, ``output`` of another product) and writes nothing then. Cost: one replay
+    per log."""
+    from planner import api
+
+    product = _session_product(product_file, level)
+    if product is None:
+        raise PlannerError(f"habits are of one workstation's plan; choose a level, not {ALL_LEVELS}")
+    before = os.path.isfile(output)
+    habits, steps = api.learn_habits(logs, product, add=output if before else None)
+    api.write_habits(output, habits, len(logs))
+    return {"file": output, "product": habits.product, "steps": steps, "logs": len(logs),
+            "edges": len(habits.counts), "added": before}
 
 
 class _Lines(io.TextIOBase):
@@ -239,9 +332,10 @@ def _level_logs(log: str, level: str | None, levels: list[str]) -> list[tuple[st
 def run_simulated_session(product_file: str, folder: str, level: str | None = None, sequence: int = 0,
                           expansions: int | None = None, max_steps: int | None = None,
                           base_part: str | None = None, progress: Callable[[str], None] | None = None,
-                          source: str = "demo") -> dict:
+                          source: str = "demo", habits: str | None = None, model: str | None = None) -> dict:
     """Run ``aplan session PRODUCT --demo SEQUENCE`` (:func:`session_arguments`; ``source="keyboard"``: the picks
-    read from standard input instead) with its logs in ``folder``, then ``aplan replay LOG --plot`` for each
+    read from standard input instead; ``habits``, ``model``: ``--habits FILE --model NAME``) with its logs in
+    ``folder``, then ``aplan replay LOG --plot`` for each
     level that ran; ``progress(line)`` gets every output line (the level started, each step's status line,
     what ended it).
 
@@ -255,7 +349,8 @@ def run_simulated_session(product_file: str, folder: str, level: str | None = No
 
     os.makedirs(folder, exist_ok=True)
     log = os.path.join(folder, "session.jsonl")
-    arguments = session_arguments(product_file, log, level, sequence, expansions, max_steps, base_part, source)
+    arguments = session_arguments(product_file, log, level, sequence, expansions, max_steps, base_part, source,
+                                  habits, model)
     # the levels as the command line resolves PRODUCT (its --fasteners and --subassemblies defaults)
     resolved = api.resolve_product(product_file, fasteners=api.DEFAULT_MODE, subassemblies=api.DEFAULT_MODE)
     levels = [lv.id for lv in api.levels_of(resolved)]

@@ -108,13 +108,13 @@ def detection_copy(document, folder: str) -> tuple[str, int]:
 
 def worker_command(action: str, engine: str | None = None) -> list[str]:
     """The program and arguments of a background job running ``batch.py`` (``action``: export, analyze,
-    level-stats, solve, session).
+    level-stats, solve, session, habits).
 
     The occt engine and the solver run in FreeCADCmd; the mesh engine needs trimesh and manifold3d, so it
     runs in :func:`_mesh_python`, else in FreeCADCmd when FreeCAD's Python has them. Raises
     :class:`~freecad_aplan.runner.FreeCADError` saying what to install when none can.
     """
-    if action in ("level-stats", "session") and _mesh_python() is not None:  # the planner alone: no FreeCAD
+    if action in ("level-stats", "session", "habits") and _mesh_python() is not None:  # the planner alone: no FreeCAD
         return [_mesh_python(), BATCH_SCRIPT]
     if action == "analyze" and engine == "mesh":
         python = _mesh_python()

@@ -14,6 +14,8 @@ Front ends only parse their input and show results; the steps of the method live
 3. :mod:`~planner.api.models`: :func:`decision_model` / :func:`lumped_model` / :func:`load_model` /
    :func:`model_of` / :func:`save_model`: the decision model of Alg. 3 (over intentions, or lumped over the
    factored model's classes), or a POMDP read from a file, and writing it as POMDPX or ``.pomdp``;
+   :data:`MODEL_PRESETS`, :func:`habits_for`, :func:`session_habits`, :func:`learn_habits`: the named models
+   (``--model``) and the operator's habits they read, checked against a product, learned from session logs;
 4. :mod:`~planner.api.policies`: :func:`solve`, :func:`policy_for`: a policy from a solver (the built-in
    point-based one, or SARSOP);
 5. :mod:`~planner.api.decisions`: :func:`decision_maker`: the model and policy a session, a simulation or an
@@ -50,6 +52,7 @@ from .levels import (
 )
 from .models import (
     FILE_OPTION,
+    MODEL_PRESETS,
     MODEL_SUFFIXES,
     Model,
     _model_file_kind,
@@ -57,11 +60,16 @@ from .models import (
     check_parallel_flat,
     decision_model,
     factored_decision_model,
+    habits_for,
+    learn_habits,
     load_model,
     lumped_model,
     model_of,
+    read_habits,
     save_model,
+    session_habits,
     tables,
+    write_habits,
 )
 from .plans import (
     AUTO_BASE_PART,
@@ -93,4 +101,6 @@ __all__ = ["resolve_product", "DEFAULT_MODE", "fastener_report", "accept_fastene
            "ModelSpec", "PlannerChoice", "EpisodeChoice", "model_of", "check_parallel_flat", "Model", "Product",
            "Plan", "AUTO_BASE_PART",
            "FILE_OPTION",
+           # operator habits (issue 23): the named models, reading, checking and learning habits
+           "MODEL_PRESETS", "habits_for", "session_habits", "learn_habits", "read_habits", "write_habits",
            "PlannerError"]

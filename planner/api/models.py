@@ -11,7 +11,8 @@ from ..assembly.intentions import count_intentions
 from ..assembly.plan import Plan
 from ..decision.factored_model import FactoredIntentionModel, factored_model
 from ..decision.deviations import Deviations
-from ..decision.habits import Habits, habit_weights
+from ..decision.habits import Habits, HabitsError, edge_counts, habit_weights
+from ..decision.io.habits_file import read_habits, write_habits
 from ..decision.intention_model import IntentionModel, Rewards, intention_model
 from ..decision.io.cassandra import read_cassandra, write_cassandra
 from ..decision.io.pomdpx import read_pomdpx, write_pomdpx
@@ -28,6 +29,7 @@ from ..decision.parallel import parallel_flag
 from ..decision.models import tables
 from ..decision.lumped_model import lumped_model as build_lumped_model
 from ..decision.pomdp import POMDP
+from ..decision.presets import PRESETS, ModelPreset, preset_habits
 from ..defaults import DISCOUNT, FILE_LIMIT
 from ..errors import FileLimitError, MemoryLimitError, PlannerError, gib
 from ..product import Product
@@ -37,7 +39,8 @@ from .plans import _decidable, base_part_of, plan_of
 from .specs import ModelSpec
 
 __all__ = ["MODEL_SUFFIXES", "Model", "decision_model", "factored_decision_model", "lumped_model",
-           "check_parallel_flat", "load_model", "model_of", "check_model_file", "save_model", "tables"]
+           "check_parallel_flat", "load_model", "model_of", "check_model_file", "save_model", "tables",
+           "MODEL_PRESETS", "habits_for", "session_habits", "learn_habits", "read_habits", "write_habits"]
 
 MODEL_SUFFIXES = (".pomdpx", ".pomdpx.gz", ".pomdp")
 
@@ -46,6 +49,65 @@ FILE_OPTION = ("--max-file", "--max-file GIB raises the file size budget")
 
 
 Model = IntentionModel | LumpedModel | POMDP
+
+#: The named models (``--model NAME``, the workbench's model choice), by name: :data:`planner.decision.presets.PRESETS`.
+MODEL_PRESETS: dict[str, ModelPreset] = PRESETS
+
+
+def habits_for(model: str | None, path: str | os.PathLike | None,
+               inputs: InputLimits = InputLimits()) -> Habits | None:
+    """The habits a model-building command uses: the file at ``path`` read and checked
+    (:func:`~planner.decision.io.habits_file.read_habits`), with the preset ``model``'s prior in place of the
+    file's (``confident``), or None (``model`` a preset without habits, e.g. ``paper``; or no ``path``). A
+    preset that needs habits without ``path`` is a :class:`~planner.errors.PlannerError`, so is an unknown name.
+    ``aplan --habits FILE --model NAME`` and the workbench's session panel both read habits here. Cost: reading
+    the file (within ``inputs``)."""
+    if model is not None and model not in PRESETS:
+        raise PlannerError(f"unknown model {model!r}; use one of {', '.join(PRESETS)}")
+    preset = PRESETS.get(model)
+    if preset is not None and not preset.habits:
+        return None
+    if path is None:
+        if preset is not None:
+            raise PlannerError(f"--model {model} needs the habits: --habits FILE (aplan habits LOG... -o FILE)")
+        return None
+    return preset_habits(preset, read_habits(path, inputs))
+
+
+def session_habits(product: str | os.PathLike | Product | Plan, model: str | None, path: str | os.PathLike | None,
+                   technical: bool | None = None, inputs: InputLimits = InputLimits()) -> Habits | None:
+    """:func:`habits_for`, then checked to be of ``product``'s plan (the product's name, its state graph's
+    fingerprint, every key one of its state edges: :func:`~planner.decision.habits.edge_counts`), as the model
+    built from them checks; a :class:`~planner.decision.habits.HabitsError` naming the file and the fix
+    otherwise. What a session checks before it starts. Cost: reading the file and one plan of ``product``."""
+    habits = habits_for(model, path, inputs)
+    if habits is not None:
+        plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical))
+        edge_counts(plan, habits)
+    return habits
+
+
+def learn_habits(logs, product: Product | Plan | None = None, prior: float | None = None,
+                 prior_per: str | None = None, technical: bool | None = None,
+                 add: str | os.PathLike | None = None, inputs: InputLimits = InputLimits()) -> tuple[Habits, int]:
+    """The habits counted from the session logs ``logs`` (``aplan habits LOG...``; docs/habits.md, Learning from
+    logs) and the operator's steps counted: of ``product``'s plan (None: the first log's product), added to the
+    counts of the habits file ``add`` when given (``product`` is then needed, to check them against), with the
+    prior ``prior`` (None: ``add``'s, else the default) spread ``prior_per`` (None: ``add``'s, else per edge). A
+    log of another product version, one with no step, or ``add`` of another product is a
+    :class:`~planner.decision.habits.HabitsError`. Cost: one replay per log (a model build, one belief update per
+    step)."""
+    from dataclasses import replace
+
+    from ..runtime.habits_logs import habits_from_logs
+
+    plan = None if product is None else product if isinstance(product, Plan) else _decidable(plan_of(product,
+                                                                                                     technical))
+    start = read_habits(add, inputs) if add else None
+    if start is not None and plan is None:
+        raise HabitsError(f"--add {add}: give the product too (--product PRODUCT), to check the counts against it")
+    habits, steps = habits_from_logs(plan, list(logs), prior, technical, start, inputs)
+    return replace(habits, prior_per=prior_per or (start.prior_per if start is not None else "edge")), steps
 
 
 def decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import argparse
 import json
-from dataclasses import replace
 
-from ..decision.habits import PRIOR_PER, HabitsError
-from ..decision.io.habits_file import read_habits, write_habits
+from ..decision.habits import PRIOR_PER
+from ..decision.io.habits_file import write_habits
 from ..defaults import HABITS_PRIOR
 from .options import (
     add_fasteners,
@@ -24,17 +23,11 @@ __all__ = ["add_commands", "habits_from"]
 
 
 def _habits(args: argparse.Namespace) -> int:
-    from ..api import _decidable, plan_of
-    from ..runtime.habits_logs import habits_from_logs
+    from ..api import learn_habits
 
-    plan = None
-    if args.product is not None:
-        plan = _decidable(plan_of(product_from(args, args.product), args.technical))
-    start = read_habits(args.add, inputs_from(args)) if args.add else None
-    if start is not None and plan is None:
-        raise HabitsError(f"--add {args.add}: give the product too (--product PRODUCT), to check the counts against it")
-    habits, steps = habits_from_logs(plan, args.logs, args.prior, args.technical, start, inputs_from(args))
-    habits = replace(habits, prior_per=args.prior_per or (start.prior_per if start is not None else "edge"))
+    product = None if args.product is None else product_from(args, args.product)
+    habits, steps = learn_habits(args.logs, product, args.prior, args.prior_per, args.technical, args.add,
+                                 inputs_from(args))
     write_habits(args.output, habits, len(args.logs))
     if args.json:
         print(json.dumps({"product": habits.product, "fingerprint": habits.fingerprint, "prior": habits.prior,

@@ -9,13 +9,12 @@ from ... import api
 from ...decision.intention_model import Rewards
 from ...decision.deviations import Deviations, deviations_of
 from ...decision.habits import Habits
-from ...decision.io.habits_file import read_habits
-from ...decision.presets import CONFIDENT, PRESETS, preset_habits, preset_rewards
+from ...decision.presets import CONFIDENT, PRESETS, preset_rewards
 from ...decision.joins import JOINS
 from ...decision.parallel import parallel_flag
 from ...decision.projected import PROJECTED, PROJECTED_CONFIDENCE
 from ...defaults import DISCOUNT
-from ...errors import PlannerError, UsageError
+from ...errors import UsageError
 
 from .limits import add_input_options, add_size_options, inputs_from, limits_from
 from .products import add_base_part, add_fasteners, add_hierarchy, add_model_options, add_technical
@@ -114,16 +113,9 @@ def rewards_from(args: argparse.Namespace) -> Rewards:
 def habits_from(args: argparse.Namespace) -> Habits | None:
     """The habits a model-building command is to use: ``--habits`` read and checked, with the ``--model``
     preset's prior in place of the file's (``--model confident``), or None (``--model paper``, or no
-    ``--habits``). ``--model habits`` or ``confident`` without ``--habits`` is an error."""
-    chosen, path = getattr(args, "habit_model", None), getattr(args, "habits", None)
-    preset = PRESETS.get(chosen)
-    if preset is not None and not preset.habits:
-        return None
-    if path is None:
-        if preset is not None:
-            raise PlannerError(f"--model {chosen} needs the habits: --habits FILE (aplan habits LOG... -o FILE)")
-        return None
-    return preset_habits(preset, read_habits(path, inputs_from(args)))
+    ``--habits``); ``--model habits`` or ``confident`` without ``--habits`` is an error
+    (:func:`planner.api.habits_for`, which the workbench's session panel calls too)."""
+    return api.habits_for(getattr(args, "habit_model", None), getattr(args, "habits", None), inputs_from(args))
 
 
 def model_spec_from(args: argparse.Namespace) -> api.ModelSpec:
