@@ -38,11 +38,13 @@ from planner.errors import PlannerError
 
 __all__ = ["LevelChoice", "ModelChoice", "level_choices", "level_of", "member_parts", "base_part_in", "model_choice",
            "level_model", "session_arguments", "run_simulated_session", "offered_picks", "typed_pick",
-           "is_prompt", "ALL_LEVELS", "SOURCES", "model_names", "model_label", "check_habits", "habits_path",
+           "is_prompt", "ALL_LEVELS", "SOURCES", "model_names", "model_label", "check_habits", "habits_path", "DEFAULT_MODEL",
            "learn_session_habits"]
 
 #: The level selector's entry for "every level, bottom-up" (the command line without ``--level``).
 ALL_LEVELS = "all levels"
+#: The model choice's first entry: no ``--model``, as the command line without it.
+DEFAULT_MODEL = "default: habits with a file, else paper"
 
 
 @dataclass(frozen=True)
@@ -244,10 +246,12 @@ def check_habits(product_file: str, level: str | None, habits: str | None, model
     the level's plan (:func:`planner.api.session_habits`: another product or version, a damaged file), a model
     that needs habits without a file, habits on every level at once (habits are of one workstation's plan).
     Returns the habits (None: the model uses none); raises :class:`~planner.errors.PlannerError` with the
-    message to show. Cost: reading the file and one plan of the level."""
+    message to show. Cost: without ``habits`` none; with, reading the file and one plan of the level."""
     from planner import api
 
     habits = habits or None
+    if habits is None:  # nothing to read: only whether the model needs habits (the product is not planned)
+        return api.habits_for(model, None)
     product = _session_product(product_file, level)
     if product is not None:
         return api.session_habits(product, model, habits)

@@ -289,7 +289,8 @@ class Session(_Command):
     def run(self):
         analysis = workflow.require_analysis(_document())
         product = workflow.analysis_product(analysis)
-        _show_panel(self.state, session.SessionPanel(product, workflow.analysis_base_part(analysis), self.state.jobs))
+        _show_panel(self.state, session.SessionPanel(product, workflow.analysis_base_part(analysis), self.state.jobs,
+                                                     _document().FileName or None))
 
 
 COMMANDS = (CreateAnalysis, GroupComponent, ExcludeParts, Detect, Diagrams, Interlocks, Intent, Fasteners, Subassemblies, Plan,

@@ -12,6 +12,10 @@ does at each step, what the operator could pick now, the prompt, a line refused 
 tools there are), each step's belief and the robot's next action. The picks the operator could make are
 offered in a list (and "nothing"): choosing one puts its line in the picks field, a double click or Send sends
 it, so nothing needs typing exactly; any other line (a wrong pick, ``apart PART...``, ``q``) can be typed.
+
+The decision model and the operator's habits (``--model NAME --habits FILE``; issue 23) are chosen in the
+panel too, checked before a session starts, and learned from the panel's sessions
+(:mod:`freecad_aplan.gui.session_habits`).
 """
 from __future__ import annotations
 
@@ -27,6 +31,7 @@ from .. import workflow
 from ..sessions import ALL_LEVELS, base_part_in, is_prompt, level_choices, level_of, offered_picks, typed_pick
 from .layout import button_rows, narrow_combo, panel_layout, stacked_field, wrapped_label
 from .plan3d_panel import _text_box
+from .session_habits import HabitsChooser
 
 #: Lines of the keyboard prompt's box (it scrolls; the last line, the prompt, stays in view).
 PROMPT_LINES = 11
@@ -39,14 +44,17 @@ class SessionPanel:
 
     ``run()`` starts the session of the selected level, ``cancel()`` ends it; ``lines`` holds the run's output
     lines so far (the last one shows in the panel), ``result`` the job's answer once it ended (``{"command",
-    "assembled", "levels": [...]}``), ``error`` its message when it failed.
+    "assembled", "levels": [...]}``), ``error`` its message when it failed. ``document_file``: the document's
+    file, beside which Learn from sessions keeps the habits; ``logs`` the (level, log) of every session run,
+    ``learned`` those whose steps are in the habits file already.
     """
 
-    def __init__(self, product, base_part: str | None, jobs: list):
+    def __init__(self, product, base_part: str | None, jobs: list, document_file: str | None = None):
         from planner.product import save_product
 
         self.product, self.base_part, self.jobs = product, base_part, jobs
         self.job, self.result, self.error, self.lines, self.running = None, None, None, [], None
+        self.logs, self.learned = [], set()
         self.scrolled = False
         self.folder = tempfile.mkdtemp(prefix="aplan-session-")
         self.product_file = os.path.join(self.folder, PRODUCT_FILE)
@@ -81,6 +89,9 @@ class SessionPanel:
         self.expansions.setRange(1, 10**6)
         self.expansions.setValue(ONLINE_EXPANSIONS)
         stacked_field(layout, "Online planner: expansions per decision", self.expansions)
+        self.habits = HabitsChooser(layout, document_file, self.folder, self.learn_habits)
+        self.habits.offer_learned(self.selected_level())
+        self.level.currentIndexChanged.connect(lambda *_: self.habits.offer_learned(self.selected_level()))
         self.run_button = QtGui.QPushButton("Run session")
         self.run_button.setObjectName("AplanRunSession")
         self.run_button.clicked.connect(self.run)
@@ -179,8 +190,12 @@ class SessionPanel:
 
         if self.job is not None:
             return
-        self.result, self.error, self.lines = None, None, []
         level = self.selected_level()
+        if not self.habits.check(self.product_file, level):  # refused: shown under the habits file, nothing runs
+            self.status.setText("not started: " + self.habits.note.text())
+            _scroll_to(self.habits.box)
+            return
+        self.result, self.error, self.lines = None, None, []
         count = len(self.levels) if level == ALL_LEVELS else 1
         self.progress.setRange(0, count)
         self.progress.setValue(0)
@@ -195,15 +210,58 @@ class SessionPanel:
         run = tempfile.mkdtemp(prefix="run-", dir=self.folder)
         job = {"action": "session", "product_file": self.product_file, "folder": run, "level": level,
                "sequence": self.sequence.value(), "expansions": self.expansions.value(),
-               "base_part": base, "source": self.source.currentData()}
+               "base_part": base, "source": self.source.currentData(), "habits": self.habits.habits(),
+               "model": self.habits.selected_model()}
         self.job = BackgroundJob(f"Session of {level or 'the product'}", workflow.worker_command("session"), job,
                                  self._done, self._failed, self.jobs, FreeCADGui.getMainWindow(),
                                  on_progress=self._progress)
         self.running = job["source"]  # a keyboard session's picks go to the job's input
-        self.run_button.setEnabled(False)
-        self.cancel_button.setEnabled(True)
-        self._keyboard(job["source"] == "keyboard")
+        self._started(job["source"] == "keyboard")
         self.job.start()
+
+    def _started(self, keyboard: bool) -> None:
+        self.run_button.setEnabled(False)
+        self.habits.learn.setEnabled(False)
+        self.cancel_button.setEnabled(True)
+        self._keyboard(keyboard)
+
+    def learn_habits(self) -> None:
+        """Learn from sessions: ``aplan habits`` on the logs of this panel's sessions of the selected level not
+        learned yet, added to the habits file beside the document (a background job); that file goes into the
+        habits field."""
+        from .jobs import BackgroundJob
+
+        level = self.selected_level()
+        if self.job is not None:
+            return
+        if level == ALL_LEVELS:
+            self.habits.show(f"habits are of one workstation's plan; choose a level, not {ALL_LEVELS}", error=True)
+            return
+        logs = [log for ran, log in self.logs if ran == level and log not in self.learned]
+        if not logs:
+            self.habits.show(f"no session of {level or 'the product'} to learn from yet: run one first", error=True)
+            return
+        output = self.habits.learned_file(level)
+        job = {"action": "habits", "product_file": self.product_file, "level": level, "logs": logs, "output": output}
+        self.running = "habits"
+        self.habits.show(f"learning habits from {len(logs)} session log{'s' if len(logs) != 1 else ''}")
+        self.job = BackgroundJob("Learn habits", workflow.worker_command("habits"), job,
+                                 lambda result: self._learned(result, logs), self._failed_learning, self.jobs,
+                                 FreeCADGui.getMainWindow(), on_progress=lambda line: None)
+        self._started(False)
+        self.job.start()
+
+    def _learned(self, result: dict, logs: list[str]) -> None:
+        self._ended()
+        self.learned.update(logs)
+        self.habits.field.setText(result["file"])
+        self.habits.show(f"learned {result['steps']} operator step{'s' if result['steps'] != 1 else ''} from "
+                         f"{result['logs']} log{'s' if result['logs'] != 1 else ''}"
+                         f"{', added to the file' if result['added'] else ''}: {os.path.basename(result['file'])}")
+
+    def _failed_learning(self, message: str) -> None:
+        self._ended()
+        self.habits.show(message, error=True)
 
     def cancel(self) -> None:
         if self.job is not None:
@@ -227,14 +285,16 @@ class SessionPanel:
         self.status.setText(line)
 
     def _ended(self) -> None:
-        self.job = None
+        self.job, self.running = None, None
         self._keyboard(False)
+        self.habits.learn.setEnabled(True)
         self.run_button.setEnabled(True)
         self.cancel_button.setEnabled(False)
 
     def _done(self, result: dict) -> None:
         self._ended()
         self.result = result
+        self.logs += [(d["level"], d["log"]) for d in result["levels"]]
         self.progress.setValue(self.progress.maximum())
         ended = "; ".join(f"{d['level'] or 'product'}: {d['message']}" for d in result["levels"])
         self.status.setText(f"{'assembled' if result['assembled'] else 'not assembled'}. {ended}. "

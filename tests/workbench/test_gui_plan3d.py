@@ -1,7 +1,9 @@
 """The plan in the real FreeCAD window (under Xvfb), one window for all of it: a pen sequence stepped through in
 the 3D view (a screenshot per step in tests/artifacts/), one obstruction relation of the diagrams panel, the
 parts of an operation and a state of the plan dialog; after each, every placement and colour of the user's
-parts is back exactly, with no undo step and the document not modified."""
+parts is back exactly, with no undo step and the document not modified. Then the session panel from the
+keyboard, habits learned from its log, a keyboard session with them that replays, and bad habits refused in the
+panel (issue 23)."""
 from __future__ import annotations
 
 import json
@@ -11,13 +13,14 @@ import cv2
 import numpy as np
 import pytest
 from conftest import PEN_MODELS, REPO, require_shared, run_freecad_gui
-from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, WORKBENCH_HELPERS
+from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, WORKBENCH_HELPERS, aplan
 from pictures import hue_of, read_picture
 from test_plan3d import pen_diagrams
 
 from planner import api, product_from_dict, product_to_dict
 from planner.assembly.explode import sequence_at
 from planner.decision.intention_model import intention_model
+from planner.product.synthetic import chain_product
 from planner.runtime.log import EventLog
 from planner.runtime.scripted import ScriptedOperator, ScriptedRobot
 from planner.runtime.session import run_session
@@ -30,7 +33,7 @@ import json, os, sys, time, traceback
 from PySide import QtCore, QtGui
 import FreeCAD, FreeCADGui
 
-OUT, COPY, ARTIFACTS, LOG = {out!r}, {copy!r}, {artifacts!r}, {log!r}
+OUT, COPY, ARTIFACTS, LOG, OTHER = {out!r}, {copy!r}, {artifacts!r}, {log!r}, {other!r}
 result = {{"steps": [], "played": 0}}
 MATERIALS = {{}}
 
@@ -260,7 +263,8 @@ def wait_prompt():
     if panel.job is None:
         result["keyboard_result"], result["keyboard_error"] = panel.result, panel.error
         result["keyboard_prompt_end"] = panel.prompt.toPlainText()
-        finish(0)
+        learn_habits()
+        return
     if choices.count() == 0 or not panel.lines or not panel.lines[-1].startswith("operator picked"):
         QtCore.QTimer.singleShot(100, guarded(wait_prompt))
         return
@@ -295,6 +299,80 @@ def wait_prompt():
     else:
         panel.send_button.click()
     QtCore.QTimer.singleShot(100, guarded(wait_prompt))
+
+
+
+def learn_habits():
+    # Habits (issue 23): learned from the keyboard session's log, a keyboard session with them and the confident
+    # model, then a habits file of another product and a model without habits: refused in the panel.
+    window = FreeCADGui.getMainWindow()
+    combo = window.findChild(QtGui.QComboBox, "AplanSessionModel")
+    result["models"] = [[combo.itemText(i), combo.itemData(i)] for i in range(combo.count())]
+    result["habits_before"] = window.findChild(QtGui.QLineEdit, "AplanSessionHabits").text()
+    window.findChild(QtGui.QPushButton, "AplanLearnHabits").click()
+    after_jobs(learned)
+
+
+def learned():
+    panel = state().panel
+    result["learned"] = [panel.habits.habits(), panel.habits.note.text()]
+    combo = FreeCADGui.getMainWindow().findChild(QtGui.QComboBox, "AplanSessionModel")
+    combo.setCurrentIndex(combo.findData("confident"))
+    result["habits_sent"] = []
+    FreeCADGui.getMainWindow().findChild(QtGui.QPushButton, "AplanRunSession").click()
+    QtCore.QTimer.singleShot(200, guarded(wait_habits_prompt))
+
+
+def wait_habits_prompt():
+    panel = state().panel
+    if panel.job is None:
+        result["habits_result"], result["habits_error"] = panel.result, panel.error
+        refused()
+        return
+    if panel.choices.count() == 0 or not panel.lines or not panel.lines[-1].startswith("operator picked"):
+        QtCore.QTimer.singleShot(100, guarded(wait_habits_prompt))
+        return
+    if len(result["habits_sent"]) >= 12:  # the pen has five operations: a session that never ends
+        panel.cancel()
+    else:
+        panel.choices.setCurrentRow(0)
+        result["habits_sent"].append(panel.picks.text())
+        panel.send_button.click()
+    QtCore.QTimer.singleShot(100, guarded(wait_habits_prompt))
+
+
+def refused():
+    panel = state().panel
+    window = FreeCADGui.getMainWindow()
+    runs = lambda: len([d for d in os.listdir(panel.folder) if d.startswith("run-")])
+    before = runs()
+    window.findChild(QtGui.QLineEdit, "AplanSessionHabits").setText(OTHER)
+    window.findChild(QtGui.QPushButton, "AplanRunSession").click()
+    result["runs_before"] = before
+    QtCore.QTimer.singleShot(300, guarded(refusal_shown))  # as a person sees it: after the panel's layout
+
+
+def refusal_shown():
+    panel = state().panel
+    window = FreeCADGui.getMainWindow()
+    runs = lambda: len([d for d in os.listdir(panel.folder) if d.startswith("run-")])
+    before = result["runs_before"]
+    note, viewport = panel.habits.note, task_view_viewport()
+    corner, screen = note.mapTo(viewport, QtCore.QPoint(0, 0)), note.mapToGlobal(QtCore.QPoint(0, 0))
+    result["other_product"] = {{"note": note.text(), "status": panel.status.text(), "started": panel.job is not None,
+                               "runs": [before, runs()], "colour": note.palette().color(note.foregroundRole()).name(),
+                               "in_view": [corner.x(), corner.y(), note.width(), note.height(), viewport.width(),
+                                           viewport.height()],
+                               "screen": [screen.x(), screen.y(), note.width(), note.height()],
+                               "status_screen": [panel.status.mapToGlobal(QtCore.QPoint(0, 0)).x(),
+                                                 panel.status.mapToGlobal(QtCore.QPoint(0, 0)).y(),
+                                                 panel.status.width(), panel.status.height()],
+                               "cut_off": cut_off(viewport), "broken": broken_words(viewport)}}
+    QtGui.QApplication.primaryScreen().grabWindow(0).save(os.path.join(ARTIFACTS, "gui_session_habits.png"))
+    window.findChild(QtGui.QLineEdit, "AplanSessionHabits").setText("")  # the confident model, no habits file
+    window.findChild(QtGui.QPushButton, "AplanRunSession").click()
+    result["no_habits"] = [note.text(), panel.job is not None, runs()]
+    finish(0)
 
 
 FreeCADGui.getMainWindow().showMaximized()
@@ -417,7 +495,7 @@ def test_plan_and_relation_in_the_3d_view(tmp_path):
     script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS,
                                         layout_check=LAYOUT_CHECK, out=str(out), copy=str(copy),
                                         log=str(tmp_path / "session.jsonl"), artifacts=str(ARTIFACTS),
-                                        diagrams=pen_diagrams()))
+                                        diagrams=pen_diagrams(), other=str(_other_habits(tmp_path))))
     data = run_freecad_gui(tmp_path, script, out)
     before = data["before"]
     assert data["before_flags"][1] is False  # saved: not modified
@@ -496,6 +574,7 @@ def test_plan_and_relation_in_the_3d_view(tmp_path):
     narrowest, scroll = data["panel_fits"]
     assert narrowest <= 250 and scroll == 0, data["panel_fits"]  # fits the default task view; the step text shows
     _assert_keyboard_session(data)
+    _assert_habits_session(data, tmp_path)
 
 
 def _assert_keyboard_session(data: dict) -> None:
@@ -542,3 +621,69 @@ def _assert_keyboard_session(data: dict) -> None:
     seen = [e["observation"] for e in events if e["event"] == "observation"]
     assert [s["sent"] for s in steps] == [" ".join(o.split("+")) if o != "blank" else "" for o in seen]
     assert "the product is assembled" in data["keyboard_prompt_end"]
+
+
+def _other_habits(folder):
+    """A habits file of another product (the chain of 4), learned from a session the operator did alone."""
+    chain = chain_product(4)
+    model = intention_model(api.plan_of(chain))
+    policy = _Waits()
+    policy.actions = model.actions
+    log = folder / "chain.jsonl"
+    assert run_session(model, policy, ScriptedOperator(model.plan, sequence_at(model.plan, 0)), ScriptedRobot(),
+                       EventLog(log)).assembled
+    habits, steps = api.learn_habits([log])
+    assert steps == 3
+    api.write_habits(folder / "chain-habits.json", habits)
+    return folder / "chain-habits.json"
+
+
+def _assert_habits_session(data: dict, tmp_path) -> None:
+    """Habits in the session panel (issue 23; docs/session-habits.png is a copy of
+    tests/artifacts/gui_session_habits.png): the planner's named models offered; habits learned from the
+    keyboard session's log into a file beside the document; a keyboard session with them and the confident
+    model, whose log records both and replays (aplan replay); a habits file of another product refused in red
+    under the file, and the confident model without a file, neither session started."""
+    from freecad_aplan.sessions import DEFAULT_MODEL, model_label, model_names
+    from planner.decision.presets import CONFIDENT, wrong_for_confidence
+    from planner.runtime.logged_sequence import logged_sequence
+
+    assert data["models"] == [[DEFAULT_MODEL, None]] + [[model_label(n), n] for n in model_names()]
+    assert data["habits_before"] == ""  # nothing learned beside the document yet
+    learned, note = data["learned"]
+    first_log = data["keyboard_result"]["levels"][0]["log"]
+    operator_steps = logged_sequence(first_log).by.count("operator")  # the robot's steps are not the operator's
+    assert learned == str(tmp_path / "pen-habits.json") and operator_steps >= 1
+    assert note.startswith(f"learned {operator_steps} operator step") and note.endswith(": pen-habits.json"), note
+    habits = api.read_habits(learned)
+    assert sum(count for _, _, count in habits.counts) == operator_steps
+    assert data["habits_error"] is None, data["habits_error"]
+    done = data["habits_result"]
+    assert done["assembled"] is True and f"--habits {learned} --model confident" in done["command"]
+    log = done["levels"][0]["log"]
+    start = json.loads(open(log).readline())["settings"]
+    assert start["habits"]["counts"] == json.loads(open(learned).read())["counts"]
+    assert (start["habits"]["prior"], start["habits"]["prior_per"]) == (CONFIDENT.prior, CONFIDENT.prior_per)
+    assert start["rewards"]["wrong"] == pytest.approx(wrong_for_confidence(CONFIDENT.act_confidence))
+    replayed = aplan("replay", log)  # the habits the log records rebuild the same beliefs
+    assert f"beliefs reproduced at all {done['levels'][0]['steps']} steps" in replayed.stdout, replayed.stdout
+    other = data["other_product"]
+    assert other["note"].startswith("chain-habits.json: habits of the product "
+                                    f"{chain_product(4).name!r}, not of "), other["note"]
+    assert other["status"] == "not started: " + other["note"] and other["started"] is False
+    assert other["runs"][0] == other["runs"][1] == 2
+    red = [int(other["colour"][k:k + 2], 16) / 255 for k in (1, 3, 5)]  # the note's text colour: a strong red
+    assert red[0] >= 0.5 and max(red[1:]) <= 0.3 * red[0], other["colour"]
+    x, y, w, h, width, height = other["in_view"]  # scrolled into view, whole
+    assert 0 <= x and x + w <= width and 0 <= y and y + h <= height and h >= 30, other["in_view"]
+    assert other["cut_off"] == [] and other["broken"] == [], (other["cut_off"], other["broken"])
+    screen = read_picture(ARTIFACTS / "gui_session_habits.png")
+    shown = screen.crop(*other["screen"])  # the refusal as a person sees it: red text
+    assert shown.share(shown.coloured(hue_of(red), saturation=0.4)) >= 0.02, shown.share(
+        shown.coloured(hue_of(red), saturation=0.4))
+    status = screen.crop(*other["status_screen"])  # the same words in the status line below, not in red
+    assert status.share(status.dark()) >= 0.02 and status.share(status.coloured(hue_of(red), saturation=0.4)) \
+        < 0.002, (status.share(status.dark()), status.share(status.coloured(hue_of(red), saturation=0.4)))
+    text, started, runs = data["no_habits"]
+    assert text == "--model confident needs the habits: --habits FILE (aplan habits LOG... -o FILE)"
+    assert started is False and runs == 2
