@@ -335,6 +335,8 @@ def _scroll_to(widget: QtGui.QWidget) -> bool:
         scroll = scroll.parentWidget()
     if scroll is None or scroll.widget() is None:
         return False
+    for _ in range(3):  # the layouts asked for (a list just filled, a note shown) first: how far it scrolls
+        QtCore.QCoreApplication.sendPostedEvents(None, QtCore.QEvent.LayoutRequest)
     bar = scroll.verticalScrollBar()
     bar.setValue(min(bar.maximum(), widget.mapTo(scroll.widget(), QtCore.QPoint(0, 0)).y()))
     return True

@@ -35,7 +35,7 @@ class HabitsChooser:
     own (:attr:`box`) of the session panel. ``learn`` is called when Learn from sessions is clicked."""
 
     def __init__(self, layout: QtGui.QBoxLayout, document_file: str | None, folder: str, learn) -> None:
-        self.document_file, self.folder = document_file, folder
+        self.document_file, self.folder, self.offered = document_file, folder, None
         self.box = QtGui.QWidget()
         inner = QtGui.QVBoxLayout(self.box)
         inner.setContentsMargins(0, 0, 0, 0)
@@ -77,10 +77,13 @@ class HabitsChooser:
         return habits_path(self.document_file, level, self.folder)
 
     def offer_learned(self, level: str | None) -> None:
-        """Put the learned file of ``level`` in an empty field, when it exists (learned in an earlier session)."""
+        """Put the learned file of ``level`` in the field, when it exists (learned in an earlier session) and the
+        field is empty or holds the learned file of another level (offered here before: not the designer's)."""
+        if self.habits() is not None and self.habits() != self.offered:
+            return
         path = self.learned_file(level)
-        if not self.habits() and level != ALL_LEVELS and os.path.isfile(path):
-            self.field.setText(path)
+        self.offered = path if level != ALL_LEVELS and os.path.isfile(path) else None
+        self.field.setText(self.offered or "")
 
     def ask_file(self) -> None:
         import FreeCADGui

@@ -364,14 +364,16 @@ def refusal_shown():
                                "in_view": [corner.x(), corner.y(), note.width(), note.height(), viewport.width(),
                                            viewport.height()],
                                "screen": [screen.x(), screen.y(), note.width(), note.height()],
-                               "status_screen": [panel.status.mapToGlobal(QtCore.QPoint(0, 0)).x(),
-                                                 panel.status.mapToGlobal(QtCore.QPoint(0, 0)).y(),
-                                                 panel.status.width(), panel.status.height()],
+                               "field_screen": [panel.habits.field.mapToGlobal(QtCore.QPoint(0, 0)).x(),
+                                                panel.habits.field.mapToGlobal(QtCore.QPoint(0, 0)).y(),
+                                                panel.habits.field.width(), panel.habits.field.height()],
                                "cut_off": cut_off(viewport), "broken": broken_words(viewport)}}
     QtGui.QApplication.primaryScreen().grabWindow(0).save(os.path.join(ARTIFACTS, "gui_session_habits.png"))
     window.findChild(QtGui.QLineEdit, "AplanSessionHabits").setText("")  # the confident model, no habits file
     window.findChild(QtGui.QPushButton, "AplanRunSession").click()
     result["no_habits"] = [note.text(), panel.job is not None, runs()]
+    FreeCADGui.runCommand("Aplan_Session")  # opened again: the habits learned beside the document offered
+    result["reopened"] = [state().panel is not panel, state().panel.habits.habits()]
     finish(0)
 
 
@@ -681,9 +683,10 @@ def _assert_habits_session(data: dict, tmp_path) -> None:
     shown = screen.crop(*other["screen"])  # the refusal as a person sees it: red text
     assert shown.share(shown.coloured(hue_of(red), saturation=0.4)) >= 0.02, shown.share(
         shown.coloured(hue_of(red), saturation=0.4))
-    status = screen.crop(*other["status_screen"])  # the same words in the status line below, not in red
-    assert status.share(status.dark()) >= 0.02 and status.share(status.coloured(hue_of(red), saturation=0.4)) \
-        < 0.002, (status.share(status.dark()), status.share(status.coloured(hue_of(red), saturation=0.4)))
+    field = screen.crop(*other["field_screen"])  # the file's name just above it: dark text, no red
+    assert field.share(field.dark()) >= 0.02 and field.share(field.coloured(hue_of(red), saturation=0.4)) \
+        < 0.002, (field.share(field.dark()), field.share(field.coloured(hue_of(red), saturation=0.4)))
     text, started, runs = data["no_habits"]
     assert text == "--model confident needs the habits: --habits FILE (aplan habits LOG... -o FILE)"
     assert started is False and runs == 2
+    assert data["reopened"] == [True, learned]
