@@ -44,7 +44,7 @@ import numpy as np
 
 from ..assembly.intentions import paths_to_final
 from ..assembly.plan import Plan
-from ..defaults import HABITS_PRIOR
+from ..defaults import HABITS_PRIOR, ORDERS_CONCENTRATION, ORDERS_DISCOUNT
 from ..errors import PlannerError
 
 __all__ = ["Habits", "HabitsError", "state_graph_fingerprint", "edge_keys", "habits_from_counts", "edge_counts",
@@ -63,7 +63,10 @@ class Habits:
     """Counts of the operator's choices: ``counts`` holds ``(state, operation, count)`` with the state and the
     operation as :func:`edge_keys` writes them; ``prior`` is ``alpha`` and ``prior_per`` what it counts
     (``"edge"`` or ``"state"``: module docstring); ``product`` and ``fingerprint`` name the plan they were counted
-    on; ``source`` the file they were read from (for messages; "" in memory)."""
+    on; ``source`` the file they were read from (for messages; "" in memory). ``orders``: the whole sequences
+    recorded, each ``((state, operation), ...)`` and its count, with the Pitman-Yor ``concentration`` and
+    ``discount`` over them; ``prior_model`` what the model uses, ``"counts"`` (per state, this module) or
+    ``"orders"`` (:mod:`~planner.decision.orders`)."""
 
     product: str
     fingerprint: str
@@ -71,6 +74,10 @@ class Habits:
     counts: tuple[tuple[str, str, float], ...]
     source: str = ""
     prior_per: str = "edge"
+    orders: tuple = ()
+    concentration: float = ORDERS_CONCENTRATION
+    discount: float = ORDERS_DISCOUNT
+    prior_model: str = "counts"
 
     @property
     def total(self) -> float:

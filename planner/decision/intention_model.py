@@ -270,9 +270,12 @@ def flat_model_fits(plan: Plan, max_bytes: int | None = None, limit: int | None 
 def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                      graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT,
                      base_part: str | None = None, max_bytes: int | None = None,
-                     weights: np.ndarray | None = None, deviations: Deviations | None = None) -> IntentionModel:
+                     weights: np.ndarray | None = None, deviations: Deviations | None = None,
+                     orders=None) -> IntentionModel:
     """The decision model of Alg. 3 over the intentions of ``plan`` (definitions in the module docstring).
     ``weights``: a positive weight per state edge (operator habits, module docstring), None for the paper's.
+    ``orders``: the orders' model (:class:`~planner.decision.orders.OrdersPrior` of ``plan``): its prior over
+    the full sequences (:meth:`~planner.decision.orders.OrdersPrior.intention_weights`) in place of weights.
     ``deviations``: change of mind and mistakes (:mod:`~planner.decision.deviations`; their tables are checked
     against ``max_bytes`` too), None for the paper's.
 
@@ -299,7 +302,14 @@ def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
     initial = np.zeros(graph.n_intentions)
     starts = graph.full_sequences()
     prior = None
-    if weights is None:
+    if orders is not None:
+        if weights is not None or base_part is not None or deviations is not None:
+            raise PlannerError("the orders' model (--model orders) takes no other habits weights, base part or "
+                               "deviations; leave those out, or use --model habits")
+        prior = orders.intention_weights(graph)
+        initial[starts] = prior[starts] / prior[starts].sum()
+        prior.flags.writeable = False
+    elif weights is None:
         initial[starts] = 1.0 / len(starts)
     else:
         weights = np.asarray(weights, dtype=float)
