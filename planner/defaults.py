@@ -125,7 +125,7 @@ HABITS_PRIOR = 1.0
 # The orders' model (planner.decision.orders): the Pitman-Yor concentration a and discount d over the recorded
 # orders (bench/README.md, Operator habits, Orders: how they were chosen).
 ORDERS_CONCENTRATION = 1.0
-ORDERS_DISCOUNT = 0.5
+ORDERS_DISCOUNT = 0.9
 
 # The belief on the true intention above which the robot counts as confident (paper's Fig. 7 discussion).
 CONFIDENCE = 0.9

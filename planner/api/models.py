@@ -11,7 +11,8 @@ from ..assembly.intentions import count_intentions
 from ..assembly.plan import Plan
 from ..decision.factored_model import FactoredIntentionModel, factored_model
 from ..decision.deviations import Deviations
-from ..decision.habits import Habits, habit_weights
+from ..decision.habits import Habits
+from ..decision.orders import prior_inputs
 from ..decision.intention_model import IntentionModel, Rewards, intention_model
 from ..decision.io.cassandra import read_cassandra, write_cassandra
 from ..decision.io.pomdpx import read_pomdpx, write_pomdpx
@@ -66,8 +67,9 @@ def decision_model(product: str | os.PathLike | Product | Plan, technical: bool 
     base = base_part_of(plan, base_part)
     if solving:  # refused before the flat model is built when the solver would not fit beside it
         check_flat_solver_memory(plan, count_intentions(plan.states, base_part=base), limits.memory)
+    weights, orders = prior_inputs(plan, habits)
     return intention_model(plan, rewards, discount, base_part=base, max_bytes=limits.memory,
-                           weights=habit_weights(plan, habits), deviations=deviations)
+                           weights=weights, deviations=deviations, orders=orders)
 
 
 def factored_decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
@@ -80,8 +82,8 @@ def factored_decision_model(product: str | os.PathLike | Product | Plan, technic
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
     if parallel:
         check_parallel_memory(plan, limits.memory, parallel)
-    return factored_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits),
-                          parallel, deviations)
+    return factored_model(plan, rewards, discount, base_part_of(plan, base_part), *_parts(plan, habits, parallel,
+                                                                                         deviations))
 
 
 def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
@@ -95,8 +97,14 @@ def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | 
     check_lumped_memory(plan, limits.memory)
     if parallel:
         check_parallel_memory(plan, limits.memory, parallel)
-    return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits),
-                              parallel, deviations)
+    return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part),
+                              *_parts(plan, habits, parallel, deviations))
+
+
+def _parts(plan: Plan, habits: Habits | None, parallel, deviations) -> tuple:
+    """``(weights, parallel, deviations, orders)`` as the factored and lumped builders take them."""
+    weights, orders = prior_inputs(plan, habits)
+    return weights, parallel, deviations, orders
 
 
 def check_parallel_flat(parallel: bool, where: str) -> None:

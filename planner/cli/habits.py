@@ -8,12 +8,14 @@ from dataclasses import replace
 
 from ..decision.habits import PRIOR_PER, HabitsError
 from ..decision.io.habits_file import read_habits, write_habits
-from ..defaults import HABITS_PRIOR
+from ..decision.orders import check_orders_parameters
+from ..defaults import HABITS_PRIOR, ORDERS_CONCENTRATION, ORDERS_DISCOUNT
 from .options import (
     add_fasteners,
     add_force,
     add_input_options,
     add_technical,
+    finite,
     habits_from,
     inputs_from,
     number,
@@ -35,15 +37,21 @@ def _habits(args: argparse.Namespace) -> int:
         raise HabitsError(f"--add {args.add}: give the product too (--product PRODUCT), to check the counts against it")
     habits, steps = habits_from_logs(plan, args.logs, args.prior, args.technical, start, inputs_from(args))
     habits = replace(habits, prior_per=args.prior_per or (start.prior_per if start is not None else "edge"))
+    concentration = args.concentration if args.concentration is not None else habits.concentration
+    discount = args.discount if args.discount is not None else habits.discount
+    habits = replace(habits, **dict(zip(("concentration", "discount"),
+                                        check_orders_parameters(concentration, discount, "--concentration/--discount"))))
     write_habits(args.output, habits, len(args.logs))
     if args.json:
         print(json.dumps({"product": habits.product, "fingerprint": habits.fingerprint, "prior": habits.prior,
                           "prior_per": habits.prior_per, "logs": len(args.logs), "steps": steps,
-                          "edges": len(habits.counts)}))
+                          "edges": len(habits.counts), "orders": len(habits.orders),
+                          "concentration": habits.concentration, "discount": habits.discount}))
     else:
         print(f"{habits.product}: {steps} steps from {len(args.logs)} log{'s' if len(args.logs) != 1 else ''}, "
               f"{len(habits.counts)} state edges counted (prior {habits.prior:g} per {habits.prior_per}; state graph "
-              f"{habits.fingerprint})")
+              f"{habits.fingerprint}); {len(habits.orders)} distinct orders recorded (concentration "
+              f"{habits.concentration:g}, discount {habits.discount:g})")
         print(f"habits: {args.output}")
     return 0
 
@@ -66,6 +74,11 @@ def add_commands(commands) -> None:
                         help="what alpha counts: edge, alpha per next operation (alpha d at a state of d; the "
                              "default, as files written before this option); state, alpha in all at each state, "
                              "so a state of many operations needs no more sessions (docs/habits.md)")
+    habits.add_argument("--concentration", type=finite, default=None, metavar="A",
+                        help=f"the orders' Pitman-Yor concentration a, above -d (default {ORDERS_CONCENTRATION:g}; "
+                             "--model orders, docs/habits.md, Orders)")
+    habits.add_argument("--discount", type=number(0, 1, high_open=True), default=None, metavar="D",
+                        help=f"the orders' Pitman-Yor discount d, from 0 to below 1 (default {ORDERS_DISCOUNT:g})")
     habits.add_argument("--add", metavar="HABITS", help="a habits file whose counts the logs' are added to")
     habits.add_argument("--json", action="store_true", help="print product, fingerprint, prior, prior_per, logs, steps, "
                                                                      "edges")

@@ -182,12 +182,12 @@ def edge_counts(plan: Plan, habits: Habits) -> np.ndarray:
 
 
 def add_sequence(plan: Plan, counts: np.ndarray, operations: list[int], start: int | None = None,
-                 counted: list[bool] | None = None) -> int:
+                 counted: list[bool] | None = None, path: list[int] | None = None) -> int:
     """Add one to ``counts`` (E,) for each state edge that ``operations`` (AND/OR indices, in order) take from
     ``start`` (default: the initial state), only where ``counted`` is true if given (steps the robot did are
     walked, not counted: they are not the operator's choice); returns the state reached. Cost: O(1) per step
     after finding the edge among the state's out-edges. Raises :class:`HabitsError` when an operation is not
-    possible there."""
+    possible there. ``path``, if given, gets each state edge taken appended (the order, :mod:`.orders`)."""
     states = plan.states
     state = states.initial if start is None else int(start)
     for k, operation in enumerate(operations):
@@ -197,6 +197,8 @@ def add_sequence(plan: Plan, counts: np.ndarray, operations: list[int], start: i
                               f"{states.describe(state)}")
         if counted is None or counted[k]:
             counts[out[0]] += 1
+        if path is not None:
+            path.append(int(out[0]))
         state = int(states.edge_target[out[0]])
     return state
 

@@ -45,7 +45,7 @@ from ..defaults import ORDERS_CONCENTRATION, ORDERS_DISCOUNT
 from .habits import Habits, HabitsError, edge_counts, edge_keys, habit_weights
 
 __all__ = ["OrdersPrior", "orders_prior", "order_edges", "check_orders_parameters", "mixture_weights",
-           "prior_inputs", "node_keys", "PRIOR_MODELS"]
+           "prior_inputs", "node_keys", "real_plan", "PRIOR_MODELS"]
 
 PRIOR_MODELS = ("counts", "orders")  # what a habits file's model uses: per-state counts, or the recorded orders
 
@@ -241,6 +241,13 @@ def node_keys(states, keys: np.ndarray, n_observations: int) -> np.ndarray:
     count = np.diff(start)[node_state]
     first = np.repeat(start[node_state] - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
     return np.repeat(np.arange(node_state.size, dtype=np.int64), count) * Z + keys[first] % Z
+
+
+def real_plan(plan: Plan) -> Plan:
+    """The plan over the real assembly states: ``plan`` itself, or the real plan of an orders' augmented one (what
+    a session's habits, logs and markers are about). Cost: O(1)."""
+    real = getattr(plan.states, "real", None)
+    return plan if real is None else dataclasses.replace(plan, states=real)
 
 
 def prior_inputs(plan: Plan, habits: Habits | None) -> tuple[np.ndarray | None, OrdersPrior | None]:
