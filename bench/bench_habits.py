@@ -299,7 +299,7 @@ def _targets(operator: str, p: dict, h: dict) -> dict:
 def _print(row: dict) -> None:
     print(f"{row['product']}: {row['parts']} parts, {row['sequences']:,} sequences; operator {row['operator']}; "
           f"{row['steps_learned']} steps learned from {row['logs']} logs (prior {row['prior']:g} per "
-          f"{row['prior_per']}; orders recorded {row["recorded_orders"]}, a {row['concentration']:g}, d {row['discount']:g}); "
+          f"{row['prior_per']}; orders recorded {row['recorded_orders']}, a {row['concentration']:g}, d {row['discount']:g}); "
           f"{row['episodes']} episodes; "
           f"{_pct(row['paid_share'])} of the capable operations are unfavorable to humans (paid +10)")
     for label in row["labels"]:
