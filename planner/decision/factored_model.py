@@ -63,7 +63,7 @@ from .intention_model import WAIT, Rewards
 from .parallel import (ParallelTable, parallel_expected_rewards, parallel_predict, parallel_rewards,
                        parallel_table)
 from .joins import JOINS, join_actions
-from .orders import OrdersPrior, node_keys
+from .orders import OrdersPrior, check_alone, node_keys
 from .projected import PROJECTED, projected_table
 
 __all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model", "factored_model_bytes"]
@@ -361,9 +361,7 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     source, one of the (state, observation) pairs); Python-int arithmetic only where the counts pass 2**52.
     """
     if orders is not None:
-        if weights is not None or base_part is not None or parallel or deviations is not None:
-            raise PlannerError("the orders' model (--model orders) takes no other habits weights, base part, "
-                               "parallel model or deviations; leave those out, or use --model habits")
+        check_alone(weights, base_part, parallel, deviations)
         plan, weights = orders.plan, orders.weights
     states = plan.states
     S, E, Z = states.n_states, states.n_edges, len(plan.observations)

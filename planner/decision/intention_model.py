@@ -48,6 +48,7 @@ from ..defaults import BLANK_WEIGHT, DISCOUNT, STAY
 from ..errors import LimitExceededError, MemoryLimitError, PlannerError
 from .deviations import Deviations, flat_deviation_entries, flat_tables
 from .pomdp import POMDP
+from .orders import check_alone
 
 __all__ = ["Rewards", "WAIT", "IntentionModel", "intention_model", "intention_pomdp", "flat_model_bytes",
            "check_flat_model", "flat_model_fits", "intention_weights"]
@@ -303,9 +304,7 @@ def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
     starts = graph.full_sequences()
     prior = None
     if orders is not None:
-        if weights is not None or base_part is not None or deviations is not None:
-            raise PlannerError("the orders' model (--model orders) takes no other habits weights, base part or "
-                               "deviations; leave those out, or use --model habits")
+        check_alone(weights, base_part, False, deviations)
         prior = orders.intention_weights(graph)
         initial[starts] = prior[starts] / prior[starts].sum()
         prior.flags.writeable = False

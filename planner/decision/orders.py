@@ -42,10 +42,11 @@ from ..assembly.intentions import paths_to_final
 from ..assembly.plan import Plan
 from ..assembly.states import AssemblyStateGraph
 from ..defaults import ORDERS_CONCENTRATION, ORDERS_DISCOUNT
+from ..errors import PlannerError
 from .habits import Habits, HabitsError, edge_counts, edge_keys, habit_weights
 
 __all__ = ["OrdersPrior", "orders_prior", "order_edges", "check_orders_parameters", "mixture_weights",
-           "prior_inputs", "node_keys", "real_plan", "PRIOR_MODELS"]
+           "prior_inputs", "node_keys", "real_plan", "check_alone", "PRIOR_MODELS"]
 
 PRIOR_MODELS = ("counts", "orders")  # what a habits file's model uses: per-state counts, or the recorded orders
 
@@ -241,6 +242,18 @@ def node_keys(states, keys: np.ndarray, n_observations: int) -> np.ndarray:
     count = np.diff(start)[node_state]
     first = np.repeat(start[node_state] - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
     return np.repeat(np.arange(node_state.size, dtype=np.int64), count) * Z + keys[first] % Z
+
+
+def check_alone(weights=None, base_part=None, parallel=False, deviations=None) -> None:
+    """The orders' model is built alone: a :class:`~planner.errors.PlannerError` naming what was given with it
+    (per-state habits' weights, a base part, a parallel model, a change of mind or mistakes), which it does not
+    combine with (their tables read the real graph's states)."""
+    given = [name for name, on in (("per-state habits weights", weights is not None),
+                                   ("--base-part", base_part is not None), ("--parallel/--projected/--joins", parallel),
+                                   ("--switch/--mistakes", deviations is not None)) if on]
+    if given:
+        raise PlannerError(f"the orders' model (--model orders) does not combine with {' and '.join(given)}: leave "
+                           f"{'it' if len(given) == 1 else 'them'} out, or use --model habits or confident")
 
 
 def real_plan(plan: Plan) -> Plan:

@@ -145,3 +145,18 @@ def test_bad_orders_are_refused(pen):
         with pytest.raises(HabitsError, match="orders' (discount|concentration)"):
             check_orders_parameters(a, d, "f.json")
     assert check_orders_parameters(-0.4, 0.5, "f.json") == (-0.4, 0.5)
+
+
+def test_the_orders_model_is_built_alone(ordered):
+    """A base part, a parallel model or deviations with the orders' model: refused, naming the option."""
+    from planner.decision.deviations import deviations_of
+    from planner.errors import PlannerError
+
+    plan, orders, _, _ = ordered
+    part = plan.andor.parts[0]
+    for options, flag in (({"base_part": part}, "--base-part"), ({"parallel": True}, "--parallel"),
+                          ({"deviations": deviations_of(0.05, 0.0)}, "--switch")):
+        with pytest.raises(PlannerError, match=flag):
+            factored_model(plan, orders=orders, **options)
+    with pytest.raises(PlannerError, match="--switch"):
+        intention_model(plan, orders=orders, deviations=deviations_of(0.0, 0.02))
