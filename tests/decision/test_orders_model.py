@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from planner import chain_product, complete_product, make_plan
-from planner.decision import DiscreteUpdater, FactoredUpdater, factored_model, intention_model, lumped_pomdp
+from planner.decision import factored_model, intention_model, lumped_pomdp
 from planner.decision.habits import HabitsError, edge_keys, habits_from_counts
 from planner.decision.orders import check_orders_parameters, orders_prior, prior_inputs
-from reference import horizon_value
+from reference import filtered_histories, horizon_value
 
 TOLERANCE = 1e-9
 
@@ -92,32 +92,12 @@ def test_flat_factored_and_lumped_agree_along_episodes(ordered):
     E = plan.states.n_edges
     edge_of = np.append(orders.plan.states.edge_of, E)  # an augmented class's real state edge (E: finished)
     of = np.where(flat_model.graph.step_edge >= 0, flat_model.graph.step_edge, E)
-    transition = [t.tocsr() for t in flat.transition]
-    observation = flat.observation[0].tocsr()
-    rng = np.random.default_rng(5)
-    starts = flat_model.full_sequences()
-    for episode in range(10):
-        up_flat, up_fact, up_lump = DiscreteUpdater(flat), FactoredUpdater(fact), DiscreteUpdater(lumped)
-        b, belief, c = up_flat.initialize(), up_fact.initialize(), up_lump.initialize()
-        state = int(rng.choice(starts, p=flat.initial[starts]))
-        for _ in range(20):
-            dense = belief.dense(fact.n_classes)
-            assert np.abs(np.bincount(of, weights=b, minlength=E + 1)
-                          - np.bincount(edge_of, weights=dense, minlength=E + 1)).max() <= TOLERANCE
-            assert np.abs(fact.expected_rewards(belief) - flat.reward @ b).max() <= TOLERANCE
-            assert np.abs(dense - c).max() <= TOLERANCE
-            if state == flat_model.final_state:
-                break
-            a = int(rng.integers(flat.n_actions)) if episode % 2 else flat.n_actions - 1
-            row = transition[a].getrow(state)
-            state = int(rng.choice(row.indices, p=row.data / row.data.sum()))
-            orow = observation.getrow(state)
-            z = int(rng.choice(orow.indices, p=orow.data / orow.data.sum()))
-            zb = flat.observation[a].T @ (flat.transition[a].T @ b)
-            zc = lumped.observation[a].T @ (lumped.transition[a].T @ c)
-            assert np.abs(zb - zc).max() <= TOLERANCE
-            b, belief, c = up_flat.update(b, a, z), up_fact.update(belief, a, z), up_lump.update(c, a, z)
-        assert not up_flat.events and not up_fact.events
+    for b, belief, c in filtered_histories(flat_model, fact, lumped, np.random.default_rng(5), 10):
+        dense = belief.dense(fact.n_classes)
+        assert np.abs(np.bincount(of, weights=b, minlength=E + 1)
+                      - np.bincount(edge_of, weights=dense, minlength=E + 1)).max() <= TOLERANCE
+        assert np.abs(fact.expected_rewards(belief) - flat.reward @ b).max() <= TOLERANCE
+        assert np.abs(dense - c).max() <= TOLERANCE
 
 
 def test_flat_and_lumped_values_are_equal(ordered):
