@@ -119,7 +119,7 @@ class OrdersPrior:
     """The orders' model of a plan (module docstring): ``plan`` the augmented plan (its ``states`` an
     :class:`AugmentedStateGraph`), ``weights`` per augmented edge, ``real`` the real plan, ``orders`` the
     recorded orders (real state edges) and counts, ``concentration`` and ``discount``; ``pi`` and ``pi0``
-    the mixture weights."""
+    the mixture weights; ``step`` a cache of :meth:`augmented_path`."""
 
     plan: Plan
     weights: np.ndarray
@@ -129,18 +129,21 @@ class OrdersPrior:
     discount: float
     pi: np.ndarray
     pi0: float
+    step: dict = dataclasses.field(default_factory=dict, compare=False, repr=False)
 
     def augmented_path(self, edges) -> list[int]:
         """The augmented edges (the factored model's classes) of a path of real state edges from the initial
-        state. Cost: O(length x out-degree)."""
+        state. Cost: O(length) after the first call's O(E') table of the augmented edges by (node, real edge)."""
         states = self.plan.states
+        if not self.step:  # built once (the dataclass is frozen, its dict is not)
+            self.step.update(((int(n), int(e)), k) for k, (n, e) in enumerate(zip(states.edge_source, states.edge_of)))
         node, out = states.initial, []
         for e in edges:
-            hits = np.flatnonzero((states.edge_source == node) & (states.edge_of == int(e)))
-            if hits.size != 1:
+            k = self.step.get((node, int(e)))
+            if k is None:
                 raise HabitsError(f"state edge {int(e)} is not a step from the augmented node {node}")
-            out.append(int(hits[0]))
-            node = int(states.edge_target[hits[0]])
+            out.append(k)
+            node = int(states.edge_target[k])
         return out
 
     def sequence_log_probability(self, edges) -> float:
@@ -195,38 +198,33 @@ def orders_prior(plan: Plan, habits: Habits) -> OrdersPrior | None:
     new[order] = np.arange(order.size)
     history = {(): int(new[states.initial])}
     history.update({h: int(new[S + k]) for k, h in enumerate(prefixes)})
-    out_start = np.searchsorted(states.edge_source[np.argsort(states.edge_source, kind="stable")], np.arange(S + 1))
-    out_edges = np.argsort(states.edge_source, kind="stable")
-    source, target, real_edge, weight = [], [], [], []
-    on_trie = {node: h for h, node in history.items()}
-    for old in range(node_state.size):
-        node, s = int(new[old]), int(node_state[old])
-        h = on_trie.get(node) if (old >= S or s == states.initial) else None
-        for e in out_edges[out_start[s]:out_start[s + 1]]:
+    # Off the trie (every real state but the initial one, which is the trie's root): the real edges, weight 1.
+    off = states.edge_source != states.initial
+    source, target = [new[states.edge_source[off]]], [new[states.edge_target[off]]]
+    real_edge, weight = [np.flatnonzero(off)], [np.ones(int(off.sum()))]
+    n_initial = n[states.initial]
+    by_source = np.argsort(states.edge_source, kind="stable")  # the out-edges of each state, in the edges' order
+    out_start = np.searchsorted(states.edge_source[by_source], np.arange(S + 1))
+    for h, node in history.items():  # on the trie: the mixture's choice (module docstring), O(L D) in all
+        s = states.initial if not h else int(states.edge_target[h[-1]])
+        for e in by_source[out_start[s]:out_start[s + 1]]:
             t = int(states.edge_target[e])
-            w = 1.0
-            if h is not None:
-                longer = h + (int(e),)
-                n_initial = n[states.initial]
-                choice = ((n_initial * mass.get(longer, 0.0) + pi0 * n[t]) /
-                          (n_initial * mass.get(h, 0.0) + pi0 * n[s]))
-                w = choice / (n[t] / n[s])
-                t_node = history.get(longer, new[t]) if t != states.final else new[t]
-            else:
-                t_node = new[t]
-            source.append(node)
-            target.append(int(t_node))
-            real_edge.append(int(e))
-            weight.append(w)
-    source, target = np.array(source, dtype=np.int64), np.array(target, dtype=np.int64)
+            longer = h + (int(e),)
+            choice = (n_initial * mass.get(longer, 0.0) + pi0 * n[t]) / (n_initial * mass.get(h, 0.0) + pi0 * n[s])
+            source.append([node])
+            target.append([history.get(longer, new[t]) if t != states.final else new[t]])
+            real_edge.append([int(e)])
+            weight.append([choice / (n[t] / n[s])])
+    source, target = np.concatenate(source).astype(np.int64), np.concatenate(target).astype(np.int64)
+    real_edge, weight = np.concatenate(real_edge).astype(np.int64), np.concatenate(weight)
     by = np.lexsort((source, target))
     levels = np.searchsorted(states.level_start, node_state[order], side="right") - 1
     level_start = np.searchsorted(levels, np.arange(len(states.level_start))).astype(states.level_start.dtype)
-    real_edge = np.array(real_edge, dtype=np.int64)[by]
+    real_edge = real_edge[by]
     graph = AugmentedStateGraph(states.andor, states.blocks[node_state[order]], level_start,
                                 source[by].astype(states.edge_source.dtype), target[by].astype(states.edge_target.dtype),
                                 states.edge_operation[real_edge], node_state[order], real_edge, states)
-    weights = np.array(weight)[by]
+    weights = weight[by]
     weights.flags.writeable = False
     return OrdersPrior(dataclasses.replace(plan, states=graph), weights, plan, tuple(orders), a, d, pi, pi0)
 
