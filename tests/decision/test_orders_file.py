@@ -169,3 +169,30 @@ def test_an_orders_session_replays_and_keeps_the_orders(learned, pen, tmp_path):
     assert replay.returncode == 0 and "beliefs reproduced" in replay.stdout, replay.stdout + replay.stderr
     counts = sorted(o["count"] for o in json.loads(out.read_text())["orders"])
     assert counts == [1, 4]  # rank 5 once more
+
+
+def test_simulate_and_evaluate_take_the_orders_model(learned, tmp_path):
+    """aplan simulate and evaluate run on --model orders (the online planner, a fixed number of expansions); a
+    base part with it is refused, naming it."""
+    _, _, good, _ = learned
+    common = ("--habits", good, "--model", "orders", "--planner", "online", "--expansions", "20")
+    done = run_aplan("simulate", "pen", *common, "--random", "2", "--json")
+    assert done.returncode == 0, done.stderr
+    done = run_aplan("evaluate", "pen", *common, "--episodes", "4", "--operator-sequence", "habitual:5:0.8")
+    assert done.returncode == 0 and "4 episodes" in done.stdout, done.stdout + done.stderr
+    done = run_aplan("simulate", "pen", *common, "--random", "1", "--base-part", "body")
+    assert done.returncode == 1 and "--base-part" in done.stderr and "Traceback" not in done.stderr
+
+
+def test_the_preset_is_its_parts(learned, tmp_path):
+    """--model orders writes the model of the orders with --act-confidence 0.9 (its preset), not the paper's -50."""
+    _, _, good, _ = learned
+
+    def model(*options) -> bytes:
+        out = tmp_path / f"m{len(list(tmp_path.iterdir()))}.pomdp"
+        done = run_aplan("pomdp", "pen", "-o", out, "--habits", good, "--model", "orders", *options)
+        assert done.returncode == 0, done.stderr
+        return out.read_bytes()
+
+    preset = model()
+    assert preset == model("--act-confidence", "0.9") and preset != model("--reward-wrong", "-50")
