@@ -61,7 +61,8 @@ def add_commands(commands) -> None:
         "habits", help="learn the operator's habits (their choice at each assembly state) from session logs",
         description="Count, from session logs, how often the operator took each next operation at each assembly "
                     "state, and write the habits file that --habits FILE puts into the decision model in place of "
-                    "the uniform choice of Alg. 3 (docs/habits.md). Logs of another product version are refused.")
+                    "the uniform choice of Alg. 3 (docs/habits.md), with the orders (whole sequences) of the finished "
+                    "sessions that --model orders uses. Logs of another product version are refused.")
     habits.add_argument("logs", nargs="+", metavar="LOG", help="session logs (.jsonl) of one product version")
     habits.add_argument("-o", "--output", required=True, metavar="FILE", help="the habits file (JSON)")
     habits.add_argument("--product", metavar="PRODUCT",
