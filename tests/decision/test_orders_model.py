@@ -140,3 +140,21 @@ def test_the_orders_model_is_built_alone(ordered):
             factored_model(plan, orders=orders, **options)
     with pytest.raises(PlannerError, match="--switch"):
         intention_model(plan, orders=orders, deviations=deviations_of(0.0, 0.02))
+
+
+def test_the_solver_and_its_warm_start_run_on_the_orders_model(pen):
+    """The offline solver on the flat model (the mixture as its prior) and on the lumped one with the warm start
+    (class-MDP and delayed-reveal bounds over the augmented classes): their certified intervals of V*(b0) overlap,
+    and the recorded habit raises the value above the paper's model's."""
+    from planner.decision import PointBasedSolver
+    from planner.decision.solvers.warm_start import solver_bounds
+
+    plan = make_plan(pen, True)
+    base = factored_model(plan)
+    orders = orders_prior(plan, _habits(plan, [(tuple(base.sequence(3)), 16.0), (tuple(base.sequence(9)), 1.0)]))
+    flat, fact = intention_model(plan, orders=orders).pomdp, factored_model(plan, orders=orders)
+    solver = PointBasedSolver(time_limit=None, max_iterations=60, precision=1e-6)
+    Q, groups = solver_bounds(fact)
+    a, b = solver.solve(flat), solver.solve(lumped_pomdp(fact), upper=Q, groups=groups)
+    assert max(a.lower_bound, b.lower_bound) <= min(a.upper_bound, b.upper_bound) + 1e-9
+    assert a.lower_bound > solver.solve(intention_model(plan).pomdp).upper_bound
