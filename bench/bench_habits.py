@@ -26,7 +26,10 @@ folder (planned with ``--fasteners auto --subassemblies auto``; every level, or 
 The habits' model's knobs (docs/habits.md): ``--prior ALPHA --prior-per edge|state`` (given to ``aplan habits``),
 ``--act-confidence C[,C...]`` (the habits' model's eagerness, each C a row of its own on the same episodes: the
 trade-off curve; the paper's model keeps the paper's rewards), ``--model confident`` (the preset: its prior and
-confidence unless given).
+confidence unless given), ``--model orders`` (the orders' model, planner/decision/orders.py: the Pitman-Yor
+mixture over the recorded orders, ``--concentration A --discount D`` given to ``aplan habits``, at each
+``--act-confidence``, default the preset's 0.95; with it the per-state habits of ``--model confident`` on the same
+episodes, for comparison).
 """
 from __future__ import annotations
 
@@ -52,7 +55,8 @@ from planner.decision.simulate import simulate_episode  # noqa: E402
 from planner.decision.habits import habit_weights  # noqa: E402
 from planner.decision.io.habits_file import read_habits  # noqa: E402
 from planner.decision.operators import HabitualOperator, UniformOperator  # noqa: E402
-from planner.decision.presets import PRESETS, preset_rewards  # noqa: E402
+from planner.decision.orders import orders_prior  # noqa: E402
+from planner.decision.presets import PRESETS, preset_habits, preset_rewards  # noqa: E402
 from planner.runtime.log import EventLog  # noqa: E402
 from planner.runtime.scripted import ScriptedOperator, ScriptedRobot  # noqa: E402
 from planner.runtime.session import run_session  # noqa: E402
@@ -134,14 +138,16 @@ def _learn(plan, model, operator, logs: int, seed: int, folder: Path, name: str,
     return read_habits(output), json.loads(done.stdout)["steps"]
 
 
-def _policy(args, model, weights):
-    """The robot's policy on ``model`` and what it is: ``offline`` (or ``auto`` when its solve closes the gap at
-    the initial belief to ``--max-gap``) a policy over the lumped model's classes, else the online planner."""
+def _policy(args, model, prior):
+    """The robot's policy on ``model`` (built from ``prior``: the real plan, edge weights, orders) and what it is:
+    ``offline`` (or ``auto`` when its solve closes the gap at the initial belief to ``--max-gap``) a policy over the
+    lumped model's classes, else the online planner."""
     if args.planner in ("offline", "auto") and model.n_classes <= args.max_classes:
         from planner.decision.lumped_model import lumped_model
         from planner.decision.solvers import PointBasedSolver
 
-        lumped = lumped_model(model.plan, model.rewards, weights=weights)
+        plan, weights, orders = prior
+        lumped = lumped_model(plan, model.rewards, weights=weights, orders=orders)
         result = PointBasedSolver(max_iterations=args.trials, time_limit=None, precision=1e-3).solve(lumped.pomdp)
         gap = result.upper_bound - result.lower_bound
         if args.planner == "offline" or gap <= args.max_gap:
@@ -163,9 +169,11 @@ def paid_share(model, plans) -> float:
     return round(paid / capable, 4) if capable else 0.0
 
 
-def _run(model, policy, plans, seed: int) -> list:
-    """One episode per plan, each with its own world stream: the same draws for every model given them."""
-    return [simulate_episode(PathWorld(model, p.sequence), policy, np.random.default_rng([seed, 12, k]),
+def _run(model, policy, plans, seed: int, orders=None) -> list:
+    """One episode per plan, each with its own world stream: the same draws for every model given them (the
+    plans' real state edges as the orders' augmented classes on the orders' model)."""
+    path = (lambda s: s) if orders is None else orders.augmented_path
+    return [simulate_episode(PathWorld(model, path(p.sequence)), policy, np.random.default_rng([seed, 12, k]),
                              switch=p.switch) for k, p in enumerate(plans)]
 
 
@@ -197,19 +205,35 @@ def _prior_options(args) -> tuple[str, ...]:
         out += ["--prior", repr(args.prior)]
     if args.prior_per is not None:
         out += ["--prior-per", args.prior_per]
+    for flag in ("concentration", "discount"):
+        if getattr(args, flag) is not None:
+            out += [f"--{flag}", repr(getattr(args, flag))]
     return tuple(out)
 
 
-def _variants(args, plan, weights) -> list[tuple[str, object, object]]:
-    """``(label, model, weights)``: the paper's model (its rewards), then the habits' model at each
-    ``--act-confidence`` (the preset's, or the paper's rewards without one)."""
+def _variants(args, plan, habits) -> list[tuple[str, object, tuple]]:
+    """``(label, model, (plan, weights, orders))``: the paper's model (its rewards), then the habits' model at
+    each ``--act-confidence`` (the preset's, or the paper's rewards without one); with ``--model orders`` the
+    per-state habits of ``--model confident`` first, then the orders' model at each confidence."""
     preset = PRESETS.get(args.model)
     confidences = args.act_confidence or [None]
-    out = [("paper", factored_model(plan), None)]
+    out = [("paper", factored_model(plan), (plan, None, None))]
+    if preset is not None and preset.orders:
+        counts = PRESETS["confident"]
+        weights = habit_weights(plan, preset_habits(counts, habits))
+        out.append(("state", factored_model(plan, preset_rewards(counts, 10.0, -2.0, 0.0, None, None),
+                                            weights=weights), (plan, weights, None)))
+        orders = orders_prior(plan, preset_habits(preset, habits))
+        for c in confidences:
+            label = "orders" if len(confidences) == 1 else f"orders C={c:g}"
+            out.append((label, factored_model(plan, preset_rewards(preset, 10.0, -2.0, 0.0, None, c), orders=orders),
+                        (plan, None, orders)))
+        return out
+    weights = habit_weights(plan, habits)
     for c in confidences:
         rewards = preset_rewards(preset, 10.0, -2.0, 0.0, None, c)
         label = "habits" if len(confidences) == 1 else f"habits C={c:g}"
-        out.append((label, factored_model(plan, rewards, weights=weights), weights))
+        out.append((label, factored_model(plan, rewards, weights=weights), (plan, weights, None)))
     return out
 
 
@@ -226,24 +250,24 @@ def _measure(args, name: str, product, folder: Path) -> dict:
         print(f"{name}: wrote {args.write_habits} (operator {operator!r})")
     if args.episodes == 0:
         return None
-    weights = habit_weights(plan, habits)
     plans = operator.plans(paper, args.episodes, np.random.default_rng([args.seed, 14]),
                            np.random.default_rng([args.seed, 15]))
     row = {"product": name, "parts": len(plan.product.parts), "sequences": n, "operator": repr(operator),
            "logs": args.logs, "steps_learned": steps, "episodes": args.episodes,
-           "prior": habits.prior, "prior_per": habits.prior_per}
+           "prior": habits.prior, "prior_per": habits.prior_per, "recorded_orders": [n for _, n in habits.orders],
+           "concentration": habits.concentration, "discount": habits.discount}
     returns, chosen = {}, {}
-    for label, model, w in _variants(args, plan, weights):
+    for label, model, prior in _variants(args, plan, habits):
         started = time.perf_counter()
-        chosen[label] = (model, *_policy(args, model, w), time.perf_counter() - started)
-    if args.online_episodes and any(how.startswith("online") for _, _, how, _ in chosen.values()):
+        chosen[label] = (model, *_policy(args, model, prior), time.perf_counter() - started, prior[2])
+    if args.online_episodes and any(how.startswith("online") for _, _, how, _, _ in chosen.values()):
         plans = plans[:args.online_episodes]  # the first ones: the same episodes for both models
         row["episodes"] = len(plans)
     row["paid_share"] = paid_share(paper, plans)
     row["labels"] = list(chosen)
-    for label, (model, policy, how, solving) in chosen.items():
+    for label, (model, policy, how, solving, orders) in chosen.items():
         started = time.perf_counter() - solving
-        played = _run(model, policy, plans, args.seed)
+        played = _run(model, policy, plans, args.seed, orders)
         totals = run_totals([episode_measures(e) for e in played])
         returns[label] = [paper_return(e, model.discount) for e in played]
         mean, half = _mean(returns[label])
@@ -275,7 +299,8 @@ def _targets(operator: str, p: dict, h: dict) -> dict:
 def _print(row: dict) -> None:
     print(f"{row['product']}: {row['parts']} parts, {row['sequences']:,} sequences; operator {row['operator']}; "
           f"{row['steps_learned']} steps learned from {row['logs']} logs (prior {row['prior']:g} per "
-          f"{row['prior_per']}); {row['episodes']} episodes; "
+          f"{row['prior_per']}; orders recorded {row['recorded_orders']}, a {row['concentration']:g}, d {row['discount']:g}); "
+          f"{row['episodes']} episodes; "
           f"{_pct(row['paid_share'])} of the capable operations are unfavorable to humans (paid +10)")
     for label in row["labels"]:
         m = row[label]
@@ -324,8 +349,11 @@ def main() -> None:
     parser.add_argument("--prior-per", choices=("edge", "state"), help="aplan habits --prior-per (default: edge)")
     parser.add_argument("--act-confidence", type=_confidences, metavar="C[,C...]",
                         help="the habits' model's eagerness (one row each on the same episodes; default: -50)")
-    parser.add_argument("--model", choices=("habits", "confident"), default="habits",
-                        help="confident: the preset's prior and act confidence, unless given")
+    parser.add_argument("--model", choices=("habits", "confident", "orders"), default="habits",
+                        help="confident: the preset's prior and act confidence, unless given; orders: the orders' "
+                             "model (and the per-state habits of confident, for comparison)")
+    parser.add_argument("--concentration", type=float, help="aplan habits --concentration (the orders' a)")
+    parser.add_argument("--discount", type=float, help="aplan habits --discount (the orders' d)")
     args = parser.parse_args()
     if args.model == "confident":
         preset = PRESETS["confident"]

@@ -10,6 +10,8 @@ from __future__ import annotations
 from functools import lru_cache
 from itertools import combinations
 
+import numpy as np
+
 
 def connected(parts: frozenset, contacts: set) -> bool:
     if not parts:
@@ -136,3 +138,37 @@ def horizon_value(model, depth: int) -> float:
                 len(B), -1).sum(axis=1)
         return q.max(axis=1)
     return float(value(model.initial[None], depth)[0])
+
+
+
+def filtered_histories(flat_model, fact, lumped, rng, episodes: int, steps: int = 20, tolerance: float = 1e-9):
+    """The flat filter (``flat_model``: an IntentionModel), the factored one (``fact``) and the lumped POMDP's
+    (``lumped``) along random histories drawn from the flat model (even episodes wait, odd ones act at random):
+    yields ``(flat belief, factored belief, lumped belief)`` at every step, after checking that the observation
+    probabilities of the flat and lumped POMDPs agree to ``tolerance``; at the end of each, that no filter
+    reset. For the equivalence tests of the weighted models."""
+    from planner.decision import DiscreteUpdater, FactoredUpdater
+
+    flat = flat_model.pomdp
+    transition = [t.tocsr() for t in flat.transition]
+    observation = flat.observation[0].tocsr()
+    starts = flat_model.full_sequences()
+    for episode in range(episodes):
+        up_flat = DiscreteUpdater(flat, reset_weights=flat_model.prior_weights)
+        up_fact, up_lump = FactoredUpdater(fact), DiscreteUpdater(lumped)
+        b, belief, c = up_flat.initialize(), up_fact.initialize(), up_lump.initialize()
+        state = int(rng.choice(starts, p=flat.initial[starts]))
+        for _ in range(steps):
+            yield b, belief, c
+            if state == flat_model.final_state:
+                break
+            a = int(rng.integers(flat.n_actions)) if episode % 2 else flat.n_actions - 1
+            row = transition[a].getrow(state)
+            state = int(rng.choice(row.indices, p=row.data / row.data.sum()))
+            orow = observation.getrow(state)
+            z = int(rng.choice(orow.indices, p=orow.data / orow.data.sum()))
+            zb = flat.observation[a].T @ (flat.transition[a].T @ b)
+            zc = lumped.observation[a].T @ (lumped.transition[a].T @ c)
+            assert np.abs(zb - zc).max() <= tolerance
+            b, belief, c = up_flat.update(b, a, z), up_fact.update(belief, a, z), up_lump.update(c, a, z)
+        assert not up_flat.events and not up_fact.events

@@ -112,7 +112,7 @@ def test_the_checker_sees_a_violation(tmp_path):
 # a policy (alpha vectors) none of them either; the interface (models.py) nothing but what it describes. Imports inside functions count too.
 DECISION_ROOMS = {
     "model": ({"pomdp", "intention_model", "factored_model", "lumped_model", "parallel", "parallel_table", "parallel_values",
-               "projected", "joins", "deviations", "habits", "presets", "belief", "factored_updater", "factored_belief",
+               "projected", "joins", "deviations", "habits", "orders", "presets", "belief", "factored_updater", "factored_belief",
                "factored_sequences"},
               ("solvers", "online", "bounds", "delayed_reveal", "models", "simulate", "factored_simulate",
                "episodes")),

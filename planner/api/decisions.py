@@ -8,7 +8,7 @@ from ..assembly.guards import SizeLimits
 from ..assembly.intentions import count_intentions
 from ..assembly.plan import Plan
 from ..decision.factored_model import FactoredIntentionModel, factored_model
-from ..decision.habits import habit_weights
+from ..decision.orders import prior_inputs
 from ..decision.intention_model import flat_model_bytes, flat_model_fits, intention_model
 from ..decision.budget import check_online_memory, check_parallel_memory, online_limits
 from ..decision.episodes import evaluate, evaluate_operator, simulate
@@ -82,14 +82,15 @@ def decision_maker(product: str | os.PathLike | Product | Plan, spec: ModelSpec 
     plan = product if isinstance(product, Plan) else \
         _decidable(plan_of(product, spec.technical, online_limits(limits)))
     base_part = base_part_of(plan, spec.base_part)
-    weights = habit_weights(plan, spec.habits)
+    weights, orders = prior_inputs(plan, spec.habits)
     chosen, note = choose_planner(plan, choice.planner, policy, choice.limit, base_part, limits)
 
     def factored() -> FactoredIntentionModel:
         check_online_memory(plan, limits.memory)
         if spec.parallel:
             check_parallel_memory(plan, limits.memory, spec.parallel)
-        return factored_model(plan, spec.rewards, spec.discount, base_part, weights, spec.parallel, spec.deviations)
+        return factored_model(plan, spec.rewards, spec.discount, base_part, weights, spec.parallel, spec.deviations,
+                              orders)
 
     if chosen == "online":
         model = factored()
@@ -98,7 +99,8 @@ def decision_maker(product: str | os.PathLike | Product | Plan, spec: ModelSpec 
     intentions = count_intentions(plan.states, base_part=base_part)
     vectors = read_policy(policy, limits=spec.inputs) if policy else None
     if vectors is not None:
-        classes = plan.states.n_edges + 1  # the factored model's classes: one per state edge, and finished
+        # the factored model's classes: one per state edge (of the orders' augmented graph), and finished
+        classes = (plan if orders is None else orders.plan).states.n_edges + 1
         length = vectors.alphas.shape[1]
         if length not in (intentions, classes):
             raise PolicyError(f"{policy}: vectors of length {length:,}, but this product's model has {intentions:,} "
@@ -111,7 +113,7 @@ def decision_maker(product: str | os.PathLike | Product | Plan, spec: ModelSpec 
     check_parallel_flat(spec.parallel, "--planner offline")
     # Past the limits this raises, with the estimate and the options (--planner online among them).
     model = intention_model(plan, spec.rewards, spec.discount, limit=choice.limit, base_part=base_part,
-                            max_bytes=limits.memory, weights=weights, deviations=spec.deviations)
+                            max_bytes=limits.memory, weights=weights, deviations=spec.deviations, orders=orders)
     if vectors is not None:
         vectors.check(model.pomdp, str(policy))
         return model, vectors, note

@@ -11,8 +11,9 @@ from ..assembly.intentions import count_intentions
 from ..assembly.plan import Plan
 from ..decision.factored_model import FactoredIntentionModel, factored_model
 from ..decision.deviations import Deviations
-from ..decision.habits import Habits, HabitsError, edge_counts, habit_weights
+from ..decision.habits import Habits, HabitsError
 from ..decision.io.habits_file import read_habits, write_habits
+from ..decision.orders import check_orders_parameters, prior_inputs
 from ..decision.intention_model import IntentionModel, Rewards, intention_model
 from ..decision.io.cassandra import read_cassandra, write_cassandra
 from ..decision.io.pomdpx import read_pomdpx, write_pomdpx
@@ -77,23 +78,26 @@ def habits_for(model: str | None, path: str | os.PathLike | None,
 def session_habits(product: str | os.PathLike | Product | Plan, model: str | None, path: str | os.PathLike | None,
                    technical: bool | None = None, inputs: InputLimits = InputLimits()) -> Habits | None:
     """:func:`habits_for`, then checked to be of ``product``'s plan (the product's name, its state graph's
-    fingerprint, every key one of its state edges: :func:`~planner.decision.habits.edge_counts`), as the model
-    built from them checks; a :class:`~planner.decision.habits.HabitsError` naming the file and the fix
+    fingerprint, every key one of its state edges, every recorded order one of its sequences:
+    :func:`~planner.decision.orders.prior_inputs`), as the model built from them checks; a :class:`~planner.decision.habits.HabitsError` naming the file and the fix
     otherwise. What a session checks before it starts. Cost: reading the file and one plan of ``product``."""
     habits = habits_for(model, path, inputs)
     if habits is not None:
         plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical))
-        edge_counts(plan, habits)
+        prior_inputs(plan, habits)
     return habits
 
 
 def learn_habits(logs, product: Product | Plan | None = None, prior: float | None = None,
                  prior_per: str | None = None, technical: bool | None = None,
-                 add: str | os.PathLike | None = None, inputs: InputLimits = InputLimits()) -> tuple[Habits, int]:
+                 add: str | os.PathLike | None = None, inputs: InputLimits = InputLimits(),
+                 concentration: float | None = None, discount: float | None = None) -> tuple[Habits, int]:
     """The habits counted from the session logs ``logs`` (``aplan habits LOG...``; docs/habits.md, Learning from
     logs) and the operator's steps counted: of ``product``'s plan (None: the first log's product), added to the
     counts of the habits file ``add`` when given (``product`` is then needed, to check them against), with the
-    prior ``prior`` (None: ``add``'s, else the default) spread ``prior_per`` (None: ``add``'s, else per edge). A
+    prior ``prior`` (None: ``add``'s, else the default) spread ``prior_per`` (None: ``add``'s, else per edge), and
+    the recorded orders' Pitman-Yor ``concentration`` and ``discount`` (None: ``add``'s, else the defaults;
+    :mod:`~planner.decision.orders`). A
     log of another product version, one with no step, or ``add`` of another product is a
     :class:`~planner.decision.habits.HabitsError`. Cost: one replay per log (a model build, one belief update per
     step)."""
@@ -107,7 +111,11 @@ def learn_habits(logs, product: Product | Plan | None = None, prior: float | Non
     if start is not None and plan is None:
         raise HabitsError(f"--add {add}: give the product too (--product PRODUCT), to check the counts against it")
     habits, steps = habits_from_logs(plan, list(logs), prior, technical, start, inputs)
-    return replace(habits, prior_per=prior_per or (start.prior_per if start is not None else "edge")), steps
+    habits = replace(habits, prior_per=prior_per or (start.prior_per if start is not None else "edge"))
+    concentration = concentration if concentration is not None else habits.concentration
+    discount = discount if discount is not None else habits.discount
+    checked = check_orders_parameters(concentration, discount, "--concentration/--discount")
+    return replace(habits, **dict(zip(("concentration", "discount"), checked))), steps
 
 
 def decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
@@ -128,8 +136,9 @@ def decision_model(product: str | os.PathLike | Product | Plan, technical: bool 
     base = base_part_of(plan, base_part)
     if solving:  # refused before the flat model is built when the solver would not fit beside it
         check_flat_solver_memory(plan, count_intentions(plan.states, base_part=base), limits.memory)
+    weights, orders = prior_inputs(plan, habits)
     return intention_model(plan, rewards, discount, base_part=base, max_bytes=limits.memory,
-                           weights=habit_weights(plan, habits), deviations=deviations)
+                           weights=weights, deviations=deviations, orders=orders)
 
 
 def factored_decision_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
@@ -142,8 +151,8 @@ def factored_decision_model(product: str | os.PathLike | Product | Plan, technic
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
     if parallel:
         check_parallel_memory(plan, limits.memory, parallel)
-    return factored_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits),
-                          parallel, deviations)
+    return factored_model(plan, rewards, discount, base_part_of(plan, base_part), *_parts(plan, habits, parallel,
+                                                                                         deviations))
 
 
 def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
@@ -157,8 +166,14 @@ def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | 
     check_lumped_memory(plan, limits.memory)
     if parallel:
         check_parallel_memory(plan, limits.memory, parallel)
-    return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part), habit_weights(plan, habits),
-                              parallel, deviations)
+    return build_lumped_model(plan, rewards, discount, base_part_of(plan, base_part),
+                              *_parts(plan, habits, parallel, deviations))
+
+
+def _parts(plan: Plan, habits: Habits | None, parallel, deviations) -> tuple:
+    """``(weights, parallel, deviations, orders)`` as the factored and lumped builders take them."""
+    weights, orders = prior_inputs(plan, habits)
+    return weights, parallel, deviations, orders
 
 
 def check_parallel_flat(parallel: bool, where: str) -> None:

@@ -7,12 +7,13 @@ import json
 
 from ..decision.habits import PRIOR_PER
 from ..decision.io.habits_file import write_habits
-from ..defaults import HABITS_PRIOR
+from ..defaults import HABITS_PRIOR, ORDERS_CONCENTRATION, ORDERS_DISCOUNT
 from .options import (
     add_fasteners,
     add_force,
     add_input_options,
     add_technical,
+    finite,
     habits_from,
     inputs_from,
     number,
@@ -27,16 +28,18 @@ def _habits(args: argparse.Namespace) -> int:
 
     product = None if args.product is None else product_from(args, args.product)
     habits, steps = learn_habits(args.logs, product, args.prior, args.prior_per, args.technical, args.add,
-                                 inputs_from(args))
+                                 inputs_from(args), args.concentration, args.discount)
     write_habits(args.output, habits, len(args.logs))
     if args.json:
         print(json.dumps({"product": habits.product, "fingerprint": habits.fingerprint, "prior": habits.prior,
                           "prior_per": habits.prior_per, "logs": len(args.logs), "steps": steps,
-                          "edges": len(habits.counts)}))
+                          "edges": len(habits.counts), "orders": len(habits.orders),
+                          "concentration": habits.concentration, "discount": habits.discount}))
     else:
         print(f"{habits.product}: {steps} steps from {len(args.logs)} log{'s' if len(args.logs) != 1 else ''}, "
               f"{len(habits.counts)} state edges counted (prior {habits.prior:g} per {habits.prior_per}; state graph "
-              f"{habits.fingerprint})")
+              f"{habits.fingerprint}); {len(habits.orders)} distinct orders recorded (concentration "
+              f"{habits.concentration:g}, discount {habits.discount:g})")
         print(f"habits: {args.output}")
     return 0
 
@@ -46,7 +49,8 @@ def add_commands(commands) -> None:
         "habits", help="learn the operator's habits (their choice at each assembly state) from session logs",
         description="Count, from session logs, how often the operator took each next operation at each assembly "
                     "state, and write the habits file that --habits FILE puts into the decision model in place of "
-                    "the uniform choice of Alg. 3 (docs/habits.md). Logs of another product version are refused.")
+                    "the uniform choice of Alg. 3 (docs/habits.md), with the orders (whole sequences) of the finished "
+                    "sessions that --model orders uses. Logs of another product version are refused.")
     habits.add_argument("logs", nargs="+", metavar="LOG", help="session logs (.jsonl) of one product version")
     habits.add_argument("-o", "--output", required=True, metavar="FILE", help="the habits file (JSON)")
     habits.add_argument("--product", metavar="PRODUCT",
@@ -59,6 +63,11 @@ def add_commands(commands) -> None:
                         help="what alpha counts: edge, alpha per next operation (alpha d at a state of d; the "
                              "default, as files written before this option); state, alpha in all at each state, "
                              "so a state of many operations needs no more sessions (docs/habits.md)")
+    habits.add_argument("--concentration", type=finite, default=None, metavar="A",
+                        help=f"the orders' Pitman-Yor concentration a, above -d (default {ORDERS_CONCENTRATION:g}; "
+                             "--model orders, docs/habits.md, Orders)")
+    habits.add_argument("--discount", type=number(0, 1, high_open=True), default=None, metavar="D",
+                        help=f"the orders' Pitman-Yor discount d, from 0 to below 1 (default {ORDERS_DISCOUNT:g})")
     habits.add_argument("--add", metavar="HABITS", help="a habits file whose counts the logs' are added to")
     habits.add_argument("--json", action="store_true", help="print product, fingerprint, prior, prior_per, logs, steps, "
                                                                      "edges")

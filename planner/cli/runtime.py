@@ -151,9 +151,10 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
     from ..runtime.scripted import ScriptedRobot
     from ..runtime.session import run_session
     from ..runtime.vision import MarkerDetector, VisionSource, marker_map
+    from ..decision.orders import real_plan
 
     model, policy = decision_maker_from(args, product, spec, choice)
-    plan = model.plan
+    plan = real_plan(model.plan)  # the real assembly states (the orders' model plans on an augmented graph)
     stream, robot = None, ConsoleRobot() if args.robot in (None, "console") else ScriptedRobot()
     if not args.keyboard:  # open the frames first: a camera or file that cannot be read stops before any log
         designed = plan.designed or plan.product  # with its fasteners: the operator picks them from the tray too
@@ -220,7 +221,10 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
 
 def _update_habits(args: argparse.Namespace, plan, log_path: str) -> None:
     """``--habits-out``: the counts of ``--habits`` (none: empty counts; read even with ``--model paper``, so
-    that updating the file in place never loses them) plus the operator's steps the session's log recorded."""
+    that updating the file in place never loses them) plus the operator's steps the session's log recorded; its
+    recorded orders (and their parameters) plus the session's order, if it finished."""
+    from dataclasses import replace
+
     import numpy as np
 
     from ..decision.habits import edge_counts, habits_from_counts
@@ -229,13 +233,17 @@ def _update_habits(args: argparse.Namespace, plan, log_path: str) -> None:
 
     habits = read_habits(args.habits, inputs_from(args)) if args.habits else None
     counts = edge_counts(plan, habits) if habits is not None else np.zeros(plan.states.n_edges)
-    steps = count_log(plan, counts, log_path, args.technical, inputs_from(args))
+    orders = dict(habits.orders) if habits is not None else {}
+    steps = count_log(plan, counts, log_path, args.technical, inputs_from(args), orders)
     if not counts.any():
         log.warning("--habits-out %s: the session did no step and there were no habits: nothing written",
                     args.habits_out)
         return
-    write_habits(args.habits_out, habits_from_counts(plan, counts, habits.prior if habits else args.habits_prior,
-                                                     prior_per=habits.prior_per if habits else "edge"))
+    learned = habits_from_counts(plan, counts, habits.prior if habits else args.habits_prior,
+                                 prior_per=habits.prior_per if habits else "edge")
+    if habits is not None:
+        learned = replace(learned, concentration=habits.concentration, discount=habits.discount)
+    write_habits(args.habits_out, replace(learned, orders=tuple(orders.items())))
     print(f"habits: {args.habits_out} ({steps} step{'s' if steps != 1 else ''} of this session added)")
 
 

@@ -63,6 +63,7 @@ from .intention_model import WAIT, Rewards
 from .parallel import (ParallelTable, parallel_expected_rewards, parallel_predict, parallel_rewards,
                        parallel_table)
 from .joins import JOINS, join_actions
+from .orders import OrdersPrior, check_alone, node_keys
 from .projected import PROJECTED, projected_table
 
 __all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model", "factored_model_bytes"]
@@ -342,7 +343,8 @@ def _counts_per_state(plan: Plan) -> np.ndarray:
 
 def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                    base_part: str | None = None, weights: np.ndarray | None = None,
-                   parallel: bool | str = False, deviations: Deviations | None = None) -> FactoredIntentionModel:
+                   parallel: bool | str = False, deviations: Deviations | None = None,
+                   orders: OrdersPrior | None = None) -> FactoredIntentionModel:
     """The factored model of Alg. 3 over ``plan`` (module docstring), without enumerating intentions.
 
     ``base_part``: only the sequences that start from this part (paper Sec. V); :class:`PlannerError` when it
@@ -353,10 +355,14 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     sequence projected onto the new state) or ``"joins"`` (the same, the actions named by the parts they join:
     :mod:`~planner.decision.joins`); False: the paper's.
     ``deviations``: change of mind and mistakes (:mod:`~planner.decision.deviations`), None for the paper's.
+    ``orders``: the orders' model (:mod:`~planner.decision.orders`), built on its augmented graph and weights.
 
     Cost: O(S + E log E) time and O(S + E) memory for S states and E state edges (one sort of the edges by
     source, one of the (state, observation) pairs); Python-int arithmetic only where the counts pass 2**52.
     """
+    if orders is not None:
+        check_alone(weights, base_part, parallel, deviations)
+        plan, weights = orders.plan, orders.weights
     states = plan.states
     S, E, Z = states.n_states, states.n_edges, len(plan.observations)
     final = states.final
@@ -377,11 +383,13 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     start = np.searchsorted(source[order], np.arange(S + 1))
     # Observations into each state: the distinct non-blank observations of the operations of its (allowed)
     # in-edges.
-    seen = plan.operation_observation[states.edge_operation]
+    # (On the orders' augmented graph: those of the node's assembly state, as Alg. 3 has them; orders.node_keys.)
+    real = getattr(states, "real", states)
+    seen = plan.operation_observation[real.edge_operation]
     if base_part is not None:
         seen = np.where(allowed_edges(states, base_part), seen, 0)
-    keys = np.sort(states.edge_target.astype(np.int64)[seen != 0] * Z + seen[seen != 0])
-    keys = keys[np.r_[True, keys[1:] != keys[:-1]]] if keys.size else keys  # distinct (a sort beats hashing)
+    keys = np.sort(real.edge_target.astype(np.int64)[seen != 0] * Z + seen[seen != 0])
+    keys = node_keys(states, keys[np.r_[True, keys[1:] != keys[:-1]]] if keys.size else keys, Z)  # distinct
     emit_weight = 1.0 / (np.bincount(keys // Z, minlength=S) + BLANK_WEIGHT)
     if parallel not in (False, True, "next", PROJECTED, JOINS):
         raise PlannerError(f"unknown parallel model {parallel!r}: use False (the paper's), True or 'next' (the step "

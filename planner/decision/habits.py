@@ -44,7 +44,7 @@ import numpy as np
 
 from ..assembly.intentions import paths_to_final
 from ..assembly.plan import Plan
-from ..defaults import HABITS_PRIOR
+from ..defaults import HABITS_PRIOR, ORDERS_CONCENTRATION, ORDERS_DISCOUNT
 from ..errors import PlannerError
 
 __all__ = ["Habits", "HabitsError", "state_graph_fingerprint", "edge_keys", "habits_from_counts", "edge_counts",
@@ -63,7 +63,10 @@ class Habits:
     """Counts of the operator's choices: ``counts`` holds ``(state, operation, count)`` with the state and the
     operation as :func:`edge_keys` writes them; ``prior`` is ``alpha`` and ``prior_per`` what it counts
     (``"edge"`` or ``"state"``: module docstring); ``product`` and ``fingerprint`` name the plan they were counted
-    on; ``source`` the file they were read from (for messages; "" in memory)."""
+    on; ``source`` the file they were read from (for messages; "" in memory). ``orders``: the whole sequences
+    recorded, each ``((state, operation), ...)`` and its count, with the Pitman-Yor ``concentration`` and
+    ``discount`` over them; ``prior_model`` what the model uses, ``"counts"`` (per state, this module) or
+    ``"orders"`` (:mod:`~planner.decision.orders`)."""
 
     product: str
     fingerprint: str
@@ -71,6 +74,10 @@ class Habits:
     counts: tuple[tuple[str, str, float], ...]
     source: str = ""
     prior_per: str = "edge"
+    orders: tuple = ()
+    concentration: float = ORDERS_CONCENTRATION
+    discount: float = ORDERS_DISCOUNT
+    prior_model: str = "counts"
 
     @property
     def total(self) -> float:
@@ -175,12 +182,12 @@ def edge_counts(plan: Plan, habits: Habits) -> np.ndarray:
 
 
 def add_sequence(plan: Plan, counts: np.ndarray, operations: list[int], start: int | None = None,
-                 counted: list[bool] | None = None) -> int:
+                 counted: list[bool] | None = None, path: list[int] | None = None) -> int:
     """Add one to ``counts`` (E,) for each state edge that ``operations`` (AND/OR indices, in order) take from
     ``start`` (default: the initial state), only where ``counted`` is true if given (steps the robot did are
     walked, not counted: they are not the operator's choice); returns the state reached. Cost: O(1) per step
     after finding the edge among the state's out-edges. Raises :class:`HabitsError` when an operation is not
-    possible there."""
+    possible there. ``path``, if given, gets each state edge taken appended (the order, :mod:`.orders`)."""
     states = plan.states
     state = states.initial if start is None else int(start)
     for k, operation in enumerate(operations):
@@ -190,6 +197,8 @@ def add_sequence(plan: Plan, counts: np.ndarray, operations: list[int], start: i
                               f"{states.describe(state)}")
         if counted is None or counted[k]:
             counts[out[0]] += 1
+        if path is not None:
+            path.append(int(out[0]))
         state = int(states.edge_target[out[0]])
     return state
 

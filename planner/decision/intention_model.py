@@ -48,6 +48,7 @@ from ..defaults import BLANK_WEIGHT, DISCOUNT, STAY
 from ..errors import LimitExceededError, MemoryLimitError, PlannerError
 from .deviations import Deviations, flat_deviation_entries, flat_tables
 from .pomdp import POMDP
+from .orders import check_alone
 
 __all__ = ["Rewards", "WAIT", "IntentionModel", "intention_model", "intention_pomdp", "flat_model_bytes",
            "check_flat_model", "flat_model_fits", "intention_weights"]
@@ -270,9 +271,12 @@ def flat_model_fits(plan: Plan, max_bytes: int | None = None, limit: int | None 
 def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                      graph: IntentionGraph | None = None, limit: int = DEFAULT_INTENTION_LIMIT,
                      base_part: str | None = None, max_bytes: int | None = None,
-                     weights: np.ndarray | None = None, deviations: Deviations | None = None) -> IntentionModel:
+                     weights: np.ndarray | None = None, deviations: Deviations | None = None,
+                     orders=None) -> IntentionModel:
     """The decision model of Alg. 3 over the intentions of ``plan`` (definitions in the module docstring).
     ``weights``: a positive weight per state edge (operator habits, module docstring), None for the paper's.
+    ``orders``: the orders' model (:class:`~planner.decision.orders.OrdersPrior` of ``plan``): its prior over
+    the full sequences (:meth:`~planner.decision.orders.OrdersPrior.intention_weights`) in place of weights.
     ``deviations``: change of mind and mistakes (:mod:`~planner.decision.deviations`; their tables are checked
     against ``max_bytes`` too), None for the paper's.
 
@@ -299,7 +303,12 @@ def intention_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = 
     initial = np.zeros(graph.n_intentions)
     starts = graph.full_sequences()
     prior = None
-    if weights is None:
+    if orders is not None:
+        check_alone(weights, base_part, False, deviations)
+        prior = orders.intention_weights(graph)
+        initial[starts] = prior[starts] / prior[starts].sum()
+        prior.flags.writeable = False
+    elif weights is None:
         initial[starts] = 1.0 / len(starts)
     else:
         weights = np.asarray(weights, dtype=float)

@@ -185,9 +185,10 @@ class LumpedModel:
 
 def lumped_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                  base_part: str | None = None, weights: np.ndarray | None = None,
-                 parallel: bool = False, deviations: Deviations | None = None) -> LumpedModel:
+                 parallel: bool = False, deviations: Deviations | None = None, orders=None) -> LumpedModel:
     """The factored model of ``plan`` (from ``base_part`` if given; ``weights``: operator habits, per state edge;
-    ``parallel``: the parallel model, docs/parallel.md; ``deviations``: change of mind and mistakes) and its
-    lumped POMDP. Cost: that of :func:`factored_model` plus :func:`lumped_pomdp`."""
-    factored = factored_model(plan, rewards, discount, base_part, weights, parallel, deviations)
+    ``parallel``: the parallel model, docs/parallel.md; ``deviations``: change of mind and mistakes; ``orders``:
+    the orders' model, :mod:`~planner.decision.orders`) and its lumped POMDP. Cost: that of
+    :func:`factored_model` plus :func:`lumped_pomdp`."""
+    factored = factored_model(plan, rewards, discount, base_part, weights, parallel, deviations, orders)
     return LumpedModel(factored, lumped_pomdp(factored))

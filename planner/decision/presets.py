@@ -17,7 +17,10 @@ the measurements showed best for a habitual operator: the prior spread per state
 alpha 1, and a robot that acts from a belief of 0.95 in the next operation (bench/README.md, Operator habits: on
 the pen, 0.98 halves the work the robot takes for half a point of wrong actions, and on the pump's sa4 it never
 acts; an empirical-Bayes alpha, the marginal likelihood's maximum, is 0.14 on the pen's 20 logs: surer, and
-more often wrong).
+more often wrong). ``orders`` is the orders' model (:mod:`~planner.decision.orders`: a Pitman-Yor mixture over the
+recorded whole sequences, the paper's prior as its base; the file's concentration and discount) with an act
+confidence of 0.95 (bench/README.md, Operator habits, Orders: where the oracle of the operator's true prior meets
+both targets on the pen).
 """
 from __future__ import annotations
 
@@ -25,10 +28,10 @@ import math
 from dataclasses import dataclass, replace
 
 from ..errors import UsageError
-from .habits import Habits
+from .habits import Habits, HabitsError
 from .intention_model import Rewards
 
-__all__ = ["ModelPreset", "PRESETS", "CONFIDENT", "wrong_for_confidence", "act_confidence_of", "preset_habits",
+__all__ = ["ModelPreset", "PRESETS", "CONFIDENT", "ORDERS", "wrong_for_confidence", "act_confidence_of", "preset_habits",
            "preset_rewards"]
 
 
@@ -36,17 +39,20 @@ __all__ = ["ModelPreset", "PRESETS", "CONFIDENT", "wrong_for_confidence", "act_c
 class ModelPreset:
     """A named model: ``habits`` whether it needs habits (``--habits FILE``); ``prior`` / ``prior_per`` the
     habits' prior it uses in place of the file's (None: the file's); ``act_confidence`` the eagerness it sets
-    when the user gives neither ``--act-confidence`` nor ``--reward-wrong`` (None: the paper's -50)."""
+    when the user gives neither ``--act-confidence`` nor ``--reward-wrong`` (None: the paper's -50);
+    ``orders`` whether the model is the orders' (:mod:`~planner.decision.orders`) rather than the counts'."""
 
     name: str
     habits: bool
     prior: float | None = None
     prior_per: str | None = None
     act_confidence: float | None = None
+    orders: bool = False
 
 
 CONFIDENT = ModelPreset("confident", True, prior=1.0, prior_per="state", act_confidence=0.95)
-PRESETS = {p.name: p for p in (ModelPreset("paper", False), ModelPreset("habits", True), CONFIDENT)}
+ORDERS = ModelPreset("orders", True, act_confidence=0.9, orders=True)
+PRESETS = {p.name: p for p in (ModelPreset("paper", False), ModelPreset("habits", True), CONFIDENT, ORDERS)}
 
 
 def _check_confidence(confidence: float) -> float:
@@ -101,9 +107,18 @@ def preset_rewards(preset: ModelPreset | None, unfavorable: float, favorable: fl
 
 def preset_habits(preset: ModelPreset | None, habits: Habits | None) -> Habits | None:
     """``habits`` with the preset's prior in place of the file's (the counts are the file's), None for a preset
-    without habits. The session log records the result, so a replay rebuilds the same model."""
+    without habits; the orders' preset uses the file's recorded orders (refused, naming the file, when it has
+    none), any other the counts. The session log records the result, so a replay rebuilds the same model."""
     if habits is None or preset is None or not preset.habits:
         return None if preset is not None and not preset.habits else habits
+    if preset.orders:
+        if not habits.orders:
+            raise HabitsError(f"{habits.name}: --model {preset.name} needs the recorded orders (whole sequences), and "
+                              "this habits file has none (written before version 3, or from logs of unfinished "
+                              "sessions); learn it again: aplan habits LOG... -o FILE")
+        return replace(habits, prior_model="orders")
+    if habits.prior_model != "counts":
+        habits = replace(habits, prior_model="counts")
     if preset.prior is None:
         return habits
     return replace(habits, prior=preset.prior, prior_per=preset.prior_per)

@@ -2,7 +2,9 @@
 sequence of operations (:func:`~planner.runtime.logged_sequence.logged_sequence`: the robot's logged operations
 and the operator's observations, explained by the first sequence that fits) counted along the state edges it
 took, one count per step the operator did (a session stopped early counts the steps it did; a step the robot
-did is walked, not counted: it was the robot's choice, not the operator's).
+did is walked, not counted: it was the robot's choice, not the operator's). A log whose sequence reaches the
+finished product also records its *order*, the whole sequence of state edges (the robot's steps included: the
+order the product was assembled in; :mod:`~planner.decision.orders`); a session stopped early records none.
 
 A log stores the product it was recorded on. It is refused, naming it, when that product planned with the same
 options has another state graph than the habits' (another version of the product: its parts, operations or
@@ -14,12 +16,13 @@ from __future__ import annotations
 
 import os
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from ..assembly.plan import Plan, make_plan
-from ..decision.habits import (Habits, HabitsError, add_sequence, edge_counts, habits_from_counts,
+from ..decision.habits import (Habits, HabitsError, add_sequence, edge_counts, edge_keys, habits_from_counts,
                                state_graph_fingerprint)
 from ..defaults import HABITS_PRIOR
 from ..validation import InputLimits
@@ -42,9 +45,10 @@ def _on_plan(plan: Plan, logged, path: Path) -> list[int]:
 
 
 def count_log(plan: Plan, counts: np.ndarray, path: str | os.PathLike, technical: bool | None = None,
-              limits: InputLimits = InputLimits()) -> int:
-    """Add the operator's steps the session log at ``path`` recorded to ``counts`` (E,) of ``plan``; returns
-    the steps counted. ``technical``: how ``plan`` switched its technical constraints (the log's product is planned the
+              limits: InputLimits = InputLimits(), orders: dict | None = None) -> int:
+    """Add the operator's steps the session log at ``path`` recorded to ``counts`` (E,) of ``plan``, and its order
+    (a finished session's whole sequence, as a tuple of :func:`edge_keys`) to ``orders`` (order -> count) if
+    given; returns the steps counted. ``technical``: how ``plan`` switched its technical constraints (the log's product is planned the
     same way to compare state graphs). Raises :class:`HabitsError` naming the log and the fix."""
     path = Path(path)
     logged = logged_sequence(path, limits)
@@ -60,10 +64,15 @@ def count_log(plan: Plan, counts: np.ndarray, path: str | os.PathLike, technical
                           f"differ); {fix}")
     operations = _on_plan(plan, logged, path)
     operator = [who == "operator" for who in logged.by]
+    edges: list[int] = []
     try:
-        add_sequence(plan, counts, operations, counted=operator)
+        reached = add_sequence(plan, counts, operations, counted=operator, path=edges)
     except HabitsError as exc:
         raise HabitsError(f"{path}: {exc}: the logged sequence is not one of this plan's (check --technical)") from None
+    if orders is not None and reached == plan.states.final and edges:
+        keys = edge_keys(plan)
+        order = tuple(keys[e] for e in edges)
+        orders[order] = orders.get(order, 0.0) + 1.0
     return sum(operator)
 
 
@@ -78,9 +87,13 @@ def habits_from_logs(plan: Plan | None, paths: Sequence[str | os.PathLike], prio
     if plan is None:
         plan = make_plan(logged_sequence(paths[0], limits).product, technical)
     counts = edge_counts(plan, start) if start is not None else np.zeros(plan.states.n_edges)
-    steps = sum(count_log(plan, counts, path, technical, limits) for path in paths)
+    orders = dict(start.orders) if start is not None else {}
+    steps = sum(count_log(plan, counts, path, technical, limits, orders) for path in paths)
     if not counts.any():
         raise HabitsError(f"{', '.join(map(str, paths))}: the logs record no operation: nothing to learn (a session "
                           "that did at least one step is needed); nothing was written")
-    return habits_from_counts(plan, counts, start.prior if start is not None and prior is None else
-                              (prior if prior is not None else HABITS_PRIOR)), steps
+    habits = habits_from_counts(plan, counts, start.prior if start is not None and prior is None else
+                                (prior if prior is not None else HABITS_PRIOR))
+    if start is not None:
+        habits = replace(habits, concentration=start.concentration, discount=start.discount)
+    return replace(habits, orders=tuple(orders.items())), steps

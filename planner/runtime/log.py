@@ -190,15 +190,16 @@ def read_log(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> li
     return events
 
 
-def _habit_weights(path: Path, plan, recorded) -> np.ndarray | None:
-    """The edge weights of the operator habits a session's model used (its start event's ``settings.habits``:
-    the habits file's content), or None (the paper's model)."""
-    from ..decision.habits import habit_weights
+def _habit_weights(path: Path, plan, recorded) -> tuple:
+    """``(edge weights, orders)`` of the operator habits a session's model used (its start event's
+    ``settings.habits``: the habits file's content, with the prior model it used), or ``(None, None)`` (the
+    paper's model)."""
     from ..decision.io.habits_file import habits_from_dict
+    from ..decision.orders import prior_inputs
 
     if recorded is None:
-        return None
-    return habit_weights(plan, habits_from_dict(recorded, f"{path} (start event, settings.habits)"))
+        return None, None
+    return prior_inputs(plan, habits_from_dict(recorded, f"{path} (start event, settings.habits)"))
 
 
 def _deviations(path: Path, recorded):
@@ -230,15 +231,16 @@ def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel | Factor
     if base_part is not None and not isinstance(base_part, str):
         raise SessionError(f"{path}: the start event's base part {base_part!r} is not a part name; the log is damaged")
     plan = make_plan(product)
-    weights = _habit_weights(path, plan, settings.get("habits"))
+    weights, orders = _habit_weights(path, plan, settings.get("habits"))
     parallel = settings.get("parallel", False)  # logs before the parallel model have none: the paper's
     if not (isinstance(parallel, bool) or parallel in ("projected", "joins")):
         raise SessionError(f"{path}: the start event's 'parallel' setting {parallel!r} is not true, false, "
                            "\"projected\" or \"joins\"; the log is damaged")
     deviations = _deviations(path, settings.get("deviations"))
-    model = (factored_model(plan, base_part=base_part, weights=weights, parallel=parallel, deviations=deviations)
+    model = (factored_model(plan, base_part=base_part, weights=weights, parallel=parallel, deviations=deviations,
+                            orders=orders)
              if start.get("belief_over") == BELIEF_OVER["factored"]
-             else intention_model(plan, base_part=base_part, weights=weights, deviations=deviations))
+             else intention_model(plan, base_part=base_part, weights=weights, deviations=deviations, orders=orders))
     if list(model.observations) != start.get("observations") or list(model.actions) != start.get("actions"):
         raise SessionError(f"{path}: the product in the log no longer gives the logged actions and observations "
                            "(the log was written by another planner version)")

@@ -17,6 +17,7 @@ import numpy as np
 from ..assembly.explode import SequenceError, check_sequence
 from ..assembly.plan import Plan
 from ..assembly.tags import BLANK
+from ..decision.orders import real_plan
 from ..product import Product
 from ..validation import InputLimits
 from .log import SessionError, replay
@@ -127,7 +128,7 @@ def logged_sequence(path: str | os.PathLike, limits: InputLimits = InputLimits()
     per step) and :func:`explain_steps`."""
     path = Path(path)
     done = replay(path, limits=limits)
-    plan = done.model.plan
+    plan = real_plan(done.model.plan)  # the orders' model is on an augmented graph: the log is about the real one
     steps = logged_steps(done.events, done.model)
     try:
         explained, ambiguous = explain_steps(plan, steps)

@@ -12,7 +12,7 @@ from planner.decision import (DiscreteUpdater, FactoredUpdater, factored_model, 
                               to_flat)
 from planner.decision.habits import (add_sequence, choice_probabilities, habit_weights, habit_weights_from,
                                      habits_from_counts)
-from reference import horizon_value
+from reference import filtered_histories, horizon_value
 
 TOLERANCE = 1e-9
 
@@ -90,34 +90,13 @@ def test_flat_factored_and_lumped_beliefs_agree_along_episodes(weighted):
     POMDP) along random histories drawn from the flat model: the same beliefs, rewards and observation
     probabilities at every step."""
     plan, weights, flat_model, fact = weighted
-    flat, lumped = flat_model.pomdp, lumped_pomdp(fact)
+    lumped = lumped_pomdp(fact)
     assert np.abs(lumped.initial - fact.initial_belief().dense(fact.n_classes)).max() <= 1e-15
     of = np.where(flat_model.graph.step_edge >= 0, flat_model.graph.step_edge, fact.final_class)
-    transition = [t.tocsr() for t in flat.transition]
-    observation = flat.observation[0].tocsr()
-    rng = np.random.default_rng(5)
-    starts = flat_model.full_sequences()
-    for episode in range(8):
-        up_flat = DiscreteUpdater(flat, reset_weights=flat_model.prior_weights)
-        up_fact, up_lump = FactoredUpdater(fact), DiscreteUpdater(lumped)
-        b, belief, c = up_flat.initialize(), up_fact.initialize(), up_lump.initialize()
-        state = int(rng.choice(starts, p=flat.initial[starts]))
-        for _ in range(20):
-            _assert_same(flat_model, fact, weights, b, belief)
-            assert np.abs(np.bincount(of, weights=b, minlength=fact.n_classes) - c).max() <= TOLERANCE
-            assert np.abs(belief.dense(fact.n_classes) - c).max() <= TOLERANCE
-            if state == flat_model.final_state:
-                break
-            a = int(rng.integers(flat.n_actions)) if episode % 2 else flat.n_actions - 1
-            row = transition[a].getrow(state)
-            state = int(rng.choice(row.indices, p=row.data / row.data.sum()))
-            orow = observation.getrow(state)
-            z = int(rng.choice(orow.indices, p=orow.data / orow.data.sum()))
-            zb = flat.observation[a].T @ (flat.transition[a].T @ b)
-            zc = lumped.observation[a].T @ (lumped.transition[a].T @ c)
-            assert np.abs(zb - zc).max() <= TOLERANCE
-            b, belief, c = up_flat.update(b, a, z), up_fact.update(belief, a, z), up_lump.update(c, a, z)
-        assert not up_flat.events and not up_fact.events
+    for b, belief, c in filtered_histories(flat_model, fact, lumped, np.random.default_rng(5), 8, 20, TOLERANCE):
+        _assert_same(flat_model, fact, weights, b, belief)
+        assert np.abs(np.bincount(of, weights=b, minlength=fact.n_classes) - c).max() <= TOLERANCE
+        assert np.abs(belief.dense(fact.n_classes) - c).max() <= TOLERANCE
 
 
 def test_resets_spread_by_the_prior_weights(weighted):

@@ -6,6 +6,7 @@ preset equal to its parts given one by one."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
@@ -123,7 +124,7 @@ def test_act_confidence_needs_a_paying_operation():
 def test_presets():
     """paper: no habits, the paper's rewards; habits: the file's prior; confident: alpha 1 per state and its C
     (w = -10 C / (1 - C)) unless the user gives the wrong reward or a confidence."""
-    assert set(PRESETS) == {"paper", "habits", "confident"}
+    assert set(PRESETS) == {"paper", "habits", "confident", "orders"}
     assert preset_rewards(PRESETS["paper"], 10, -2, 0, None, None) == Rewards()
     assert preset_rewards(None, 10, -2, 0, None, None) == Rewards()
     c = CONFIDENT.act_confidence
@@ -147,6 +148,13 @@ def test_presets():
     assert preset_habits(None, h) is h
     c = preset_habits(CONFIDENT, h)
     assert (c.prior, c.prior_per, c.counts) == (1.0, "state", h.counts)
+    with pytest.raises(HabitsError, match="--model orders needs the recorded orders"):
+        preset_habits(PRESETS["orders"], h)  # a file without orders (version 1 or 2)
+    ordered = replace(h, orders=(((("s", "o"),), 3.0),))
+    o = preset_habits(PRESETS["orders"], ordered)
+    assert o.prior_model == "orders" and preset_habits(PRESETS["habits"], o).prior_model == "counts"
+    assert preset_rewards(PRESETS["orders"], 10, -2, 0, None, None).wrong == pytest.approx(
+        wrong_for_confidence(PRESETS["orders"].act_confidence), rel=1e-12)
 
 
 # The command line: a usage error (exit 2) writes nothing; the preset is its parts given one by one.
@@ -244,7 +252,7 @@ def test_a_confident_session_logs_its_prior_replays_and_keeps_the_files(habits_f
                      stdin="\n".join(picks) + "\n")
     assert done.returncode == 0, done.stderr
     recorded = json.loads(log.read_text().splitlines()[0])["settings"]["habits"]
-    assert (recorded["prior"], recorded["prior_per"], recorded["version"]) == (1.0, "state", 2)
+    assert (recorded["prior"], recorded["prior_per"], recorded["version"]) == (1.0, "state", 3)  # with orders
     replay = run_aplan("replay", log)
     assert replay.returncode == 0 and "beliefs reproduced" in replay.stdout, replay.stdout + replay.stderr
     assert json.loads(out.read_text())["prior_per"] == "edge"

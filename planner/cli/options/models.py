@@ -9,7 +9,7 @@ from ... import api
 from ...decision.intention_model import Rewards
 from ...decision.deviations import Deviations, deviations_of
 from ...decision.habits import Habits
-from ...decision.presets import CONFIDENT, PRESETS, preset_rewards
+from ...decision.presets import CONFIDENT, ORDERS, PRESETS, preset_rewards
 from ...decision.joins import JOINS
 from ...decision.parallel import parallel_flag
 from ...decision.projected import PROJECTED, PROJECTED_CONFIDENCE
@@ -64,7 +64,9 @@ def add_habits_options(group) -> None:
                        help="paper: the paper's model, ignoring --habits, --switch and --mistakes; habits (the "
                             "default with --habits): the habits' model; confident: the habits' model with the prior "
                             f"spread per state (alpha {CONFIDENT.prior:g} in all) and --act-confidence "
-                            f"{CONFIDENT.act_confidence:g} unless given (docs/habits.md)")
+                            f"{CONFIDENT.act_confidence:g} unless given; orders: the habits file's recorded orders "
+                            f"(whole sequences, a Pitman-Yor mixture) with --act-confidence {ORDERS.act_confidence:g} "
+                            "unless given (docs/habits.md, Orders)")
 
 
 def add_parallel_options(group) -> None:

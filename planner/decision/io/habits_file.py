@@ -14,6 +14,16 @@ operation) or ``"state"`` (in all per state; :mod:`~planner.decision.habits`): a
 used in the model); ``counts`` the state edges counted at least once, each a state and an operation as
 ``aplan stats``/``intentions`` write them and a finite count of at least 0. Whether the keys are state edges of
 the product is checked when the habits are used (:func:`~planner.decision.habits.edge_counts`).
+
+Version 3 adds the recorded *orders* (whole sequences, :mod:`~planner.decision.orders`) and their Pitman-Yor
+parameters; a file with orders is written as version 3 so that an older planner refuses it:
+
+    {..., "version": 3, "concentration": 1.0, "discount": 0.5, "prior_model": "counts",
+     "orders": [{"count": 16, "steps": [{"state": "...", "operation": "{ink} + {cartridge}"}, ...]}, ...]}
+
+``prior_model`` is what the model uses, ``"counts"`` (per state) or ``"orders"`` (``--model orders`` sets it;
+a session log's copy records it for replay). Whether each order is a whole path of the product's state graph is
+checked when the habits are used (:func:`~planner.decision.orders.order_edges`).
 """
 from __future__ import annotations
 
@@ -25,21 +35,54 @@ from ...defaults import HABITS_FORMAT, HABITS_VERSION
 from ...files import write_atomic
 from ...validation import InputError, InputLimits, json_loads
 from ..habits import Habits, HabitsError, check_prior, check_prior_per
+from ..orders import PRIOR_MODELS, check_orders_parameters
 
 __all__ = ["read_habits", "write_habits", "habits_to_dict", "habits_from_dict"]
 
 _REWRITE = "write it again with aplan habits LOG... -o FILE"
 _STATE_PRIOR_VERSION = 2  # the first version that may spread alpha per state (module docstring)
+_ORDERS_VERSION = 3  # the first version that may hold recorded orders
+_VERSIONS = (HABITS_VERSION, _STATE_PRIOR_VERSION, _ORDERS_VERSION)
 
 
 def habits_to_dict(habits: Habits, sessions: int | None = None) -> dict:
     """The file's content (module docstring)."""
     version = HABITS_VERSION if habits.prior_per == "edge" else _STATE_PRIOR_VERSION
-    return {"format": HABITS_FORMAT, "version": version, "product": habits.product,
-            "fingerprint": habits.fingerprint, "prior": habits.prior, "prior_per": habits.prior_per,
-            "sessions": sessions,
-            "counts": [{"state": s, "operation": o, "count": int(c) if float(c).is_integer() else c}
-                       for s, o, c in habits.counts]}
+    out = {"format": HABITS_FORMAT, "version": version, "product": habits.product,
+           "fingerprint": habits.fingerprint, "prior": habits.prior, "prior_per": habits.prior_per,
+           "sessions": sessions,
+           "counts": [{"state": s, "operation": o, "count": _number(c)} for s, o, c in habits.counts]}
+    if habits.orders or habits.prior_model != "counts":
+        out.update(version=_ORDERS_VERSION, concentration=habits.concentration, discount=habits.discount,
+                   prior_model=habits.prior_model,
+                   orders=[{"count": _number(n), "steps": [{"state": s, "operation": o} for s, o in steps]}
+                           for steps, n in habits.orders])
+    return out
+
+
+def _number(c: float):
+    return int(c) if float(c).is_integer() else c
+
+
+def _orders(data: dict, source: str) -> tuple:
+    """The ``orders`` of a version-3 file, each entry's shape and count checked (module docstring)."""
+    orders = data.get("orders", [])
+    if not isinstance(orders, list):
+        raise HabitsError(f"{source}: \"orders\" must be a list of {{count, steps}}; {_REWRITE}")
+    out = []
+    for k, entry in enumerate(orders):
+        where = f"{source}: orders[{k}]"
+        steps = entry.get("steps") if isinstance(entry, dict) else None
+        if not isinstance(steps, list) or not steps or "count" not in entry or not all(
+                isinstance(s, dict) and isinstance(s.get("state"), str) and isinstance(s.get("operation"), str)
+                for s in steps):
+            raise HabitsError(f"{where}: must be an object with a \"count\" and \"steps\", a non-empty list of "
+                              f"{{state, operation}} (text); fix the entry or {_REWRITE}")
+        count = _count(entry["count"], where)
+        if count <= 0:
+            raise HabitsError(f"{where}: count {entry['count']!r} is not above 0; remove the entry or {_REWRITE}")
+        out.append((tuple((s["state"], s["operation"]) for s in steps), count))
+    return tuple(out)
 
 
 def _count(value, where: str) -> float:
@@ -56,9 +99,9 @@ def habits_from_dict(data, source: str) -> Habits:
     if not isinstance(data, dict) or data.get("format") != HABITS_FORMAT:
         raise HabitsError(f"{source}: not a habits file (no \"format\": \"{HABITS_FORMAT}\"); {_REWRITE}")
     version = data.get("version")
-    if isinstance(version, bool) or version not in (HABITS_VERSION, _STATE_PRIOR_VERSION):
+    if isinstance(version, bool) or version not in _VERSIONS:
         raise HabitsError(f"{source}: habits file version {version!r}; this planner reads versions "
-                          f"{HABITS_VERSION} and {_STATE_PRIOR_VERSION}; {_REWRITE}")
+                          f"{', '.join(map(str, _VERSIONS))}; {_REWRITE}")
     for key in ("product", "fingerprint"):
         if not isinstance(data.get(key), str) or not data[key]:
             raise HabitsError(f"{source}: \"{key}\" must be a non-empty string; {_REWRITE}")
@@ -80,7 +123,17 @@ def habits_from_dict(data, source: str) -> Habits:
             raise HabitsError(f"{where}: must be an object with a \"state\" and an \"operation\" (text) and a "
                               f"\"count\"; fix the entry or {_REWRITE}")
         out.append((entry["state"], entry["operation"], _count(entry["count"], where)))
-    return Habits(data["product"], data["fingerprint"], prior, tuple(out), source, prior_per)
+    if version != _ORDERS_VERSION:
+        if any(key in data for key in ("orders", "concentration", "discount", "prior_model")):
+            raise HabitsError(f"{source}: recorded orders and their parameters need version {_ORDERS_VERSION}; "
+                              + _REWRITE)
+        return Habits(data["product"], data["fingerprint"], prior, tuple(out), source, prior_per)
+    concentration, discount = check_orders_parameters(data.get("concentration"), data.get("discount"), source)
+    prior_model = data.get("prior_model", "counts")
+    if prior_model not in PRIOR_MODELS:
+        raise HabitsError(f"{source}: \"prior_model\" must be \"counts\" or \"orders\", got {prior_model!r}")
+    return Habits(data["product"], data["fingerprint"], prior, tuple(out), source, prior_per, _orders(data, source),
+                  concentration, discount, prior_model)
 
 
 def read_habits(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> Habits:
