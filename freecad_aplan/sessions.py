@@ -222,7 +222,10 @@ def model_label(name: str) -> str:
     preset = api.MODEL_PRESETS[name]
     if not preset.habits:
         return f"{name}: the paper's model (no habits)"
-    prior = "the file's prior" if preset.prior is None else f"prior {preset.prior:g} per {preset.prior_per}"
+    if preset.orders:
+        prior = "the recorded orders"
+    else:
+        prior = "the file's prior" if preset.prior is None else f"prior {preset.prior:g} per {preset.prior_per}"
     acts = "" if preset.act_confidence is None else f", acts at {preset.act_confidence:g}"
     return f"{name}: habits, {prior}{acts}"
 

@@ -28,7 +28,7 @@ from planner.assembly import make_plan
 from planner.assembly.explode import sequence_at
 from planner.decision.habits import edge_counts
 from planner.decision.intention_model import intention_model
-from planner.decision.presets import CONFIDENT, PRESETS, ModelPreset
+from planner.decision.presets import CONFIDENT, ORDERS, PRESETS, ModelPreset
 from planner.errors import PlannerError
 from planner.product import Subassembly, save_product
 from planner.product.synthetic import chain_product
@@ -66,8 +66,8 @@ def test_session_arguments_pass_habits_and_model_as_the_command_line():
         "session", "p.json", "--keyboard", "--robot", "auto", "--log", "s.jsonl", "--habits", "h.json",
         "--model", "confident"]
     assert session_arguments("p.json", "s.jsonl") == ["session", "p.json", "--demo", "0", "--log", "s.jsonl"]
-    with pytest.raises(PlannerError, match="unknown model 'orders'; use one of paper, habits, confident"):
-        session_arguments("p.json", "s.jsonl", model="orders")
+    with pytest.raises(PlannerError, match="unknown model 'eager'; use one of paper, habits, confident, orders"):
+        session_arguments("p.json", "s.jsonl", model="eager")
 
 
 def test_the_models_offered_are_the_planners_presets(monkeypatch):
@@ -78,9 +78,10 @@ def test_the_models_offered_are_the_planners_presets(monkeypatch):
     assert model_label("habits") == "habits: habits, the file's prior"
     assert model_label("confident") == (f"confident: habits, prior {CONFIDENT.prior:g} per {CONFIDENT.prior_per}, "
                                         f"acts at {CONFIDENT.act_confidence:g}")
-    monkeypatch.setitem(PRESETS, "orders", ModelPreset("orders", True, act_confidence=0.9))
-    assert model_names()[-1] == "orders" and model_label("orders") == "orders: habits, the file's prior, acts at 0.9"
-    assert session_arguments("p.json", "s.jsonl", habits="h.json", model="orders")[-2:] == ["--model", "orders"]
+    assert model_label("orders") == f"orders: habits, the recorded orders, acts at {ORDERS.act_confidence:g}"
+    monkeypatch.setitem(PRESETS, "eager", ModelPreset("eager", True, act_confidence=0.7))
+    assert model_names()[-1] == "eager" and model_label("eager") == "eager: habits, the file's prior, acts at 0.7"
+    assert session_arguments("p.json", "s.jsonl", habits="h.json", model="eager")[-2:] == ["--model", "eager"]
 
 
 def test_learned_habits_are_checked_and_added_to(pen, pen_file, tmp_path):
