@@ -67,9 +67,14 @@ def test_the_pens_model_files_are_byte_identical(tmp_path, kind, suffix):
 
 @pytest.mark.parametrize("kind, trials", sorted(BOUNDS))
 def test_the_solvers_bounds_at_fixed_trials_are_digit_identical(kind, trials):
+    """To 1e-13 relative, not to the last digit: the bounds add up thousands of backups, and numpy releases
+    change the order of a reduction's sums (numpy 2.4.6 moved the flat model's upper bound at 1 trial by 2 units
+    in the last place, 10.757016770835275 to ...277); a refactor that changes what is computed moves them by far
+    more."""
     result = api.solve(_model(kind), time_limit=math.inf, precision=0.0, iterations=trials)
     assert result.iterations == trials
-    assert (repr(result.lower_bound), repr(result.upper_bound)) == BOUNDS[kind, trials]
+    expected = tuple(float(v) for v in BOUNDS[kind, trials])
+    assert (result.lower_bound, result.upper_bound) == pytest.approx(expected, rel=1e-13, abs=1e-15)
 
 
 @pytest.mark.parametrize("variant, bound", sorted(VALUES))
