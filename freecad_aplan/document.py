@@ -4,7 +4,8 @@ Which objects are parts:
 
 - ``Part::Feature`` and everything derived from it that holds solids: plain features, ``Part::FeaturePython``
   (A2plus assemblies such as the pen and the truck), ``PartDesign::Body``, STEP imports;
-- ``App::Link`` objects (also to other documents), with the link's placement;
+- ``App::Link`` objects (also to other documents), with the link's placement; a link array (``ElementCount``
+  elements) gives one part per element, named by the element's label (``Bolt_i0`` ...);
 - objects inside ``App::Part`` containers, with the containers' placements.
 
 The document's structure (``App::Part`` containers nesting parts, groups, and compounds of whole parts that
@@ -169,9 +170,15 @@ def is_grouping(obj) -> bool:
 
 
 def _parent_placement(obj) -> "FreeCAD.Placement":
-    """The placement of the containers (App::Part, links) above ``obj``."""
+    """The placement of the containers (App::Part, links) above ``obj``. FreeCAD 0.20's ``App::Link`` has no
+    ``getGlobalPlacement``: for it, the global placement of the container whose group holds it."""
     try:
         return obj.getGlobalPlacement().multiply(obj.Placement.inverse())
+    except AttributeError:
+        for parent in obj.InList:
+            if parent.hasExtension("App::GeoFeatureGroupExtension") and obj in parent.Group:
+                return _parent_placement(parent).multiply(parent.Placement)
+        return FreeCAD.Placement()
     except Exception:
         return FreeCAD.Placement()
 
@@ -221,6 +228,26 @@ def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
     if not parent.isIdentity():
         compound.Placement = parent.multiply(compound.Placement)
     return compound, note
+
+
+def _link_elements(obj) -> list[tuple[object, "Part.Shape"]]:
+    """The elements of a link array (an ``App::Link`` with ``ElementCount`` > 0) with their solids in global
+    coordinates (the array's containers, the array's and the element's placements), those without solids
+    left out; [] for any other object. Cost: one shape copy per element."""
+    if not obj.isDerivedFrom("App::Link") or not getattr(obj, "ElementCount", 0):
+        return []
+    parent = _parent_placement(obj)
+    found = []
+    for k, element in enumerate(obj.ElementList):
+        shape = Part.getShape(obj, f"{k}.", needSubElement=True, transform=True)
+        if shape is None or shape.isNull() or not shape.Solids:
+            continue
+        solids = [s.copy() for s in shape.Solids]
+        compound = (solids[0] if len(solids) == 1 else Part.makeCompound(solids)).copy()
+        if not parent.isIdentity():
+            compound.Placement = parent.multiply(compound.Placement)
+        found.append((element, compound))
+    return found
 
 
 def _holds_solid(obj) -> bool:
@@ -281,6 +308,12 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
             if _holds_solid(obj):
                 why = f"used by {', '.join(consumers)}" if consumers else "shown by an App::Link"
                 left_out.append((obj.Label, why))
+            continue
+        elements = _link_elements(obj)
+        if elements:  # a link array: one part per element, as the tree shows them
+            for element, shape in elements:
+                if element.Name not in excluded:
+                    singles.append(Component(element.Label, element.Label, shape, [obj.Name], _material(obj)))
             continue
         shape, problem = _solids_of(obj)
         if problem and shape is None:

@@ -1,0 +1,118 @@
+"""Assemblies in the styles public CAD comes in, built by FreeCAD here (tests/integration/unseen_documents.py),
+from the file with the default flags (issue 26, "Must show": assemblies never seen before):
+
+- every part found: PartDesign Bodies (the hinge), App::Part containers with nested placements and an
+  App::Link array of bolts (the coupling: one part per element, placed by the containers above the array),
+  Part primitives and booleans (the vise), and the coupling exported to STEP and read back;
+- the obstruction diagrams equal the ground truth derived from the construction (exactly touching faces and
+  0.05 mm clearances included);
+- a container of parts that do not touch each other (``Bolts``, ``Nuts``) is no subassembly: the coupling's
+  session runs from its ``.FCStd`` to the assembled product, and says so in one line per container.
+
+One FreeCADCmd process builds the documents, ``aplan export-freecad`` exports each (about 3 s each); the
+coupling's session runs from its ``.FCStd`` (exporting it itself) in a process and a folder of its own; all in
+the background.
+"""
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from aplan_runner import run_aplan
+from background import ENVIRONMENT, Job, folder, run
+from conftest import REPO, require_freecadcmd
+
+from integration.unseen_documents import DOCUMENTS, GROUND_TRUTH
+
+#: The STEP file names the link array's elements after the object they show (FreeCAD's STEP export).
+STEP_NAMES = {"BoltSource": "Bolt_i0", "BoltSource001": "Bolt_i1", "BoltSource002": "Bolt_i2",
+              "BoltSource003": "Bolt_i3"}
+
+
+def _build() -> tuple[Path, subprocess.CompletedProcess]:
+    """FreeCAD builds the documents; then ``aplan export-freecad`` with the default flags exports each (and the
+    STEP file) to ``NAME_bundle``, as a user would; the first run that fails is the result."""
+    from integration.unseen_documents import SCRIPT
+
+    tmp = folder("unseen-docs")
+    script = tmp / "unseen_docs.py"
+    script.write_text(f"TMP = {str(tmp)!r}\n" + SCRIPT)
+    done = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(script)])
+    models = [(tmp / f"{name}.FCStd", tmp / f"{name}_bundle") for name in DOCUMENTS]
+    for model, bundle in models + [(tmp / "coupling.step", tmp / "step_bundle")]:
+        if done.returncode != 0:
+            break
+        done = run([sys.executable, "-m", "planner", "export-freecad", str(model), "-o", str(bundle)], cwd=tmp,
+                   env={**ENVIRONMENT, "PYTHONPATH": str(REPO)})
+    return tmp, done
+
+
+def _session() -> tuple[Path, subprocess.CompletedProcess]:
+    documents, built = BACKGROUND[0].result()
+    here = folder("unseen-coupling")
+    if built.returncode != 0:
+        return here, built
+    done = run([sys.executable, "-m", "planner", "session", str(documents / "coupling.FCStd"), "--demo", "0"],
+               cwd=here, env={**ENVIRONMENT, "PYTHONPATH": str(REPO)})
+    return here, done
+
+
+BACKGROUND = (Job("unseen documents in FreeCAD", _build), Job("aplan session coupling.FCStd", _session))
+
+
+@pytest.fixture(scope="module")
+def built() -> Path:
+    require_freecadcmd()
+    tmp, done = BACKGROUND[0].result()
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    return tmp
+
+
+def _diagrams(bundle: Path, names: dict[str, str] | None = None) -> tuple[list[str], dict[str, set]]:
+    product = json.loads((bundle / "product.json").read_text())
+    name = (names or {}).get
+    found = {entry["direction"]: {(name(a, a), name(b, b)) for a, b in entry["blocks"]}
+             for entry in product["obstructions"] if isinstance(entry["direction"], str)}
+    return [name(p["id"], p["id"]) for p in product["parts"]], found
+
+
+@pytest.mark.freecad
+@pytest.mark.parametrize("name", DOCUMENTS)
+def test_every_part_found_and_the_diagrams_equal_the_ground_truth(built, name):
+    parts, found = _diagrams(built / f"{name}_bundle")
+    truth = GROUND_TRUTH[name]
+    assert sorted(parts) == sorted({p for pairs in truth.values() for pair in pairs for p in pair})
+    assert {axis: found.get(axis, set()) for axis in truth} == truth
+
+
+@pytest.mark.freecad
+def test_the_coupling_read_back_from_step(built):
+    parts, found = _diagrams(built / "step_bundle", STEP_NAMES)
+    assert sorted(parts) == sorted(_diagrams(built / "coupling_bundle")[0])
+    assert {axis: found.get(axis, set()) for axis in GROUND_TRUTH["coupling"]} == GROUND_TRUTH["coupling"]
+
+
+@pytest.mark.freecad
+def test_containers_of_parts_that_do_not_touch_are_no_subassemblies(built):
+    product = json.loads((built / "coupling_bundle" / "product.json").read_text())
+    # The document's structure as written: the link array (its elements) and the nuts' container.
+    assert {s["id"]: len(s["parts"]) for s in product["subassemblies"]} == {"Bolt": 4, "Nuts": 4}
+    done = run_aplan("stats", built / "coupling_bundle")
+    assert done.returncode == 0, done.stderr
+    for container, first in (("Bolt", "Bolt_i0"), ("Nuts", "Nut1")):
+        assert (f"the document's container {container} holds members that do not touch each other (4 groups: "
+                f"{{{first}}};") in done.stderr
+
+
+@pytest.mark.freecad
+def test_the_coupling_session_from_its_document_with_the_default_flags(built):
+    here, done = BACKGROUND[1].result()
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    assert re.search(r"^assembled: the product is assembled", done.stdout, re.M), done.stdout[-2000:]
+    assert len(re.findall(r"container \w+ holds members that do not touch", done.stderr)) == 2
+    assert any(p.suffix == ".jsonl" for p in here.iterdir())
