@@ -250,6 +250,24 @@ def _link_elements(obj) -> list[tuple[object, "Part.Shape"]]:
     return found
 
 
+#: Draft's array features (their proxies' classes): ortho, polar, circular, path and point arrays.
+_DRAFT_ARRAYS = ("Array", "PathArray", "PathTwistedArray", "PointArray")
+
+
+def _array_element_solids(obj, shape) -> list[list]:
+    """The solids of each element of a Draft array (``Draft.make_*_array``, linked or not), in order: its shape
+    holds the base's solids once per element; [] for any other object, or an array whose solid count is no
+    multiple of its base's. Cost: one pass over the solids."""
+    if type(getattr(obj, "Proxy", None)).__name__ not in _DRAFT_ARRAYS:
+        return []
+    base = getattr(obj, "Base", None)
+    per = len(base.Shape.Solids) if base is not None and hasattr(base, "Shape") else 1
+    solids = shape.Solids
+    if per < 1 or len(solids) % per or len(solids) <= per:
+        return []
+    return [solids[k:k + per] for k in range(0, len(solids), per)]
+
+
 def _holds_solid(obj) -> bool:
     """True when ``obj``'s own shape holds a solid, or ``obj`` is a link (sketches and datums are not named
     when left out)."""
@@ -275,7 +293,8 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
     ``groups`` maps a component name to the labels (or names) of the objects it fuses; ``exclude`` lists
     labels (or names) to leave out (fasteners to be treated later, say). Both take shell-style patterns
     (``wood_screw*``, ``bolt_00[1-4]``; :func:`fnmatch.fnmatchcase`). With ``split_solids``, an object
-    holding several solids (a STEP file exported as one product) gives one part per solid. Raises
+    holding several solids (a STEP file exported as one product) gives one part per solid; a Draft array
+    always gives one part per element, and a link array one per element (its elements' labels). Raises
     :class:`DocumentError` when a group or exclusion matches no object, when an object matches two groups, or
     when nothing with a solid is left.
     """
@@ -328,9 +347,11 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
         group = group_of.get(obj.Name)
         if group is not None:
             grouped[group].append((obj, shape))
-        elif len(shape.Solids) > 1 and split_solids:
-            for k, solid in enumerate(shape.Solids, start=1):
-                singles.append(Component(f"{obj.Label}_{k:03d}", f"{obj.Label} {k}", solid.copy(), [obj.Name],
+        elif len(shape.Solids) > 1 and (split_solids or _array_element_solids(obj, shape)):
+            pieces = _array_element_solids(obj, shape) or [[s] for s in shape.Solids]
+            for k, solids in enumerate(pieces, start=1):
+                piece = solids[0].copy() if len(solids) == 1 else Part.makeCompound([s.copy() for s in solids])
+                singles.append(Component(f"{obj.Label}_{k:03d}", f"{obj.Label} {k}", piece, [obj.Name],
                                          _material(obj)))
         else:
             if len(shape.Solids) > 1:

@@ -3,7 +3,8 @@ from the file with the default flags (issue 26, "Must show": assemblies never se
 
 - every part found: PartDesign Bodies (the hinge), App::Part containers with nested placements and an
   App::Link array of bolts (the coupling: one part per element, placed by the containers above the array),
-  Part primitives and booleans (the vise), and the coupling exported to STEP and read back;
+  Part primitives and booleans (the vise), Draft polar arrays of 40 bolts and 40 nuts (the bolt circle: one
+  part per element, 82 parts), and the coupling exported to STEP and read back;
 - the obstruction diagrams equal the ground truth derived from the construction (exactly touching faces and
   0.05 mm clearances included);
 - a container of parts that do not touch each other (``Bolts``, ``Nuts``) is no subassembly: the coupling's
@@ -107,6 +108,13 @@ def test_containers_of_parts_that_do_not_touch_are_no_subassemblies(built):
     for container, first in (("Bolt", "Bolt_i0"), ("Nuts", "Nut1")):
         assert (f"the document's container {container} holds members that do not touch each other (4 groups: "
                 f"{{{first}}};") in done.stderr
+    # The Draft arrays of the bolt circle: each a container of its 40 elements, dissolved the same way.
+    done = run_aplan("stats", built / "bolt_circle_bundle")
+    assert done.returncode == 0, done.stderr
+    assert "fasteners folded: 80 parts in 1 groups" in done.stdout
+    for container in ("Bolts", "Nuts"):
+        assert f"the document's container {container} holds members that do not touch each other (40 groups: " \
+            in done.stderr
 
 
 @pytest.mark.freecad

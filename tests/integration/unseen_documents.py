@@ -10,38 +10,56 @@ for each of :data:`DOCUMENTS` (and ``coupling.step``, the coupling exported to S
   in a container turned by 90 degrees about Z (their shapes turned back, so they sit on the bolts);
 - ``vise``: Part primitives and booleans: a base with a fixed jaw, a sliding jaw on it, a screw through a
   threaded hole of the fixed jaw (the same radius) into the sliding jaw, and a handle bar through the
-  screw's head (0.05 mm clearance).
+  screw's head (0.05 mm clearance);
+- ``bolt_circle``: the coupling's flanges at radius 160 with a circle of 40 bolts and 40 nuts, each a Draft
+  polar array of one plain feature (82 parts: one per array element).
 
 The obstruction ground truth of each follows from the construction: :data:`GROUND_TRUTH` (by label).
 """
 
-DOCUMENTS = ("hinge", "coupling", "vise")
+import math
+
+DOCUMENTS = ("hinge", "coupling", "vise", "bolt_circle")
 
 #: Bolt centres of the coupling: the four corners (+-A, +-A) of a square (A = 20).
 _A = 20
 _BOLTS = [(-_A, -_A), (_A, -_A), (-_A, _A), (_A, _A)]
 
 
-def _coupling_truth() -> dict[str, set[tuple[str, str]]]:
-    """The coupling's diagrams (x moving along +d collides with y), from its construction: flanges FA (z 0..10)
-    and FB (z 10..20) of radius 40 with bores and holes of radius 3 at the bolt centres, bolts k (the link array's elements ``Bolt_iK``: head radius 5
-    at z -4..0 under FA, shank radius 3 up to z 24) and nuts k (radius 5, z 20..24 on FB).
+#: Bolt circle of the ``bolt_circle`` document: N bolts at radius R, the first at angle 0 (Draft's polar array).
+_CIRCLE_N, _CIRCLE_R = 40, 150.0
+_CIRCLE = [(_CIRCLE_R * math.cos(2 * math.pi * k / _CIRCLE_N), _CIRCLE_R * math.sin(2 * math.pi * k / _CIRCLE_N))
+           for k in range(_CIRCLE_N)]
 
-    Along Z a bolt's head pushes both flanges and its nut, the flanges their nuts, FA the FB. Across (X, Y) a
-    shank is held by both flanges and its nut, and bolts and nuts on the same row (same y for X, same x for Y)
-    meet the next ones: head with head, shank with shank and nut, nut with nut and shank."""
-    names = [f"Bolt_i{k}" for k in range(4)], [f"Nut{k + 1}" for k in range(4)]
+
+def _coupling_truth(centres, bolts: list[str], nuts: list[str]) -> dict[str, set[tuple[str, str]]]:
+    """A flange coupling's diagrams (x moving along +d collides with y), from its construction: flanges FA
+    (z 0..10) and FB (z 10..20) with holes of radius 3 at ``centres``, bolts (head radius 5 at z -4..0 under FA,
+    shank radius 3 up to z 24) and nuts (radius 5 with a hole of 3, z 20..24 on FB), ``bolts[k]`` and
+    ``nuts[k]`` at ``centres[k]``.
+
+    Along Z a bolt's head pushes both flanges and its nut, the flanges the nuts, FA the FB. Across (X, Y) a
+    shank is held by both flanges and its nut. Moved along +X, a cylinder of radius r1 at (x1, y1) meets one of
+    radius r2 further along X when their shadows on the YZ plane overlap: |y1 - y2| < r1 + r2 and their z
+    ranges overlap (head with head, shank with shank and nut, nut with nut); the same across Y. A gap within
+    0.01 of a threshold is refused (the truth would then hang on rounding)."""
     z = {("FA", "FB")}
-    for bolt, nut in zip(*names):
+    for bolt, nut in zip(bolts, nuts):
         z |= {("FA", nut), ("FB", nut), (bolt, "FA"), (bolt, "FB"), (bolt, nut)}
     truth = {"+Z": z}
     for axis, along, across in (("+X", 0, 1), ("+Y", 1, 0)):
         pairs = set()
-        for k, (bolt, nut) in enumerate(zip(*names)):
+        for k, (bolt, nut) in enumerate(zip(bolts, nuts)):
             pairs |= {(bolt, "FA"), (bolt, "FB"), ("FA", bolt), ("FB", bolt), (bolt, nut), (nut, bolt)}
-            for j, (other, other_nut) in enumerate(zip(*names)):
-                if _BOLTS[j][across] == _BOLTS[k][across] and _BOLTS[j][along] > _BOLTS[k][along]:
-                    pairs |= {(bolt, other), (nut, other_nut), (bolt, other_nut), (nut, other)}
+            for j, (other, other_nut) in enumerate(zip(bolts, nuts)):
+                if centres[j][along] <= centres[k][along] + 1e-9:
+                    continue
+                gap = abs(centres[j][across] - centres[k][across])
+                assert all(abs(gap - limit) > 0.01 for limit in (8, 10)), (bolt, other, gap)
+                if gap < 10:    # heads with heads (bolts), nuts with nuts
+                    pairs |= {(bolt, other), (nut, other_nut)}
+                if gap < 8:     # a shank with the other's nut, a nut with the other's shank
+                    pairs |= {(bolt, other_nut), (nut, other)}
         truth[axis] = pairs
     return truth
 
@@ -78,7 +96,11 @@ def _vise_truth() -> dict[str, set[tuple[str, str]]]:
     return {"+X": x, "+Y": y, "+Z": z}
 
 
-GROUND_TRUTH = {"hinge": _HINGE, "coupling": _coupling_truth(), "vise": _vise_truth()}
+GROUND_TRUTH = {"hinge": _HINGE, "vise": _vise_truth(),
+                "coupling": _coupling_truth(_BOLTS, [f"Bolt_i{k}" for k in range(4)],
+                                            [f"Nut{k + 1}" for k in range(4)]),
+                "bolt_circle": _coupling_truth(_CIRCLE, [f"Bolts_{k + 1:03d}" for k in range(_CIRCLE_N)],
+                                               [f"Nuts_{k + 1:03d}" for k in range(_CIRCLE_N)])}
 
 SCRIPT = r"""
 import json, os
@@ -196,5 +218,19 @@ head.Tool = cylinder("BarBore", 2.05, 40, (-25, 0, 25), (0, 1, 0))
 screw.Shapes = [cylinder("Shank", 5, 80, (-20, 20, 25), (1, 0, 0)), head]
 labelled(cylinder("Bar", 2, 40, (-25, 0, 25), (0, 1, 0)), "Bar")
 saved(doc, "vise")
+
+# Bolt circle: Draft polar arrays of a bolt and a nut.
+import Draft
+doc = FreeCAD.newDocument("bolt_circle")
+holes = Part.makeCompound([Part.makeCylinder(3, 30, V(x, y, -5)) for x, y in CIRCLE])
+for label, z in (("FA", 0), ("FB", 10)):
+    feature(doc, label, Part.makeCylinder(160, 10, V(0, 0, z)).cut(Part.makeCylinder(10, 10, V(0, 0, z))).cut(holes))
+x0 = CIRCLE[0][0]
+bolt = Part.makeCylinder(5, 4, V(x0, 0, -4)).fuse(Part.makeCylinder(3, 24, V(x0, 0, 0))).removeSplitter()
+nut = Part.makeCylinder(5, 4, V(x0, 0, 20)).cut(Part.makeCylinder(3, 4, V(x0, 0, 20)))
+for label, shape in (("Bolt", bolt), ("Nut", nut)):
+    array = Draft.make_polar_array(feature(doc, label, shape), number=len(CIRCLE), angle=360, center=V(0, 0, 0))
+    array.Label = label + "s"
+saved(doc, "bolt_circle")
 print("APLAN-RESULT " + json.dumps(out), flush=True)
-""".replace("BOLTS", repr(_BOLTS))
+""".replace("BOLTS", repr(_BOLTS)).replace("CIRCLE", repr(_CIRCLE))
