@@ -33,6 +33,8 @@ import Part
 
 from planner.errors import PlannerError
 
+from .arrays import array_element_solids, link_elements, parent_placement
+
 __all__ = ["Component", "ReadResult", "open_model", "read_components", "matching",
            "consuming_properties", "is_grouping", "DocumentError"]
 
@@ -169,20 +171,6 @@ def is_grouping(obj) -> bool:
     return not any(consuming_properties(user, obj) for user in users)
 
 
-def _parent_placement(obj) -> "FreeCAD.Placement":
-    """The placement of the containers (App::Part, links) above ``obj``. FreeCAD 0.20's ``App::Link`` has no
-    ``getGlobalPlacement``: for it, the global placement of the container whose group holds it."""
-    try:
-        return obj.getGlobalPlacement().multiply(obj.Placement.inverse())
-    except AttributeError:
-        for parent in obj.InList:
-            if parent.hasExtension("App::GeoFeatureGroupExtension") and obj in parent.Group:
-                return _parent_placement(parent).multiply(parent.Placement)
-        return FreeCAD.Placement()
-    except Exception:
-        return FreeCAD.Placement()
-
-
 def _closed_shell_solids(shape) -> list:
     """The solids bounded by ``shape``'s shells when it has faces but no solid and every shell is closed
     (STEP imports and meshes turned into shapes often come so); [] otherwise."""
@@ -224,48 +212,10 @@ def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
         return None, None
     compound = solids[0] if len(solids) == 1 else Part.makeCompound(solids)
     compound = compound.copy()
-    parent = _parent_placement(obj)
+    parent = parent_placement(obj)
     if not parent.isIdentity():
         compound.Placement = parent.multiply(compound.Placement)
     return compound, note
-
-
-def _link_elements(obj) -> list[tuple[object, "Part.Shape"]]:
-    """The elements of a link array (an ``App::Link`` with ``ElementCount`` > 0) with their solids in global
-    coordinates (the array's containers, the array's and the element's placements), those without solids
-    left out; [] for any other object. Cost: one shape copy per element."""
-    if not obj.isDerivedFrom("App::Link") or not getattr(obj, "ElementCount", 0):
-        return []
-    parent = _parent_placement(obj)
-    found = []
-    for k, element in enumerate(obj.ElementList):
-        shape = Part.getShape(obj, f"{k}.", needSubElement=True, transform=True)
-        if shape is None or shape.isNull() or not shape.Solids:
-            continue
-        solids = [s.copy() for s in shape.Solids]
-        compound = (solids[0] if len(solids) == 1 else Part.makeCompound(solids)).copy()
-        if not parent.isIdentity():
-            compound.Placement = parent.multiply(compound.Placement)
-        found.append((element, compound))
-    return found
-
-
-#: Draft's array features (their proxies' classes): ortho, polar, circular, path and point arrays.
-_DRAFT_ARRAYS = ("Array", "PathArray", "PathTwistedArray", "PointArray")
-
-
-def _array_element_solids(obj, shape) -> list[list]:
-    """The solids of each element of a Draft array (``Draft.make_*_array``, linked or not), in order: its shape
-    holds the base's solids once per element; [] for any other object, or an array whose solid count is no
-    multiple of its base's. Cost: one pass over the solids."""
-    if type(getattr(obj, "Proxy", None)).__name__ not in _DRAFT_ARRAYS:
-        return []
-    base = getattr(obj, "Base", None)
-    per = len(base.Shape.Solids) if base is not None and hasattr(base, "Shape") else 1
-    solids = shape.Solids
-    if per < 1 or len(solids) % per or len(solids) <= per:
-        return []
-    return [solids[k:k + per] for k in range(0, len(solids), per)]
 
 
 def _holds_solid(obj) -> bool:
@@ -294,7 +244,8 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
     labels (or names) to leave out (fasteners to be treated later, say). Both take shell-style patterns
     (``wood_screw*``, ``bolt_00[1-4]``; :func:`fnmatch.fnmatchcase`). With ``split_solids``, an object
     holding several solids (a STEP file exported as one product) gives one part per solid; a Draft array
-    always gives one part per element, and a link array one per element (its elements' labels). Raises
+    always gives one part per element, and a link array one per element (its elements' labels); the document's
+    only part, when it holds several solids, one part per solid. Raises
     :class:`DocumentError` when a group or exclusion matches no object, when an object matches two groups, or
     when nothing with a solid is left.
     """
@@ -328,7 +279,7 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
                 why = f"used by {', '.join(consumers)}" if consumers else "shown by an App::Link"
                 left_out.append((obj.Label, why))
             continue
-        elements = _link_elements(obj)
+        elements = link_elements(obj)
         if elements:  # a link array: one part per element, as the tree shows them
             for element, shape in elements:
                 if element.Name not in excluded:
@@ -347,8 +298,8 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
         group = group_of.get(obj.Name)
         if group is not None:
             grouped[group].append((obj, shape))
-        elif len(shape.Solids) > 1 and (split_solids or _array_element_solids(obj, shape)):
-            pieces = _array_element_solids(obj, shape) or [[s] for s in shape.Solids]
+        elif len(shape.Solids) > 1 and (split_solids or array_element_solids(obj, shape)):
+            pieces = array_element_solids(obj, shape) or [[s] for s in shape.Solids]
             for k, solids in enumerate(pieces, start=1):
                 piece = solids[0].copy() if len(solids) == 1 else Part.makeCompound([s.copy() for s in solids])
                 singles.append(Component(f"{obj.Label}_{k:03d}", f"{obj.Label} {k}", piece, [obj.Name],
@@ -363,6 +314,8 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
         warnings.append("not parts of their own (inputs of another feature, or shown by a link): "
                         + "; ".join(f"{label} ({why})" for label, why in left_out)
                         + "; the features and links using them are the parts")
+    if len(singles) == 1 and not groups and len(singles[0].shape.Solids) > 1:
+        singles = _split_the_only_part(singles[0], warnings)
     components = list(singles)
     for group, members in grouped.items():
         if not members:
@@ -373,6 +326,20 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
         raise DocumentError(_nothing_left(document, objects, excluded))
     _unique_ids(components, warnings)
     return ReadResult(components, warnings, document)
+
+
+def _split_the_only_part(only: Component, warnings: list[str]) -> list[Component]:
+    """One component per solid of ``only``, the document's one part (a STEP file exported as one body of many
+    solids): one part leaves nothing to assemble, so it is split as ``split_solids`` would, and the warning that
+    it was read as one part says so instead."""
+    count = len(only.shape.Solids)
+    said = f"{only.label}: {count} solids are read as one part (use split_solids / --split-solids for one part " \
+        "per solid)"
+    warnings[:] = [w for w in warnings if w != said]
+    warnings.append(f"{only.label}: the document's only part holds {count} solids: read as one part per solid "
+                    "(one part leaves nothing to assemble); group them in FreeCAD to plan them otherwise")
+    return [Component(f"{only.label}_{k:03d}", f"{only.label} {k}", solid.copy(), list(only.objects), only.material)
+            for k, solid in enumerate(only.shape.Solids, start=1)]
 
 
 def _nothing_left(document, objects: list, excluded: dict[str, str]) -> str:

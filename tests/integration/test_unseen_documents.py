@@ -4,7 +4,8 @@ from the file with the default flags (issue 26, "Must show": assemblies never se
 - every part found: PartDesign Bodies (the hinge), App::Part containers with nested placements and an
   App::Link array of bolts (the coupling: one part per element, placed by the containers above the array),
   Part primitives and booleans (the vise), Draft polar arrays of 40 bolts and 40 nuts (the bolt circle: one
-  part per element, 82 parts), and the coupling exported to STEP and read back;
+  part per element, 82 parts), the coupling exported to STEP and read back, and a STEP file of the coupling as
+  one body of ten solids (one part per solid: one part leaves nothing to assemble);
 - the obstruction diagrams equal the ground truth derived from the construction (exactly touching faces and
   0.05 mm clearances included);
 - a container of parts that do not touch each other (``Bolts``, ``Nuts``) is no subassembly: the coupling's
@@ -45,7 +46,8 @@ def _build() -> tuple[Path, subprocess.CompletedProcess]:
     script.write_text(f"TMP = {str(tmp)!r}\n" + SCRIPT)
     done = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(script)])
     models = [(tmp / f"{name}.FCStd", tmp / f"{name}_bundle") for name in DOCUMENTS]
-    for model, bundle in models + [(tmp / "coupling.step", tmp / "step_bundle")]:
+    steps = [(tmp / "coupling.step", tmp / "step_bundle"), (tmp / "one_body.step", tmp / "one_body_bundle")]
+    for model, bundle in models + steps:
         if done.returncode != 0:
             break
         done = run([sys.executable, "-m", "planner", "export-freecad", str(model), "-o", str(bundle)], cwd=tmp,
@@ -96,6 +98,22 @@ def test_the_coupling_read_back_from_step(built):
     parts, found = _diagrams(built / "step_bundle", STEP_NAMES)
     assert sorted(parts) == sorted(_diagrams(built / "coupling_bundle")[0])
     assert {axis: found.get(axis, set()) for axis in GROUND_TRUTH["coupling"]} == GROUND_TRUTH["coupling"]
+
+
+#: The one body's solids, in the order they were put in it: the coupling's parts.
+ONE_BODY = {f"Coupling_{k + 1:03d}": name for k, name in enumerate(
+    ["FA", "FB"] + [f"Bolt_i{k}" for k in range(4)] + [f"Nut{k + 1}" for k in range(4)])}
+
+
+@pytest.mark.freecad
+def test_a_step_file_of_one_body_of_many_solids_is_one_part_per_solid(built):
+    parts, found = _diagrams(built / "one_body_bundle", ONE_BODY)
+    assert sorted(parts) == sorted(ONE_BODY.values())
+    assert {axis: found.get(axis, set()) for axis in GROUND_TRUTH["coupling"]} == GROUND_TRUTH["coupling"]
+    warnings = json.loads((built / "one_body_bundle" / "product.json").read_text())["geometry"]["warnings"]
+    assert "Coupling: the document's only part holds 10 solids: read as one part per solid (one part leaves " \
+        "nothing to assemble); group them in FreeCAD to plan them otherwise" in warnings
+    assert not any("solids are read as one part" in w for w in warnings)
 
 
 @pytest.mark.freecad

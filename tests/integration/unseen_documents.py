@@ -1,6 +1,7 @@
 """The FreeCADCmd script that builds assemblies in the styles public models come in (tests/integration/
 test_unseen_documents.py, bench/bench_unseen_cad.py): ``TMP = FOLDER`` prepended, it saves ``NAME.FCStd`` there
-for each of :data:`DOCUMENTS` (and ``coupling.step``, the coupling exported to STEP), and prints
+for each of :data:`DOCUMENTS` (and ``coupling.step``, the coupling exported to STEP, and ``one_body.step``, the
+coupling as one body of ten solids), and prints
 ``APLAN-RESULT`` with the parts' labels per document.
 
 - ``hinge``: two leaves as PartDesign Bodies (additive and subtractive primitives), knuckles interleaved along
@@ -188,6 +189,12 @@ for k, (x, y) in enumerate(BOLTS):
 saved(doc, "coupling")
 import Import
 Import.export([top], os.path.join(TMP, "coupling.step"))
+# The same coupling as one body of ten solids (a STEP file some CAD systems write), in the order of its parts.
+one = [flange(0), flange(10)] + [bolt.translated(V(x, y, 0)) for x, y in BOLTS]
+one += [Part.makeCylinder(5, 4, V(x, y, 20)).cut(Part.makeCylinder(3, 4, V(x, y, 20))) for x, y in BOLTS]
+body = FreeCAD.newDocument("one_body")
+merged = feature(body, "Coupling", Part.makeCompound([s.translated(V(100, 50, 0)) for s in one]))
+Import.export([merged], os.path.join(TMP, "one_body.step"))
 
 # Vise: Part primitives and booleans.
 doc = FreeCAD.newDocument("vise")
