@@ -6,13 +6,13 @@ Run: ``nice -n 10 .venv/bin/python bench/bench_unseen_cad.py`` (about 5 minutes 
 
 The documents are tests/integration/unseen_documents.py's (a hinge of PartDesign Bodies, a coupling in
 App::Part containers with an App::Link array of bolts, a vise of Part primitives and booleans, an 82-part bolt
-circle of Draft polar arrays), built by FreeCADCmd, and the coupling exported to STEP. For each: ``aplan
-export-freecad DOC -o BUNDLE``, ``aplan stats DOC`` and ``aplan session DOC --demo 0``, each with the default
-flags otherwise and from the CAD file (stats and session export it again themselves), each timed as CPU seconds
-of the command and its children (FreeCADCmd) with the wall clock beside. Precision and recall count the pairs
+circle of Draft polar arrays), built by FreeCADCmd, and the coupling exported to STEP, as it is and as one body
+of ten solids. For each: ``aplan export-freecad DOC -o BUNDLE``, ``aplan stats DOC`` and ``aplan session DOC
+--demo 0``, each with the default flags and from the CAD file (stats and session export it again themselves),
+each timed as CPU seconds of the command and its children (FreeCADCmd) with the wall clock beside. Precision and recall count the pairs
 of the +X, +Y and +Z diagrams (the reverse directions are the same pairs reversed) against
 ``GROUND_TRUTH``; the STEP file names the link array's elements after the object they show
-(tests/integration/test_unseen_documents.py's ``STEP_NAMES``).
+(``STEP_NAMES``), and the one-body STEP file's solids are the coupling's parts in order (``ONE_BODY``).
 """
 from __future__ import annotations
 
@@ -29,11 +29,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tests"))
 sys.path.insert(0, str(ROOT / "tests" / "integration"))
 
-from unseen_documents import DOCUMENTS, GROUND_TRUTH, SCRIPT  # noqa: E402
-
-#: The STEP file's names of the link array's elements (FreeCAD names them after the object they show).
-STEP_NAMES = {f"BoltSource{'' if k == 0 else f'{k:03d}'}": f"Bolt_i{k}" for k in range(4)}
-
+from unseen_documents import DOCUMENTS, GROUND_TRUTH, ONE_BODY, SCRIPT, STEP_NAMES  # noqa: E402
 
 def _timed(command: list[str], cwd: Path) -> tuple[subprocess.CompletedProcess, float, float]:
     """``command`` run to its end: (the run, CPU seconds of it and its children, wall seconds)."""
@@ -67,7 +63,8 @@ def main() -> None:
         script.write_text(f"TMP = {tmp!r}\n" + SCRIPT)
         subprocess.run(["freecadcmd", str(script)], check=True, capture_output=True, timeout=900)
         cases = [(name, folder / f"{name}.FCStd", name, {}) for name in DOCUMENTS]
-        cases.append(("coupling (STEP)", folder / "coupling.step", "coupling", STEP_NAMES))
+        cases += [("coupling (STEP)", folder / "coupling.step", "coupling", STEP_NAMES),
+                  ("coupling (STEP, one body)", folder / "one_body.step", "coupling", ONE_BODY)]
         for label, model, truth_of, names in cases:
             truth = GROUND_TRUTH[truth_of]
             built = len({p for pairs in truth.values() for pair in pairs for p in pair})
@@ -79,8 +76,8 @@ def main() -> None:
             parts, precision, recall = _precision_recall(bundle, truth, names)
             stats, stats_cpu, stats_wall = _timed(aplan + ["stats", str(model)], folder)
             session, session_cpu, session_wall = _timed(aplan + ["session", str(model), "--demo", "0"], folder)
-            ended = next((line for line in session.stdout.splitlines() if line.startswith("assembled:")),
-                         f"failed: {session.stderr.strip()[-160:]}")
+            ended = next((line.split(" is assembled ")[-1] for line in session.stdout.splitlines()
+                          if line.startswith("assembled:")), f"failed: {session.stderr.strip()[-160:]}")
             print(f"| {label} | {parts} / {built} | {precision:.3f} | {recall:.3f} | {export_cpu:.1f} "
                   f"({export_wall:.0f}) | {stats_cpu:.1f} ({stats_wall:.0f})"
                   f"{'' if stats.returncode == 0 else ' failed'} | {session_cpu:.1f} ({session_wall:.0f}) | "

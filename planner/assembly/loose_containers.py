@@ -16,31 +16,14 @@ from __future__ import annotations
 import logging
 from dataclasses import replace
 
+from ..geometry.gaps import connection_groups
 from ..product import Product
 from .hierarchy import product_levels
+from .untangle import dissolved
 
 __all__ = ["connected_structure"]
 
 log = logging.getLogger(__name__)
-
-
-def _groups(members: tuple[str, ...], contacts) -> list[list[str]]:
-    """The connected groups of ``members`` under ``contacts`` (pairs), each in member order, largest first."""
-    root = {m: m for m in members}
-
-    def find(m: str) -> str:
-        while root[m] != m:
-            root[m] = root[root[m]]
-            m = root[m]
-        return m
-
-    for a, b in contacts:
-        if a in root and b in root:
-            root[find(a)] = find(b)
-    groups: dict[str, list[str]] = {}
-    for m in members:
-        groups.setdefault(find(m), []).append(m)
-    return sorted(groups.values(), key=len, reverse=True)
 
 
 def connected_structure(product: Product) -> Product:
@@ -59,7 +42,7 @@ def connected_structure(product: Product) -> Product:
         for level in product_levels(current):
             if level.id not in ids:
                 continue
-            found = _groups(level.members, level.product.contacts)
+            found = sorted(connection_groups(level.members, level.product.contacts), key=len, reverse=True)
             if len(found) > 1:
                 loose = level.id
                 shown = "; ".join("{" + ", ".join(g) + "}" for g in found[:4]) + ("; ..." if len(found) > 4 else "")
@@ -69,7 +52,5 @@ def connected_structure(product: Product) -> Product:
                 break
         if loose is None:
             break
-        gone = next(g for g in groups if g.id == loose)
-        groups = [replace(g, parts=tuple(m for p in g.parts for m in (gone.parts if p == loose else (p,))))
-                  for g in groups if g.id != loose]
+        groups = dissolved(groups, loose)
     return replace(product, subassemblies=tuple(groups)) if len(groups) != len(product.subassemblies) else product

@@ -29,12 +29,7 @@ from aplan_runner import run_aplan
 from background import ENVIRONMENT, Job, folder, run
 from conftest import REPO, require_freecadcmd
 
-from integration.unseen_documents import DOCUMENTS, GROUND_TRUTH
-
-#: The STEP file names the link array's elements after the object they show (FreeCAD's STEP export).
-STEP_NAMES = {"BoltSource": "Bolt_i0", "BoltSource001": "Bolt_i1", "BoltSource002": "Bolt_i2",
-              "BoltSource003": "Bolt_i3"}
-
+from integration.unseen_documents import DOCUMENTS, GROUND_TRUTH, ONE_BODY, STEP_NAMES
 
 def _build() -> tuple[Path, subprocess.CompletedProcess]:
     """FreeCAD builds the documents; then ``aplan export-freecad`` with the default flags exports each (and the
@@ -98,11 +93,6 @@ def test_the_coupling_read_back_from_step(built):
     parts, found = _diagrams(built / "step_bundle", STEP_NAMES)
     assert sorted(parts) == sorted(_diagrams(built / "coupling_bundle")[0])
     assert {axis: found.get(axis, set()) for axis in GROUND_TRUTH["coupling"]} == GROUND_TRUTH["coupling"]
-
-
-#: The one body's solids, in the order they were put in it: the coupling's parts.
-ONE_BODY = {f"Coupling_{k + 1:03d}": name for k, name in enumerate(
-    ["FA", "FB"] + [f"Bolt_i{k}" for k in range(4)] + [f"Nut{k + 1}" for k in range(4)])}
 
 
 @pytest.mark.freecad

@@ -103,6 +103,12 @@ GROUND_TRUTH = {"hinge": _HINGE, "vise": _vise_truth(),
                 "bolt_circle": _coupling_truth(_CIRCLE, [f"Bolts_{k + 1:03d}" for k in range(_CIRCLE_N)],
                                                [f"Nuts_{k + 1:03d}" for k in range(_CIRCLE_N)])}
 
+#: The STEP file names the link array's elements after the object they show (FreeCAD's STEP export).
+STEP_NAMES = {f"BoltSource{'' if k == 0 else f'{k:03d}'}": f"Bolt_i{k}" for k in range(4)}
+#: The one body's solids, in the order they were put in it: the coupling's parts.
+ONE_BODY = {f"Coupling_{k + 1:03d}": name for k, name in enumerate(
+    ["FA", "FB"] + [f"Bolt_i{k}" for k in range(4)] + [f"Nut{k + 1}" for k in range(4)])}
+
 SCRIPT = r"""
 import json, os
 import FreeCAD, Part
