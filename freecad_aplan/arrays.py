@@ -23,15 +23,19 @@ def parent_placement(obj) -> "FreeCAD.Placement":
         return FreeCAD.Placement()
 
 
-def link_elements(obj) -> list[tuple[object, "Part.Shape"]]:
-    """The elements of a link array (an ``App::Link`` with ``ElementCount`` > 0) with their solids in global
-    coordinates (the array's containers, the array's and the element's placements), those without solids
-    left out; [] for any other object. Cost: one shape copy per element."""
-    if not obj.isDerivedFrom("App::Link") or not getattr(obj, "ElementCount", 0):
+def link_elements(obj) -> list[tuple[str, str | None, "Part.Shape"]]:
+    """The elements of a link array (an ``App::Link`` with ``ElementCount`` > 0) as (label, internal name,
+    solids in global coordinates: the array's containers, the array's and the element's placements), those
+    without solids left out; [] for any other object. An array whose elements are not shown as objects
+    (``ShowElement`` off) names them ``LABEL_iK`` as FreeCAD would, without an internal name. Cost: one shape
+    copy per element."""
+    count = getattr(obj, "ElementCount", 0) if obj.isDerivedFrom("App::Link") else 0
+    if not count:
         return []
     parent = parent_placement(obj)
+    shown = list(obj.ElementList)
     found = []
-    for k, element in enumerate(obj.ElementList):
+    for k in range(count):
         shape = Part.getShape(obj, f"{k}.", needSubElement=True, transform=True)
         if shape is None or shape.isNull() or not shape.Solids:
             continue
@@ -39,7 +43,9 @@ def link_elements(obj) -> list[tuple[object, "Part.Shape"]]:
         compound = (solids[0] if len(solids) == 1 else Part.makeCompound(solids)).copy()
         if not parent.isIdentity():
             compound.Placement = parent.multiply(compound.Placement)
-        found.append((element, compound))
+        element = shown[k] if k < len(shown) else None
+        found.append((element.Label if element else f"{obj.Label}_i{k}", element.Name if element else None,
+                      compound))
     return found
 
 

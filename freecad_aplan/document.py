@@ -281,9 +281,9 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
             continue
         elements = link_elements(obj)
         if elements:  # a link array: one part per element, as the tree shows them
-            for element, shape in elements:
-                if element.Name not in excluded:
-                    singles.append(Component(element.Label, element.Label, shape, [obj.Name], _material(obj)))
+            for label, name, shape in elements:
+                if name not in excluded:
+                    singles.append(Component(label, label, shape, [obj.Name], _material(obj)))
             continue
         shape, problem = _solids_of(obj)
         if problem and shape is None:

@@ -2,7 +2,8 @@
 from the file with the default flags (issue 26, "Must show": assemblies never seen before):
 
 - every part found: PartDesign Bodies (the hinge), App::Part containers with nested placements and an
-  App::Link array of bolts (the coupling: one part per element, placed by the containers above the array),
+  App::Link array of bolts (the coupling: one part per element, placed by the containers above the array;
+  also with the elements not shown as objects),
   Part primitives and booleans (the vise), Draft polar arrays of 40 bolts and 40 nuts (the bolt circle: one
   part per element, 82 parts), the coupling exported to STEP and read back, and a STEP file of the coupling as
   one body of ten solids (one part per solid: one part leaves nothing to assemble);
@@ -41,7 +42,8 @@ def _build() -> tuple[Path, subprocess.CompletedProcess]:
     script.write_text(f"TMP = {str(tmp)!r}\n" + SCRIPT)
     done = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(script)])
     models = [(tmp / f"{name}.FCStd", tmp / f"{name}_bundle") for name in DOCUMENTS]
-    steps = [(tmp / "coupling.step", tmp / "step_bundle"), (tmp / "one_body.step", tmp / "one_body_bundle")]
+    steps = [(tmp / "coupling.step", tmp / "step_bundle"), (tmp / "one_body.step", tmp / "one_body_bundle"),
+             (tmp / "coupling_hidden.FCStd", tmp / "hidden_bundle")]
     for model, bundle in models + steps:
         if done.returncode != 0:
             break
@@ -89,8 +91,10 @@ def test_every_part_found_and_the_diagrams_equal_the_ground_truth(built, name):
 
 
 @pytest.mark.freecad
-def test_the_coupling_read_back_from_step(built):
-    parts, found = _diagrams(built / "step_bundle", STEP_NAMES)
+@pytest.mark.parametrize("bundle, names", [("step_bundle", STEP_NAMES), ("hidden_bundle", {})],
+                         ids=["STEP", "link array elements not shown"])
+def test_the_coupling_read_back_from_step_and_with_hidden_link_elements(built, bundle, names):
+    parts, found = _diagrams(built / bundle, names)
     assert sorted(parts) == sorted(_diagrams(built / "coupling_bundle")[0])
     assert {axis: found.get(axis, set()) for axis in GROUND_TRUTH["coupling"]} == GROUND_TRUTH["coupling"]
 

@@ -1,7 +1,8 @@
 """The FreeCADCmd script that builds assemblies in the styles public models come in (tests/integration/
 test_unseen_documents.py, bench/bench_unseen_cad.py): ``TMP = FOLDER`` prepended, it saves ``NAME.FCStd`` there
-for each of :data:`DOCUMENTS` (and ``coupling.step``, the coupling exported to STEP, and ``one_body.step``, the
-coupling as one body of ten solids), and prints
+for each of :data:`DOCUMENTS` (and ``coupling_hidden.FCStd``, the coupling with its link array's elements not
+shown as objects, ``coupling.step``, the coupling exported to STEP, and ``one_body.step``, the coupling as one
+body of ten solids), and prints
 ``APLAN-RESULT`` with the parts' labels per document.
 
 - ``hinge``: two leaves as PartDesign Bodies (additive and subtractive primitives), knuckles interleaved along
@@ -193,6 +194,10 @@ for k, (x, y) in enumerate(BOLTS):
     c = turn_back.multVec(V(x, y, 0))
     feature(doc, f"Nut{k + 1}", Part.makeCylinder(5, 4, c).cut(Part.makeCylinder(3, 4, c)), nuts)
 saved(doc, "coupling")
+# The same with the array's elements not shown as objects (ShowElement off: no App::LinkElement in the tree).
+array.ShowElement = False
+doc.recompute()
+doc.saveAs(os.path.join(TMP, "coupling_hidden.FCStd"))
 import Import
 Import.export([top], os.path.join(TMP, "coupling.step"))
 # The same coupling as one body of ten solids (a STEP file some CAD systems write), in the order of its parts.
