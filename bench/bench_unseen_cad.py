@@ -60,7 +60,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="aplan-unseen-") as tmp:
         folder = Path(tmp)
         script = folder / "unseen_build.py"
-        script.write_text(f"TMP = {tmp!r}\n" + SCRIPT)
+        script.write_text(f"TMP = {tmp!r}\nREPO = {str(ROOT)!r}\n" + SCRIPT)
         subprocess.run(["freecadcmd", str(script)], check=True, capture_output=True, timeout=900)
         cases = [(name, folder / f"{name}.FCStd", name, {}) for name in DOCUMENTS]
         cases += [("coupling (STEP)", folder / "coupling.step", "coupling", STEP_NAMES),

@@ -282,7 +282,11 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
         elements = link_elements(obj)
         if elements:  # a link array: one part per element, as the tree shows them
             for label, name, shape in elements:
-                if name not in excluded:
+                if name in excluded:
+                    continue
+                if group_of.get(name) is not None:  # --group names elements by their labels
+                    grouped[group_of[name]].append((obj, shape))
+                else:
                     singles.append(Component(label, label, shape, [obj.Name], _material(obj)))
             continue
         shape, problem = _solids_of(obj)

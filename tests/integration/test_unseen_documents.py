@@ -30,6 +30,7 @@ from aplan_runner import run_aplan
 from background import ENVIRONMENT, Job, folder, run
 from conftest import REPO, require_freecadcmd
 
+from integration.freecad_tools import freecad_result
 from integration.unseen_documents import DOCUMENTS, GROUND_TRUTH, ONE_BODY, STEP_NAMES
 
 def _build() -> tuple[Path, subprocess.CompletedProcess]:
@@ -39,8 +40,9 @@ def _build() -> tuple[Path, subprocess.CompletedProcess]:
 
     tmp = folder("unseen-docs")
     script = tmp / "unseen_docs.py"
-    script.write_text(f"TMP = {str(tmp)!r}\n" + SCRIPT)
+    script.write_text(f"TMP = {str(tmp)!r}\nREPO = {str(REPO)!r}\n" + SCRIPT)
     done = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(script)])
+    (tmp / "build.out").write_text(done.stdout)
     models = [(tmp / f"{name}.FCStd", tmp / f"{name}_bundle") for name in DOCUMENTS]
     steps = [(tmp / "coupling.step", tmp / "step_bundle"), (tmp / "one_body.step", tmp / "one_body_bundle"),
              (tmp / "coupling_hidden.FCStd", tmp / "hidden_bundle")]
@@ -71,6 +73,12 @@ def built() -> Path:
     tmp, done = BACKGROUND[0].result()
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
     return tmp
+
+
+@pytest.mark.freecad
+def test_link_array_elements_are_grouped_and_excluded_by_their_labels(built):
+    result = freecad_result(subprocess.CompletedProcess([], 0, (built / "build.out").read_text(), ""))
+    assert result["coupling_grouped"] == {"FA": 1, "FB": 1, "Nut1": 1, "Nut2": 1, "Nut3": 1, "bolts": 4}
 
 
 def _diagrams(bundle: Path, names: dict[str, str] | None = None) -> tuple[list[str], dict[str, set]]:

@@ -3,7 +3,8 @@ test_unseen_documents.py, bench/bench_unseen_cad.py): ``TMP = FOLDER`` prepended
 for each of :data:`DOCUMENTS` (and ``coupling_hidden.FCStd``, the coupling with its link array's elements not
 shown as objects, ``coupling.step``, the coupling exported to STEP, and ``one_body.step``, the coupling as one
 body of ten solids), and prints
-``APLAN-RESULT`` with the parts' labels per document.
+``APLAN-RESULT`` with the parts' labels per document (and the coupling read with the link array's elements
+grouped, one nut excluded). ``REPO`` (the repository) is prepended too.
 
 - ``hinge``: two leaves as PartDesign Bodies (additive and subtractive primitives), knuckles interleaved along
   Z with exactly touching end faces, 0.05 mm radial clearance to the other leaf, and a headed pin through them;
@@ -194,6 +195,11 @@ for k, (x, y) in enumerate(BOLTS):
     c = turn_back.multVec(V(x, y, 0))
     feature(doc, f"Nut{k + 1}", Part.makeCylinder(5, 4, c).cut(Part.makeCylinder(3, 4, c)), nuts)
 saved(doc, "coupling")
+import sys
+sys.path.insert(0, REPO)
+from freecad_aplan.document import read_components
+grouped = read_components(doc, groups={"bolts": ["Bolt_i*"]}, exclude=["Nut4"]).components
+out["coupling_grouped"] = {c.id: len(c.shape.Solids) for c in grouped}
 # The same with the array's elements not shown as objects (ShowElement off: no App::LinkElement in the tree).
 array.ShowElement = False
 doc.recompute()
