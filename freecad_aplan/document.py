@@ -4,7 +4,8 @@ Which objects are parts:
 
 - ``Part::Feature`` and everything derived from it that holds solids: plain features, ``Part::FeaturePython``
   (A2plus assemblies such as the pen and the truck), ``PartDesign::Body``, STEP imports;
-- ``App::Link`` objects (also to other documents), with the link's placement;
+- ``App::Link`` objects (also to other documents), with the link's placement; a link array (``ElementCount``
+  elements) gives one part per element, named by the element's label (``Bolt_i0`` ...);
 - objects inside ``App::Part`` containers, with the containers' placements.
 
 The document's structure (``App::Part`` containers nesting parts, groups, and compounds of whole parts that
@@ -31,6 +32,8 @@ import FreeCAD
 import Part
 
 from planner.errors import PlannerError
+
+from .arrays import array_element_solids, link_elements, parent_placement
 
 __all__ = ["Component", "ReadResult", "open_model", "read_components", "matching",
            "consuming_properties", "is_grouping", "DocumentError"]
@@ -168,14 +171,6 @@ def is_grouping(obj) -> bool:
     return not any(consuming_properties(user, obj) for user in users)
 
 
-def _parent_placement(obj) -> "FreeCAD.Placement":
-    """The placement of the containers (App::Part, links) above ``obj``."""
-    try:
-        return obj.getGlobalPlacement().multiply(obj.Placement.inverse())
-    except Exception:
-        return FreeCAD.Placement()
-
-
 def _closed_shell_solids(shape) -> list:
     """The solids bounded by ``shape``'s shells when it has faces but no solid and every shell is closed
     (STEP imports and meshes turned into shapes often come so); [] otherwise."""
@@ -217,7 +212,7 @@ def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
         return None, None
     compound = solids[0] if len(solids) == 1 else Part.makeCompound(solids)
     compound = compound.copy()
-    parent = _parent_placement(obj)
+    parent = parent_placement(obj)
     if not parent.isIdentity():
         compound.Placement = parent.multiply(compound.Placement)
     return compound, note
@@ -248,7 +243,9 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
     ``groups`` maps a component name to the labels (or names) of the objects it fuses; ``exclude`` lists
     labels (or names) to leave out (fasteners to be treated later, say). Both take shell-style patterns
     (``wood_screw*``, ``bolt_00[1-4]``; :func:`fnmatch.fnmatchcase`). With ``split_solids``, an object
-    holding several solids (a STEP file exported as one product) gives one part per solid. Raises
+    holding several solids (a STEP file exported as one product) gives one part per solid; a Draft array
+    always gives one part per element, and a link array one per element (its elements' labels); the document's
+    only part, when it holds several solids, one part per solid. Raises
     :class:`DocumentError` when a group or exclusion matches no object, when an object matches two groups, or
     when nothing with a solid is left.
     """
@@ -282,6 +279,16 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
                 why = f"used by {', '.join(consumers)}" if consumers else "shown by an App::Link"
                 left_out.append((obj.Label, why))
             continue
+        elements = link_elements(obj)
+        if elements:  # a link array: one part per element, as the tree shows them
+            for label, name, shape in elements:
+                if name in excluded:
+                    continue
+                if group_of.get(name) is not None:  # --group names elements by their labels
+                    grouped[group_of[name]].append((obj, shape))
+                else:
+                    singles.append(Component(label, label, shape, [obj.Name], _material(obj)))
+            continue
         shape, problem = _solids_of(obj)
         if problem and shape is None:
             warnings.append(f"{obj.Label}: {problem}; skipped (make it a solid in FreeCAD to include it)")
@@ -295,9 +302,11 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
         group = group_of.get(obj.Name)
         if group is not None:
             grouped[group].append((obj, shape))
-        elif len(shape.Solids) > 1 and split_solids:
-            for k, solid in enumerate(shape.Solids, start=1):
-                singles.append(Component(f"{obj.Label}_{k:03d}", f"{obj.Label} {k}", solid.copy(), [obj.Name],
+        elif len(shape.Solids) > 1 and (split_solids or array_element_solids(obj, shape)):
+            pieces = array_element_solids(obj, shape) or [[s] for s in shape.Solids]
+            for k, solids in enumerate(pieces, start=1):
+                piece = solids[0].copy() if len(solids) == 1 else Part.makeCompound([s.copy() for s in solids])
+                singles.append(Component(f"{obj.Label}_{k:03d}", f"{obj.Label} {k}", piece, [obj.Name],
                                          _material(obj)))
         else:
             if len(shape.Solids) > 1:
@@ -309,6 +318,8 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
         warnings.append("not parts of their own (inputs of another feature, or shown by a link): "
                         + "; ".join(f"{label} ({why})" for label, why in left_out)
                         + "; the features and links using them are the parts")
+    if len(singles) == 1 and not groups and len(singles[0].shape.Solids) > 1:
+        singles = _split_the_only_part(singles[0], warnings)
     components = list(singles)
     for group, members in grouped.items():
         if not members:
@@ -319,6 +330,20 @@ def read_components(document, groups: dict[str, list[str]] | None = None,
         raise DocumentError(_nothing_left(document, objects, excluded))
     _unique_ids(components, warnings)
     return ReadResult(components, warnings, document)
+
+
+def _split_the_only_part(only: Component, warnings: list[str]) -> list[Component]:
+    """One component per solid of ``only``, the document's one part (a STEP file exported as one body of many
+    solids): one part leaves nothing to assemble, so it is split as ``split_solids`` would, and the warning that
+    it was read as one part says so instead."""
+    count = len(only.shape.Solids)
+    said = f"{only.label}: {count} solids are read as one part (use split_solids / --split-solids for one part " \
+        "per solid)"
+    warnings[:] = [w for w in warnings if w != said]
+    warnings.append(f"{only.label}: the document's only part holds {count} solids: read as one part per solid "
+                    "(one part leaves nothing to assemble); group them in FreeCAD to plan them otherwise")
+    return [Component(f"{only.label}_{k:03d}", f"{only.label} {k}", solid.copy(), list(only.objects), only.material)
+            for k, solid in enumerate(only.shape.Solids, start=1)]
 
 
 def _nothing_left(document, objects: list, excluded: dict[str, str]) -> str:

@@ -68,6 +68,7 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
         raise PlannerError(f"{argument}: --group and --exclude choose the components of a CAD model (.FCStd, "
                            "STEP); this product's parts are chosen already (export the model again with them)")
     from ..assembly.interlocks import INTERLOCK_MODES, apply_interlock_mode, drawn_in_cad
+    from ..assembly.loose_containers import connected_structure
 
     if interlocks not in INTERLOCK_MODES:
         raise PlannerError(f"unknown interlock mode {interlocks!r}; use one of {', '.join(INTERLOCK_MODES)}")
@@ -77,6 +78,7 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
 
     product = prepare(argument) if isinstance(argument, Product) else _load(argument, tolerances, model_options,
                                                                             prepare)
+    product = connected_structure(product)  # containers of parts that do not touch are no subassemblies
     # The designer's structure, before any proposal; a product not drawn in CAD (no meshes: synthetic, written
     # by hand) is planned as written, as the paper's products are.
     own = bool(product.fasteners or product.subassemblies) or not drawn_in_cad(product)

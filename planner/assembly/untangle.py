@@ -18,7 +18,7 @@ from ..product import Product, Subassembly
 from .feasibility import interlocked_pairs
 from .hierarchy import product_levels
 
-__all__ = ["untangled"]
+__all__ = ["untangled", "dissolved"]
 
 log = logging.getLogger(__name__)
 
@@ -42,7 +42,13 @@ def untangled(product: Product, proposed: tuple[Subassembly, ...]) -> tuple[Suba
                 break
         if culprit is None:
             break
-        gone = next(g for g in groups if g.id == culprit)
-        groups = [replace(g, parts=tuple(m for p in g.parts for m in (gone.parts if p == culprit else (p,))))
-                  for g in groups if g.id != culprit]
+        groups = dissolved(groups, culprit)
     return tuple(groups)
+
+
+def dissolved(groups: list[Subassembly], gone: str) -> list[Subassembly]:
+    """``groups`` without subassembly ``gone``: its members take its place in the subassembly that held it (or
+    join the top level). Cost: O(members)."""
+    members = next(g for g in groups if g.id == gone).parts
+    return [replace(g, parts=tuple(m for p in g.parts for m in (members if p == gone else (p,))))
+            for g in groups if g.id != gone]

@@ -13,7 +13,6 @@ from ..decision.intention_model import IntentionModel
 from ..decision.models import BELIEF_OVER, belief_over, is_flat, is_offline_policy
 from ..defaults import HABITS_PRIOR, STEP_LIMIT
 from ..errors import PlannerError, UsageError
-from ..product import DEFAULT_MARKER_DICTIONARY
 from ..validation import check_output
 from .decision import decision_maker_from, levels_from, model_from
 from .options import (
@@ -307,10 +306,11 @@ def _replay(args: argparse.Namespace) -> int:
 
 def _markers(args: argparse.Namespace) -> int:
     from ..runtime.sheet import write_marker_sheet
+    from ..runtime.vision import default_markers
 
     product = api.resolve_product(args.product)
     count = write_marker_sheet(product, args.output, args.size)
-    dictionary = product.markers.dictionary if product.markers else DEFAULT_MARKER_DICTIONARY
+    dictionary = (product.markers or default_markers(product)).dictionary
     print(f"{args.output}: {count} markers ({dictionary}, {args.size:g} mm)")
     if product.markers is None:
         log.info("the product has no 'markers': they are numbered in file order (parts, then tools); add "

@@ -141,6 +141,17 @@ def _chain(parts: int):
     return make
 
 
+def _chain_with_markers(parts: int, dictionary: str):
+    """A chain of ``parts`` parts whose 'markers' map numbers them 0, 1, ... in ``dictionary``."""
+    def make(work: Path) -> None:
+        _chain(parts)(work)
+        path = work / f"chain{parts}.json"
+        doc = json.loads(path.read_text())
+        doc["markers"] = {"dictionary": dictionary, "ids": {p["id"]: k for k, p in enumerate(doc["parts"])}}
+        path.write_text(json.dumps(doc))
+    return make
+
+
 def _synth(kind: str, parts: int):
     def make(work: Path) -> None:
         assert aplan("synth", kind, parts, "-o", f"{kind}{parts}.json")[0] == 0
@@ -296,7 +307,8 @@ CASES = [
     ("5 one-part product: pomdp", _one_part, ["pomdp", "one.json", "-o", "m.pomdpx"], 1, ["one.json", "two parts"]),
     ("5 one-part product: solve", _one_part, ["solve", "one.json", "-o", "p.policy"], 1, ["one.json", "two parts"]),
     ("5 one-part product: evaluate", _one_part, ["evaluate", "one.json", "--episodes", "2"], 1, ["two parts"]),
-    ("5 markers past the dictionary", _chain(60), ["markers", "chain60.json", "-o", "s.pdf"], 1,
+    ("5 markers past the dictionary", _chain_with_markers(60, "DICT_4X4_50"),
+     ["markers", "chain60.json", "-o", "s.pdf"], 1,
      ["chain60.json", "DICT_4X4_50", "markers"]),
     ("5 --camera -1", None, ["session", "pen", "--camera", "-1"], 2, ["--camera"]),
     ("5 --demo -3", None, ["session", "pen", "--demo", "-3"], 2, ["--demo"]),

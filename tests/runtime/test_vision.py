@@ -63,6 +63,19 @@ def test_default_markers_and_missing_ones(pen):
         marker_map(product_from_dict(doc))
 
 
+def test_default_markers_of_a_product_with_more_than_fifty_items():
+    # 82 parts (an assembly with a bolt circle of 40 bolts and 40 nuts): DICT_4X4_50 cannot hold them; the
+    # next of its family can, and every part is seen by the detector's dictionary.
+    from planner.product.synthetic import chain_product
+
+    for count, dictionary in ((50, "DICT_4X4_50"), (51, "DICT_4X4_100"), (82, "DICT_4X4_100"), (251, "DICT_4X4_1000")):
+        product = chain_product(count)
+        assert product.markers is None
+        markers = default_markers(product)
+        assert markers.dictionary == dictionary and len(markers.ids) == count
+        assert sorted(marker_map(product).items) == list(range(count))
+
+
 @pytest.mark.parametrize("camera", [CameraModel(), CameraModel(blur=1.5), CameraModel(noise=10),
                                     CameraModel(perspective=0.06, seed=2)],
                          ids=["clean", "blur", "noise", "perspective"])

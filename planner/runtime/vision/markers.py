@@ -39,10 +39,20 @@ class MarkerMap:
         return next(marker for marker, name in self.items.items() if name == item)
 
 
+#: The default dictionary's family, smallest first: a product without a 'markers' map gets the first that holds
+#: all its items (an 82-part assembly needs DICT_4X4_100: 50 ids are not enough).
+_DEFAULT_FAMILY = tuple(sorted((name for name in MARKER_DICTIONARIES
+                                if name.rsplit("_", 1)[0] == DEFAULT_MARKER_DICTIONARY.rsplit("_", 1)[0]),
+                               key=MARKER_DICTIONARIES.get))
+
+
 def default_markers(product: Product) -> Markers:
-    """Markers numbered 0, 1, ... in the product file's order: the parts, then the tools."""
+    """Markers numbered 0, 1, ... in the product file's order: the parts, then the tools; in
+    :data:`~planner.product.DEFAULT_MARKER_DICTIONARY`, or the first larger one of its family (4x4 bits) that
+    holds them all (the largest when none does: :func:`marker_map` then says what to do)."""
     names = [p.id for p in product.parts] + [t.id for t in product.tools]
-    return Markers(tuple((name, k) for k, name in enumerate(names)), DEFAULT_MARKER_DICTIONARY)
+    dictionary = next((d for d in _DEFAULT_FAMILY if MARKER_DICTIONARIES[d] >= len(names)), _DEFAULT_FAMILY[-1])
+    return Markers(tuple((name, k) for k, name in enumerate(names)), dictionary)
 
 
 def dictionary_size(dictionary: str) -> int | None:
