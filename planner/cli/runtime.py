@@ -26,7 +26,6 @@ from .options import (
     model_spec_from,
     number,
     planner_choice_from,
-    positive,
 )
 
 __all__ = ["add_commands"]
