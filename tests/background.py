@@ -29,7 +29,7 @@ import time
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
-__all__ = ["CPU", "ENVIRONMENT", "LANES", "SECONDS", "WAITED", "WORKERS", "WORKING_FOLDER", "Job", "Popen", "enabled", "folder", "run", "start",
+__all__ = ["CPU", "ENVIRONMENT", "LANES", "SECONDS", "SPANS", "WAITED", "WORKERS", "WORKING_FOLDER", "Job", "Popen", "enabled", "folder", "run", "start",
            "stop", "track"]
 
 #: The environment and working folder of the session's start, for every command run here: a test may change
@@ -95,6 +95,9 @@ SECONDS: dict[str, float] = {}  # each finished job's wall seconds (a report onl
 #: by the others' work, the CPU time is not.
 CPU: dict[str, float] = {}
 LANES: dict[str, str] = {}  # each job's lane, by its name (for the report's sums)
+#: Each finished job's begin and end (time.monotonic()): a lane's span, from its first job's begin to its last
+#: one's end, is its wall time with two jobs at once.
+SPANS: dict[str, tuple[float, float]] = {}
 #: The wall seconds the tests spent waiting for each job run elsewhere (a report: where the lanes set the pace).
 WAITED: dict[str, float] = {}
 _reaped = threading.local()  # .seconds: CPU seconds of the commands this thread reaped (Popen below)
@@ -121,6 +124,7 @@ def _timed(name: str, work: Callable[[], object]) -> Callable[[], object]:
             return work()
         finally:
             SECONDS[name] = time.monotonic() - begun
+            SPANS[name] = (begun, time.monotonic())
             CPU[name] = time.thread_time() - thread_begun + getattr(_reaped, "seconds", 0.0) - reaped
     return timed
 
