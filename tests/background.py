@@ -3,16 +3,16 @@
 A *job* is a function without arguments that runs one command (FreeCADCmd on a script, ``python -m planner
 export-freecad``, the FreeCAD window under Xvfb) through :func:`run` and returns what a fixture reads. A test
 module lists the jobs its fixtures read in a module attribute ``BACKGROUND``; tests/conftest.py runs those
-modules after the others, and starts their jobs when the session starts, one at a time in a thread of its
-own, in the order the modules will need them. FreeCAD then works in its own process on the machine's second
-core while the tests of the other modules run on the first (the suite itself runs on one core). A job's
-``lane`` names its thread: the ROS sessions (tests/runtime/ros), which mostly wait on each other's messages,
-run in a lane of their own beside FreeCAD's.
+modules after the others, and starts their jobs when the session starts, in threads of their own, in the
+order the modules will need them. FreeCAD then works in its own processes on the machine's second core while
+the tests of the other modules run on the first (the suite itself runs on one core). A job's ``lane`` names
+its threads: the ROS sessions (tests/runtime/ros), which mostly wait on each other's messages, run in a lane
+of their own beside FreeCAD's.
 
 Nothing is checked in the thread: a fixture calls :meth:`Job.result`, which waits for the job (or runs it at
 once, when it was not started or not begun yet), and makes the same checks as before on what it returns.
-FreeCAD's lane has two threads (:data:`WORKERS`): a FreeCAD job spends about half of its wall time waiting
-(start-up, the window's timers, Xvfb), so two at once keep that core busy.
+FreeCAD's lane has two threads, the others one (:data:`WORKERS`): a FreeCAD job spends about half of its wall
+time off the CPU (start-up, the window's timers, Xvfb), so two at once keep that core busy.
 ``APLAN_TEST_BACKGROUND=0`` turns this off: every job runs when a fixture first asks for it, as before.
 """
 from __future__ import annotations
