@@ -3,14 +3,16 @@
 A *job* is a function without arguments that runs one command (FreeCADCmd on a script, ``python -m planner
 export-freecad``, the FreeCAD window under Xvfb) through :func:`run` and returns what a fixture reads. A test
 module lists the jobs its fixtures read in a module attribute ``BACKGROUND``; tests/conftest.py runs those
-modules after the others, and starts their jobs when the session starts, one at a time in a thread of its
-own, in the order the modules will need them. FreeCAD then works in its own process on the machine's second
-core while the tests of the other modules run on the first (the suite itself runs on one core). A job's
-``lane`` names its thread: the ROS sessions (tests/runtime/ros), which mostly wait on each other's messages,
-run in a lane of their own beside FreeCAD's.
+modules after the others, and starts their jobs when the session starts, in threads of their own, in the
+order the modules will need them. FreeCAD then works in its own processes on the machine's second core while
+the tests of the other modules run on the first (the suite itself runs on one core). A job's ``lane`` names
+its threads: the ROS sessions (tests/runtime/ros), which mostly wait on each other's messages, run in a lane
+of their own beside FreeCAD's.
 
 Nothing is checked in the thread: a fixture calls :meth:`Job.result`, which waits for the job (or runs it at
 once, when it was not started or not begun yet), and makes the same checks as before on what it returns.
+FreeCAD's lane has two threads, the others one (:data:`WORKERS`): a FreeCAD job spends about half of its wall
+time off the CPU (start-up, the window's timers, Xvfb), so two at once keep that core busy.
 ``APLAN_TEST_BACKGROUND=0`` turns this off: every job runs when a fixture first asks for it, as before.
 """
 from __future__ import annotations
@@ -27,14 +29,18 @@ import time
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
-__all__ = ["ENVIRONMENT", "WORKING_FOLDER", "Job", "enabled", "folder", "run", "start", "stop", "track"]
+__all__ = ["CPU", "ENVIRONMENT", "LANES", "SECONDS", "SPANS", "WAITED", "WORKERS", "WORKING_FOLDER", "Job", "Popen", "enabled", "folder", "run", "start",
+           "stop", "track"]
 
 #: The environment and working folder of the session's start, for every command run here: a test may change
 #: its own for a while (a fault-injection variable, ``monkeypatch.chdir``) while a job starts.
 ENVIRONMENT = dict(os.environ)
 WORKING_FOLDER = os.getcwd()
 
-_executors: dict[str, concurrent.futures.ThreadPoolExecutor] = {}  # lane -> its thread
+#: Threads per lane (one when not named). FreeCAD's: the lane's jobs used 258 CPU s in 741 s of wall time one
+#: at a time (load 6, bench/README.md: the suite's lanes), so a second thread runs one while another waits.
+WORKERS = {"freecad": 2}
+_executors: dict[str, concurrent.futures.ThreadPoolExecutor] = {}  # lane -> its threads
 _running: set[subprocess.Popen] = set()
 _lock = threading.Lock()
 
@@ -49,6 +55,7 @@ class Job:
 
     def __init__(self, name: str, work: Callable[[], object], lane: str = "freecad") -> None:
         self.name, self.work, self.lane = name, _timed(name, work), lane
+        LANES[name] = lane
         self._future: concurrent.futures.Future | None = None
         self._lock = threading.Lock()
 
@@ -75,30 +82,61 @@ class Job:
                 future.set_result(self.work())
             except Exception as exc:  # noqa: BLE001  (raised again by future.result(), in every waiting test)
                 future.set_exception(exc)
-        return future.result()
+        begun = time.monotonic()
+        try:
+            return future.result()
+        finally:
+            WAITED[self.name] = WAITED.get(self.name, 0.0) + time.monotonic() - begun
 
 
 SECONDS: dict[str, float] = {}  # each finished job's wall seconds (a report only: no test reads it)
+#: Each finished job's CPU seconds: its thread's own and those of the commands it ran and waited for (with what
+#: they waited for: xvfb-run's FreeCAD). A report only, as SECONDS: on a loaded machine the wall time is inflated
+#: by the others' work, the CPU time is not.
+CPU: dict[str, float] = {}
+LANES: dict[str, str] = {}  # each job's lane, by its name (for the report's sums)
+#: Each finished job's begin and end (time.monotonic()): a lane's span, from its first job's begin to its last
+#: one's end, is its wall time with two jobs at once.
+SPANS: dict[str, tuple[float, float]] = {}
+#: The wall seconds the tests spent waiting for each job run elsewhere (a report: where the lanes set the pace).
+WAITED: dict[str, float] = {}
+_reaped = threading.local()  # .seconds: CPU seconds of the commands this thread reaped (Popen below)
+
+
+class Popen(subprocess.Popen):
+    """``subprocess.Popen`` that adds the CPU seconds of the command (and of what it waited for) to the job
+    of the thread that reaps it: ``os.wait4`` in place of ``os.waitpid`` (the one wait that returns them)."""
+
+    def _try_wait(self, wait_flags):  # subprocess.Popen's one call of os.waitpid (CPython 3.3 on, POSIX)
+        try:
+            pid, status, usage = os.wait4(self.pid, wait_flags)
+        except ChildProcessError:  # as Popen's own: a child no one can wait for any more
+            return self.pid, 0
+        if pid == self.pid:
+            _reaped.seconds = getattr(_reaped, "seconds", 0.0) + usage.ru_utime + usage.ru_stime
+        return pid, status
 
 
 def _timed(name: str, work: Callable[[], object]) -> Callable[[], object]:
     def timed() -> object:
-        begun = time.monotonic()
+        begun, thread_begun, reaped = time.monotonic(), time.thread_time(), getattr(_reaped, "seconds", 0.0)
         try:
             return work()
         finally:
             SECONDS[name] = time.monotonic() - begun
+            SPANS[name] = (begun, time.monotonic())
+            CPU[name] = time.thread_time() - thread_begun + getattr(_reaped, "seconds", 0.0) - reaped
     return timed
 
 
 def start(jobs: Iterable[Job]) -> None:
-    """Queue ``jobs`` (each once, in this order) on the background thread of each one's lane."""
+    """Queue ``jobs`` (each once, in this order) on the background threads of each one's lane."""
     if not enabled():
         return
     for job in jobs:
         if job.lane not in _executors:
             _executors[job.lane] = concurrent.futures.ThreadPoolExecutor(
-                max_workers=1, thread_name_prefix=f"aplan-tests-{job.lane}")
+                max_workers=WORKERS.get(job.lane, 1), thread_name_prefix=f"aplan-tests-{job.lane}")
         job.submit(_executors[job.lane])
 
 
@@ -140,7 +178,7 @@ def run(command: list[str], timeout: float = 600, **options) -> subprocess.Compl
     in a process group of its own that :func:`stop` ends when the session ends first (and a
     timeout ends, failing the test that reads the job)."""
     options = {"env": ENVIRONMENT, "cwd": WORKING_FOLDER, **options}
-    with subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
+    with Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL,
                           text=True, start_new_session=True, **options) as process:
         with _lock:
             _running.add(process)

@@ -105,12 +105,29 @@ def pytest_collection_finish(session: pytest.Session) -> None:
 
 
 def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Config) -> None:
-    """The background jobs' wall seconds, the slowest first (where a FreeCAD-bound suite spends its time)."""
-    if background.SECONDS:
-        terminalreporter.section("background jobs (wall seconds)")
-        for name, seconds in sorted(background.SECONDS.items(), key=lambda item: -item[1])[:25]:
-            terminalreporter.write_line(f"{seconds:7.1f} s  {name}")
-        terminalreporter.write_line(f"{sum(background.SECONDS.values()):7.1f} s  in all")
+    """The background jobs' wall and CPU seconds, the slowest first, each lane's sums, and how long the tests
+    waited for the jobs (where a FreeCAD-bound suite spends its time; on a loaded machine the CPU seconds are
+    the figure to trust)."""
+    if not background.SECONDS:
+        return
+    terminalreporter.section("background jobs (wall seconds, CPU seconds)")
+    for name, seconds in sorted(background.SECONDS.items(), key=lambda item: -item[1])[:25]:
+        terminalreporter.write_line(f"{seconds:7.1f} s {background.CPU.get(name, 0.0):7.1f} s  {name}")
+    lanes: dict[str, list[float]] = {}  # lane -> wall sum, CPU sum, first begin, last end
+    for name, seconds in background.SECONDS.items():
+        begun, ended = background.SPANS[name]
+        sums = lanes.setdefault(background.LANES.get(name, "?"), [0.0, 0.0, begun, ended])
+        sums[0] += seconds
+        sums[1] += background.CPU.get(name, 0.0)
+        sums[2], sums[3] = min(sums[2], begun), max(sums[3], ended)
+    for lane, (seconds, cpu, begun, ended) in sorted(lanes.items()):
+        if seconds >= 0.05:  # not test_background's own lanes
+            terminalreporter.write_line(f"{seconds:7.1f} s {cpu:7.1f} s  in all, lane {lane} "
+                                        f"({ended - begun:.1f} s from its first job's start to its last one's end)")
+    waited = {name: s for name, s in background.WAITED.items() if s >= 0.05}
+    terminalreporter.write_line(f"the tests waited {sum(waited.values()):.1f} s for jobs, the longest: "
+                                + ", ".join(f"{name} {s:.1f} s" for name, s in
+                                            sorted(waited.items(), key=lambda item: -item[1])[:5]))
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:

@@ -105,3 +105,23 @@ def test_each_lane_has_a_thread_of_its_own():
     finally:
         release.set()
     assert blocker.result() is True
+
+
+def test_a_lane_of_two_threads_runs_two_jobs_at_once(monkeypatch):
+    """A job starts while another of its lane is still busy, in a lane of two threads (background.WORKERS, as
+    FreeCAD's; a lane of its own: FreeCAD's is busy with the session's jobs)."""
+    if not background.enabled():
+        pytest.skip("APLAN_TEST_BACKGROUND=0: jobs run in the tests")
+    assert background.WORKERS["freecad"] == 2
+    monkeypatch.setitem(background.WORKERS, "test-pair", 2)
+    release, ran = threading.Event(), threading.Event()
+    # The bounds only keep a broken lane from hanging the suite: it would then fail below.
+    blocker = background.Job("pair blocker", lambda: release.wait(60), lane="test-pair")
+    job = background.Job("second of the pair", lambda: ran.set() or "done", lane="test-pair")
+    background.start([blocker, job])
+    try:
+        assert ran.wait(60), "the lane's second job did not start while the first was busy"
+        assert job.result() == "done"
+    finally:
+        release.set()
+    assert blocker.result() is True

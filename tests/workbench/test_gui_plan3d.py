@@ -3,7 +3,7 @@ the 3D view (a screenshot per step in tests/artifacts/), one obstruction relatio
 parts of an operation and a state of the plan dialog; after each, every placement and colour of the user's
 parts is back exactly, with no undo step and the document not modified. Then the session panel from the
 keyboard, habits learned from its log, a keyboard session with them that replays, and bad habits refused in the
-panel (issue 23)."""
+panel (issue 23). The window runs as a background job (tests/background.py)."""
 from __future__ import annotations
 
 import json
@@ -12,7 +12,8 @@ import shutil
 import cv2
 import numpy as np
 import pytest
-from conftest import PEN_MODELS, REPO, require_shared, run_freecad_gui
+from background import Job, folder
+from conftest import PEN_MODELS, REPO, freecad_gui_result, freecad_gui_run, require_freecad_gui, require_shared
 from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, WORKBENCH_HELPERS, aplan
 from pictures import hue_of, read_picture
 from test_plan3d import pen_diagrams
@@ -484,21 +485,34 @@ def _obj(part: str) -> str:
     return f"b_{part}_"
 
 
-@pytest.mark.freecad
-def test_plan_and_relation_in_the_3d_view(tmp_path):
+def _in_the_window():
+    """The script in the FreeCAD window on a copy of the pen, with a logged session to load (a background job):
+    its folder, FreeCAD's run and the logged session's operations."""
+    tmp_path = folder("plan3d")
     copy = tmp_path / "pen.FCStd"
-    shutil.copy(require_shared(PEN), copy)
+    shutil.copy(PEN, copy)
     ARTIFACTS.mkdir(exist_ok=True)
-    out = tmp_path / "result.json"
     script = tmp_path / "gui_plan3d.py"
     logged = _session_log(tmp_path / "session.jsonl", 13)
     for stale in ARTIFACTS.glob("plan3d_overview_*.png"):
         stale.unlink()
     script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS,
-                                        layout_check=LAYOUT_CHECK, out=str(out), copy=str(copy),
+                                        layout_check=LAYOUT_CHECK, out=str(tmp_path / "result.json"), copy=str(copy),
                                         log=str(tmp_path / "session.jsonl"), artifacts=str(ARTIFACTS),
                                         diagrams=pen_diagrams(), other=str(_other_habits(tmp_path))))
-    data = run_freecad_gui(tmp_path, script, out)
+    return tmp_path, freecad_gui_run(tmp_path, script, display=180), logged
+
+
+#: The window's run, done in the background (tests/background.py): FreeCAD's lane, off the foreground.
+BACKGROUND = (Job("Plan in 3D in the FreeCAD window", _in_the_window),)
+
+
+@pytest.mark.freecad
+def test_plan_and_relation_in_the_3d_view():
+    require_shared(PEN)
+    require_freecad_gui()
+    tmp_path, done, logged = BACKGROUND[0].result()
+    data = freecad_gui_result(done, tmp_path / "result.json")
     before = data["before"]
     assert data["before_flags"][1] is False  # saved: not modified
     # The chooser lists the pen's 24 sequences, in rank order (the planner's, with the document's part ids).

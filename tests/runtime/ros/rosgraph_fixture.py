@@ -86,7 +86,7 @@ class RosGraph:
 
     def _spawn(self, name: str, command: list[str]) -> subprocess.Popen:
         out = open(self.folder / f"{name}.out", "w")
-        process = subprocess.Popen(command, env=self.env, cwd=self.folder, stdout=out, stderr=subprocess.STDOUT,
+        process = background.Popen(command, env=self.env, cwd=self.folder, stdout=out, stderr=subprocess.STDOUT,
                                    stdin=subprocess.DEVNULL, start_new_session=True)
         self.processes[name] = process
         if self.tracked:
