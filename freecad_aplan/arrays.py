@@ -6,7 +6,14 @@ from __future__ import annotations
 import FreeCAD
 import Part
 
-__all__ = ["parent_placement", "link_elements", "array_element_solids"]
+__all__ = ["parent_placement", "link_elements", "array_element_solids", "outward"]
+
+
+def outward(solid: "Part.Solid") -> "Part.Solid":
+    """``solid`` with its faces turned outward: a solid whose orientation is reversed (seen in STEP files: one
+    of the 57 solids of the truck's) has a negative volume, which the product file refuses and which would turn its
+    mesh inside out; the same solid reversed has the same faces and a positive volume."""
+    return solid.reversed() if solid.Volume < 0 else solid
 
 
 def parent_placement(obj) -> "FreeCAD.Placement":
@@ -39,7 +46,7 @@ def link_elements(obj) -> list[tuple[str, str | None, "Part.Shape"]]:
         shape = Part.getShape(obj, f"{k}.", needSubElement=True, transform=True)
         if shape is None or shape.isNull() or not shape.Solids:
             continue
-        solids = [s.copy() for s in shape.Solids]
+        solids = [outward(s.copy()) for s in shape.Solids]
         compound = (solids[0] if len(solids) == 1 else Part.makeCompound(solids)).copy()
         if not parent.isIdentity():
             compound.Placement = parent.multiply(compound.Placement)

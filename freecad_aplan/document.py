@@ -33,7 +33,7 @@ import Part
 
 from planner.errors import PlannerError
 
-from .arrays import array_element_solids, link_elements, parent_placement
+from .arrays import array_element_solids, link_elements, outward, parent_placement
 
 __all__ = ["Component", "ReadResult", "open_model", "read_components", "matching",
            "consuming_properties", "is_grouping", "DocumentError"]
@@ -200,7 +200,7 @@ def _solids_of(obj) -> tuple["Part.Shape | None", str | None]:
         shape = obj.Shape
     if shape is None or shape.isNull():
         return None, None
-    solids = [s.copy() for s in shape.Solids]
+    solids = [outward(s.copy()) for s in shape.Solids]
     note = None
     if not solids:
         solids = _closed_shell_solids(shape)
