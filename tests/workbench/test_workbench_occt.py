@@ -4,7 +4,7 @@ and a pair OCCT leaves undecided keeps the mesh engine's answer; each such pair,
 the job's notes, its result and the stored analysis (what the Diagrams panel shows, undecided_notes).
 
 The document (built here): a cylinder as a B-spline (radius 5, axis Z, its centre at the origin) touching a
-box (x from 5 to 15, spanning the cylinder's section in Y and Z). Closed form: the cylinder moving along +X
+box (x from 5 to 15, spanning the cylinder's section in Y and Z), and a small box far away (at 100, 100, 100: in no sweep of theirs along an axis). Closed form: the cylinder moving along +X
 hits the box, along no other axis. OCCT sweeps a B-spline side face as triangles (it folds with no known
 silhouette), and the analysis' bound ``OcctPrismTriangles = 1`` is below any such sweep: the pair stays
 undecided by a bound on work, not on the clock. Without a Python for the mesh engine (FreeCADCmd alone),
@@ -29,6 +29,7 @@ V = FreeCAD.Vector
 doc = FreeCAD.newDocument("touching")
 doc.addObject("Part::Feature", "Cylinder").Shape = Part.makeCylinder(5, 10, V(0, 0, -5)).toNurbs()
 doc.addObject("Part::Feature", "Block").Shape = Part.makeBox(10, 10, 10, V(5, -5, -5))
+doc.addObject("Part::Feature", "Far").Shape = Part.makeBox(2, 2, 2, V(100, 100, 100))
 doc.recompute()
 analysis = create_analysis(doc)
 update_intent(analysis, "occt engine, one triangle per sweep", engine="occt", occt_prism_triangles=1)
@@ -81,7 +82,8 @@ def test_a_pair_occt_leaves_undecided_keeps_the_mesh_answer(detected):
     assert run["command"].endswith("python"), run["stderr"]  # the mesh engine's Python: the hybrid runs
     assert isinstance(run["result"], dict), run["result"]
     pairs = run["analysis"]["tolerances"]["pairs"]
-    assert pairs["undecided"] == [PAIR] and pairs["mesh"] == 0 and pairs["occt"] == 0
+    # The far box's two pairs are easy (boxes apart, good meshes): settled on the meshes; OCCT had one pair.
+    assert pairs["undecided"] == [PAIR] and pairs["mesh"] == 2 and pairs["occt"] == 0
     (fallback,) = pairs["fallbacks"]
     assert sorted(fallback["parts"]) == PAIR and fallback["answer"] == "mesh"
     assert any("Cylinder moving along +X" in what for what in fallback["relations"]), fallback
@@ -114,7 +116,9 @@ def test_without_the_mesh_engine_the_pair_counts_as_blocking(detected):
     run = data["alone"]
     assert run["command"].endswith(("freecadcmd", "FreeCADCmd")) and isinstance(run["result"], dict), run
     pairs = run["analysis"]["tolerances"]["pairs"]
-    assert pairs["undecided"] == [PAIR] and [f["answer"] for f in pairs["fallbacks"]] == ["blocking"]
+    # OCCT on all three pairs (the far box's decided by boxes), the contacts falling apart: no meshes read here.
+    assert pairs["undecided"] == [PAIR] and pairs["occt"] == 2 and pairs["mesh"] == 0
+    assert [f["answer"] for f in pairs["fallbacks"]] == ["blocking"]
     assert ("Cylinder", "Block") in _blocks(run["obstructions"], "+X")
     assert run["result"]["undecided"] and all("counted as touching and blocking" in n for n in run["result"]["undecided"])
     assert set(run["result"]["undecided"]) <= set(run["notes"])
