@@ -144,15 +144,18 @@ def mesh_prism(face, d, length: float, deflection: float, triangles_bound: int |
 def _quiet_stdout():
     """Standard output (file descriptor 1) sent to the null device: FreeCAD's mesh module prints progress bars
     there, without newlines, which would run into the batch protocol's lines (:mod:`freecad_aplan.protocol`)."""
-    libc = ctypes.CDLL(None)
+    try:  # C's buffered output flushed on each side of the swap (no C library by that name on Windows)
+        flush = ctypes.CDLL(None).fflush
+    except (OSError, AttributeError):
+        flush = lambda _: None  # noqa: E731
     sys.stdout.flush()
-    libc.fflush(None)
+    flush(None)
     saved, null = os.dup(1), os.open(os.devnull, os.O_WRONLY)
     os.dup2(null, 1)
     try:
         yield
     finally:
-        libc.fflush(None)
+        flush(None)
         os.dup2(saved, 1)
         os.close(saved)
         os.close(null)
