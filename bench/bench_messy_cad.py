@@ -14,10 +14,11 @@ Run: ``.venv/bin/python bench/bench_messy_cad.py [--parts] [--occt] [--springs] 
   ``aplan export-freecad DOC -o BUNDLE --engine mesh|occt`` with the default flags otherwise, under
   ``prlimit --as`` 6 GiB: CPU seconds (the command and FreeCADCmd), peak memory, parts per fallback rule
   and the pairs OCCT left undecided. Before the OCCT bounds, the 10-turn spring ran past 10 minutes and 11 GB.
-- ``--documents [--engines mesh,occt] [--models]``: issue 26's test documents, built in FreeCAD as the tests
+- ``--documents [--engines mesh,occt] [--models] [--only NAMES]``: issue 26's test documents, built in FreeCAD as the tests
   build them (tests/integration/interlock_documents.py: press fit, splined hub, captured part, caged ball;
   tests/integration/test_cad_documents.py: a group with non-parts, a bearing with balls, linked documents;
-  the 10-turn spring of tests/workbench/spring_document.py), with ``--models`` the pen, the truck and the pump
+  the 10-turn spring of tests/workbench/spring_document.py, the open coil and the sphere and torus as NURBS of
+  tests/workbench/test_heavy_shapes.py), with ``--models`` the pen, the truck and the pump
   too: per document and engine, ``aplan export-freecad DOC -o BUNDLE --engine E`` with the default flags: CPU
   seconds of the command and its FreeCADCmd children (wall beside), the parts per fallback rule, the interlocked
   pairs and what the interlock rules did with them, and the pairs OCCT left undecided (of them, those of a
@@ -110,6 +111,20 @@ build_spring_document(os.environ["OUT"], pitch=float(os.environ["PITCH"]), heigh
 """
 
 
+NURBS_SCRIPT = r"""
+import os
+import FreeCAD, Part
+V = FreeCAD.Vector
+document = FreeCAD.newDocument("nurbs")
+for name, shape in (("Ball", Part.makeSphere(5).toNurbs()), ("BallBlock", Part.makeBox(10, 4, 4, V(5.05, -2, -2))),
+                    ("Torus", Part.makeTorus(8, 3, V(0, 100, 0)).toNurbs()),
+                    ("TorusBlock", Part.makeBox(10, 4, 2, V(11.05, 98, -1)))):
+    document.addObject("Part::Feature", name).Shape = shape
+document.recompute()
+document.saveAs(os.environ["OUT"])
+"""
+
+
 def _spring_rows(pitch: float = 4.0, turns=(10, 20)) -> list[str]:
     """One table row per spring document and engine (module docstring)."""
     rows = []
@@ -170,8 +185,8 @@ def _document_row(name: str, model: Path, bundle: Path, engine: str) -> str:
             f"{resolved or 'none'}{f', {len(unresolved)} unresolved' if unresolved else ''} | {undecided} |")
 
 
-def _documents(engines: list[str], models: bool) -> None:
-    """The ``--documents`` table (module docstring)."""
+def _documents(engines: list[str], models: bool, only: list[str] | None = None) -> None:
+    """The ``--documents`` table (module docstring); ``only``: those documents alone (all are built)."""
     sys.path.insert(0, str(ROOT / "tests"))
     from integration.interlock_documents import DOCUMENTS as INTERLOCKS
     from integration.interlock_documents import SCRIPT as INTERLOCK_SCRIPT
@@ -182,19 +197,24 @@ def _documents(engines: list[str], models: bool) -> None:
           "| OCCT pairs undecided |\n|---|---|---:|---:|---|---|---|")
     with tempfile.TemporaryDirectory(prefix="aplan-documents-") as tmp:
         folder = Path(tmp)
-        for name, script in (("interlocks", f"TMP = {tmp!r}\n" + INTERLOCK_SCRIPT),
-                             ("structure", BUILD.format(folder=tmp, repo=str(ROOT), balls=BALLS)),
-                             ("spring", SPRING_SCRIPT)):
+        # The open coil (pitch 12: its ring 13 times its volume, rule closest) as
+        # tests/workbench/test_heavy_shapes.py builds it, and its sphere and torus as NURBS beside their boxes.
+        for name, script, pitch, height in (("interlocks", f"TMP = {tmp!r}\n" + INTERLOCK_SCRIPT, 0, 0),
+                                            ("structure", BUILD.format(folder=tmp, repo=str(ROOT), balls=BALLS), 0, 0),
+                                            ("spring", SPRING_SCRIPT, 4, 40), ("open_coil", SPRING_SCRIPT, 12, 60),
+                                            ("nurbs", NURBS_SCRIPT, 0, 0)):
             path = folder / f"{name}_build.py"
             path.write_text(script)
             subprocess.run(["freecadcmd", str(path)], check=True, capture_output=True, timeout=900,
-                           env={**os.environ, "ROOT": str(ROOT), "OUT": str(folder / "spring.FCStd"),
-                                "PITCH": "4", "HEIGHT": "40"})
-        cases = [(n, folder / f"{n}.FCStd") for n in (*INTERLOCKS, *STRUCTURE, "spring")]
+                           env={**os.environ, "ROOT": str(ROOT), "OUT": str(folder / f"{name}.FCStd"),
+                                "PITCH": str(pitch), "HEIGHT": str(height)})
+        cases = [(n, folder / f"{n}.FCStd") for n in (*INTERLOCKS, *STRUCTURE, "spring", "open_coil", "nurbs")]
         if models:
             cases += [("pen (simplified)", MODELS / "bourjault_pen/simplified/asm_bourjault_ballpoint.FCStd"),
                       *CASES]
         for name, model in cases:
+            if only and name not in only:
+                continue
             for engine in engines:
                 print(_document_row(name, model, folder / f"{name}_{engine}".replace(" ", "_"), engine), flush=True)
 
@@ -208,9 +228,10 @@ def main() -> None:
     parser.add_argument("--documents", action="store_true", help="issue 26's test documents (module docstring)")
     parser.add_argument("--engines", default="mesh,occt", help="--documents: the engines, comma-separated")
     parser.add_argument("--models", action="store_true", help="--documents: the pen, the truck and the pump too")
+    parser.add_argument("--only", help="--documents: these documents alone, comma-separated (e.g. open_coil,nurbs)")
     args = parser.parse_args()
     if args.documents:
-        _documents(args.engines.split(","), args.models)
+        _documents(args.engines.split(","), args.models, args.only.split(",") if args.only else None)
         return
     if args.springs:
         print("| turns | engine | CPU s | peak MB | parts per rule | pairs undecided |\n|---:|---|---:|---:|---|---:|")

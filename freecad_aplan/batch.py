@@ -10,7 +10,7 @@ follow :mod:`freecad_aplan.protocol`. Used by :mod:`freecad_aplan.runner`.
 
 Three more actions serve the workbench's background jobs (:mod:`freecad_aplan.workflow`), and also run in a
 plain Python that has the planner's dependencies (no FreeCAD needed): ``analyze`` (a geometry engine on a
-bundle, written into its ``product.json``), ``level-stats`` (the per-level figures of ``aplan stats`` for a
+bundle, written into its ``product.json``, with a note line per pair the exact engine left undecided), ``level-stats`` (the per-level figures of ``aplan stats`` for a
 product of several workstations, with a note line per level) and ``solve`` (the point-based solver on a product
 file, written as a ``.policy``, with progress lines), ``session`` (``aplan session --demo`` in the simulated
 camera cell and each level's belief plot, :func:`freecad_aplan.sessions.run_simulated_session`, a note line
@@ -48,7 +48,7 @@ def _run(job: dict) -> dict:
     if action == "analyze":
         from freecad_aplan.workflow import analyze_bundle
 
-        return analyze_bundle(**job)
+        return analyze_bundle(**job, progress=lambda text: print(note_line(text), flush=True))
     if action == "level-stats":
         from freecad_aplan.workflow import level_statistics_report
 

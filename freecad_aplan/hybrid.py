@@ -24,7 +24,11 @@ Definitions
   wholly decided by OCCT, ``undecided``: the pairs with a relation left, ``timed_out``; and OCCT's bounds
   ``face_weight``, ``prism_triangles`` with what they left undecided: ``heavy`` parts, ``sweeps_over`` their
   triangle bound, ``sweeps_lost``: sweeps that lost a face OCCT could not sweep at all, e.g. a sphere or a
-  torus as NURBS, whose every pair along that direction keeps the mesh answer).
+  torus as NURBS, whose every pair along that direction keeps the mesh answer), and ``fallbacks``: per
+  undecided pair, the relations OCCT left and the answer that stands for them (:func:`pair_fallbacks`).
+- Without the mesh engine (a bundle whose meshes cannot be read, FreeCAD's Python without trimesh), OCCT
+  decides every pair, and a relation it leaves undecided counts as touching and blocking (answer
+  ``blocking``); :func:`undecided_notes` says which, for the command line, the workbench's job and its panel.
 
 This module does not import FreeCAD: OCCT runs in FreeCADCmd (:mod:`freecad_aplan.runner`).
 """
@@ -40,9 +44,13 @@ from planner.geometry import GeometryReport, Tolerances
 from planner.geometry.mesh_engine import PartMesh, analyze_meshes
 from planner.product import Product
 
-__all__ = ["fallback_parts", "exact_pairs", "merge_reports", "mesh_then_occt"]
+__all__ = ["fallback_parts", "exact_pairs", "merge_reports", "mesh_then_occt", "pair_fallbacks",
+           "undecided_notes"]
 
 EXACT_RULES = ("exact", "box")
+#: What stands for a relation OCCT left undecided: the mesh engine's answer, or blocking (no meshes to ask).
+ANSWERS = {"mesh": "the mesh engine's answer stands",
+           "blocking": "counted as touching and blocking (no mesh engine's answer to fall back to)"}
 
 
 def fallback_parts(product: Product, rules=EXACT_RULES) -> dict[str, str]:
@@ -90,6 +98,32 @@ def _open_relations(occt: dict) -> tuple[set, set]:
     return contacts, motions
 
 
+def pair_fallbacks(occt: dict, answer: str, asked=None) -> list[dict]:
+    """Per pair OCCT left (partly) undecided in ``occt`` (an answer of
+    :func:`freecad_aplan.occt.analyze_shapes`), only those of ``asked`` when given: ``{"parts": [a, b],
+    "relations": [what, ...], "answer": answer}`` (``answer``: a key of :data:`ANSWERS`), in the order of
+    ``undecided``. A pair without ``undecided_relations`` has every relation undecided (``["all"]``).
+    Cost O(undecided relations)."""
+    relations: dict[frozenset, list[str]] = {}
+    for a, b, what in occt.get("undecided_relations") or ():
+        relations.setdefault(frozenset((a, b)), []).append(what)
+    chosen = None if asked is None else {frozenset(p) for p in asked}
+    return [{"parts": list(pair), "relations": relations.get(frozenset(pair), ["all"]), "answer": answer}
+            for pair in occt.get("undecided", []) if chosen is None or frozenset(pair) in chosen]
+
+
+def undecided_notes(tolerances: dict) -> list[str]:
+    """One line per pair the exact engine left undecided, from a report's ``tolerances`` (or a stored
+    analysis' ``tolerances``): the pair, the relations left and the answer used for them. Empty when every
+    pair was decided or the mesh engine alone ran."""
+    record = (tolerances or {}).get("pairs") or {}
+    lines = [f"OCCT left '{f['parts'][0]}' and '{f['parts'][1]}' undecided ({', '.join(f['relations'])}): "
+             f"{ANSWERS.get(f['answer'], f['answer'])}" for f in record.get("fallbacks", ())]
+    if lines and record.get("timed_out"):
+        lines.append(f"the exact engine reached its time limit ({record.get('time_limit')} s)")
+    return lines
+
+
 def merge_reports(mesh: GeometryReport, occt: dict, pairs, engine: str, fallback: dict[str, str]) -> GeometryReport:
     """The mesh engine's report with what OCCT decided (``occt``: the answer of
     :func:`freecad_aplan.occt.analyze_bundle_breps`) on the pairs of ``pairs`` taken from OCCT, relation by
@@ -126,7 +160,7 @@ def merge_reports(mesh: GeometryReport, occt: dict, pairs, engine: str, fallback
               "occt": len(asked - undecided), "undecided": sorted(sorted(p) for p in undecided),
               "undecided_relations": len(occt.get("undecided_relations", [])),
               "timed_out": bool(occt.get("timed_out")), "time_limit": occt.get("time_limit"),
-              "fallback": dict(sorted(fallback.items())),
+              "fallback": dict(sorted(fallback.items())), "fallbacks": pair_fallbacks(occt, "mesh", asked),
               **{k: occt[k] for k in ("face_weight", "prism_triangles", "sweeps_over", "sweeps_lost", "heavy")
                  if occt.get(k)}}
     tolerances = {**mesh.tolerances, "pairs": record,

@@ -7,8 +7,11 @@
 - ``aplan stats MODEL.FCStd`` (and every command taking PRODUCT): the same export into a temporary folder.
 - ``aplan analyze --engine occt``: the exact engine, run in FreeCADCmd on the bundle's B-reps (at most
   ``--pair-budget`` seconds per pair of parts; its progress lines go to standard error).
+- :func:`geometry_engines`: the engines registered here, which the workbench's detection job runs too (one
+  path for both front ends, :func:`freecad_aplan.workflow.analyze_bundle`).
 
-Nothing here imports FreeCAD: FreeCAD runs as a separate program (:mod:`freecad_aplan.runner`).
+Nothing here imports FreeCAD: FreeCAD runs as a separate program (:mod:`freecad_aplan.runner`), or, when this
+runs inside FreeCADCmd already (the workbench's job without a Python for the mesh engine), in this process.
 """
 from __future__ import annotations
 
@@ -30,10 +33,10 @@ from planner.product import Product, save_product
 from planner.product.designer import add_directions
 
 from .archive import SKIP_BY_EXPORT, SKIP_OPTION, check_document
-from .hybrid import fallback_parts, mesh_then_occt
+from .hybrid import fallback_parts, mesh_then_occt, pair_fallbacks
 from .runner import FreeCADError, find_freecadcmd, run_batch
 
-__all__ = ["register", "export_bundle", "export_warnings", "occt_report"]
+__all__ = ["register", "export_bundle", "export_warnings", "occt_report", "occt_engine", "geometry_engines"]
 
 MODEL_SUFFIXES = (".fcstd", ".step", ".stp")
 
@@ -143,30 +146,38 @@ def export_warnings(product: Product) -> list[str]:
     return list(dict.fromkeys(found))
 
 
-def _occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
-    """The occt engine: the meshes settle the easy pairs, OCCT the others within ``tolerances``' budget
-    (:mod:`freecad_aplan.hybrid`); a bundle whose meshes cannot be read goes to OCCT whole, as before."""
+def occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
+    """The occt engine: the meshes settle the easy pairs, OCCT the others within ``tolerances``' budget, and
+    a relation OCCT leaves undecided keeps the mesh engine's answer (:mod:`freecad_aplan.hybrid`); a bundle
+    whose meshes cannot be read, or a Python without the mesh engine (FreeCADCmd's), goes to OCCT whole,
+    its undecided relations counted as blocking. Both are reported per pair (``tolerances["pairs"]``)."""
     from planner.geometry.bundle import load_part_meshes
 
     if product.source == "<memory>":
         raise FreeCADError("the occt engine reads a bundle's B-rep files: give it a bundle folder")
+    from .dependencies import MESH_ENGINE, installed
+
     try:
-        meshes = load_part_meshes(product)
+        meshes = load_part_meshes(product) if installed("trimesh") else None
     except PlannerError:
         meshes = None
-    if meshes is not None:
+    if meshes is not None and all(installed(m) for m in MESH_ENGINE):
         return mesh_then_occt(product, meshes, tolerances, "occt", lambda arguments: _run_occt(product, arguments))
     data = _run_occt(product, {"contact": tolerances.contact, "interference": tolerances.interference,
                                "depth": tolerances.depth, "pair_budget": tolerances.pair_budget,
                                "pair_steps": tolerances.pair_steps, "time_limit": tolerances.time_limit,
                                "face_weight": tolerances.face_weight, "prism_triangles": tolerances.prism_triangles,
-                               "directions": _occt_directions(product, tolerances)})
+                               "directions": _occt_directions(tolerances, meshes)})
     return occt_report(product, data)
 
 
 def _run_occt(product: Product, arguments: dict) -> dict:
     # A CAD model's product names the model as its source; its B-reps are in the kept temporary bundle.
     folder = (product.geometry or {}).get("x-temporary-bundle") or Path(product.source).parent
+    if "FreeCAD" in sys.modules:  # inside FreeCADCmd already (a workbench job): no second FreeCADCmd
+        from .occt import analyze_bundle_breps
+
+        return analyze_bundle_breps(str(folder), **arguments, progress=lambda text: print(text, file=sys.stderr))
     return run_batch("analyze-occt", {"folder": str(folder), **arguments},
                      on_note=lambda text: print(text, file=sys.stderr, flush=True))
 
@@ -197,33 +208,34 @@ def _mesh_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
     return mesh_then_occt(product, meshes, tolerances, "mesh", lambda arguments: _run_occt(product, arguments))
 
 
-def _occt_directions(product: Product, tolerances: Tolerances) -> list[list[float]]:
-    """The directions besides the axes the occt engine tests: the designer's, then the candidate directions
-    the mesh engine would find on the bundle's meshes (:func:`planner.geometry.candidate_directions`, at
-    most ``tolerances.directions``; none when the meshes cannot be read, the exact engine's job being the
-    B-reps). Cost: one pass over the meshes' facets."""
+def _occt_directions(tolerances: Tolerances, meshes) -> list[list[float]]:
+    """The directions besides the axes the occt engine tests when OCCT decides every pair: the designer's,
+    then the candidate directions the mesh engine would find on ``meshes`` (the bundle's, or None when they
+    cannot be read here: the exact engine's job being the B-reps; :func:`planner.geometry.candidate_directions`,
+    at most ``tolerances.directions``). Cost: one pass over the meshes' facets."""
     import numpy as np
 
-    from planner.geometry.bundle import load_part_meshes
     from planner.geometry.mesh_engine import candidate_directions
 
     designer = [np.asarray(v, dtype=float) for v in tolerances.designer_directions]
-    found: list = []
-    if tolerances.directions > 0:
-        try:
-            found = candidate_directions(load_part_meshes(product), tolerances.directions, designer)
-        except PlannerError:
-            found = []
+    found = candidate_directions(meshes, tolerances.directions, designer) \
+        if tolerances.directions > 0 and meshes is not None else []
     return [[float(c) for c in v] for v in designer + list(found)]
 
 
 def occt_report(product: Product, data: dict) -> GeometryReport:
-    """The :class:`GeometryReport` of the OCCT engine's JSON answer (:func:`freecad_aplan.occt.analyze_bundle_breps`)."""
+    """The :class:`GeometryReport` of the OCCT engine's JSON answer (:func:`freecad_aplan.occt.analyze_bundle_breps`)
+    on every pair, its undecided pairs counted as blocking and recorded as :mod:`freecad_aplan.hybrid` records
+    them (``tolerances["pairs"]``)."""
+    count = len(product.part_ids) * (len(product.part_ids) - 1) // 2
+    pairs = {"mesh": 0, "occt": count - len(data.get("undecided", [])), "undecided": sorted(sorted(p) for p in data.get("undecided", [])),
+             "timed_out": bool(data.get("timed_out")), "time_limit": data.get("time_limit"),
+             "fallbacks": pair_fallbacks(data, "blocking")}
     return GeometryReport(
         engine="occt", parts=tuple(product.part_ids), contacts=tuple(tuple(c) for c in data["contacts"]),
         interferences=tuple((i["parts"][0], i["parts"][1], float(i["volume"])) for i in data["interferences"]),
         obstructions={axis: tuple(tuple(p) for p in pairs) for axis, pairs in data["obstructions"].items()},
-        tolerances=data.get("tolerances", {}), warnings=tuple(data.get("warnings", ())),
+        tolerances={**data.get("tolerances", {}), "pairs": pairs}, warnings=tuple(data.get("warnings", ())),
         seconds=float(data.get("seconds", 0.0)),
         directions={name: tuple(float(c) for c in v) for name, v in data.get("directions", {}).items()})
 
@@ -301,9 +313,15 @@ def _export_command(subparsers) -> None:
     parser.set_defaults(run=run)
 
 
+def geometry_engines() -> dict:
+    """The geometry engines of the FreeCAD side by name: ``occt`` (:func:`occt_engine`) and ``mesh`` (the
+    planner's, plus OCCT for the parts without a good mesh). What the entry point registers, and what the
+    workbench's job passes where no entry point is installed (FreeCADCmd's Python)."""
+    return {"occt": occt_engine, "mesh": _mesh_engine}
+
+
 def register(registry) -> None:
     registry.commands.append(_export_command)
     for suffix in MODEL_SUFFIXES:
         registry.loaders[suffix] = _load_model
-    registry.engines["occt"] = _occt_engine
-    registry.engines["mesh"] = _mesh_engine  # the planner's, plus OCCT for the parts without a good mesh
+    registry.engines.update(geometry_engines())

@@ -41,7 +41,6 @@ from planner.defaults import (
 from planner.errors import PlannerError
 from planner.files import building_folder
 from planner.product import fold, product_to_dict, save_product
-from planner.product.designer import designer_geometry
 
 from .dependencies import MESH_ENGINE, installed
 from .dependencies import mesh_python as _mesh_python  # the name the commands and tests use
@@ -52,7 +51,7 @@ from .runner import FreeCADError, find_freecadcmd
 from .sessions import base_part_in, level_model, level_of
 
 __all__ = ["require_analysis", "export_for_detection", "detection_copy", "worker_command", "analyze_bundle",
-           "store_detection", "edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking",
+           "detection_job", "store_detection", "edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking",
            "unmark_not_blocking", "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report",
            "has_levels", "level_statistics_report",
            "export_analysis_bundle", "export_decision_model",
@@ -110,57 +109,66 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
     """The program and arguments of a background job running ``batch.py`` (``action``: export, analyze,
     level-stats, solve, session, habits).
 
-    The occt engine and the solver run in FreeCADCmd; the mesh engine needs trimesh and manifold3d, so it
-    runs in :func:`_mesh_python`, else in FreeCADCmd when FreeCAD's Python has them. Raises
+    The solver runs in FreeCADCmd; the mesh engine needs trimesh and manifold3d, so it runs in
+    :func:`_mesh_python`, else in FreeCADCmd when FreeCAD's Python has them; so does the occt engine, which
+    settles the easy pairs on the meshes (else FreeCADCmd alone, OCCT deciding every pair). Raises
     :class:`~freecad_aplan.runner.FreeCADError` saying what to install when none can.
     """
     if action in ("level-stats", "session", "habits") and _mesh_python() is not None:  # the planner alone: no FreeCAD
         return [_mesh_python(), BATCH_SCRIPT]
-    if action == "analyze" and engine == "mesh":
-        python = _mesh_python()
+    if action == "analyze" and engine in ("mesh", "occt"):
+        python = _mesh_python()  # the occt engine settles the easy pairs on the meshes too (hybrid)
         if python is not None:
             return [python, BATCH_SCRIPT]
-        if not all(installed(m) for m in MESH_ENGINE):
+        if engine == "mesh" and not all(installed(m) for m in MESH_ENGINE):
             raise FreeCADError("the mesh engine needs the Python packages trimesh and manifold3d, which FreeCAD's "
                                "Python does not have: install them for FreeCAD (pip), set APLAN_PYTHON to a Python "
                                "that has them, or choose the occt engine (analysis property Engine)")
     return [find_freecadcmd(), BATCH_SCRIPT]
 
 
+def detection_job(folder: str, engine: str, intent) -> dict:
+    """The ``analyze`` job (:func:`analyze_bundle`) of the bundle ``folder`` with ``engine`` and the analysis'
+    tolerances and OCCT bounds (``intent``: its :class:`~freecad_aplan.intent.DesignerIntent`): what Detect
+    runs in the background."""
+    return {"action": "analyze", "folder": folder, "engine": engine, "contact": intent.contact,
+            "interference": intent.interference, "depth": intent.depth,
+            "face_weight": intent.occt_face_weight, "prism_triangles": intent.occt_prism_triangles}
+
+
 def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_TOLERANCE,
                    interference: float = INTERFERENCE_VOLUME, depth: float = BLOCKING_DEPTH,
-                   face_weight: int = OCCT_FACE_WEIGHT, prism_triangles: int = OCCT_PRISM_TRIANGLES) -> dict:
+                   face_weight: int = OCCT_FACE_WEIGHT, prism_triangles: int = OCCT_PRISM_TRIANGLES,
+                   progress=None) -> dict:
     """Run a geometry engine on the bundle ``folder`` and write the result into its ``product.json``
     (``face_weight``, ``prism_triangles``: the occt engine's bounds, the analysis' ``OcctFaceWeight`` and
-    ``OcctPrismTriangles``).
+    ``OcctPrismTriangles``), through the engines ``aplan analyze`` runs
+    (:func:`freecad_aplan.plugin.geometry_engines`): with ``occt``, the meshes settle the easy pairs and a
+    relation OCCT leaves undecided keeps the mesh engine's answer (:mod:`freecad_aplan.hybrid`), or counts
+    as blocking where the mesh engine cannot run (FreeCADCmd's Python without trimesh and manifold3d).
 
-    Returns the counts (parts, contacts, interferences, seconds). The interlock rules' proposals are recorded
-    with the diagrams (:func:`planner.assembly.interlock_proposals.record_proposals`). Runs in a background job.
+    Returns the counts (parts, contacts, interferences, seconds) and ``undecided``: one line per pair OCCT
+    left undecided, with the answer used (:func:`freecad_aplan.hybrid.undecided_notes`), each also told to
+    ``progress(text)`` when given (the job's notes). The interlock rules' proposals are recorded with the
+    diagrams (:func:`planner.assembly.interlock_proposals.record_proposals`). Runs in a background job.
     """
     from planner.geometry import Tolerances
     from planner.geometry.bundle import PRODUCT_FILE, analyse_bundle, load_bundle
 
+    from .hybrid import undecided_notes
+    from .plugin import geometry_engines
+
     product = load_bundle(folder)
     tolerances = Tolerances(contact=contact, interference=interference, depth=depth, face_weight=face_weight,
                             prism_triangles=prism_triangles)
-    if engine == "occt":
-        from .occt import analyze_bundle_breps
-        from .plugin import occt_report
-
-        designer = [d.vector for d in designer_geometry(product).directions]  # tested like the axes
-        report = occt_report(product, analyze_bundle_breps(folder, contact=contact, interference=interference,
-                                                           depth=depth, directions=designer,
-                                                           pair_steps=tolerances.pair_steps,
-                                                           time_limit=tolerances.time_limit,
-                                                           face_weight=face_weight,
-                                                           prism_triangles=prism_triangles))
-    else:
-        report = None  # the engine runs in analyse_bundle
     # The interlock rules' proposals, while the meshes are here: the interlocks panel lists them.
-    _, report = analyse_bundle(product, Path(folder) / PRODUCT_FILE, engine, tolerances, report,
-                               then=record_proposals)
+    _, report = analyse_bundle(product, Path(folder) / PRODUCT_FILE, engine, tolerances, then=record_proposals,
+                               engines=geometry_engines())
+    notes = undecided_notes(report.tolerances)
+    for note in notes if progress is not None else ():
+        progress(note)
     return {"parts": len(report.parts), "contacts": len(report.contacts),
-            "interferences": len(report.interferences), "seconds": round(report.seconds, 3)}
+            "interferences": len(report.interferences), "seconds": round(report.seconds, 3), "undecided": notes}
 
 
 def store_detection(analysis, folder: str):

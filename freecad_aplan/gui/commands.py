@@ -128,9 +128,7 @@ class Detect(_Command):
                 finally:
                     shutil.rmtree(folder, ignore_errors=True)
 
-            job = {"action": "analyze", "folder": bundle, "engine": engine, "contact": intent.contact,
-                   "interference": intent.interference, "depth": intent.depth,
-                   "face_weight": intent.occt_face_weight, "prism_triangles": intent.occt_prism_triangles}
+            job = workflow.detection_job(bundle, engine, intent)
             BackgroundJob(f"Detecting contacts and obstructions of {result['parts']} parts ({engine} engine)",
                           command, job, done, failed, self.state.jobs, parent).start()
 
@@ -141,8 +139,12 @@ class Detect(_Command):
     @staticmethod
     def _store(analysis, folder, result):
         workflow.store_detection(analysis, folder)
+        undecided = result.get("undecided", [])
+        for note in undecided:  # each pair the exact engine left, and the answer used (also in Diagrams)
+            _message(f"warning: {note}", error=False)
         _message(f"{result['parts']} parts, {result['contacts']} contacts, {result['interferences']} "
-                 f"interferences ({result['seconds']:.1f} s); see Diagrams", error=False)
+                 f"interferences ({result['seconds']:.1f} s"
+                 f"{f'; {len(undecided)} pairs undecided by OCCT' if undecided else ''}); see Diagrams", error=False)
 
 
 class Diagrams(_Command):

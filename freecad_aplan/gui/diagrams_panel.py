@@ -9,6 +9,7 @@ import FreeCADGui
 from PySide import QtGui
 
 from ..diagrams import RELATION_KINDS, RelationError, describe_relation, edited_diagrams, relation_rows
+from ..hybrid import undecided_notes
 from ..intent import IntentError, read_intent
 from .layout import button_rows, narrow_combo, panel_layout, stacked_field, wrapped_label
 from .tables import _direction_name, _item, _table
@@ -45,6 +46,11 @@ class DiagramsPanel:
             f"({summary.get('engine', '?')} engine{edited}). A row 'blocks +X: a, b' means a, moved along +X, "
             "hits b (and b, moved along -X, hits a).")
         layout.addWidget(intro)
+        undecided = undecided_notes(summary.get("tolerances", {}))
+        if undecided:  # the pairs the exact engine left, and the answer that stands for each
+            label = wrapped_label("\n".join(undecided))
+            label.setObjectName("AplanUndecidedPairs")
+            layout.addWidget(label)
         self.table = _table(["relation", "part", "part"], "AplanDiagramsTable")
         self.table.setSelectionBehavior(QtGui.QAbstractItemView.SelectRows)
         for relation in relation_rows(self.diagrams):

@@ -2,6 +2,11 @@
 built exactly where OCCT can, else from the faces' tessellation."""
 from __future__ import annotations
 
+import ctypes
+import os
+import sys
+from contextlib import contextmanager
+
 import FreeCAD
 import Part
 
@@ -10,10 +15,15 @@ from planner.errors import PlannerError
 from .silhouettes import facing, revolution_axis, silhouette_cutters, split_face
 from .solids import bounding_box
 
-__all__ = ["Prism", "SweepTooLarge", "SweepStopped", "sweep_direction", "exact_prism", "mesh_prism", "sweep_prisms"]
+__all__ = ["Prism", "SweepTooLarge", "SweepStopped", "sweep_direction", "exact_prism", "mesh_prism", "sweep_prisms",
+           "self_intersecting"]
 
 _FLAT = 1e-7  # |normal . d| below this: the face is parallel to d there
 _FOLD = 1e-3  # a face whose normal turns past the silhouette by less than this (radians) is not split
+#: Prisms of more facets than this are checked for self-intersection before they are built (about 1 ms of OCCT
+#: per facet). Smaller ones are built and checked as before: a sliver of a few triangles along a silhouette may
+#: cross itself and still give OCCT's solid its (near zero) volume, which never blocks (the pump's 17_001).
+_CHECKED_FACETS = 1000
 
 
 def sweep_direction(face, d):
@@ -119,6 +129,8 @@ def mesh_prism(face, d, length: float, deflection: float, triangles_bound: int |
         if (q, p) not in uses:  # a boundary edge: one side wall, wound against the patch's
             facets.append((points[q], points[p], points[p] + up))
             facets.append((points[q], points[p] + up, points[q] + up))
+    if len(facets) > _CHECKED_FACETS and self_intersecting(facets):
+        return None  # the patch overlaps itself seen along d: no one prism holds its sweep
     shell = Part.Shell([Part.Face(Part.makePolygon([a, b, c, a])) for a, b, c in facets])
     shell.sewShape()  # our own shape; Shape.makeShapeFromMesh would print progress bars on stdout
     solid = Part.Solid(shell.Shells[0])
@@ -130,6 +142,45 @@ def mesh_prism(face, d, length: float, deflection: float, triangles_bound: int |
     if solid.Volume < 0:
         solid.reverse()
     return solid
+
+
+@contextmanager
+def _quiet_stdout():
+    """Standard output (file descriptor 1) sent to the null device: FreeCAD's mesh module prints progress bars
+    there, without newlines, which would run into the batch protocol's lines (:mod:`freecad_aplan.protocol`)."""
+    try:  # C's buffered output flushed on each side of the swap (no C library by that name on Windows)
+        flush = ctypes.CDLL(None).fflush
+    except (OSError, AttributeError):
+        flush = lambda _: None  # noqa: E731
+    sys.stdout.flush()
+    flush(None)
+    saved, null = os.dup(1), os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, 1)
+    try:
+        yield
+    finally:
+        flush(None)
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(null)
+
+
+def self_intersecting(facets) -> bool:
+    """True when the closed triangle surface ``facets`` (point triples) intersects itself
+    (``Mesh.hasSelfIntersections``: a grid over the triangles, in C++).
+
+    Why: :func:`mesh_prism` builds one ``Part.Face`` per facet and sews them, about 1 ms of OCCT per facet,
+    then refuses the solid whose volume is wrong, as it is for a patch that overlaps itself seen along the
+    direction (a torus or a sphere made with ``toNurbs()``: one closed B-spline patch). Such a patch's walls
+    cut through it, so its prism's surface intersects itself: known here in 0.03 CPU s instead of 6 to 9
+    (the torus of tests/workbench/test_heavy_shapes.py, 14,612 facets, bench/README.md). A surface that does
+    not intersect itself goes on to be built and checked as before, so no verdict comes from this test alone
+    but that the piece cannot be swept (its pairs undecided: the mesh engine's answer stands). Asked only for
+    prisms of more than :data:`_CHECKED_FACETS` facets, where it saves seconds."""
+    import Mesh
+
+    with _quiet_stdout():
+        return bool(Mesh.Mesh([[tuple(p) for p in facet] for facet in facets]).hasSelfIntersections())
 
 
 class Prism:

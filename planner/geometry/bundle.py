@@ -86,8 +86,11 @@ def _mesh_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
 ENGINES: dict[str, Callable[[Product, Tolerances], GeometryReport]] = {"mesh": _mesh_engine}
 
 
-def analyze_product(product: Product, engine: str = "mesh", tolerances: Tolerances = Tolerances()) -> GeometryReport:
+def analyze_product(product: Product, engine: str = "mesh", tolerances: Tolerances = Tolerances(),
+                    engines: dict[str, Callable] | None = None) -> GeometryReport:
     """Run a geometry engine on the product's meshes (``mesh``) or B-reps (``occt``, from the FreeCAD side).
+    ``engines``: engines by name besides the plugins' (a Python where no entry point is installed, such as
+    FreeCADCmd's, passes the FreeCAD side's here).
 
     ``tolerances.contact`` may be ``"auto"``; the gaps between the groups are recorded when the contacts fall
     apart, and a tolerance that makes too much touch is warned about
@@ -95,7 +98,7 @@ def analyze_product(product: Product, engine: str = "mesh", tolerances: Toleranc
     (``geometry.designer``) are tested besides the axes and the candidate directions (mesh engine)."""
     from ..plugins import registry
 
-    engines = {**ENGINES, **registry().engines}
+    engines = {**ENGINES, **registry().engines, **(engines or {})}
     if engine not in engines:
         raise GeometryError(f"unknown geometry engine {engine!r}; available: {', '.join(sorted(engines))}")
     designer = designer_geometry(product).directions
@@ -107,14 +110,16 @@ def analyze_product(product: Product, engine: str = "mesh", tolerances: Toleranc
 
 def analyse_bundle(product: Product, path: str | Path, engine: str = "mesh", tolerances: Tolerances = Tolerances(),
                    report: GeometryReport | None = None,
-                   then: Callable[[Product], Product] | None = None) -> tuple[Product, GeometryReport]:
+                   then: Callable[[Product], Product] | None = None,
+                   engines: dict[str, Callable] | None = None) -> tuple[Product, GeometryReport]:
     """Analyse a bundle: the one way its diagrams are found and written, for the command line (``aplan
     analyze``), the workbench and the FreeCAD export. ``report``: an engine's answer found elsewhere (the
-    workbench's OCCT run inside FreeCAD), else :func:`analyze_product` with ``engine`` and ``tolerances``;
+    workbench's OCCT run inside FreeCAD), else :func:`analyze_product` with ``engine``, ``tolerances`` and
+    ``engines``;
     applied to ``product`` (:func:`apply_report`), then to ``then`` if given (what a caller adds while the
     meshes are at hand, e.g. the workbench's interlock proposals), and the product written to ``path``
     atomically, once. Returns the analysed product and the report. Cost: the engine's."""
-    report = analyze_product(product, engine, tolerances) if report is None else report
+    report = analyze_product(product, engine, tolerances, engines) if report is None else report
     analysed = apply_report(product, report)
     if then is not None:
         analysed = then(analysed)

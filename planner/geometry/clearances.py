@@ -113,7 +113,7 @@ def analyze_with_clearances(run: Engine, tolerances: Tolerances,
     """Run the engine ``run`` with ``tolerances``, choosing the contact tolerance when it is ``"auto"``, and add
     the gap record and the touching warning (module docstring). ``meshes`` reads the part meshes, only when
     needed (a disconnected result, auto, or a tolerance above the default): for a fixed tolerance a bundle
-    without meshes is analysed as before, without the record.
+    without meshes, or a Python without trimesh to read them, is analysed as before, without the record.
 
     Auto: the engine runs at the default tolerance; when its contacts fall apart, the gaps between the groups
     are measured, the tolerance is the bottleneck (:func:`~planner.geometry.gaps.contact_tolerance_for`), the
@@ -127,7 +127,7 @@ def analyze_with_clearances(run: Engine, tolerances: Tolerances,
         if not loaded:
             try:
                 loaded.append(meshes())
-            except GeometryError:
+            except (GeometryError, ImportError):  # ImportError: no trimesh here (FreeCADCmd's Python)
                 if required:
                     raise
                 log.debug("no meshes to measure the gaps with", exc_info=True)

@@ -16,6 +16,11 @@ both documents, exports them and runs the OCCT engine on the 10-turn one, and ch
   the other pairs exactly as without the spring;
 - a sweep over its triangle bound (a cylinder as a B-spline, bound 1) leaves its pair undecided, named;
 - a sweep asks its ``stop`` (the time limit) before each face, and is abandoned when it says so;
+- a patch swept as triangles that overlaps itself seen along the direction (the torus as NURBS) is refused
+  before any face of its prism is built (counted: no ``Part.Face``), a one-to-one patch built as before;
+- an open coil (pitch 12) whose ring is looser than :data:`~freecad_aplan.hull.LOOSE` (closed form) is
+  exported on its closest mesh (rule ``closest``, named in the warnings), and ``aplan analyze --engine occt``
+  decides its pairs on that mesh, none undecided;
 - a face OCCT cannot sweep at all (a sphere and a torus as B-splines, in a document built here, each beside a
   box that blocks it along +X) leaves its pairs along that direction undecided, so ``aplan analyze --engine
   occt`` keeps the mesh engine's answer for them, reported per pair: the diagram shows the blocking (before,
@@ -37,6 +42,7 @@ from spring_document import COIL_RADIUS, WIRE
 
 PITCH = 4.0
 TURNS = (10, 20)
+OPEN_PITCH, OPEN_TURNS = 12.0, 5  # an open coil: its ring 13 times its volume (closed form, _ring_ratio)
 TIGHT, LOOSE = 4.0, 8.0  # freecad_aplan.hull (it imports FreeCAD)
 
 SCRIPT = r"""
@@ -74,6 +80,23 @@ for turns in TURNS:
         out["occt_without"] = analyze_shapes([p for p in parts if p[0] != "Spring"])
         out["occt_asked"] = analyze_shapes(parts, pairs=[["Plate", "Rod"], ["Rod", "Washer"]])
     FreeCAD.closeDocument(doc.Name)
+# An open coil (pitch OPEN_PITCH, 10 wire diameters): no mesh within 1 %, its exact shape heavy and its ring looser
+# than LOOSE, so it is decided on its closest mesh (rule closest); exported here, analysed by aplan (OPEN_COIL).
+from freecad_aplan.hull import LOOSE, ring_hull
+from freecad_aplan.tessellation import checked_mesh
+path = os.path.join(TMP, "open_coil.FCStd")
+build_spring_document(path, pitch=OPEN_PITCH, height=OPEN_PITCH * OPEN_TURNS)
+product, _ = export_model(path, os.path.join(TMP, "open_coil"))
+doc = open_model(path)
+spring = {c.id: c.shape for c in read_components(doc).components}["Spring"]
+mesh, _ = checked_mesh(spring, 0.05, 0.25, 0.01)
+points = [(p.x, p.y, p.z) for p in mesh.Points]
+rings = [ring_hull(points, spring.Volume, 0.05, spring, bound) for bound in (LOOSE, 100.0)]
+out["open"] = {"check": product["geometry"]["mesh_check"]["parts"]["Spring"],
+               "rules": product["geometry"]["mesh_check"]["rules"], "warnings": product["geometry"]["warnings"],
+               "weight": shape_weight(spring)[0], "loose_ring": rings[0] is not None,
+               "ring_ratio": rings[1].Volume / spring.Volume if rings[1] is not None else None}
+FreeCAD.closeDocument(doc.Name)
 # A cylinder as a B-spline: its side face folds with no known silhouette, so it is swept as triangles.
 cylinder, block = Part.makeCylinder(5, 10, V(0, 0, -5)).toNurbs(), Part.makeBox(10, 10, 10, V(6, -5, -5))
 out["bounded"] = analyze_shapes([("cylinder", cylinder), ("block", block)], prism_triangles=1)
@@ -104,11 +127,23 @@ try:
 except SweepStopped:
     out["stopped"] = len(asked)
 out["unstopped"] = len(sweep_prisms(block, V(1, 0, 0), 20.0, 0.05, 1e-4, stop=lambda: False)[0])
+# A patch that overlaps itself along +X (the torus as NURBS) is refused before any face of its prism is built;
+# a B-spline cylinder's half is built (one face per facet), as before.
+from freecad_aplan.occt.prisms import mesh_prism
+built, face_type = [], Part.Face
+Part.Face = lambda *arguments: built.append(1) or face_type(*arguments)
+out["faces_built"] = {}
+for name, shape in (("Torus", NURBS[2][1]), ("cylinder", cylinder)):
+    del built[:]
+    prism = mesh_prism(shape.Faces[0], V(1, 0, 0), 20.0, 0.025)
+    out["faces_built"][name] = [prism is not None, len(built)]
+Part.Face = face_type
 print("APLAN-RESULT " + json.dumps(out), flush=True)
 """
 
 HEAVY = freecadcmd_job("heavy", lambda tmp: f"REPO = {str(REPO)!r}\nTMP = {str(tmp)!r}\nPITCH = {PITCH!r}\n"
-                                            f"TURNS = {TURNS!r}\n" + SCRIPT)
+                                            f"TURNS = {TURNS!r}\nOPEN_PITCH = {OPEN_PITCH!r}\n"
+                                            f"OPEN_TURNS = {OPEN_TURNS!r}\n" + SCRIPT)
 # Bounds above the ball's and the torus' (face weights 270 and 324; 3,288 and 7,044 triangles at 0.05), so
 # that they are swept, and below the defaults, so that the run shows they were applied.
 BOUNDS = {"face_weight": 1000, "prism_triangles": 10000}
@@ -123,7 +158,10 @@ def _analyze_nurbs():
 
 
 NURBS_ANALYSIS = Job("aplan analyze --engine occt of a sphere and a torus as NURBS", _analyze_nurbs)
-BACKGROUND = (HEAVY, NURBS_ANALYSIS)
+OPEN_COIL = Job("aplan analyze --engine occt of the open coil",
+                lambda: aplan_process("analyze", str(HEAVY.result()[0] / "open_coil"), "--engine", "occt",
+                                      "--directions", "0"))
+BACKGROUND = (HEAVY, NURBS_ANALYSIS, OPEN_COIL)
 
 
 @pytest.fixture(scope="module")
@@ -132,12 +170,14 @@ def heavy():
     return freecad_result(HEAVY.result()[1])
 
 
-def _ring_ratio(turns: int) -> float:
+def _ring_ratio(turns: int, pitch: float = PITCH) -> float:
     """The ring hull's volume over the spring's, closed form: the ring from COIL_RADIUS - WIRE to + WIRE over
-    the height plus the wire's diameter, the spring a tube of radius WIRE along the helix."""
-    height = PITCH * turns + 2 * WIRE
+    the height plus the wire's diameter; the spring the circle of radius WIRE in a plane through the axis
+    (spring_document) swept along the helix, whose volume is the circle's area times the path of its centre
+    around the axis, 2 pi COIL_RADIUS per turn (the pitch moves it along the axis, within its own plane)."""
+    height = pitch * turns + 2 * WIRE
     ring = math.pi * ((COIL_RADIUS + WIRE) ** 2 - (COIL_RADIUS - WIRE) ** 2) * height
-    tube = math.pi * WIRE ** 2 * turns * math.hypot(2 * math.pi * COIL_RADIUS, PITCH)
+    tube = math.pi * WIRE ** 2 * turns * 2 * math.pi * COIL_RADIUS
     return ring / tube
 
 
@@ -199,6 +239,42 @@ def test_a_sweep_over_its_triangle_bound_is_undecided(heavy):
 def test_a_sweep_stops_between_faces(heavy):
     assert heavy["stopped"] == 3  # asked before each of the box's six faces, stopped at the third
     assert heavy["unstopped"] == 1  # a box along +X: the prism of its one face facing backwards
+
+
+@pytest.mark.freecad
+def test_a_patch_that_overlaps_itself_is_refused_before_its_faces_are_built(heavy):
+    # The torus' backward half along +X is two bands whose projections overlap (the outer one on the -X side,
+    # the inner one on the +X side of the hole): its prism's walls cut through it, found on its triangles
+    # (Mesh.hasSelfIntersections) before one Part.Face is made. The cylinder's half projects one-to-one.
+    assert heavy["faces_built"]["Torus"] == [False, 0]
+    swept, faces = heavy["faces_built"]["cylinder"]
+    assert swept and faces > 0
+
+
+@pytest.mark.freecad
+def test_an_open_coil_is_exported_on_its_closest_mesh(heavy):
+    # The export of a document, end to end: no mesh within 1 %, heavier than the OCCT bound, and its ring
+    # (the closed form, measured within 2 %) looser than LOOSE, so none is taken: rule closest, named.
+    found = heavy["open"]
+    assert found["rules"]["closest"] == ["Spring"] and sorted(found["rules"]["mesh"]) == ["Plate", "Rod", "Washer"]
+    assert found["check"]["rule"] == "closest" and found["check"]["method"] == "exact"
+    assert found["check"]["weight"] == found["weight"] > OCCT_FACE_WEIGHT
+    ratio = _ring_ratio(OPEN_TURNS, OPEN_PITCH)
+    assert ratio > LOOSE and not found["loose_ring"]
+    assert abs(found["ring_ratio"] - ratio) < 0.02 * ratio
+    named = [w for w in found["warnings"] if w.startswith("Spring:")]
+    assert len(named) == 1 and "fallback rule 'closest'" in named[0] and "not conservative for blocking" in named[0]
+
+
+@pytest.mark.freecad
+def test_the_open_coil_s_pairs_are_decided_on_its_mesh_by_both_engines(heavy):
+    # Rule closest: OCCT is never asked about the coil's pairs (hybrid.exact_pairs), so none is undecided.
+    done = succeeded(OPEN_COIL.result())
+    product = load_product(HEAVY.result()[0] / "open_coil" / "product.json")
+    pairs = product.geometry["analysis"]["tolerances"]["pairs"]
+    assert pairs["mesh"] >= 3 and not [p for p in pairs["undecided"] if "Spring" in p], done.stderr
+    assert all("Spring" not in f["parts"] for f in pairs["fallbacks"])
+    assert any(c for c in product.contacts if "Spring" in c)  # on its mesh: it rests on the plate
 
 
 @pytest.mark.freecad

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from freecad_aplan.hybrid import exact_pairs, fallback_parts, merge_reports, mesh_then_occt
+from freecad_aplan.hybrid import exact_pairs, fallback_parts, merge_reports, mesh_then_occt, undecided_notes
+from freecad_aplan.plugin import occt_report
 from planner.errors import GeometryError
 from planner.geometry import Tolerances
 from planner.geometry.mesh_engine import analyze_meshes
@@ -40,8 +41,27 @@ def test_occt_decides_relation_by_relation():
     assert ("b", "c") not in merged.obstructions["+X"]  # decided by OCCT
     record = merged.tolerances["pairs"]
     assert record == {"mesh": 6 - 2, "occt": 1, "undecided": [["a", "b"]], "undecided_relations": 1,
-                      "timed_out": True, "time_limit": 1.0, "fallback": {}}
+                      "timed_out": True, "time_limit": 1.0, "fallback": {},
+                      "fallbacks": [{"parts": ["a", "b"], "relations": ["a moving along +X"], "answer": "mesh"}]}
     assert merged.engine == "occt" and "w" in merged.warnings
+    # Told per pair to the user (the workbench's job notes and Diagrams panel, undecided_notes).
+    assert undecided_notes(merged.tolerances) == [
+        "OCCT left 'a' and 'b' undecided (a moving along +X): the mesh engine's answer stands",
+        "the exact engine reached its time limit (1.0 s)"]
+
+
+def test_without_the_mesh_engine_undecided_pairs_count_as_blocking():
+    # OCCT on every pair (FreeCADCmd's Python has no trimesh): its undecided pair is recorded as blocking.
+    product = product_from_dict({"format": "aplan-product", "version": 1, "contacts": [],
+                                 "parts": [{"id": "a"}, {"id": "b"}, {"id": "c"}]}, "t")
+    occt = {"contacts": [["a", "b"]], "interferences": [], "obstructions": {"+X": [["a", "b"]], "+Y": [], "+Z": []},
+            "undecided": [["a", "b"]], "undecided_relations": [["a", "b", "the contact"]]}
+    report = occt_report(product, occt)
+    assert report.tolerances["pairs"]["occt"] == 3 - 1
+    assert undecided_notes(report.tolerances) == [
+        "OCCT left 'a' and 'b' undecided (the contact): counted as touching and blocking (no mesh engine's answer "
+        "to fall back to)"]
+    assert undecided_notes({}) == [] and undecided_notes(_mesh().tolerances) == []
 
 
 def test_fallback_parts_come_from_the_bundle_rules():
