@@ -89,7 +89,8 @@ def count_log(plan: Plan, counts: np.ndarray, path: str | os.PathLike, technical
                           f"habits are of {name!r}, state graph {theirs}: parts, operations or technical constraints "
                           f"differ); {fix}")
     try:
-        found = explanations(plan, _on_plan(plan, logged, steps, path), log_prior(plan) if choice is None else choice)
+        found = explanations(plan, _on_plan(plan, logged, steps, path), log_prior(plan) if choice is None else choice,
+                             ORDERS_CAP)
     except SequenceError as exc:
         raise HabitsError(f"{path}: {exc}: the logged sequence is not one of this plan's (check --technical)") from None
     counts += found.counts
