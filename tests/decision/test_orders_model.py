@@ -138,7 +138,7 @@ def test_bad_orders_are_refused(pen):
             check_orders_parameters(a, d, "f.json")
     assert check_orders_parameters(-0.4, 0.5, "f.json") == (-0.4, 0.5)
     # a - d < a + min(n, d) <= 0: a negative concentration with one order weighing 0.2 < d would leave pi_0 < 0
-    with pytest.raises(HabitsError, match="leave the base a weight of -0.2"):
+    with pytest.raises(HabitsError, match=r"the habits: the orders. concentration -0.4 .* leave the base a weight of -0.2"):
         orders_prior(plan, _habits(plan, [(order, 0.2)], -0.4, 0.5))
 
 
