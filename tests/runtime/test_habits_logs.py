@@ -79,7 +79,7 @@ def test_counts_are_the_logged_steps(logs, tmp_path):
                           expected + _one(model, played))
 
 
-def test_a_log_past_the_cap_records_no_order_and_says_so(logs, monkeypatch):
+def test_a_log_past_the_cap_records_no_order_and_says_so(logs, monkeypatch, capsys):
     """More explanations than the cap (here a cap of 0): the per-state counts are the same, no order is recorded,
     and a note names the log."""
     from planner.runtime import habits_logs
@@ -93,6 +93,15 @@ def test_a_log_past_the_cap_records_no_order_and_says_so(logs, monkeypatch):
     assert habits_logs.count_log(model.plan, capped, path, orders=none, notes=notes) == len(played[path])
     assert np.array_equal(capped, counts) and len(orders) == 1 and none == {}
     assert len(notes) == 1 and str(path) in notes[0] and "more than 0 sequences" in notes[0]
+
+    from planner.cli import main
+
+    out = path.parent / "capped-habits.json"
+    assert main(["habits", str(path), "-o", str(out), "--json"]) == 0  # in process: the cap patched
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert summary["unrecorded"] == 1 and summary["orders"] == 0
+    assert main(["habits", str(path), "-o", str(out), "--force"]) == 0
+    assert capsys.readouterr().out.startswith(f"note: {path}: more than 0 sequences explain")
 
 
 def _one(model, played):
