@@ -256,7 +256,7 @@ class SessionPanel:
         self.learned.update(logs)
         self.habits.field.setText(result["file"])
         self.habits.offered = result["file"]  # the level's learned file: another level's replaces it
-        self.habits.show(f"learned {result['steps']} operator step{'s' if result['steps'] != 1 else ''} from "
+        self.habits.show(f"learned {result['steps']:g} operator step{'s' if result['steps'] != 1 else ''} from "
                          f"{result['logs']} log{'s' if result['logs'] != 1 else ''}"
                          f"{', added to the file' if result['added'] else ''}: {os.path.basename(result['file'])}")
 

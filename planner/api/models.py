@@ -91,14 +91,16 @@ def session_habits(product: str | os.PathLike | Product | Plan, model: str | Non
 def learn_habits(logs, product: Product | Plan | None = None, prior: float | None = None,
                  prior_per: str | None = None, technical: bool | None = None,
                  add: str | os.PathLike | None = None, inputs: InputLimits = InputLimits(),
-                 concentration: float | None = None, discount: float | None = None) -> tuple[Habits, int]:
+                 concentration: float | None = None, discount: float | None = None,
+                 notes: list[str] | None = None) -> tuple[Habits, float]:
     """The habits counted from the session logs ``logs`` (``aplan habits LOG...``; docs/habits.md, Learning from
     logs) and the operator's steps counted: of ``product``'s plan (None: the first log's product), added to the
     counts of the habits file ``add`` when given (``product`` is then needed, to check them against), with the
     prior ``prior`` (None: ``add``'s, else the default) spread ``prior_per`` (None: ``add``'s, else per edge), and
     the recorded orders' Pitman-Yor ``concentration`` and ``discount`` (None: ``add``'s, else the defaults;
-    :mod:`~planner.decision.orders`). A
-    log of another product version, one with no step, or ``add`` of another product is a
+    :mod:`~planner.decision.orders`); ``notes``, if given, gets a line per finished log whose explanations are too
+    many to record as orders (the operator's steps counted are expected counts: docs/habits.md, Learning from
+    logs). A log of another product version, one with no step, or ``add`` of another product is a
     :class:`~planner.decision.habits.HabitsError`. Cost: one replay per log (a model build, one belief update per
     step)."""
     from dataclasses import replace
@@ -110,7 +112,7 @@ def learn_habits(logs, product: Product | Plan | None = None, prior: float | Non
     start = read_habits(add, inputs) if add else None
     if start is not None and plan is None:
         raise HabitsError(f"--add {add}: give the product too (--product PRODUCT), to check the counts against it")
-    habits, steps = habits_from_logs(plan, list(logs), prior, technical, start, inputs)
+    habits, steps = habits_from_logs(plan, list(logs), prior, technical, start, inputs, notes)
     habits = replace(habits, prior_per=prior_per or (start.prior_per if start is not None else "edge"))
     concentration = concentration if concentration is not None else habits.concentration
     discount = discount if discount is not None else habits.discount

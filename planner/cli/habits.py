@@ -27,16 +27,20 @@ def _habits(args: argparse.Namespace) -> int:
     from ..api import learn_habits
 
     product = None if args.product is None else product_from(args, args.product)
+    notes: list[str] = []
     habits, steps = learn_habits(args.logs, product, args.prior, args.prior_per, args.technical, args.add,
-                                 inputs_from(args), args.concentration, args.discount)
+                                 inputs_from(args), args.concentration, args.discount, notes)
     write_habits(args.output, habits, len(args.logs))
     if args.json:
         print(json.dumps({"product": habits.product, "fingerprint": habits.fingerprint, "prior": habits.prior,
                           "prior_per": habits.prior_per, "logs": len(args.logs), "steps": steps,
+                          "unrecorded": len(notes),
                           "edges": len(habits.counts), "orders": len(habits.orders),
                           "concentration": habits.concentration, "discount": habits.discount}))
     else:
-        print(f"{habits.product}: {steps} steps from {len(args.logs)} log{'s' if len(args.logs) != 1 else ''}, "
+        for note in notes:
+            print(f"note: {note}")
+        print(f"{habits.product}: {steps:g} steps from {len(args.logs)} log{'s' if len(args.logs) != 1 else ''}, "
               f"{len(habits.counts)} state edges counted (prior {habits.prior:g} per {habits.prior_per}; state graph "
               f"{habits.fingerprint}); {len(habits.orders)} distinct orders recorded (concentration "
               f"{habits.concentration:g}, discount {habits.discount:g})")

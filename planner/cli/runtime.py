@@ -227,12 +227,16 @@ def _update_habits(args: argparse.Namespace, plan, log_path: str) -> None:
 
     from ..decision.habits import edge_counts, habits_from_counts
     from ..decision.io.habits_file import read_habits, write_habits
-    from ..runtime.habits_logs import count_log
+    from ..runtime.habits_logs import count_log, log_prior
 
     habits = read_habits(args.habits, inputs_from(args)) if args.habits else None
     counts = edge_counts(plan, habits) if habits is not None else np.zeros(plan.states.n_edges)
     orders = dict(habits.orders) if habits is not None else {}
-    steps = count_log(plan, counts, log_path, args.technical, inputs_from(args), orders)
+    notes: list[str] = []
+    steps = count_log(plan, counts, log_path, args.technical, inputs_from(args), orders, log_prior(plan, habits),
+                      notes)
+    for note in notes:
+        print(f"note: {note}")
     if not counts.any():
         log.warning("--habits-out %s: the session did no step and there were no habits: nothing written",
                     args.habits_out)
@@ -242,7 +246,7 @@ def _update_habits(args: argparse.Namespace, plan, log_path: str) -> None:
     if habits is not None:
         learned = replace(learned, concentration=habits.concentration, discount=habits.discount)
     write_habits(args.habits_out, replace(learned, orders=tuple(orders.items())))
-    print(f"habits: {args.habits_out} ({steps} step{'s' if steps != 1 else ''} of this session added)")
+    print(f"habits: {args.habits_out} ({steps:g} step{'s' if steps != 1 else ''} of this session added)")
 
 
 def _habits_setting(args: argparse.Namespace, habits) -> dict | None:

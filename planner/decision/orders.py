@@ -8,7 +8,7 @@ the concentration (``a > -d``) and ``d`` the discount (``0 <= d < 1``), a full s
     p(sigma) = sum_k pi_k [sigma == sigma_k] + pi_0 U(sigma),
     pi_k = max(n_k - d, 0) / (n + a),   pi_0 = (a + d K) / (n + a),
 
-``U`` the paper's prior (every full sequence equally likely: ``U(sigma) = 1 / N(initial)``; the base is the
+(fractional counts below ``d``: :func:`mixture_weights`), ``U`` the paper's prior (every full sequence equally likely: ``U(sigma) = 1 / N(initial)``; the base is the
 paper's, not the per-state habits', because an operator off its habit draws any sequence, as Alg. 3 assumes).
 ``d = 0`` is the Dirichlet process; no orders is the paper's model exactly.
 
@@ -66,11 +66,23 @@ def check_orders_parameters(concentration, discount, where: str) -> tuple[float,
     return float(concentration), float(discount)
 
 
-def mixture_weights(counts, concentration: float, discount: float) -> tuple[np.ndarray, float]:
-    """``(pi_k, pi_0)`` of the module docstring for the orders' ``counts`` (n_k > 0). They sum to 1. Cost: O(K)."""
+def mixture_weights(counts, concentration: float, discount: float, where: str = "orders") -> tuple[np.ndarray, float]:
+    """``(pi_k, pi_0)`` of the module docstring for the orders' ``counts`` (n_k > 0). Fractional counts (a log
+    that several sequences explain records each with its posterior weight, docs/habits.md, Learning from logs)
+    are discounted by ``min(n_k, d)``: ``pi_k = (n_k - min(n_k, d)) / (n + a)``, ``pi_0 = (a + sum_k min(n_k, d))
+    / (n + a)``, which is the module docstring's for every ``n_k >= d`` (so for every whole count) and still sums
+    to 1 (``max(n_k - d, 0)`` with ``pi_0``'s ``d K`` would not, for ``n_k < d``): an order weighing less than
+    the discount gives all of it to the base. Raises :class:`HabitsError` when ``a + sum_k min(n_k, d) <= 0``
+    (``pi_0`` would not be a probability: a negative concentration with too little recorded), naming ``where``.
+    Cost: O(K)."""
     counts = np.asarray(counts, dtype=float)
-    n, k = float(counts.sum()), counts.size
-    return np.maximum(counts - discount, 0.0) / (n + concentration), (concentration + discount * k) / (n + concentration)
+    n, taken = float(counts.sum()), np.minimum(counts, discount)
+    base = concentration + float(taken.sum())
+    if not base > 0:
+        raise HabitsError(f"{where}: the orders' concentration {concentration:g} with discount {discount:g} and these counts "
+                          f"(total {n:g}) leave the base a weight of {base:g}, not above 0; give a concentration above "
+                          f"{-float(taken.sum()):g}")
+    return (counts - taken) / (n + concentration), base / (n + concentration)
 
 
 def order_edges(plan: Plan, habits: Habits) -> list[tuple[tuple[int, ...], float]]:
@@ -180,7 +192,7 @@ def orders_prior(plan: Plan, habits: Habits) -> OrdersPrior | None:
     if not orders:
         return None
     a, d = check_orders_parameters(habits.concentration, habits.discount, habits.name)
-    pi, pi0 = mixture_weights([c for _, c in orders], a, d)
+    pi, pi0 = mixture_weights([c for _, c in orders], a, d, habits.name)
     states = plan.states
     S = states.n_states
     n = _paths(states)

@@ -4,7 +4,9 @@ The log names the robot's operations (its actions) but only what the operator wa
 observation), which several operations of a state may explain, and a blank observation may hide one (an
 operation that takes no single part and no tool). The sequence is the first, in the order of the state
 graph's edges, that explains every logged event, preferring one that finishes the product
-(:func:`explain_steps`); ``ambiguous`` says whether another one explains the log too.
+(:func:`explain_steps`); ``ambiguous`` says whether another one explains the log too. That one sequence is what
+a log shows (``aplan sequence``, the 3-D panel); the habits learn from every explanation, weighted by its
+posterior (:mod:`~planner.runtime.log_posterior`).
 """
 from __future__ import annotations
 
@@ -23,7 +25,7 @@ from ..validation import InputLimits
 from .log import SessionError, replay
 from .progress import AssemblyProgress
 
-__all__ = ["LoggedSequence", "complete_sequence", "explain_steps", "logged_sequence", "logged_steps"]
+__all__ = ["LoggedSequence", "complete_sequence", "explain_steps", "logged_sequence", "logged_steps", "read_steps"]
 
 
 @dataclass(frozen=True)
@@ -121,20 +123,25 @@ def complete_sequence(plan: Plan, operations: list[int]) -> list[int]:
     return out
 
 
+def read_steps(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> tuple[Product, Plan, list]:
+    """The product the session log at ``path`` stores, its real plan (the orders' model is on an augmented graph:
+    the log is about the real one) and the log's :func:`logged_steps`. Raises
+    :class:`~planner.runtime.log.SessionError` for a file that is not a session log. Cost: the replay (one
+    model build and one belief update per step)."""
+    done = replay(Path(path), limits=limits)
+    return done.product, real_plan(done.model.plan), logged_steps(done.events, done.model)
+
+
 def logged_sequence(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> LoggedSequence:
     """The sequence the session log at ``path`` recorded (module docstring), over the plan of the product
     the log stores; ``limits``: what the log is read within (:func:`~planner.runtime.log.read_log`). Raises :class:`~planner.runtime.log.SessionError` for a file that is not a session log
-    and when no sequence of that product explains it. Cost: the replay (one model build and one belief update
-    per step) and :func:`explain_steps`."""
-    path = Path(path)
-    done = replay(path, limits=limits)
-    plan = real_plan(done.model.plan)  # the orders' model is on an augmented graph: the log is about the real one
-    steps = logged_steps(done.events, done.model)
+    and when no sequence of that product explains it. Cost: :func:`read_steps` and :func:`explain_steps`."""
+    product, plan, steps = read_steps(path, limits)
     try:
         explained, ambiguous = explain_steps(plan, steps)
     except SequenceError as exc:
         raise SessionError(f"{path}: {exc}") from None
     operations = [op for op, _ in explained]
     state = check_sequence(plan, operations)[-1]
-    return LoggedSequence(done.product, plan, tuple(operations), tuple(who for _, who in explained),
+    return LoggedSequence(product, plan, tuple(operations), tuple(who for _, who in explained),
                           state == plan.states.final, ambiguous)

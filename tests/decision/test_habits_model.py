@@ -17,22 +17,28 @@ from reference import filtered_histories, horizon_value
 TOLERANCE = 1e-9
 
 
-def _random_counts(plan, rng, fill=0.5):
+def _random_counts(plan, rng, fill=0.5, fractional=False):
+    """Whole counts from 1 to 29 on a ``fill`` share of the edges, or (``fractional``) expected counts in (0, 3),
+    as a log that several sequences explain gives (docs/habits.md, Learning from logs)."""
     E = plan.states.n_edges
-    return rng.integers(1, 30, E).astype(float) * (rng.random(E) < fill)
+    drawn = rng.uniform(0.01, 3.0, E) if fractional else rng.integers(1, 30, E).astype(float)
+    return drawn * (rng.random(E) < fill)
 
 
 @pytest.fixture(scope="module", params=["pen-no-technical", "pen-technical", "chain-5", "complete-4",
-                                        "pen-technical-per-state", "complete-4-per-state"])
+                                        "pen-technical-per-state", "complete-4-per-state", "chain-5-fractional"])
 def weighted(request, pen):
-    """Random habits on a small product; ``-per-state``: the prior alpha in all per state (docs/habits.md)."""
-    name = request.param.removesuffix("-per-state")
+    """Random habits on a small product; ``-per-state``: the prior alpha in all per state (docs/habits.md);
+    ``-fractional``: fractional counts."""
+    fractional = request.param.endswith("-fractional")
+    name = request.param.removesuffix("-per-state").removesuffix("-fractional")
     product, technical = {"pen-no-technical": (pen, False), "pen-technical": (pen, True),
                           "chain-5": (chain_product(5), None), "complete-4": (complete_product(4), None)}[name]
     plan = make_plan(product, technical)
     rng = np.random.default_rng(sum(map(ord, request.param)))
     per = "state" if request.param.endswith("-per-state") else "edge"
-    weights = habit_weights_from(plan, _random_counts(plan, rng), float(rng.choice([0.1, 1.0, 3.0])), per)
+    weights = habit_weights_from(plan, _random_counts(plan, rng, fractional=fractional),
+                                 float(rng.choice([0.1, 1.0, 3.0])), per)
     return plan, weights, intention_model(plan, weights=weights), factored_model(plan, weights=weights)
 
 

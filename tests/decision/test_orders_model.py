@@ -27,20 +27,29 @@ def _habits(plan, orders, concentration=1.0, discount=0.5):
                    discount=discount, orders=tuple((tuple(keys[e] for e in edges), n) for edges, n in orders))
 
 
-def _random_orders(plan, rng, k):
+def _random_orders(plan, rng, k, fractional=False):
+    """``k`` distinct orders with whole counts from 1 to 19, or (``fractional``) posterior-like ones in (0, 2),
+    some below the discount (docs/habits.md, Learning from logs)."""
     base = factored_model(plan)
     ranks = rng.choice(base.n_sequences, size=min(k, base.n_sequences), replace=False)
-    return [(tuple(base.sequence(int(r))), float(rng.integers(1, 20))) for r in ranks]
+    counts = rng.uniform(0.05, 2.0, ranks.size) if fractional else rng.integers(1, 20, ranks.size)
+    return [(tuple(base.sequence(int(r))), float(n)) for r, n in zip(ranks, counts)]
 
 
-@pytest.fixture(scope="module", params=["pen-technical", "pen-no-technical", "chain-5", "complete-4"])
+@pytest.fixture(scope="module", params=["pen-technical", "pen-no-technical", "chain-5", "complete-4",
+                                        "chain-5-fractional", "pen-fractional"])
 def ordered(request, pen):
     product, technical = {"pen-technical": (pen, True), "pen-no-technical": (pen, False),
-                          "chain-5": (chain_product(5), None), "complete-4": (complete_product(4), None)}[request.param]
+                          "chain-5": (chain_product(5), None), "complete-4": (complete_product(4), None),
+                          "chain-5-fractional": (chain_product(5), None),
+                          "pen-fractional": (pen, True)}[request.param]
     plan = make_plan(product, technical)
     rng = np.random.default_rng(sum(map(ord, request.param)))
     a, d = float(rng.choice([0.3, 1.0, 4.0])), float(rng.choice([0.0, 0.5, 0.9]))
-    orders = orders_prior(plan, _habits(plan, _random_orders(plan, rng, 4), a, d))
+    if request.param.endswith("fractional"):
+        d = 0.9  # so that some counts are below the discount
+    orders = orders_prior(plan, _habits(plan, _random_orders(plan, rng, 4, request.param.endswith("fractional")),
+                                        a, d))
     return plan, orders, intention_model(plan, orders=orders), factored_model(plan, orders=orders)
 
 
@@ -53,11 +62,13 @@ def test_no_orders_is_the_base_model_exactly(pen):
 
 
 def test_one_order_recorded_n_times_has_the_formula_belief(pen):
-    """p(sigma) = (n - d) / (n + a) + (a + d) / (n + a) / N for the order, (a + d) / (n + a) / N for the others."""
+    """p(sigma) = (n - d) / (n + a) + (a + d) / (n + a) / N for the order, (a + d) / (n + a) / N for the others;
+    a fractional n below d is discounted by n (mixture_weights): (a + n) / (n + a) = 1 goes to the base, the
+    paper's model."""
     plan = make_plan(pen)
     base = factored_model(plan)
     N = base.n_sequences
-    for n, a, d in ((7, 1.0, 0.5), (1, 0.2, 0.0), (20, 3.0, 0.9)):
+    for n, a, d in ((7, 1.0, 0.5), (1, 0.2, 0.0), (20, 3.0, 0.9), (1.4, 1.0, 0.9), (0.3, 1.0, 0.9)):
         order = tuple(base.sequence(11))
         orders = orders_prior(plan, _habits(plan, [(order, float(n))], a, d))
         flat, fact = intention_model(plan, orders=orders), factored_model(plan, orders=orders)
@@ -65,8 +76,9 @@ def test_one_order_recorded_n_times_has_the_formula_belief(pen):
         initial = flat.pomdp.initial[starts]
         ops = [flat.sequence_operations(int(i)) for i in starts]
         mine = ops.index(base.sequence_operations(list(order)))
-        other = (a + d) / (n + a) / N
-        assert initial[mine] == pytest.approx((n - d) / (n + a) + other, rel=1e-12)
+        taken = min(n, d)
+        other = (a + taken) / (n + a) / N
+        assert initial[mine] == pytest.approx((n - taken) / (n + a) + other, rel=1e-12)
         assert np.allclose(np.delete(initial, mine), other, rtol=1e-12)
         for k in range(N):  # the factored model's prior of each sequence: the product of its choices
             path = fact.sequence(k)
@@ -125,6 +137,9 @@ def test_bad_orders_are_refused(pen):
         with pytest.raises(HabitsError, match="orders' (discount|concentration)"):
             check_orders_parameters(a, d, "f.json")
     assert check_orders_parameters(-0.4, 0.5, "f.json") == (-0.4, 0.5)
+    # a - d < a + min(n, d) <= 0: a negative concentration with one order weighing 0.2 < d would leave pi_0 < 0
+    with pytest.raises(HabitsError, match=r"the habits: the orders. concentration -0.4 .* leave the base a weight of -0.2"):
+        orders_prior(plan, _habits(plan, [(order, 0.2)], -0.4, 0.5))
 
 
 def test_the_orders_model_is_built_alone(ordered):

@@ -71,10 +71,37 @@ def test_counts_are_the_logged_steps(logs, tmp_path):
             expected[edge] += 1
             state = int(states.edge_target[edge])
     assert np.array_equal(counts, expected)
+    # One sequence explains each pen log: whole counts, the orders 3 and 1 exactly (docs/habits.md).
+    assert sorted(count for _, count in habits.orders) == [1.0, 3.0]
     again = run_aplan("habits", *list(played)[:1], "-o", tmp_path / "more.json", "--product", "pen", "--add", out)
     assert again.returncode == 0, again.stderr
     assert np.array_equal(edge_counts(model.plan, read_habits(tmp_path / "more.json")),
                           expected + _one(model, played))
+
+
+def test_a_log_past_the_cap_records_no_order_and_says_so(logs, monkeypatch, capsys):
+    """More explanations than the cap (here a cap of 0): the per-state counts are the same, no order is recorded,
+    and a note names the log."""
+    from planner.runtime import habits_logs
+
+    model, played = logs
+    path = next(iter(played))
+    counts, orders = np.zeros(model.plan.states.n_edges), {}
+    habits_logs.count_log(model.plan, counts, path, orders=orders)
+    monkeypatch.setattr(habits_logs, "ORDERS_CAP", 0)
+    capped, none, notes = np.zeros_like(counts), {}, []
+    assert habits_logs.count_log(model.plan, capped, path, orders=none, notes=notes) == len(played[path])
+    assert np.array_equal(capped, counts) and len(orders) == 1 and none == {}
+    assert len(notes) == 1 and str(path) in notes[0] and "more than 0 sequences" in notes[0]
+
+    from planner.cli import main
+
+    out = path.parent / "capped-habits.json"
+    assert main(["habits", str(path), "-o", str(out), "--json"]) == 0  # in process: the cap patched
+    summary = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert summary["unrecorded"] == 1 and summary["orders"] == 0
+    assert main(["habits", str(path), "-o", str(out), "--force"]) == 0
+    assert capsys.readouterr().out.startswith(f"note: {path}: more than 0 sequences explain")
 
 
 def _one(model, played):
