@@ -49,8 +49,8 @@ __all__ = ["fallback_parts", "exact_pairs", "merge_reports", "mesh_then_occt", "
 
 EXACT_RULES = ("exact", "box")
 #: What stands for a relation OCCT left undecided: the mesh engine's answer, or blocking (no meshes to ask).
-ANSWERS = {"mesh": "the mesh engine's answer stands",
-           "blocking": "counted as touching and blocking (no mesh engine's answer to fall back to)"}
+ANSWERS = (("mesh", "the mesh engine's answer stands"),
+           ("blocking", "counted as touching and blocking (no mesh engine's answer to fall back to)"))
 
 
 def fallback_parts(product: Product, rules=EXACT_RULES) -> dict[str, str]:
@@ -101,7 +101,7 @@ def _open_relations(occt: dict) -> tuple[set, set]:
 def pair_fallbacks(occt: dict, answer: str, asked=None) -> list[dict]:
     """Per pair OCCT left (partly) undecided in ``occt`` (an answer of
     :func:`freecad_aplan.occt.analyze_shapes`), only those of ``asked`` when given: ``{"parts": [a, b],
-    "relations": [what, ...], "answer": answer}`` (``answer``: a key of :data:`ANSWERS`), in the order of
+    "relations": [what, ...], "answer": answer}`` (``answer``: a name in :data:`ANSWERS`), in the order of
     ``undecided``. A pair without ``undecided_relations`` has every relation undecided (``["all"]``).
     Cost O(undecided relations)."""
     relations: dict[frozenset, list[str]] = {}
@@ -118,7 +118,7 @@ def undecided_notes(tolerances: dict) -> list[str]:
     pair was decided or the mesh engine alone ran."""
     record = (tolerances or {}).get("pairs") or {}
     lines = [f"OCCT left '{f['parts'][0]}' and '{f['parts'][1]}' undecided ({', '.join(f['relations'])}): "
-             f"{ANSWERS.get(f['answer'], f['answer'])}" for f in record.get("fallbacks", ())]
+             f"{dict(ANSWERS).get(f['answer'], f['answer'])}" for f in record.get("fallbacks", ())]
     if lines and record.get("timed_out"):
         lines.append(f"the exact engine reached its time limit ({record.get('time_limit')} s)")
     return lines
