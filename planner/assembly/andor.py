@@ -352,13 +352,12 @@ def _floating(subset, product, adjacency, separable) -> str:
     known volume, then the most contacts in the product (a housing), then the first. Cost: O(connected
     subsets of ``subset`` x its parts)."""
     parts = product.part_ids
-    seen, found = set(), []
-    for root in bit_indices(subset):
-        for moving in connected_subsets(adjacency, subset, root):
+    found = []
+    for root in bit_indices(subset):  # each connected part set once, by its lowest part
+        for moving in connected_subsets(adjacency, subset & ~((1 << root) - 1), root):
             rest = subset ^ moving
-            if moving in seen or not rest:
+            if not rest:
                 continue
-            seen.add(moving)
             groups = components(adjacency, rest)
             if len(groups) > 1 and separable(moving, rest):
                 found.append((moving, groups))
