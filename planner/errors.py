@@ -120,12 +120,24 @@ class DisconnectedProductError(PlannerError):
 class NotDisassemblableError(PlannerError):
     """Some subassembly that the product needs cannot be split under the constraints (it is stuck)."""
 
-    def __init__(self, stuck: list[str], detail: str):
+    def __init__(self, stuck: list[str], detail: str, smallest: Sequence[str] = (), floating: str = ""):
+        """``smallest``: the smallest subassembly that the parts coming apart one by one reach and that has
+        no feasible split; ``floating``: why it has none when a split is refused only because a side is not
+        connected (which parts would float, and what helps), in words."""
         self.stuck = stuck
+        self.smallest = list(smallest)
+        self.floating = floating
+        where = ""
+        if self.smallest and self.smallest != stuck:
+            where = " The smallest subassembly with no feasible split is {" + ", ".join(self.smallest) + "}."
         super().__init__(
             "the product cannot be disassembled: subassembly {" + ", ".join(stuck) + "} has no feasible split "
-            f"({detail}). Check the obstruction relations and technical constraints of these parts."
+            f"({detail}).{where}" + (f" {floating}" if floating else
+                                     " Check the obstruction relations and technical constraints of these parts.")
         )
+        if floating:
+            self.brief = ("cannot be disassembled: {" + ", ".join(self.smallest or stuck) + "} has no feasible "
+                          "split: " + floating)
 
 
 class InterlockedPartsError(NotDisassemblableError):

@@ -190,7 +190,7 @@ def and_or_graph(product: Product, technical: bool | None = None, limit: int = S
             splits[subset] = found
 
     if full not in splits:
-        raise _stuck(full, parts, adjacency, splits, technically_feasible, separable)
+        raise _stuck(full, product, adjacency, splits, technically_feasible, separable)
 
     # Top-down: keep what the complete product can be disassembled into.
     subassemblies = tuple(sorted(_reachable(splits, full), key=lambda m: (-m.bit_count(), m)))
@@ -290,8 +290,9 @@ def _union(masks: Iterable[int]) -> int:
     return out
 
 
-def _stuck(full, parts, adjacency, splits, technically_feasible, separable) -> NotDisassemblableError:
+def _stuck(full, product, adjacency, splits, technically_feasible, separable) -> NotDisassemblableError:
     """Explain why the complete product has no feasible split, down to the smallest stuck subassembly."""
+    parts = product.part_ids
     names = lambda m: "{" + ", ".join(parts[i] for i in bit_indices(m)) + "}"  # noqa: E731
     feasible_alone = lambda m: m & (m - 1) == 0 or technically_feasible(m)  # noqa: E731
     chain = [full]
@@ -324,4 +325,55 @@ def _stuck(full, parts, adjacency, splits, technically_feasible, separable) -> N
     detail = "; ".join(reasons) or "no cut into two connected halves"
     if len(chain) > 1:
         detail += "; it is needed by " + " <- ".join(names(m) for m in reversed(chain[:-1]))
-    return NotDisassemblableError([parts[i] for i in bit_indices(chain[-1])], detail)
+    smallest = _smallest_stuck(chain[-1], adjacency, splits, feasible_alone, separable)
+    return NotDisassemblableError([parts[i] for i in bit_indices(chain[-1])], detail,
+                                  [parts[i] for i in bit_indices(smallest)],
+                                  _floating(smallest, product, adjacency, separable))
+
+
+def _smallest_stuck(subset, adjacency, splits, feasible_alone, separable) -> int:
+    """The smallest subassembly with no feasible split that the parts coming apart one by one reach from
+    ``subset``: follow, while there is one, the smaller side of a separable cut into two connected, feasible
+    halves that cannot be split itself. Cost: O(cuts of each set on the way)."""
+    while True:
+        needed = [m for first in connected_subsets(adjacency, subset, lowest_bit(subset).bit_length() - 1)
+                  if (second := subset ^ first) and len(components(adjacency, second)) == 1
+                  and feasible_alone(first) and feasible_alone(second) and separable(first, second)
+                  for m in (first, second) if m not in splits]
+        if not needed:
+            return subset
+        subset = min(needed, key=lambda m: (m.bit_count(), m))
+
+
+def _floating(subset, product, adjacency, separable) -> str:
+    """The cuts of ``subset`` that the obstructions allow but the topological constraint refuses (the part
+    set left behind is not connected), in words: which parts would be left touching none of the rest, inside
+    which, and what helps; "" when there is none. The part set they rest in is the one with the largest
+    known volume, then the most contacts in the product (a housing), then the first. Cost: O(connected
+    subsets of ``subset`` x its parts)."""
+    parts = product.part_ids
+    found = []
+    for root in bit_indices(subset):  # each connected part set once, by its lowest part
+        for moving in connected_subsets(adjacency, subset & ~((1 << root) - 1), root):
+            rest = subset ^ moving
+            if not rest:
+                continue
+            groups = components(adjacency, rest)
+            if len(groups) > 1 and separable(moving, rest):
+                found.append((moving, groups))
+    if not found:
+        return ""
+    moving, groups = min(found, key=lambda f: (f[0].bit_count(), f[0]))
+    size = [(p.volume or 0.0, adjacency[i].bit_count(), -i) for i, p in enumerate(product.parts)]
+    holds = lambda m: max(size[i] for i in bit_indices(m))  # noqa: E731
+    holder = max(groups, key=holds)
+    names = lambda m: ", ".join(parts[i] for i in bit_indices(m))  # noqa: E731
+    floats = [g for g in groups if g != holder]
+    touching = " and ".join(f"{names(g)} touching only each other" if g.bit_count() > 1 else
+                            f"{names(g)} touching nothing" for g in floats)
+    first = parts[bit_indices(floats[0])[0]]
+    inside = parts[max(bit_indices(holder), key=size.__getitem__)]
+    return (f"taking {names(moving)} out would leave {touching} inside {names(holder)} (a subassembly must be "
+            f"connected in the connection diagram). Add a support contact between each such part and the part "
+            f"it rests on (e.g. {first} and {inside} in the product's contacts), or --group NAME={inside},{first} "
+            "on the CAD model (it then stays in place)")

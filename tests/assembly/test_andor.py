@@ -49,6 +49,8 @@ def test_stuck_product_names_the_subassembly():
         and_or_graph(product)
     assert not isinstance(info.value, InterlockedPartsError)
     assert info.value.stuck == ["a", "b", "c", "lid"]
+    # lid leaves along +X (it hits nothing), and {a, b, c} left is the cycle itself: nothing floats.
+    assert info.value.smallest == ["a", "b", "c"] and info.value.floating == ""
     assert ("subassembly {a, b, c, lid} has no feasible split (3 cut(s) blocked in every direction, e.g. {a} from "
             "{b, c, lid}; 1 cut(s) with a side that cannot be assembled itself, e.g. {a, b, c})") in str(info.value)
 
