@@ -13,7 +13,7 @@ import threading
 from typing import Callable
 
 from planner.errors import PlannerError
-from planner.interrupts import child_options
+from planner.interrupts import start_child
 
 from .protocol import BATCH_SCRIPT, JOB_VARIABLE, encode_job, read_answer, read_note
 
@@ -68,8 +68,8 @@ def _run_captured(command: list[str], env: dict, timeout: float) -> subprocess.C
     """``subprocess.run`` with output captured, whose child never outlives it: killed and reaped on a timeout
     or an interrupt (``run`` does not wait for it after Ctrl-C), and killed by the kernel if this process is
     (:func:`planner.interrupts.child_options`)."""
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-                               stdin=subprocess.DEVNULL, **child_options())
+    process = start_child(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                          stdin=subprocess.DEVNULL)
     try:
         out, err = process.communicate(timeout=timeout)
     except BaseException:
@@ -82,8 +82,8 @@ def _run_captured(command: list[str], env: dict, timeout: float) -> subprocess.C
 def _run_streaming(command: list[str], env: dict, timeout: float, on_note: Callable[[str], None]):
     """``subprocess.run`` with standard output (and error) read line by line, notes passed on at once; a
     timer kills the job after ``timeout`` seconds (then :class:`subprocess.TimeoutExpired`)."""
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
-                               stdin=subprocess.DEVNULL, **child_options())
+    process = start_child(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
+                          stdin=subprocess.DEVNULL)
     killed = threading.Event()
 
     def kill() -> None:

@@ -19,12 +19,13 @@ Handlers can only be installed in the main thread; elsewhere (a GUI's worker thr
 from __future__ import annotations
 
 import signal
+import subprocess
 import sys
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
-__all__ = ["Interrupted", "child_options", "deferred_interrupts", "delivered", "exit_status", "held_interrupts",
+__all__ = ["Interrupted", "child_options", "start_child", "deferred_interrupts", "delivered", "exit_status", "held_interrupts",
            "raise_if_swallowed", "signal_number", "signals_as_interrupts", "swallowed"]
 
 _TERMINATING = tuple(s for s in (getattr(signal, "SIGTERM", None), getattr(signal, "SIGHUP", None)) if s)
@@ -153,10 +154,12 @@ def deferred_interrupts() -> Iterator[Callable[[], int]]:
             signal.signal(s, handler)
 
 
-def child_options() -> dict:
+def child_options(unblock: tuple[int, ...] = ()) -> dict:
     """Keyword arguments for :class:`subprocess.Popen` so the child dies with this process, even when it is
     killed outright (SIGKILL): on Linux the child asks the kernel for SIGKILL when its parent exits
-    (``PR_SET_PDEATHSIG``). Elsewhere nothing; the callers kill their children on an interrupt anyway."""
+    (``PR_SET_PDEATHSIG``). Elsewhere nothing; the callers kill their children on an interrupt anyway.
+    ``unblock``: signals the parent holds while it starts the child (:func:`start_child`), released in the
+    child before it runs its program (a signal mask survives exec)."""
     if not sys.platform.startswith("linux"):
         return {}
     try:
@@ -168,5 +171,31 @@ def child_options() -> dict:
 
     def die_with_parent() -> None:  # runs in the child, between fork and exec
         libc.prctl(1, int(signal.SIGKILL))  # 1: PR_SET_PDEATHSIG
+        if unblock:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, unblock)
 
     return {"preexec_fn": die_with_parent}
+
+
+def start_child(command: list[str], **options) -> subprocess.Popen:
+    """``subprocess.Popen(command, **options)`` with :func:`child_options`, started so that an interrupt never
+    leaves it running: SIGINT, SIGTERM and SIGHUP are held while it starts (an interrupt between the fork and
+    the return of ``Popen`` would leave a child that no caller knows of to kill: the kernel's SIGKILL at this
+    process's exit comes later, while it still runs), then released, and a signal that came meanwhile kills and
+    reaps the child before it is raised. Cost: two ``pthread_sigmask`` calls."""
+    held = (signal.SIGINT, *_TERMINATING)
+    holding = _main_thread() and hasattr(signal, "pthread_sigmask")
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, held) if holding else None
+    process = None
+    try:
+        process = subprocess.Popen(command, **options, **child_options(held if holding else ()))
+    finally:
+        if holding:
+            try:
+                signal.pthread_sigmask(signal.SIG_SETMASK, previous)  # a signal held meanwhile is raised here
+            except BaseException:
+                if process is not None:
+                    process.kill()
+                    process.wait()
+                raise
+    return process

@@ -161,3 +161,42 @@ def test_a_failure_after_an_ignored_interrupt_is_the_interrupt(monkeypatch, caps
     assert capsys.readouterr().err == "aplan: interrupted (SIGTERM): nothing was written\n"
     monkeypatch.setattr(plan, "_stats", lambda args: (_ for _ in ()).throw(PlannerError("a plain failure")))
     assert main(["stats", "pen"]) == 1 and "a plain failure" in capsys.readouterr().err
+
+
+def test_a_signal_while_a_child_starts_kills_and_reaps_it(monkeypatch):
+    """SIGTERM sent between the fork and the return of Popen (the window in which no caller can kill the child
+    yet; seen as a FreeCADCmd outliving an interrupted ``aplan stats`` under load): held, then raised once the
+    child exists, which is killed and reaped first."""
+    import subprocess
+    import sys
+
+    started = []
+    real = subprocess.Popen
+
+    def popen_then_signal(*args, **kwargs):
+        process = real(*args, **kwargs)
+        started.append(process)
+        os.kill(os.getpid(), signal.SIGTERM)  # held: delivered when start_child releases the signals
+        return process
+
+    monkeypatch.setattr(interrupts.subprocess, "Popen", popen_then_signal)
+    with interrupts.signals_as_interrupts():
+        with pytest.raises(interrupts.Interrupted) as caught:
+            interrupts.start_child([sys.executable, "-c", "import time; time.sleep(60)"])
+        interrupts.delivered()
+    assert caught.value.signum == signal.SIGTERM
+    assert started[0].returncode == -signal.SIGKILL  # killed and reaped before the interrupt was raised
+
+
+def test_a_child_starts_with_no_signal_held():
+    """The signals held while it starts are released in the child before its program runs (a signal mask
+    survives exec)."""
+    import subprocess
+    import sys
+
+    with interrupts.signals_as_interrupts():
+        process = interrupts.start_child([sys.executable, "-c", "import signal; "
+                                          "print(sorted(signal.pthread_sigmask(signal.SIG_BLOCK, [])))"],
+                                         stdout=subprocess.PIPE, text=True)
+        out, _ = process.communicate(timeout=60)
+    assert out.strip() == "[]"
