@@ -158,12 +158,6 @@ class OrdersPrior:
             node = int(states.edge_target[k])
         return out
 
-    def sequence_log_probability(self, edges) -> float:
-        """``log p(sigma)`` of a full sequence (real state edges), from the mixture directly (module docstring)."""
-        n_initial = float(_paths(self.real.states)[self.real.states.initial])
-        p = self.pi0 / n_initial + sum(pi for (order, _), pi in zip(self.orders, self.pi) if order == tuple(edges))
-        return math.log(p)
-
     def intention_weights(self, graph) -> np.ndarray:
         """Each intention's prior weight on the flat model over the real graph (:class:`IntentionGraph`),
         scaled so that the largest is 1: ``p(sigma) N(initial)`` for a full sequence; 1 (the base's choice off
