@@ -182,7 +182,8 @@ def start_child(command: list[str], **options) -> subprocess.Popen:
     leaves it running: SIGINT, SIGTERM and SIGHUP are held while it starts (an interrupt between the fork and
     the return of ``Popen`` would leave a child that no caller knows of to kill: the kernel's SIGKILL at this
     process's exit comes later, while it still runs), then released, and a signal that came meanwhile kills and
-    reaps the child before it is raised. Cost: two ``pthread_sigmask`` calls."""
+    reaps the child before it is raised. The signals are held for this thread only: in a process whose other
+    threads do not hold them, one sent to the process can still come through another thread meanwhile. Cost: two ``pthread_sigmask`` calls."""
     held = (signal.SIGINT, *_TERMINATING)
     holding = _main_thread() and hasattr(signal, "pthread_sigmask")
     previous = signal.pthread_sigmask(signal.SIG_BLOCK, held) if holding else None

@@ -169,6 +169,7 @@ def test_a_signal_while_a_child_starts_kills_and_reaps_it(monkeypatch):
     child exists, which is killed and reaped first."""
     import subprocess
     import sys
+    import threading
 
     started = []
     real = subprocess.Popen
@@ -176,7 +177,9 @@ def test_a_signal_while_a_child_starts_kills_and_reaps_it(monkeypatch):
     def popen_then_signal(*args, **kwargs):
         process = real(*args, **kwargs)
         started.append(process)
-        os.kill(os.getpid(), signal.SIGTERM)  # held: delivered when start_child releases the signals
+        # To this thread, which holds it until start_child releases the signals (a signal to the process could
+        # be taken by another thread that does not hold it: the suite's background lanes).
+        signal.pthread_kill(threading.main_thread().ident, signal.SIGTERM)
         return process
 
     monkeypatch.setattr(interrupts.subprocess, "Popen", popen_then_signal)
