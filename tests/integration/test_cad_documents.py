@@ -129,7 +129,8 @@ def _export(name: str) -> tuple:
 
 
 def _session(name: str) -> subprocess.CompletedProcess:
-    """``aplan session MODEL --demo 0`` with the default flags, in the documents' folder (its log). MODEL is
+    """``aplan session MODEL --demo 0`` with the default flags, in a folder of its own in the documents' (its logs
+    are named by the second they start and the level, and FreeCAD's lane runs two jobs at once). MODEL is
     ``grouped.FCStd`` (the one run from the CAD file end to end: its export's warnings name the model), the
     bundles the export jobs wrote for the others (their exports are checked by their own tests: a session
     from the bundle checks the rest, without exporting again)."""
@@ -142,7 +143,9 @@ def _session(name: str) -> subprocess.CompletedProcess:
         model, exported = EXPORTS[name].result()
         if exported.returncode != 0:
             return exported
-    done = run([sys.executable, "-m", "planner", "session", str(model), "--demo", "0"], cwd=tmp)
+    own = tmp / f"session-{name}"
+    own.mkdir(exist_ok=True)
+    done = run([sys.executable, "-m", "planner", "session", str(model), "--demo", "0"], cwd=own)
     return subprocess.CompletedProcess(["aplan", "session", name], done.returncode, done.stdout, done.stderr)
 
 
