@@ -38,7 +38,8 @@ def _run(job: dict) -> dict:
         stored = None if intent is None else {"engine": intent.engine, "contact": intent.contact,
                                               "interference": intent.interference, "depth": intent.depth,
                                               "face_weight": intent.occt_face_weight,
-                                              "prism_triangles": intent.occt_prism_triangles}
+                                              "prism_triangles": intent.occt_prism_triangles,
+                                              "time_limit": intent.occt_time_limit}
         return {"parts": len(product["parts"]), "warnings": product["geometry"]["warnings"], "intent": stored,
                 "diagrams": product["geometry"].get("analysis", {}).get("diagrams")}
     if action == "analyze-occt":

@@ -45,7 +45,7 @@ from planner.geometry.mesh_engine import PartMesh, analyze_meshes
 from planner.product import Product
 
 __all__ = ["fallback_parts", "exact_pairs", "merge_reports", "mesh_then_occt", "pair_fallbacks",
-           "undecided_notes"]
+           "undecided_notes", "time_limit_note", "undecided_summary", "to_stderr"]
 
 EXACT_RULES = ("exact", "box")
 #: What stands for a relation OCCT left undecided: the mesh engine's answer, or blocking (no meshes to ask).
@@ -114,14 +114,42 @@ def pair_fallbacks(occt: dict, answer: str, asked=None) -> list[dict]:
 
 def undecided_notes(tolerances: dict) -> list[str]:
     """One line per pair the exact engine left undecided, from a report's ``tolerances`` (or a stored
-    analysis' ``tolerances``): the pair, the relations left and the answer used for them. Empty when every
-    pair was decided or the mesh engine alone ran."""
+    analysis' ``tolerances``): the pair, the relations left and the answer used for them; first, when the
+    time limit stopped it, :func:`time_limit_note`. Empty when every pair was decided or the mesh engine alone
+    ran."""
     record = (tolerances or {}).get("pairs") or {}
     lines = [f"OCCT left '{f['parts'][0]}' and '{f['parts'][1]}' undecided ({', '.join(f['relations'])}): "
              f"{dict(ANSWERS).get(f['answer'], f['answer'])}" for f in record.get("fallbacks", ())]
-    if lines and record.get("timed_out"):
-        lines.append(f"the exact engine reached its time limit ({record.get('time_limit')} s)")
-    return lines
+    stop = time_limit_note(tolerances)
+    return ([stop] if stop and lines else []) + lines
+
+
+def time_limit_note(tolerances: dict) -> str | None:
+    """The line that says the exact engine's time limit stopped it (``tolerances["pairs"]["timed_out"]``): how
+    many pairs it left undecided, within how many seconds, and the answer kept for them; None when it was not
+    stopped. Undecided pairs are counted whatever left them (the limit, or a bound on one pair's work)."""
+    record = (tolerances or {}).get("pairs") or {}
+    if not record.get("timed_out"):
+        return None
+    answers = dict(ANSWERS)
+    kept = "; ".join(dict.fromkeys(answers.get(f["answer"], f["answer"]) for f in record.get("fallbacks", ())))
+    return (f"{len(record.get('fallbacks', ()))} pairs not decided within the exact engine's time limit of "
+            f"{float(record.get('time_limit')):g} s; for each, {kept or 'nothing to keep'} (a longer time limit "
+            "decides more of them)")
+
+
+def undecided_summary(tolerances: dict) -> str:
+    """What the end of a detection says of the exact engine's undecided pairs, in a few words: empty when there
+    are none, else ``N pairs undecided by OCCT``, or ``N pairs not decided within S s, mesh answers kept`` when
+    its time limit stopped it (the answer ``blocking`` says so instead)."""
+    record = (tolerances or {}).get("pairs") or {}
+    fallbacks = record.get("fallbacks", ())
+    if not fallbacks:
+        return ""
+    if not record.get("timed_out"):
+        return f"{len(fallbacks)} pairs undecided by OCCT"
+    kept = "mesh answers kept" if all(f["answer"] == "mesh" for f in fallbacks) else "counted as blocking"
+    return f"{len(fallbacks)} pairs not decided within {float(record.get('time_limit')):g} s, {kept}"
 
 
 def merge_reports(mesh: GeometryReport, occt: dict, pairs, engine: str, fallback: dict[str, str]) -> GeometryReport:
@@ -175,12 +203,17 @@ def merge_reports(mesh: GeometryReport, occt: dict, pairs, engine: str, fallback
                    seconds=mesh.seconds + float(occt.get("seconds", 0.0)))
 
 
+def to_stderr(text: str) -> None:
+    """A progress line on standard error (where ``aplan analyze`` prints the exact engine's progress)."""
+    print(text, file=sys.stderr, flush=True)
+
+
 def mesh_then_occt(product: Product, meshes: list[PartMesh], tolerances: Tolerances, engine: str,
-                   run_occt: Callable[[dict], dict]) -> GeometryReport:
+                   run_occt: Callable[[dict], dict], progress: Callable[[str], None] = to_stderr) -> GeometryReport:
     """The report of ``engine`` (``mesh`` or ``occt``) decided as the module docstring says: the mesh engine
-    on ``meshes``, then ``run_occt(arguments)`` (the ``analyze-occt`` batch job) on the exact pairs. With
-    the mesh engine and no part of rule ``exact``/``box``, OCCT does not run. Cost: the mesh engine's, plus
-    at most ``tolerances.time_limit`` s of OCCT."""
+    on ``meshes``, then ``run_occt(arguments)`` (the ``analyze-occt`` batch job) on the exact pairs, which
+    ``progress(text)`` is told first. With the mesh engine and no part of rule ``exact``/``box``, OCCT does not
+    run. Cost: the mesh engine's, plus at most ``tolerances.time_limit`` s of OCCT."""
     report = analyze_meshes(meshes, tolerances)
     fallback = fallback_parts(product)
     if engine == "mesh" and not fallback:
@@ -194,6 +227,6 @@ def mesh_then_occt(product: Product, meshes: list[PartMesh], tolerances: Toleran
                  "time_limit": tolerances.time_limit, "face_weight": tolerances.face_weight,
                  "prism_triangles": tolerances.prism_triangles, "pairs": [list(p) for p in pairs],
                  "directions": [list(v) for v in report.directions.values()]}
-    print(f"occt: deciding {len(pairs)} of {len(meshes) * (len(meshes) - 1) // 2} pairs on the exact shapes "
-          f"(at most {tolerances.time_limit:g} s)", file=sys.stderr, flush=True)
+    progress(f"occt: deciding {len(pairs)} of {len(meshes) * (len(meshes) - 1) // 2} pairs on the exact shapes "
+             f"(at most {tolerances.time_limit:g} s)")
     return merge_reports(report, run_occt(arguments), pairs, engine, fallback)

@@ -13,9 +13,10 @@ top of the geometry (everything is saved in the ``.FCStd`` and restored on reope
   none, ``auto`` for the most connected part, or a component id (an analysis saved before it existed gets
   the property, empty, when it is read or restored);
 - ``Engine`` and the tolerances of the geometry engines (``ContactTolerance``, ``InterferenceVolume``,
-  ``DepthTolerance``), and the exact engine's two bounds (``OcctFaceWeight``, ``OcctPrismTriangles``: the CLI's
-  ``--occt-face-weight`` and ``--occt-prism-triangles``, :class:`planner.geometry.Tolerances`; an analysis
-  saved before them gets them with their defaults);
+  ``DepthTolerance``), and the exact engine's bounds (``OcctFaceWeight``, ``OcctPrismTriangles``,
+  ``OcctTimeLimit``: the CLI's ``--occt-face-weight``, ``--occt-prism-triangles`` and ``--time-limit``,
+  :class:`planner.geometry.Tolerances`; an analysis saved before them gets them with their defaults; Detect's
+  task panel sets the engine and the time limit);
 - ``Diagrams``: the connection and obstruction diagrams the last detection found (product-format JSON);
 - ``DesignerDirections`` (``X,Y,Z`` per entry) and ``NotBlocking`` (one JSON mark per entry): the designer's
   motion directions, tested like the axes, and relations marked not blocking, applied after every detection
@@ -44,7 +45,8 @@ from dataclasses import dataclass, field, fields, replace
 import FreeCAD
 
 from planner.defaults import (BLOCKING_DEPTH, CONTACT_TOLERANCE, INTERFERENCE_VOLUME, OCCT_FACE_WEIGHT,
-                              OCCT_PRISM_TRIANGLES)
+                              OCCT_PRISM_TRIANGLES, OCCT_TIME_LIMIT)
+from planner.errors import PlannerError
 
 from .document import DocumentError
 
@@ -78,6 +80,7 @@ class Intent:
     depth: float = BLOCKING_DEPTH
     occt_face_weight: int = OCCT_FACE_WEIGHT
     occt_prism_triangles: int = OCCT_PRISM_TRIANGLES
+    occt_time_limit: float = OCCT_TIME_LIMIT
     diagrams: dict = field(default_factory=dict)
     directions: list[list[float]] = field(default_factory=list)
     not_blocking: list[dict] = field(default_factory=list)
@@ -110,6 +113,9 @@ _PROPERTIES = (
     ("OcctPrismTriangles", "App::PropertyInteger", "Detection",
      "occt engine: a face swept as triangles has at most this many, else that sweep's pairs keep the mesh "
      "engine's answer"),
+    ("OcctTimeLimit", "App::PropertyFloat", "Detection",
+     "CPU seconds the exact engine (and OCCT on the parts without a good mesh) spends on all its pairs; the pairs "
+     "left then keep the mesh engine's answer and are reported (set in Detect's task panel)"),
     ("Diagrams", "App::PropertyString", "Detection", "connection and obstruction diagrams found by the last detection"),
     ("DesignerDirections", "App::PropertyStringList", "Detection",
      "motion directions X,Y,Z tested like the axes at every detection (added in the diagrams panel)"),
@@ -142,6 +148,7 @@ class AnalysisProxy:
         obj.ContactTolerance, obj.InterferenceVolume, obj.DepthTolerance = (
             defaults.contact, defaults.interference, defaults.depth)
         obj.OcctFaceWeight, obj.OcctPrismTriangles = defaults.occt_face_weight, defaults.occt_prism_triangles
+        obj.OcctTimeLimit = defaults.occt_time_limit
         obj.setEditorMode("Diagrams", 2)  # hidden: edited through the task panel
 
     def execute(self, obj):
@@ -161,11 +168,12 @@ class AnalysisProxy:
 
 
 #: Defaults of properties added since an analysis may have been saved (not 0); pairs, so no module state changes.
-_ADDED_DEFAULTS = (("OcctFaceWeight", OCCT_FACE_WEIGHT), ("OcctPrismTriangles", OCCT_PRISM_TRIANGLES))
+_ADDED_DEFAULTS = (("OcctFaceWeight", OCCT_FACE_WEIGHT), ("OcctPrismTriangles", OCCT_PRISM_TRIANGLES),
+                   ("OcctTimeLimit", OCCT_TIME_LIMIT))
 
 
 def _add_missing_properties(obj) -> None:
-    """Properties added since the analysis was saved (``BasePart``, the OCCT bounds), with their defaults: an
+    """Properties added since the analysis was saved (``BasePart``, the OCCT bounds and time limit), with their defaults: an
     older analysis reads as it did."""
     for name, kind, group, tip in _PROPERTIES:
         if name not in obj.PropertiesList:
@@ -286,6 +294,7 @@ def read_intent(analysis) -> Intent:
                   depth=float(analysis.DepthTolerance),
                   occt_face_weight=_bound(analysis, "OcctFaceWeight"),
                   occt_prism_triangles=_bound(analysis, "OcctPrismTriangles"),
+                  occt_time_limit=float(getattr(analysis, "OcctTimeLimit", OCCT_TIME_LIMIT)),
                   diagrams=diagrams, directions=directions,
                   not_blocking=not_blocking,
                   fasteners=_json_entries(analysis, "Fasteners") if "Fasteners" in analysis.PropertiesList else [],
@@ -307,6 +316,12 @@ def _write(analysis, intent: Intent) -> None:
         value = getattr(intent, name)
         if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
             raise IntentError(f"{analysis.Label}.{prop} must be a whole number >= 1, got {value!r}")
+    from .workflow import detection_time_limit  # no FreeCAD there: the task panel's check, and the CLI's
+
+    try:
+        detection_time_limit(intent.occt_time_limit)
+    except PlannerError as exc:
+        raise IntentError(f"{analysis.Label}.OcctTimeLimit: {exc}") from None
     parts = intent.diagrams.get("parts") or []
     base = intent.base_part.strip()
     if base not in ("", BASE_PART_AUTO) and parts and base not in parts:
@@ -327,6 +342,7 @@ def _write(analysis, intent: Intent) -> None:
         "DepthTolerance": float(intent.depth),
         "OcctFaceWeight": int(intent.occt_face_weight),
         "OcctPrismTriangles": int(intent.occt_prism_triangles),
+        "OcctTimeLimit": float(intent.occt_time_limit),
         "Diagrams": json.dumps(intent.diagrams, sort_keys=True) if intent.diagrams else "",
         "DesignerDirections": [",".join(f"{c:.9g}" for c in v) for v in intent.directions],
         "NotBlocking": [json.dumps(m, sort_keys=True) for m in intent.not_blocking],

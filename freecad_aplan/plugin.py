@@ -33,7 +33,7 @@ from planner.product import Product, save_product
 from planner.product.designer import add_directions
 
 from .archive import SKIP_BY_EXPORT, SKIP_OPTION, check_document
-from .hybrid import fallback_parts, mesh_then_occt, pair_fallbacks
+from .hybrid import fallback_parts, mesh_then_occt, pair_fallbacks, to_stderr
 from .runner import FreeCADError, find_freecadcmd, run_batch
 
 __all__ = ["register", "export_bundle", "export_warnings", "occt_report", "occt_engine", "geometry_engines"]
@@ -105,8 +105,8 @@ def export_bundle(model: str | Path, bundle: str | Path, engine: str | None = No
             save_product(product, work / PRODUCT_FILE)
         engine = engine or stored.get("engine", "mesh")
         if not isinstance(tolerances, Tolerances):
-            chosen = {k: stored[k] for k in ("contact", "interference", "depth", "face_weight", "prism_triangles")
-                      if k in stored}
+            chosen = {k: stored[k] for k in ("contact", "interference", "depth", "face_weight", "prism_triangles",
+                                             "time_limit") if k in stored}
             tolerances = Tolerances(**{**chosen, **(tolerances or {})})
         if engine != "none" and (not answer.get("diagrams") or directions):  # no stored diagrams that fit: detect
             analyse_bundle(product, work / PRODUCT_FILE, engine, tolerances)
@@ -146,11 +146,12 @@ def export_warnings(product: Product) -> list[str]:
     return list(dict.fromkeys(found))
 
 
-def occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
-    """The occt engine: the meshes settle the easy pairs, OCCT the others within ``tolerances``' budget, and
-    a relation OCCT leaves undecided keeps the mesh engine's answer (:mod:`freecad_aplan.hybrid`); a bundle
-    whose meshes cannot be read, or a Python without the mesh engine (FreeCADCmd's), goes to OCCT whole,
-    its undecided relations counted as blocking. Both are reported per pair (``tolerances["pairs"]``)."""
+def occt_engine(product: Product, tolerances: Tolerances, progress=to_stderr) -> GeometryReport:
+    """The occt engine: the meshes settle the easy pairs, OCCT the others within ``tolerances``' budget (per
+    pair, and ``time_limit`` s in all), and a relation OCCT leaves undecided keeps the mesh engine's answer
+    (:mod:`freecad_aplan.hybrid`); a bundle whose meshes cannot be read, or a Python without the mesh engine
+    (FreeCADCmd's), goes to OCCT whole, its undecided relations counted as blocking. Both are reported per
+    pair (``tolerances["pairs"]``). ``progress(text)`` is told OCCT's progress lines (default: standard error)."""
     from planner.geometry.bundle import load_part_meshes
 
     if product.source == "<memory>":
@@ -162,30 +163,30 @@ def occt_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
     except PlannerError:
         meshes = None
     if meshes is not None and all(installed(m) for m in MESH_ENGINE):
-        return mesh_then_occt(product, meshes, tolerances, "occt", lambda arguments: _run_occt(product, arguments))
+        return mesh_then_occt(product, meshes, tolerances, "occt",
+                              lambda arguments: _run_occt(product, arguments, progress), progress)
     data = _run_occt(product, {"contact": tolerances.contact, "interference": tolerances.interference,
                                "depth": tolerances.depth, "pair_budget": tolerances.pair_budget,
                                "pair_steps": tolerances.pair_steps, "time_limit": tolerances.time_limit,
                                "face_weight": tolerances.face_weight, "prism_triangles": tolerances.prism_triangles,
-                               "directions": _occt_directions(tolerances, meshes)})
+                               "directions": _occt_directions(tolerances, meshes)}, progress)
     return occt_report(product, data)
 
 
-def _run_occt(product: Product, arguments: dict) -> dict:
+def _run_occt(product: Product, arguments: dict, progress=to_stderr) -> dict:
     # A CAD model's product names the model as its source; its B-reps are in the kept temporary bundle.
     folder = (product.geometry or {}).get("x-temporary-bundle") or Path(product.source).parent
     if "FreeCAD" in sys.modules:  # inside FreeCADCmd already (a workbench job): no second FreeCADCmd
         from .occt import analyze_bundle_breps
 
-        return analyze_bundle_breps(str(folder), **arguments, progress=lambda text: print(text, file=sys.stderr))
-    return run_batch("analyze-occt", {"folder": str(folder), **arguments},
-                     on_note=lambda text: print(text, file=sys.stderr, flush=True))
+        return analyze_bundle_breps(str(folder), **arguments, progress=progress)
+    return run_batch("analyze-occt", {"folder": str(folder), **arguments}, on_note=progress)
 
 
-def _mesh_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
+def _mesh_engine(product: Product, tolerances: Tolerances, progress=to_stderr) -> GeometryReport:
     """The mesh engine, with the pairs of parts that have no good mesh (rule ``exact`` or ``box``) decided by
-    OCCT (:mod:`freecad_aplan.hybrid`); without FreeCAD, or without B-reps, the meshes decide them, with a
-    warning."""
+    OCCT (:mod:`freecad_aplan.hybrid`; its progress lines told to ``progress``); without FreeCAD, or without
+    B-reps, the meshes decide them, with a warning."""
     from planner.geometry.bundle import ENGINES, load_part_meshes
 
     fallback = fallback_parts(product)
@@ -205,7 +206,8 @@ def _mesh_engine(product: Product, tolerances: Tolerances) -> GeometryReport:
         return replace(report, warnings=(f"parts {', '.join(sorted(fallback))} have no mesh within the B-rep "
                                          f"tolerance; OCCT would decide their pairs, but {exc}: the meshes "
                                          "decide them", *report.warnings))
-    return mesh_then_occt(product, meshes, tolerances, "mesh", lambda arguments: _run_occt(product, arguments))
+    return mesh_then_occt(product, meshes, tolerances, "mesh", lambda arguments: _run_occt(product, arguments, progress),
+                          progress)
 
 
 def _occt_directions(tolerances: Tolerances, meshes) -> list[list[float]]:
@@ -283,7 +285,8 @@ def _export_command(subparsers) -> None:
                              "objects that cannot be read, naming them in a warning (default: an error)")
     add_tolerance_options(parser)
     # Tolerances not given on the command line come from the document's APLAN analysis.
-    parser.set_defaults(contact=None, interference=None, depth=None, occt_face_weight=None, occt_prism_triangles=None)
+    parser.set_defaults(contact=None, interference=None, depth=None, occt_face_weight=None, occt_prism_triangles=None,
+                        time_limit=None)
 
     def run(args: argparse.Namespace) -> int:
         from planner.cli.geometry import contact_choice
@@ -292,9 +295,10 @@ def _export_command(subparsers) -> None:
                  if getattr(args, k) is not None}
         product = export_bundle(args.model, args.output, args.engine,
                                 {**given, "resolution": args.resolution, "directions": args.directions,
-                                 "pair_budget": args.pair_budget, "time_limit": args.time_limit,
+                                 "pair_budget": args.pair_budget,
                                  **{k: v for k, v in (("face_weight", args.occt_face_weight),
-                                                      ("prism_triangles", args.occt_prism_triangles)) if v is not None}},
+                                                      ("prism_triangles", args.occt_prism_triangles),
+                                                      ("time_limit", args.time_limit)) if v is not None}},
                                 dict(args.group),
                                 args.exclude, args.split_solids, args.linear_deflection, args.angular_deflection,
                                 args.freecadcmd, args.force, args.redetect, args.direction, args.skip_damaged)
@@ -313,11 +317,14 @@ def _export_command(subparsers) -> None:
     parser.set_defaults(run=run)
 
 
-def geometry_engines() -> dict:
+def geometry_engines(progress=None) -> dict:
     """The geometry engines of the FreeCAD side by name: ``occt`` (:func:`occt_engine`) and ``mesh`` (the
-    planner's, plus OCCT for the parts without a good mesh). What the entry point registers, and what the
-    workbench's job passes where no entry point is installed (FreeCADCmd's Python)."""
-    return {"occt": occt_engine, "mesh": _mesh_engine}
+    planner's, plus OCCT for the parts without a good mesh), telling OCCT's progress lines to ``progress(text)``
+    (None: standard error, as ``aplan analyze`` shows them). What the entry point registers, and what the
+    workbench's job runs, its progress going to the job's notes (one path for both front ends)."""
+    tell = progress or to_stderr
+    return {"occt": lambda product, tolerances: occt_engine(product, tolerances, tell),
+            "mesh": lambda product, tolerances: _mesh_engine(product, tolerances, tell)}
 
 
 def register(registry) -> None:

@@ -34,6 +34,7 @@ from planner.defaults import (
     INTERFERENCE_VOLUME,
     OCCT_FACE_WEIGHT,
     OCCT_PRISM_TRIANGLES,
+    OCCT_TIME_LIMIT,
     PRODUCT_FILE,
     SOLVE_PRECISION,
     WORKBENCH_SOLVE_TIME_LIMIT,
@@ -50,8 +51,8 @@ from .protocol import BATCH_SCRIPT
 from .runner import FreeCADError, find_freecadcmd
 from .sessions import base_part_in, level_model, level_of
 
-__all__ = ["require_analysis", "export_for_detection", "detection_copy", "worker_command", "analyze_bundle",
-           "detection_job", "store_detection", "edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking",
+__all__ = ["require_analysis", "export_for_detection", "check_detection", "detection_copy", "worker_command",
+           "analyze_bundle", "detection_time_limit", "detection_settings", "detection_job", "store_detection", "edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking",
            "unmark_not_blocking", "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report",
            "has_levels", "level_statistics_report",
            "export_analysis_bundle", "export_decision_model",
@@ -83,11 +84,10 @@ def export_for_detection(document, folder: str) -> dict:
     return product
 
 
-def detection_copy(document, folder: str) -> tuple[str, int]:
-    """Check the document's components (quick: no tessellation; an error such as a document without solids is
-    raised here, before any job starts) and save a copy of the document into ``folder`` for a background export
-    (FreeCADCmd: ``batch.py export``; the document itself is neither saved nor changed). Returns the copy's
-    path and the number of components."""
+def check_detection(document) -> int:
+    """The quick checks of a detection (no tessellation): the document's components (an error such as a document
+    without solids) and the analysis' structure over them; raised here, before any panel or job. Returns the
+    number of components."""
     from .document import read_components
     from .intent import find_analysis, read_intent
 
@@ -99,10 +99,18 @@ def detection_copy(document, folder: str) -> tuple[str, int]:
         from .structure import structure_entries
 
         structure_entries(intent, {c.id: list(c.objects) for c in result.components})
+    return len(result.components)
+
+
+def detection_copy(document, folder: str) -> tuple[str, int]:
+    """Check the document (:func:`check_detection`) and save a copy of it into ``folder`` for a background export
+    (FreeCADCmd: ``batch.py export``; the document itself is neither saved nor changed). Returns the copy's
+    path and the number of components."""
+    count = check_detection(document)
     name = re.sub(r"[^A-Za-z0-9._-]+", "_", document.Label).strip("._") or "model"
     path = os.path.join(folder, name + ".FCStd")
     document.saveCopy(path)
-    return path, len(result.components)
+    return path, count
 
 
 def worker_command(action: str, engine: str | None = None) -> list[str]:
@@ -127,48 +135,82 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
     return [find_freecadcmd(), BATCH_SCRIPT]
 
 
+def detection_time_limit(value) -> float:
+    """The exact engine's time limit ``value`` (as typed in Detect's task panel, or a number) in CPU seconds:
+    a finite number above 0 and at most :data:`~planner.defaults.TIME_LIMIT_MAX`, checked as the command line
+    checks ``--time-limit`` (:func:`planner.cli.options.positive_seconds`). Raises
+    :class:`~planner.errors.PlannerError` saying what was given and what is allowed."""
+    import argparse
+
+    from planner.cli.options import positive_seconds
+
+    try:
+        return positive_seconds(str(value).strip())
+    except argparse.ArgumentTypeError as exc:
+        raise PlannerError(f"the exact engine's time limit {exc}; give the CPU seconds OCCT may spend on all its "
+                           f"pairs (default {OCCT_TIME_LIMIT:g})") from None
+
+
+def detection_settings(engine: str, time_limit) -> dict:
+    """The :class:`~freecad_aplan.intent.Intent` fields Detect's task panel sets: ``engine`` (its choice, one of
+    :data:`~freecad_aplan.intent.ENGINES`, which storing it checks) and ``occt_time_limit``
+    (:func:`detection_time_limit` of the field's text). Raises :class:`~planner.errors.PlannerError` naming the
+    field, so that the panel shows it and runs nothing."""
+    try:
+        seconds = detection_time_limit(time_limit)
+    except PlannerError as exc:
+        raise PlannerError(f"Time limit: {exc}; nothing was detected") from None
+    return {"engine": engine, "occt_time_limit": seconds}
+
+
 def detection_job(folder: str, engine: str, intent) -> dict:
     """The ``analyze`` job (:func:`analyze_bundle`) of the bundle ``folder`` with ``engine`` and the analysis'
-    tolerances and OCCT bounds (``intent``: its :class:`~freecad_aplan.intent.DesignerIntent`): what Detect
+    tolerances, OCCT bounds and time limit (``intent``: its :class:`~freecad_aplan.intent.Intent`): what Detect
     runs in the background."""
     return {"action": "analyze", "folder": folder, "engine": engine, "contact": intent.contact,
             "interference": intent.interference, "depth": intent.depth,
-            "face_weight": intent.occt_face_weight, "prism_triangles": intent.occt_prism_triangles}
+            "face_weight": intent.occt_face_weight, "prism_triangles": intent.occt_prism_triangles,
+            "time_limit": intent.occt_time_limit}
 
 
 def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_TOLERANCE,
                    interference: float = INTERFERENCE_VOLUME, depth: float = BLOCKING_DEPTH,
                    face_weight: int = OCCT_FACE_WEIGHT, prism_triangles: int = OCCT_PRISM_TRIANGLES,
-                   progress=None) -> dict:
+                   time_limit: float = OCCT_TIME_LIMIT, progress=None) -> dict:
     """Run a geometry engine on the bundle ``folder`` and write the result into its ``product.json``
-    (``face_weight``, ``prism_triangles``: the occt engine's bounds, the analysis' ``OcctFaceWeight`` and
-    ``OcctPrismTriangles``), through the engines ``aplan analyze`` runs
+    (``face_weight``, ``prism_triangles``, ``time_limit``: the occt engine's bounds, the analysis'
+    ``OcctFaceWeight``, ``OcctPrismTriangles`` and ``OcctTimeLimit``), through the engines ``aplan analyze`` runs
     (:func:`freecad_aplan.plugin.geometry_engines`): with ``occt``, the meshes settle the easy pairs and a
-    relation OCCT leaves undecided keeps the mesh engine's answer (:mod:`freecad_aplan.hybrid`), or counts
-    as blocking where the mesh engine cannot run (FreeCADCmd's Python without trimesh and manifold3d).
+    relation OCCT leaves undecided (its bounds, the time limit) keeps the mesh engine's answer
+    (:mod:`freecad_aplan.hybrid`), or counts as blocking where the mesh engine cannot run (FreeCADCmd's Python
+    without trimesh and manifold3d).
 
-    Returns the counts (parts, contacts, interferences, seconds) and ``undecided``: one line per pair OCCT
-    left undecided, with the answer used (:func:`freecad_aplan.hybrid.undecided_notes`), each also told to
-    ``progress(text)`` when given (the job's notes). The interlock rules' proposals are recorded with the
+    ``progress(text)``, when given, is told the exact engine's progress lines as it goes (those ``aplan
+    analyze`` prints on standard error: the pairs it decides, then every few seconds the pairs done and
+    undecided), then one line per pair OCCT left undecided, with the answer used
+    (:func:`freecad_aplan.hybrid.undecided_notes`, the time limit's stop first). Returns the counts (parts,
+    contacts, interferences, seconds), ``undecided`` (those lines) and ``summary`` (one line:
+    :func:`freecad_aplan.hybrid.undecided_summary`). The interlock rules' proposals are recorded with the
     diagrams (:func:`planner.assembly.interlock_proposals.record_proposals`). Runs in a background job.
     """
     from planner.geometry import Tolerances
     from planner.geometry.bundle import PRODUCT_FILE, analyse_bundle, load_bundle
 
-    from .hybrid import undecided_notes
+    from .hybrid import undecided_notes, undecided_summary
     from .plugin import geometry_engines
 
     product = load_bundle(folder)
     tolerances = Tolerances(contact=contact, interference=interference, depth=depth, face_weight=face_weight,
-                            prism_triangles=prism_triangles)
+                            prism_triangles=prism_triangles, time_limit=time_limit)
     # The interlock rules' proposals, while the meshes are here: the interlocks panel lists them.
     _, report = analyse_bundle(product, Path(folder) / PRODUCT_FILE, engine, tolerances, then=record_proposals,
-                               engines=geometry_engines())
+                               engines=geometry_engines(progress))
     notes = undecided_notes(report.tolerances)
     for note in notes if progress is not None else ():
         progress(note)
     return {"parts": len(report.parts), "contacts": len(report.contacts),
-            "interferences": len(report.interferences), "seconds": round(report.seconds, 3), "undecided": notes}
+            "interferences": len(report.interferences), "seconds": round(report.seconds, 3), "undecided": notes,
+            "summary": undecided_summary(report.tolerances)}
 
 
 def store_detection(analysis, folder: str):

@@ -90,15 +90,24 @@ class ExcludeParts(_Command):
 
 class Detect(_Command):
     name, menu = "Aplan_Detect", "Detect contacts and obstructions"
-    tooltip = ("Compute the connection and obstruction diagrams of the components in the background "
-               "(engine and tolerances: the analysis' properties); the parts are not moved")
+    tooltip = ("Compute the connection and obstruction diagrams of the components in the background: choose the "
+               "engine and the exact engine's time limit in the task panel, OK starts it (the other tolerances: "
+               "the analysis' properties); the parts are not moved")
 
     def run(self):
-        from ..dependencies import detection_engine
-        from .jobs import BackgroundJob
+        from .detect_panel import DetectPanel
 
         document = _document()
         analysis = workflow.require_analysis(document)
+        workflow.check_detection(document)  # no solids, a bad intent: told at once, before the panel opens
+        _show_panel(self.state, DetectPanel(analysis, lambda: _guarded(lambda: self.start(document, analysis))))
+
+    def start(self, document, analysis):
+        """Export the document's components and run the analysis' engine on them, in background jobs, with the
+        settings the analysis holds (Detect's panel stored them); the diagrams are stored when both ended."""
+        from ..dependencies import detection_engine
+        from .jobs import BackgroundJob
+
         intent = read_intent(analysis)
         engine, note = detection_engine(intent.engine, workflow._mesh_python())  # occt without manifold3d
         if note:
@@ -129,7 +138,8 @@ class Detect(_Command):
                     shutil.rmtree(folder, ignore_errors=True)
 
             job = workflow.detection_job(bundle, engine, intent)
-            BackgroundJob(f"Detecting contacts and obstructions of {result['parts']} parts ({engine} engine)",
+            limit = f", at most {intent.occt_time_limit:g} s on the exact shapes" if engine == "occt" else ""
+            BackgroundJob(f"Detecting contacts and obstructions of {result['parts']} parts ({engine} engine{limit})",
                           command, job, done, failed, self.state.jobs, parent).start()
 
         job = {"action": "export", "model": copy, "folder": bundle, "redetect": True, "notes": True}
@@ -139,12 +149,12 @@ class Detect(_Command):
     @staticmethod
     def _store(analysis, folder, result):
         workflow.store_detection(analysis, folder)
-        undecided = result.get("undecided", [])
-        for note in undecided:  # each pair the exact engine left, and the answer used (also in Diagrams)
+        for note in result.get("undecided", []):  # each pair the exact engine left, and the answer used (also in Diagrams)
             _message(f"warning: {note}", error=False)
+        summary = result.get("summary")
         _message(f"{result['parts']} parts, {result['contacts']} contacts, {result['interferences']} "
-                 f"interferences ({result['seconds']:.1f} s"
-                 f"{f'; {len(undecided)} pairs undecided by OCCT' if undecided else ''}); see Diagrams", error=False)
+                 f"interferences ({result['seconds']:.1f} s{f'; {summary}' if summary else ''}); see Diagrams",
+                 error=False)
 
 
 class Diagrams(_Command):

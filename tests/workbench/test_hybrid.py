@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from freecad_aplan.hybrid import exact_pairs, fallback_parts, merge_reports, mesh_then_occt, undecided_notes
+from freecad_aplan.hybrid import (exact_pairs, fallback_parts, merge_reports, mesh_then_occt, time_limit_note,
+                                  undecided_notes, undecided_summary)
 from freecad_aplan.plugin import occt_report
 from planner.errors import GeometryError
 from planner.geometry import Tolerances
@@ -45,9 +46,16 @@ def test_occt_decides_relation_by_relation():
                       "fallbacks": [{"parts": ["a", "b"], "relations": ["a moving along +X"], "answer": "mesh"}]}
     assert merged.engine == "occt" and "w" in merged.warnings
     # Told per pair to the user (the workbench's job notes and Diagrams panel, undecided_notes).
+    # The time limit's stop first: how many pairs it left, within how long, and what was kept for them.
     assert undecided_notes(merged.tolerances) == [
-        "OCCT left 'a' and 'b' undecided (a moving along +X): the mesh engine's answer stands",
-        "the exact engine reached its time limit (1.0 s)"]
+        "1 pairs not decided within the exact engine's time limit of 1 s; for each, the mesh engine's answer "
+        "stands (a longer time limit decides more of them)",
+        "OCCT left 'a' and 'b' undecided (a moving along +X): the mesh engine's answer stands"]
+    assert undecided_summary(merged.tolerances) == "1 pairs not decided within 1 s, mesh answers kept"
+    # Not stopped by the limit (a bound on one pair's work): the pairs alone.
+    bounded = {"pairs": {**record, "timed_out": False}}
+    assert time_limit_note(bounded) is None and len(undecided_notes(bounded)) == 1
+    assert undecided_summary(bounded) == "1 pairs undecided by OCCT"
 
 
 def test_without_the_mesh_engine_undecided_pairs_count_as_blocking():
@@ -61,7 +69,9 @@ def test_without_the_mesh_engine_undecided_pairs_count_as_blocking():
     assert undecided_notes(report.tolerances) == [
         "OCCT left 'a' and 'b' undecided (the contact): counted as touching and blocking (no mesh engine's answer "
         "to fall back to)"]
+    assert undecided_summary(report.tolerances) == "1 pairs undecided by OCCT"
     assert undecided_notes({}) == [] and undecided_notes(_mesh().tolerances) == []
+    assert undecided_summary({}) == "" and undecided_summary(_mesh().tolerances) == ""
 
 
 def test_fallback_parts_come_from_the_bundle_rules():
