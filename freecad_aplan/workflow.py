@@ -139,7 +139,7 @@ def detection_time_limit(value) -> float:
     """The exact engine's time limit ``value`` (as typed in Detect's task panel, or a number) in CPU seconds:
     a finite number above 0 and at most :data:`~planner.defaults.TIME_LIMIT_MAX`, checked as the command line
     checks ``--time-limit`` (:func:`planner.cli.options.positive_seconds`). Raises
-    :class:`~planner.errors.PlannerError` saying what was given and what is allowed."""
+    :class:`~planner.errors.PlannerError` saying what was given and what is allowed (the caller names the field)."""
     import argparse
 
     from planner.cli.options import positive_seconds
@@ -147,8 +147,8 @@ def detection_time_limit(value) -> float:
     try:
         return positive_seconds(str(value).strip())
     except argparse.ArgumentTypeError as exc:
-        raise PlannerError(f"the exact engine's time limit {exc}; give the CPU seconds OCCT may spend on all its "
-                           f"pairs (default {OCCT_TIME_LIMIT:g})") from None
+        raise PlannerError(f"{exc}; give the CPU seconds OCCT may spend on all its pairs (default "
+                           f"{OCCT_TIME_LIMIT:g})") from None
 
 
 def detection_settings(engine: str, time_limit) -> dict:

@@ -99,6 +99,12 @@ def after_jobs(step):
             return
         step()
     QtCore.QTimer.singleShot(100, guarded(wait))
+
+
+def detect():
+    # Detect opens its task panel (engine, the exact engine's time limit); OK starts it with the values shown.
+    FreeCADGui.runCommand("Aplan_Detect")
+    state().panel.accept()
 '''
 
 

@@ -28,7 +28,7 @@ def test_a_time_limit_that_is_not_positive_and_finite_is_refused_naming_the_fiel
     with pytest.raises(PlannerError) as caught:
         workflow.detection_settings("occt", text)
     message = str(caught.value)
-    assert message.startswith("Time limit: the exact engine's time limit must be a number of seconds")
+    assert message.startswith("Time limit: must be a number of seconds")
     assert message.endswith("nothing was detected") and f"(default {OCCT_TIME_LIMIT:g})" in message
 
 

@@ -66,7 +66,7 @@ def start():
     result["nothing_selected"] = status()
     FreeCADGui.runCommand("Aplan_Plan")              # nothing detected yet
     result["not_detected"] = status()
-    FreeCADGui.runCommand("Aplan_Detect")            # the mesh engine, in a background process
+    detect()                                         # the mesh engine, in a background process
     QtCore.QTimer.singleShot(100, guarded(wait_detection))
 
 
@@ -81,7 +81,7 @@ def wait_detection():
     result["detected"] = status()
     result["diagrams"] = read_intent(analysis).diagrams
     # Cancel a second detection half-way: the stored diagrams stay as they are.
-    FreeCADGui.runCommand("Aplan_Detect")
+    detect()
     result["cancel_started"] = len(state().jobs)
     QtCore.QTimer.singleShot(300, guarded(lambda: [job.cancel() for job in list(state().jobs)]))
     QtCore.QTimer.singleShot(400, guarded(wait_cancel))
@@ -164,7 +164,7 @@ def panels_at_default_width():
     combo = window.findChild(QtGui.QDockWidget, "Combo View")
     result["combo_view_width"] = combo.width()
     result["cut_off"], result["task_view_width"] = {{}}, {{}}
-    for name, command in (("diagrams", "Aplan_Diagrams"), ("intent", "Aplan_Intent"),
+    for name, command in (("detect", "Aplan_Detect"), ("diagrams", "Aplan_Diagrams"), ("intent", "Aplan_Intent"),
                           ("fasteners", "Aplan_Fasteners"), ("subassemblies", "Aplan_Subassemblies"),
                           ("plan3d", "Aplan_Plan3D")):
         FreeCADGui.runCommand(command)
@@ -431,10 +431,10 @@ def test_workbench_in_the_real_freecad_window():
     # Every task panel and dialog at FreeCAD's default size: nothing cut off (the panels before issue 15 each
     # had a dozen problems: a right edge at 300 to 480 px in a task view of 244, columns beyond the table).
     assert 200 <= data["combo_view_width"] <= 300, data["combo_view_width"]
-    assert set(data["task_view_width"]) == {"diagrams", "intent", "fasteners", "subassemblies", "plan3d"}
+    assert set(data["task_view_width"]) == {"detect", "diagrams", "intent", "fasteners", "subassemblies", "plan3d"}
     assert all(width <= data["combo_view_width"] for width in data["task_view_width"].values())
-    assert data["cut_off"] == {name: [] for name in ("diagrams", "intent", "fasteners", "subassemblies", "plan3d",
-                                                     "plan", "levels", "image")}, data["cut_off"]
+    assert data["cut_off"] == {name: [] for name in ("detect", "diagrams", "intent", "fasteners", "subassemblies",
+                                                     "plan3d", "plan", "levels", "image")}, data["cut_off"]
     # Simulate ran the lumped policy (before issue 24 it was refused, naming the session panel).
     assert data["simulate"][1].startswith("Sequence 3 (lumped model): belief on the true intention"), data["simulate"]
     belief = read_picture(ARTIFACTS / "gui_simulate_lumped.png")

@@ -47,7 +47,7 @@ def start():
     FreeCADGui.SendMsgToActiveView("ViewFit")
     FreeCADGui.activeDocument().activeView().viewIsometric()
     FreeCADGui.runCommand("Aplan_CreateAnalysis")
-    FreeCADGui.runCommand("Aplan_Detect")
+    detect()
     after_jobs(panel)
 
 
@@ -102,7 +102,7 @@ def panel():
     doc.redo()
     result["redo"] = read_intent(analysis).not_blocking
     state().panel.accept()
-    FreeCADGui.runCommand("Aplan_Detect")
+    detect()
     after_jobs(redetected)
 
 

@@ -118,7 +118,7 @@ def start():
     result["before"] = geometry()
     result["home_looks"] = looks()
     FreeCADGui.runCommand("Aplan_CreateAnalysis")
-    FreeCADGui.runCommand("Aplan_Detect")
+    detect()
     after_jobs(panel)
 
 
@@ -199,7 +199,7 @@ def captured():
     MATERIALS.update({{o.Name: face_materials(o)[0] for o in solids}})
     result["captured_home"] = shown_looks(MATERIALS)
     FreeCADGui.runCommand("Aplan_CreateAnalysis")
-    FreeCADGui.runCommand("Aplan_Detect")
+    detect()
     after_jobs(captured_panel)
 
 

@@ -63,7 +63,7 @@ def start():
     FreeCADGui.SendMsgToActiveView("ViewFit")
     FreeCADGui.runCommand("Aplan_CreateAnalysis")
     result["detect_started"] = time.monotonic()
-    FreeCADGui.runCommand("Aplan_Detect")       # export and engine, both in background processes
+    detect()       # export and engine, both in background processes
     result["detect_returned"] = time.monotonic() - result["detect_started"]
     QtCore.QTimer.singleShot(200, guarded(wait_detection))
 

@@ -53,6 +53,15 @@ def detect(name):
             "obstructions": stored["obstructions"], "stderr": done.stderr[-2000:]}
 
 out["hybrid"] = detect("hybrid")
+# A tiny time limit (what Detect's panel stores), the bound on work back at its default: the limit stops OCCT
+# before it decides a relation (1 ns of CPU: less than any OCCT call takes).
+from planner.defaults import OCCT_PRISM_TRIANGLES, OCCT_TIME_LIMIT
+update_intent(analysis, "a tiny time limit", occt_prism_triangles=OCCT_PRISM_TRIANGLES, occt_time_limit=1e-9)
+intent = read_intent(analysis)
+out["limit_intent"] = [intent.occt_prism_triangles, intent.occt_time_limit, analysis.OcctTimeLimit]
+out["limit"] = detect("limit")
+update_intent(analysis, "one triangle per sweep again", occt_prism_triangles=1, occt_time_limit=OCCT_TIME_LIMIT)
+intent = read_intent(analysis)
 workflow._mesh_python = lambda: None  # as in FreeCAD without the addon's .venv: FreeCADCmd alone
 out["alone"] = detect("alone")
 print("APLAN-RESULT " + json.dumps(out), flush=True)
@@ -95,6 +104,29 @@ def test_a_pair_occt_leaves_undecided_keeps_the_mesh_answer(detected):
     told = [n for n in run["notes"] if n.startswith("OCCT left 'Cylinder' and 'Block' undecided")]
     assert len(told) == 1 and told[0].endswith("the mesh engine's answer stands")
     assert run["result"]["undecided"] == told
+
+
+@pytest.mark.freecad
+def test_a_tiny_time_limit_leaves_the_pair_to_the_mesh_answer_and_says_so(detected):
+    _, data = detected
+    assert data["limit_intent"] == [20000, 1e-9, 1e-9]  # stored in the analysis (OcctTimeLimit)
+    run = data["limit"]
+    assert isinstance(run["result"], dict), run["result"]
+    pairs = run["analysis"]["tolerances"]["pairs"]
+    assert pairs["timed_out"] is True and pairs["time_limit"] == 1e-9
+    assert pairs["undecided"] == [PAIR] and pairs["mesh"] == 2 and pairs["occt"] == 0
+    # The limit stops OCCT before it decides anything: every relation of the pair keeps the mesh answer.
+    (fallback,) = pairs["fallbacks"]
+    assert fallback["answer"] == "mesh" and "the contact" in fallback["relations"]
+    assert ("Cylinder", "Block") in _blocks(run["obstructions"], "+X")
+    for axis in ("+Y", "+Z"):
+        assert not _blocks(run["obstructions"], axis), axis
+    # Progress as it went (OCCT's lines, as aplan analyze prints them), then the limit's stop and the pair.
+    assert "occt: deciding 1 of 3 pairs on the exact shapes (at most 1e-09 s)" in run["notes"]
+    stop = ("1 pairs not decided within the exact engine's time limit of 1e-09 s; for each, the mesh engine's answer "
+            "stands (a longer time limit decides more of them)")
+    assert run["result"]["undecided"][0] == stop and stop in run["notes"]
+    assert run["result"]["summary"] == "1 pairs not decided within 1e-09 s, mesh answers kept"
 
 
 @pytest.mark.freecad
