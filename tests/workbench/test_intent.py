@@ -12,7 +12,7 @@ from conftest import PEN_MODELS, REPO, require_freecadcmd, require_shared
 from integration.freecad_tools import aplan, aplan_process, freecad_result, freecadcmd_job, succeeded
 
 from planner import load_product
-from planner.defaults import OCCT_PRISM_TRIANGLES
+from planner.defaults import OCCT_PRISM_TRIANGLES, OCCT_TIME_LIMIT
 
 PEN = PEN_MODELS / "simplified" / "asm_bourjault_ballpoint.FCStd"
 # The pen's technical constraint (paper Sec. V): ink and cartridge only together with the head.
@@ -54,6 +54,13 @@ try:
     update_intent(analysis, "bad", occt_prism_triangles=0)
 except IntentError as exc:
     out["bad_bound"] = str(exc)
+out["bad_limits"] = []
+for bad in (0.0, -2.0, float("nan"), float("inf")):
+    try:
+        update_intent(analysis, "bad", occt_time_limit=bad)
+    except IntentError as exc:
+        out["bad_limits"].append(str(exc))
+out["limit_unchanged"] = analysis.OcctTimeLimit
 analysis.OcctFaceWeight = 0  # as the property editor may leave it
 try:
     read_intent(analysis)
@@ -62,6 +69,7 @@ except IntentError as exc:
 analysis.OcctFaceWeight = 5000
 written = asdict(read_intent(analysis))
 analysis.removeProperty("OcctPrismTriangles")  # an analysis saved before it: back with its default, not 0
+analysis.removeProperty("OcctTimeLimit")  # likewise
 doc.save()
 FreeCAD.closeDocument(doc.Name)
 doc = FreeCAD.openDocument({copy!r})
@@ -115,6 +123,13 @@ def test_intent_round_trip_undo_and_newer_format():
     assert (intent["engine"], intent["contact"]) == ("occt", 0.05)
     assert (intent["occt_face_weight"], intent["occt_prism_triangles"]) == (5000, OCCT_PRISM_TRIANGLES)
     assert "OcctPrismTriangles must be a whole number >= 1, got 0" in data["bad_bound"]
+    # The exact engine's time limit: refused unless a finite number of seconds above 0, as --time-limit; an
+    # analysis saved before it reads the command line's default.
+    assert intent["occt_time_limit"] == OCCT_TIME_LIMIT and data["limit_unchanged"] == OCCT_TIME_LIMIT
+    assert len(data["bad_limits"]) == 4
+    for message, bad in zip(data["bad_limits"], ("0.0", "-2.0", "nan", "inf")):
+        assert message.startswith("APLAN analysis.OcctTimeLimit: must be a number of seconds above 0"), message
+        assert f"got {bad};" in message, message
     assert "OcctFaceWeight must be a whole number >= 1, got 0 (default 20,000)" in data["zero_bound"]
     for key in ("newer_read", "newer_update"):
         assert "format version 2, written by a newer APLAN" in data[key] and "update the APLAN workbench" in data[key]
@@ -148,7 +163,7 @@ def _store_intent(tmp_path, name: str, **changes) -> str:
 #: Intents stored in the pen and exported, by name.
 INTENTS = {"tagged": {"tools": ["screwdriver"], "operations": [TAG], "technical_constraints": [CONSTRAINT]},
            "grouped": {"groups": {"refill": ["b_ink_001_", "b_cartridge_001_"]}, "excluded": ["b_button_001_"],
-                       "engine": "occt", "contact": 0.05}}
+                       "engine": "occt", "contact": 0.05, "occt_time_limit": 60.0}}
 
 
 def _store_and_export(name: str) -> tuple:
@@ -201,6 +216,8 @@ def test_export_uses_stored_components_engine_and_rejects_bad_intent(tmp_path):
     assert sorted(product.part_ids) == ["body_001", "cap_001", "head_001", "refill"]
     assert product.geometry["analysis"]["engine"] == "occt"
     assert product.geometry["analysis"]["tolerances"]["contact"] == 0.05
+    # The document's time limit (Detect's panel) bounds the command line's exact engine too.
+    assert product.geometry["analysis"]["tolerances"]["pairs"]["time_limit"] == 60.0
     # A tag naming a part the components do not have: a clear error, no bundle.
     bad = _store_intent(tmp_path, "bad", excluded=["b_button_001_"], operations=[TAG])
     done = aplan("export-freecad", bad, "-o", str(tmp_path / "c"), check=False)
