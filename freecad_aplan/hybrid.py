@@ -40,12 +40,14 @@ from typing import Callable
 
 import numpy as np
 
+from planner.defaults import OCCT_TIME_LIMIT
+from planner.errors import PlannerError
 from planner.geometry import GeometryReport, Tolerances
 from planner.geometry.mesh_engine import PartMesh, analyze_meshes
 from planner.product import Product
 
 __all__ = ["fallback_parts", "exact_pairs", "merge_reports", "mesh_then_occt", "pair_fallbacks",
-           "undecided_notes", "time_limit_note", "undecided_summary", "to_stderr"]
+           "undecided_notes", "time_limit_note", "undecided_summary", "to_stderr", "checked_time_limit"]
 
 EXACT_RULES = ("exact", "box")
 #: What stands for a relation OCCT left undecided: the mesh engine's answer, or blocking (no meshes to ask).
@@ -122,6 +124,22 @@ def undecided_notes(tolerances: dict) -> list[str]:
              f"{dict(ANSWERS).get(f['answer'], f['answer'])}" for f in record.get("fallbacks", ())]
     stop = time_limit_note(tolerances)
     return ([stop] if stop and lines else []) + lines
+
+
+def checked_time_limit(value) -> float:
+    """The exact engine's time limit ``value`` (as typed in Detect's task panel, or a number) in CPU seconds:
+    a finite number above 0 and at most :data:`~planner.defaults.TIME_LIMIT_MAX`, checked as the command line
+    checks ``--time-limit`` (:func:`planner.cli.options.positive_seconds`). Raises
+    :class:`~planner.errors.PlannerError` saying what was given and what is allowed (the caller names the field)."""
+    import argparse
+
+    from planner.cli.options import positive_seconds
+
+    try:
+        return positive_seconds(str(value).strip())
+    except argparse.ArgumentTypeError as exc:
+        raise PlannerError(f"{exc}; give the CPU seconds OCCT may spend on all its pairs (default "
+                           f"{OCCT_TIME_LIMIT:g})") from None
 
 
 def time_limit_note(tolerances: dict) -> str | None:

@@ -316,10 +316,10 @@ def _write(analysis, intent: Intent) -> None:
         value = getattr(intent, name)
         if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
             raise IntentError(f"{analysis.Label}.{prop} must be a whole number >= 1, got {value!r}")
-    from .workflow import detection_time_limit  # no FreeCAD there: the task panel's check, and the CLI's
+    from .hybrid import checked_time_limit  # the task panel's check, and the command line's
 
     try:
-        detection_time_limit(intent.occt_time_limit)
+        checked_time_limit(intent.occt_time_limit)
     except PlannerError as exc:
         raise IntentError(f"{analysis.Label}.OcctTimeLimit: {exc}") from None
     parts = intent.diagrams.get("parts") or []

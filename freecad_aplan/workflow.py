@@ -52,7 +52,7 @@ from .runner import FreeCADError, find_freecadcmd
 from .sessions import base_part_in, level_model, level_of
 
 __all__ = ["require_analysis", "export_for_detection", "check_detection", "detection_copy", "worker_command",
-           "analyze_bundle", "detection_time_limit", "detection_settings", "detection_job", "store_detection", "edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking",
+           "analyze_bundle", "detection_settings", "detection_job", "store_detection", "edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking",
            "unmark_not_blocking", "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report",
            "has_levels", "level_statistics_report",
            "export_analysis_bundle", "export_decision_model",
@@ -135,29 +135,15 @@ def worker_command(action: str, engine: str | None = None) -> list[str]:
     return [find_freecadcmd(), BATCH_SCRIPT]
 
 
-def detection_time_limit(value) -> float:
-    """The exact engine's time limit ``value`` (as typed in Detect's task panel, or a number) in CPU seconds:
-    a finite number above 0 and at most :data:`~planner.defaults.TIME_LIMIT_MAX`, checked as the command line
-    checks ``--time-limit`` (:func:`planner.cli.options.positive_seconds`). Raises
-    :class:`~planner.errors.PlannerError` saying what was given and what is allowed (the caller names the field)."""
-    import argparse
-
-    from planner.cli.options import positive_seconds
-
-    try:
-        return positive_seconds(str(value).strip())
-    except argparse.ArgumentTypeError as exc:
-        raise PlannerError(f"{exc}; give the CPU seconds OCCT may spend on all its pairs (default "
-                           f"{OCCT_TIME_LIMIT:g})") from None
-
-
 def detection_settings(engine: str, time_limit) -> dict:
     """The :class:`~freecad_aplan.intent.Intent` fields Detect's task panel sets: ``engine`` (its choice, one of
     :data:`~freecad_aplan.intent.ENGINES`, which storing it checks) and ``occt_time_limit``
-    (:func:`detection_time_limit` of the field's text). Raises :class:`~planner.errors.PlannerError` naming the
-    field, so that the panel shows it and runs nothing."""
+    (:func:`freecad_aplan.hybrid.checked_time_limit` of the field's text). Raises
+    :class:`~planner.errors.PlannerError` naming the field, so that the panel shows it and runs nothing."""
+    from .hybrid import checked_time_limit
+
     try:
-        seconds = detection_time_limit(time_limit)
+        seconds = checked_time_limit(time_limit)
     except PlannerError as exc:
         raise PlannerError(f"Time limit: {exc}; nothing was detected") from None
     return {"engine": engine, "occt_time_limit": seconds}

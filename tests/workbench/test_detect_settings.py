@@ -16,6 +16,7 @@ import pytest
 from geometry.test_bundle import make_bundle
 
 from freecad_aplan import plugin, workflow
+from freecad_aplan.hybrid import checked_time_limit
 from planner.cli.options import positive_seconds
 from planner.defaults import OCCT_TIME_LIMIT, TIME_LIMIT_MAX
 from planner.errors import PlannerError
@@ -41,10 +42,10 @@ def test_a_good_time_limit_is_taken_as_the_command_line_takes_it(text):
 
 def test_the_time_limit_check_is_the_command_lines():
     # A number (the analysis' stored OcctTimeLimit) is checked like the text typed in the panel.
-    assert workflow.detection_time_limit(OCCT_TIME_LIMIT) == OCCT_TIME_LIMIT
+    assert checked_time_limit(OCCT_TIME_LIMIT) == OCCT_TIME_LIMIT
     for value in (0.0, -1.0, math.nan, math.inf):
         with pytest.raises(PlannerError, match="must be a number of seconds above 0"):
-            workflow.detection_time_limit(value)
+            checked_time_limit(value)
 
 
 class _Intent:  # the fields of freecad_aplan.intent.Intent the job reads (that module needs FreeCAD)
