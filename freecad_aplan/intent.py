@@ -173,8 +173,8 @@ _ADDED_DEFAULTS = (("OcctFaceWeight", OCCT_FACE_WEIGHT), ("OcctPrismTriangles", 
 
 
 def _add_missing_properties(obj) -> None:
-    """Properties added since the analysis was saved (``BasePart``, the OCCT bounds and time limit), with their defaults: an
-    older analysis reads as it did."""
+    """Properties added since the analysis was saved (``BasePart``, the OCCT bounds and time limit), with their
+    defaults: an older analysis reads as it did."""
     for name, kind, group, tip in _PROPERTIES:
         if name not in obj.PropertiesList:
             obj.addProperty(kind, name, group, tip)

@@ -206,8 +206,8 @@ def _mesh_engine(product: Product, tolerances: Tolerances, progress=to_stderr) -
         return replace(report, warnings=(f"parts {', '.join(sorted(fallback))} have no mesh within the B-rep "
                                          f"tolerance; OCCT would decide their pairs, but {exc}: the meshes "
                                          "decide them", *report.warnings))
-    return mesh_then_occt(product, meshes, tolerances, "mesh", lambda arguments: _run_occt(product, arguments, progress),
-                          progress)
+    return mesh_then_occt(product, meshes, tolerances, "mesh",
+                          lambda arguments: _run_occt(product, arguments, progress), progress)
 
 
 def _occt_directions(tolerances: Tolerances, meshes) -> list[list[float]]:

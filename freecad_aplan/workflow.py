@@ -52,7 +52,8 @@ from .runner import FreeCADError, find_freecadcmd
 from .sessions import base_part_in, level_model, level_of
 
 __all__ = ["require_analysis", "export_for_detection", "check_detection", "detection_copy", "worker_command",
-           "analyze_bundle", "detection_settings", "detection_job", "store_detection", "edit_analysis_diagrams", "add_analysis_direction", "mark_not_blocking",
+           "analyze_bundle", "detection_settings", "detection_job", "store_detection", "edit_analysis_diagrams",
+           "add_analysis_direction", "mark_not_blocking",
            "unmark_not_blocking", "analysis_product", "analysis_base_part", "analysis_diagrams", "plan_report",
            "has_levels", "level_statistics_report",
            "export_analysis_bundle", "export_decision_model",

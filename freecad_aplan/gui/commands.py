@@ -149,7 +149,7 @@ class Detect(_Command):
     @staticmethod
     def _store(analysis, folder, result):
         workflow.store_detection(analysis, folder)
-        for note in result.get("undecided", []):  # each pair the exact engine left, and the answer used (also in Diagrams)
+        for note in result.get("undecided", []):  # each pair the exact engine left, the answer used (in Diagrams too)
             _message(f"warning: {note}", error=False)
         summary = result.get("summary")
         _message(f"{result['parts']} parts, {result['contacts']} contacts, {result['interferences']} "

@@ -23,12 +23,10 @@ __all__ = ["DetectPanel"]
 
 
 class DetectPanel:
-    """The task panel of ``analysis``'s detection; ``start()`` runs it (with the settings stored) after OK.
-
-    ``message`` holds what the panel last said (a refusal, in red), ``started`` whether OK started it."""
+    """The task panel of ``analysis``'s detection; ``start()`` runs it (with the settings stored) after OK."""
 
     def __init__(self, analysis, start):
-        self.analysis, self.start, self.started = analysis, start, False
+        self.analysis, self.start = analysis, start
         intent = read_intent(analysis)
         self.form = QtGui.QWidget()
         self.form.setObjectName("AplanDetectPanel")
@@ -43,7 +41,7 @@ class DetectPanel:
         self.engine.setToolTip("mesh: the meshes decide every pair; occt: the meshes settle the pairs far apart, "
                                "the exact shapes (OCCT) the others (--engine)")
         stacked_field(layout, "Engine", self.engine)
-        self.time_limit = QtGui.QLineEdit(f"{intent.occt_time_limit:g}")
+        self.time_limit = QtGui.QLineEdit(f"{intent.occt_time_limit:.15g}")  # read back exactly
         self.time_limit.setObjectName("AplanDetectTimeLimit")
         self.time_limit.setToolTip("CPU seconds OCCT spends on all its pairs (the occt engine's, and those of parts "
                                    "without a good mesh); the pairs left then keep the mesh engine's answer and "
@@ -60,10 +58,6 @@ class DetectPanel:
         self.note.setStyleSheet(f"color: {ERROR_COLOUR}" if error else "")
         self.note.setVisible(bool(text))
 
-    @property
-    def message(self) -> str:
-        return self.note.text()
-
     def accept(self) -> bool:
         """Check the fields; refused: the reason in red, the panel open, nothing run. Else store them (when
         they changed), close the panel and start the detection."""
@@ -76,7 +70,6 @@ class DetectPanel:
         if (intent.engine, intent.occt_time_limit) != (settings["engine"], settings["occt_time_limit"]):
             update_intent(self.analysis, "detection settings", **settings)
         FreeCADGui.Control.closeDialog()
-        self.started = True
         self.start()
         return True
 

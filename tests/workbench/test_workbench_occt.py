@@ -7,8 +7,10 @@ The document (built here): a cylinder as a B-spline (radius 5, axis Z, its centr
 box (x from 5 to 15, spanning the cylinder's section in Y and Z), and a small box far away (at 100, 100, 100: in no sweep of theirs along an axis). Closed form: the cylinder moving along +X
 hits the box, along no other axis. OCCT sweeps a B-spline side face as triangles (it folds with no known
 silhouette), and the analysis' bound ``OcctPrismTriangles = 1`` is below any such sweep: the pair stays
-undecided by a bound on work, not on the clock. Without a Python for the mesh engine (FreeCADCmd alone),
-OCCT decides every pair and the undecided one counts as blocking, reported as such.
+undecided by a bound on work, not on the clock. Then the analysis' time limit (Detect's panel, OcctTimeLimit)
+of 1 ns, the bound back at its default: the limit stops OCCT before its first call (any call takes more CPU than
+that), so the pair keeps every mesh answer, and the stop is said first. Without a Python for the mesh engine
+(FreeCADCmd alone), OCCT decides every pair and the undecided one counts as blocking, reported as such.
 """
 from __future__ import annotations
 
