@@ -15,7 +15,10 @@ grouped, one nut excluded). ``REPO`` (the repository) is prepended too.
   threaded hole of the fixed jaw (the same radius) into the sliding jaw, and a handle bar through the
   screw's head (0.05 mm clearance);
 - ``bolt_circle``: the coupling's flanges at radius 160 with a circle of 40 bolts and 40 nuts, each a Draft
-  polar array of one plain feature (82 parts: one per array element).
+  polar array of one plain feature (82 parts: one per array element);
+- ``gearbox`` (:data:`GEARBOX`, not in :data:`DOCUMENTS`: its diagrams have no ground truth written out): a
+  closed two-shaft gearbox of 14 parts, whose gears float once their shafts are out (a support contact each,
+  :mod:`planner.assembly.support_contacts`).
 
 The obstruction ground truth of each follows from the construction: :data:`GROUND_TRUTH` (by label).
 """
@@ -23,6 +26,14 @@ The obstruction ground truth of each follows from the construction: :data:`GROUN
 import math
 
 DOCUMENTS = ("hinge", "coupling", "vise", "bolt_circle")
+
+#: The gearbox (mm): a housing x 0..100, y 0..60, z 0..60 with a cavity x 10..90, y 10..50 open at the top (z from
+#: 10), bores of radius 5 along Y at (x, z) = (32, 30) and (68, 30) through its walls, four blind holes of radius 2
+#: at the corners (z 45..60); a cover z 60..65 with four holes, screws (shank radius 2, z 45..65, head radius 4 at
+#: z 65..68); per bore a shaft (radius 5, y -15..75), a gear on it inside (radius 18, y 25..35: the two meet at
+#: x = 50) and a bearing on each side outside (a ring of radii 5 and 10, y -10..0 and 60..70). The parts come
+#: apart one by one, but a gear whose shaft is out touches only the other gear: it rests in the housing.
+GEARBOX = "gearbox"
 
 #: Bolt centres of the coupling: the four corners (+-A, +-A) of a square (A = 20).
 _A = 20
@@ -242,6 +253,32 @@ head.Tool = cylinder("BarBore", 2.05, 40, (-25, 0, 25), (0, 1, 0))
 screw.Shapes = [cylinder("Shank", 5, 80, (-20, 20, 25), (1, 0, 0)), head]
 labelled(cylinder("Bar", 2, 40, (-25, 0, 25), (0, 1, 0)), "Bar")
 saved(doc, "vise")
+
+# Gearbox: a closed housing of Part booleans, its cover screwed on (see GEARBOX).
+doc = FreeCAD.newDocument("gearbox")
+SHAFTS = ((32, "A"), (68, "B"))
+CORNERS = ((5, 5), (95, 5), (5, 55), (95, 55))
+def along_y(radius, y0, length, x, z=30):
+    return Part.makeCylinder(radius, length, V(x, y0, z), V(0, 1, 0))
+housing = Part.makeBox(100, 60, 60).cut(Part.makeBox(80, 40, 50, V(10, 10, 10)))
+for x, _ in SHAFTS:
+    housing = housing.cut(along_y(5, 0, 60, x))
+for x, y in CORNERS:
+    housing = housing.cut(Part.makeCylinder(2, 15, V(x, y, 45)))
+feature(doc, "Housing", housing)
+cover = Part.makeBox(100, 60, 5, V(0, 0, 60))
+for x, y in CORNERS:
+    cover = cover.cut(Part.makeCylinder(2, 5, V(x, y, 60)))
+feature(doc, "Cover", cover)
+for k, (x, y) in enumerate(CORNERS):
+    feature(doc, f"Screw{k + 1}", Part.makeCylinder(2, 20, V(x, y, 45)).fuse(
+        Part.makeCylinder(4, 3, V(x, y, 65))).removeSplitter())
+for x, name in SHAFTS:
+    feature(doc, "Shaft" + name, along_y(5, -15, 90, x))
+    feature(doc, "Gear" + name, along_y(18, 25, 10, x).cut(along_y(5, 25, 10, x)))
+    for k, y0 in ((1, -10), (2, 60)):
+        feature(doc, f"Bearing{name}{k}", along_y(10, y0, 10, x).cut(along_y(5, y0, 10, x)))
+saved(doc, "gearbox")
 
 # Bolt circle: Draft polar arrays of a bolt and a nut.
 import Draft
