@@ -4,7 +4,7 @@ from the file with the default flags (issue 26, "Must show": assemblies never se
 - every part found: PartDesign Bodies (the hinge), App::Part containers with nested placements and an
   App::Link array of bolts (the coupling: one part per element, placed by the containers above the array;
   also with the elements not shown as objects),
-  Part primitives and booleans (the vise), Draft polar arrays of 40 bolts and 40 nuts (the bolt circle: one
+  Part primitives and booleans (the vise, a closed gearbox), Draft polar arrays of 40 bolts and 40 nuts (the bolt circle: one
   part per element, 82 parts), the coupling exported to STEP and read back, and a STEP file of the coupling as
   one body of ten solids (one part per solid: one part leaves nothing to assemble);
 - the obstruction diagrams equal the ground truth derived from the construction (exactly touching faces and
