@@ -21,19 +21,21 @@ pocket open one way (five of six: the gearbox's housing once its cover is off), 
 (four). A part on a plate (one or two), in a corner or in a trough open along its length and upward (three) is
 not enclosed: it could be slid or lifted away, and a contact there would join parts the designer did not.
 
-The rule, on a product drawn in CAD (every part has a mesh; a product written by hand is planned as written):
+The rule, on a product drawn in CAD (every part has a mesh; a product without meshes is planned as written):
 when the flat product (its fastener groups folded, as :func:`~planner.assembly.make_plan` plans it) has no
-AND/OR graph because parts would float (:attr:`~planner.errors.NotDisassemblableError.floating_parts`), each
-every part that some part encloses without touching it gets a support contact with it (the enclosing part with
-the smallest box when several do: the innermost cavity), provided the diagnosis names one of them. Every such
-part, not only those the diagnosis names first: the second gear rests on the housing as the first does, and
+AND/OR graph because parts would float (:attr:`~planner.errors.NotDisassemblableError.floating_parts`), every
+part that some part encloses without touching it gets a support contact with it (the enclosing part with the
+smallest box when several do: the innermost cavity), provided the diagnosis names one of them. Every such part,
+not only those the diagnosis names first: the second gear rests on the housing as the first does, and
 supporting the first alone would let the plan take its shaft out first and forbid the mirror order. Contacts
 only add connected part sets, hence subassemblies, so no subset of them frees a product they do not free: they
 are kept when the product then has an AND/OR graph; else the product is left as it is and the planner's error
-stands. Every level of a product planned as workstations sees them (members
-touch when parts of theirs do). They are recorded in ``geometry.analysis.support_contacts``.
+stands. Every level of a product planned as workstations sees them (members touch when parts of theirs do).
+They are recorded in ``geometry.analysis.support_contacts``. A product too large to plan flat (past
+:data:`CHECK_LIMIT`) is not judged, even when a part floats inside one of its workstations: that level's error
+names the parts and what helps.
 
-Cost: O(n^2) over the axis diagrams' pairs; with no part walled in by one it does not touch (the usual
+Cost: O(pairs of the axis diagrams); with no part walled in by one it does not touch (the usual
 product), nothing more. Else at most two flat AND/OR graphs within :data:`CHECK_LIMIT` connected part sets (the
 product as it is, and with the contacts), and one reading of the meshes.
 """
@@ -45,7 +47,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..defaults import SUBASSEMBLY_LIMIT
-from ..errors import LimitExceededError, NotDisassemblableError, PlannerError, SupportRefusedError
+from ..errors import NotDisassemblableError, PlannerError, SupportRefusedError
 from ..product import Product, fold
 from ..product.constants import AXIS_DIRECTIONS
 from .andor import and_or_graph
@@ -158,7 +160,7 @@ def _walled(product: Product) -> dict[tuple[str, str], int]:
 
 def _hosts(walled: dict[tuple[str, str], int], boxes: dict, margin: float) -> dict[str, str]:
     """``p -> h``: the part whose box holds ``p``'s (within ``margin``) among those walling ``p`` in, the one with
-    the smallest box when several do (the innermost cavity), the first in product order on a tie."""
+    the smallest box when several do (the innermost cavity; on a tie the first in the diagrams' order)."""
     found: dict[str, tuple[float, str]] = {}
     for p, h in walled:
         (lo, hi), (host_lo, host_hi) = boxes[p], boxes[h]
@@ -177,6 +179,6 @@ def _floating_parts(product: Product) -> tuple[str, ...] | None:
         and_or_graph(fold(product).product, limit=CHECK_LIMIT)
     except NotDisassemblableError as error:
         return error.floating_parts or None
-    except (LimitExceededError, PlannerError):
+    except PlannerError:  # past the limit (LimitExceededError), not connected: not judged
         return None
     return ()
