@@ -18,6 +18,7 @@ __all__ = [
     "NotDisassemblableError",
     "InterlockedPartsError",
     "InterlockRefusedError",
+    "SupportRefusedError",
     "LimitExceededError",
     "SolveTimeError",
     "MemoryLimitError",
@@ -120,13 +121,18 @@ class DisconnectedProductError(PlannerError):
 class NotDisassemblableError(PlannerError):
     """Some subassembly that the product needs cannot be split under the constraints (it is stuck)."""
 
-    def __init__(self, stuck: list[str], detail: str, smallest: Sequence[str] = (), floating: str = ""):
+    floating_parts: tuple[str, ...] = ()
+
+    def __init__(self, stuck: list[str], detail: str, smallest: Sequence[str] = (), floating: str = "",
+                 floating_parts: Sequence[str] = ()):
         """``smallest``: the smallest subassembly that the parts coming apart one by one reach and that has
         no feasible split; ``floating``: why it has none when a split is refused only because a side is not
-        connected (which parts would float, and what helps), in words."""
+        connected (which parts would float, and what helps), in words; ``floating_parts``: the ids of those
+        parts (the support-contact rule's candidates, :mod:`planner.assembly.support_contacts`)."""
         self.stuck = stuck
         self.smallest = list(smallest)
         self.floating = floating
+        self.floating_parts = tuple(floating_parts)
         where = ""
         if self.smallest and self.smallest != stuck:
             where = " The smallest subassembly with no feasible split is {" + ", ".join(self.smallest) + "}."
@@ -243,6 +249,19 @@ class ContactCeilingError(GeometryError):
         self.parts = parts
         self.ceiling = ceiling
         super().__init__(message)
+
+
+class SupportRefusedError(NotDisassemblableError):
+    """Parts that would float inside the part that holds them (:mod:`planner.assembly.support_contacts`), whose
+    support contacts ``--support-contacts error`` refuses. The message is one line; ``contacts`` the support
+    contacts ``(part, host)`` the rule would add."""
+
+    def __init__(self, message: str, contacts: Sequence[tuple[str, str]]):
+        self.contacts = tuple(contacts)
+        self.stuck = sorted({p for pair in self.contacts for p in pair})
+        self.smallest, self.floating = [], ""
+        self.floating_parts = tuple(p for p, _ in self.contacts)
+        PlannerError.__init__(self, message)
 
 
 class InterlockRefusedError(InterlockedPartsError):

@@ -37,7 +37,8 @@ DEFAULT_MODE = STRUCTURE_DEFAULT
 
 def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fasteners: str = "tagged",
                     model_options: dict | None = None, subassemblies: str | None = None,
-                    max_components: int = MAX_COMPONENTS, interlocks: str = "resolve") -> Product:
+                    max_components: int = MAX_COMPONENTS, interlocks: str = "resolve",
+                    supports: str = "add") -> Product:
     """Load PRODUCT: a product file, a bundle folder, a CAD file a plugin reads (``.FCStd``, STEP: through
     FreeCAD), or the name of an embedded example (``pen``).
 
@@ -58,6 +59,10 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
     ``interlocks``: pairs of parts that block each other along every direction, in a product drawn in CAD,
     are resolved from its meshes (``resolve``: one note per decision), refused (``error``) or left to the
     planner (``keep``), as :func:`~planner.assembly.interlocks.apply_interlock_mode`; before the proposals.
+    ``supports``: parts of a product drawn in CAD that would float inside the part whose cavity holds them once
+    what holds them is out (a gear in a closed housing) get a support contact with it (``add``: one note),
+    are refused (``error``) or left to the planner (``keep``), as
+    :func:`~planner.assembly.support_contacts.apply_support_mode`; after the interlocks.
     """
     if fasteners not in FASTENER_MODES + (DEFAULT_MODE,):
         raise PlannerError(f"unknown fastener mode {fasteners!r}; use one of {', '.join(FASTENER_MODES)}")
@@ -69,12 +74,15 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
                            "STEP); this product's parts are chosen already (export the model again with them)")
     from ..assembly.interlocks import INTERLOCK_MODES, apply_interlock_mode, drawn_in_cad
     from ..assembly.loose_containers import connected_structure
+    from ..assembly.support_contacts import SUPPORT_MODES, apply_support_mode
 
     if interlocks not in INTERLOCK_MODES:
         raise PlannerError(f"unknown interlock mode {interlocks!r}; use one of {', '.join(INTERLOCK_MODES)}")
+    if supports not in SUPPORT_MODES:
+        raise PlannerError(f"unknown support-contact mode {supports!r}; use one of {', '.join(SUPPORT_MODES)}")
 
     def prepare(loaded: Product) -> Product:  # while a CAD model's meshes exist (its bundle is temporary)
-        return apply_interlock_mode(loaded, interlocks)
+        return apply_support_mode(apply_interlock_mode(loaded, interlocks), supports)
 
     product = prepare(argument) if isinstance(argument, Product) else _load(argument, tolerances, model_options,
                                                                             prepare)
@@ -127,8 +135,8 @@ def fastener_report(product: Product) -> tuple[tuple[FastenerGroup, ...], Fasten
 
 def accept_fasteners(product: Product) -> Product:
     """``product`` with the proposed fastener groups added to its ``fasteners`` section (its diagrams as they are:
-    the interlock rules are left to the planning)."""
-    return resolve_product(product, fasteners="auto", interlocks="keep")
+    the interlock and support-contact rules are left to the planning)."""
+    return resolve_product(product, fasteners="auto", interlocks="keep", supports="keep")
 
 
 def _is_model_file(argument) -> bool:

@@ -326,9 +326,9 @@ def _stuck(full, product, adjacency, splits, technically_feasible, separable) ->
     if len(chain) > 1:
         detail += "; it is needed by " + " <- ".join(names(m) for m in reversed(chain[:-1]))
     smallest = _smallest_stuck(chain[-1], adjacency, splits, feasible_alone, separable)
+    floating, floats = _floating(smallest, product, adjacency, separable)
     return NotDisassemblableError([parts[i] for i in bit_indices(chain[-1])], detail,
-                                  [parts[i] for i in bit_indices(smallest)],
-                                  _floating(smallest, product, adjacency, separable))
+                                  [parts[i] for i in bit_indices(smallest)], floating, floats)
 
 
 def _smallest_stuck(subset, adjacency, splits, feasible_alone, separable) -> int:
@@ -345,10 +345,11 @@ def _smallest_stuck(subset, adjacency, splits, feasible_alone, separable) -> int
         subset = min(needed, key=lambda m: (m.bit_count(), m))
 
 
-def _floating(subset, product, adjacency, separable) -> str:
+def _floating(subset, product, adjacency, separable) -> tuple[str, tuple[str, ...]]:
     """The cuts of ``subset`` that the obstructions allow but the topological constraint refuses (the part
     set left behind is not connected), in words: which parts would be left touching none of the rest, inside
-    which, and what helps; "" when there is none. The part set they rest in is the one with the largest
+    which, and what helps; and the ids of those parts (:attr:`~planner.errors.NotDisassemblableError.
+    floating_parts`). ``("", ())`` when there is none. The part set they rest in is the one with the largest
     known volume, then the most contacts in the product (a housing), then the first. Cost: O(connected
     subsets of ``subset`` x its parts)."""
     parts = product.part_ids
@@ -362,7 +363,7 @@ def _floating(subset, product, adjacency, separable) -> str:
             if len(groups) > 1 and separable(moving, rest):
                 found.append((moving, groups))
     if not found:
-        return ""
+        return "", ()
     moving, groups = min(found, key=lambda f: (f[0].bit_count(), f[0]))
     size = [(p.volume or 0.0, adjacency[i].bit_count(), -i) for i, p in enumerate(product.parts)]
     holds = lambda m: max(size[i] for i in bit_indices(m))  # noqa: E731
@@ -373,7 +374,8 @@ def _floating(subset, product, adjacency, separable) -> str:
                             f"{names(g)} touching nothing" for g in floats)
     first = parts[bit_indices(floats[0])[0]]
     inside = parts[max(bit_indices(holder), key=size.__getitem__)]
-    return (f"taking {names(moving)} out would leave {touching} inside {names(holder)} (a subassembly must be "
+    text = (f"taking {names(moving)} out would leave {touching} inside {names(holder)} (a subassembly must be "
             f"connected in the connection diagram). Add a support contact between each such part and the part "
             f"it rests on (e.g. {first} and {inside} in the product's contacts), or --group NAME={inside},{first} "
             "on the CAD model (it then stays in place)")
+    return text, tuple(parts[i] for g in floats for i in bit_indices(g))

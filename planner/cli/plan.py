@@ -227,8 +227,8 @@ def _sequence(args: argparse.Namespace) -> int:
 
 
 def _fasteners(args: argparse.Namespace) -> int:
-    # The file's diagrams as they are: -o writes this product back (the interlock rules are the planning's).
-    product = api.resolve_product(args.product, interlocks="keep")
+    # The file's diagrams as they are: -o writes this product back (the interlock and support-contact rules are the planning's).
+    product = api.resolve_product(args.product, interlocks="keep", supports="keep")
     designed, proposals = api.fastener_report(product)
     if args.json:
         print(json.dumps({"designer": [_group_json(g) for g in designed],

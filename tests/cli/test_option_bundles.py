@@ -61,6 +61,6 @@ def test_the_product_bundle_is_one_set_of_options_for_stats_intentions_and_seque
         return set(sub._option_string_actions)
 
     bundle = {"--technical", "--base-part", "--subassemblies", "--max-components", "--level", "--fasteners",
-              "--interlocks", "--group", "--exclude", "--max-subassemblies", "--max-memory"}
+              "--interlocks", "--support-contacts", "--group", "--exclude", "--max-subassemblies", "--max-memory"}
     for command in ("stats", "intentions", "sequence"):
         assert bundle <= offered(command), command

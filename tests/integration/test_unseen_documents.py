@@ -4,17 +4,19 @@ from the file with the default flags (issue 26, "Must show": assemblies never se
 - every part found: PartDesign Bodies (the hinge), App::Part containers with nested placements and an
   App::Link array of bolts (the coupling: one part per element, placed by the containers above the array;
   also with the elements not shown as objects),
-  Part primitives and booleans (the vise), Draft polar arrays of 40 bolts and 40 nuts (the bolt circle: one
+  Part primitives and booleans (the vise, a closed gearbox), Draft polar arrays of 40 bolts and 40 nuts (the bolt circle: one
   part per element, 82 parts), the coupling exported to STEP and read back, and a STEP file of the coupling as
   one body of ten solids (one part per solid: one part leaves nothing to assemble);
 - the obstruction diagrams equal the ground truth derived from the construction (exactly touching faces and
   0.05 mm clearances included);
 - a container of parts that do not touch each other (``Bolts``, ``Nuts``) is no subassembly: the coupling's
-  session runs from its ``.FCStd`` to the assembled product, and says so in one line per container.
+  session runs from its ``.FCStd`` to the assembled product, and says so in one line per container;
+- a closed gearbox whose gears float once their shafts are out: its session runs from its ``.FCStd`` to the
+  assembled product with a support contact per gear, said in one line.
 
 One FreeCADCmd process builds the documents, ``aplan export-freecad`` exports each (about 3 s each); the
-coupling's session runs from its ``.FCStd`` (exporting it itself) in a process and a folder of its own; all in
-the background.
+coupling's and the gearbox's sessions run from their ``.FCStd`` (exporting it themselves), each in a process and
+a folder of its own; all in the background.
 """
 from __future__ import annotations
 
@@ -31,7 +33,7 @@ from background import ENVIRONMENT, Job, folder, run
 from conftest import REPO, require_freecadcmd
 
 from integration.freecad_tools import freecad_result
-from integration.unseen_documents import DOCUMENTS, GROUND_TRUTH, ONE_BODY, STEP_NAMES
+from integration.unseen_documents import DOCUMENTS, GEARBOX, GROUND_TRUTH, ONE_BODY, STEP_NAMES
 
 def _build() -> tuple[Path, subprocess.CompletedProcess]:
     """FreeCAD builds the documents; then ``aplan export-freecad`` with the default flags exports each (and the
@@ -54,17 +56,20 @@ def _build() -> tuple[Path, subprocess.CompletedProcess]:
     return tmp, done
 
 
-def _session() -> tuple[Path, subprocess.CompletedProcess]:
+def _session(name: str) -> tuple[Path, subprocess.CompletedProcess]:
+    """``aplan session NAME.FCStd --demo 0`` with no flags, in a folder of its own."""
     documents, built = BACKGROUND[0].result()
-    here = folder("unseen-coupling")
+    here = folder(f"unseen-{name}")
     if built.returncode != 0:
         return here, built
-    done = run([sys.executable, "-m", "planner", "session", str(documents / "coupling.FCStd"), "--demo", "0"],
+    done = run([sys.executable, "-m", "planner", "session", str(documents / f"{name}.FCStd"), "--demo", "0"],
                cwd=here, env={**ENVIRONMENT, "PYTHONPATH": str(REPO)})
     return here, done
 
 
-BACKGROUND = (Job("unseen documents in FreeCAD", _build), Job("aplan session coupling.FCStd", _session))
+BACKGROUND = (Job("unseen documents in FreeCAD", _build),
+              Job("aplan session coupling.FCStd", lambda: _session("coupling")),
+              Job("aplan session gearbox.FCStd", lambda: _session(GEARBOX)))
 
 
 @pytest.fixture(scope="module")
@@ -144,3 +149,16 @@ def test_the_coupling_session_from_its_document_with_the_default_flags(built):
     assert re.search(r"^assembled: the product is assembled", done.stdout, re.M), done.stdout[-2000:]
     assert len(re.findall(r"container \w+ holds members that do not touch", done.stderr)) == 2
     assert any(p.suffix == ".jsonl" for p in here.iterdir())
+
+
+@pytest.mark.freecad
+def test_the_closed_gearbox_session_adds_a_support_contact_per_gear(built):
+    here, done = BACKGROUND[2].result()
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    assert re.search(r"^assembled: the product is assembled", done.stdout, re.M), done.stdout[-2000:]
+    lines = [line for line in done.stderr.splitlines() if line.startswith("aplan: support contacts: ")]
+    assert len(lines) == 1, done.stderr[-3000:]
+    # Each gear sits in the housing's cavity (open at the top once the cover is off: 5 of the 6 directions).
+    assert lines[0].startswith("aplan: support contacts: GearA rests in Housing (inside its box, walled in along 5 "
+                               "of the 6 axis directions); GearB rests in Housing (")
+    assert "cannot be disassembled" not in done.stderr

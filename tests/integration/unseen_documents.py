@@ -15,14 +15,55 @@ grouped, one nut excluded). ``REPO`` (the repository) is prepended too.
   threaded hole of the fixed jaw (the same radius) into the sliding jaw, and a handle bar through the
   screw's head (0.05 mm clearance);
 - ``bolt_circle``: the coupling's flanges at radius 160 with a circle of 40 bolts and 40 nuts, each a Draft
-  polar array of one plain feature (82 parts: one per array element).
+  polar array of one plain feature (82 parts: one per array element);
+- ``gearbox``: Part booleans, a closed two-shaft gearbox of 14 parts (:data:`GEARBOX`) whose gears float
+  once their shafts are out (a support contact each, :mod:`planner.assembly.support_contacts`).
 
 The obstruction ground truth of each follows from the construction: :data:`GROUND_TRUTH` (by label).
 """
 
 import math
 
-DOCUMENTS = ("hinge", "coupling", "vise", "bolt_circle")
+DOCUMENTS = ("hinge", "coupling", "vise", "bolt_circle", "gearbox")
+
+#: The gearbox (mm): a housing x 0..100, y 0..60, z 0..60 with a cavity x 10..90, y 10..50 open at the top (z from
+#: 10), bores of radius 5 along Y at (x, z) = (32, 30) and (68, 30) through its walls, four blind holes of radius 2
+#: at the corners (z 45..60); a cover z 60..65 with four holes, screws (shank radius 2, z 45..65, head radius 4 at
+#: z 65..68); per bore a shaft (radius 5, y -15..75), a gear on it inside (radius 18, y 25..35: the two meet at
+#: x = 50) and a bearing on each side outside (a ring of radii 5 and 10, y -10..0 and 60..70). The parts come
+#: apart one by one, but a gear whose shaft is out touches only the other gear: it rests in the housing.
+GEARBOX = "gearbox"
+
+
+def _gearbox_truth() -> dict[str, set[tuple[str, str]]]:
+    """The gearbox's diagrams from its construction (:data:`GEARBOX`; x moving along +d collides with y when
+    their shadows across d overlap in an area and y lies ahead; faces or lines that only touch are no overlap).
+
+    Along Z: the housing's floor lies under everything inside it, the cover over it; a screw's head rests on
+    the cover and its shank's tip on the housing; a shaft is held both ways by the housing's bore walls, its
+    bearings and its gear around it. Along X: the housing's side walls hold the screws, shafts and gears both
+    ways (and the cover its screws); what lies at x = 32 meets what lies at x = 68 (shafts, gears, bearings),
+    the screws at x = 5 those at x = 95. Along Y: the shafts slide through their bores, gears and bearings; the
+    housing's end walls hold the gears both ways and stand between the bearings (the outer ones, y -10..0, hit
+    them moving +Y; the inner, y 60..70, are hit), and a bearing meets the gear and the bearing beyond it; the
+    screws at y = 5 meet those at y = 55."""
+    screws = [f"Screw{k}" for k in range(1, 5)]
+    both = lambda pairs: {p for a, b in pairs for p in ((a, b), (b, a))}  # noqa: E731
+    z = {("Housing", "Cover")} | {(h, s) for s in screws for h in ("Housing", "Cover")}
+    x = both([(s, h) for s in screws for h in ("Housing", "Cover")]) | {("Screw1", "Screw2"), ("Screw3", "Screw4")}
+    y = both([(s, h) for s in screws for h in ("Housing", "Cover")]) | {("Screw1", "Screw3"), ("Screw2", "Screw4")}
+    for k in "AB":
+        shaft, gear, outer, inner = f"Shaft{k}", f"Gear{k}", f"Bearing{k}1", f"Bearing{k}2"
+        z |= both([(shaft, "Housing"), (shaft, gear), (shaft, outer), (shaft, inner)])
+        z |= {("Housing", gear), (shaft, "Cover"), (gear, "Cover")}
+        x |= both([(shaft, "Housing"), (gear, "Housing"), (shaft, gear), (shaft, outer), (shaft, inner)])
+        y |= both([(gear, "Housing")]) | {(outer, "Housing"), ("Housing", inner), (outer, gear), (gear, inner),
+                                          (outer, inner)}
+    x |= {("ShaftA", "ShaftB"), ("GearA", "GearB"), ("ShaftA", "GearB"), ("GearA", "ShaftB"),
+          ("BearingA1", "BearingB1"), ("BearingA2", "BearingB2")}
+    x |= {(bearing, "ShaftB") for bearing in ("BearingA1", "BearingA2")}
+    x |= {("ShaftA", bearing) for bearing in ("BearingB1", "BearingB2")}
+    return {"+X": x, "+Y": y, "+Z": z}
 
 #: Bolt centres of the coupling: the four corners (+-A, +-A) of a square (A = 20).
 _A = 20
@@ -99,7 +140,7 @@ def _vise_truth() -> dict[str, set[tuple[str, str]]]:
     return {"+X": x, "+Y": y, "+Z": z}
 
 
-GROUND_TRUTH = {"hinge": _HINGE, "vise": _vise_truth(),
+GROUND_TRUTH = {"hinge": _HINGE, "vise": _vise_truth(), "gearbox": _gearbox_truth(),
                 "coupling": _coupling_truth(_BOLTS, [f"Bolt_i{k}" for k in range(4)],
                                             [f"Nut{k + 1}" for k in range(4)]),
                 "bolt_circle": _coupling_truth(_CIRCLE, [f"Bolts_{k + 1:03d}" for k in range(_CIRCLE_N)],
@@ -242,6 +283,32 @@ head.Tool = cylinder("BarBore", 2.05, 40, (-25, 0, 25), (0, 1, 0))
 screw.Shapes = [cylinder("Shank", 5, 80, (-20, 20, 25), (1, 0, 0)), head]
 labelled(cylinder("Bar", 2, 40, (-25, 0, 25), (0, 1, 0)), "Bar")
 saved(doc, "vise")
+
+# Gearbox: a closed housing of Part booleans, its cover screwed on (see GEARBOX).
+doc = FreeCAD.newDocument("gearbox")
+SHAFTS = ((32, "A"), (68, "B"))
+CORNERS = ((5, 5), (95, 5), (5, 55), (95, 55))
+def along_y(radius, y0, length, x, z=30):
+    return Part.makeCylinder(radius, length, V(x, y0, z), V(0, 1, 0))
+housing = Part.makeBox(100, 60, 60).cut(Part.makeBox(80, 40, 50, V(10, 10, 10)))
+for x, _ in SHAFTS:
+    housing = housing.cut(along_y(5, 0, 60, x))
+for x, y in CORNERS:
+    housing = housing.cut(Part.makeCylinder(2, 15, V(x, y, 45)))
+feature(doc, "Housing", housing)
+cover = Part.makeBox(100, 60, 5, V(0, 0, 60))
+for x, y in CORNERS:
+    cover = cover.cut(Part.makeCylinder(2, 5, V(x, y, 60)))
+feature(doc, "Cover", cover)
+for k, (x, y) in enumerate(CORNERS):
+    feature(doc, f"Screw{k + 1}", Part.makeCylinder(2, 20, V(x, y, 45)).fuse(
+        Part.makeCylinder(4, 3, V(x, y, 65))).removeSplitter())
+for x, name in SHAFTS:
+    feature(doc, "Shaft" + name, along_y(5, -15, 90, x))
+    feature(doc, "Gear" + name, along_y(18, 25, 10, x).cut(along_y(5, 25, 10, x)))
+    for k, y0 in ((1, -10), (2, 60)):
+        feature(doc, f"Bearing{name}{k}", along_y(10, y0, 10, x).cut(along_y(5, y0, 10, x)))
+saved(doc, "gearbox")
 
 # Bolt circle: Draft polar arrays of a bolt and a nut.
 import Draft

@@ -61,12 +61,19 @@ def add_fasteners(parser) -> None:
 
 
 def add_interlocks(parser) -> None:
-    """``--interlocks {resolve,error,keep}``: what to do with parts that block each other along every direction."""
+    """``--interlocks {resolve,error,keep}``: what to do with parts that block each other along every direction;
+    ``--support-contacts {add,error,keep}``: with parts that would float in the part whose cavity holds them."""
     parser.add_argument("--interlocks", choices=("resolve", "error", "keep"), default="resolve",
                         help="pairs of parts that block each other along every direction, in a product drawn in "
                              "CAD: resolve: from the geometry (an overlap's insertion direction, a direction found "
                              "on the pair, else one component), one line per decision (default); error: refuse, "
                              "naming what would be done; keep: plan the diagrams as they are")
+    parser.add_argument("--support-contacts", choices=("add", "error", "keep"), default="add",
+                        help="parts of a product drawn in CAD that would touch nothing once what holds them is "
+                             "taken out, inside a part whose cavity holds them (a gear in a closed housing once "
+                             "its shaft is out): add: a support contact with that part, when the product cannot "
+                             "be taken apart otherwise, one line saying so (default); error: refuse, naming the "
+                             "contacts; keep: plan the contacts as they are")
 
 
 def parse_group(text: str) -> tuple[str, list[str]]:
@@ -101,7 +108,7 @@ def product_from(args: argparse.Namespace, argument, tolerances=None):
     return api.resolve_product(argument, tolerances, getattr(args, "fasteners", STRUCTURE_DEFAULT),
                                model_options_from(args), getattr(args, "subassemblies", None),
                                getattr(args, "max_components", MAX_COMPONENTS),
-                               getattr(args, "interlocks", "resolve"))
+                               getattr(args, "interlocks", "resolve"), getattr(args, "support_contacts", "add"))
 
 
 def add_product_options(parser, level: bool = True) -> None:

@@ -1,0 +1,184 @@
+"""Support contacts: a part that rests in the cavity of another without touching it, joined to it for planning.
+
+The AND/OR graph's subassemblies are connected in the connection diagram (:mod:`planner.assembly.andor`). In a
+closed gearbox the parts come apart one by one (the screws, the cover, the bearings, a shaft pushed out
+through the housing's bores, its gear lifted out), but once a shaft is out its gear touches only the other
+gear, or nothing: the part set the shaft leaves is not connected, that split is refused, and the product
+"cannot be disassembled". Meanwhile the gear rests on the housing's floor. A *support contact* between the
+gear and the housing says so, and the split is allowed.
+
+Definition. Part ``h`` *encloses* part ``p`` when
+
+1. ``p``'s axis-aligned bounding box lies inside ``h``'s (within the contact tolerance), and
+2. ``h`` blocks ``p`` along at least :data:`MIN_WALLED` of the six axis directions (``(p, h)`` in the ``+A``
+   diagram: along ``+A``; ``(h, p)`` in it: along ``-A``), the product having diagrams along the three axes.
+
+Why both: the bounding boxes are the only shape the planner has at plan time besides the diagrams (the
+bundle's meshes: their vertices), and the diagrams say from which sides ``h`` walls ``p`` in. A box inside
+another's alone holds for any part over a chassis or a base plate; walls alone for a part wedged between two
+flanges. Together: ``p`` lies within ``h``'s extent and ``h`` walls it in on all sides but at most two -- a
+pocket open one way (five of six: the gearbox's housing once its cover is off), a tube open at both ends
+(four). A part on a plate (one or two), in a corner or in a trough open along its length and upward (three) is
+not enclosed: it could be slid or lifted away, and a contact there would join parts the designer did not.
+
+The rule, on a product drawn in CAD (every part has a mesh; a product without meshes is planned as written):
+when the flat product (its fastener groups folded, as :func:`~planner.assembly.make_plan` plans it) has no
+AND/OR graph because parts would float (:attr:`~planner.errors.NotDisassemblableError.floating_parts`), every
+part that some part encloses without touching it gets a support contact with it (the enclosing part with the
+smallest box when several do: the innermost cavity), provided the diagnosis names one of them. Every such part,
+not only those the diagnosis names first: the second gear rests on the housing as the first does, and
+supporting the first alone would let the plan take its shaft out first and forbid the mirror order. Contacts
+only add connected part sets, hence subassemblies, so no subset of them frees a product they do not free: they
+are kept when the product then has an AND/OR graph; else the product is left as it is and the planner's error
+stands. Every level of a product planned as workstations sees them (members touch when parts of theirs do).
+They are recorded in ``geometry.analysis.support_contacts``. A product too large to plan flat (past
+:data:`CHECK_LIMIT`) is not judged, even when a part floats inside one of its workstations: that level's error
+names the parts and what helps.
+
+Cost: O(pairs of the axis diagrams); with no part walled in by one it does not touch (the usual
+product), nothing more. Else at most two flat AND/OR graphs within :data:`CHECK_LIMIT` connected part sets (the
+product as it is, and with the contacts), and one reading of the meshes.
+"""
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..defaults import SUBASSEMBLY_LIMIT
+from ..errors import NotDisassemblableError, PlannerError, SupportRefusedError
+from ..product import Product, fold
+from ..product.constants import AXIS_DIRECTIONS
+from .andor import and_or_graph
+from .interlocks import _meshes, _tolerances
+
+__all__ = ["SupportContact", "support_contacts", "apply_support_mode", "SUPPORT_MODES", "MIN_WALLED", "CHECK_LIMIT"]
+
+log = logging.getLogger(__name__)
+
+#: ``--support-contacts``: add (the rule's contacts, one line saying so), error (name them, plan nothing), keep
+#: (the contacts as they are: the planner names the parts that would float).
+SUPPORT_MODES = ("add", "error", "keep")
+#: The fewest axis directions (of six) along which the enclosing part blocks the enclosed one (module docstring).
+MIN_WALLED = 4
+#: The AND/OR graphs the rule builds to see whether the product needs its contacts stay within the planner's own
+#: limit of connected part sets (and its cuts): past it the rule does not judge the product. The closed gearbox's
+#: flat graph (14 parts, its four screws in) takes 0.4 CPU s, 0.8 s once it plans (bench/README.md).
+CHECK_LIMIT = SUBASSEMBLY_LIMIT
+
+
+@dataclass(frozen=True)
+class SupportContact:
+    """``part`` rests in ``host``'s cavity: ``walled`` of the six axis directions are blocked by it."""
+
+    part: str
+    host: str
+    walled: int
+
+    @property
+    def text(self) -> str:
+        return f"{self.part} rests in {self.host} (inside its box, walled in along {self.walled} of the 6 axis directions)"
+
+
+def support_contacts(product: Product, meshes=None) -> tuple[Product, tuple[SupportContact, ...]]:
+    """``product`` with the support contacts of the rule (module docstring) added, and those contacts; the
+    product itself and ``()`` when it needs none, when none frees it, or when it cannot be judged (no meshes,
+    no diagram along some axis, an AND/OR graph past :data:`CHECK_LIMIT`). ``meshes``: the parts'
+    :class:`~planner.geometry.PartMesh` (default: the product's mesh files). Cost: module docstring."""
+    walled = _walled(product)
+    if not walled or meshes is None and not all(p.mesh for p in product.parts):
+        return product, ()  # no candidate, or not drawn in CAD (planned as written): no graph is built
+    stuck = _floating_parts(product)
+    if not stuck or not any(p in stuck for p, _ in walled):
+        return product, ()
+    meshes = _meshes(product) if meshes is None else meshes
+    if meshes is None:
+        return product, ()
+    boxes = {m.id: (m.vertices.min(axis=0), m.vertices.max(axis=0)) for m in meshes}
+    if not all(p in boxes for p in product.part_ids):
+        return product, ()
+    margin = _tolerances(product)[0].contact
+    hosts = _hosts(walled, boxes, margin)
+    if not any(p in hosts for p in stuck):
+        return product, ()
+    added = tuple(SupportContact(p, hosts[p], walled[(p, hosts[p])]) for p in product.part_ids if p in hosts)
+    current = replace(product, contacts=product.contacts + tuple((c.part, c.host) for c in added))
+    if _floating_parts(current) != ():
+        return product, ()  # more contacts only add subassemblies: no fewer would free it
+    analysis = {**current.geometry.get("analysis", {}),
+                "support_contacts": [{"parts": [c.part, c.host], "text": c.text} for c in added]}
+    return replace(current, geometry={**current.geometry, "analysis": analysis}), tuple(added)
+
+
+def apply_support_mode(product: Product, mode: str = "add", meshes=None) -> Product:
+    """``product`` as ``--support-contacts MODE`` plans it (:data:`SUPPORT_MODES`): ``add`` adds the rule's
+    contacts (:func:`support_contacts`) and logs one line naming them and why, ``error`` raises
+    :class:`~planner.errors.SupportRefusedError` naming them, ``keep`` returns it untouched (the planner's
+    error names the parts that would float). Cost: that of :func:`support_contacts`."""
+    if mode not in SUPPORT_MODES:
+        raise PlannerError(f"unknown support-contact mode {mode!r}; use one of {', '.join(SUPPORT_MODES)}")
+    if mode == "keep":
+        return product
+    supported, added = support_contacts(product, meshes)
+    if not added:
+        return product
+    where = f"{product.name}: " if product.name else ""
+    listed = "; ".join(c.text for c in added)
+    why = ("the product cannot be taken apart otherwise (once what holds such a part is out, it would touch none of "
+           "the parts left, and a subassembly must be connected in the connection diagram)")
+    if mode == "error":
+        raise SupportRefusedError(
+            f"{where}{len(added)} support contact(s) refused by --support-contacts error: {listed}; {why}. "
+            "Leave out --support-contacts error to add them, or make each part one component with the part it "
+            f"rests in (--group NAME={added[0].host},{added[0].part} on the CAD model)",
+            [(c.part, c.host) for c in added])
+    log.info("support contacts: %s: %s; --support-contacts error to refuse instead", listed, why)
+    return supported
+
+
+def _walled(product: Product) -> dict[tuple[str, str], int]:
+    """``(p, h) -> k``: the pairs of parts that do not touch where ``h`` blocks ``p`` along ``k >=``
+    :data:`MIN_WALLED` axis directions; ``{}`` without diagrams along the three axes. Cost: O(pairs)."""
+    along: dict[tuple[str, str], set[str]] = {}
+    covered: set[str] = set()
+    reverse = {name: ("-" if name[0] == "+" else "+") + name[1:] for name in AXIS_DIRECTIONS}
+    for obstruction in product.obstructions:
+        name = obstruction.direction.name
+        if name not in AXIS_DIRECTIONS:
+            continue
+        covered |= {name, reverse[name]}
+        for x, y in obstruction.blocks:
+            along.setdefault((x, y), set()).add(name)          # x moving along it hits y
+            along.setdefault((y, x), set()).add(reverse[name])  # y moving against it hits x
+    if len(covered) < len(AXIS_DIRECTIONS):
+        return {}
+    touching = {frozenset(c) for c in product.contacts}
+    return {pair: len(names) for pair, names in along.items()
+            if len(names) >= MIN_WALLED and frozenset(pair) not in touching}
+
+
+def _hosts(walled: dict[tuple[str, str], int], boxes: dict, margin: float) -> dict[str, str]:
+    """``p -> h``: the part whose box holds ``p``'s (within ``margin``) among those walling ``p`` in, the one with
+    the smallest box when several do (the innermost cavity; on a tie the first in the diagrams' order)."""
+    found: dict[str, tuple[float, str]] = {}
+    for p, h in walled:
+        (lo, hi), (host_lo, host_hi) = boxes[p], boxes[h]
+        if np.all(lo >= host_lo - margin) and np.all(hi <= host_hi + margin):
+            size = float(np.prod(host_hi - host_lo))
+            if p not in found or size < found[p][0]:
+                found[p] = (size, h)
+    return {p: h for p, (_, h) in found.items()}
+
+
+def _floating_parts(product: Product) -> tuple[str, ...] | None:
+    """The parts the planner's diagnosis says would float (:attr:`~planner.errors.NotDisassemblableError.
+    floating_parts`) when the flat product, its fasteners folded, has no AND/OR graph; ``()`` when it has one,
+    None when it is stuck otherwise or cannot be judged (past :data:`CHECK_LIMIT`, not connected)."""
+    try:
+        and_or_graph(fold(product).product, limit=CHECK_LIMIT)
+    except NotDisassemblableError as error:
+        return error.floating_parts or None
+    except PlannerError:  # past the limit (LimitExceededError), not connected: not judged
+        return None
+    return ()
