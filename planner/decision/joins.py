@@ -33,7 +33,7 @@ import numpy as np
 
 from ..assembly.andor import liaison_adjacency
 
-__all__ = ["JOINS", "join_of", "join_actions", "names_joins", "join_parts", "performed", "join_choices"]
+__all__ = ["JOINS", "join_of", "join_actions", "names_joins", "join_parts", "performed", "join_choices", "join_family"]
 
 JOINS = "joins"
 
@@ -117,3 +117,14 @@ def join_choices(model, action: int, belief) -> list[tuple[int, int, float]]:
     found = [(int(s), int(by_state[int(s)]), float(m)) for s, m in zip(states.tolist(), mass.tolist())
              if m > 0 and int(s) in by_state]
     return sorted(found, key=lambda x: (-x[2], x[0]))
+
+
+def join_family(plan, operation: int) -> tuple[tuple[str, str], tuple[int, ...]]:
+    """The join ``(P, Q)`` (part ids) of AND/OR ``operation`` and every robot-capable operation with that join,
+    sorted: what a join is when only its reported operation is known (a ROS goal: docs/ros.md). Cost:
+    O(ops x n)."""
+    andor = plan.andor
+    adjacency = liaison_adjacency(plan.product)
+    pair = join_of(andor, adjacency, operation)
+    family = tuple(int(op) for op in np.flatnonzero(plan.tags.robot) if join_of(andor, adjacency, int(op)) == pair)
+    return (andor.parts[pair[0]], andor.parts[pair[1]]), family

@@ -37,8 +37,8 @@ from .intention_model import Rewards
 from .joins import JOINS
 from .projected import PROJECTED_CONFIDENCE
 
-__all__ = ["ModelPreset", "PRESETS", "CONFIDENT", "ORDERS", "HELPFUL", "wrong_for_confidence", "act_confidence_of", "preset_habits",
-           "preset_rewards"]
+__all__ = ["ModelPreset", "PRESETS", "CONFIDENT", "ORDERS", "HELPFUL", "wrong_for_confidence", "act_confidence_of",
+           "preset_habits", "preset_rewards"]
 
 
 @dataclass(frozen=True)

@@ -6,14 +6,18 @@ methods, without subclassing or importing anything else from the planner.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, replace
 from typing import Protocol, runtime_checkable
 
 from ..assembly.tags import Observation
 from ..decision.intention_model import IntentionModel
-from ..decision.joins import join_choices, join_parts, names_joins, performed
+from ..decision.joins import join_choices, join_family, join_parts, names_joins, performed
 
-__all__ = ["Instruction", "RobotReport", "ObservationSource", "Robot", "instruction_for", "instruction_of_operation"]
+__all__ = ["Instruction", "RobotReport", "ObservationSource", "Robot", "instruction_for", "instruction_of_operation",
+           "with_join"]
+
+_JOIN_NAME = re.compile(r"a\d+:join\(")  # the name of an action named by a join (FactoredIntentionModel.actions)
 
 
 @dataclass(frozen=True)
@@ -126,6 +130,16 @@ def instruction_for(model: IntentionModel, action: int, step: int, belief=None) 
     takes = sorted({p for op in set(operations) for p in instruction_of_operation(plan, op).picks})
     return Instruction(step, action, name, join=join_parts(model, action), same_motion=len(set(operations)) == 1,
                        takes=tuple(takes), performs=performed(model, action), **_operation_fields(plan, operations[0]))
+
+
+def with_join(plan, instruction: Instruction) -> Instruction:
+    """``instruction`` as a ROS goal carried it (docs/ros.md: the goal has no field for the join; the action's
+    name ``aK:join(P,Q)`` says it is one, ``operation`` is the one reported) with its join and the join's
+    operations filled in from ``plan`` (:func:`~planner.decision.joins.join_family`); any other, as it is."""
+    if instruction.join is not None or instruction.operation is None or not _JOIN_NAME.match(instruction.name):
+        return instruction
+    join, family = join_family(plan, instruction.operation)
+    return replace(instruction, join=join, performs=family)
 
 
 def instruction_of_operation(plan, operation: int, step: int = 0, action: int = -1, name: str = "") -> Instruction:

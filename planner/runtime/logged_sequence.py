@@ -47,7 +47,8 @@ class LoggedSequence:
 def logged_steps(events: list[dict], model) -> list[tuple[str, int]]:
     """The log's steps that changed the assembly state, as ``("robot", operation)`` for each robot operation
     reported done (for an action named by a join, the tuple of the join's operations:
-    :func:`~planner.decision.joins.performed`; the one at the state applies) and ``("operator", observation index)`` for each observation, in the order they were applied
+    :func:`~planner.decision.joins.performed`; the one at the state applies) and ``("operator", observation
+    index)`` for each observation, in the order they were applied
     (:class:`~planner.runtime.progress.AssemblyProgress`, the session's rule): an observation no operation
     explains in the assembly state (the session ignored it and counted the step as blank; a log written before
     that rule kept it) and a robot operation the state does not allow are left out; a step undone ends them

@@ -41,9 +41,10 @@ class ScriptedOperator:
     (``state``). The robot's operation there (for an action named by a join, the join's operation at that state)
     is struck from its list when the list has it; otherwise the robot helped ahead (docs/parallel.md, The
     projected model): the rest of the sequence is projected onto the new state, the operator's other joins in
-    its order (``ahead`` lists those operations). When that projection is not feasible, or the robot's operation no operation of the state is,
-    the robot's operation goes to ``off_script``, and the operator then finishes by the first completion from
-    the new state (smallest state edges). As an :class:`~planner.runtime.interfaces.ObservationSource` it reports
+    its order (``ahead`` lists those operations). When that projection is not feasible, the robot's operation
+    goes to ``off_script`` and the operator then finishes by the first completion from the new state (smallest
+    state edges); an instruction of which no operation applies at the true state changes nothing and goes to
+    ``off_script`` too. As an :class:`~planner.runtime.interfaces.ObservationSource` it reports
     the observation of what it did.
     """
 

@@ -23,24 +23,17 @@ from planner.decision.joins import performed
 from planner.decision.online import OnlinePlanner
 from planner.decision.presets import HELPFUL, wrong_for_confidence
 from planner.decision.projected import PROJECTED_CONFIDENCE
-from planner.runtime.interfaces import Instruction, instruction_for, instruction_of_operation
+from planner.runtime.interfaces import Instruction, instruction_for, instruction_of_operation, with_join
 from planner.runtime.log import EventLog
 from planner.runtime.progress import AssemblyProgress
 from planner.runtime.scripted import ScriptedOperator, ScriptedRobot
 from planner.runtime.session import run_session
+from test_habit_sessions import learn_habits
 
 EXPANSIONS = 20  # no clock: the same decisions in the test's own run and in the command's
 EARLY = 8  # the rank of a pen sequence whose robot joins ahead of the operator under the uniform prior
 HABIT_RANK = 1  # the operator of the habits: under the uniform prior its robot never joins ahead
 ROBOT_WRONG = wrong_for_confidence(PROJECTED_CONFIDENCE)  # the joins model's own default (-490)
-
-
-class _Wait:
-    def __init__(self, model):
-        self.wait = model.wait
-
-    def action(self, belief) -> int:
-        return self.wait
 
 
 def _events(path) -> list[dict]:
@@ -94,17 +87,7 @@ def joins(pen):
 def learned(pen, tmp_path_factory):
     """Habits of an operator who did sequence HABIT_RANK in 3 logged sessions alone, learned by ``aplan
     habits``."""
-    folder = tmp_path_factory.mktemp("join-habits")
-    model = factored_model(make_plan(pen))
-    logs = []
-    for k in range(3):
-        operator = ScriptedOperator(model.plan, model.sequence_operations(model.sequence(HABIT_RANK)))
-        assert run_session(model, _Wait(model), operator, ScriptedRobot(), EventLog(folder / f"s{k}.jsonl")).assembled
-        logs.append(folder / f"s{k}.jsonl")
-    habits = folder / "habits.json"
-    done = run_aplan("habits", *logs, "-o", habits)
-    assert done.returncode == 0, done.stderr
-    return habits
+    return learn_habits(pen, tmp_path_factory.mktemp("join-habits"), HABIT_RANK, 3)[1]
 
 
 @pytest.fixture(scope="module")
@@ -230,3 +213,20 @@ def test_replay_refuses_a_log_whose_reported_join_operation_was_changed(cell_log
     done = run_aplan("replay", changed)
     assert done.returncode == 1 and f"joins differ from the ones the recomputed beliefs give at steps {step['step']}" \
         in done.stderr, done.stderr
+
+
+def test_a_join_is_done_at_the_true_state_also_when_a_goal_carried_it(joins):
+    """The ROS goal has no field for the join: its name says it (``aK:join(P,Q)``) and its operation is the
+    reported one; :func:`with_join` gives back the join's operations, and the simulated cell's operator does
+    the one of its true state, whichever state the report was of."""
+    action = next(k for k, name in enumerate(joins.actions) if name.endswith(":join(ink,cartridge)"))
+    first, second, _ = _spread(joins, action)
+    plan = joins.plan
+    reported = int(joins.class_operation[second])  # the report is of the second state, the truth the first
+    goal = with_join(plan, Instruction(1, action, joins.actions[action], reported))
+    assert goal.join == ("ink", "cartridge") and goal.performs == performed(joins, action)
+    assert with_join(plan, Instruction(1, joins.wait, "wait")).join is None
+    operator = ScriptedOperator(plan, [])
+    operator.state = int(joins.class_source[first])
+    done = operator.robot_acting(goal)
+    assert done == int(joins.class_operation[first]) and done != reported
