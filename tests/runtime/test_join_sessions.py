@@ -21,7 +21,7 @@ from planner.decision.intention_model import Rewards
 from planner.decision.io.habits_file import read_habits
 from planner.decision.joins import performed
 from planner.decision.online import OnlinePlanner
-from planner.decision.presets import HELPFUL, wrong_for_confidence
+from planner.decision.presets import CONFIDENT, HELPFUL, preset_habits, wrong_for_confidence
 from planner.decision.projected import PROJECTED_CONFIDENCE
 from planner.runtime.interfaces import Instruction, instruction_for, instruction_of_operation, with_join
 from planner.runtime.log import EventLog
@@ -109,6 +109,10 @@ def test_a_cell_session_joins_ahead_of_the_operator_and_replays(joins, cell_log,
     operator = _world(joins, EARLY, events)
     assert operator.ahead and not operator.off_script and not operator.remaining  # a join early, none wrong
     assert f"its {len(robot)} joins reproduced" in _replays(log)
+    habits = tmp_path / "habits.json"  # a log of joins teaches habits: the robot's joins walked at the true state
+    done = run_aplan("habits", log, "-o", habits)
+    assert done.returncode == 0, done.stderr
+    assert sum(n for _, _, n in read_habits(habits).counts) == pytest.approx(5 - len(robot))  # the operator's steps
     _, here = _here(joins, EARLY, tmp_path, "here")
     assert _actions(here) == _actions(events)
     assert [e.get("operation") for e in here if e["event"] == "action"] == \
@@ -135,12 +139,19 @@ def test_with_habits_the_robot_does_more_and_the_preset_is_the_same_model(joins,
     assert _robot(runs["helpful"]) > _robot(plain)
 
 
-def test_a_keyboard_session_with_joins_makes_the_same_decisions(joins, learned, pen, tmp_path):
-    """The keyboard's lines are what the operator was seen picking in the same session run here: the command's
-    robot does the same joins, reported as the same operations, and the log replays."""
-    weighted = factored_model(joins.plan, joins.rewards, weights=habit_weights(
-        joins.plan, read_habits(learned)), parallel="joins")
-    operator, here = _here(weighted, HABIT_RANK, tmp_path, "here")
+@pytest.mark.parametrize("model", ["uniform", "confident"])
+def test_a_keyboard_session_with_joins_makes_the_same_decisions(joins, learned, model, tmp_path):
+    """The keyboard's lines are what the operator was seen picking in the same session run here (without habits,
+    and with ``--habits H --model confident``): the command's robot does the same joins, reported as the same
+    operations, one of them ahead of the operator, and the log replays."""
+    if model == "uniform":
+        here_model, rank, extra = joins, EARLY, []
+    else:
+        habits = preset_habits(CONFIDENT, read_habits(learned))
+        here_model = factored_model(joins.plan, joins.rewards, weights=habit_weights(joins.plan, habits),
+                                    parallel="joins")
+        rank, extra = HABIT_RANK, ["--habits", learned, "--model", "confident"]
+    operator, here = _here(here_model, rank, tmp_path, "here")
     assert operator.ahead
     picks = []  # one line per step: the parts and tool seen, an empty line for nothing
     for event in here:
@@ -148,13 +159,15 @@ def test_a_keyboard_session_with_joins_makes_the_same_decisions(joins, learned, 
             seen = joins.plan.observations[event["index"]]
             picks.append(" ".join(seen.parts + ((seen.tool,) if seen.tool else ())))
     log = tmp_path / "keyboard.jsonl"
-    done = run_aplan("session", "pen", "--keyboard", "--robot", "auto", "--joins", "--habits", learned,
+    done = run_aplan("session", "pen", "--keyboard", "--robot", "auto", "--joins", *extra,
                      "--expansions", EXPANSIONS, "--log", log, stdin="\n".join(picks) + "\n")
     assert done.returncode == 0 and done.stdout.startswith("assembled"), done.stdout + done.stderr
     events = _events(log)
     assert _actions(events) == _actions(here)
-    assert [e["instruction"] for e in events if e["event"] == "action"] == \
-        [e["instruction"] for e in here if e["event"] == "action"]
+    told = [e["instruction"] for e in events if e["event"] == "action"]
+    assert told == [e["instruction"] for e in here if e["event"] == "action"]
+    assert all(f"robot, step {k}: {text}" in done.stderr + done.stdout for k, text in enumerate(told, start=1)
+               if text.startswith("join "))  # the person at the keyboard sees what the robot joins
     _replays(log)
 
 
