@@ -86,7 +86,7 @@ def names_joins(model) -> bool:
 
 def join_parts(model, action: int) -> tuple[str, str]:
     """The part ids ``(P, Q)`` of the join ``action`` of the joins model (its first operation's join). Cost:
-    O(ops x n) once for the contacts, O(n) here."""
+    the contact bitmasks, O(n + contacts)."""
     op = model.operation(action)
     andor = model.plan.andor
     p, q = join_of(andor, liaison_adjacency(model.plan.product), op)

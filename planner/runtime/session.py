@@ -4,7 +4,10 @@ One decision step (as in :func:`planner.decision.simulate.simulate_episode` and 
 
 1. the policy picks the action for the current belief (an operation for the robot, or ``wait``);
 2. the observation source is told what the robot is about to do (its marker events are not the
-   operator's), then the robot performs it and reports success or failure;
+   operator's), then the robot performs it and reports success or failure (an action named by a join,
+   ``--joins``, is told as the join and the operation at the belief's most probable state where it applies:
+   :func:`~planner.runtime.interfaces.instruction_for`; the assembly state applies the join's operation at each
+   state it holds);
 3. the source delivers the operator's observation for the step (what the operator was seen picking, or
    blank); a source with an ``offer(picks)`` method (the keyboard) is first given what the operator could be
    seen picking in the assembly state (:meth:`~planner.runtime.progress.AssemblyProgress.possible`);

@@ -113,6 +113,8 @@ def test_a_cell_session_joins_ahead_of_the_operator_and_replays(joins, cell_log,
     done = run_aplan("habits", log, "-o", habits)
     assert done.returncode == 0, done.stderr
     assert sum(n for _, _, n in read_habits(habits).counts) == pytest.approx(5 - len(robot))  # the operator's steps
+    shown = run_aplan("sequence", "pen", "--log", log)  # what the 3-D panel shows of the log
+    assert shown.returncode == 0 and "recorded, 5 operations" in shown.stdout, shown.stdout + shown.stderr
     _, here = _here(joins, EARLY, tmp_path, "here")
     assert _actions(here) == _actions(events)
     assert [e.get("operation") for e in here if e["event"] == "action"] == \
