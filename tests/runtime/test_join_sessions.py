@@ -245,3 +245,16 @@ def test_a_join_is_done_at_the_true_state_also_when_a_goal_carried_it(joins):
     operator.state = int(joins.class_source[first])
     done = operator.robot_acting(goal)
     assert done == int(joins.class_operation[first]) and done != reported
+
+
+def test_a_robot_that_could_not_join_stops_the_session_as_for_any_action(joins, tmp_path):
+    """The robot answers "failed" at its first join: the session ends ``robot failed`` with the belief of the step
+    before, as for any action, and the log replays."""
+    _, here = _here(joins, EARLY, tmp_path, "here")
+    first = next(e["step"] for e in here if e["event"] == "action" and "join" in e)
+    operator = ScriptedOperator(joins.plan, joins.sequence_operations(joins.sequence(EARLY)))
+    done = run_session(joins, OnlinePlanner(joins, expansions=EXPANSIONS), operator, ScriptedRobot(fail_at={first}),
+                       EventLog(tmp_path / "failed.jsonl"), settings={"parallel": "joins"})  # what replay rebuilds
+    assert done.reason == "robot failed" and f"step {first}: the robot could not join" in done.message
+    assert len(done.beliefs) == first and done.belief is done.beliefs[-1]
+    _replays(tmp_path / "failed.jsonl")
