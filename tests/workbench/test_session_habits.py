@@ -66,7 +66,8 @@ def test_session_arguments_pass_habits_and_model_as_the_command_line():
         "session", "p.json", "--keyboard", "--robot", "auto", "--log", "s.jsonl", "--habits", "h.json",
         "--model", "confident"]
     assert session_arguments("p.json", "s.jsonl") == ["session", "p.json", "--demo", "0", "--log", "s.jsonl"]
-    with pytest.raises(PlannerError, match="unknown model 'eager'; use one of paper, habits, confident, orders, helpful"):
+    with pytest.raises(PlannerError, match="unknown model 'eager'; use one of paper, habits, confident, orders, "
+                                           "helpful"):
         session_arguments("p.json", "s.jsonl", model="eager")
 
 
