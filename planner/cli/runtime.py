@@ -110,12 +110,6 @@ def _session(args: argparse.Namespace) -> int:
     level's id before the suffix), whose start event records the level."""
     if args.demo is not None and args.robot is not None:
         raise UsageError("--demo simulates the robot too; leave out --robot")
-    if getattr(args, "joins", False) and getattr(args, "habit_model", None) != "paper":
-        # A join is one AND/OR operation per state, and a session's robot is told the operation: which one
-        # depends on a state the session does not know for sure (docs/parallel.md, Actions named by joins).
-        raise UsageError("--joins names the robot's actions by the parts they join; a session's robot performs "
-                         "AND/OR operations, so it is not combined with aplan session yet: use --projected here "
-                         "(aplan simulate and evaluate take --joins)")
     if args.keyboard is False and args.quiet_frames <= args.debounce:
         raise UsageError(f"--quiet-frames {args.quiet_frames} must be more than --debounce {args.debounce} (a quiet "
                          "period is counted in debounced frames); raise --quiet-frames or lower --debounce")
@@ -302,8 +296,13 @@ def _replay(args: argparse.Namespace) -> int:
     if done.mismatches:
         raise PlannerError(f"{args.log}: the logged beliefs differ from the recomputed ones at steps "
                            f"{', '.join(map(str, done.mismatches))}")
+    if done.reported:
+        raise PlannerError(f"{args.log}: the logged operations of the robot's joins differ from the ones the "
+                           f"recomputed beliefs give at steps {', '.join(map(str, done.reported))}")
     if not args.json:
-        print(f"beliefs reproduced at all {len(done.actions)} steps")
+        joins = sum("join" in e for e in done.events if e["event"] == "action")
+        also = f" and the operations of its {joins} joins" if joins else ""
+        print(f"beliefs{also} reproduced at all {len(done.actions)} steps")
     return 0
 
 

@@ -19,6 +19,13 @@ When each join is the join of one operation only (each join exists in one state)
 operations and the model is the projected model, table for table.
 
 Cost of :func:`join_actions`: O(ops x n) for n parts (a bitmask per part of its contacts).
+
+In a session (docs/parallel.md, "In a session") the robot is told the join: "join the block that holds ``P`` to
+the block that holds ``Q``". :func:`performed` gives the AND/OR operations an action may be (for a join, one per
+state where it applies: what the session's assembly state follows), :func:`join_choices` the operation of the join
+at each assembly state of the belief where it applies, most probable state first: the first is the one reported
+and drawn (its moving parts, direction, tool). When every such state has the same operation the physical motion
+is the same whatever the state.
 """
 from __future__ import annotations
 
@@ -26,7 +33,7 @@ import numpy as np
 
 from ..assembly.andor import liaison_adjacency
 
-__all__ = ["JOINS", "join_of", "join_actions"]
+__all__ = ["JOINS", "join_of", "join_actions", "names_joins", "join_parts", "performed", "join_choices", "join_family"]
 
 JOINS = "joins"
 
@@ -70,3 +77,54 @@ def join_actions(plan, robot_ops: np.ndarray) -> tuple[np.ndarray, np.ndarray, t
         action[k] = index[pair]
     names = tuple(f"join({ids[p]},{ids[q]})" for p, q in index)
     return action, np.array(first, dtype=np.int64), names
+
+
+def names_joins(model) -> bool:
+    """Whether ``model``'s actions are named by the parts they join (the joins model), not by operations."""
+    return getattr(model, "action_names", None) is not None
+
+
+def join_parts(model, action: int) -> tuple[str, str]:
+    """The part ids ``(P, Q)`` of the join ``action`` of the joins model (its first operation's join). Cost:
+    the contact bitmasks, O(n + contacts)."""
+    op = model.operation(action)
+    andor = model.plan.andor
+    p, q = join_of(andor, liaison_adjacency(model.plan.product), op)
+    return andor.parts[p], andor.parts[q]
+
+
+def performed(model, action: int) -> int | tuple[int, ...] | None:
+    """The AND/OR operations ``action`` performs: None for ``wait``; its operation on a model whose actions are
+    operations (flat or factored); for a join, every operation with that join, sorted (at most one applies at
+    each assembly state, module docstring). Cost: O(E) for a join, O(1) otherwise."""
+    operation = model.operation(action)
+    if operation is None or not names_joins(model):
+        return operation
+    E = model.final_class
+    return tuple(np.unique(model.class_operation[:E][model.class_action[:E] == action]).tolist())
+
+
+def join_choices(model, action: int, belief) -> list[tuple[int, int, float]]:
+    """``(state, operation, mass)`` for each assembly state of the (factored) ``belief`` where the join ``action``
+    applies: the state edge out of it whose operation has that join, and the belief's mass on the state; most
+    probable state first (ties: the lower state index). Empty when no state of the belief has the join. Cost:
+    O(E + k log k) for k classes of the belief."""
+    E = model.final_class
+    edges = np.flatnonzero(model.class_action[:E] == action)
+    by_state = dict(zip(model.class_source[edges].tolist(), model.class_operation[edges].tolist()))
+    states, inverse = np.unique(model.class_source[belief.classes], return_inverse=True)
+    mass = np.bincount(inverse, weights=belief.mass, minlength=states.size)
+    found = [(int(s), int(by_state[int(s)]), float(m)) for s, m in zip(states.tolist(), mass.tolist())
+             if m > 0 and int(s) in by_state]
+    return sorted(found, key=lambda x: (-x[2], x[0]))
+
+
+def join_family(plan, operation: int) -> tuple[tuple[str, str], tuple[int, ...]]:
+    """The join ``(P, Q)`` (part ids) of AND/OR ``operation`` and every robot-capable operation with that join,
+    sorted: what a join is when only its reported operation is known (a ROS goal: docs/ros.md). Cost:
+    O(ops x n)."""
+    andor = plan.andor
+    adjacency = liaison_adjacency(plan.product)
+    pair = join_of(andor, adjacency, operation)
+    family = tuple(int(op) for op in np.flatnonzero(plan.tags.robot) if join_of(andor, adjacency, int(op)) == pair)
+    return (andor.parts[pair[0]], andor.parts[pair[1]]), family

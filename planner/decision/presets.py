@@ -20,7 +20,11 @@ acts; an empirical-Bayes alpha, the marginal likelihood's maximum, is 0.14 on th
 more often wrong). ``orders`` is the orders' model (:mod:`~planner.decision.orders`: a Pitman-Yor mixture over the
 recorded whole sequences, the paper's prior as its base; the file's concentration and discount) with an act
 confidence of 0.9 (bench/README.md, History-dependent habits: on the pen's four seeds the orders' model at 0.9
-lands where the oracle of the operator's true prior is at 0.95).
+lands where the oracle of the operator's true prior is at 0.95). ``helpful`` is the robot that helps before the
+last step: ``confident``'s habits (alpha 1 per state) in the joins model (``--joins``, docs/parallel.md: the robot
+may do any join of the operator's sequence early) at the projected model's own confidence 0.98
+(:data:`~planner.decision.projected.PROJECTED_CONFIDENCE`), the more careful of the two, as ``--model confident
+--joins`` gives: one name for the robot that helps a habitual operator.
 """
 from __future__ import annotations
 
@@ -30,9 +34,11 @@ from dataclasses import dataclass, replace
 from ..errors import UsageError
 from .habits import Habits, HabitsError
 from .intention_model import Rewards
+from .joins import JOINS
+from .projected import PROJECTED_CONFIDENCE
 
-__all__ = ["ModelPreset", "PRESETS", "CONFIDENT", "ORDERS", "wrong_for_confidence", "act_confidence_of", "preset_habits",
-           "preset_rewards"]
+__all__ = ["ModelPreset", "PRESETS", "CONFIDENT", "ORDERS", "HELPFUL", "wrong_for_confidence", "act_confidence_of",
+           "preset_habits", "preset_rewards"]
 
 
 @dataclass(frozen=True)
@@ -40,7 +46,9 @@ class ModelPreset:
     """A named model: ``habits`` whether it needs habits (``--habits FILE``); ``prior`` / ``prior_per`` the
     habits' prior it uses in place of the file's (None: the file's); ``act_confidence`` the eagerness it sets
     when the user gives neither ``--act-confidence`` nor ``--reward-wrong`` (None: the paper's -50);
-    ``orders`` whether the model is the orders' (:mod:`~planner.decision.orders`) rather than the counts'."""
+    ``orders`` whether the model is the orders' (:mod:`~planner.decision.orders`) rather than the counts';
+    ``parallel`` the model of help before the last step it switches on (``"joins"``: ``--joins``), False for
+    none (the flags then choose)."""
 
     name: str
     habits: bool
@@ -48,11 +56,14 @@ class ModelPreset:
     prior_per: str | None = None
     act_confidence: float | None = None
     orders: bool = False
+    parallel: bool | str = False
 
 
 CONFIDENT = ModelPreset("confident", True, prior=1.0, prior_per="state", act_confidence=0.95)
 ORDERS = ModelPreset("orders", True, act_confidence=0.9, orders=True)
-PRESETS = {p.name: p for p in (ModelPreset("paper", False), ModelPreset("habits", True), CONFIDENT, ORDERS)}
+HELPFUL = ModelPreset("helpful", True, prior=CONFIDENT.prior, prior_per=CONFIDENT.prior_per,
+                      act_confidence=PROJECTED_CONFIDENCE, parallel=JOINS)
+PRESETS = {p.name: p for p in (ModelPreset("paper", False), ModelPreset("habits", True), CONFIDENT, ORDERS, HELPFUL)}
 
 
 def _check_confidence(confidence: float) -> float:

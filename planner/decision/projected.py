@@ -54,7 +54,7 @@ import numpy as np
 from ..assembly.intentions import allowed_edges
 
 __all__ = ["PROJECTED", "PROJECTED_CONFIDENCE", "Projector", "projected_table", "projected_candidates",
-           "projected_bytes", "projected_rewrite"]
+           "projected_bytes", "projected_rewrite", "project_path"]
 
 PROJECTED = "projected"
 
@@ -223,16 +223,18 @@ def projected_table(model, rule: str = PROJECTED):
     return ParallelTable(A, *arrays, rule=rule, projector=projector)
 
 
-def project_path(model, projector: Projector, path: list[int], position: int, robot_edge: int) -> list[int] | None:
-    """The projection (module docstring) of the operator's ``path[position:]`` (state edges) onto the target of
-    the robot's ``robot_edge`` (out of the state ``path[position]`` starts at), as state edges from there; None
-    when it is not feasible. Cost: O(k (n + log S + log E)) for k steps."""
-    op = int(model.class_operation[robot_edge])
+def project_path(projector: Projector, path: list[int], position: int, robot_edge: int) -> list[int] | None:
+    """The projection (module docstring) of the operator's ``path[position:]`` (state edges of
+    ``projector.states``) onto the target of the robot's ``robot_edge`` (out of the state ``path[position]``
+    starts at), as state edges from there; None when it is not feasible. Cost: O(k (n + log S + log E)) for k
+    steps."""
+    states = projector.states
+    op = int(states.edge_operation[robot_edge])
     a, b = int(projector.first_part[op]), int(projector.second_part[op])
-    here = int(model.class_target[robot_edge])
+    here = int(states.edge_target[robot_edge])
     out = []
     for i in range(position, len(path)):
-        t = int(model.class_target[path[i]])
+        t = int(states.edge_target[path[i]])
         joined, phi = projector.phi(a, b, np.array([t]))
         if joined[0]:
             return out + list(path[i + 1:]) if here == t else None
@@ -254,5 +256,5 @@ def projected_rewrite(model, path: list[int], position: int, action: int) -> lis
     if not p.size:
         return path
     f = int(par.robot_edge[p[0]])
-    rest = project_path(model, par.projector, path, position, f)
+    rest = project_path(par.projector, path, position, f)
     return path if rest is None else path[:position] + [f] + rest

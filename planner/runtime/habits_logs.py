@@ -36,18 +36,22 @@ __all__ = ["habits_from_logs", "count_log", "log_prior"]
 
 
 def _on_plan(plan: Plan, logged: Plan, steps: list[tuple[str, int]], path: Path) -> list[tuple[str, int]]:
-    """The logged steps as steps of ``plan``: robot operations matched by the part sets they join, observations
-    by name."""
+    """The logged steps as steps of ``plan``: robot operations matched by the part sets they join (each of a
+    join's operations), observations by name."""
     index = {frozenset(plan.andor.inputs(j)): j for j in range(len(plan.andor.operations))}
     names = {name: z for z, name in enumerate(plan.observations)}
+
+    def operation(value: int) -> int:
+        key = frozenset(logged.andor.inputs(value))
+        if key not in index:
+            raise HabitsError(f"{path}: the logged operation {logged.andor.describe(value)} is not an operation "
+                              f"of {plan.product.name or 'the product'}; the log belongs to another product version")
+        return index[key]
+
     out = []
     for who, value in steps:
         if who == "robot":
-            key = frozenset(logged.andor.inputs(value))
-            if key not in index:
-                raise HabitsError(f"{path}: the logged operation {logged.andor.describe(value)} is not an operation "
-                                  f"of {plan.product.name or 'the product'}; the log belongs to another product version")
-            out.append((who, index[key]))
+            out.append((who, tuple(map(operation, value)) if isinstance(value, tuple) else operation(value)))
         else:
             name = logged.observations[value]
             if name not in names:

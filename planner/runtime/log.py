@@ -10,7 +10,10 @@ seconds, to the millisecond):
   the same model),
   ``n_intentions``, ``actions`` and ``observations`` (the model's names), ``top``;
 - per step: ``action`` (``step``, ``action``, ``name``, ``instruction``, ``decision_ms``: the milliseconds the
-  policy took to choose it), ``robot`` (``step``, ``ok``,
+  policy took to choose it; for an action named by a join, ``join``: its two parts ``[P, Q]``, ``operation``:
+  the AND/OR operation reported, the join's at the belief's most probable assembly state where it applies, and
+  ``same_motion``: whether it is the join's operation at every state of the belief where it applies; replay
+  recomputes the operation), ``robot`` (``step``, ``ok``,
   ``message``), ``observation`` (``step``, ``observation``, ``index``: null when no operation of the product
   shows it, ``ignored``: true when no operation explains it in the assembly state, so the belief was updated
   with the blank observation),
@@ -136,7 +139,9 @@ class EventLog:
 class Replay:
     """A session log replayed: the product, the beliefs recomputed from its actions and observations (the
     initial one first), the steps whose logged belief differs from the recomputed one, and the steps whose
-    observation the session ignored (counted as blank: ``observations`` holds the blank one there)."""
+    observation the session ignored (counted as blank: ``observations`` holds the blank one there);
+    ``reported``: the steps of actions named by joins whose logged operation (the one reported and drawn) is
+    not the one the recomputed belief gives."""
 
     product: Product
     model: IntentionModel | FactoredIntentionModel
@@ -149,6 +154,7 @@ class Replay:
     ignored: dict[int, str] = field(default_factory=dict)  # step (from 1) -> the observation counted as blank
     undone: dict[int, str] = field(default_factory=dict)  # step (from 1) -> the piece that came apart
     unrecoverable: str | None = None  # the message of a step the product could not recover from
+    reported: list[int] = field(default_factory=list)  # steps whose logged join operation differs (recomputed)
 
 
 def read_log(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> list[dict]:
@@ -274,6 +280,8 @@ def replay(path: str | os.PathLike, tolerance: float = 1e-6, limits: InputLimits
         try:
             if kind == "action":
                 pending[event["step"]] = _in_range(int(event["action"]), model.actions, "action")
+                if "join" in event and _reported(model, pending[event["step"]], belief) != event["operation"]:
+                    done.reported.append(event["step"])
             elif kind == "observation" and (event.get("index") is not None or event.get("ignored") is True):
                 action = pending[event["step"]]
                 if event.get("ignored") is True:  # no operation explained it: the session counted it as blank
@@ -310,6 +318,14 @@ def replay(path: str | os.PathLike, tolerance: float = 1e-6, limits: InputLimits
             raise SessionError(f"{path}: event {number} ({kind!r}): malformed or out of order ({detail}); "
                                "the log is damaged") from None
     return done
+
+
+def _reported(model, action: int, belief) -> int | None:
+    """The operation a session reports for the join ``action`` at ``belief`` (the belief's most probable state
+    where it applies: :func:`~planner.runtime.interfaces.instruction_for`)."""
+    from .interfaces import instruction_for
+
+    return instruction_for(model, action, 0, belief).operation
 
 
 def _in_range(index: int, names, what: str) -> int:

@@ -2,10 +2,10 @@
 habits learn from a log whose observations several sequences explain.
 
 Definition. A log's steps (:func:`~planner.runtime.logged_sequence.logged_steps`) are robot operations (the
-operation is known) and operator observations (the part seen picked: every state edge whose operation shows it
-explains the step; a blank observation, also nothing). An *explanation* is a path of state edges from the
-initial state that takes one matching edge per step (or none at a blank observation). Of the alignments that
-give the same sequence (the operations of a run of blank observations can take any of its steps) only the
+operation is known; for a join, the one of its operations at the state) and operator observations (the part
+seen picked: every state edge whose operation shows it explains the step; a blank observation, also nothing).
+An *explanation* is a path of state edges from the initial state that takes one matching edge per step (or none
+at a blank observation). Of the alignments that give the same sequence (the operations of a run of blank observations can take any of its steps) only the
 canonical one is kept, the operations taking the run's first steps, so each sequence is counted once. When some
 explanation reaches the finished product, the explanations are those that do (the session finished). An
 explanation's weight is the product of the prior's choice ``p(e | s)`` over its *operator* steps: the robot's
@@ -59,7 +59,7 @@ def _transitions(plan: Plan, steps, choice: np.ndarray) -> list[tuple[np.ndarray
     out = []
     for who, value in steps:
         robot = who == "robot"
-        edges = np.flatnonzero(states.edge_operation == value if robot else shows == value)
+        edges = np.flatnonzero(np.isin(states.edge_operation, value) if robot else shows == value)
         out.append((edges, np.ones(edges.size) if robot else choice[edges], not robot and value == blank, not robot))
     return out
 

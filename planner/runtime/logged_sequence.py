@@ -19,11 +19,13 @@ import numpy as np
 from ..assembly.explode import SequenceError, check_sequence
 from ..assembly.plan import Plan
 from ..assembly.tags import BLANK
+from ..decision.joins import performed
 from ..decision.orders import real_plan
 from ..product import Product
 from ..validation import InputLimits
 from .log import SessionError, replay
 from .progress import AssemblyProgress
+from .scripted import first_completion
 
 __all__ = ["LoggedSequence", "complete_sequence", "explain_steps", "logged_sequence", "logged_steps", "read_steps"]
 
@@ -44,7 +46,9 @@ class LoggedSequence:
 
 def logged_steps(events: list[dict], model) -> list[tuple[str, int]]:
     """The log's steps that changed the assembly state, as ``("robot", operation)`` for each robot operation
-    reported done and ``("operator", observation index)`` for each observation, in the order they were applied
+    reported done (for an action named by a join, the tuple of the join's operations:
+    :func:`~planner.decision.joins.performed`; the one at the state applies) and ``("operator", observation
+    index)`` for each observation, in the order they were applied
     (:class:`~planner.runtime.progress.AssemblyProgress`, the session's rule): an observation no operation
     explains in the assembly state (the session ignored it and counted the step as blank; a log written before
     that rule kept it) and a robot operation the state does not allow are left out; a step undone ends them
@@ -57,7 +61,7 @@ def logged_steps(events: list[dict], model) -> list[tuple[str, int]]:
         if kind in ("apart", "unrecoverable"):  # a step undone: the sequence counted is the one before it
             return steps
         if kind == "action":
-            pending[event.get("step")] = [model.operation(int(event["action"])), False]
+            pending[event.get("step")] = [performed(model, int(event["action"])), False]
         elif kind == "robot" and event.get("ok") and event.get("step") in pending:
             pending[event.get("step")][1] = True
         elif kind == "observation":
@@ -97,7 +101,7 @@ def explain_steps(plan: Plan, steps: list[tuple[str, int]]) -> tuple[list[tuple[
         who, value = steps[at]
         out = np.flatnonzero(states.edge_source == state)
         ops = states.edge_operation[out]
-        match = out[ops == value] if who == "robot" else out[seen[ops] == value]
+        match = out[np.isin(ops, value)] if who == "robot" else out[seen[ops] == value]
         for edge in match:
             search(int(states.edge_target[edge]), at + 1, done + [(int(states.edge_operation[edge]), who)])
         if who == "operator" and value == blank:
@@ -115,12 +119,8 @@ def complete_sequence(plan: Plan, operations: list[int]) -> list[int]:
     """``operations`` (a prefix of a full sequence) followed by the first continuation (smallest state edges)
     to the finished product. Cost: O(n E)."""
     states = plan.states
-    state, out = check_sequence(plan, operations)[-1], list(operations)
-    while state != states.final:
-        edge = int(np.flatnonzero(states.edge_source == state)[0])
-        out.append(int(states.edge_operation[edge]))
-        state = int(states.edge_target[edge])
-    return out
+    rest = first_completion(states, check_sequence(plan, operations)[-1])
+    return list(operations) + [int(states.edge_operation[e]) for e in rest]
 
 
 def read_steps(path: str | os.PathLike, limits: InputLimits = InputLimits()) -> tuple[Product, Plan, list]:

@@ -10,7 +10,9 @@ An observation that no operation explains in these states (parts that cannot be 
 operation shows, the tool alone before two subassemblies exist) changes nothing: the step counts as blank,
 and :meth:`AssemblyProgress.possible` names what the operator could do instead. Within one step the robot
 acts first (the decision model's order); a robot operation not possible before the operator's is tried again
-after it (the operator may have built what the robot joins), else it changes nothing either.
+after it (the operator may have built what the robot joins), else it changes nothing either. A robot action
+named by the parts it joins (``--joins``) is the tuple of the join's operations: at each state held, the one
+that applies there (at most one does).
 
 Cost per step: O(E) over the state graph's edges for each state held (one or a few).
 """
@@ -61,10 +63,10 @@ class AssemblyProgress:
     def _out(self, state: int) -> np.ndarray:
         return np.flatnonzero(self.plan.states.edge_source == state)
 
-    def _robot(self, operation: int) -> bool:
+    def _robot(self, operation: int | tuple[int, ...]) -> bool:
         states = self.plan.states
         reached = {int(states.edge_target[e]) for s in self.states for e in self._out(s)
-                   if states.edge_operation[e] == operation}
+                   if np.isin(states.edge_operation[e], operation)}
         if reached:
             self.states = reached
             self.operations += 1
@@ -84,7 +86,7 @@ class AssemblyProgress:
             self.operations += 1
         return bool(reached)
 
-    def robot(self, operation: int) -> bool:
+    def robot(self, operation: int | tuple[int, ...]) -> bool:
         """Apply the robot's confirmed ``operation`` alone (a step whose observation was a step undone)."""
         return self._robot(operation)
 
@@ -95,9 +97,10 @@ class AssemblyProgress:
         blocks = [len(self.plan.states.subassemblies_of(s)) for s in self.states]
         self.operations = len(self.plan.andor.parts) - min(blocks)
 
-    def step(self, operation: int | None, observation: int | None) -> StepOutcome:
-        """Apply one step: the robot's confirmed ``operation`` (None: wait, or not confirmed), then the
-        operator's ``observation`` (an index of ``plan.observations``; None: one the plan does not have)."""
+    def step(self, operation: int | tuple[int, ...] | None, observation: int | None) -> StepOutcome:
+        """Apply one step: the robot's confirmed ``operation`` (None: wait, or not confirmed; a tuple: a join's
+        operations, of which the one at each state applies there), then the operator's ``observation`` (an
+        index of ``plan.observations``; None: one the plan does not have)."""
         outcome = StepOutcome(None, False)
         deferred = operation is not None and not self._robot(operation)
         if operation is not None and not deferred:

@@ -4,7 +4,10 @@ One decision step (as in :func:`planner.decision.simulate.simulate_episode` and 
 
 1. the policy picks the action for the current belief (an operation for the robot, or ``wait``);
 2. the observation source is told what the robot is about to do (its marker events are not the
-   operator's), then the robot performs it and reports success or failure;
+   operator's), then the robot performs it and reports success or failure (an action named by a join,
+   ``--joins``, is told as the join and the operation at the belief's most probable state where it applies:
+   :func:`~planner.runtime.interfaces.instruction_for`; the assembly state applies the join's operation at each
+   state it holds);
 3. the source delivers the operator's observation for the step (what the operator was seen picking, or
    blank); a source with an ``offer(picks)`` method (the keyboard) is first given what the operator could be
    seen picking in the assembly state (:meth:`~planner.runtime.progress.AssemblyProgress.possible`);
@@ -102,8 +105,9 @@ def run_session(model: IntentionModel | FactoredIntentionModel, policy, source: 
         action = run.decide(policy)
         for step in range(1, max_steps + 1):
             run.result.steps = step
-            operation = run.perform(step, instruction_for(model, action, step), source, robot)
-            observation, z = run.observe(step, source, operation)
+            instruction = instruction_for(model, action, step, run.belief)
+            operation = run.perform(step, instruction, source, robot)
+            observation, z = run.observe(step, source, operation, instruction)
             if isinstance(observation, Apart):  # a step undone: the belief moves to the earlier state
                 run.undo(step, action, operation, observation)
             else:
@@ -187,20 +191,27 @@ class _Run:
                        top=top_intentions(self.belief))
         return result
 
-    def perform(self, step: int, instruction: Instruction, source: ObservationSource, robot: Robot) -> int | None:
+    def perform(self, step: int, instruction: Instruction, source: ObservationSource,
+                robot: Robot) -> int | tuple[int, ...] | None:
         """Tell the source, then have the robot perform ``instruction``; a failure stops the loop. Returns the
-        AND/OR operation the robot confirmed (None for wait)."""
+        AND/OR operation the robot confirmed (None for wait; a join's operations for an action named by a join).
+        A join's action event also records the join, the operation reported (at the belief's most probable state
+        where it applies: replay recomputes it) and whether the motion is the same at every state."""
+        joined = {} if instruction.join is None else {
+            "join": list(instruction.join), "operation": instruction.operation, "same_motion": instruction.same_motion}
         self.log.write("action", step=step, action=instruction.action, name=instruction.name,
-                       instruction=instruction.text, decision_ms=round(1000 * self.result.decision_seconds[-1], 3))
+                       instruction=instruction.text, decision_ms=round(1000 * self.result.decision_seconds[-1], 3),
+                       **joined)
         source.robot_acting(instruction)
         report = robot.perform(instruction)
         self.log.write("robot", step=step, ok=report.ok, message=report.message)
         if not report.ok:
             raise _Stop("robot failed", f"step {step}: the robot could not {instruction.text}: "
                         f"{report.message or 'no reason given'}; the belief is the one before this step")
-        return None if instruction.is_wait else self.model.operation(instruction.action)
+        return None if instruction.is_wait else instruction.performs
 
-    def observe(self, step: int, source: ObservationSource, operation: int | None) -> tuple[Observation, int]:
+    def observe(self, step: int, source: ObservationSource, operation,
+                instruction: Instruction) -> tuple[Observation, int]:
         """The operator's observation for ``step`` and the index the belief is updated with, the step applied
         to the assembly state with the robot's ``operation``. An observation no operation explains there is
         logged (``ignored``), with a warning naming what the operator could do, and counts as blank; the source
@@ -221,8 +232,8 @@ class _Run:
                        ignored=not outcome.explained)
         if outcome.robot is False:
             self.log.write("warning", step=step, message=(
-                f"the robot's operation {self.model.plan.andor.describe(operation)} is not possible in the "
-                f"assembly state ({before}); it does not count"))
+                f"the robot's operation {self._robot_name(instruction)} is not possible in the assembly state "
+                f"({before}); it does not count"))
         if not outcome.explained:
             why = ("no operation of the product shows these picks" if z is None else
                    "no operation explains it in the assembly state")
@@ -232,6 +243,11 @@ class _Run:
                 "as blank: check the tray and that only one operation's items were taken"))
             return observation, self.blank
         return observation, z
+
+    def _robot_name(self, instruction: Instruction) -> str:
+        if instruction.join is not None:
+            return "join {} to {}".format(*instruction.join)
+        return self.model.plan.andor.describe(instruction.operation)
 
     def update(self, step: int, action: int, observation: Observation, z: int) -> None:
         """The Bayes filter's update; a reset (an observation of probability 0) is logged as a warning event."""

@@ -17,7 +17,7 @@ from typing import Iterable, Sequence
 import numpy as np
 
 from ..errors import PlannerError
-from .interfaces import Instruction
+from .interfaces import Instruction, instruction_of_operation
 from .scripted import ScriptedOperator
 from .vision.markers import MarkerMap
 
@@ -288,7 +288,8 @@ class SimulatedCell:
     When its queue of frames runs dry it is the operator's turn: the operator performs its next operation
     (takes the operation's single parts, grasps the tool, puts it back) or idles for ``idle`` frames.
     ``robot(instruction)`` (a :class:`~planner.runtime.scripted.ScriptedRobot` hook) renders the robot taking its
-    parts and using the tool, and strikes the operation from the operator's list. Each change is held for
+    parts and using the tool, and strikes the operation from the operator's list (a join: the picks of its
+    operation at the operator's true state). Each change is held for
     ``hold`` frames; ``operator_observations`` is the truth, in order. After an operation without a tool the
     operator spends ``settle`` frames joining the parts: the quiet period by which a camera tells that such an
     operation is over (give it more frames than the vision source's ``quiet_frames``).
@@ -316,7 +317,11 @@ class SimulatedCell:
         return self.queue.popleft()
 
     def robot(self, instruction: Instruction) -> None:
-        self.operator.robot_acting(instruction)
+        done = self.operator.robot_acting(instruction)
+        if instruction.join is not None:  # a join: what its operation at the true state takes (none: nothing)
+            if done is None:
+                return
+            instruction = instruction_of_operation(self.operator.plan, done)
         for part in instruction.picks:
             self._take(part)
         if instruction.tool is not None:

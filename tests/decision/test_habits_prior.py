@@ -18,7 +18,8 @@ from planner.decision.habits import (Habits, HabitsError, choice_probabilities, 
                                      prior_pseudo_counts)
 from planner.decision.intention_model import Rewards
 from planner.decision.io.habits_file import habits_from_dict, habits_to_dict
-from planner.decision.presets import (CONFIDENT, PRESETS, act_confidence_of, preset_habits, preset_rewards,
+from planner.decision.projected import PROJECTED_CONFIDENCE
+from planner.decision.presets import (CONFIDENT, HELPFUL, PRESETS, act_confidence_of, preset_habits, preset_rewards,
                                       wrong_for_confidence)
 from planner.errors import UsageError
 
@@ -124,7 +125,7 @@ def test_act_confidence_needs_a_paying_operation():
 def test_presets():
     """paper: no habits, the paper's rewards; habits: the file's prior; confident: alpha 1 per state and its C
     (w = -10 C / (1 - C)) unless the user gives the wrong reward or a confidence."""
-    assert set(PRESETS) == {"paper", "habits", "confident", "orders"}
+    assert set(PRESETS) == {"paper", "habits", "confident", "orders", "helpful"}
     assert preset_rewards(PRESETS["paper"], 10, -2, 0, None, None) == Rewards()
     assert preset_rewards(None, 10, -2, 0, None, None) == Rewards()
     c = CONFIDENT.act_confidence
@@ -148,6 +149,10 @@ def test_presets():
     assert preset_habits(None, h) is h
     c = preset_habits(CONFIDENT, h)
     assert (c.prior, c.prior_per, c.counts) == (1.0, "state", h.counts)
+    # helpful: confident's habits, the joins model, at the more careful of its 0.98 and the joins model's own
+    assert preset_habits(HELPFUL, h) == c and HELPFUL.parallel == "joins" and not CONFIDENT.parallel
+    assert preset_rewards(HELPFUL, 10, -2, 0, None, None, ("--joins", PROJECTED_CONFIDENCE)).wrong == \
+        pytest.approx(wrong_for_confidence(PROJECTED_CONFIDENCE), rel=1e-12)
     with pytest.raises(HabitsError, match="--model orders needs the recorded orders"):
         preset_habits(PRESETS["orders"], h)  # a file without orders (version 1 or 2)
     ordered = replace(h, orders=(((("s", "o"),), 3.0),))
@@ -225,6 +230,9 @@ def test_the_default_is_the_papers_model_and_the_preset_its_parts(habits_files, 
     c = repr(CONFIDENT.act_confidence)
     assert confident == model("--habits", state, "--act-confidence", c)
     assert confident != model("--habits", edge, "--act-confidence", c)  # the preset's prior is used
+    helpful = model("--habits", edge, "--model", "helpful")  # the joins model: written from the lumped model
+    assert helpful == model("--habits", state, "--joins", "--act-confidence", repr(PROJECTED_CONFIDENCE))
+    assert helpful == model("--habits", edge, "--model", "confident", "--joins") != confident
     done = run_aplan("pomdp", "pen", "-o", tmp_path / "x.pomdp", "--model", "confident")
     assert done.returncode != 0 and "--model confident needs the habits" in done.stderr
     assert not (tmp_path / "x.pomdp").exists()

@@ -2,13 +2,13 @@
 they join"): the joins of chains and stars in closed form; table by table, the projected model with the
 operations of one join made one action (at a state at most one operation has a given join; where none has, the
 join is wrong and stays); lumped = factored along random histories, the class-MDP bound = value iteration; a
-simulated join the operator's sequence needs later is the robot's operation; a session refuses it."""
+simulated join the operator's sequence needs later is the robot's operation (sessions with joins:
+tests/runtime/test_join_sessions.py)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from aplan_runner import run_aplan
 from planner import chain_product, make_plan
 from planner.decision import factored_model, lumped_pomdp
 from planner.decision.factored_simulate import PathWorld
@@ -73,8 +73,3 @@ def test_a_join_the_sequence_needs_later_is_the_robots_operation():
     first = episode.steps[0]
     assert first.robot_operation and not first.wrong_action and episode.finished
     assert int(model.class_action[episode.path[0]]) == last and len(episode.path) == len(path)
-
-
-def test_a_session_refuses_it_naming_projected():
-    done = run_aplan("session", "pen", "--joins", "--demo", "0")
-    assert done.returncode == 2 and "--joins" in done.stderr and "--projected" in done.stderr

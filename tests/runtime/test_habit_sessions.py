@@ -15,7 +15,6 @@ from planner.decision.factored_model import factored_model
 from planner.decision.habits import habit_weights, state_graph_fingerprint
 from planner.decision.io.habits_file import read_habits
 from planner.decision.online import OnlinePlanner
-from planner.product import load_product
 from planner.runtime.log import EventLog
 from planner.runtime.scripted import ScriptedOperator, ScriptedRobot
 from planner.runtime.session import run_session
@@ -32,20 +31,25 @@ class _Wait:
         return self.wait
 
 
-@pytest.fixture(scope="module")
-def learned(pen, tmp_path_factory):
-    """Habits of an operator who did sequence RANK in 6 logged sessions alone, learned by ``aplan habits``."""
-    folder = tmp_path_factory.mktemp("habit-sessions")
-    model = factored_model(make_plan(pen))
+def learn_habits(product, folder, rank: int, sessions: int):
+    """The factored model of ``product`` and the habits ``aplan habits`` learns from ``sessions`` logged sessions
+    (in ``folder``) in which the operator did sequence ``rank`` alone (the robot waits)."""
+    model = factored_model(make_plan(product))
     logs = []
-    for k in range(6):
-        operator = ScriptedOperator(model.plan, model.sequence_operations(model.sequence(RANK)))
+    for k in range(sessions):
+        operator = ScriptedOperator(model.plan, model.sequence_operations(model.sequence(rank)))
         assert run_session(model, _Wait(model), operator, ScriptedRobot(), EventLog(folder / f"s{k}.jsonl")).assembled
         logs.append(folder / f"s{k}.jsonl")
     habits = folder / "habits.json"
     done = run_aplan("habits", *logs, "-o", habits)
     assert done.returncode == 0, done.stderr
     return model, habits
+
+
+@pytest.fixture(scope="module")
+def learned(pen, tmp_path_factory):
+    """Habits of an operator who did sequence RANK in 6 logged sessions alone, learned by ``aplan habits``."""
+    return learn_habits(pen, tmp_path_factory.mktemp("habit-sessions"), RANK, 6)
 
 
 def _events(path) -> list[dict]:

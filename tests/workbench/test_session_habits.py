@@ -28,7 +28,7 @@ from planner.assembly import make_plan
 from planner.assembly.explode import sequence_at
 from planner.decision.habits import edge_counts
 from planner.decision.intention_model import intention_model
-from planner.decision.presets import CONFIDENT, ORDERS, PRESETS, ModelPreset
+from planner.decision.presets import CONFIDENT, HELPFUL, ORDERS, PRESETS, ModelPreset
 from planner.errors import PlannerError
 from planner.product import Subassembly, save_product
 from planner.product.synthetic import chain_product
@@ -66,7 +66,8 @@ def test_session_arguments_pass_habits_and_model_as_the_command_line():
         "session", "p.json", "--keyboard", "--robot", "auto", "--log", "s.jsonl", "--habits", "h.json",
         "--model", "confident"]
     assert session_arguments("p.json", "s.jsonl") == ["session", "p.json", "--demo", "0", "--log", "s.jsonl"]
-    with pytest.raises(PlannerError, match="unknown model 'eager'; use one of paper, habits, confident, orders"):
+    with pytest.raises(PlannerError, match="unknown model 'eager'; use one of paper, habits, confident, orders, "
+                                           "helpful"):
         session_arguments("p.json", "s.jsonl", model="eager")
 
 
@@ -79,6 +80,9 @@ def test_the_models_offered_are_the_planners_presets(monkeypatch):
     assert model_label("confident") == (f"confident: habits, prior {CONFIDENT.prior:g} per {CONFIDENT.prior_per}, "
                                         f"acts at {CONFIDENT.act_confidence:g}")
     assert model_label("orders") == f"orders: habits, the recorded orders, acts at {ORDERS.act_confidence:g}"
+    assert model_label("helpful") == (f"helpful: habits, prior {HELPFUL.prior:g} per {HELPFUL.prior_per}, acts at "
+                                      f"{HELPFUL.act_confidence:g}, helps early (--joins)")
+    assert session_arguments("p.json", "s.jsonl", habits="h.json", model="helpful")[-2:] == ["--model", "helpful"]
     monkeypatch.setitem(PRESETS, "eager", ModelPreset("eager", True, act_confidence=0.7))
     assert model_names()[-1] == "eager" and model_label("eager") == "eager: habits, the file's prior, acts at 0.7"
     assert session_arguments("p.json", "s.jsonl", habits="h.json", model="eager")[-2:] == ["--model", "eager"]
@@ -100,6 +104,10 @@ def test_learned_habits_are_checked_and_added_to(pen, pen_file, tmp_path):
     assert edge_counts(make_plan(pen), habits).sum() == 15  # 3 sessions of 5 operations
     confident = check_habits(pen_file, None, out, "confident")
     assert (confident.prior, confident.prior_per) == (CONFIDENT.prior, CONFIDENT.prior_per)
+    helpful = check_habits(pen_file, None, out, "helpful")  # the joins preset reads the habits as confident does
+    assert helpful == confident
+    with pytest.raises(PlannerError, match="--model helpful needs the habits"):
+        check_habits(pen_file, None, None, "helpful")
     assert check_habits(pen_file, None, out, "paper") is None and check_habits(pen_file, None, "", None) is None
     with pytest.raises(PlannerError, match="no operation"):  # a log without a step: nothing learned, nothing written
         empty = tmp_path / "empty.jsonl"

@@ -9,12 +9,12 @@ from ... import api
 from ...decision.intention_model import Rewards
 from ...decision.deviations import Deviations, deviations_of
 from ...decision.habits import Habits
-from ...decision.presets import CONFIDENT, ORDERS, PRESETS, preset_rewards
+from ...decision.presets import CONFIDENT, HELPFUL, ORDERS, PRESETS, preset_rewards
 from ...decision.joins import JOINS
 from ...decision.parallel import parallel_flag
 from ...decision.projected import PROJECTED, PROJECTED_CONFIDENCE
 from ...defaults import DISCOUNT
-from ...errors import UsageError
+from ...errors import PlannerError, UsageError
 
 from .limits import add_input_options, add_size_options, inputs_from, limits_from
 from .products import add_base_part, add_fasteners, add_hierarchy, add_model_options, add_technical
@@ -66,7 +66,9 @@ def add_habits_options(group) -> None:
                             f"spread per state (alpha {CONFIDENT.prior:g} in all) and --act-confidence "
                             f"{CONFIDENT.act_confidence:g} unless given; orders: the habits file's recorded orders "
                             f"(whole sequences, a Pitman-Yor mixture) with --act-confidence {ORDERS.act_confidence:g} "
-                            "unless given (docs/habits.md, Orders)")
+                            f"unless given (docs/habits.md, Orders); helpful: confident's habits with --joins (the "
+                            f"robot may do any join of the operator's sequence early) and --act-confidence "
+                            f"{HELPFUL.act_confidence:g} unless given (docs/parallel.md)")
 
 
 def add_parallel_options(group) -> None:
@@ -90,15 +92,41 @@ def add_parallel_options(group) -> None:
 
 def parallel_from(args: argparse.Namespace) -> bool | str:
     """The parallel model ``args`` ask for, as :func:`~planner.decision.factored_model.factored_model` takes it:
-    True (``--parallel``), ``"projected"`` (``--projected``), ``"joins"`` (``--joins``) or False (none, or ``--model
-    paper``); two at once is a :class:`~planner.errors.UsageError`."""
+    True (``--parallel``), ``"projected"`` (``--projected``), ``"joins"`` (``--joins``, or a ``--model`` preset that
+    sets it: ``helpful``) or False (none, or ``--model paper``); two at once is a :class:`~planner.errors.UsageError`,
+    and so is a preset's model with another flag; a preset's with a model file or the flat model (``--planner
+    offline`` without a policy) is a :class:`~planner.errors.PlannerError` naming the preset."""
     given = [flag for flag in ("parallel", "projected", "joins") if getattr(args, flag, False)]
     if len(given) > 1:
         raise UsageError(f"{' and '.join('--' + f for f in given)} are models of the robot's help before the last "
                          "step: give one of them (docs/parallel.md)")
-    if getattr(args, "habit_model", None) == "paper" or not given:
+    preset = PRESETS.get(getattr(args, "habit_model", None))
+    if getattr(args, "habit_model", None) == "paper":
+        return False
+    if preset is not None and preset.parallel:
+        flag = parallel_flag(preset.parallel)
+        if given and "--" + given[0] != flag:
+            raise UsageError(f"--model {preset.name} is the model of {flag}; leave out --{given[0]}, or choose "
+                             "another --model (docs/parallel.md)")
+        _check_preset_parallel(args, preset.name, flag)
+        return preset.parallel
+    if not given:
         return False
     return True if given[0] == "parallel" else given[0]
+
+
+def _check_preset_parallel(args: argparse.Namespace, name: str, flag: str) -> None:
+    """Where the preset ``name``'s parallel model (``flag``) cannot go: a model file (fixed tables), the flat
+    model over intentions (``--planner offline`` without a policy: :func:`~planner.api.check_parallel_flat`)."""
+    model = getattr(args, "model", None) or getattr(args, "product", None)
+    if model is not None and api._model_file_kind(model):
+        raise PlannerError(f"{model}: --model {name} is the model of {flag} on a PRODUCT's assembly states; a model "
+                           "file's tables are fixed: give the PRODUCT, or another --model")
+    if getattr(args, "planner", None) == "offline" and not getattr(args, "policy", None):
+        raise PlannerError(f"--model {name} is the model of {flag}, over the factored model's classes, and --planner "
+                           "offline without a policy builds the flat model over intentions, which cannot hold it: use "
+                           f"the online planner (--planner online), or a policy over the classes (aplan solve PRODUCT "
+                           f"--model {name} --habits FILE -o P.policy), or another --model")
 
 
 def rewards_from(args: argparse.Namespace) -> Rewards:

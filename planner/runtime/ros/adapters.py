@@ -80,7 +80,9 @@ def connect(name: str, argv: list[str]) -> MasterWatch:
 
 
 def goal_of(instruction: Instruction, goal_class):
-    """The ``PerformGoal`` of ``instruction``."""
+    """The ``PerformGoal`` of ``instruction``. The goal's format is unchanged for an action named by a join
+    (``--joins``): its ``name`` and ``instruction`` text carry the join, the other fields are the reported
+    operation's (docs/ros.md; :func:`~planner.runtime.interfaces.with_join` gives the join back)."""
     first, second = instruction.inputs or ((), ())
     return goal_class(step=instruction.step, action=instruction.action, name=instruction.name,
                       operation=-1 if instruction.operation is None else instruction.operation,

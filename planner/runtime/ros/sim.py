@@ -16,7 +16,7 @@ from __future__ import annotations
 import threading
 import time
 
-from ..interfaces import Instruction
+from ..interfaces import Instruction, with_join
 from ..tray import SimulatedCell
 from .adapters import MasterWatch
 from .images import array_to_image
@@ -86,6 +86,6 @@ class SimulatedRosCell:
             return False, f"scripted failure at step {step}"
         if step in self.cancel_at:
             return None, "the operator changed course"
-        with self.lock:
-            self.cell.robot(instruction)
+        with self.lock:  # a join (its goal's name says so) is done at the cell's true state
+            self.cell.robot(with_join(self.cell.operator.plan, instruction))
         return True, ""

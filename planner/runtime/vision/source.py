@@ -68,7 +68,8 @@ class VisionSource:
             builder.robot_parts.clear()
             builder.robot_tools.clear()
         if instruction.operation is not None:
-            builder.expect_robot(instruction.picks, instruction.tool if self.robot_uses_tray_tools else None)
+            # a join (--joins) may take what any of its operations at the belief's states takes: all are the robot's
+            builder.expect_robot(instruction.may_take, instruction.tool if self.robot_uses_tray_tools else None)
 
     def observe(self) -> Observation | None:
         """The operator's next operation, BLANK after a quiet period, None when the frames have ended."""

@@ -67,8 +67,9 @@ class ObservationBuilder:
     robot_tools: list[str] = field(default_factory=list)
 
     def expect_robot(self, parts: Iterable[str], tool: str | None) -> None:
-        """The robot is about to take ``parts`` and use ``tool``: those marker events are not the operator's."""
-        self.robot_parts.update(parts)
+        """The robot is about to take ``parts`` and use ``tool``: those marker events are not the operator's. A
+        part taken already is in an assembly, not in the tray: it is not expected again."""
+        self.robot_parts.update(p for p in parts if p not in self.taken)
         if tool is not None:
             self.robot_tools.append(tool)
 

@@ -1,5 +1,7 @@
 """Whole runs on a real ROS master (tests/runtime/ros/rosgraph_fixture.py): a product of several levels
-through ``aplan ros`` in one run, and ``cell.launch`` really started with roslaunch beside the simulated cell.
+through ``aplan ros`` in one run, ``cell.launch`` really started with roslaunch beside the simulated cell, and a
+session with actions named by joins (``--joins``: the goal's name and instruction carry the join, the simulated
+robot does it at the cell's true state) writing the in-process demo's log.
 Each run is a background job (:func:`rosgraph_fixture.ros_job`); the tests assert on what it kept."""
 from __future__ import annotations
 
@@ -15,7 +17,7 @@ from planner.decision.habits import habits_from_counts
 from planner.decision.io.habits_file import write_habits
 from planner.product import Part, Product, Subassembly, save_product
 from rosgraph_fixture import REPO, log_events, require_ros, ros_job
-from test_ros_cell import _counts, _habits, _log_counts, _no_traceback, _replay, _replays
+from test_ros_cell import _comparable, _counts, _habits, _log_counts, _no_traceback, _replay, _replays
 
 LAUNCH = REPO / "planner" / "runtime" / "ros"
 
@@ -105,7 +107,37 @@ def test_cell_launch_started_by_roslaunch_assembles_the_pen():
     _no_traceback(ran)
 
 
+JOINS_MODEL = ["pen", "--joins", "--expansions", "20"]
+JOINS_DEMO = "8"  # a pen sequence whose robot joins ahead of the operator (tests/runtime/test_join_sessions.py)
+
+
+def _joins_run(ros):
+    demo = ros.folder / "demo.jsonl"
+    ros._spawn("demo", [sys.executable, "-m", "planner", "session", *JOINS_MODEL, "--demo", JOINS_DEMO, "--log",
+                        str(demo)])
+    ros.aplan("vision", "ros-vision", "pen")
+    ros.aplan("sim", "ros-sim", *JOINS_MODEL, "--demo", JOINS_DEMO)
+    log = ros.folder / "ros.jsonl"
+    ros.aplan("planner", "ros", *JOINS_MODEL, "--log", str(log), "--frame-timeout", "120")
+    status = ros.wait("planner")
+    return dict(status=status, log=log, demo=demo, demo_status=ros.wait("demo"), replay=_replay(log))
+
+
+def test_a_session_with_joins_on_ros_writes_the_demo_log_and_replays():
+    require_ros()
+    ran = JOINS_RUN.result()
+    run, output = ran.result, ran.output("planner")
+    assert run["status"] == 0 and run["demo_status"] == 0, output + ran.output("demo")
+    ros_events, demo_events = log_events(run["log"]), log_events(run["demo"])
+    assert _comparable(ros_events) == _comparable(demo_events)
+    joins = [e for e in ros_events if e["event"] == "action" and "join" in e]
+    assert joins and all(e["instruction"].startswith("join {} to {}".format(*e["join"])) for e in joins)
+    assert f"and the operations of its {len(joins)} joins reproduced" in _replays(run["replay"])
+    _no_traceback(ran)
+
+
 LEVELS_RUN = ros_job("several levels", _levels_run)
 LAUNCH_RUN = ros_job("cell.launch", _launch_run)
+JOINS_RUN = ros_job("joins", _joins_run)
 #: The runs, started with the session in its ROS lane (tests/background.py).
-BACKGROUND = (LEVELS_RUN, LAUNCH_RUN)
+BACKGROUND = (LEVELS_RUN, LAUNCH_RUN, JOINS_RUN)
