@@ -345,6 +345,7 @@ def _print(row: dict) -> None:
 
 
 def _parallel_rules(text: str) -> list[str]:
+    """``--parallel``'s rules: a comma list of ``projected`` and ``joins`` (factored_model's names)."""
     out = [r.strip() for r in text.split(",") if r.strip()]
     if not out or any(r not in (PROJECTED, JOINS) for r in out):
         raise argparse.ArgumentTypeError(f"--parallel takes {PROJECTED} or {JOINS} (or both, comma-separated), got "
