@@ -30,6 +30,12 @@ confidence unless given), ``--model orders`` (the orders' model, planner/decisio
 mixture over the recorded orders, ``--concentration A --discount D`` given to ``aplan habits``, at each
 ``--act-confidence``, default the preset's 0.95; with it the per-state habits of ``--model confident`` on the same
 episodes, for comparison).
+
+``--parallel projected|joins`` (repeatable, or a comma list; docs/parallel.md) adds, on the same episodes, the
+robot's help before the last step: the parallel model with the paper's uniform prior (label ``joins``) and with
+the per-state habits of ``--model confident`` (``state+joins``), at each ``--act-confidence``, by default the
+projected model's own confidence (0.98, the larger of it and the preset's). The orders' model with a parallel
+model is refused by the model (planner/decision/orders.py, ``check_alone``), so none is built.
 """
 from __future__ import annotations
 
@@ -57,6 +63,8 @@ from planner.decision.io.habits_file import read_habits  # noqa: E402
 from planner.decision.operators import HabitualOperator, UniformOperator  # noqa: E402
 from planner.decision.orders import orders_prior  # noqa: E402
 from planner.decision.presets import PRESETS, preset_habits, preset_rewards  # noqa: E402
+from planner.decision.projected import PROJECTED, PROJECTED_CONFIDENCE  # noqa: E402
+from planner.decision.joins import JOINS  # noqa: E402
 from planner.runtime.log import EventLog  # noqa: E402
 from planner.runtime.scripted import ScriptedOperator, ScriptedRobot  # noqa: E402
 from planner.runtime.session import run_session  # noqa: E402
@@ -138,16 +146,15 @@ def _learn(plan, model, operator, logs: int, seed: int, folder: Path, name: str,
     return read_habits(output), json.loads(done.stdout)["steps"]
 
 
-def _policy(args, model, prior):
-    """The robot's policy on ``model`` (built from ``prior``: the real plan, edge weights, orders) and what it is:
-    ``offline`` (or ``auto`` when its solve closes the gap at the initial belief to ``--max-gap``) a policy over the
-    lumped model's classes, else the online planner."""
+def _policy(args, plan, model, build: dict):
+    """The robot's policy on ``model`` (``factored_model(plan, rewards, **build)``: edge weights, orders, a
+    parallel model) and what it is: ``offline`` (or ``auto`` when its solve closes the gap at the initial belief
+    to ``--max-gap``) a policy over the lumped model's classes (the same model lumped), else the online planner."""
     if args.planner in ("offline", "auto") and model.n_classes <= args.max_classes:
         from planner.decision.lumped_model import lumped_model
         from planner.decision.solvers import PointBasedSolver
 
-        plan, weights, orders = prior
-        lumped = lumped_model(plan, model.rewards, weights=weights, orders=orders)
+        lumped = lumped_model(plan, model.rewards, **build)
         result = PointBasedSolver(max_iterations=args.trials, time_limit=None, precision=1e-3).solve(lumped.pomdp)
         gap = result.upper_bound - result.lower_bound
         if args.planner == "offline" or gap <= args.max_gap:
@@ -211,29 +218,49 @@ def _prior_options(args) -> tuple[str, ...]:
     return tuple(out)
 
 
-def _variants(args, plan, habits) -> list[tuple[str, object, tuple]]:
-    """``(label, model, (plan, weights, orders))``: the paper's model (its rewards), then the habits' model at
-    each ``--act-confidence`` (the preset's, or the paper's rewards without one); with ``--model orders`` the
-    per-state habits of ``--model confident`` first, then the orders' model at each confidence."""
+def _variants(args, plan, habits) -> list[tuple[str, object, dict]]:
+    """``(label, model, build)`` (``build``: the keywords of ``factored_model`` besides its rewards): the paper's
+    model (its rewards), then the habits' model at each ``--act-confidence`` (the preset's, or the paper's rewards
+    without one); with ``--model orders`` the per-state habits of ``--model confident`` first, then the orders'
+    model at each confidence; then :func:`_parallel_variants`."""
     preset = PRESETS.get(args.model)
     confidences = args.act_confidence or [None]
-    out = [("paper", factored_model(plan), (plan, None, None))]
+    out = [("paper", factored_model(plan), {})]
     if preset is not None and preset.orders:
         counts = PRESETS["confident"]
         weights = habit_weights(plan, preset_habits(counts, habits))
         out.append(("state", factored_model(plan, preset_rewards(counts, 10.0, -2.0, 0.0, None, None),
-                                            weights=weights), (plan, weights, None)))
+                                            weights=weights), {"weights": weights}))
         orders = orders_prior(plan, preset_habits(preset, habits))
         for c in confidences:
             label = "orders" if len(confidences) == 1 else f"orders C={c:g}"
             out.append((label, factored_model(plan, preset_rewards(preset, 10.0, -2.0, 0.0, None, c), orders=orders),
-                        (plan, None, orders)))
-        return out
+                        {"orders": orders}))
+        return out + _parallel_variants(args, plan, habits)
     weights = habit_weights(plan, habits)
     for c in confidences:
         rewards = preset_rewards(preset, 10.0, -2.0, 0.0, None, c)
         label = "habits" if len(confidences) == 1 else f"habits C={c:g}"
-        out.append((label, factored_model(plan, rewards, weights=weights), (plan, weights, None)))
+        out.append((label, factored_model(plan, rewards, weights=weights), {"weights": weights}))
+    return out + _parallel_variants(args, plan, habits)
+
+
+def _parallel_variants(args, plan, habits) -> list[tuple[str, object, dict]]:
+    """Per ``--parallel`` rule R and ``--act-confidence`` C: ``R`` (the paper's uniform prior) and ``state+R`` (the
+    per-state habits of ``--model confident``), each at C, else at the larger of the projected model's own
+    confidence and the preset's (``preset_rewards``' ``model_confidence``, as ``aplan --joins --model confident``
+    takes it). Cost: two factored models (and parallel tables) per rule and confidence."""
+    out, confident = [], PRESETS["confident"]
+    weights = habit_weights(plan, preset_habits(confident, habits)) if args.parallel else None
+    confidences = args.act_confidence or [None]
+    for rule in args.parallel:
+        own = (f"--{rule}", PROJECTED_CONFIDENCE)
+        for c in confidences:
+            tail = "" if len(confidences) == 1 else f" C={c:g}"
+            for label, preset, w in ((rule, None, None), (f"state+{rule}", confident, weights)):
+                rewards = preset_rewards(preset, 10.0, -2.0, 0.0, None, c, own)
+                out.append((label + tail, factored_model(plan, rewards, weights=w, parallel=rule),
+                            {"weights": w, "parallel": rule}))
     return out
 
 
@@ -257,9 +284,10 @@ def _measure(args, name: str, product, folder: Path) -> dict:
            "prior": habits.prior, "prior_per": habits.prior_per, "recorded_orders": [n for _, n in habits.orders],
            "concentration": habits.concentration, "discount": habits.discount}
     returns, chosen = {}, {}
-    for label, model, prior in _variants(args, plan, habits):
+    for label, model, build in _variants(args, plan, habits):
         started = time.perf_counter()
-        chosen[label] = (model, *_policy(args, model, prior), time.perf_counter() - started, prior[2])
+        chosen[label] = (model, *_policy(args, plan, model, build), time.perf_counter() - started,
+                         build.get("orders"))
     if args.online_episodes and any(how.startswith("online") for _, _, how, _, _ in chosen.values()):
         plans = plans[:args.online_episodes]  # the first ones: the same episodes for both models
         row["episodes"] = len(plans)
@@ -316,6 +344,15 @@ def _print(row: dict) -> None:
                   + ("met" if not missed else "MISSED: " + ", ".join(missed)))
 
 
+def _parallel_rules(text: str) -> list[str]:
+    """``--parallel``'s rules: a comma list of ``projected`` and ``joins`` (factored_model's names)."""
+    out = [r.strip() for r in text.split(",") if r.strip()]
+    if not out or any(r not in (PROJECTED, JOINS) for r in out):
+        raise argparse.ArgumentTypeError(f"--parallel takes {PROJECTED} or {JOINS} (or both, comma-separated), got "
+                                         f"{text!r}")
+    return out
+
+
 def _confidences(text: str) -> list[float]:
     out = [float(c) for c in text.split(",")]
     if not all(0 < c < 1 for c in out):  # NaN fails too
@@ -352,9 +389,14 @@ def main() -> None:
     parser.add_argument("--model", choices=("habits", "confident", "orders"), default="habits",
                         help="confident: the preset's prior and act confidence, unless given; orders: the orders' "
                              "model (and the per-state habits of confident, for comparison)")
+    parser.add_argument("--parallel", type=_parallel_rules, action="append", default=[], metavar="RULE[,RULE]",
+                        help="also the parallel model RULE (projected or joins; docs/parallel.md) with the paper's "
+                             "prior and with the per-state habits of --model confident, at each --act-confidence "
+                             f"(default {PROJECTED_CONFIDENCE:g}, the projected model's own)")
     parser.add_argument("--concentration", type=float, help="aplan habits --concentration (the orders' a)")
     parser.add_argument("--discount", type=float, help="aplan habits --discount (the orders' d)")
     args = parser.parse_args()
+    args.parallel = list(dict.fromkeys(r for rules in args.parallel for r in rules))  # repeated: once each
     if args.model == "confident":
         preset = PRESETS["confident"]
         args.prior = preset.prior if args.prior is None else args.prior
