@@ -2,8 +2,9 @@
 the 3D view (a screenshot per step in tests/artifacts/), one obstruction relation of the diagrams panel, the
 parts of an operation and a state of the plan dialog; after each, every placement and colour of the user's
 parts is back exactly, with no undo step and the document not modified. Then the session panel from the
-keyboard, habits learned from its log, a keyboard session with them that replays, and bad habits refused in the
-panel (issue 23). The window runs as a background job (tests/background.py)."""
+keyboard, habits learned from its log, a keyboard session with them and ``--model helpful`` in which the robot
+joins ahead of the operator and that replays, and bad habits refused in the panel (issue 23). The window runs
+as a background job (tests/background.py)."""
 from __future__ import annotations
 
 import json
@@ -304,8 +305,9 @@ def wait_prompt():
 
 
 def learn_habits():
-    # Habits (issue 23): learned from the keyboard session's log, a keyboard session with them and the confident
-    # model, then a habits file of another product and a model without habits: refused in the panel.
+    # Habits (issue 23): learned from the keyboard session's log, a keyboard session with them and the helpful
+    # model (the confident habits, joins done early), then a habits file of another product and a model without
+    # habits: refused in the panel.
     window = FreeCADGui.getMainWindow()
     combo = window.findChild(QtGui.QComboBox, "AplanSessionModel")
     result["models"] = [[combo.itemText(i), combo.itemData(i)] for i in range(combo.count())]
@@ -318,7 +320,7 @@ def learned():
     panel = state().panel
     result["learned"] = [panel.habits.habits(), panel.habits.note.text()]
     combo = FreeCADGui.getMainWindow().findChild(QtGui.QComboBox, "AplanSessionModel")
-    combo.setCurrentIndex(combo.findData("confident"))
+    combo.setCurrentIndex(combo.findData("helpful"))
     result["habits_sent"] = []
     FreeCADGui.getMainWindow().findChild(QtGui.QPushButton, "AplanRunSession").click()
     QtCore.QTimer.singleShot(200, guarded(wait_habits_prompt))
@@ -328,6 +330,7 @@ def wait_habits_prompt():
     panel = state().panel
     if panel.job is None:
         result["habits_result"], result["habits_error"] = panel.result, panel.error
+        result["habits_prompt_end"] = panel.prompt.toPlainText()  # the robot's instructions as the panel shows them
         refused()
         return
     if panel.choices.count() == 0 or not panel.lines or not panel.lines[-1].startswith("operator picked"):
@@ -370,7 +373,7 @@ def refusal_shown():
                                                 panel.habits.field.width(), panel.habits.field.height()],
                                "cut_off": cut_off(viewport), "broken": broken_words(viewport)}}
     QtGui.QApplication.primaryScreen().grabWindow(0).save(os.path.join(ARTIFACTS, "gui_session_habits.png"))
-    window.findChild(QtGui.QLineEdit, "AplanSessionHabits").setText("")  # the confident model, no habits file
+    window.findChild(QtGui.QLineEdit, "AplanSessionHabits").setText("")  # the helpful model, no habits file
     window.findChild(QtGui.QPushButton, "AplanRunSession").click()
     result["no_habits"] = [note.text(), panel.job is not None, runs()]
     FreeCADGui.runCommand("Aplan_Session")  # opened again: the habits learned beside the document offered
@@ -657,11 +660,13 @@ def _other_habits(folder):
 def _assert_habits_session(data: dict, tmp_path) -> None:
     """Habits in the session panel (issue 23; docs/session-habits.png is a copy of
     tests/artifacts/gui_session_habits.png): the planner's named models offered; habits learned from the
-    keyboard session's log into a file beside the document; a keyboard session with them and the confident
-    model, whose log records both and replays (aplan replay); a habits file of another product refused in red
-    under the file, and the confident model without a file, neither session started."""
+    keyboard session's log into a file beside the document; a keyboard session with them and the helpful model
+    (the confident habits, the robot told joins it may do before the operator's sequence needs them), whose log
+    records both, has a robot join, and replays (aplan replay), each join's instruction ("join P to Q") shown in
+    the panel's prompt box; a habits file of another product refused in red under the file, and the helpful
+    model without a file, neither session started."""
     from freecad_aplan.sessions import DEFAULT_MODEL, model_label, model_names
-    from planner.decision.presets import CONFIDENT, wrong_for_confidence
+    from planner.decision.presets import HELPFUL, wrong_for_confidence
     from planner.runtime.logged_sequence import logged_sequence
 
     assert data["models"] == [[DEFAULT_MODEL, None]] + [[model_label(n), n] for n in model_names()]
@@ -675,14 +680,28 @@ def _assert_habits_session(data: dict, tmp_path) -> None:
     assert sum(count for _, _, count in habits.counts) == operator_steps
     assert data["habits_error"] is None, data["habits_error"]
     done = data["habits_result"]
-    assert done["assembled"] is True and f"--habits {learned} --model confident" in done["command"]
+    assert done["assembled"] is True and f"--habits {learned} --model helpful" in done["command"]
     log = done["levels"][0]["log"]
-    start = json.loads(open(log).readline())["settings"]
+    events = [json.loads(line) for line in open(log)]
+    start = events[0]["settings"]
     assert start["habits"]["counts"] == json.loads(open(learned).read())["counts"]
-    assert (start["habits"]["prior"], start["habits"]["prior_per"]) == (CONFIDENT.prior, CONFIDENT.prior_per)
-    assert start["rewards"]["wrong"] == pytest.approx(wrong_for_confidence(CONFIDENT.act_confidence))
-    replayed = aplan("replay", log)  # the habits the log records rebuild the same beliefs
-    assert f"beliefs reproduced at all {done['levels'][0]['steps']} steps" in replayed.stdout, replayed.stdout
+    assert (start["habits"]["prior"], start["habits"]["prior_per"]) == (HELPFUL.prior, HELPFUL.prior_per)
+    assert start["rewards"]["wrong"] == pytest.approx(wrong_for_confidence(HELPFUL.act_confidence))
+    assert start["parallel"] == HELPFUL.parallel
+    joins = [e for e in events if e["event"] == "action" and "join" in e]
+    assert joins, [e["name"] for e in events if e["event"] == "action"]  # the robot helped: at least one join
+    seen = {e["step"]: e for e in events if e["event"] == "observation"}
+    beside = [e for e in joins if not seen[e["step"]]["ignored"] and seen[e["step"]]["observation"] != "blank"
+              and not set(e["join"]) <= set(seen[e["step"]]["observation"].split("+"))]
+    assert beside, (joins, seen)  # in a step of a join the operator did another operation: help before the last step
+    shown = data["habits_prompt_end"].splitlines()  # what the person at the keyboard read in the panel
+    for event in joins:
+        told = "join {} to {}".format(*event["join"])
+        assert event["instruction"].startswith(told), event["instruction"]
+        assert f"robot, step {event['step']}: {event['instruction']}" in shown, (event, shown)
+    replayed = aplan("replay", log)  # the habits the log records rebuild the same beliefs and joins
+    assert (f"beliefs and the operations of its {len(joins)} joins reproduced at all"
+            f" {done['levels'][0]['steps']} steps") in replayed.stdout, replayed.stdout
     other = data["other_product"]
     assert other["note"].startswith("chain-habits.json: habits of the product "
                                     f"{chain_product(4).name!r}, not of "), other["note"]
@@ -701,6 +720,6 @@ def _assert_habits_session(data: dict, tmp_path) -> None:
     assert field.share(field.dark()) >= 0.02 and field.share(field.coloured(hue_of(red), saturation=0.4)) \
         < 0.002, (field.share(field.dark()), field.share(field.coloured(hue_of(red), saturation=0.4)))
     text, started, runs = data["no_habits"]
-    assert text == "--model confident needs the habits: --habits FILE (aplan habits LOG... -o FILE)"
+    assert text == "--model helpful needs the habits: --habits FILE (aplan habits LOG... -o FILE)"
     assert started is False and runs == 2
     assert data["reopened"] == [True, learned]
