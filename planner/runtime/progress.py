@@ -119,9 +119,16 @@ class AssemblyProgress:
         """The assembly state, e.g. ``{body, button} {cap} ...``; several joined by `` or ``."""
         return " or ".join(self.plan.states.describe(s) for s in sorted(self.states))
 
-    def possible(self) -> list[str]:
+    def possible(self, robot: int | tuple[int, ...] | None = None) -> list[str]:
         """What the operator could be seen picking now: the observations of the operations possible in these
-        states (blank ones left out), sorted."""
+        states (blank ones left out), sorted. With the robot's ``robot`` operation of this step (a join's
+        tuple), the states after it where it applies (the robot acts first: the operator picks beside what the
+        robot is doing, so the robot's own operation is not offered); where it applies nowhere yet, these
+        states (it is tried again after the operator's step)."""
         plan, states = self.plan, self.plan.states
-        seen = {int(plan.operation_observation[states.edge_operation[e]]) for s in self.states for e in self._out(s)}
+        held = self.states
+        if robot is not None:
+            held = {int(states.edge_target[e]) for s in self.states for e in self._out(s)
+                    if np.isin(states.edge_operation[e], robot)} or held
+        seen = {int(plan.operation_observation[states.edge_operation[e]]) for s in held for e in self._out(s)}
         return sorted(str(plan.observations[z]) for z in seen if z != self.blank)

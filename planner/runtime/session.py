@@ -216,7 +216,7 @@ class _Run:
         to the assembly state with the robot's ``operation``. An observation no operation explains there is
         logged (``ignored``), with a warning naming what the operator could do, and counts as blank; the source
         ending stops the loop."""
-        before, possible = self.progress.describe(), self.progress.possible()
+        before, possible = self.progress.describe(), self.progress.possible(operation)
         offer = getattr(source, "offer", None)  # a source a person types into (the keyboard) shows the choices
         if offer is not None:
             offer(possible)

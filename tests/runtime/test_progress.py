@@ -100,3 +100,18 @@ def test_a_session_warns_of_a_robot_operation_the_state_does_not_allow(plan):
     assert warnings[0] == ("the robot's operation {ink} + {cartridge, head} is not possible in the assembly state "
                            "({ink} {cartridge} {head} {body} {cap} {button}); it does not count")
     assert len(warnings) == 2
+
+
+def test_the_picks_offered_beside_the_robots_operation(plan):
+    """The keyboard is offered what the operator could pick beside the robot's operation of the step: the
+    states after it (the robot acts first), so not the robot's own operation; a robot operation possible
+    nowhere yet leaves the picks of the states held (it is tried again after the operator's step)."""
+    progress = AssemblyProgress(plan)
+    progress.step(None, _seen(plan, ("body", "button")))
+    alone = progress.possible()
+    assert alone == ["cartridge+head+[hammer]", "cartridge+ink+[hammer]"]
+    robot = _operation(plan, {"cartridge"}, {"head"})
+    beside = progress.possible(robot)
+    assert "cartridge+head+[hammer]" not in beside and beside == ["ink+[hammer]"]
+    assert progress.possible(_operation(plan, {"ink"}, {"cartridge", "head"})) == alone
+    assert progress.possible() == alone  # asking changes nothing
