@@ -374,8 +374,9 @@ def designer_record(intent: Intent) -> dict:
     """The product's ``geometry.designer`` (:mod:`planner.product.designer`): the designer's directions and
     not-blocking marks the analysis holds, and the interlock proposals the designer rejected
     (``refused_interlocks``, :mod:`planner.assembly.interlock_proposals`); empty when it holds none."""
+    # A rejected support contact is only not added (freecad_aplan.interlocks): no refusal for the planner.
     refused = [{k: d[k] for k in ("parts", "rule", "text") if k in d} for d in intent.interlocks
-               if d.get("decision") == "rejected"]
+               if d.get("decision") == "rejected" and d.get("rule") != "support"]
     return {**({"directions": [list(v) for v in intent.directions]} if intent.directions else {}),
             **({"not_blocking": [dict(m) for m in intent.not_blocking]} if intent.not_blocking else {}),
             **({"refused_interlocks": refused} if refused else {})}

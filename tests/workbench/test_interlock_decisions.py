@@ -104,7 +104,7 @@ def test_a_one_component_proposal_accepted_is_a_group_and_undone(decided):
     assert [(d["parts"], d["decision"]) for d in accepted["decisions"]] == [(["cover", "knob"], "accepted")]
     assert accepted["plan"] == ["planned", 1] and accepted["report"] == ["accepted"]
     assert accepted["again"] == [] and accepted["same"] is True  # an accepted one stays; the shapes untouched
-    assert decided["lines"] == ["accepted: " + decided["lines"][0].split("accepted: ")[1]]
+    assert decided["lines"] == ["interlock accepted: " + decided["lines"][0].split("accepted: ")[1]]
     undone = decided["undone"]
     assert undone == {"groups": {}, "parts": ["housing", "cover", "knob"], "decisions": [],
                       "plan": undone["plan"]} and undone["plan"][0] == "InterlockedPartsError"
