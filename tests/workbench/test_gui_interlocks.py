@@ -84,7 +84,7 @@ def arrows():
 def on_screen(name):
     # The part's bounding box projected on the 3D view (pixels; the view's y runs up).
     view = FreeCADGui.ActiveDocument.ActiveView
-    box = FreeCAD.ActiveDocument.getObject(name).Shape.BoundBox
+    box = FreeCAD.ActiveDocument.getObjectsByLabel(name)[0].Shape.BoundBox
     return [list(view.getPointOnScreen(box.getPoint(i))) for i in range(8)]
 
 
@@ -188,85 +188,63 @@ def shown_looks(materials):
     return {{n: [list(m.diffuseColor[0]), round(100 * m.transparency[0])] for n, m in materials.items()}}
 
 
-def captured():
-    # A one-component proposal: the knob captured by the cover, both highlighted together, no arrow.
+def opened(path, then):
+    # The document at path with its parts shown (not the booleans' tools), seen isometric; their materials by
+    # label; an analysis created and detected, then `then`.
     from freecad_aplan.plan3d import face_materials
-    doc = FreeCAD.openDocument(CAPTURED)
-    solids = [o for o in doc.Objects if o.TypeId == "Part::Feature"]
+    doc = FreeCAD.openDocument(path)
+    solids = [o for o in doc.Objects if not o.InList and hasattr(o, "Shape")]
     for o in solids:
         o.ViewObject.Visibility = True
     FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
     FreeCADGui.SendMsgToActiveView("ViewFit")
     settle(2.0)
     MATERIALS.clear()
-    MATERIALS.update({{o.Name: face_materials(o)[0] for o in solids}})
-    result["captured_home"] = shown_looks(MATERIALS)
+    MATERIALS.update({{o.Label: face_materials(o)[0] for o in solids}})
+    home = shown_looks(MATERIALS)
     FreeCADGui.runCommand("Aplan_CreateAnalysis")
     detect()
-    after_jobs(captured_panel)
+    after_jobs(then)
+    return home
+
+
+def first_proposal(picture, names):
+    # The interlocks panel opened, its first proposal selected: what it lists and what the 3D view shows (the
+    # view saved as `picture`, the screen boxes of `names`); then Cancel (the view as it was, nothing stored).
+    FreeCADGui.runCommand("Aplan_Interlocks")
+    settle()
+    window = FreeCADGui.getMainWindow()
+    listed = window.findChild(QtGui.QListWidget, "AplanInterlocksList")
+    listed.setCurrentRow(0)
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    settle()
+    view = FreeCADGui.ActiveDocument.ActiveView
+    view.saveImage(os.path.join(ARTIFACTS, picture), *view.getSize(), "White")
+    shown = {{"entries": [listed.item(r).text() for r in range(listed.count())],
+             "summary": window.findChild(QtGui.QLabel, "AplanInterlocksSummary").text(),
+             "looks": shown_looks(MATERIALS), "arrows": len(arrows()), "screen": {{n: on_screen(n) for n in names}},
+             "cut_off": cut_off(task_view_viewport()) + broken_words(task_view_viewport())}}
+    state().panel.reject()
+    settle()
+    return shown
+
+
+def captured():
+    # A one-component proposal: the knob captured by the cover, both highlighted together, no arrow.
+    result["captured_home"] = opened(CAPTURED, captured_panel)
 
 
 def captured_panel():
-    FreeCADGui.runCommand("Aplan_Interlocks")
-    settle()
-    window = FreeCADGui.getMainWindow()
-    listed = window.findChild(QtGui.QListWidget, "AplanInterlocksList")
-    listed.setCurrentRow(0)
-    FreeCADGui.SendMsgToActiveView("ViewFit")
-    settle()
-    view = FreeCADGui.ActiveDocument.ActiveView
-    view.saveImage(os.path.join(ARTIFACTS, "gui_interlocks_component.png"), *view.getSize(), "White")
-    result["captured"] = {{"entries": [listed.item(r).text() for r in range(listed.count())],
-                          "looks": shown_looks(MATERIALS), "arrows": len(arrows()),
-                          "screen": {{n: on_screen(n) for n in ("Cover", "Knob", "Housing")}},
-                          "cut_off": cut_off(task_view_viewport()) + broken_words(task_view_viewport())}}
-    state().panel.reject()  # Cancel: the view as it was, nothing stored
-    settle()
+    result["captured"] = first_proposal("gui_interlocks_component.png", ("Cover", "Knob", "Housing"))
     from freecad_aplan.intent import find_analysis, read_intent
     result["captured_closed"] = [shown_looks(MATERIALS), len(arrows()),
                                  read_intent(find_analysis(FreeCAD.ActiveDocument)).interlocks]
-    gearbox()
-
-
-SUPPORTED = ("GearA", "Housing")
-
-
-def gearbox():
     # The support contacts of the closed gearbox: its gears would float in the housing once their shafts are out.
-    from freecad_aplan.plan3d import face_materials
-    doc = FreeCAD.openDocument(GEARBOX)
-    shown = [o for o in doc.Objects if not o.InList and hasattr(o, "Shape")]  # the parts, not the booleans' tools
-    for o in shown:
-        o.ViewObject.Visibility = True
-    FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
-    FreeCADGui.SendMsgToActiveView("ViewFit")
-    settle(2.0)
-    MATERIALS.clear()
-    MATERIALS.update({{o.Label: face_materials(o)[0] for o in shown}})
-    FreeCADGui.runCommand("Aplan_CreateAnalysis")
-    detect()
-    after_jobs(gearbox_panel)
+    opened(GEARBOX, gearbox_panel)
 
 
 def gearbox_panel():
-    FreeCADGui.runCommand("Aplan_Interlocks")
-    settle()
-    window = FreeCADGui.getMainWindow()
-    listed = window.findChild(QtGui.QListWidget, "AplanInterlocksList")
-    listed.setCurrentRow(0)
-    FreeCADGui.SendMsgToActiveView("ViewFit")
-    settle()
-    view = FreeCADGui.ActiveDocument.ActiveView
-    view.saveImage(os.path.join(ARTIFACTS, "gui_interlocks_support.png"), *view.getSize(), "White")
-    doc = FreeCAD.ActiveDocument
-    result["support"] = {{"entries": [listed.item(r).text() for r in range(listed.count())],
-                         "summary": window.findChild(QtGui.QLabel, "AplanInterlocksSummary").text(),
-                         "looks": shown_looks(MATERIALS), "arrows": len(arrows()),
-                         "screen": {{n: [list(view.getPointOnScreen(doc.getObjectsByLabel(n)[0].Shape.BoundBox.getPoint(i)))
-                                    for i in range(8)] for n in SUPPORTED}},
-                         "cut_off": cut_off(task_view_viewport()) + broken_words(task_view_viewport())}}
-    state().panel.reject()
-    settle()
+    result["support"] = first_proposal("gui_interlocks_support.png", ("GearA", "Housing"))
     finish(0)
 
 

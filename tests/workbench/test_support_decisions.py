@@ -21,33 +21,10 @@ from planner.product import product_to_dict
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "assembly"))
 from test_floating_parts import box_meshes, closed_gearbox  # noqa: E402
+from test_interlock_decisions import PREAMBLE  # noqa: E402
 
-SCRIPT = r"""
-import json, sys
-sys.path.insert(0, {repo!r})
-import FreeCAD, Part
-from planner import api
-from freecad_aplan import workflow
-from freecad_aplan.intent import create_analysis, designer_record, read_intent, update_intent
-from freecad_aplan.interlocks import decide_interlocks, interlock_report
-
-out = {{}}
-doc = FreeCAD.newDocument("gearbox")
-doc.UndoMode = 1
-for name in {parts!r}:
-    doc.addObject("Part::Box", name)
-doc.recompute()
-def shapes():
-    return {{o.Name: [o.Shape.exportBrepToString(), list(o.Placement.Base), list(o.Placement.Rotation.Q)]
-            for o in doc.Objects if o.TypeId == "Part::Box"}}
-before = shapes()
-analysis = create_analysis(doc)
+SCRIPT = PREAMBLE + r"""
 update_intent(analysis, "detect", diagrams={diagrams!r})
-def plan():
-    try:
-        return ["planned", api.plan_statistics_of(workflow.analysis_product(analysis))[1].sequences]
-    except Exception as exc:
-        return [type(exc).__name__, str(exc)]
 def contacts():
     return sorted(sorted(c) for c in read_intent(analysis).diagrams["contacts"])
 out["report"] = [[p["rule"], p["parts"], p["text"], p["decision"]] for p in interlock_report(analysis)[0]]
@@ -93,7 +70,7 @@ def decided(tmp_path_factory) -> dict:
                 "contacts": data["contacts"], "obstructions": data["obstructions"],
                 "analysis": data["geometry"]["analysis"]}
     script = tmp_path_factory.mktemp("supports") / "supports.py"
-    script.write_text(SCRIPT.format(repo=str(REPO), parts=diagrams["parts"], diagrams=json.loads(json.dumps(diagrams))))
+    script.write_text(SCRIPT.format(repo=str(REPO), name="gearbox", parts=diagrams["parts"], diagrams=json.loads(json.dumps(diagrams))))
     return freecad_result(subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300))
 
 
