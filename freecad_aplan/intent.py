@@ -28,7 +28,8 @@ top of the geometry (everything is saved in the ``.FCStd`` and restored on reope
   each: ``{"parts": [a, b], "rule": r, "text": t, "decision": "accepted" or "rejected"}``,
   :mod:`freecad_aplan.interlocks`): an accepted one is written into the designer data above (directions,
   marks, diagrams, groups), a rejected one makes the planner refuse the pair (the product's
-  ``geometry.designer.refused_interlocks``);
+  ``geometry.designer.refused_interlocks``); and on the support contacts it proposes (rule ``support``: an
+  accepted one is a contact in the diagrams, a rejected one only not added);
 - ``Subassemblies``: the designer's subassembly tree, one product-format JSON object per subassembly over
   component ids (``{"id": s, "parts": [...], "label"?: l}``); empty: the document's own structure
   (``App::Part`` containers and groups) applies;
