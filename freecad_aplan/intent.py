@@ -28,7 +28,8 @@ top of the geometry (everything is saved in the ``.FCStd`` and restored on reope
   each: ``{"parts": [a, b], "rule": r, "text": t, "decision": "accepted" or "rejected"}``,
   :mod:`freecad_aplan.interlocks`): an accepted one is written into the designer data above (directions,
   marks, diagrams, groups), a rejected one makes the planner refuse the pair (the product's
-  ``geometry.designer.refused_interlocks``);
+  ``geometry.designer.refused_interlocks``); and on the support contacts it proposes (rule ``support``: an
+  accepted one is a contact in the diagrams, a rejected one only not added);
 - ``Subassemblies``: the designer's subassembly tree, one product-format JSON object per subassembly over
   component ids (``{"id": s, "parts": [...], "label"?: l}``); empty: the document's own structure
   (``App::Part`` containers and groups) applies;
@@ -374,8 +375,9 @@ def designer_record(intent: Intent) -> dict:
     """The product's ``geometry.designer`` (:mod:`planner.product.designer`): the designer's directions and
     not-blocking marks the analysis holds, and the interlock proposals the designer rejected
     (``refused_interlocks``, :mod:`planner.assembly.interlock_proposals`); empty when it holds none."""
+    # A rejected support contact is only not added (freecad_aplan.interlocks): no refusal for the planner.
     refused = [{k: d[k] for k in ("parts", "rule", "text") if k in d} for d in intent.interlocks
-               if d.get("decision") == "rejected"]
+               if d.get("decision") == "rejected" and d.get("rule") != "support"]
     return {**({"directions": [list(v) for v in intent.directions]} if intent.directions else {}),
             **({"not_blocking": [dict(m) for m in intent.not_blocking]} if intent.not_blocking else {}),
             **({"refused_interlocks": refused} if refused else {})}

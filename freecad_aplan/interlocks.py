@@ -13,12 +13,20 @@ the analysis only (:mod:`freecad_aplan.intent`; the user's geometry and placemen
   (``geometry.designer.refused_interlocks``) and planning raises the ``--interlocks error`` message for the
   pair while it is interlocked: nothing is applied that the designer did not accept.
 
+The support contacts the detection proposes (:func:`planner.assembly.support_contacts.record_support_proposals`:
+a part that would float inside the part whose cavity holds it) are listed after them, with the rule
+``support``: *accepted*, the contact is added to the stored diagrams (as ``--support-contacts add`` adds it:
+:func:`~planner.assembly.support_contacts.apply_support_proposal`); *rejected*, nothing is added, as with
+``--support-contacts keep``: the plan names the parts that would float. A new detection drops an accepted
+contact from the diagrams; its proposal reads *not decided* again then.
+
 Every decision is recorded in ``Interlocks`` (``{"parts", "rule", "text", "decision"}``). One OK is one undo
 step. Plain functions (no Qt), shared by the panel (:mod:`freecad_aplan.gui.interlocks`) and the tests.
 """
 from __future__ import annotations
 
 from planner.assembly.interlock_proposals import PROPOSALS_KEY, apply_proposal
+from planner.assembly.support_contacts import SUPPORT_PROPOSALS_KEY, apply_support_proposal
 from planner.errors import PlannerError
 
 from .intent import IntentError, read_intent, update_intent
@@ -28,13 +36,21 @@ __all__ = ["interlock_report", "decide_interlocks", "DECISIONS"]
 DECISIONS = ("accepted", "rejected")
 
 
-def _key(entry: dict) -> frozenset:
-    return frozenset(entry.get("parts", ()))
+def _key(entry: dict) -> tuple[bool, frozenset]:
+    return entry.get("rule") == "support", frozenset(entry.get("parts", ()))
+
+
+def _decision(proposal: dict, decided: dict, contacts: set):
+    """The stored decision on ``proposal``; an accepted support contact the diagrams lack (a new detection) none."""
+    decision = decided.get(_key(proposal))
+    missing = proposal.get("rule") == "support" and frozenset(proposal["parts"]) not in contacts
+    return None if decision == "accepted" and missing else decision
 
 
 def interlock_report(analysis) -> tuple[list[dict], list[str]]:
-    """The proposals of the last detection, each with ``decision`` (``accepted``, ``rejected`` or None: not
-    decided yet, from the analysis' ``Interlocks``), and the lines of the pairs no rule frees. Raises
+    """The proposals of the last detection, the interlock rules' then the support contacts' (module docstring),
+    each with ``decision`` (``accepted``, ``rejected`` or None: not decided yet, from the analysis'
+    ``Interlocks``), and the lines of the pairs no rule frees. Raises
     :class:`IntentError` before any detection."""
     intent = read_intent(analysis)
     if not intent.diagrams.get("parts"):
@@ -42,7 +58,9 @@ def interlock_report(analysis) -> tuple[list[dict], list[str]]:
                           "obstructions first (it finds the interlocked pairs and what would free them)")
     record = intent.diagrams.get("analysis", {})
     decided = {_key(d): d.get("decision") for d in intent.interlocks}
-    proposals = [{**p, "decision": decided.get(_key(p))} for p in record.get(PROPOSALS_KEY, [])]
+    contacts = {frozenset(c) for c in intent.diagrams.get("contacts", [])}
+    proposals = [{**p, "decision": _decision(p, decided, contacts)}
+                 for p in record.get(PROPOSALS_KEY, []) + record.get(SUPPORT_PROPOSALS_KEY, [])]
     return proposals, list(record.get("interlock_unresolved", []))
 
 
@@ -68,7 +86,8 @@ def _merged_component(diagrams: dict, groups: dict, proposal: dict) -> None:
 
 def decide_interlocks(analysis, decisions: dict[int, str]) -> list[str]:
     """Store the designer's ``decisions`` (index in :func:`interlock_report`'s proposals -> ``accepted`` or
-    ``rejected``) in one undoable transaction (module docstring); returns one line per change. A proposal
+    ``rejected``) in one undoable transaction (module docstring); returns one line per change (``interlock
+    accepted: ...``, ``support contact rejected: ...``). A proposal
     accepted already is left as it is (undo the step to take it back). Raises :class:`IntentError` naming the
     proposal (an unknown index or decision, components that changed since the detection: detect again), and
     nothing changes then. Cost: O(size of the product) per accepted proposal."""
@@ -94,9 +113,10 @@ def decide_interlocks(analysis, decisions: dict[int, str]) -> list[str]:
     for k, decision in sorted(chosen.items()):
         proposal = proposals[k]
         pair = " and ".join(proposal["parts"])
+        support = proposal["rule"] == "support"
         if decision == "accepted":
             try:
-                product = apply_proposal(product, proposal)
+                product = (apply_support_proposal if support else apply_proposal)(product, proposal)
             except PlannerError as exc:
                 raise IntentError(f"interlock proposal for {pair}: {exc}") from None
             if proposal["rule"] == "component":
@@ -112,16 +132,18 @@ def decide_interlocks(analysis, decisions: dict[int, str]) -> list[str]:
                                                         for p in entry["parts"]))
         record.append({"parts": list(proposal["parts"]), "rule": proposal["rule"], "text": proposal["text"],
                        "decision": decision})
-        said = proposal["text"] if decision == "accepted" else f"{pair} ({proposal['rule']}): refused when planning"
-        lines.append(f"{decision}: {said}")
+        said = (proposal["text"] if decision == "accepted" else f"{pair} ({proposal['rule']}): " +
+                ("not added; the plan names the parts that would float" if support else "refused when planning"))
+        lines.append(f"{'support contact' if support else 'interlock'} {decision}: {said}")
     data = product_to_dict(product)
     designer = product.geometry.get("designer", {})
     diagrams.update(parts=list(product.part_ids), contacts=data["contacts"], obstructions=data["obstructions"],
                     analysis=product.geometry.get("analysis", {}))
     (first, decision), = list(chosen.items())[:1]
     verb = {"accepted": "accept", "rejected": "reject"}[decision]
-    what = (f"{verb} interlock {' and '.join(proposals[first]['parts'])}" if len(chosen) == 1 else
-            f"decide {len(chosen)} interlocks")
+    kind = "support contact" if proposals[first]["rule"] == "support" else "interlock"
+    what = (f"{verb} {kind} {' and '.join(proposals[first]['parts'])}" if len(chosen) == 1 else
+            f"decide {len(chosen)} interlocks and support contacts")
     update_intent(analysis, what, groups=groups, subassemblies=subassemblies, diagrams=diagrams, interlocks=record,
                   directions=[list(v) for v in designer.get("directions", [])],
                   not_blocking=[dict(m) for m in designer.get("not_blocking", [])])

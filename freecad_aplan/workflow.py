@@ -25,7 +25,6 @@ from dataclasses import replace
 from pathlib import Path
 
 from planner import api
-from planner.assembly.interlock_proposals import record_proposals
 from planner.decision.policy import write_policy
 from planner.defaults import (
     BLOCKING_DEPTH,
@@ -177,8 +176,8 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
     undecided), then one line per pair OCCT left undecided, with the answer used
     (:func:`freecad_aplan.hybrid.undecided_notes`, the time limit's stop first). Returns the counts (parts,
     contacts, interferences, seconds), ``undecided`` (those lines) and ``summary`` (one line:
-    :func:`freecad_aplan.hybrid.undecided_summary`). The interlock rules' proposals are recorded with the
-    diagrams (:func:`planner.assembly.interlock_proposals.record_proposals`). Runs in a background job.
+    :func:`freecad_aplan.hybrid.undecided_summary`). The interlock rules' and the support contacts' proposals
+    are recorded with the diagrams (:func:`planner.api.record_detection_proposals`). Runs in a background job.
     """
     from planner.geometry import Tolerances
     from planner.geometry.bundle import PRODUCT_FILE, analyse_bundle, load_bundle
@@ -189,8 +188,9 @@ def analyze_bundle(folder: str, engine: str = "mesh", contact: float = CONTACT_T
     product = load_bundle(folder)
     tolerances = Tolerances(contact=contact, interference=interference, depth=depth, face_weight=face_weight,
                             prism_triangles=prism_triangles, time_limit=time_limit)
-    # The interlock rules' proposals, while the meshes are here: the interlocks panel lists them.
-    _, report = analyse_bundle(product, Path(folder) / PRODUCT_FILE, engine, tolerances, then=record_proposals,
+    # The interlock and support-contact proposals, while the meshes are here: the interlocks panel lists them.
+    _, report = analyse_bundle(product, Path(folder) / PRODUCT_FILE, engine, tolerances,
+                               then=api.record_detection_proposals,
                                engines=geometry_engines(progress))
     notes = undecided_notes(report.tolerances)
     for note in notes if progress is not None else ():

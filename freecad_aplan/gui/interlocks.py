@@ -1,5 +1,6 @@
-"""The interlocks task panel: the interlock rules' proposals of the last detection, each shown in the 3D view
-while it is selected, for the designer to accept or reject.
+"""The interlocks task panel: the interlock rules' proposals of the last detection, and the support contacts it
+proposes (a part that would float in the part whose cavity holds it), each shown in the 3D view while it is
+selected, for the designer to accept or reject.
 
 Thin Qt over :mod:`freecad_aplan.interlocks` (the logic, also run without the GUI by the tests). The list
 shows each proposal's pair, the rule and its decision, each on a line of its own so that it reads at the task
@@ -27,13 +28,14 @@ __all__ = ["InterlocksPanel", "RULE_NAMES", "show_interlock"]
 
 #: What each rule is called in the panel (planner.assembly.interlocks.RULES).
 RULE_NAMES = MappingProxyType({"overlap": "overlap axis", "direction": "contact direction",
-                               "component": "one component"})
+                               "component": "one component", "support": "support contact"})
 _SHOWN = MappingProxyType({None: "not decided", "accepted": "accepted", "rejected": "rejected"})
 
 
 def show_interlock(view: PlanView, proposal: dict) -> None:
     """``proposal`` in the 3D view: with a direction, the part that leaves orange, the other blue, an arrow from
-    the first along the direction; one component: the two parts highlighted together. The others dimmed."""
+    the first along the direction; one component or a support contact: the two parts highlighted together. The
+    others dimmed."""
     a, b = proposal["parts"]
     if proposal.get("direction") is None:
         view.show_parts([frozenset((a, b))])
@@ -47,7 +49,8 @@ def show_interlock(view: PlanView, proposal: dict) -> None:
 
 def _entry(proposal: dict, decision) -> str:
     a, b = proposal["parts"]
-    return f"{a}\n+ {b}\n{RULE_NAMES.get(proposal['rule'], proposal['rule'])}: {_SHOWN[decision]}"
+    pair = f"{a} rests in {b}" if proposal["rule"] == "support" else f"{a}\n+ {b}"
+    return f"{pair}\n{RULE_NAMES.get(proposal['rule'], proposal['rule'])}: {_SHOWN[decision]}"
 
 
 def _button(text: str, name: str, slot) -> QtGui.QPushButton:
@@ -70,12 +73,15 @@ class InterlocksPanel:
         self.form.setObjectName("AplanInterlocksPanel")
         self.form.setWindowTitle("APLAN: interlocks")
         layout = panel_layout(self.form)
-        count = len(self.proposals)
+        supports = sum(p["rule"] == "support" for p in self.proposals)
+        count = len(self.proposals) - supports
+        found = ([f"{count} interlocked pair{'s' if count != 1 else ''} the rules would free"] if count else []) + (
+            [f"{supports} support contact{'s' if supports != 1 else ''} for parts that would float"] if supports else [])
         self.summary = wrapped_label(
-            (f"{count} interlocked pair{'s' if count != 1 else ''} the rules would free; select one to see it in "
-             "3D, then accept or reject it. A rejected one is refused when planning." if count else
-             "No interlocked pair to decide on.") + "".join(f"\nnot freed: {line}" for line in unresolved),
-            "AplanInterlocksSummary")
+            (f"{' and '.join(found)}; select one to see it in 3D, then accept or reject it. A rejected interlock is "
+             "refused when planning; a rejected support contact is not added." if found else
+             "No interlocked pair or support contact to decide on.") +
+            "".join(f"\nnot freed: {line}" for line in unresolved), "AplanInterlocksSummary")
         layout.addWidget(self.summary)
         self.list = QtGui.QListWidget()
         self.list.setObjectName("AplanInterlocksList")
@@ -155,7 +161,7 @@ class InterlocksPanel:
             self.message.setText(str(exc))
             return False
         for line in lines:  # one line per decision in the report view, as the command line says them
-            FreeCAD.Console.PrintMessage(f"APLAN: interlock {line}\n")
+            FreeCAD.Console.PrintMessage(f"APLAN: {line}\n")
         self._close()
         return True
 

@@ -83,13 +83,20 @@ from .plans import (
     sequence_from_log,
 )
 from .policies import SOLVER_ENGINES, check_solved, policy_for, solve
-from .products import DEFAULT_MODE, FASTENER_MODES, accept_fasteners, fastener_report, resolve_product
+from .products import (
+    DEFAULT_MODE,
+    FASTENER_MODES,
+    accept_fasteners,
+    fastener_report,
+    record_detection_proposals,
+    resolve_product,
+)
 from .specs import EpisodeChoice, ModelSpec, PlannerChoice
 
 # Private names other modules of the planner read from here (the command line's habits, its model files).
 _PRIVATE = (_decidable, _model_file_kind)
 
-__all__ = ["resolve_product", "DEFAULT_MODE", "fastener_report", "accept_fasteners", "FASTENER_MODES", "plan_of",
+__all__ = ["resolve_product", "record_detection_proposals", "DEFAULT_MODE", "fastener_report", "accept_fasteners", "FASTENER_MODES", "plan_of",
            "proposed_subassemblies", "structure_problems", "level_report", "level_table", "LEVEL_KEYS",
            "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import logging
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Callable
 
@@ -25,7 +26,8 @@ from ..product.examples import EXAMPLES, example_path
 from ..defaults import STRUCTURE_DEFAULT
 from ..validation import not_regular
 
-__all__ = ["resolve_product", "DEFAULT_MODE", "fastener_report", "accept_fasteners", "FASTENER_MODES"]
+__all__ = ["resolve_product", "DEFAULT_MODE", "fastener_report", "accept_fasteners", "FASTENER_MODES",
+           "record_detection_proposals"]
 
 log = logging.getLogger(__name__)
 
@@ -181,3 +183,25 @@ def _load(argument: str | os.PathLike, tolerances=None, model_options: dict | No
         raise UnknownProductError(not_regular(path, "product") or f"{argument}: not a regular file")
     raise UnknownProductError(
         f"{argument}: no such file, and no embedded example of that name (embedded: {', '.join(EXAMPLES)})")
+
+
+def record_detection_proposals(product: Product, meshes=None) -> Product:
+    """``product`` (its diagrams as they are) with what ``--interlocks resolve`` and then ``--support-contacts
+    add`` would do to it recorded as proposals in ``geometry.analysis``
+    (:func:`~planner.assembly.interlock_proposals.record_proposals`,
+    :func:`~planner.assembly.support_contacts.record_support_proposals`): the workbench's detection calls this
+    while the meshes exist, its interlocks panel lists them. The support contacts are those of the product
+    with every interlock proposal applied, as the command line orders the two rules (a merged component has
+    no mesh: no support contact is proposed then). Cost: that of the two rules."""
+    from ..assembly.interlock_proposals import PROPOSALS_KEY, apply_proposal, record_proposals
+    from ..assembly.support_contacts import SUPPORT_PROPOSALS_KEY, record_support_proposals
+
+    recorded = record_proposals(product, meshes)
+    resolved = product
+    for proposal in recorded.geometry.get("analysis", {}).get(PROPOSALS_KEY, []):
+        resolved = apply_proposal(resolved, proposal)
+    supports = record_support_proposals(resolved, meshes).geometry.get("analysis", {}).get(SUPPORT_PROPOSALS_KEY)
+    if not supports:
+        return recorded
+    analysis = {**recorded.geometry.get("analysis", {}), SUPPORT_PROPOSALS_KEY: supports}
+    return replace(recorded, geometry={**recorded.geometry, "analysis": analysis})

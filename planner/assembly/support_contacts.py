@@ -53,7 +53,8 @@ from ..product.constants import AXIS_DIRECTIONS
 from .andor import and_or_graph
 from .interlocks import _meshes, _tolerances
 
-__all__ = ["SupportContact", "support_contacts", "apply_support_mode", "SUPPORT_MODES", "MIN_WALLED", "CHECK_LIMIT"]
+__all__ = ["SupportContact", "support_contacts", "apply_support_mode", "record_support_proposals", "apply_support_proposal",
+           "SUPPORT_PROPOSALS_KEY", "SUPPORT_MODES", "MIN_WALLED", "CHECK_LIMIT"]
 
 log = logging.getLogger(__name__)
 
@@ -66,6 +67,9 @@ MIN_WALLED = 4
 #: limit of connected part sets (and its cuts): past it the rule does not judge the product. The closed gearbox's
 #: flat graph (14 parts, its four screws in) takes 0.4 CPU s, 0.8 s once it plans (bench/README.md).
 CHECK_LIMIT = SUBASSEMBLY_LIMIT
+#: The key of the contacts the rule proposes (not added) under ``geometry.analysis``: the workbench's detection
+#: records them while the meshes exist, for the designer to accept (:func:`record_support_proposals`).
+SUPPORT_PROPOSALS_KEY = "support_proposals"
 
 
 @dataclass(frozen=True)
@@ -135,6 +139,36 @@ def apply_support_mode(product: Product, mode: str = "add", meshes=None) -> Prod
             [(c.part, c.host) for c in added])
     log.info("support contacts: %s: %s; --support-contacts error to refuse instead", listed, why)
     return supported
+
+
+def record_support_proposals(product: Product, meshes=None) -> Product:
+    """``product``, its diagrams as they are, with the contacts :func:`support_contacts` would add recorded as
+    proposals in ``geometry.analysis.support_proposals`` (``[{"rule": "support", "parts": [part, host],
+    "text"}]``); ``product`` itself when it needs none. Cost: that of :func:`support_contacts`."""
+    _, added = support_contacts(product, meshes)
+    if not added:
+        return product
+    analysis = {**product.geometry.get("analysis", {}), SUPPORT_PROPOSALS_KEY: [
+        {"rule": "support", "parts": [c.part, c.host], "text": c.text} for c in added]}
+    return replace(product, geometry={**product.geometry, "analysis": analysis})
+
+
+def apply_support_proposal(product: Product, proposal: dict) -> Product:
+    """``product`` with the support contact of ``proposal`` (:func:`record_support_proposals`) added, as
+    ``--support-contacts add`` adds it, and recorded in ``geometry.analysis.support_contacts``. Raises
+    :class:`~planner.errors.PlannerError` naming the part when the product lacks one (the components changed).
+    Cost: O(contacts)."""
+    pair = tuple(proposal["parts"])
+    missing = [p for p in pair if p not in set(product.part_ids)]
+    if missing:
+        raise PlannerError(f"the support contact {' in '.join(pair)} names {', '.join(missing)}, which is not a part "
+                           "of the product (the components changed: detect again)")
+    if frozenset(pair) not in {frozenset(c) for c in product.contacts}:
+        product = replace(product, contacts=product.contacts + (pair,))
+    record = product.geometry.get("analysis", {})
+    done = [c for c in record.get("support_contacts", []) if frozenset(c["parts"]) != frozenset(pair)]
+    analysis = {**record, "support_contacts": done + [{"parts": list(pair), "text": proposal["text"]}]}
+    return replace(product, geometry={**product.geometry, "analysis": analysis})
 
 
 def _walled(product: Product) -> dict[tuple[str, str], int]:

@@ -5,11 +5,12 @@ the block blue and an arrow up from the pin (pixels of tests/artifacts/gui_inter
 (one undo step: the analysis carries the mark, the plan has its one sequence, the user's shapes, placements
 and colours as they were), undoes it, then rejects it (the plan refuses the pair in the ``--interlocks error``
 words). Then the captured knob of the same tests: its one-component proposal shows the cover and the knob
-together (tests/artifacts/gui_interlocks_component.png), Cancel restores the view. The panel fits the default
+together (tests/artifacts/gui_interlocks_component.png), Cancel restores the view. Then the closed gearbox of
+tests/integration/unseen_documents.py: its support contacts listed ("GearA rests in Housing"), the first shows the
+gear and the housing orange together (tests/artifacts/gui_interlocks_support.png). The panel fits the default
 task view (tests/artifacts/gui_panel_interlocks.png)."""
 from __future__ import annotations
 
-import json
 import shutil
 
 import numpy as np
@@ -18,6 +19,8 @@ from background import Job, folder, run
 from conftest import REPO, freecad_gui_result, freecad_gui_run, require_freecad_gui
 from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, WORKBENCH_HELPERS
 from integration.interlock_documents import SCRIPT
+from integration.unseen_documents import GEARBOX
+from integration.unseen_documents import SCRIPT as UNSEEN
 from pictures import hue_of, read_picture
 
 ARTIFACTS = REPO / "tests" / "artifacts"
@@ -28,7 +31,7 @@ import hashlib, json, os, time, traceback
 from PySide import QtCore, QtGui
 import FreeCAD, FreeCADGui
 
-OUT, COPY, CAPTURED, ARTIFACTS = {out!r}, {copy!r}, {captured!r}, {artifacts!r}
+OUT, COPY, CAPTURED, GEARBOX, ARTIFACTS = {out!r}, {copy!r}, {captured!r}, {gearbox!r}, {artifacts!r}
 result = {{}}
 PARTS = ("Block", "Pin")
 MATERIALS = {{}}
@@ -81,7 +84,7 @@ def arrows():
 def on_screen(name):
     # The part's bounding box projected on the 3D view (pixels; the view's y runs up).
     view = FreeCADGui.ActiveDocument.ActiveView
-    box = FreeCAD.ActiveDocument.getObject(name).Shape.BoundBox
+    box = FreeCAD.ActiveDocument.getObjectsByLabel(name)[0].Shape.BoundBox
     return [list(view.getPointOnScreen(box.getPoint(i))) for i in range(8)]
 
 
@@ -185,25 +188,29 @@ def shown_looks(materials):
     return {{n: [list(m.diffuseColor[0]), round(100 * m.transparency[0])] for n, m in materials.items()}}
 
 
-def captured():
-    # A one-component proposal: the knob captured by the cover, both highlighted together, no arrow.
+def opened(path, then):
+    # The document at path with its parts shown (not the booleans' tools), seen isometric; their materials by
+    # label; an analysis created and detected, then `then`.
     from freecad_aplan.plan3d import face_materials
-    doc = FreeCAD.openDocument(CAPTURED)
-    solids = [o for o in doc.Objects if o.TypeId == "Part::Feature"]
+    doc = FreeCAD.openDocument(path)
+    solids = [o for o in doc.Objects if not o.InList and hasattr(o, "Shape")]
     for o in solids:
         o.ViewObject.Visibility = True
     FreeCADGui.ActiveDocument.ActiveView.viewIsometric()
     FreeCADGui.SendMsgToActiveView("ViewFit")
     settle(2.0)
     MATERIALS.clear()
-    MATERIALS.update({{o.Name: face_materials(o)[0] for o in solids}})
-    result["captured_home"] = shown_looks(MATERIALS)
+    MATERIALS.update({{o.Label: face_materials(o)[0] for o in solids}})
+    home = shown_looks(MATERIALS)
     FreeCADGui.runCommand("Aplan_CreateAnalysis")
     detect()
-    after_jobs(captured_panel)
+    after_jobs(then)
+    return home
 
 
-def captured_panel():
+def first_proposal(picture, names):
+    # The interlocks panel opened, its first proposal selected: what it lists and what the 3D view shows (the
+    # view saved as `picture`, the screen boxes of `names`); then Cancel (the view as it was, nothing stored).
     FreeCADGui.runCommand("Aplan_Interlocks")
     settle()
     window = FreeCADGui.getMainWindow()
@@ -212,16 +219,32 @@ def captured_panel():
     FreeCADGui.SendMsgToActiveView("ViewFit")
     settle()
     view = FreeCADGui.ActiveDocument.ActiveView
-    view.saveImage(os.path.join(ARTIFACTS, "gui_interlocks_component.png"), *view.getSize(), "White")
-    result["captured"] = {{"entries": [listed.item(r).text() for r in range(listed.count())],
-                          "looks": shown_looks(MATERIALS), "arrows": len(arrows()),
-                          "screen": {{n: on_screen(n) for n in ("Cover", "Knob", "Housing")}},
-                          "cut_off": cut_off(task_view_viewport()) + broken_words(task_view_viewport())}}
-    state().panel.reject()  # Cancel: the view as it was, nothing stored
+    view.saveImage(os.path.join(ARTIFACTS, picture), *view.getSize(), "White")
+    shown = {{"entries": [listed.item(r).text() for r in range(listed.count())],
+             "summary": window.findChild(QtGui.QLabel, "AplanInterlocksSummary").text(),
+             "looks": shown_looks(MATERIALS), "arrows": len(arrows()), "screen": {{n: on_screen(n) for n in names}},
+             "cut_off": cut_off(task_view_viewport()) + broken_words(task_view_viewport())}}
+    state().panel.reject()
     settle()
+    return shown
+
+
+def captured():
+    # A one-component proposal: the knob captured by the cover, both highlighted together, no arrow.
+    result["captured_home"] = opened(CAPTURED, captured_panel)
+
+
+def captured_panel():
+    result["captured"] = first_proposal("gui_interlocks_component.png", ("Cover", "Knob", "Housing"))
     from freecad_aplan.intent import find_analysis, read_intent
     result["captured_closed"] = [shown_looks(MATERIALS), len(arrows()),
                                  read_intent(find_analysis(FreeCAD.ActiveDocument)).interlocks]
+    # The support contacts of the closed gearbox: its gears would float in the housing once their shafts are out.
+    opened(GEARBOX, gearbox_panel)
+
+
+def gearbox_panel():
+    result["support"] = first_proposal("gui_interlocks_support.png", ("GearA", "Housing"))
     finish(0)
 
 
@@ -239,11 +262,17 @@ def _in_the_window() -> tuple:
     built = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(build)])
     if not (tmp / "press_fit.FCStd").is_file():
         return tmp, built
+    unseen = tmp / "unseen.py"  # the closed gearbox (and the other unseen documents: one script builds them)
+    unseen.write_text(f"TMP = {str(tmp)!r}\nREPO = {str(REPO)!r}\n" + UNSEEN)
+    built = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(unseen)])
+    if not (tmp / f"{GEARBOX}.FCStd").is_file():
+        return tmp, built
     ARTIFACTS.mkdir(exist_ok=True)
     script = tmp / "gui_interlocks.py"
     script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS, layout_check=LAYOUT_CHECK,
                                         out=str(tmp / "result.json"), copy=str(tmp / "press_fit.FCStd"),
-                                        captured=str(tmp / "captured.FCStd"), artifacts=str(ARTIFACTS)))
+                                        captured=str(tmp / "captured.FCStd"), gearbox=str(tmp / f"{GEARBOX}.FCStd"),
+                                        artifacts=str(ARTIFACTS)))
     return tmp, freecad_gui_run(tmp, script, display=170)
 
 
@@ -321,6 +350,24 @@ def test_an_interlock_proposal_shown_accepted_undone_and_rejected():
     assert "the rules would resolve them so: Block and Pin overlap by" in text
     assert rejected["arrows"] == 0 and rejected["looks"] == data["home_looks"]
     _assert_component(data)
+    _assert_support(data)
+
+
+def _assert_support(data) -> None:
+    """The closed gearbox: each gear's support contact listed as "GearA rests in Housing", the first selected
+    shows the gear and the housing orange together, the other parts dimmed, no arrow."""
+    support = data["support"]
+    assert support["entries"] == [f"Gear{g} rests in Housing\nsupport contact: not decided" for g in "AB"]
+    assert support["summary"].startswith("2 support contacts for parts that would float; select one")
+    assert support["cut_off"] == [], support["cut_off"]
+    looks = support["looks"]
+    assert looks["GearA"] == looks["Housing"] == [pytest.approx(list(ORANGE)), 0] and support["arrows"] == 0
+    assert all(t == 85 for name, (_, t) in looks.items() if name not in ("GearA", "Housing")), looks
+    picture = read_picture(ARTIFACTS / "gui_interlocks_support.png")
+    orange = picture.coloured(hue_of(ORANGE), saturation=0.3)
+    housing = _region(support["screen"]["Housing"], picture.size)
+    # The housing orange, the cover see-through over it: measured 0.65 of its projected box; about half of that.
+    assert _share(orange, housing) >= 0.3, _share(orange, housing)
 
 
 def _assert_component(data) -> None:

@@ -20,7 +20,10 @@ from planner.product import product_to_dict
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "assembly"))
 from test_interlocks import _captured  # noqa: E402
 
-SCRIPT = r"""
+#: The FreeCADCmd script's start (formatted with repo, the document's name, its box objects' names and the
+#: diagrams to store): a document of boxes, an analysis, ``shapes()`` (the user's geometry, to compare) and
+#: ``plan()`` (the workbench's plan, or the error's type and message). Shared with test_support_decisions.py.
+PREAMBLE = r"""
 import json, sys
 sys.path.insert(0, {repo!r})
 import FreeCAD, Part
@@ -30,9 +33,9 @@ from freecad_aplan.intent import IntentError, create_analysis, designer_record, 
 from freecad_aplan.interlocks import decide_interlocks, interlock_report
 
 out = {{}}
-doc = FreeCAD.newDocument("captured")
+doc = FreeCAD.newDocument({name!r})
 doc.UndoMode = 1
-for name in ("housing", "cover", "knob"):
+for name in {parts!r}:
     doc.addObject("Part::Box", name)
 doc.recompute()
 def shapes():
@@ -40,16 +43,19 @@ def shapes():
             for o in doc.Objects if o.TypeId == "Part::Box"}}
 before = shapes()
 analysis = create_analysis(doc)
-try:
-    interlock_report(analysis)
-except IntentError as exc:
-    out["not_detected"] = str(exc)
-update_intent(analysis, "detect", diagrams={diagrams!r})
 def plan():
     try:
         return ["planned", api.plan_statistics_of(workflow.analysis_product(analysis))[1].sequences]
     except Exception as exc:
         return [type(exc).__name__, str(exc)]
+"""
+
+SCRIPT = PREAMBLE + r"""
+try:
+    interlock_report(analysis)
+except IntentError as exc:
+    out["not_detected"] = str(exc)
+update_intent(analysis, "detect", diagrams={diagrams!r})
 proposals, lines = interlock_report(analysis)
 out["report"] = [[p["rule"], p["parts"], p.get("component"), p["decision"]] for p in proposals]
 out["plan_before"] = plan()
@@ -86,7 +92,8 @@ def decided(tmp_path_factory) -> dict:
                 "contacts": data["contacts"], "obstructions": data["obstructions"],
                 "analysis": data["geometry"]["analysis"]}
     script = tmp_path_factory.mktemp("decisions") / "decisions.py"
-    script.write_text(SCRIPT.format(repo=str(REPO), diagrams=json.loads(json.dumps(diagrams))))
+    script.write_text(SCRIPT.format(repo=str(REPO), name="captured", parts=diagrams["parts"],
+                                    diagrams=json.loads(json.dumps(diagrams))))
     return freecad_result(subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300))
 
 
@@ -104,7 +111,7 @@ def test_a_one_component_proposal_accepted_is_a_group_and_undone(decided):
     assert [(d["parts"], d["decision"]) for d in accepted["decisions"]] == [(["cover", "knob"], "accepted")]
     assert accepted["plan"] == ["planned", 1] and accepted["report"] == ["accepted"]
     assert accepted["again"] == [] and accepted["same"] is True  # an accepted one stays; the shapes untouched
-    assert decided["lines"] == ["accepted: " + decided["lines"][0].split("accepted: ")[1]]
+    assert decided["lines"] == ["interlock accepted: " + decided["lines"][0].split("accepted: ")[1]]
     undone = decided["undone"]
     assert undone == {"groups": {}, "parts": ["housing", "cover", "knob"], "decisions": [],
                       "plan": undone["plan"]} and undone["plan"][0] == "InterlockedPartsError"
