@@ -63,10 +63,15 @@ class AssemblyProgress:
     def _out(self, state: int) -> np.ndarray:
         return np.flatnonzero(self.plan.states.edge_source == state)
 
-    def _robot(self, operation: int | tuple[int, ...]) -> bool:
+    def _after(self, operation: int | tuple[int, ...]) -> set[int]:
+        """The states ``operation`` (a join's tuple: the one at each state) leads to from those held; empty
+        where it applies at none."""
         states = self.plan.states
-        reached = {int(states.edge_target[e]) for s in self.states for e in self._out(s)
-                   if np.isin(states.edge_operation[e], operation)}
+        return {int(states.edge_target[e]) for s in self.states for e in self._out(s)
+                if np.isin(states.edge_operation[e], operation)}
+
+    def _robot(self, operation: int | tuple[int, ...]) -> bool:
+        reached = self._after(operation)
         if reached:
             self.states = reached
             self.operations += 1
@@ -126,9 +131,7 @@ class AssemblyProgress:
         robot is doing, so the robot's own operation is not offered); where it applies nowhere yet, these
         states (it is tried again after the operator's step)."""
         plan, states = self.plan, self.plan.states
-        held = self.states
-        if robot is not None:
-            held = {int(states.edge_target[e]) for s in self.states for e in self._out(s)
-                    if np.isin(states.edge_operation[e], robot)} or held
+        held = self._after(robot) if robot is not None else set()
+        held = held or self.states  # no robot operation, or one that applies nowhere yet
         seen = {int(plan.operation_observation[states.edge_operation[e]]) for s in held for e in self._out(s)}
         return sorted(str(plan.observations[z]) for z in seen if z != self.blank)
