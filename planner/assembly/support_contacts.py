@@ -84,6 +84,11 @@ class SupportContact:
     def text(self) -> str:
         return f"{self.part} rests in {self.host} (inside its box, walled in along {self.walled} of the 6 axis directions)"
 
+    @property
+    def record(self) -> dict:
+        """What ``geometry.analysis`` records of it: ``{"parts": [part, host], "text"}``."""
+        return {"parts": [self.part, self.host], "text": self.text}
+
 
 def support_contacts(product: Product, meshes=None) -> tuple[Product, tuple[SupportContact, ...]]:
     """``product`` with the support contacts of the rule (module docstring) added, and those contacts; the
@@ -111,7 +116,7 @@ def support_contacts(product: Product, meshes=None) -> tuple[Product, tuple[Supp
     if _floating_parts(current) != ():
         return product, ()  # more contacts only add subassemblies: no fewer would free it
     analysis = {**current.geometry.get("analysis", {}),
-                "support_contacts": [{"parts": [c.part, c.host], "text": c.text} for c in added]}
+                "support_contacts": [c.record for c in added]}
     return replace(current, geometry={**current.geometry, "analysis": analysis}), tuple(added)
 
 
@@ -149,7 +154,7 @@ def record_support_proposals(product: Product, meshes=None) -> Product:
     if not added:
         return product
     analysis = {**product.geometry.get("analysis", {}), SUPPORT_PROPOSALS_KEY: [
-        {"rule": "support", "parts": [c.part, c.host], "text": c.text} for c in added]}
+        {"rule": "support", **c.record} for c in added]}
     return replace(product, geometry={**product.geometry, "analysis": analysis})
 
 
