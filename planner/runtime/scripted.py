@@ -65,10 +65,11 @@ class ScriptedOperator:
         """The operator whose intention is ``intention`` of the decision model ``model``."""
         return cls(model.plan, model.sequence_operations(intention), acts)
 
-    def _edge(self, operations) -> int | None:
-        """The state edge out of the true state whose operation is one of ``operations``, or None."""
+    def _edge(self, operations, state: int | None = None) -> int | None:
+        """The state edge out of ``state`` (default: the true state) whose operation is one of ``operations``, or
+        None."""
         states = self.plan.states
-        out = np.flatnonzero(states.edge_source == self.state)
+        out = np.flatnonzero(states.edge_source == (self.state if state is None else state))
         hit = out[np.isin(states.edge_operation[out], operations)]
         return int(hit[0]) if hit.size else None
 
@@ -124,14 +125,13 @@ class ScriptedOperator:
 
         if self._projector is None:
             self._projector = Projector(self.plan.states)
-        path, state, states = [], self.state, self.plan.states
+        path, state = [], self.state
         for operation in self.remaining:
-            out = np.flatnonzero(states.edge_source == state)
-            hit = out[states.edge_operation[out] == operation]
-            if not hit.size:
+            edge = self._edge(operation, state)
+            if edge is None:
                 return None
-            path.append(int(hit[0]))
-            state = int(states.edge_target[hit[0]])
+            path.append(edge)
+            state = int(self.plan.states.edge_target[edge])
         return project_path(self._projector, path, 0, robot_edge)
 
 
