@@ -13,7 +13,11 @@ cd "$(dirname "$0")/.."
 if [ ! -x .venv/bin/python ]; then
     python3 -m venv .venv
 fi
-.venv/bin/python -m pip install --quiet --disable-pip-version-check -e '.[test]'
+# --no-cache-dir: the wheels are not kept a second time in ~/.cache/pip (a CI disk can be nearly full).
+.venv/bin/python -m pip install --quiet --disable-pip-version-check --no-cache-dir -e '.[test]'
+
+# apt keeps no copy of the packages it downloads here (APT::Keep-Downloaded-Packages=false: several hundred MB
+# on a disk that may have little to spare); packages already in its cache are left alone.
 
 # Debian's FreeCAD runs the system Python 3: it needs these modules too (also where FreeCAD is installed already).
 freecad_ready() {
@@ -36,7 +40,7 @@ if [ "$want_freecad" = 1 ] && ! freecad_ready; then
     if can_apt; then
         echo "setup: installing FreeCAD and its Python packages from Debian (about a minute)" >&2
         "${as_root[@]}" apt-get update -qq
-        DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends \
+        DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends -o APT::Keep-Downloaded-Packages=false \
             freecad-python3 freecad xvfb xauth python3-numpy python3-networkx python3-lxml python3-scipy \
             python3-matplotlib python3-jsonschema python3-threadpoolctl >/dev/null
     else
@@ -54,7 +58,7 @@ if [ "$want_ros" = 1 ]; then
         if can_apt; then
             echo "setup: installing ROS 1 from Debian (rosmaster, rospy, actionlib, genpy)" >&2
             "${as_root[@]}" apt-get update -qq
-            DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends \
+            DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends -o APT::Keep-Downloaded-Packages=false \
                 ros-core python3-rospy python3-actionlib python3-actionlib-msgs python3-sensor-msgs python3-genpy \
                 python3-genmsg ros-std-msgs ros-actionlib-msgs >/dev/null
         else

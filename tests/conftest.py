@@ -9,6 +9,7 @@ import subprocess
 from pathlib import Path
 
 import background
+import disk
 import pytest
 
 REPO = Path(__file__).resolve().parent.parent
@@ -80,6 +81,9 @@ def pen():
     return resolve_product("pen")
 
 
+_DISK: disk.Watch | None = None  # the disk's free space while the session runs, from the collection's end
+
+
 def _jobs(item: pytest.Item) -> tuple:
     module = getattr(item, "module", None)
     return tuple(getattr(module, "BACKGROUND", ()))
@@ -99,6 +103,12 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     APLAN_REQUIRE_FREECAD=1 or APLAN_REQUIRE_ROS=1, as before)."""
     if session.config.option.collectonly:
         return
+    global _DISK
+    # the whole suite (its background jobs, or hundreds of tests) needs disk.NEEDED_MB; a few tests, little
+    short = disk.shortage(disk.NEEDED_MB if len(session.items) > 200 or any(map(_jobs, session.items)) else 50)
+    if short:
+        pytest.exit(short, returncode=1)
+    _DISK = disk.Watch()
     there = {"freecad": bool(shutil.which("freecadcmd") or shutil.which("FreeCADCmd")),
              "ros": bool(shutil.which("rosmaster"))}
     background.start(job for item in session.items for job in _jobs(item) if there.get(job.lane, True))
@@ -107,7 +117,9 @@ def pytest_collection_finish(session: pytest.Session) -> None:
 def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Config) -> None:
     """The background jobs' wall and CPU seconds, the slowest first, each lane's sums, and how long the tests
     waited for the jobs (where a FreeCAD-bound suite spends its time; on a loaded machine the CPU seconds are
-    the figure to trust)."""
+    the figure to trust); and the least free space the disk had."""
+    if _DISK is not None:
+        terminalreporter.write_line(_DISK.summary())
     if not background.SECONDS:
         return
     terminalreporter.section("background jobs (wall seconds, CPU seconds)")
