@@ -12,8 +12,8 @@ import shutil
 import tempfile
 import threading
 
-# A whole run of the suite in /work/main took about 350 MB of the disk at once (df sampled every 5 s beside a fresh
-# clone's CI run, 2026-12-02; 200 MB of it in /tmp); some margin above that, for products and logs that grow.
+# A fresh clone's whole CI run took about 350 MB of the disk at once while pytest ran (df sampled every 5 s beside
+# it, 2026-12-02; 200 MB of it in /tmp); some margin above that, for products and logs that grow.
 NEEDED_MB = 500
 SAMPLE_SECONDS = 2.0
 
