@@ -16,9 +16,6 @@ fi
 # --no-cache-dir: the wheels are not kept a second time in ~/.cache/pip (a CI disk can be nearly full).
 .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-cache-dir -e '.[test]'
 
-# apt keeps no copy of the packages it downloads here (APT::Keep-Downloaded-Packages=false: several hundred MB
-# on a disk that may have little to spare); packages already in its cache are left alone.
-
 # Debian's FreeCAD runs the system Python 3: it needs these modules too (also where FreeCAD is installed already).
 freecad_ready() {
     command -v freecadcmd >/dev/null 2>&1 && command -v xvfb-run >/dev/null 2>&1 &&
@@ -34,15 +31,20 @@ for option in "$@"; do
     esac
 done
 if [ "$(id -u)" = 0 ]; then as_root=(); elif sudo -n true 2>/dev/null; then as_root=(sudo -n); else as_root=(); fi
+# apt keeps no copy of the packages it downloads here (APT::Keep-Downloaded-Packages=false: several hundred MB
+# on a disk that may have little to spare); packages already in its cache are left alone.
+apt_install() {
+    DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends \
+        -o APT::Keep-Downloaded-Packages=false "$@" >/dev/null
+}
 can_apt() { command -v apt-get >/dev/null 2>&1 && { [ "$(id -u)" = 0 ] || [ ${#as_root[@]} -gt 0 ]; }; }
 
 if [ "$want_freecad" = 1 ] && ! freecad_ready; then
     if can_apt; then
         echo "setup: installing FreeCAD and its Python packages from Debian (about a minute)" >&2
         "${as_root[@]}" apt-get update -qq
-        DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends -o APT::Keep-Downloaded-Packages=false \
-            freecad-python3 freecad xvfb xauth python3-numpy python3-networkx python3-lxml python3-scipy \
-            python3-matplotlib python3-jsonschema python3-threadpoolctl >/dev/null
+        apt_install freecad-python3 freecad xvfb xauth python3-numpy python3-networkx python3-lxml python3-scipy \
+            python3-matplotlib python3-jsonschema python3-threadpoolctl
     else
         echo "setup: FreeCAD (or a Python package it needs) is missing and apt-get cannot be used here: FreeCAD tests will be skipped" >&2
     fi
@@ -58,9 +60,8 @@ if [ "$want_ros" = 1 ]; then
         if can_apt; then
             echo "setup: installing ROS 1 from Debian (rosmaster, rospy, actionlib, genpy)" >&2
             "${as_root[@]}" apt-get update -qq
-            DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends -o APT::Keep-Downloaded-Packages=false \
-                ros-core python3-rospy python3-actionlib python3-actionlib-msgs python3-sensor-msgs python3-genpy \
-                python3-genmsg ros-std-msgs ros-actionlib-msgs >/dev/null
+            apt_install ros-core python3-rospy python3-actionlib python3-actionlib-msgs python3-sensor-msgs \
+                python3-genpy python3-genmsg ros-std-msgs ros-actionlib-msgs
         else
             echo "setup: ROS 1 is missing and apt-get cannot be used here: ROS tests will be skipped" >&2
         fi

@@ -105,10 +105,11 @@ def pytest_collection_finish(session: pytest.Session) -> None:
         return
     global _DISK
     # the whole suite (its background jobs, or hundreds of tests) needs disk.NEEDED_MB; a few tests, little
-    short = disk.shortage(disk.NEEDED_MB if len(session.items) > 200 or any(map(_jobs, session.items)) else 50)
+    needed = disk.NEEDED_MB if len(session.items) > 200 or any(map(_jobs, session.items)) else 50
+    short = disk.shortage(needed)
     if short:
         pytest.exit(short, returncode=1)
-    _DISK = disk.Watch()
+    _DISK = disk.Watch(needed)
     there = {"freecad": bool(shutil.which("freecadcmd") or shutil.which("FreeCADCmd")),
              "ros": bool(shutil.which("rosmaster"))}
     background.start(job for item in session.items for job in _jobs(item) if there.get(job.lane, True))
