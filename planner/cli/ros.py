@@ -224,8 +224,8 @@ def add_commands(commands) -> None:
                     "'markers', publishes the belief on 'belief', and logs every event as aplan session does. "
                     "ROS remappings (name:=value) and private parameters (~product, ~planner, ~log, ...) apply.")
     _add_model_options(ros, defaults=False)
-    ros.add_argument("--log", metavar="FILE", help="the JSON-lines log (default: session-DATE-TIME.jsonl; never "
-                                                   "overwritten)")
+    ros.add_argument("--log", metavar="FILE", help="the JSON-lines log (default: session-DATE-TIME-PID.jsonl, PID "
+                                                   "the process id; never overwritten)")
     ros.add_argument("--robot-own-tools", action="store_true",
                      help="the robot has tools of its own (default: it takes its tool from the tray too)")
     ros.add_argument("--max-steps", type=number(1, STEP_LIMIT, integer=True), default=None, metavar="N",

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import sys
 import time
 from pathlib import Path
@@ -120,7 +121,7 @@ def _session(args: argparse.Namespace) -> int:
     levels = levels_from(args)
     if args.habits_out and len(levels) > 1:
         raise PlannerError("--habits-out: habits are of one workstation's plan; give --level ID")
-    log_path = args.log or f"session-{time.strftime('%Y%m%d-%H%M%S')}.jsonl"
+    log_path = args.log or _default_log_name()
     paths = [log_path if len(levels) == 1 else str(Path(log_path).with_suffix("")) + f"-{level}.jsonl"
              for level, _ in levels]
     for path in paths:  # every level's log before the first level starts: a refusal has done nothing
@@ -134,6 +135,18 @@ def _session(args: argparse.Namespace) -> int:
         if status:
             return status
     return status
+
+
+def _default_log_name() -> str:
+    """``session-DATE-TIME-PID.jsonl`` in the working folder, or ``...-PID-2.jsonl``, ``-3``, ... when that name or
+    a level's log of it (``NAME-LEVEL.jsonl``) is there. The process id keeps apart two sessions started in one
+    folder within the same second; the number, two sessions of one process (the Python API) in that second."""
+    stem = f"session-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"
+    k = 1
+    while any(Path.cwd().glob(f"{stem}{f'-{k}' if k > 1 else ''}.jsonl")) or (
+            any(Path.cwd().glob(f"{stem}{f'-{k}' if k > 1 else ''}-*.jsonl"))):
+        k += 1
+    return f"{stem}{f'-{k}' if k > 1 else ''}.jsonl"
 
 
 def _session_level(args: argparse.Namespace, product, log_path: str, level: str | None, spec: api.ModelSpec,
@@ -351,8 +364,8 @@ def _add_session(commands) -> None:
     session.add_argument("--robot", choices=("console", "auto"),
                          help="console (default): print each instruction for the person standing in for the "
                               "robot and wait for Enter; auto: confirm every instruction at once (dry runs)")
-    session.add_argument("--log", metavar="FILE", help="the JSON-lines log (default: session-DATE-TIME.jsonl; "
-                                                       "never overwritten)")
+    session.add_argument("--log", metavar="FILE", help="the JSON-lines log (default: session-DATE-TIME-PID.jsonl, "
+                                                       "PID the process id; never overwritten)")
     session.add_argument("--debounce", type=number(1, FRAME_LIMIT, integer=True), default=3, metavar="F",
                          help=f"frames a marker must stay seen or unseen before it counts, 1 to {FRAME_LIMIT:,} "
                               "(default 3)")

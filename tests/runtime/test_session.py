@@ -3,6 +3,7 @@ log and its replay."""
 from __future__ import annotations
 
 import json
+import os
 import logging
 
 import numpy as np
@@ -461,3 +462,18 @@ def test_cli_demo_with_the_online_planner(tmp_path):
     start = json.loads((tmp_path / "d.jsonl").read_text().splitlines()[0])
     assert start["settings"]["planner"] == "online" and start["settings"]["expansions"] == 5
     assert replay(tmp_path / "d.jsonl").mismatches == []
+
+
+def test_default_logs_of_two_sessions_in_one_second_differ(policy_file, tmp_path, monkeypatch):
+    """Without --log, two sessions started in one folder within the same second (here: one clock reading) keep
+    two logs, each replayable; before, the second refused the first's ``session-DATE-TIME.jsonl``."""
+    import time
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(time, "strftime", lambda fmt, *rest: "20261203-101500")
+    for _ in range(2):
+        done = _aplan("session", "pen", "--policy", policy_file, "--demo", 57)
+        assert done.returncode == 0, done.stderr
+    logs = sorted(p.name for p in tmp_path.glob("session-*.jsonl"))
+    pid = os.getpid()
+    assert logs == [f"session-20261203-101500-{pid}-2.jsonl", f"session-20261203-101500-{pid}.jsonl"], logs
+    assert all(replay(tmp_path / name).observations for name in logs)
