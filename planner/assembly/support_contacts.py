@@ -31,13 +31,19 @@ supporting the first alone would let the plan take its shaft out first and forbi
 only add connected part sets, hence subassemblies, so no subset of them frees a product they do not free: they
 are kept when the product then has an AND/OR graph; else the product is left as it is and the planner's error
 stands. Every level of a product planned as workstations sees them (members touch when parts of theirs do).
-They are recorded in ``geometry.analysis.support_contacts``. A product too large to plan flat (past
-:data:`CHECK_LIMIT`) is not judged, even when a part floats inside one of its workstations: that level's error
-names the parts and what helps.
+They are recorded in ``geometry.analysis.support_contacts``.
+
+A product too large to judge flat (its AND/OR graph past :data:`CHECK_LIMIT`: a machine with a closed gearbox
+as one of its workstations) is judged at its levels instead: every part some part encloses, with its host, is
+recorded as a *candidate* (``geometry.analysis.support_candidates``, with the mode), and once the product's
+subassemblies are chosen each level that fails only because members would float gets the candidates lying at it
+as contacts, kept when the level then plans; one line names the level (:mod:`planner.assembly.level_supports`).
 
 Cost: O(pairs of the axis diagrams); with no part walled in by one it does not touch (the usual
 product), nothing more. Else at most two flat AND/OR graphs within :data:`CHECK_LIMIT` connected part sets (the
-product as it is, and with the contacts), and one reading of the meshes.
+product as it is, and with the contacts), and one reading of the meshes; past the limit, one reading of the
+meshes here and at most two AND/OR graphs within the limit per level where a candidate lies (module
+:mod:`~planner.assembly.level_supports`).
 """
 from __future__ import annotations
 

@@ -13,7 +13,8 @@ import pytest
 import trimesh
 
 from aplan_runner import run_aplan
-from planner import NotDisassemblableError, Obstruction, Part, Product, and_or_graph, resolve_product
+from planner import NotDisassemblableError, Part, Product, and_or_graph, api, resolve_product
+from planner.product import Subassembly
 from planner.assembly.andor import connected_sets_bound, liaison_adjacency
 from planner.assembly.hierarchy import product_levels
 from planner.assembly.level_supports import CANDIDATES_KEY, with_level_supports
@@ -156,3 +157,18 @@ def test_a_candidates_record_read_with_the_product_takes_the_modes_of_the_comman
     with pytest.raises(PlannerError, match=r"machine.json: geometry.analysis.support_candidates: expected .*; delete "
                                            r"it \(the support-contact rule records it again from the meshes\)$"):
         resolve_product(path, subassemblies="auto")
+
+
+def test_a_product_with_its_own_subassemblies_is_judged_when_it_is_read(tmp_path, caplog):
+    # The gearbox as the designer's subassembly (a document's container): resolved without choosing a mode, its
+    # levels are known, so they are judged at once, in one line, and every later look at them is as planned
+    # (the top level, the plate and its 20 brackets with the gearbox, is past the limit itself: not planned here).
+    product = replace(bundle(tmp_path), subassemblies=(Subassembly("gearbox", GEARBOX, "Gearbox"),))
+    save_product(product, tmp_path / "product.json")
+    with caplog.at_level(logging.INFO, logger="planner"):
+        resolved = resolve_product(tmp_path)
+        for _ in range(2):  # the levels looked at again: nothing more to judge, nothing said
+            and_or_graph(next(lv for lv in api.levels_of(resolved) if lv.id == "gearbox").product)
+    lines = [r.getMessage() for r in caplog.records if r.getMessage().startswith("support contacts")]
+    assert len(lines) == 1 and lines[0].startswith("support contacts: level gearbox: gear_a rests in housing")
+    assert [r["level"] for r in resolved.geometry["analysis"]["support_contacts"]] == ["gearbox", "gearbox"]
