@@ -37,6 +37,7 @@ from .support_contacts import (CANDIDATES_KEY, SupportContact, _floating_parts, 
 
 __all__ = ["CANDIDATES_KEY", "freeing_contacts", "with_level_supports", "onto_level"]
 
+
 def freeing_contacts(level: Product, candidates: tuple[SupportContact, ...],
                      member_of: Mapping[str, str] | None = None) -> tuple[SupportContact, ...]:
     """The candidates lying at the level whose product is ``level`` when they free it (module docstring), else
