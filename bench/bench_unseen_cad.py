@@ -6,7 +6,8 @@ Run: ``nice -n 10 .venv/bin/python bench/bench_unseen_cad.py`` (about 5 minutes 
 
 The documents are tests/integration/unseen_documents.py's (a hinge of PartDesign Bodies, a coupling in
 App::Part containers with an App::Link array of bolts, a vise of Part primitives and booleans, an 82-part bolt
-circle of Draft polar arrays, a closed two-shaft gearbox whose gears float once their shafts are out), built by
+circle of Draft polar arrays, a closed two-shaft gearbox whose gears float once their shafts are out, the same
+gearbox on a machine's base plate with 20 brackets, planned as workstations), built by
 FreeCADCmd, and the coupling exported to STEP, as it is and as one body
 of ten solids. For each: ``aplan export-freecad DOC -o BUNDLE``, ``aplan stats DOC`` and ``aplan session DOC
 --demo 0``, each with the default flags and from the CAD file (stats and session export it again themselves),

@@ -9,6 +9,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Callable
 
+from ..assembly.level_supports import with_level_supports
 from ..assembly.subassembly_proposals import SUBASSEMBLY_MODES, with_subassemblies
 from ..defaults import MAX_COMPONENTS
 from ..errors import PlannerError, UnknownProductError
@@ -64,7 +65,10 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
     ``supports``: parts of a product drawn in CAD that would float inside the part whose cavity holds them once
     what holds them is out (a gear in a closed housing) get a support contact with it (``add``: one note),
     are refused (``error``) or left to the planner (``keep``), as
-    :func:`~planner.assembly.support_contacts.apply_support_mode`; after the interlocks.
+    :func:`~planner.assembly.support_contacts.apply_support_mode`; after the interlocks. A product too large to
+    judge flat is judged per level once its subassemblies are chosen
+    (:func:`~planner.assembly.level_supports.with_level_supports`: here when they are, else by the first
+    :func:`~planner.assembly.subassembly_proposals.with_subassemblies` that chooses them).
     """
     if fasteners not in FASTENER_MODES + (DEFAULT_MODE,):
         raise PlannerError(f"unknown fastener mode {fasteners!r}; use one of {', '.join(FASTENER_MODES)}")
@@ -99,6 +103,8 @@ def resolve_product(argument: str | os.PathLike | Product, tolerances=None, fast
     if subassemblies is not None:
         mode = ("designer" if own else "auto") if subassemblies == DEFAULT_MODE else subassemblies
         resolved = with_subassemblies(resolved, mode, max_components)
+    elif resolved.subassemblies:  # its levels known already: judged once here, not at every later look
+        resolved = with_level_supports(resolved)
     _note_proposals(product, resolved, fasteners == DEFAULT_MODE, subassemblies == DEFAULT_MODE)
     return resolved
 

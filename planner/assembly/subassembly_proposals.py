@@ -17,6 +17,7 @@ from ..product import Product, Subassembly, fold
 from .andor import and_or_graph
 from .feasibility import interlocked_pairs
 from .hierarchy import PROPOSED, SUBASSEMBLY_MODES, ConstraintViolationError, check_level_constraints, product_levels
+from .level_supports import candidates_of, freeing_contacts, onto_level, with_level_supports
 from .untangle import untangled
 
 __all__ = ["propose_subassemblies", "with_subassemblies", "SUBASSEMBLY_MODES"]
@@ -26,15 +27,17 @@ log = logging.getLogger(__name__)
 
 def with_subassemblies(product: Product, mode: str = "designer", max_components: int = MAX_COMPONENTS) -> Product:
     """``product`` with the subassemblies ``mode`` asks for: ``designer`` its own (none if absent), ``auto`` its
-    own or, when it has none, :func:`propose_subassemblies`, ``none`` none (planned flat)."""
+    own or, when it has none, :func:`propose_subassemblies`, ``none`` none (planned flat); then with the support
+    contacts its levels need, when the support-contact rule left them candidates (a product too large to judge
+    flat: :func:`~planner.assembly.level_supports.with_level_supports`)."""
     if mode not in SUBASSEMBLY_MODES:
         raise PlannerError(f"unknown subassembly mode {mode!r}; use one of {', '.join(SUBASSEMBLY_MODES)}")
     if mode == "none":
-        return replace(product, subassemblies=()) if product.subassemblies else product
-    if mode == "auto" and not product.subassemblies:
+        product = replace(product, subassemblies=()) if product.subassemblies else product
+    elif mode == "auto" and not product.subassemblies:
         proposed = propose_subassemblies(product, max_components)
-        return replace(product, subassemblies=proposed) if proposed else product
-    return product
+        product = replace(product, subassemblies=proposed) if proposed else product
+    return with_level_supports(product)
 
 
 def propose_subassemblies(product: Product, max_components: int = MAX_COMPONENTS) -> tuple[Subassembly, ...]:
@@ -45,7 +48,8 @@ def propose_subassemblies(product: Product, max_components: int = MAX_COMPONENTS
     most contacts per pair of members merge first, while their union fits); each group of two or more becomes
     a subassembly, one member of the next round; rounds repeat until at most ``max_components`` members are
     left, which form the top level. A group is kept only if it can be built on its own (its level has a
-    feasible AND/OR graph, :func:`~planner.assembly.and_or_graph`); a group that cannot is merged with the
+    feasible AND/OR graph, :func:`~planner.assembly.and_or_graph`, or the support contacts the product's
+    candidates would add there free it, :mod:`planner.assembly.level_supports`); a group that cannot is merged with the
     neighbouring group it shares most contacts with whose union can be built, allowing the union up to 1.5 x
     ``max_components`` members (the agglomeration already merged every pair that fits), else it is left as it
     is and a warning names its stuck parts (its level's plan will then fail with the same reason).
@@ -88,7 +92,8 @@ def propose_subassemblies(product: Product, max_components: int = MAX_COMPONENTS
             label = " + ".join(group[:3]) + (f" + {len(group) - 3} more" if len(group) > 3 else "")
             added.append(Subassembly(name, tuple(group), label, PROPOSED))
         found.extend(added)
-        current = product_levels(replace(product, subassemblies=tuple(found)))[-1].product
+        levels = product_levels(replace(product, subassemblies=tuple(found)))
+        current = onto_level(product, levels[-1], levels)  # the candidates named by its members
     return untangled(product, tuple(found))
 
 
@@ -222,8 +227,10 @@ def _stuck_parts(product: Product, members: list[str]) -> PlannerError | None:
     try:
         check_level_constraints(product, level)
         and_or_graph(level.product, limit=SUBASSEMBLY_LIMIT)
-    except (NotDisassemblableError, ConstraintViolationError) as error:
+    except ConstraintViolationError as error:
         return error
+    except NotDisassemblableError as error:  # buildable all the same when support contacts free it
+        return None if error.floating_parts and freeing_contacts(level.product, candidates_of(product)[1]) else error
     except LimitExceededError:
         return None  # not decided cheaply: the level's own plan will say
     return None

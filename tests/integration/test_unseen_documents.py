@@ -12,10 +12,13 @@ from the file with the default flags (issue 26, "Must show": assemblies never se
 - a container of parts that do not touch each other (``Bolts``, ``Nuts``) is no subassembly: the coupling's
   session runs from its ``.FCStd`` to the assembled product, and says so in one line per container;
 - a closed gearbox whose gears float once their shafts are out: its session runs from its ``.FCStd`` to the
-  assembled product with a support contact per gear, said in one line.
+  assembled product with a support contact per gear, said in one line;
+- the same gearbox on a machine's base plate with 20 brackets (35 parts, too large for the support-contact rule
+  to judge flat): planned as workstations with the default flags, the gearbox's workstation gets the support
+  contacts (one line naming it) and every workstation's session runs to its assembled product.
 
 One FreeCADCmd process builds the documents, ``aplan export-freecad`` exports each (about 3 s each); the
-coupling's and the gearbox's sessions run from their ``.FCStd`` (exporting it themselves), each in a process and
+coupling's, the gearbox's and the machine's sessions run from their ``.FCStd`` (exporting it themselves), each in a process and
 a folder of its own; all in the background.
 """
 from __future__ import annotations
@@ -33,7 +36,7 @@ from background import ENVIRONMENT, Job, folder, run
 from conftest import REPO, require_freecadcmd
 
 from integration.freecad_tools import freecad_result
-from integration.unseen_documents import DOCUMENTS, GEARBOX, GROUND_TRUTH, ONE_BODY, STEP_NAMES
+from integration.unseen_documents import DOCUMENTS, GEARBOX, GROUND_TRUTH, MACHINE, ONE_BODY, STEP_NAMES
 
 def _build() -> tuple[Path, subprocess.CompletedProcess]:
     """FreeCAD builds the documents; then ``aplan export-freecad`` with the default flags exports each (and the
@@ -69,7 +72,8 @@ def _session(name: str) -> tuple[Path, subprocess.CompletedProcess]:
 
 BACKGROUND = (Job("unseen documents in FreeCAD", _build),
               Job("aplan session coupling.FCStd", lambda: _session("coupling")),
-              Job("aplan session gearbox.FCStd", lambda: _session(GEARBOX)))
+              Job("aplan session gearbox.FCStd", lambda: _session(GEARBOX)),
+              Job("aplan session machine.FCStd", lambda: _session(MACHINE)))
 
 
 @pytest.fixture(scope="module")
@@ -162,3 +166,22 @@ def test_the_closed_gearbox_session_adds_a_support_contact_per_gear(built):
     assert lines[0].startswith("aplan: support contacts: GearA rests in Housing (inside its box, walled in along 5 "
                                "of the 6 axis directions); GearB rests in Housing (")
     assert "cannot be disassembled" not in done.stderr
+
+
+@pytest.mark.freecad
+def test_the_machine_plans_the_gearbox_workstation_with_its_support_contacts(built):
+    here, done = BACKGROUND[3].result()
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    levels = re.findall(r"^level (\S+) \(\d+ of (\d+)\): (.*)$", done.stdout, re.M)
+    assert len(levels) == int(levels[0][1]) > 1, done.stdout[-2000:]  # planned as workstations
+    assert len(re.findall(r"^assembled: the product is assembled", done.stdout, re.M)) == len(levels)
+    # The gearbox is one workstation: its 14 parts (the screws installed there), nothing of the plate's.
+    gearbox = [(level, members.split(", ")) for level, _, members in levels if "Housing" in members.split(", ")]
+    assert len(gearbox) == 1 and sorted(gearbox[0][1]) == sorted(
+        {p for pairs in GROUND_TRUTH[GEARBOX].values() for pair in pairs for p in pair})
+    lines = [line for line in done.stderr.splitlines() if line.startswith("aplan: support contacts: ")]
+    assert len(lines) == 1, done.stderr[-3000:]
+    assert lines[0].startswith(f"aplan: support contacts: level {gearbox[0][0]}: GearA rests in Housing (inside its "
+                               "box, walled in along 5 of the 6 axis directions); GearB rests in Housing (")
+    assert "cannot be disassembled" not in done.stderr and "cannot be built on its own" not in done.stderr
+    assert len([p for p in here.iterdir() if p.suffix == ".jsonl"]) == len(levels)  # a log per workstation

@@ -17,14 +17,17 @@ grouped, one nut excluded). ``REPO`` (the repository) is prepended too.
 - ``bolt_circle``: the coupling's flanges at radius 160 with a circle of 40 bolts and 40 nuts, each a Draft
   polar array of one plain feature (82 parts: one per array element);
 - ``gearbox``: Part booleans, a closed two-shaft gearbox of 14 parts (:data:`GEARBOX`) whose gears float
-  once their shafts are out (a support contact each, :mod:`planner.assembly.support_contacts`).
+  once their shafts are out (a support contact each, :mod:`planner.assembly.support_contacts`);
+- ``machine``: the gearbox on a base plate with a row of 20 brackets (:data:`MACHINE`, 35 parts): too large
+  for the support-contact rule to judge flat, so its gearbox's workstation judges it
+  (:mod:`planner.assembly.level_supports`).
 
 The obstruction ground truth of each follows from the construction: :data:`GROUND_TRUTH` (by label).
 """
 
 import math
 
-DOCUMENTS = ("hinge", "coupling", "vise", "bolt_circle", "gearbox")
+DOCUMENTS = ("hinge", "coupling", "vise", "bolt_circle", "gearbox", "machine")
 
 #: The gearbox (mm): a housing x 0..100, y 0..60, z 0..60 with a cavity x 10..90, y 10..50 open at the top (z from
 #: 10), bores of radius 5 along Y at (x, z) = (32, 30) and (68, 30) through its walls, four blind holes of radius 2
@@ -33,6 +36,25 @@ DOCUMENTS = ("hinge", "coupling", "vise", "bolt_circle", "gearbox")
 #: x = 50) and a bearing on each side outside (a ring of radii 5 and 10, y -10..0 and 60..70). The parts come
 #: apart one by one, but a gear whose shaft is out touches only the other gear: it rests in the housing.
 GEARBOX = "gearbox"
+#: The machine: the gearbox standing on a base plate x -300..400, y -50..110, z -10..0, with a row of 20 brackets
+#: (10 x 10 x 20 mm at y -40..-30, 18 mm apart, ten on each side of the gearbox) standing on it. The plate and any
+#: set of the 20 brackets are connected: at least 2^20 connected part sets, past the support-contact rule's
+#: CHECK_LIMIT, so the rule judges the gearbox's workstation, not the flat product (planner.assembly.level_supports).
+MACHINE = "machine"
+_PLATE = ((-300, -50, -10), (400, 110, 0))
+_BRACKETS = [-290 + 28 * k for k in range(10)] + [110 + 28 * k for k in range(10)]
+
+
+def _machine_truth() -> dict[str, set[tuple[str, str]]]:
+    """The machine's diagrams (:data:`MACHINE`): the gearbox's, the plate under everything (moving +Z it hits
+    every part), and along X each bracket hits those ahead of it in the row (their shadows across X are the
+    same); the brackets' shadows meet no part of the gearbox's, nor the plate's in an area."""
+    truth = {axis: set(pairs) for axis, pairs in _gearbox_truth().items()}
+    names = [f"Bracket{k + 1}" for k in range(len(_BRACKETS))]
+    others = sorted({p for pairs in truth.values() for pair in pairs for p in pair}) + names
+    truth["+Z"] |= {("Plate", p) for p in others}
+    truth["+X"] |= {(a, b) for i, a in enumerate(names) for b in names[i + 1:]}
+    return truth
 
 
 def _gearbox_truth() -> dict[str, set[tuple[str, str]]]:
@@ -140,7 +162,7 @@ def _vise_truth() -> dict[str, set[tuple[str, str]]]:
     return {"+X": x, "+Y": y, "+Z": z}
 
 
-GROUND_TRUTH = {"hinge": _HINGE, "vise": _vise_truth(), "gearbox": _gearbox_truth(),
+GROUND_TRUTH = {"hinge": _HINGE, "vise": _vise_truth(), "gearbox": _gearbox_truth(), "machine": _machine_truth(),
                 "coupling": _coupling_truth(_BOLTS, [f"Bolt_i{k}" for k in range(4)],
                                             [f"Nut{k + 1}" for k in range(4)]),
                 "bolt_circle": _coupling_truth(_CIRCLE, [f"Bolts_{k + 1:03d}" for k in range(_CIRCLE_N)],
@@ -285,30 +307,41 @@ labelled(cylinder("Bar", 2, 40, (-25, 0, 25), (0, 1, 0)), "Bar")
 saved(doc, "vise")
 
 # Gearbox: a closed housing of Part booleans, its cover screwed on (see GEARBOX).
-doc = FreeCAD.newDocument("gearbox")
 SHAFTS = ((32, "A"), (68, "B"))
 CORNERS = ((5, 5), (95, 5), (5, 55), (95, 55))
 def along_y(radius, y0, length, x, z=30):
     return Part.makeCylinder(radius, length, V(x, y0, z), V(0, 1, 0))
-housing = Part.makeBox(100, 60, 60).cut(Part.makeBox(80, 40, 50, V(10, 10, 10)))
-for x, _ in SHAFTS:
-    housing = housing.cut(along_y(5, 0, 60, x))
-for x, y in CORNERS:
-    housing = housing.cut(Part.makeCylinder(2, 15, V(x, y, 45)))
-feature(doc, "Housing", housing)
-cover = Part.makeBox(100, 60, 5, V(0, 0, 60))
-for x, y in CORNERS:
-    cover = cover.cut(Part.makeCylinder(2, 5, V(x, y, 60)))
-feature(doc, "Cover", cover)
-for k, (x, y) in enumerate(CORNERS):
-    feature(doc, f"Screw{k + 1}", Part.makeCylinder(2, 20, V(x, y, 45)).fuse(
-        Part.makeCylinder(4, 3, V(x, y, 65))).removeSplitter())
-for x, name in SHAFTS:
-    feature(doc, "Shaft" + name, along_y(5, -15, 90, x))
-    feature(doc, "Gear" + name, along_y(18, 25, 10, x).cut(along_y(5, 25, 10, x)))
-    for k, y0 in ((1, -10), (2, 60)):
-        feature(doc, f"Bearing{name}{k}", along_y(10, y0, 10, x).cut(along_y(5, y0, 10, x)))
+def gearbox(doc):
+    housing = Part.makeBox(100, 60, 60).cut(Part.makeBox(80, 40, 50, V(10, 10, 10)))
+    for x, _ in SHAFTS:
+        housing = housing.cut(along_y(5, 0, 60, x))
+    for x, y in CORNERS:
+        housing = housing.cut(Part.makeCylinder(2, 15, V(x, y, 45)))
+    feature(doc, "Housing", housing)
+    cover = Part.makeBox(100, 60, 5, V(0, 0, 60))
+    for x, y in CORNERS:
+        cover = cover.cut(Part.makeCylinder(2, 5, V(x, y, 60)))
+    feature(doc, "Cover", cover)
+    for k, (x, y) in enumerate(CORNERS):
+        feature(doc, f"Screw{k + 1}", Part.makeCylinder(2, 20, V(x, y, 45)).fuse(
+            Part.makeCylinder(4, 3, V(x, y, 65))).removeSplitter())
+    for x, name in SHAFTS:
+        feature(doc, "Shaft" + name, along_y(5, -15, 90, x))
+        feature(doc, "Gear" + name, along_y(18, 25, 10, x).cut(along_y(5, 25, 10, x)))
+        for k, y0 in ((1, -10), (2, 60)):
+            feature(doc, f"Bearing{name}{k}", along_y(10, y0, 10, x).cut(along_y(5, y0, 10, x)))
+doc = FreeCAD.newDocument("gearbox")
+gearbox(doc)
 saved(doc, "gearbox")
+
+# Machine: the gearbox standing on a base plate with a row of brackets (see MACHINE).
+doc = FreeCAD.newDocument("machine")
+gearbox(doc)
+feature(doc, "Plate", Part.makeBox(PLATE[1][0] - PLATE[0][0], PLATE[1][1] - PLATE[0][1], PLATE[1][2] - PLATE[0][2],
+                                   V(*PLATE[0])))
+for k, x in enumerate(BRACKETS):
+    feature(doc, f"Bracket{k + 1}", Part.makeBox(10, 10, 20, V(x, -40, 0)))
+saved(doc, "machine")
 
 # Bolt circle: Draft polar arrays of a bolt and a nut.
 import Draft
@@ -324,4 +357,5 @@ for label, shape in (("Bolt", bolt), ("Nut", nut)):
     array.Label = label + "s"
 saved(doc, "bolt_circle")
 print("APLAN-RESULT " + json.dumps(out), flush=True)
-""".replace("BOLTS", repr(_BOLTS)).replace("CIRCLE", repr(_CIRCLE))
+""".replace("BOLTS", repr(_BOLTS)).replace("CIRCLE", repr(_CIRCLE)).replace("PLATE", repr(_PLATE)).replace(
+    "BRACKETS", repr(_BRACKETS))
