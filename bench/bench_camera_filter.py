@@ -136,6 +136,12 @@ def main() -> None:
     choice = api.EpisodeChoice(random=args.episodes, seed=args.seed,
                                operator_model=parse_operator("uniform,changing:0.3"), world="camera")
     played = api.simulate(model, _Observer(model.wait), choice)
+    ops = [o for e in played for o in model.sequence_operations(e.path)]
+    seen = model.plan.operation_observation[np.asarray(ops, dtype=np.int64)]
+    tool_only = sum(not model.plan.observations[z].parts for z in seen if z != 0)
+    print(f"(the operations of the sequences done: {len(ops)}; seen as blank whatever the camera, no loose part and "
+          f"no tool: {int(np.sum(seen == 0))}; the tool alone: {tool_only}; {len(set(seen.tolist()))} distinct "
+          f"observations among them)")
     for label, episodes in (("paper", played), ("camera", [camera_filtered(model, e) for e in played])):
         totals = switch_totals(model, episodes)
         n = totals["switched"]
