@@ -20,8 +20,9 @@ share of the operations, its wrong actions (and their share of its actions) and 
 
 Run: ``.venv/bin/python bench/bench_change_of_mind.py [--product pen|chain:N|complete:N|FILE|BUNDLE] [--level ID]
 [--episodes 200] [--expansions 200] [--switch 0.05] [--mistakes 0.02] [--operator uniform,changing:0.3 |
---crossing 0.3 [--logs 20] [--prior-per edge|state]] [--robots online,observer]`` (a bundle is planned with
-``--fasteners auto --subassemblies auto``).
+--crossing 0.3 [--logs 20] [--prior-per edge|state]] [--robots online,observer] [--world model|camera]`` (a
+bundle is planned with ``--fasteners auto --subassemblies auto``). ``--world camera``: the simulated camera reports
+the operation the operator did (planner/decision/camera_world.py), not a draw from the paper's observation model.
 """
 from __future__ import annotations
 
@@ -38,6 +39,7 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from planner import api, chain_product, complete_product  # noqa: E402
+from planner.decision.camera_world import WORLDS  # noqa: E402
 from planner.decision.deviations import Deviations  # noqa: E402
 from planner.decision.episode_measures import episode_measures, run_totals  # noqa: E402
 from planner.decision.mind_measures import READINGS, switch_totals  # noqa: E402
@@ -62,7 +64,7 @@ def _run(model, robot, operator, args) -> dict:
     planner = api.online_planner(model, None, args.expansions) if robot == "online" else _Observer(model.wait)
     began = time.process_time()
     choice = api.EpisodeChoice(random=args.episodes, seed=args.seed, max_steps=args.max_steps,
-                               operator_model=operator)
+                               operator_model=operator, world=args.world)
     mean, half, played = api.evaluate_operator(model, planner, choice)
     totals = run_totals([episode_measures(e) for e in played])
     return {"mean": mean, "half": half, "cpu": time.process_time() - began, **totals,
@@ -135,6 +137,9 @@ def main() -> None:
     parser.add_argument("--prior-per", choices=("edge", "state"), default="edge",
                         help="--crossing: the habits' prior spread (aplan habits --prior-per)")
     parser.add_argument("--robots", default="online,observer", help="online, observer or both (comma-separated)")
+    parser.add_argument("--world", choices=WORLDS, default="model",
+                        help="what the simulated camera reports: model (the paper's O(z | i), default) or camera (the "
+                             "operation the operator did)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--max-steps", type=int, default=100)
     args = parser.parse_args()
@@ -144,7 +149,8 @@ def main() -> None:
     plan = api.plan_of(_product(args.product, args.level))
     operator, models = _models(plan, args)
     print(f"{args.product}{' ' + args.level if args.level else ''}: operator {operator!r}, {args.episodes} "
-          f"episodes, online planner {args.expansions} expansions per decision")
+          f"episodes, online planner {args.expansions} expansions per decision"
+          + (f", world {args.world}" if args.world != "model" else ""))
     print("| model | robot | switched | episodes with a reset (resets) | "
           + " | ".join(f"{name.replace('_', ' ')} > 0.9" for name in READINGS)
           + " | robot share | wrong robot actions | mean return | CPU s |")

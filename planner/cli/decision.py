@@ -234,7 +234,7 @@ def _simulate_level(args: argparse.Namespace, product, spec: api.ModelSpec, choi
               f"{episode.discounted_return:.3f}" + (f"; {_times_text(times)}" if episode.steps else ""))
     _print_totals(args, episodes)
     if not args.json:
-        _say_sampled(model, episodes)
+        _say_sampled(model, episodes, args.world)
     if args.plot:
         traces = [episode_trace(model, e, f"sequence {e.start}: " + " ; ".join(model.describe_operations(e.start)))
                   for e in episodes]
@@ -264,10 +264,10 @@ def _totals_line(operator, totals: dict) -> str:
             f"{totals['never_helped']}, never confident in {totals['never_confident']}")
 
 
-def _say_sampled(model, episodes) -> None:
+def _say_sampled(model, episodes, world: str = "model") -> None:
     """Say where the printed observations come from, when they are not just the sequence's operations."""
     names = {model.observations[s.observation] for e in episodes for s in e.steps}
-    if names - {"blank"}:
+    if names - {"blank"} and world == "model":
         print("  (observations are sampled from the model: the operator's picks of the parts and tools of its "
               "next operation, with the model's missed detections (blank) and observation noise, so some "
               "differ from the sequence's operations)")
@@ -308,7 +308,7 @@ def _print_factored(model, episodes, args: argparse.Namespace) -> list:
               f"{episode.discounted_return:.3f}; {_times_text(times)}" if episode.steps else "  no step")
     _print_totals(args, episodes)
     if not args.json:
-        _say_sampled(model, episodes)
+        _say_sampled(model, episodes, args.world)
     if args.plot:
         traces = [path_trace(model, e, "sequence: " + " ; ".join(model.describe_operations(e.path)))
                   for e in episodes]
@@ -317,8 +317,9 @@ def _print_factored(model, episodes, args: argparse.Namespace) -> list:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    if args.operator_model is not None and api._model_file_kind(args.model):  # refused before any solving
-        raise PlannerError(f"{args.model}: --operator-sequence needs a PRODUCT (its full sequences), not a model file")
+    if (args.operator_model is not None or args.world == "camera") and api._model_file_kind(args.model):
+        what = "--operator-sequence" if args.operator_model is not None else "--world camera"  # before any solving
+        raise PlannerError(f"{args.model}: {what} needs a PRODUCT (its full sequences), not a model file")
     played = episode_choice_from(args)
     model, policy = decision_maker_from(args)
     if is_online_planner(policy) and policy.decision_time is not None:
@@ -382,7 +383,8 @@ def add_commands(commands) -> None:
                                    description="Per step: the robot's action, the observation, and the belief on "
                                                "the true intention; optionally the Fig. 7 belief heat map. The "
                                                "observations are sampled from the model (missed detections and "
-                                               "observation noise), so some differ from the sequence's operations.")
+                                               "observation noise), so some differ from the sequence's operations; "
+                                               "--world camera reports the operations done instead.")
     simulate.add_argument("model", metavar="PRODUCT", help=PRODUCT_HELP)
     add_policy_options(simulate)
     which = simulate.add_mutually_exclusive_group()

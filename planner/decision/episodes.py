@@ -11,7 +11,7 @@ from __future__ import annotations
 import logging
 import math
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -19,13 +19,14 @@ from ..assembly.guards import Progress
 from ..defaults import EPISODE_LIMIT, STEP_LIMIT
 from ..errors import PlannerError, UsageError
 from ..validation import check_number
+from .camera_world import check_world, intention_step_observations
 from .episode import Episode
 from .factored_simulate import PathWorld
 from .models import Model, filtered, final_of, is_factored, is_flat, of_product, tables
 from .operators import mistake_stream
 from .simulate import OPERATORS, IntentionWorld, simulate_episode
 
-__all__ = ["EpisodeChoice", "simulate", "evaluate", "evaluate_operator", "world_of"]
+__all__ = ["EpisodeChoice", "simulate", "evaluate", "evaluate_operator", "world_of", "world_maker"]
 
 log = logging.getLogger(__name__)
 
@@ -42,7 +43,10 @@ class EpisodeChoice:
     (:data:`~.simulate.OPERATORS`): ``model`` (the operator acts with the model's probability, 1/2 per step) or
     ``turns`` (whenever the model lets it, as in the paper's experiment); ``operator_model``
     (:mod:`~planner.decision.operators`; with ``random`` only): draws the ``random`` plans (sequences, changes
-    of mind, mistakes) instead of the initial belief, before any episode.
+    of mind, mistakes) instead of the initial belief, before any episode. ``world``
+    (:data:`~.camera_world.WORLDS`): what the simulated camera reports, ``model`` (the paper's observation
+    model, the default) or ``camera`` (the operation the operator did; :mod:`.camera_world`; a product's model
+    only).
 
     Raises :class:`~planner.validation.InputError` for a number that is not a whole number in its range
     (``random`` 1 to ``EPISODE_LIMIT``, ``max_steps`` 1 to ``STEP_LIMIT``, ``seed`` and ``sequences`` from 0)
@@ -57,6 +61,7 @@ class EpisodeChoice:
     operator: str = "model"
     operator_model: object | None = None
     what: str = "--sequence"
+    world: str = "model"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "sequences", tuple(_whole(k, self.what, 0) for k in self.sequences or ()))
@@ -66,6 +71,7 @@ class EpisodeChoice:
         object.__setattr__(self, "max_steps", _whole(self.max_steps, "max_steps", 1, STEP_LIMIT))
         if not isinstance(self.every, bool):
             raise UsageError(f"episodes: every must be True or False, got {self.every!r}")
+        check_world(self.world)
         if self.operator not in OPERATORS:
             raise UsageError(f"episodes: unknown operator {self.operator!r}; use one of {', '.join(OPERATORS)}")
         if sum((bool(self.sequences), self.every, self.random is not None)) > 1:
@@ -82,16 +88,28 @@ def _whole(value, name: str, low: int, high: int | None = None) -> int:
     return check_number(value, f"episodes: {name}", low, high, integer=True)
 
 
-def world_of(model: Model, truth) -> IntentionWorld | PathWorld:
+def world_of(model: Model, truth, world: str = "model") -> IntentionWorld | PathWorld:
     """The world of ``model`` (of :func:`~.models.filtered`) whose true state starts at ``truth``: an intention
-    (a state of a file's POMDP) or a full sequence's state edges (the factored model). Cost: O(tables)."""
-    model = filtered(model)
+    (a state of a file's POMDP) or a full sequence's state edges (the factored model); ``world``: its camera
+    (:data:`~.camera_world.WORLDS`; ``camera`` needs a product's model). Cost: O(tables)."""
+    return world_maker(model, world)(truth)
+
+
+def world_maker(model: Model, world: str = "model") -> Callable[[object], IntentionWorld | PathWorld]:
+    """:func:`world_of` for many truths of one model: what every world shares is computed once (the flat camera
+    world's observation of each intention's next step, O(intentions)). Raises
+    :class:`~planner.errors.PlannerError` for the camera world of a model file."""
+    model, camera = filtered(model), check_world(world) == "camera"
     if is_factored(model):
-        return PathWorld(model, truth)
+        return lambda truth: PathWorld(model, truth, camera)
     if is_flat(model):
-        return IntentionWorld(model.pomdp, truth, model.graph.successor, model.final_state, model.graph.first_state,
-                              model.world)
-    return IntentionWorld(model, truth)
+        steps = intention_step_observations(model.plan, model.graph) if camera else None
+        return lambda truth: IntentionWorld(model.pomdp, truth, model.graph.successor, model.final_state,
+                                            model.graph.first_state, model.world, steps)
+    if camera:
+        raise PlannerError("--world camera needs a PRODUCT (which operation the operator did), not a model file; "
+                           "use --world model")
+    return lambda truth: IntentionWorld(model, truth)
 
 
 def simulate(model: Model, policy, choice: EpisodeChoice = EpisodeChoice()) -> list[Episode]:
@@ -106,8 +124,8 @@ def simulate(model: Model, policy, choice: EpisodeChoice = EpisodeChoice()) -> l
         return _simulate_operator(model, policy, choice)
     rng = np.random.default_rng(choice.seed)
     truths = _paths(model, choice, rng) if is_factored(model) else _starts(model, choice, rng)
-    return [simulate_episode(world_of(model, truth), policy, rng, choice.max_steps, choice.operator)
-            for truth in truths]
+    make = world_maker(model, choice.world)
+    return [simulate_episode(make(truth), policy, rng, choice.max_steps, choice.operator) for truth in truths]
 
 
 def _starts(model, choice: EpisodeChoice, rng: np.random.Generator) -> list[int]:
@@ -143,8 +161,8 @@ def _simulate_operator(model, policy, choice: EpisodeChoice) -> list[Episode]:
     seed, operator_model = choice.seed, choice.operator_model
     rng = np.random.default_rng(seed)  # the plans first, as the default draws, then the episodes
     plans = operator_model.plans(model, choice.random, rng, np.random.default_rng([seed, 1]))
-    rate = operator_model.mistakes
-    return [simulate_episode(world_of(model, plan.sequence), policy, rng, choice.max_steps, choice.operator,
+    rate, make = operator_model.mistakes, world_maker(model, choice.world)
+    return [simulate_episode(make(plan.sequence), policy, rng, choice.max_steps, choice.operator,
                              plan.switch, (rate, mistake_stream(seed, k)) if rate > 0 else None)
             for k, plan in enumerate(plans)]
 
@@ -159,11 +177,15 @@ def evaluate(model: Model, policy, choice: EpisodeChoice) -> tuple[float, float]
         return evaluate_operator(model, policy, choice)[:2]
     if choice.random is None:
         raise UsageError("evaluate draws its episodes from the initial belief: give their number (random=N)")
-    model, episodes = filtered(model), choice.random
+    model, episodes, camera = filtered(model), choice.random, choice.world == "camera"
     rng = np.random.default_rng(choice.seed)
     if is_factored(model):
         truths = (model.sample_sequence(rng) for _ in range(episodes))  # each drawn before its episode
-        worlds = (PathWorld(model, path) for path in truths)
+        worlds = (PathWorld(model, path, camera) for path in truths)
+    elif camera:  # the camera needs the steps done: the world of simulate, its starts drawn as below
+        make = world_maker(model, choice.world)
+        starts = rng.choice(tables(model).n_states, size=episodes, p=tables(model).initial)
+        worlds = (make(int(start)) for start in starts)
     else:  # the tables' states, all drawn first; the operator's operations are not counted
         pomdp, final = tables(model), final_of(model)
         deviating = model.world if is_flat(model) else None  # deviations: the operator's own tables

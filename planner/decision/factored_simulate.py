@@ -10,6 +10,9 @@ then the operator's next one, then the rest), and the step counts as the robot's
 model (:mod:`planner.decision.projected`) a pair's action is right when the projection of the rest of the
 sequence onto the robot's new state is feasible: the sequence continues with the robot's step, then that
 projection.
+
+With ``camera=True`` (``--world camera``, :mod:`.camera_world`) the world's observation is the operation the
+operator did in the step (with the model's chance of a missed detection), not a draw from the state's table.
 """
 from __future__ import annotations
 
@@ -17,6 +20,7 @@ import math
 
 import numpy as np
 
+from .camera_world import camera_observation
 from .episode import Episode
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .factored_updater import FactoredUpdater
@@ -42,11 +46,13 @@ class PathWorld:
     of the path's steps done (``done``; :class:`~.episode.Step` ``position``); the episode's ``path`` is the one
     done (after a change of mind, or a parallel model's robot step, the sequence continued). The
     :class:`~.simulate.World` protocol; its updater is the :class:`FactoredUpdater` (resets counted, not warned
-    about). Cost per step: that of the model's position transition and observation draw."""
+    about). ``camera``: the camera world's observations (:mod:`.camera_world`) instead of the model's. Cost per
+    step: that of the model's position transition and observation draw."""
 
-    def __init__(self, model: FactoredIntentionModel, path: list[int]):
+    def __init__(self, model: FactoredIntentionModel, path: list[int], camera: bool = False):
         self.model, self.path, self.done = model, list(path), 0
         self.wait, self.discount, self.n_observations = model.wait, model.discount, len(model.observations)
+        self.camera, self.seen = camera, None  # seen: the observation of the operator's operation of the step
 
     def finished(self) -> bool:
         return self.done >= len(self.path)
@@ -71,9 +77,14 @@ class PathWorld:
             nxt = model.sample_position(path, position, action, rng)
         capable = int(np.count_nonzero(model.class_action[path[position:nxt]] >= 0))
         self.done = nxt
+        # The operator's operation of the step: the one edge after the robot's, when the world moved past it
+        self.seen = int(model.plan.operation_observation[model.class_operation[path[nxt - 1]]]) \
+            if nxt - position - robot_steps > 0 else None
         return Move(reward, robot_steps == 1, nxt - position - robot_steps, capable)
 
     def observe(self, action: int, rng: np.random.Generator) -> int:
+        if self.camera:
+            return camera_observation(self.seen, rng)
         return self.model.sample_observation(self.path, self.done, rng)
 
     def p_true(self, belief: FactoredBelief) -> float:

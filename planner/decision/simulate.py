@@ -29,6 +29,7 @@ import numpy as np
 
 from ..defaults import CONFIDENCE
 from .belief import DiscreteUpdater
+from .camera_world import camera_observation
 from .episode import Episode, Step
 from .operators import mistaken_observation, switch_intention
 from .pomdp import POMDP
@@ -173,13 +174,18 @@ class IntentionWorld:
     ``final``: the finished product's intention (None: the episode runs to its step limit). ``successor`` (the
     intention graph's successor array) lets it count operator operations (a move of the true intention that
     the robot's action does not explain) and the operator take turns; ``first_state`` (the graph's) lets it
-    change its mind. Cost per step: a row of each table, plus O(length x actions) to count the operations.
+    change its mind. ``camera`` (with ``successor``): the observation of each intention's next step
+    (:func:`~.camera_world.intention_step_observations`), for the camera world (:mod:`.camera_world`: the
+    observation is the operation the operator did), in place of the tables' observations. Cost per step: a row
+    of each table, plus O(length x actions) to count the operations.
     """
 
     def __init__(self, model: POMDP, start: int, successor: np.ndarray | None = None, final: int | None = None,
-                 first_state: np.ndarray | None = None, world: POMDP | None = None):
+                 first_state: np.ndarray | None = None, world: POMDP | None = None, camera: np.ndarray | None = None):
+        if camera is not None and successor is None:
+            raise ValueError("the camera world needs the intention graph's successors (which step was done)")
         self.model, self.state, self.start, self.final = model, int(start), int(start), final
-        self.successor, self.first_state = successor, first_state
+        self.successor, self.first_state, self.camera, self.seen = successor, first_state, camera, None
         self.tables = world if world is not None else model
         self.transition = [t.tocsr() for t in self.tables.transition]
         self.observation = [o.tocsr() for o in self.tables.observation]
@@ -207,15 +213,21 @@ class IntentionWorld:
             nxt = int(rng.choice(row.indices, p=row.data / row.data.sum()))
         robot = action != self.wait and _moves_intention(self.tables, action, state)
         operations = capable = 0
+        self.seen = None  # the observation of the operator's operation of the step (camera world)
         if successor is not None and nxt != state:
             moved = _moves(successor, state, nxt)
             self.done += moved
             operations = moved - (1 if robot else 0)
             capable = _capable_between(self.model, successor, state, nxt, self.wait)
+            if self.camera is not None and operations > 0:  # the operator stepped from the intention before nxt
+                before = int(successor[state]) if robot else state
+                self.seen = int(self.camera[before])
         self.state = nxt
         return Move(reward, robot, operations, capable)
 
     def observe(self, action: int, rng: np.random.Generator) -> int:
+        if self.camera is not None:
+            return camera_observation(self.seen, rng)
         row = self.observation[action].getrow(self.state)
         return int(rng.choice(row.indices, p=row.data / row.data.sum()))
 

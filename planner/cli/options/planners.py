@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 
 from ... import api
+from ...decision.camera_world import CAMERA_BLANK, WORLDS
 from ...decision.operators import parse_operator
 from ...defaults import DECISION_TIME, DECISION_TIME_MAX, EXPANSION_LIMIT, POLICY_TIME_LIMIT, STEP_LIMIT, TIME_LIMIT_MAX
 from ...errors import PlannerError
@@ -72,17 +73,22 @@ def add_episode_options(parser: argparse.ArgumentParser) -> None:
                              "put back (the camera sees another observation); drawn from "
                              "--seed before any episode, so two planners face the same operators. Default: the "
                              "model's initial belief (with --habits, the habits)")
+    parser.add_argument("--world", choices=WORLDS, default="model",
+                        help="what the simulated camera reports: model (default, the paper's observation model: an "
+                             "observation of any operation into the current state, blank at a quarter weight, even "
+                             "when the operator did nothing) or camera (the operation the operator did, blank with "
+                             f"probability {CAMERA_BLANK:g}; blank when it did nothing), as the camera cell sees it")
     add_decision_options(parser)
 
 
 def episode_choice_from(args: argparse.Namespace) -> api.EpisodeChoice:
     """The episodes ``args`` ask for, as one :class:`~planner.api.specs.EpisodeChoice`: simulate's
     ``--sequence``, ``--all`` or ``--random`` and ``--operator``, or evaluate's ``--episodes`` (drawn at random),
-    with :func:`add_episode_options`' ``--seed``, ``--max-steps`` and ``--operator-sequence``."""
+    with :func:`add_episode_options`' ``--seed``, ``--max-steps``, ``--operator-sequence`` and ``--world``."""
     return api.EpisodeChoice(sequences=tuple(getattr(args, "sequence", None) or ()), every=getattr(args, "all", False),
                              random=getattr(args, "random", None) or getattr(args, "episodes", None), seed=args.seed,
                              max_steps=args.max_steps, operator=getattr(args, "operator", "model"),
-                             operator_model=args.operator_model)
+                             operator_model=args.operator_model, world=args.world)
 
 
 def operator_model(text: str):
