@@ -470,9 +470,9 @@ def test_default_logs_of_two_sessions_in_one_second_differ(policy_file, tmp_path
     import time
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(time, "strftime", lambda fmt, *rest: "20261203-101500")
-    for _ in range(2):
-        done = _aplan("session", "pen", "--policy", policy_file, "--demo", 57)
-        assert done.returncode == 0, done.stderr
+    for _ in range(2):  # the operator types one pick and stops: a short session, logged
+        done = _aplan("session", "pen", "--policy", policy_file, "--keyboard", stdin="body button hammer\n")
+        assert "refuse" not in done.stderr and "exists" not in done.stderr, done.stderr
     logs = sorted(p.name for p in tmp_path.glob("session-*.jsonl"))
     pid = os.getpid()
     assert logs == [f"session-20261203-101500-{pid}-2.jsonl", f"session-20261203-101500-{pid}.jsonl"], logs
