@@ -27,10 +27,12 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
 
 import numpy as np  # noqa: E402
 
-from planner import api, chain_product, complete_product  # noqa: E402
+from bench_change_of_mind import Observer, bench_product  # noqa: E402
+from planner import api  # noqa: E402
 from planner.decision.camera_world import CAMERA_BLANK, WORLDS  # noqa: E402
 from planner.decision.factored_model import FactoredBelief  # noqa: E402
 from planner.decision.factored_simulate import true_intention_probability  # noqa: E402
@@ -39,24 +41,6 @@ from planner.decision.operators import parse_operator  # noqa: E402
 from planner.defaults import STAY  # noqa: E402
 
 KINDS = ("idle", "seen", "missed")
-
-
-class _Observer:
-    def __init__(self, wait: int):
-        self.wait = wait
-
-    def action(self, belief) -> int:
-        return self.wait
-
-
-def _product(spec: str, level: str | None):
-    kind, _, size = spec.partition(":")
-    if kind in ("chain", "complete") and size:
-        return {"chain": chain_product, "complete": complete_product}[kind](int(size))
-    if spec == "pen":
-        return api.resolve_product(spec)
-    product = api.resolve_product(spec, None, "auto", None, "auto")
-    return api.level_product(product, "designer", level) if level else product
 
 
 def step_changes(model, episodes) -> tuple[dict[str, list[float]], list[float]]:
@@ -119,7 +103,7 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=200)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
-    model = api.factored_decision_model(api.plan_of(_product(args.product, args.level)))
+    model = api.factored_decision_model(api.plan_of(bench_product(args.product, args.level)))
     name = f"{args.product}{' ' + args.level if args.level else ''}"
     print(f"{name}: {args.episodes} episodes, seed {args.seed}, a waiting robot; 1. operator uniform")
     print("| world | " + " | ".join(f"{k} steps | {k}: mean log change" for k in KINDS) + " | last belief on the state |")
@@ -127,7 +111,7 @@ def main() -> None:
     for world in WORLDS:
         choice = api.EpisodeChoice(random=args.episodes, seed=args.seed, operator_model=parse_operator("uniform"),
                                    world=world)
-        changes, last = step_changes(model, api.simulate(model, _Observer(model.wait), choice))
+        changes, last = step_changes(model, api.simulate(model, Observer(model.wait), choice))
         cells = " | ".join(f"{len(changes[k])} | {np.mean(changes[k]):+.3f}" if changes[k] else "0 | -" for k in KINDS)
         print(f"| {world} | {cells} | {np.mean(last):.3f} |")
     print(f"\n2. operator uniform,changing:0.3, the camera world; switched episodes whose reading passed 0.9")
@@ -135,7 +119,7 @@ def main() -> None:
     print("|---|---:|---:|" + "---:|" * len(READINGS))
     choice = api.EpisodeChoice(random=args.episodes, seed=args.seed,
                                operator_model=parse_operator("uniform,changing:0.3"), world="camera")
-    played = api.simulate(model, _Observer(model.wait), choice)
+    played = api.simulate(model, Observer(model.wait), choice)
     ops = [o for e in played for o in model.sequence_operations(e.path)]
     seen = model.plan.operation_observation[np.asarray(ops, dtype=np.int64)]
     tool_only = sum(not model.plan.observations[z].parts for z in seen if z != 0)

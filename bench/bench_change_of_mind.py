@@ -50,7 +50,7 @@ from planner.runtime.scripted import ScriptedOperator, ScriptedRobot  # noqa: E4
 from planner.runtime.session import run_session  # noqa: E402
 
 
-class _Observer:
+class Observer:
     """A robot that always waits: every operation is the operator's, and the belief is the filter's alone."""
 
     def __init__(self, wait: int):
@@ -61,7 +61,7 @@ class _Observer:
 
 
 def _run(model, robot, operator, args) -> dict:
-    planner = api.online_planner(model, None, args.expansions) if robot == "online" else _Observer(model.wait)
+    planner = api.online_planner(model, None, args.expansions) if robot == "online" else Observer(model.wait)
     began = time.process_time()
     choice = api.EpisodeChoice(random=args.episodes, seed=args.seed, max_steps=args.max_steps,
                                operator_model=operator, world=args.world)
@@ -71,7 +71,9 @@ def _run(model, robot, operator, args) -> dict:
             **switch_totals(model, played)}
 
 
-def _product(spec: str, level: str | None):
+def bench_product(spec: str, level: str | None):
+    """``pen``, ``chain:N`` / ``complete:N``, or a product file or bundle (planned as a CAD model is by default), at
+    ``level`` if given."""
     kind, _, size = spec.partition(":")
     if kind in ("chain", "complete") and size:
         return {"chain": chain_product, "complete": complete_product}[kind](int(size))
@@ -91,7 +93,7 @@ def learned_habits(plan, model, operator: CrossingOperator, logs: int, seed: int
         for k, drawn in enumerate(plans):
             path = Path(folder) / f"session-{k:02d}.jsonl"
             person = ScriptedOperator(plan, model.sequence_operations(operator.done(drawn)))
-            result = run_session(model, _Observer(model.wait), person, ScriptedRobot(), EventLog(path))
+            result = run_session(model, Observer(model.wait), person, ScriptedRobot(), EventLog(path))
             if not result.assembled:
                 raise SystemExit(f"learning session {k} did not finish: {result.message}")
             paths.append(path)
@@ -146,7 +148,7 @@ def main() -> None:
     if args.crossing is not None and args.operator is not None:
         parser.error("--operator and --crossing are two operators: give one")
     args.operator = args.operator or "uniform,changing:0.3"
-    plan = api.plan_of(_product(args.product, args.level))
+    plan = api.plan_of(bench_product(args.product, args.level))
     operator, models = _models(plan, args)
     print(f"{args.product}{' ' + args.level if args.level else ''}: operator {operator!r}, {args.episodes} "
           f"episodes, online planner {args.expansions} expansions per decision"
