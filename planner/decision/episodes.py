@@ -182,15 +182,15 @@ def evaluate(model: Model, policy, choice: EpisodeChoice) -> tuple[float, float]
     if is_factored(model):
         truths = (model.sample_sequence(rng) for _ in range(episodes))  # each drawn before its episode
         worlds = (PathWorld(model, path, camera) for path in truths)
-    elif camera:  # the camera needs the steps done: the world of simulate, its starts drawn as below
-        make = world_maker(model, choice.world)
-        starts = rng.choice(tables(model).n_states, size=episodes, p=tables(model).initial)
-        worlds = (make(int(start)) for start in starts)
-    else:  # the tables' states, all drawn first; the operator's operations are not counted
-        pomdp, final = tables(model), final_of(model)
-        deviating = model.world if is_flat(model) else None  # deviations: the operator's own tables
+    else:  # the tables' states, all drawn first
+        pomdp = tables(model)
         starts = rng.choice(pomdp.n_states, size=episodes, p=pomdp.initial)
-        worlds = (IntentionWorld(pomdp, int(start), final=final, world=deviating) for start in starts)
+        if camera:  # the camera needs the steps done: the world of simulate
+            make = world_maker(model, choice.world)
+        else:  # the operator's operations are not counted
+            final, deviating = final_of(model), model.world if is_flat(model) else None  # deviations: its tables
+            make = lambda start: IntentionWorld(pomdp, start, final=final, world=deviating)  # noqa: E731
+        worlds = (make(int(start)) for start in starts)
     progress = Progress(log, after=5.0, every=10.0)
     returns, total = [], 0.0
     for k, played in enumerate(worlds):

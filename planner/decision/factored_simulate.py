@@ -77,9 +77,10 @@ class PathWorld:
             nxt = model.sample_position(path, position, action, rng)
         capable = int(np.count_nonzero(model.class_action[path[position:nxt]] >= 0))
         self.done = nxt
-        # The operator's operation of the step: the one edge after the robot's, when the world moved past it
-        self.seen = int(model.plan.operation_observation[model.class_operation[path[nxt - 1]]]) \
-            if nxt - position - robot_steps > 0 else None
+        # The camera world: the operator's operation of the step, the edge after the robot's, if the world moved on
+        if self.camera:
+            self.seen = int(model.plan.operation_observation[model.class_operation[path[nxt - 1]]]) \
+                if nxt - position - robot_steps > 0 else None
         return Move(reward, robot_steps == 1, nxt - position - robot_steps, capable)
 
     def observe(self, action: int, rng: np.random.Generator) -> int:
