@@ -162,8 +162,9 @@ def apply_support_mode(product: Product, mode: str = "add", meshes=None) -> Prod
     if mode == "keep":
         return without_candidates(product)
     supported, added, candidates = _judged(product, meshes)
-    if candidates or not added and candidates_of(product)[1]:  # found now, or read with the product: this mode
-        return record_candidates(product, candidates or candidates_of(product)[1], mode)
+    candidates = candidates or (() if added else candidates_of(product)[1])  # found now, or read with the product
+    if candidates:  # recorded in this command's mode
+        return record_candidates(product, candidates, mode)
     if not added:
         return product
     refuse_or_say(added, mode, product.name)

@@ -142,11 +142,11 @@ def _default_log_name() -> str:
     a level's log of it (``NAME-LEVEL.jsonl``) is there. The process id keeps apart two sessions started in one
     folder within the same second; the number, two sessions of one process (the Python API) in that second."""
     stem = f"session-{time.strftime('%Y%m%d-%H%M%S')}-{os.getpid()}"
-    k = 1
-    while any(Path.cwd().glob(f"{stem}{f'-{k}' if k > 1 else ''}.jsonl")) or (
-            any(Path.cwd().glob(f"{stem}{f'-{k}' if k > 1 else ''}-*.jsonl"))):
+    name, k = stem, 1
+    while Path(f"{name}.jsonl").exists() or any(Path.cwd().glob(f"{name}-*.jsonl")):
         k += 1
-    return f"{stem}{f'-{k}' if k > 1 else ''}.jsonl"
+        name = f"{stem}-{k}"
+    return f"{name}.jsonl"
 
 
 def _session_level(args: argparse.Namespace, product, log_path: str, level: str | None, spec: api.ModelSpec,
