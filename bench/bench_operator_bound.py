@@ -16,6 +16,10 @@ between a sequence's probability under the per-state chain and under the operato
 operations or fewer: a state one step in has one history, and two steps in, one way on). Else the bound is of
 the per-state operator closest to it, and says so.
 
+Its twin, ``bench_habits_oracle.py``, puts the true operator in the flat model's initial belief: exact for any
+operator, but without the joins rule (the flat model has no parallel variant) and for small products only. This
+one is for the joins model and a bundle's levels (lumped).
+
     nice -n 10 prlimit --as=6000000000 .venv/bin/python bench/bench_operator_bound.py BUNDLE --level top \
         [--parallel joins] [--share 0.8] [--seed 0] [--trials 2000]
 
