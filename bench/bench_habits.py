@@ -31,6 +31,10 @@ mixture over the recorded orders, ``--concentration A --discount D`` given to ``
 ``--act-confidence``, default the preset's 0.95; with it the per-state habits of ``--model confident`` on the same
 episodes, for comparison).
 
+``--world camera`` plays every episode in the camera world (planner/decision/camera_world.py: the camera reports
+the operation done, blank when nothing was) and ``--observe step`` gives every model but the paper's a camera's
+observations (planner/decision/step_observations.py; row ``step``: the uniform prior with them).
+
 ``--parallel projected|joins`` (repeatable, or a comma list; docs/parallel.md) adds, on the same episodes, the
 robot's help before the last step: the parallel model with the paper's uniform prior (label ``joins``) and with
 the per-state habits of ``--model confident`` (``state+joins``), at each ``--act-confidence``, by default the
@@ -150,7 +154,8 @@ def _policy(args, plan, model, build: dict):
     """The robot's policy on ``model`` (``factored_model(plan, rewards, **build)``: edge weights, orders, a
     parallel model) and what it is: ``offline`` (or ``auto`` when its solve closes the gap at the initial belief
     to ``--max-gap``) a policy over the lumped model's classes (the same model lumped), else the online planner."""
-    if args.planner in ("offline", "auto") and model.n_classes <= args.max_classes:
+    # (a model with a camera's observations has no lumped tables: the online planner's alone)
+    if args.planner in ("offline", "auto") and model.n_classes <= args.max_classes and model.observe == "state":
         from planner.decision.lumped_model import lumped_model
         from planner.decision.solvers import PointBasedSolver
 
@@ -176,12 +181,13 @@ def paid_share(model, plans) -> float:
     return round(paid / capable, 4) if capable else 0.0
 
 
-def _run(model, policy, plans, seed: int, orders=None) -> list:
+def _run(model, policy, plans, seed: int, orders=None, camera: bool = False) -> list:
     """One episode per plan, each with its own world stream: the same draws for every model given them (the
-    plans' real state edges as the orders' augmented classes on the orders' model)."""
+    plans' real state edges as the orders' augmented classes on the orders' model); ``camera``: the camera
+    world's observations (planner/decision/camera_world.py) instead of the model's."""
     path = (lambda s: s) if orders is None else orders.augmented_path
-    return [simulate_episode(PathWorld(model, path(p.sequence)), policy, np.random.default_rng([seed, 12, k]),
-                             switch=p.switch) for k, p in enumerate(plans)]
+    return [simulate_episode(PathWorld(model, path(p.sequence), camera=camera), policy,
+                             np.random.default_rng([seed, 12, k]), switch=p.switch) for k, p in enumerate(plans)]
 
 
 def paper_return(episode, discount: float, wrong: float = -50.0) -> float:
@@ -226,22 +232,25 @@ def _variants(args, plan, habits) -> list[tuple[str, object, dict]]:
     preset = PRESETS.get(args.model)
     confidences = args.act_confidence or [None]
     out = [("paper", factored_model(plan), {})]
+    if args.observe == "step":  # the paper's model stays the reference; the uniform prior with a camera's too
+        out.append(("step", factored_model(plan, observe="step"), {}))
     if preset is not None and preset.orders:
         counts = PRESETS["confident"]
         weights = habit_weights(plan, preset_habits(counts, habits))
         out.append(("state", factored_model(plan, preset_rewards(counts, 10.0, -2.0, 0.0, None, None),
-                                            weights=weights), {"weights": weights}))
+                                            weights=weights, observe=args.observe), {"weights": weights}))
         orders = orders_prior(plan, preset_habits(preset, habits))
         for c in confidences:
             label = "orders" if len(confidences) == 1 else f"orders C={c:g}"
-            out.append((label, factored_model(plan, preset_rewards(preset, 10.0, -2.0, 0.0, None, c), orders=orders),
+            out.append((label, factored_model(plan, preset_rewards(preset, 10.0, -2.0, 0.0, None, c), orders=orders,
+                                                observe=args.observe),
                         {"orders": orders}))
         return out + _parallel_variants(args, plan, habits)
     weights = habit_weights(plan, habits)
     for c in confidences:
         rewards = preset_rewards(preset, 10.0, -2.0, 0.0, None, c)
         label = "habits" if len(confidences) == 1 else f"habits C={c:g}"
-        out.append((label, factored_model(plan, rewards, weights=weights), {"weights": weights}))
+        out.append((label, factored_model(plan, rewards, weights=weights, observe=args.observe), {"weights": weights}))
     return out + _parallel_variants(args, plan, habits)
 
 
@@ -259,7 +268,7 @@ def _parallel_variants(args, plan, habits) -> list[tuple[str, object, dict]]:
             tail = "" if len(confidences) == 1 else f" C={c:g}"
             for label, preset, w in ((rule, None, None), (f"state+{rule}", confident, weights)):
                 rewards = preset_rewards(preset, 10.0, -2.0, 0.0, None, c, own)
-                out.append((label + tail, factored_model(plan, rewards, weights=w, parallel=rule),
+                out.append((label + tail, factored_model(plan, rewards, weights=w, parallel=rule, observe=args.observe),
                             {"weights": w, "parallel": rule}))
     return out
 
@@ -295,7 +304,7 @@ def _measure(args, name: str, product, folder: Path) -> dict:
     row["labels"] = list(chosen)
     for label, (model, policy, how, solving, orders) in chosen.items():
         started = time.perf_counter() - solving
-        played = _run(model, policy, plans, args.seed, orders)
+        played = _run(model, policy, plans, args.seed, orders, args.world == "camera")
         totals = run_totals([episode_measures(e) for e in played])
         returns[label] = [paper_return(e, model.discount) for e in played]
         mean, half = _mean(returns[label])
@@ -380,6 +389,11 @@ def main() -> None:
     parser.add_argument("--max-classes", type=int, default=2000, help="largest lumped model --planner offline solves")
     parser.add_argument("--technical", action=argparse.BooleanOptionalAction, default=None)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--world", choices=("model", "camera"), default="model",
+                        help="the simulated world's observations: the paper's model's (default) or the camera's")
+    parser.add_argument("--observe", choices=("state", "step"), default="state",
+                        help="the robot's model (all but the paper's row): the paper's observations, or a camera's "
+                             "(step: adds the row 'step', the uniform prior with a camera's; online planner only)")
     parser.add_argument("--json", action="store_true", help="one JSON line per product and level")
     parser.add_argument("--write-habits", metavar="FILE", help="also write the learned habits (one product)")
     parser.add_argument("--prior", type=float, help="aplan habits --prior ALPHA (default: its own)")

@@ -15,7 +15,7 @@ __all__ = [
     "SOLVE_TIME_LIMIT", "POLICY_TIME_LIMIT", "WORKBENCH_SOLVE_TIME_LIMIT", "SOLVE_PRECISION",
     "CONFIDENCE", "DECISION_TIME", "ONLINE_EXPANSIONS", "ONLINE_DEPTH",
     "JSON_DEPTH_LIMIT", "INPUT_FILE_LIMIT", "SPREAD_CELL_LIMIT", "DECLARED_LIMIT", "RESOLUTION_LIMIT", "EPISODE_LIMIT",
-    "LINEAR_DEFLECTION_MIN", "STRUCTURE_DEFAULT", "MAX_COMPONENTS", "STAY", "BLANK_WEIGHT", "HABITS_FORMAT", "HABITS_VERSION", "HABITS_PRIOR", "ORDERS_CONCENTRATION", "ORDERS_DISCOUNT",
+    "LINEAR_DEFLECTION_MIN", "STRUCTURE_DEFAULT", "MAX_COMPONENTS", "STAY", "BLANK_WEIGHT", "CAMERA_BLANK", "HABITS_FORMAT", "HABITS_VERSION", "HABITS_PRIOR", "ORDERS_CONCENTRATION", "ORDERS_DISCOUNT",
     "TIME_LIMIT_MAX", "DECISION_TIME_MAX", "EXPANSION_LIMIT", "TRIAL_LIMIT", "STEP_LIMIT", "ONLINE_TREE_NUMBERS",
 ]
 
@@ -92,6 +92,9 @@ DISCOUNT = 0.9
 # times the weight of each operation's observation.
 STAY = 0.5
 BLANK_WEIGHT = 0.25
+# A camera's chance of missing an operation (the camera world and --observe step): the blank share Alg. 3 gives a
+# state with one operation into it, BLANK_WEIGHT / (1 + BLANK_WEIGHT) = 1/5 (planner/decision/camera_world.py).
+CAMERA_BLANK = BLANK_WEIGHT / (1.0 + BLANK_WEIGHT)
 SOLVE_TIME_LIMIT = 60.0            # aplan solve
 POLICY_TIME_LIMIT = 20.0           # simulate, evaluate and session when no --policy is given
 WORKBENCH_SOLVE_TIME_LIMIT = 10.0  # the workbench's Solve command (its parameter SolveTimeLimit overrides it)

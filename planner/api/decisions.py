@@ -19,6 +19,7 @@ from ..errors import PlannerError, gib
 from ..product import Product
 
 from .models import check_parallel_flat
+from ..decision.step_observations import STEP
 from .plans import _decidable, base_part_of, plan_of
 from .policies import policy_for
 from .specs import PLANNERS, ModelSpec, PlannerChoice
@@ -36,6 +37,17 @@ def online_planner(model: FactoredIntentionModel, decision_time: float | None = 
         raise PlannerError("the online planner needs a decision time or a number of expansions")
     return OnlinePlanner(model, expansions if expansions is not None else ONLINE_EXPANSIONS, decision_time,
                          lower=lower)
+
+
+def check_step_planner(observe: str, planner: str, policy) -> None:
+    """Observations of the step (``--observe step``) are the online planner's alone, without a policy: the flat
+    model and the lumped POMDP (which policy files and the offline solver are of) hold observations of the state
+    reached, and a policy of theirs is no lower bound under a camera's. A :class:`PlannerError` naming the fix."""
+    if observe == STEP and (planner != "online" or policy):
+        what = "--policy" if policy else "--planner offline"
+        raise PlannerError(f"--observe step is decided by the online planner alone: {what} is a policy of the "
+                           "paper's observations (of the state reached), no bound under a camera's; leave out "
+                           f"{what}, or --observe step")
 
 
 def choose_planner(plan: Plan, planner: str | None, policy: str | os.PathLike | None,
@@ -84,13 +96,14 @@ def decision_maker(product: str | os.PathLike | Product | Plan, spec: ModelSpec 
     base_part = base_part_of(plan, spec.base_part)
     weights, orders = prior_inputs(plan, spec.habits)
     chosen, note = choose_planner(plan, choice.planner, policy, choice.limit, base_part, limits)
+    check_step_planner(spec.observe, chosen, policy)
 
     def factored() -> FactoredIntentionModel:
         check_online_memory(plan, limits.memory)
         if spec.parallel:
             check_parallel_memory(plan, limits.memory, spec.parallel)
         return factored_model(plan, spec.rewards, spec.discount, base_part, weights, spec.parallel, spec.deviations,
-                              orders)
+                              orders, spec.observe)
 
     if chosen == "online":
         model = factored()

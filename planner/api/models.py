@@ -30,6 +30,7 @@ from ..decision.parallel import parallel_flag
 from ..decision.models import tables
 from ..decision.lumped_model import lumped_model as build_lumped_model
 from ..decision.pomdp import POMDP
+from ..decision.step_observations import STATE, refuse_step_tables
 from ..decision.presets import PRESETS, ModelPreset, preset_habits
 from ..defaults import DISCOUNT, FILE_LIMIT
 from ..errors import FileLimitError, MemoryLimitError, PlannerError, gib
@@ -147,14 +148,15 @@ def factored_decision_model(product: str | os.PathLike | Product | Plan, technic
                             rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                             base_part: str | None = None, limits: SizeLimits = SizeLimits(),
                             habits: Habits | None = None, parallel: bool = False,
-                            deviations: Deviations | None = None) -> FactoredIntentionModel:
+                            deviations: Deviations | None = None, observe: str = STATE) -> FactoredIntentionModel:
     """The same decision model without enumerating intentions (paper Sec. V): beliefs over classes;
-    ``parallel``: the parallel model (docs/parallel.md); ``deviations``: change of mind and mistakes."""
+    ``parallel``: the parallel model (docs/parallel.md); ``deviations``: change of mind and mistakes;
+    ``observe``: the paper's observations (``"state"``) or a camera's (``"step"``, docs/camera.md)."""
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
     if parallel:
         check_parallel_memory(plan, limits.memory, parallel)
     return factored_model(plan, rewards, discount, base_part_of(plan, base_part), *_parts(plan, habits, parallel,
-                                                                                         deviations))
+                                                                                         deviations), observe)
 
 
 def lumped_model(product: str | os.PathLike | Product | Plan, technical: bool | None = None,
@@ -237,7 +239,9 @@ def model_of(argument: str | os.PathLike | Product | Plan, spec: ModelSpec = Mod
     """The model :func:`load_model` gives for ``spec`` (:class:`~planner.api.specs.ModelSpec`): a model file as
     it is, else the PRODUCT's decision model (``lumped``: its :class:`LumpedModel`). ``flat``: the flat
     :class:`IntentionModel` whatever ``spec.parallel`` asks (a command that needs intentions: the parallel model
-    is on the classes), and a plan may be given. Cost: that of the model built."""
+    is on the classes), and a plan may be given. Cost: that of the model built. ``spec.observe`` ``"step"`` is
+    refused (the online planner's alone: :func:`~planner.decision.step_observations.refuse_step_tables`)."""
+    refuse_step_tables(spec, "the flat model, the lumped POMDP and model files")
     if flat or isinstance(argument, Plan):
         return decision_model(argument, spec.technical, spec.rewards, spec.discount, spec.base_part, spec.limits,
                               spec.habits, solving, spec.deviations)

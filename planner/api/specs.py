@@ -18,6 +18,7 @@ from ..decision.deviations import Deviations
 from ..decision.episodes import EpisodeChoice
 from ..decision.habits import Habits
 from ..decision.intention_model import Rewards
+from ..decision.step_observations import STATE
 from ..defaults import DECISION_TIME, DISCOUNT, INTENTION_LIMIT, POLICY_TIME_LIMIT
 from ..errors import PlannerError
 from ..validation import InputLimits
@@ -38,7 +39,9 @@ class ModelSpec:
     every sequence; ``limits``: the plan's and the model's size limits; ``inputs``: the limits model, policy and
     log files are read within; ``habits`` (:mod:`~planner.decision.habits`) and ``deviations`` (change of mind
     and mistakes, :mod:`~planner.decision.deviations`): None for the paper's model; ``parallel``: the parallel
-    model (docs/parallel.md; on the classes only). Cost: a few fields, compared by value.
+    model (docs/parallel.md; on the classes only); ``observe``: ``"state"`` (the paper's observations) or
+    ``"step"`` (a camera's, :mod:`~planner.decision.step_observations`; the online planner only). Cost: a few
+    fields, compared by value.
     """
 
     technical: bool | None = None
@@ -50,6 +53,7 @@ class ModelSpec:
     habits: Habits | None = None
     parallel: bool | str = False
     deviations: Deviations | None = None
+    observe: str = STATE  # what an observation depends on (planner/decision/step_observations.py)
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..defaults import BLANK_WEIGHT
+from ..defaults import CAMERA_BLANK
 from ..errors import UsageError
 
 __all__ = ["WORLDS", "CAMERA_BLANK", "check_world", "camera_observation", "intention_step_observations"]
@@ -35,8 +35,8 @@ __all__ = ["WORLDS", "CAMERA_BLANK", "check_world", "camera_observation", "inten
 #: The simulated worlds' observation sources: the paper's model (default) or the camera that sees what was done.
 WORLDS = ("model", "camera")
 
-#: The camera world's chance that the operator's operation goes unnoticed (module docstring): 1/5.
-CAMERA_BLANK = BLANK_WEIGHT / (1.0 + BLANK_WEIGHT)
+# CAMERA_BLANK (the chance that the operator's operation goes unnoticed, module docstring: 1/5) is in
+# planner.defaults: the decision model of the camera (step_observations.py) reads it too.
 
 
 def check_world(world: str) -> str:

@@ -36,6 +36,7 @@ import scipy.sparse as sp
 from ..defaults import STAY
 from ..errors import PlannerError
 from .factored_belief import FactoredBelief, _sum_by
+from .step_observations import operator_advance, stay_part
 
 __all__ = ["Deviations", "deviations_of", "check_probability", "switch_share", "operator_step", "mix_likelihood",
            "flat_deviation_entries", "flat_switch", "mixed_observations", "lumped_switch", "MistakeSplit",
@@ -102,7 +103,7 @@ def operator_step(model, classes: np.ndarray, mass: np.ndarray) -> list[tuple[np
         mass = np.concatenate([np.where(moving, (1 - sigma) * mass, mass), np.repeat(per_state, count) * share])
     moving = classes != final
     half = np.where(moving, STAY * mass, mass)
-    return [(classes, half), model.advance(classes[moving], half[moving])]
+    return [stay_part(model, classes, half), operator_advance(model, classes[moving], half[moving])]
 
 
 def mix_likelihood(likelihood: np.ndarray, mistake: float, n_observations: int) -> np.ndarray:

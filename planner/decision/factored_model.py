@@ -65,6 +65,7 @@ from .parallel import (ParallelTable, parallel_expected_rewards, parallel_predic
 from .joins import JOINS, join_actions
 from .orders import OrdersPrior, check_alone, node_keys
 from .projected import PROJECTED, projected_table
+from .step_observations import STATE, check_observe, operator_advance, stay_part
 
 __all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model", "factored_model_bytes"]
 
@@ -111,6 +112,7 @@ class FactoredIntentionModel(FactoredSequences):
     deviations: Deviations | None = None  # change of mind and mistakes (deviations.py), None for the paper's
     switch_share: np.ndarray | None = None  # per class, its share of a redraw at its state (with deviations)
     action_names: tuple[str, ...] | None = None  # actions named by joins (joins.py): their names; None: operations
+    observe: str = STATE  # what an observation depends on: the state reached, or the step (step_observations.py)
 
     @property
     def name(self) -> str:
@@ -240,20 +242,25 @@ class FactoredIntentionModel(FactoredSequences):
             return operator_step(self, classes, mass)
         moving = classes != self.final_class
         half = np.where(moving, STAY * mass, mass)
-        return [(classes, half), self.advance(classes[moving], half[moving])]
+        return [stay_part(self, classes, half), operator_advance(self, classes[moving], half[moving])]
 
     def predict(self, belief: FactoredBelief, action: int) -> FactoredBelief:
         """The distribution over classes after ``action`` (before the observation), module docstring."""
+        return self._combine(*list(map(np.concatenate, zip(*self.predict_parts(belief, action))))[:2])
+
+    def predict_parts(self, belief: FactoredBelief, action: int) -> list[tuple]:
+        """:meth:`predict`'s pieces before they are summed by class: ``(classes, mass)``, and with observations
+        of the step (:mod:`~planner.decision.step_observations`) the observation of each piece's step third."""
         classes, mass = belief.classes, belief.mass
         if action == self.wait:
-            return self._combine(*map(np.concatenate, zip(*self._wait_step(classes, mass))))
+            return self._wait_step(classes, mass)
         performs = self.class_action[classes] == action
-        parts = [(classes[~performs], mass[~performs])]
-        if performs.any():
+        parts = [stay_part(self, classes[~performs], mass[~performs])]
+        if performs.any():  # the robot's step (never an observation), then the operator's stay or advance
             parts += self._wait_step(*self.advance(classes[performs], mass[performs]))
         if self.parallel is not None:  # a right parallel action: to e', then stay or advance; wrong: stay
             parts = parallel_predict(self, classes, mass, action, performs, parts)
-        return self._combine(*map(np.concatenate, zip(*parts)))
+        return parts
 
     def observation_likelihood(self, observation: int, classes: np.ndarray | None = None) -> np.ndarray:
         """O(z | class) for ``classes`` (default: all), the same for every action: that of the class's
@@ -344,7 +351,7 @@ def _counts_per_state(plan: Plan) -> np.ndarray:
 def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = DISCOUNT,
                    base_part: str | None = None, weights: np.ndarray | None = None,
                    parallel: bool | str = False, deviations: Deviations | None = None,
-                   orders: OrdersPrior | None = None) -> FactoredIntentionModel:
+                   orders: OrdersPrior | None = None, observe: str = STATE) -> FactoredIntentionModel:
     """The factored model of Alg. 3 over ``plan`` (module docstring), without enumerating intentions.
 
     ``base_part``: only the sequences that start from this part (paper Sec. V); :class:`PlannerError` when it
@@ -356,6 +363,7 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     :mod:`~planner.decision.joins`); False: the paper's.
     ``deviations``: change of mind and mistakes (:mod:`~planner.decision.deviations`), None for the paper's.
     ``orders``: the orders' model (:mod:`~planner.decision.orders`), built on its augmented graph and weights.
+    ``observe``: ``"state"`` (the paper's observations) or ``"step"`` (:mod:`~planner.decision.step_observations`).
 
     Cost: O(S + E log E) time and O(S + E) memory for S states and E state edges (one sort of the edges by
     source, one of the (state, observation) pairs); Python-int arithmetic only where the counts pass 2**52.
@@ -423,7 +431,8 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     for a in arrays + tuple(a for a in (class_weights, log_weight) if a is not None):
         a.flags.writeable = False
     model = FactoredIntentionModel(plan, rewards, discount, *arrays, base_part=base_part, weights=class_weights,
-                                   class_log_weight=log_weight, action_names=action_names)
+                                   class_log_weight=log_weight, action_names=action_names,
+                                   observe=check_observe(observe))
     if parallel:
         model = dataclasses.replace(model, parallel=projected_table(model, parallel) if parallel in (PROJECTED, JOINS)
                                     else parallel_table(model))

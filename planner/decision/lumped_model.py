@@ -54,6 +54,7 @@ from .factored_model import FactoredIntentionModel, factored_model
 from .intention_model import Rewards
 from .parallel_values import parallel_rows
 from .pomdp import POMDP
+from .step_observations import refuse_step_tables
 
 # The solver's warm start on this model (solver_bounds, solver_start) is the solver's configuration:
 # planner.decision.solvers.warm_start. A model imports no solver.
@@ -152,8 +153,10 @@ def lumped_pomdp_bytes(n_classes: int, n_actions: int) -> int:
 def lumped_pomdp(model: FactoredIntentionModel) -> POMDP:
     """The POMDP over the classes of ``model`` (module docstring), named ``<product>:lumped``.
 
-    Cost: O(nnz(M^2) + (E + 1) A) for E state edges and A actions.
+    Cost: O(nnz(M^2) + (E + 1) A) for E state edges and A actions. A model with observations of the step
+    (:mod:`~planner.decision.step_observations`) has no such tables: :class:`PlannerError`.
     """
+    refuse_step_tables(model, "the lumped POMDP (for the offline solvers and model files)")
     transition = _transitions(model)
     table = _observations(model)
     observation = tuple(table for _ in transition)  # one object: solvers and updaters share its products

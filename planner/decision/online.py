@@ -45,6 +45,7 @@ from .deviations import with_mistakes
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .online_steps import StepTimes
 from .policy import AlphaVectorPolicy
+from .step_observations import STEP, StepSplit, predict_seen, refuse_step_tables
 
 # ClassValues, class_values, revealed_state_values and VALUE_BLOCK live in planner.decision.bounds (the
 # online planner's and the solver's warm start's bounds); still importable from here.
@@ -56,9 +57,19 @@ def observation_split(model: FactoredIntentionModel, predicted: FactoredBelief
                       ) -> list[tuple[int, float, FactoredBelief]]:
     """The observations ``predicted`` can emit, each with its probability and the posterior belief:
     ``(z, P(z), b_z)``, the blank observation first (what the search's :class:`_Split` makes, all at once).
-    Cost: O(k x Z') for k classes and Z' observations."""
+    Cost: O(k x Z') for k classes and Z' observations. (With observations of the step the split needs the
+    prediction's pieces: :class:`~planner.decision.step_observations.StepSplit`.)"""
+    refuse_step_tables(model, "a split of the predicted belief alone")
     split = with_mistakes(model, _Split(model, predicted), None)
     return [(z, p, split.posterior(z)) for z, p, _ in split.branches]
+
+
+def _split_of(model: FactoredIntentionModel, belief: FactoredBelief, action: int, value: np.ndarray | None):
+    """The split by observation of ``belief`` after ``action``: :class:`_Split` (with mistakes mixed in), or
+    with observations of the step :class:`~planner.decision.step_observations.StepSplit`."""
+    if model.observe == STEP:
+        return StepSplit(model, predict_seen(model, belief, action), value)
+    return with_mistakes(model, _Split(model, model.predict(belief, action), value), value)
 
 
 def _posterior(classes: np.ndarray, weighted: np.ndarray) -> FactoredBelief:
@@ -311,8 +322,7 @@ class OnlinePlanner:
     def _expand(self, node: _Node, action: int) -> None:
         model = self.model
         reward = float(model.expected_rewards(node.belief)[action])
-        split = with_mistakes(model, _Split(model, model.predict(node.belief, action), self.values.value),
-                              self.values.value)
+        split = _split_of(model, node.belief, action, self.values.value)
         # the split's arrays (classes, masses, their states and keys) and a node per observation
         self._numbers += 6 * split.classes.size + _NODE_NUMBERS * len(split.branches)
         wait_forever = self._after_now / model.discount

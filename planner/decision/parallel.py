@@ -30,6 +30,7 @@ from ..assembly.intentions import allowed_edges
 from .parallel_table import ParallelTable
 from .joins import JOINS
 from .projected import PROJECTED, projected_rewrite
+from .step_observations import stay_part
 
 __all__ = ["ParallelTable", "parallel_table", "parallel_flag", "parallel_rewrite", "parallel_bytes",
            "parallel_candidates", "parallel_predict", "parallel_rewards", "parallel_expected_rewards"]
@@ -117,7 +118,7 @@ def parallel_predict(model, classes: np.ndarray, mass: np.ndarray, action: int, 
     right = mass[k] * model.parallel.fraction[p]
     stay = mass.copy()
     stay[k] -= right
-    return [(classes[~performs], stay[~performs])] + parts[1:] + \
+    return [stay_part(model, classes[~performs], stay[~performs])] + parts[1:] + \
         model._wait_step(model.parallel.target[p].astype(np.int64), right)
 
 

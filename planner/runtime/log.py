@@ -6,8 +6,9 @@ seconds, to the millisecond):
 - ``start``: ``version``, ``product`` (the product itself, in the product file format), ``settings``
   (``base_part``: the part the model's sequences start from, or null; ``habits``: the operator habits the model
   used, as the habits file holds them, or null; ``parallel``: the parallel model (true, "projected" or "joins"),
-  docs/parallel.md; ``deviations``: ``{"switch": P, "mistake": Q}`` or null, docs/deviations.md; replay rebuilds
-  the same model),
+  docs/parallel.md; ``deviations``: ``{"switch": P, "mistake": Q}`` or null, docs/deviations.md; ``observe``:
+  "state" or "step", docs/camera.md, absent in older logs: "state"; replay
+  rebuilds the same model),
   ``n_intentions``, ``actions`` and ``observations`` (the model's names), ``top``;
 - per step: ``action`` (``step``, ``action``, ``name``, ``instruction``, ``decision_ms``: the milliseconds the
   policy took to choose it; for an action named by a join, ``join``: its two parts ``[P, Q]``, ``operation``:
@@ -46,6 +47,7 @@ from ..assembly.tags import BLANK
 from ..decision.factored_model import FactoredIntentionModel, factored_model
 from ..decision.intention_model import IntentionModel, intention_model
 from ..decision.models import BELIEF_OVER, belief_at, top_intentions, updater_for
+from ..decision.step_observations import OBSERVE, STATE
 from ..errors import PlannerError
 from ..files import with_faults
 from ..product import Product, product_from_dict
@@ -243,8 +245,12 @@ def _model_of(path: Path, start: dict) -> tuple[Product, IntentionModel | Factor
         raise SessionError(f"{path}: the start event's 'parallel' setting {parallel!r} is not true, false, "
                            "\"projected\" or \"joins\"; the log is damaged")
     deviations = _deviations(path, settings.get("deviations"))
+    observe = settings.get("observe", STATE)  # logs before observations of the step have none: the paper's
+    if observe not in OBSERVE:
+        raise SessionError(f"{path}: the start event's 'observe' setting {observe!r} is not one of "
+                           f"{', '.join(OBSERVE)}; the log is damaged")
     model = (factored_model(plan, base_part=base_part, weights=weights, parallel=parallel, deviations=deviations,
-                            orders=orders)
+                            orders=orders, observe=observe)
              if start.get("belief_over") == BELIEF_OVER["factored"]
              else intention_model(plan, base_part=base_part, weights=weights, deviations=deviations, orders=orders))
     if list(model.observations) != start.get("observations") or list(model.actions) != start.get("actions"):

@@ -47,6 +47,7 @@ from ..decision.belief import UnexplainedObservation
 from ..decision.factored_model import FactoredBelief, FactoredIntentionModel
 from ..decision.intention_model import IntentionModel
 from ..decision.models import BELIEF_OVER, belief_at, belief_over, belief_prefix, final_of, top_intentions, updater_for
+from ..decision.step_observations import STATE
 from ..errors import PlannerError
 from ..product import product_to_dict
 from .interfaces import Instruction, ObservationSource, Robot, instruction_for
@@ -177,7 +178,8 @@ class _Run:
         intentions = count_intentions(model.plan.states) if self.factored else model.pomdp.n_states
         designed = model.plan.designed or model.plan.product  # before folding: replaying folds the same fasteners
         deviations = getattr(model, "deviations", None)  # the model's own: replay rebuilds the same tables
-        settings = {**settings, "deviations": None if deviations is None else deviations.as_dict()}
+        settings = {**settings, "deviations": None if deviations is None else deviations.as_dict(),
+                    "observe": getattr(model, "observe", STATE)}
         self.log.write("start", version=LOG_VERSION, product=product_to_dict(designed), settings=settings,
                        n_intentions=intentions, belief_over=self.over,
                        actions=list(model.actions), observations=list(model.observations),

@@ -13,6 +13,7 @@ from ...decision.presets import CONFIDENT, HELPFUL, ORDERS, PRESETS, preset_rewa
 from ...decision.joins import JOINS
 from ...decision.parallel import parallel_flag
 from ...decision.projected import PROJECTED, PROJECTED_CONFIDENCE
+from ...decision.step_observations import OBSERVE, STATE, STEP
 from ...defaults import DISCOUNT
 from ...errors import PlannerError, UsageError
 
@@ -21,7 +22,8 @@ from .products import add_base_part, add_fasteners, add_hierarchy, add_model_opt
 from .values import _probability, finite, number
 
 __all__ = ["add_decision_options", "add_habits_options", "add_parallel_options", "add_deviation_options",
-           "parallel_from", "rewards_from", "habits_from", "deviations_from", "model_spec_from"]
+           "parallel_from", "rewards_from", "habits_from", "deviations_from", "model_spec_from",
+           "add_observation_options", "observe_from"]
 
 
 def add_decision_options(parser: argparse.ArgumentParser) -> None:
@@ -51,6 +53,7 @@ def add_decision_options(parser: argparse.ArgumentParser) -> None:
     add_habits_options(group)
     add_parallel_options(group)
     add_deviation_options(group)
+    add_observation_options(group)
     add_size_options(parser)
     add_input_options(parser)
 
@@ -154,7 +157,27 @@ def model_spec_from(args: argparse.Namespace) -> api.ModelSpec:
     the habits file is read once) and passed down. Cost: reading ``--habits``, if given."""
     return api.ModelSpec(technical=args.technical, rewards=rewards_from(args), discount=args.discount,
                          base_part=args.base_part, limits=limits_from(args), inputs=inputs_from(args),
-                         habits=habits_from(args), parallel=parallel_from(args), deviations=deviations_from(args))
+                         habits=habits_from(args), parallel=parallel_from(args), deviations=deviations_from(args),
+                         observe=observe_from(args))
+
+
+def add_observation_options(group) -> None:
+    """``--observe state|step``: what an observation depends on (docs/camera.md); the paper's by default."""
+    group.add_argument("--observe", choices=OBSERVE, default=STATE,
+                       help="what the robot's observations depend on: state (the paper's Alg. 3: the state reached, "
+                            "drawn afresh each step; the default) or step (a camera that reports the operation the "
+                            "operator did, missing it with probability 1/5, and blank when it did nothing; the online "
+                            "planner only; docs/camera.md)")
+
+
+def observe_from(args: argparse.Namespace) -> str:
+    """``--observe`` (``state`` for a command without it); ``--model paper`` with ``step`` is a usage error (the
+    paper's model observes the state reached)."""
+    observe = getattr(args, "observe", STATE) or STATE
+    if observe == STEP and getattr(args, "habit_model", None) == "paper":
+        raise UsageError("--model paper is Alg. 3 as published, whose observations are of the state reached: leave "
+                         "out --observe step, or choose another --model")
+    return observe
 
 
 def add_deviation_options(group) -> None:
