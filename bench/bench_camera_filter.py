@@ -13,7 +13,7 @@ waits (the observer: its belief is the filter's alone).
    then emits blank, or its operator does its step and the camera reports that step's observation with
    probability 4/5, else blank; the step then spreads over the target's classes by the prior, as the paper's).
    It differs from the paper's filter only in the observation's likelihood, which depends on the step taken,
-   not on the state reached. It is a measure here, not a decision model.
+   not on the state reached: the filter of ``--observe step`` (planner/decision/step_observations.py).
 
 Run: ``.venv/bin/python bench/bench_camera_filter.py [--product pen|chain:N|complete:N|BUNDLE] [--level ID]
 [--episodes 200] [--seed 0]``. Seconds on the pen.
@@ -33,12 +33,11 @@ import numpy as np  # noqa: E402
 
 from bench_change_of_mind import Observer, bench_product  # noqa: E402
 from planner import api  # noqa: E402
-from planner.decision.camera_world import CAMERA_BLANK, WORLDS  # noqa: E402
-from planner.decision.factored_model import FactoredBelief  # noqa: E402
+from planner.decision.camera_world import WORLDS  # noqa: E402
+from planner.decision.factored_updater import FactoredUpdater  # noqa: E402
 from planner.decision.factored_simulate import true_intention_probability  # noqa: E402
 from planner.decision.mind_measures import READINGS, step_readings, switch_totals  # noqa: E402
 from planner.decision.operators import parse_operator  # noqa: E402
-from planner.defaults import STAY  # noqa: E402
 
 KINDS = ("idle", "seen", "missed")
 
@@ -63,34 +62,15 @@ def step_changes(model, episodes) -> tuple[dict[str, list[float]], list[float]]:
     return changes, last
 
 
-def camera_update(model, belief: FactoredBelief, observation: int) -> FactoredBelief:
-    """The camera filter's posterior after ``wait`` and ``observation`` (module docstring, 2). Dense over the
-    classes: O(E) per step (a measure on small levels, not the decision model's cost)."""
-    final = model.final_class
-    mass = belief.dense(model.n_classes)
-    moving = np.arange(model.n_classes) != final
-    seen = np.zeros(model.n_classes, dtype=np.int64)
-    seen[:final] = model.plan.operation_observation[model.class_operation[:final]]
-    blank = observation == 0
-    stay = np.where(moving, STAY * mass, mass) * (1.0 if blank else 0.0)
-    step = np.where(seen == 0, 1.0 if blank else 0.0,
-                    np.where(seen == observation, 1.0 - CAMERA_BLANK, 0.0) + (CAMERA_BLANK if blank else 0.0))
-    go = np.flatnonzero(moving & (mass > 0))
-    classes, advanced = model.advance(go, (1.0 - STAY) * mass[go] * step[go])
-    posterior = stay.copy()
-    np.add.at(posterior, classes, advanced)
-    total = posterior.sum()
-    if total <= 0:
-        raise SystemExit(f"the camera filter found observation {observation} impossible: a bug in this measure")
-    keep = np.flatnonzero(posterior > 0)
-    return FactoredBelief(keep.astype(np.int64), posterior[keep] / total)
-
-
 def camera_filtered(model, episode):
-    """``episode`` (a waiting robot's) with the camera filter's beliefs and beliefs on the true intention."""
-    beliefs, steps = [model.initial_belief()], []
+    """``episode`` (a waiting robot's) with the camera filter's beliefs and beliefs on the true intention: the
+    filter of the same model with observations of the step (``observe="step"``, planner/decision/
+    step_observations.py), which is the camera world's own observation model."""
+    camera = dataclasses.replace(model, observe="step")
+    updater = FactoredUpdater(camera)
+    beliefs, steps = [updater.initialize()], []
     for step in episode.steps:
-        beliefs.append(camera_update(model, beliefs[-1], step.observation))
+        beliefs.append(updater.update(beliefs[-1], model.wait, step.observation))
         p_true = true_intention_probability(model, beliefs[-1], episode.path, step.position)
         steps.append(dataclasses.replace(step, p_true=p_true))
     return dataclasses.replace(episode, beliefs=beliefs, steps=steps)

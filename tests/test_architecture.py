@@ -113,7 +113,7 @@ def test_the_checker_sees_a_violation(tmp_path):
 DECISION_ROOMS = {
     "model": ({"pomdp", "intention_model", "factored_model", "lumped_model", "parallel", "parallel_table", "parallel_values",
                "projected", "joins", "deviations", "habits", "orders", "presets", "belief", "factored_updater", "factored_belief",
-               "factored_sequences", "step_observations"},
+               "factored_sequences", "step_observations", "step_pomdp"},
               ("solvers", "online", "bounds", "delayed_reveal", "models", "simulate", "factored_simulate",
                "episodes")),
     "bound": ({"bounds", "delayed_reveal"}, ("online", "models", "solvers.point_based", "solvers.warm_start",

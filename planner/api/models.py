@@ -30,7 +30,9 @@ from ..decision.parallel import parallel_flag
 from ..decision.models import tables
 from ..decision.lumped_model import lumped_model as build_lumped_model
 from ..decision.pomdp import POMDP
-from ..decision.step_observations import STATE, refuse_step_tables
+from ..decision.step_observations import STATE, STEP, refuse_step_tables
+from ..decision.step_pomdp import step_pomdp, step_pomdp_states
+from ..decision.lumped_model import lumped_pomdp_bytes
 from ..decision.presets import PRESETS, ModelPreset, preset_habits
 from ..defaults import DISCOUNT, FILE_LIMIT
 from ..errors import FileLimitError, MemoryLimitError, PlannerError, gib
@@ -239,14 +241,38 @@ def model_of(argument: str | os.PathLike | Product | Plan, spec: ModelSpec = Mod
     """The model :func:`load_model` gives for ``spec`` (:class:`~planner.api.specs.ModelSpec`): a model file as
     it is, else the PRODUCT's decision model (``lumped``: its :class:`LumpedModel`). ``flat``: the flat
     :class:`IntentionModel` whatever ``spec.parallel`` asks (a command that needs intentions: the parallel model
-    is on the classes), and a plan may be given. Cost: that of the model built. ``spec.observe`` ``"step"`` is
-    refused (the online planner's alone: :func:`~planner.decision.step_observations.refuse_step_tables`)."""
-    refuse_step_tables(spec, "the flat model, the lumped POMDP and model files")
+    is on the classes), and a plan may be given. Cost: that of the model built. ``spec.observe`` ``"step"``: with
+    ``lumped``, the POMDP over (class, the step's observation) pairs (:func:`~planner.decision.step_pomdp.
+    step_pomdp`: a bare POMDP, for files and solvers), else refused (the flat model cannot hold it)."""
+    if spec.observe == STEP:
+        return _step_tables(argument, spec, lumped and not flat)
     if flat or isinstance(argument, Plan):
         return decision_model(argument, spec.technical, spec.rewards, spec.discount, spec.base_part, spec.limits,
                               spec.habits, solving, spec.deviations)
     return load_model(argument, spec.technical, spec.rewards, spec.discount, spec.base_part, spec.limits, lumped,
                       spec.inputs, spec.habits, solving, spec.parallel, spec.deviations)
+
+
+def _step_tables(argument, spec: ModelSpec, lumped: bool) -> POMDP:
+    """The POMDP of ``--observe step`` on a PRODUCT (:func:`~planner.decision.step_pomdp.step_pomdp`), after
+    the factored model's and the lumped model's memory checks (its states: the classes and their pairs with the
+    observations into them, refused past the budget with the count)."""
+    if not lumped or isinstance(argument, Plan) or _model_file_kind(argument):
+        refuse_step_tables(spec, "the flat model over intentions (or a model file)",
+                           "add --lumped for the POMDP over (class, seen observation) pairs (docs/camera.md), use "
+                           "the online planner (aplan simulate/session), or leave out --observe step")
+    plan = _decidable(plan_of(argument, spec.technical, lumped_limits(spec.limits)))
+    check_lumped_memory(plan, spec.limits.memory)
+    model = factored_decision_model(plan, spec.technical, spec.rewards, spec.discount, spec.base_part, spec.limits,
+                                    spec.habits, spec.parallel, spec.deviations, STEP)
+    n = step_pomdp_states(model)
+    needed = lumped_pomdp_bytes(n, len(model.actions))
+    if needed > spec.limits.memory:
+        raise MemoryLimitError(f"the POMDP of --observe step would hold {n:,} states (the classes and their pairs "
+                               f"with the observations into them) x {len(model.actions):,} actions, about "
+                               f"{gib(needed)}, past the memory budget of {gib(spec.limits.memory)}; use the online "
+                               "planner (aplan simulate/session --observe step), or --base-part")
+    return step_pomdp(model)
 
 
 # Reading a model file peaks at about 3 bytes of memory per byte of file (bench/README.md, model files).

@@ -154,9 +154,11 @@ def lumped_pomdp(model: FactoredIntentionModel) -> POMDP:
     """The POMDP over the classes of ``model`` (module docstring), named ``<product>:lumped``.
 
     Cost: O(nnz(M^2) + (E + 1) A) for E state edges and A actions. A model with observations of the step
-    (:mod:`~planner.decision.step_observations`) has no such tables: :class:`PlannerError`.
+    (:mod:`~planner.decision.step_observations`) has no such tables: :class:`PlannerError` (its POMDP is over
+    pairs: :func:`~planner.decision.step_pomdp.step_pomdp`).
     """
-    refuse_step_tables(model, "the lumped POMDP (for the offline solvers and model files)")
+    refuse_step_tables(model, "the lumped POMDP over classes", "build the POMDP over (class, seen observation) "
+                       "pairs (step_pomdp; aplan pomdp --lumped --observe step), or use the online planner")
     transition = _transitions(model)
     table = _observations(model)
     observation = tuple(table for _ in transition)  # one object: solvers and updaters share its products

@@ -59,13 +59,13 @@ def check_observe(observe: str) -> str:
     return observe
 
 
-def refuse_step_tables(model, what: str) -> None:
+def refuse_step_tables(model, what: str, fix: str = "use the online planner (--planner online, the default "
+                       "without --policy), or leave out --observe step") -> None:
     """A :class:`PlannerError` when ``model`` observes steps and ``what`` (a lumped POMDP, a file) needs tables
-    ``O(z | state reached)``, which cannot hold observations of the step: names the planner that can."""
+    ``O(z | state reached)``, which cannot hold observations of the step: ``fix`` names what can."""
     if getattr(model, "observe", STATE) == STEP:
         raise PlannerError(f"--observe step gives observations of the operator's step, and {what} holds "
-                           "observations of the state reached only: use the online planner (--planner online, "
-                           "the default without --policy), or leave out --observe step")
+                           f"observations of the state reached only: {fix}")
 
 
 @dataclass(frozen=True)

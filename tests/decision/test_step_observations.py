@@ -2,14 +2,16 @@
 model's filter equals an explicit filter over every (state, completion) pair of the product, with the camera's
 likelihood written out here (habits, change of mind and mistakes included); the online planner's split agrees
 with the filter; the camera's idle blank keeps the belief where it is (closed form 5/6); the camera world never
-resets it; what cannot hold it (the lumped POMDP, the flat model, policies, ``--model paper``) refuses; a cell
-session replays."""
+resets it; the POMDP over (class, seen observation) pairs (planner/decision/step_pomdp.py), filtered by the
+generic updater, is the same filter and its POMDPX file reads back; what cannot hold it (the lumped POMDP of
+the classes, the flat model, policies in a session, ``--model paper``) refuses; a cell session replays."""
 from __future__ import annotations
 
 import json
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 from aplan_runner import run_aplan
 
 from planner import chain_product, make_plan
@@ -17,7 +19,9 @@ from planner.decision import FactoredUpdater, factored_model, lumped_pomdp
 from planner.decision.deviations import Deviations
 from planner.decision.habits import habit_weights_from
 from planner.decision.online import OnlinePlanner, _split_of
+from planner.decision.belief import DiscreteUpdater
 from planner.decision.step_observations import STEP, check_observe, predict_seen, step_posterior
+from planner.decision.step_pomdp import step_pomdp, step_states
 from planner.defaults import CAMERA_BLANK, STAY
 from planner.errors import PlannerError
 
@@ -125,6 +129,39 @@ def test_the_step_filter_equals_the_filter_over_every_completion(plans, product,
     assert updater.events == []  # every observation drawn from the world is explained: no reset
 
 
+@pytest.mark.parametrize("parallel", [False, "joins"])
+@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("product", PRODUCTS)
+def test_the_step_pomdp_summed_over_the_seen_is_the_step_filter(plans, product, case, parallel):
+    """The POMDP over (class, seen) pairs (planner/decision/step_pomdp.py), filtered exactly by the generic
+    DiscreteUpdater and summed over the seen observation, is the factored step filter; its rows are
+    distributions, and the observations are drawn from the POMDP itself (so parallel joins are covered)."""
+    plan = plans[product]
+    habits, deviations = CASES[case]
+    rng = np.random.default_rng(11)
+    weights = habit_weights_from(plan, rng.integers(0, 4, plan.states.n_edges).astype(float), 1.0) if habits else None
+    model = factored_model(plan, weights=weights, deviations=deviations, parallel=parallel, observe=STEP)
+    pomdp = step_pomdp(model)
+    pair_class, pair_seen = step_states(model)
+    assert pomdp.n_states == pair_class.size and np.all(pair_seen[np.flatnonzero(np.diff(pair_class)) + 1] == 0)
+    for table in (*pomdp.transition, pomdp.observation[0]):
+        assert np.allclose(np.asarray(table.sum(axis=1)).ravel(), 1.0, atol=1e-12)
+    by_class = sp.csr_matrix((np.ones(pair_class.size), (np.arange(pair_class.size), pair_class)),
+                             shape=(pair_class.size, model.n_classes))
+    generic, factored = DiscreteUpdater(pomdp), FactoredUpdater(model)
+    for episode in range(3):
+        flat, belief = generic.initialize(), factored.initialize()
+        assert np.allclose(by_class.T @ flat, belief.dense(model.n_classes), atol=1e-12)
+        for _ in range(12):
+            action = model.wait if rng.random() < 0.6 else int(rng.integers(len(model.actions)))
+            predicted = generic.predict(flat, action)
+            chance = pomdp.observation[action].T @ predicted
+            z = int(rng.choice(chance.size, p=chance / chance.sum()))
+            flat, belief = generic.update(flat, action, z), factored.update(belief, action, z)
+            assert np.allclose(by_class.T @ flat, belief.dense(model.n_classes), atol=1e-9, rtol=0)
+    assert generic.events == [] and factored.events == []
+
+
 def test_an_idle_blank_keeps_five_sixths_on_the_state(plans):
     """The operator is seen doing a first operation of the pen's, then the camera sees nothing: every operation
     out of the state it reached shows a part, so it stayed with probability 1/2 / (1/2 + 1/2 x 1/5) = 5/6 (else
@@ -196,7 +233,32 @@ def test_what_cannot_hold_observations_of_the_step_refuses(plans, tmp_path):
         done = run_aplan("simulate", "pen", "--random", "1", "--observe", "step", *args)
         assert done.returncode != 0 and message in done.stderr, done.stderr
     solve = run_aplan("solve", "pen", "--observe", "step", "-o", tmp_path / "p.policy")
-    assert solve.returncode != 0 and "--observe step" in solve.stderr and not (tmp_path / "p.policy").exists()
+    assert solve.returncode != 0 and "add --lumped for the POMDP over (class, seen observation) pairs" in solve.stderr
+    assert not (tmp_path / "p.policy").exists()
+
+
+def test_the_step_pomdp_is_written_and_read_back_and_solved(pen, tmp_path):
+    """``aplan pomdp pen --lumped --observe step`` (change of mind and mistakes on): a POMDPX file whose tables
+    are those of step_pomdp (to the file's precision), with more states than classes, which ``aplan solve``
+    solves."""
+    from planner.decision.io.pomdpx import read_pomdpx
+
+    path = tmp_path / "step.pomdpx"
+    done = run_aplan("pomdp", "pen", "--lumped", "--observe", "step", "--switch", "0.1", "--mistakes", "0.05",
+                     "-o", path)
+    assert done.returncode == 0, done.stderr
+    model = factored_model(make_plan(pen), observe=STEP, deviations=Deviations(0.1, 0.05))  # the file's constraints
+    expected, read = step_pomdp(model), read_pomdpx(path)
+    assert (read.n_states, read.n_actions, read.n_observations) == (expected.n_states, len(model.actions),
+                                                                    len(model.plan.observations))
+    assert read.n_states > model.n_classes  # pairs beyond the classes: the step's observation is in the state
+    for a in range(read.n_actions):
+        assert np.allclose(read.transition[a].toarray(), expected.transition[a].toarray(), atol=1e-6)
+        assert np.allclose(read.observation[a].toarray(), expected.observation[a].toarray(), atol=1e-6)
+    assert np.allclose(read.reward, expected.reward, atol=1e-6)
+    assert np.allclose(read.initial, expected.initial, atol=1e-9)
+    solved = run_aplan("solve", path, "-o", tmp_path / "step.policy", "--trials", "20")
+    assert solved.returncode == 0 and "lower bound" in solved.stdout, solved.stderr
 
 
 def test_a_cell_session_observing_steps_records_it_and_replays(tmp_path):
