@@ -20,9 +20,11 @@ share of the operations, its wrong actions (and their share of its actions) and 
 
 Run: ``.venv/bin/python bench/bench_change_of_mind.py [--product pen|chain:N|complete:N|FILE|BUNDLE] [--level ID]
 [--episodes 200] [--expansions 200] [--switch 0.05] [--mistakes 0.02] [--operator uniform,changing:0.3 |
---crossing 0.3 [--logs 20] [--prior-per edge|state]] [--robots online,observer] [--world model|camera]`` (a
-bundle is planned with ``--fasteners auto --subassemblies auto``). ``--world camera``: the simulated camera reports
-the operation the operator did (planner/decision/camera_world.py), not a draw from the paper's observation model.
+--crossing 0.3 [--logs 20] [--prior-per edge|state]] [--robots online,observer] [--world model|camera]
+[--observe state|step]`` (a bundle is planned with ``--fasteners auto --subassemblies auto``). ``--world camera``:
+the simulated camera reports the operation the operator did (planner/decision/camera_world.py), not a draw from
+the paper's observation model. ``--observe step``: every model but the paper's reads the observations as the
+camera's of the step taken (docs/camera.md), and the paper's model is measured a second time so (``paper, step``).
 """
 from __future__ import annotations
 
@@ -105,9 +107,12 @@ def _models(plan, args) -> tuple[object, list[tuple[str, object]]]:
     """The operator and ``(label, model)`` per model measured."""
     deviations = Deviations(args.switch, args.mistakes)
     dev = f"switch {args.switch:g}, mistakes {args.mistakes:g}"
+    observe = args.observe
+    step = [("paper, step", api.factored_decision_model(plan, observe=observe))] if observe == "step" else []
     if args.crossing is None:
-        return parse_operator(args.operator), [("paper", api.factored_decision_model(plan)),
-                                               (dev, api.factored_decision_model(plan, deviations=deviations))]
+        return parse_operator(args.operator), [
+            ("paper", api.factored_decision_model(plan)), *step,
+            (dev, api.factored_decision_model(plan, deviations=deviations, observe=observe))]
     paper = api.factored_decision_model(plan)
     first, second, position = crossing_pair(paper, np.random.default_rng([args.seed, 20]))
     operator = CrossingOperator(first, second, position, args.crossing)
@@ -116,8 +121,10 @@ def _models(plan, args) -> tuple[object, list[tuple[str, object]]]:
           f"{int(paper.paths[paper.class_source[first[position]]])} completions); the sequences share "
           f"{'their start' if first[:position] == second[:position] else 'only the crossing state'}; habits "
           f"from {args.logs} logs, {habits.total:g} choices counted, prior {habits.prior:g} per {habits.prior_per}")
-    return operator, [("paper", paper), ("habits", api.factored_decision_model(plan, habits=habits)),
-                      (f"habits, {dev}", api.factored_decision_model(plan, habits=habits, deviations=deviations))]
+    return operator, [("paper", paper), *step,
+                      ("habits", api.factored_decision_model(plan, habits=habits, observe=observe)),
+                      (f"habits, {dev}", api.factored_decision_model(plan, habits=habits, deviations=deviations,
+                                                                     observe=observe))]
 
 
 def _share(count: int, of: int) -> str:
@@ -142,6 +149,9 @@ def main() -> None:
     parser.add_argument("--world", choices=WORLDS, default="model",
                         help="what the simulated camera reports: model (the paper's O(z | i), default) or camera (the "
                              "operation the operator did)")
+    parser.add_argument("--observe", choices=("state", "step"), default="state",
+                        help="what the models but the paper's read an observation as: of the state reached (the "
+                             "paper's) or of the step taken (a camera's, docs/camera.md)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--max-steps", type=int, default=100)
     args = parser.parse_args()
@@ -152,7 +162,8 @@ def main() -> None:
     operator, models = _models(plan, args)
     print(f"{args.product}{' ' + args.level if args.level else ''}: operator {operator!r}, {args.episodes} "
           f"episodes, online planner {args.expansions} expansions per decision"
-          + (f", world {args.world}" if args.world != "model" else ""))
+          + (f", world {args.world}" if args.world != "model" else "")
+          + (f", observe {args.observe}" if args.observe != "state" else ""))
     print("| model | robot | switched | episodes with a reset (resets) | "
           + " | ".join(f"{name.replace('_', ' ')} > 0.9" for name in READINGS)
           + " | robot share | wrong robot actions | mean return | CPU s |")

@@ -216,8 +216,8 @@ def model_names() -> tuple[str, ...]:
 
 def model_label(name: str) -> str:
     """What the model choice shows for the named model ``name``, from the preset's own fields: whether it needs
-    habits, the habits' prior it uses, the act confidence it sets and the model of help before the last step it
-    switches on (so a new preset is described too)."""
+    habits, the habits' prior it uses, the act confidence it sets, the model of help before the last step it
+    switches on and its observations when they are not the paper's (so a new preset is described too)."""
     from planner import api
     from planner.decision.parallel import parallel_flag
 
@@ -230,7 +230,8 @@ def model_label(name: str) -> str:
         prior = "the file's prior" if preset.prior is None else f"prior {preset.prior:g} per {preset.prior_per}"
     acts = "" if preset.act_confidence is None else f", acts at {preset.act_confidence:g}"
     helps = "" if not preset.parallel else f", helps early ({parallel_flag(preset.parallel)})"
-    return f"{name}: habits, {prior}{acts}{helps}"
+    sees = "" if preset.observe == "state" else f", sees each {preset.observe} (--observe {preset.observe})"
+    return f"{name}: habits, {prior}{acts}{helps}{sees}"
 
 
 def _session_product(product_file: str, level: str | None):

@@ -24,7 +24,10 @@ lands where the oracle of the operator's true prior is at 0.95). ``helpful`` is 
 last step: ``confident``'s habits (alpha 1 per state) in the joins model (``--joins``, docs/parallel.md: the robot
 may do any join of the operator's sequence early) at the projected model's own confidence 0.98
 (:data:`~planner.decision.projected.PROJECTED_CONFIDENCE`), the more careful of the two, as ``--model confident
---joins`` gives: one name for the robot that helps a habitual operator.
+--joins`` gives: one name for the robot that helps a habitual operator. ``camera`` is ``helpful`` reading its
+observations as a camera gives them, of the operator's step (``--observe step``, docs/camera.md): the model of the
+camera cell (``aplan session --demo``, a real camera), where it takes more of the work than ``helpful``, its wrong
+actions below 1 % (bench/README.md, "Observations of the step").
 """
 from __future__ import annotations
 
@@ -36,9 +39,10 @@ from .habits import Habits, HabitsError
 from .intention_model import Rewards
 from .joins import JOINS
 from .projected import PROJECTED_CONFIDENCE
+from .step_observations import STATE, STEP
 
-__all__ = ["ModelPreset", "PRESETS", "CONFIDENT", "ORDERS", "HELPFUL", "wrong_for_confidence", "act_confidence_of",
-           "preset_habits", "preset_rewards"]
+__all__ = ["ModelPreset", "PRESETS", "CONFIDENT", "ORDERS", "HELPFUL", "CAMERA", "wrong_for_confidence",
+           "act_confidence_of", "preset_habits", "preset_rewards"]
 
 
 @dataclass(frozen=True)
@@ -48,7 +52,8 @@ class ModelPreset:
     when the user gives neither ``--act-confidence`` nor ``--reward-wrong`` (None: the paper's -50);
     ``orders`` whether the model is the orders' (:mod:`~planner.decision.orders`) rather than the counts';
     ``parallel`` the model of help before the last step it switches on (``"joins"``: ``--joins``), False for
-    none (the flags then choose)."""
+    none (the flags then choose); ``observe`` what its observations depend on (``"step"``: ``--observe step``),
+    the paper's ``"state"`` by default."""
 
     name: str
     habits: bool
@@ -57,13 +62,16 @@ class ModelPreset:
     act_confidence: float | None = None
     orders: bool = False
     parallel: bool | str = False
+    observe: str = STATE
 
 
 CONFIDENT = ModelPreset("confident", True, prior=1.0, prior_per="state", act_confidence=0.95)
 ORDERS = ModelPreset("orders", True, act_confidence=0.9, orders=True)
 HELPFUL = ModelPreset("helpful", True, prior=CONFIDENT.prior, prior_per=CONFIDENT.prior_per,
                       act_confidence=PROJECTED_CONFIDENCE, parallel=JOINS)
-PRESETS = {p.name: p for p in (ModelPreset("paper", False), ModelPreset("habits", True), CONFIDENT, ORDERS, HELPFUL)}
+CAMERA = replace(HELPFUL, name="camera", observe=STEP)
+PRESETS = {p.name: p for p in (ModelPreset("paper", False), ModelPreset("habits", True), CONFIDENT, ORDERS, HELPFUL,
+                               CAMERA)}
 
 
 def _check_confidence(confidence: float) -> float:

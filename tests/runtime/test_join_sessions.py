@@ -141,6 +141,27 @@ def test_with_habits_the_robot_does_more_and_the_preset_is_the_same_model(joins,
     assert _robot(runs["helpful"]) > _robot(plain)
 
 
+def test_the_camera_preset_is_helpful_observing_steps(learned, tmp_path):
+    """``--model camera`` is ``--model helpful --observe step`` (the same decisions, recorded as such, the log
+    replays); contradicting its observations is a usage error."""
+    runs = {}
+    for name, model in (("camera", ["--model", "camera"]), ("helpful", ["--model", "helpful", "--observe", "step"])):
+        log = tmp_path / f"{name}.jsonl"
+        done = run_aplan("session", "pen", "--demo", HABIT_RANK, "--habits", learned, *model, "--expansions",
+                         EXPANSIONS, "--log", log)
+        assert done.returncode == 0 and done.stdout.startswith("assembled"), done.stdout + done.stderr
+        _replays(log)
+        runs[name] = _events(log)
+    start = runs["camera"][0]["settings"]
+    assert (start["observe"], start["parallel"]) == ("step", "joins")
+    assert start["rewards"]["wrong"] == pytest.approx(ROBOT_WRONG)
+    assert _actions(runs["camera"]) == _actions(runs["helpful"]) and _robot(runs["camera"]) > 0
+    bad = run_aplan("session", "pen", "--demo", HABIT_RANK, "--habits", learned, "--model", "camera", "--observe",
+                    "state", "--log", tmp_path / "bad.jsonl")
+    assert bad.returncode == 2 and "--model camera reads observations of the step" in bad.stderr, bad.stderr
+    assert not (tmp_path / "bad.jsonl").exists()
+
+
 @pytest.mark.parametrize("model", ["uniform", "confident"])
 def test_a_keyboard_session_with_joins_makes_the_same_decisions(joins, learned, model, tmp_path):
     """The keyboard's lines are what the operator was seen picking in the same session run here (without habits,

@@ -28,7 +28,7 @@ from planner.assembly import make_plan
 from planner.assembly.explode import sequence_at
 from planner.decision.habits import edge_counts
 from planner.decision.intention_model import intention_model
-from planner.decision.presets import CONFIDENT, HELPFUL, ORDERS, PRESETS, ModelPreset
+from planner.decision.presets import CAMERA, CONFIDENT, HELPFUL, ORDERS, PRESETS, ModelPreset
 from planner.errors import PlannerError
 from planner.product import Subassembly, save_product
 from planner.product.synthetic import chain_product
@@ -67,7 +67,7 @@ def test_session_arguments_pass_habits_and_model_as_the_command_line():
         "--model", "confident"]
     assert session_arguments("p.json", "s.jsonl") == ["session", "p.json", "--demo", "0", "--log", "s.jsonl"]
     with pytest.raises(PlannerError, match="unknown model 'eager'; use one of paper, habits, confident, orders, "
-                                           "helpful"):
+                                           "helpful, camera"):
         session_arguments("p.json", "s.jsonl", model="eager")
 
 
@@ -83,6 +83,9 @@ def test_the_models_offered_are_the_planners_presets(monkeypatch):
     assert model_label("helpful") == (f"helpful: habits, prior {HELPFUL.prior:g} per {HELPFUL.prior_per}, acts at "
                                       f"{HELPFUL.act_confidence:g}, helps early (--joins)")
     assert session_arguments("p.json", "s.jsonl", habits="h.json", model="helpful")[-2:] == ["--model", "helpful"]
+    assert model_label("camera") == (f"camera: habits, prior {CAMERA.prior:g} per {CAMERA.prior_per}, acts at "
+                                     f"{CAMERA.act_confidence:g}, helps early (--joins), sees each step (--observe "
+                                     "step)")
     monkeypatch.setitem(PRESETS, "eager", ModelPreset("eager", True, act_confidence=0.7))
     assert model_names()[-1] == "eager" and model_label("eager") == "eager: habits, the file's prior, acts at 0.7"
     assert session_arguments("p.json", "s.jsonl", habits="h.json", model="eager")[-2:] == ["--model", "eager"]

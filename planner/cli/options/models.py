@@ -9,7 +9,7 @@ from ... import api
 from ...decision.intention_model import Rewards
 from ...decision.deviations import Deviations, deviations_of
 from ...decision.habits import Habits
-from ...decision.presets import CONFIDENT, HELPFUL, ORDERS, PRESETS, preset_rewards
+from ...decision.presets import CAMERA, CONFIDENT, HELPFUL, ORDERS, PRESETS, preset_rewards
 from ...decision.joins import JOINS
 from ...decision.parallel import parallel_flag
 from ...decision.projected import PROJECTED, PROJECTED_CONFIDENCE
@@ -71,7 +71,8 @@ def add_habits_options(group) -> None:
                             f"(whole sequences, a Pitman-Yor mixture) with --act-confidence {ORDERS.act_confidence:g} "
                             f"unless given (docs/habits.md, Orders); helpful: confident's habits with --joins (the "
                             f"robot may do any join of the operator's sequence early) and --act-confidence "
-                            f"{HELPFUL.act_confidence:g} unless given (docs/parallel.md)")
+                            f"{HELPFUL.act_confidence:g} unless given (docs/parallel.md); {CAMERA.name}: helpful with "
+                            "--observe step, the model of a camera cell (docs/camera.md)")
 
 
 def add_parallel_options(group) -> None:
@@ -163,21 +164,30 @@ def model_spec_from(args: argparse.Namespace) -> api.ModelSpec:
 
 def add_observation_options(group) -> None:
     """``--observe state|step``: what an observation depends on (docs/camera.md); the paper's by default."""
-    group.add_argument("--observe", choices=OBSERVE, default=STATE,
+    group.add_argument("--observe", choices=OBSERVE, default=None,
                        help="what the robot's observations depend on: state (the paper's Alg. 3: the state reached, "
                             "drawn afresh each step; the default) or step (a camera that reports the operation the "
                             "operator did, missing it with probability 1/5, and blank when it did nothing; the online "
-                            "planner only; docs/camera.md)")
+                            f"planner or a policy over the lumped model's steps; --model {CAMERA.name} sets it; "
+                            "docs/camera.md)")
 
 
 def observe_from(args: argparse.Namespace) -> str:
-    """``--observe`` (``state`` for a command without it); ``--model paper`` with ``step`` is a usage error (the
-    paper's model observes the state reached)."""
-    observe = getattr(args, "observe", STATE) or STATE
-    if observe == STEP and getattr(args, "habit_model", None) == "paper":
+    """``--observe``, else the ``--model`` preset's (``camera``: ``step``), else ``state``; ``--model paper`` with
+    ``step`` is a usage error (the paper's model observes the state reached), and so is a preset's observation
+    model contradicted (``--model camera --observe state``)."""
+    given = getattr(args, "observe", None)
+    preset = PRESETS.get(getattr(args, "habit_model", None))
+    if given == STEP and preset is not None and preset.name == "paper":
         raise UsageError("--model paper is Alg. 3 as published, whose observations are of the state reached: leave "
                          "out --observe step, or choose another --model")
-    return observe
+    if preset is not None and preset.observe != STATE:
+        if given is not None and given != preset.observe:
+            raise UsageError(f"--model {preset.name} reads observations of the {preset.observe} "
+                             f"(--observe {preset.observe}); leave out --observe {given}, or choose another --model "
+                             "(docs/camera.md)")
+        return preset.observe
+    return given or STATE
 
 
 def add_deviation_options(group) -> None:
