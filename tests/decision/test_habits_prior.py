@@ -125,7 +125,10 @@ def test_act_confidence_needs_a_paying_operation():
 def test_presets():
     """paper: no habits, the paper's rewards; habits: the file's prior; confident: alpha 1 per state and its C
     (w = -10 C / (1 - C)) unless the user gives the wrong reward or a confidence."""
-    assert set(PRESETS) == {"paper", "habits", "confident", "orders", "helpful"}
+    assert set(PRESETS) == {"paper", "habits", "confident", "orders", "helpful", "camera"}
+    camera, helpful = PRESETS["camera"], PRESETS["helpful"]  # helpful with a camera's observations, nothing else
+    assert (camera.observe, helpful.observe) == ("step", "state")
+    assert replace(camera, name="helpful", observe="state") == helpful
     assert preset_rewards(PRESETS["paper"], 10, -2, 0, None, None) == Rewards()
     assert preset_rewards(None, 10, -2, 0, None, None) == Rewards()
     c = CONFIDENT.act_confidence
