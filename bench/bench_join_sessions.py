@@ -1,16 +1,16 @@
-"""Sessions with actions named by joins (issue 23, "In the workbench and the cell"; docs/parallel.md, In a
-session): ``aplan session PRODUCT --demo K`` in the simulated camera cell (the rendered tray seen through the
-vision pipeline) for every full sequence K of a product, with the paper's model, with ``--joins`` and with
-``--model helpful`` (habits learned by ``aplan habits`` from 3 scripted sessions of the operator who does K, the
-robot waiting). Per model: the sessions assembled, the logs ``aplan replay`` reproduces, the robot's share of the
-operations, the joins it did ahead of the operator (its operation was not the operator's, and the operator went on
-with its sequence projected onto the new state), and its wrong actions (a robot operation off the operator's
-sequence whose projection was not feasible, or one no operation of the state was). The operator is replayed
-through each log as the cell ran it (:class:`~planner.runtime.scripted.ScriptedOperator`), checked observation by
-observation against the log.
+"""Sessions with actions named by joins (issue 23, "In the workbench and the cell"; docs/parallel.md, In a session):
+``aplan session PRODUCT --demo K`` in the simulated camera cell (the rendered tray seen through the vision pipeline)
+for every full sequence K of a product, with the paper's model, with ``--joins`` and with ``--model helpful``
+(habits learned by ``aplan habits`` from 3 scripted sessions of the operator who does K, the robot waiting), and
+with ``--model camera`` (``helpful`` with observations of the step, docs/camera.md). Per model: the sessions
+assembled, the logs ``aplan replay`` reproduces, the robot's share of the operations, the joins it did ahead of the
+operator (its operation was not the operator's, and the operator went on with its sequence projected onto the new
+state), and its wrong actions (a robot operation off the operator's sequence whose projection was not feasible, or
+one no operation of the state was). The operator is replayed through each log as the cell ran it
+(:class:`~planner.runtime.scripted.ScriptedOperator`), checked observation by observation against the log.
 
 Run: ``.venv/bin/python bench/bench_join_sessions.py [--product pen] [--expansions 20] [--models
-paper,joins,helpful] [--sequences K,K,...]`` (default: every full sequence; the online planner at a fixed
+paper,joins,helpful,camera] [--sequences K,K,...]`` (default: every full sequence; the online planner at a fixed
 number of expansions per decision: the same actions on any machine).
 """
 from __future__ import annotations
@@ -33,7 +33,9 @@ from planner.runtime.log import EventLog  # noqa: E402
 from planner.runtime.scripted import ScriptedOperator, ScriptedRobot  # noqa: E402
 from planner.runtime.session import run_session  # noqa: E402
 
-MODELS = {"paper": ["--model", "paper"], "joins": ["--joins"], "helpful": ["--model", "helpful"]}
+MODELS = {"paper": ["--model", "paper"], "joins": ["--joins"], "helpful": ["--model", "helpful"],
+          "camera": ["--model", "camera"]}
+LEARNED = ("helpful", "camera")  # the presets that need habits
 
 
 def _aplan(*args) -> subprocess.CompletedProcess:
@@ -51,13 +53,15 @@ class _Wait:
 
 def _habits(model, rank: int, folder: Path) -> Path:
     """``aplan habits`` of 3 sessions in which the operator did sequence ``rank`` alone."""
+    out = folder / f"habits-{rank}.json"
+    if out.exists():  # learned for another preset of the same run: the same 3 sessions
+        return out
     logs = []
     for k in range(3):
         operator = ScriptedOperator(model.plan, model.sequence_operations(model.sequence(rank)))
         path = folder / f"learn-{rank}-{k}.jsonl"
         run_session(model, _Wait(model), operator, ScriptedRobot(), EventLog(path))
         logs.append(path)
-    out = folder / f"habits-{rank}.json"
     done = _aplan("habits", *logs, "-o", out)
     if done.returncode:
         raise SystemExit(done.stderr)
@@ -99,7 +103,7 @@ def main() -> None:
             assembled = replayed = robot = ahead = wrong = 0
             for rank in ranks:
                 log = folder / f"{name}-{rank}.jsonl"
-                extra = ["--habits", _habits(base, rank, folder)] if name == "helpful" else []
+                extra = ["--habits", _habits(base, rank, folder)] if name in LEARNED else []
                 done = _aplan("session", args.product, "--demo", rank, "--expansions", args.expansions, "--log",
                               log, *MODELS[name], *extra)
                 assembled += done.returncode == 0
