@@ -46,6 +46,7 @@ from planner.decision.deviations import Deviations  # noqa: E402
 from planner.decision.episode_measures import episode_measures, run_totals  # noqa: E402
 from planner.decision.mind_measures import READINGS, switch_totals  # noqa: E402
 from planner.decision.operators import CrossingOperator, crossing_pair, parse_operator  # noqa: E402
+from planner.decision.step_observations import OBSERVE, STATE, STEP  # noqa: E402
 from planner.runtime.habits_logs import habits_from_logs  # noqa: E402
 from planner.runtime.log import EventLog  # noqa: E402
 from planner.runtime.scripted import ScriptedOperator, ScriptedRobot  # noqa: E402
@@ -108,7 +109,7 @@ def _models(plan, args) -> tuple[object, list[tuple[str, object]]]:
     deviations = Deviations(args.switch, args.mistakes)
     dev = f"switch {args.switch:g}, mistakes {args.mistakes:g}"
     observe = args.observe
-    step = [("paper, step", api.factored_decision_model(plan, observe=observe))] if observe == "step" else []
+    step = [("paper, step", api.factored_decision_model(plan, observe=observe))] if observe == STEP else []
     if args.crossing is None:
         return parse_operator(args.operator), [
             ("paper", api.factored_decision_model(plan)), *step,
@@ -149,7 +150,7 @@ def main() -> None:
     parser.add_argument("--world", choices=WORLDS, default="model",
                         help="what the simulated camera reports: model (the paper's O(z | i), default) or camera (the "
                              "operation the operator did)")
-    parser.add_argument("--observe", choices=("state", "step"), default="state",
+    parser.add_argument("--observe", choices=OBSERVE, default=STATE,
                         help="what the models but the paper's read an observation as: of the state reached (the "
                              "paper's) or of the step taken (a camera's, docs/camera.md)")
     parser.add_argument("--seed", type=int, default=0)
@@ -163,7 +164,7 @@ def main() -> None:
     print(f"{args.product}{' ' + args.level if args.level else ''}: operator {operator!r}, {args.episodes} "
           f"episodes, online planner {args.expansions} expansions per decision"
           + (f", world {args.world}" if args.world != "model" else "")
-          + (f", observe {args.observe}" if args.observe != "state" else ""))
+          + (f", observe {args.observe}" if args.observe != STATE else ""))
     print("| model | robot | switched | episodes with a reset (resets) | "
           + " | ".join(f"{name.replace('_', ' ')} > 0.9" for name in READINGS)
           + " | robot share | wrong robot actions | mean return | CPU s |")

@@ -28,6 +28,7 @@ sys.path.insert(0, str(ROOT))
 from planner import api, make_plan  # noqa: E402
 from planner.decision.factored_model import factored_model  # noqa: E402
 from planner.decision.joins import names_joins, performed  # noqa: E402
+from planner.decision.presets import PRESETS  # noqa: E402
 from planner.runtime.interfaces import Instruction  # noqa: E402
 from planner.runtime.log import EventLog  # noqa: E402
 from planner.runtime.scripted import ScriptedOperator, ScriptedRobot  # noqa: E402
@@ -35,7 +36,6 @@ from planner.runtime.session import run_session  # noqa: E402
 
 MODELS = {"paper": ["--model", "paper"], "joins": ["--joins"], "helpful": ["--model", "helpful"],
           "camera": ["--model", "camera"]}
-LEARNED = ("helpful", "camera")  # the presets that need habits
 
 
 def _aplan(*args) -> subprocess.CompletedProcess:
@@ -103,7 +103,7 @@ def main() -> None:
             assembled = replayed = robot = ahead = wrong = 0
             for rank in ranks:
                 log = folder / f"{name}-{rank}.jsonl"
-                extra = ["--habits", _habits(base, rank, folder)] if name in LEARNED else []
+                extra = ["--habits", _habits(base, rank, folder)] if name in PRESETS and PRESETS[name].habits else []
                 done = _aplan("session", args.product, "--demo", rank, "--expansions", args.expansions, "--log",
                               log, *MODELS[name], *extra)
                 assembled += done.returncode == 0

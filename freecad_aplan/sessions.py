@@ -220,6 +220,7 @@ def model_label(name: str) -> str:
     switches on and its observations when they are not the paper's (so a new preset is described too)."""
     from planner import api
     from planner.decision.parallel import parallel_flag
+    from planner.decision.step_observations import STATE
 
     preset = api.MODEL_PRESETS[name]
     if not preset.habits:
@@ -230,7 +231,7 @@ def model_label(name: str) -> str:
         prior = "the file's prior" if preset.prior is None else f"prior {preset.prior:g} per {preset.prior_per}"
     acts = "" if preset.act_confidence is None else f", acts at {preset.act_confidence:g}"
     helps = "" if not preset.parallel else f", helps early ({parallel_flag(preset.parallel)})"
-    sees = "" if preset.observe == "state" else f", sees each {preset.observe} (--observe {preset.observe})"
+    sees = "" if preset.observe == STATE else f", sees each {preset.observe} (--observe {preset.observe})"
     return f"{name}: habits, {prior}{acts}{helps}{sees}"
 
 

@@ -77,6 +77,20 @@ def _here(model, rank: int, tmp_path, name: str):
     return operator, _events(tmp_path / f"{name}.jsonl")
 
 
+def _habit_sessions(learned, tmp_path, **models: list[str]) -> dict[str, list[dict]]:
+    """Per name, the events of ``aplan session pen --demo HABIT_RANK --habits LEARNED`` with that name's model
+    options; each session assembles and its log replays."""
+    runs = {}
+    for name, model in models.items():
+        log = tmp_path / f"{name}.jsonl"
+        done = run_aplan("session", "pen", "--demo", HABIT_RANK, "--habits", learned, *model, "--expansions",
+                         EXPANSIONS, "--log", log)
+        assert done.returncode == 0 and done.stdout.startswith("assembled"), done.stdout + done.stderr
+        _replays(log)
+        runs[name] = _events(log)
+    return runs
+
+
 @pytest.fixture(scope="module")
 def joins(pen):
     plan = make_plan(pen)
@@ -123,14 +137,8 @@ def test_a_cell_session_joins_ahead_of_the_operator_and_replays(joins, cell_log,
 
 def test_with_habits_the_robot_does_more_and_the_preset_is_the_same_model(joins, learned, tmp_path):
     uniform, plain = _here(joins, HABIT_RANK, tmp_path, "uniform")
-    runs = {}
-    for name, model in (("confident", ["--model", "confident", "--joins"]), ("helpful", ["--model", "helpful"])):
-        log = tmp_path / f"{name}.jsonl"
-        done = run_aplan("session", "pen", "--demo", HABIT_RANK, "--habits", learned, *model, "--expansions",
-                         EXPANSIONS, "--log", log)
-        assert done.returncode == 0 and done.stdout.startswith("assembled"), done.stdout + done.stderr
-        _replays(log)
-        runs[name] = _events(log)
+    runs = _habit_sessions(learned, tmp_path, confident=["--model", "confident", "--joins"],
+                           helpful=["--model", "helpful"])
     start = runs["helpful"][0]["settings"]
     assert start["parallel"] == "joins" and start["rewards"]["wrong"] == pytest.approx(ROBOT_WRONG)
     assert (start["habits"]["prior"], start["habits"]["prior_per"]) == (HELPFUL.prior, HELPFUL.prior_per)
@@ -144,14 +152,8 @@ def test_with_habits_the_robot_does_more_and_the_preset_is_the_same_model(joins,
 def test_the_camera_preset_is_helpful_observing_steps(learned, tmp_path):
     """``--model camera`` is ``--model helpful --observe step`` (the same decisions, recorded as such, the log
     replays); contradicting its observations is a usage error."""
-    runs = {}
-    for name, model in (("camera", ["--model", "camera"]), ("helpful", ["--model", "helpful", "--observe", "step"])):
-        log = tmp_path / f"{name}.jsonl"
-        done = run_aplan("session", "pen", "--demo", HABIT_RANK, "--habits", learned, *model, "--expansions",
-                         EXPANSIONS, "--log", log)
-        assert done.returncode == 0 and done.stdout.startswith("assembled"), done.stdout + done.stderr
-        _replays(log)
-        runs[name] = _events(log)
+    runs = _habit_sessions(learned, tmp_path, camera=["--model", "camera"],
+                           helpful=["--model", "helpful", "--observe", "step"])
     start = runs["camera"][0]["settings"]
     assert (start["observe"], start["parallel"]) == ("step", "joins")
     assert start["rewards"]["wrong"] == pytest.approx(ROBOT_WRONG)
