@@ -21,10 +21,11 @@ share of the operations, its wrong actions (and their share of its actions) and 
 Run: ``.venv/bin/python bench/bench_change_of_mind.py [--product pen|chain:N|complete:N|FILE|BUNDLE] [--level ID]
 [--episodes 200] [--expansions 200] [--switch 0.05] [--mistakes 0.02] [--operator uniform,changing:0.3 |
 --crossing 0.3 [--logs 20] [--prior-per edge|state]] [--robots online,observer] [--world model|camera]
-[--observe state|step]`` (a bundle is planned with ``--fasteners auto --subassemblies auto``). ``--world camera``:
+[--observe state|step|join]`` (a bundle is planned with ``--fasteners auto --subassemblies auto``). ``--world camera``:
 the simulated camera reports the operation the operator did (planner/decision/camera_world.py), not a draw from
 the paper's observation model. ``--observe step``: every model but the paper's reads the observations as the
-camera's of the step taken (docs/camera.md), and the paper's model is measured a second time so (``paper, step``).
+camera's of the step taken (docs/camera.md), and the paper's model is measured a second time so (``paper, step``);
+``--observe join``: the same with the camera that sees the pieces joined too (one observation per operation).
 """
 from __future__ import annotations
 
@@ -46,7 +47,7 @@ from planner.decision.deviations import Deviations  # noqa: E402
 from planner.decision.episode_measures import episode_measures, run_totals  # noqa: E402
 from planner.decision.mind_measures import READINGS, switch_totals  # noqa: E402
 from planner.decision.operators import CrossingOperator, crossing_pair, parse_operator  # noqa: E402
-from planner.decision.step_observations import OBSERVE, STATE, STEP  # noqa: E402
+from planner.decision.step_observations import OBSERVE, STATE, of_step  # noqa: E402
 from planner.runtime.habits_logs import habits_from_logs  # noqa: E402
 from planner.runtime.log import EventLog  # noqa: E402
 from planner.runtime.scripted import ScriptedOperator, ScriptedRobot  # noqa: E402
@@ -109,7 +110,7 @@ def _models(plan, args) -> tuple[object, list[tuple[str, object]]]:
     deviations = Deviations(args.switch, args.mistakes)
     dev = f"switch {args.switch:g}, mistakes {args.mistakes:g}"
     observe = args.observe
-    step = [("paper, step", api.factored_decision_model(plan, observe=observe))] if observe == STEP else []
+    step = [(f"paper, {observe}", api.factored_decision_model(plan, observe=observe))] if of_step(observe) else []
     if args.crossing is None:
         return parse_operator(args.operator), [
             ("paper", api.factored_decision_model(plan)), *step,
@@ -152,7 +153,7 @@ def main() -> None:
                              "operation the operator did)")
     parser.add_argument("--observe", choices=OBSERVE, default=STATE,
                         help="what the models but the paper's read an observation as: of the state reached (the "
-                             "paper's) or of the step taken (a camera's, docs/camera.md)")
+                             "paper's), of the step taken (a camera's, docs/camera.md), or of the step and the pieces it joined")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--max-steps", type=int, default=100)
     args = parser.parse_args()

@@ -38,7 +38,8 @@ from ..assembly.plan import Plan
 from ..errors import PlannerError
 from ..product import Product
 from ..validation import InputLimits
-from .decisions import PLANNERS, choose_planner, decision_maker, evaluate, evaluate_operator, online_planner, simulate
+from .decisions import (PLANNERS, check_cell_observe, choose_planner, decision_maker, evaluate, evaluate_operator,
+                        online_planner, simulate)
 from .levels import (
     LEVEL_KEYS,
     arranged,
@@ -101,7 +102,7 @@ __all__ = ["resolve_product", "record_detection_proposals", "DEFAULT_MODE", "fas
            "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
            "check_solved", "evaluate_operator",
-           "policy_for", "simulate", "evaluate", "PLANNERS", "factored_decision_model", "online_planner",
+           "policy_for", "simulate", "evaluate", "check_cell_observe", "PLANNERS", "factored_decision_model", "online_planner",
            "choose_planner", "decision_maker", "arranged", "levels_of", "level_product", "hierarchy_statistics_of",
            "sequence_choices", "plan_in_3d", "sequence_from_log", "InputLimits",
            # the stages' values (issue 24), and names front ends read from here

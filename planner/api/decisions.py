@@ -15,17 +15,17 @@ from ..decision.episodes import evaluate, evaluate_operator, simulate
 from ..decision.online import OnlinePlanner
 from ..decision.policy import AlphaVectorPolicy, PolicyError, read_policy
 from ..defaults import DECISION_TIME, INTENTION_LIMIT, ONLINE_EXPANSIONS
-from ..errors import PlannerError, gib
+from ..errors import PlannerError, UsageError, gib
 from ..product import Product
 
 from .models import check_parallel_flat
-from ..decision.step_observations import STEP
+from ..decision.step_observations import JOIN, of_step
 from .plans import _decidable, base_part_of, plan_of
 from .policies import policy_for
 from .specs import PLANNERS, ModelSpec, PlannerChoice
 
 __all__ = ["PLANNERS", "online_planner", "choose_planner", "decision_maker", "simulate", "evaluate",
-           "evaluate_operator"]
+           "evaluate_operator", "check_cell_observe"]
 
 
 def online_planner(model: FactoredIntentionModel, decision_time: float | None = DECISION_TIME,
@@ -39,15 +39,26 @@ def online_planner(model: FactoredIntentionModel, decision_time: float | None = 
                          lower=lower)
 
 
+def check_cell_observe(observe: str) -> None:
+    """A session reads the tray camera or the keyboard, which report the loose parts and tool of a step, not the
+    pieces joined: ``--observe join`` (their alphabet) is for simulated worlds (``aplan simulate/evaluate
+    --world camera``) until a camera that sees the pieces is built. A :class:`UsageError` naming the fix."""
+    if observe == JOIN:
+        raise UsageError("--observe join needs a camera that sees the pieces being joined, and a session's camera "
+                         "(the parts tray) and keyboard report the loose parts and tool only: use --observe step "
+                         "(or --model camera), or simulate the join camera with aplan simulate --world camera "
+                         "--observe join (docs/camera.md)")
+
+
 def check_step_planner(observe: str, planner: str, policy) -> None:
     """Observations of the step (``--observe step``) are the online planner's alone, without a policy: the flat
     model and the lumped POMDP (which policy files and the offline solver are of) hold observations of the state
     reached, and a policy of theirs is no lower bound under a camera's. A :class:`PlannerError` naming the fix."""
-    if observe == STEP and (planner != "online" or policy):
+    if of_step(observe) and (planner != "online" or policy):
         what = "--policy" if policy else "--planner offline"
-        raise PlannerError(f"--observe step is decided by the online planner alone: {what} is a policy of the "
+        raise PlannerError(f"--observe {observe} is decided by the online planner alone: {what} is a policy of the "
                            "paper's observations (of the state reached), no bound under a camera's; leave out "
-                           f"{what}, or --observe step")
+                           f"{what}, or --observe {observe}")
 
 
 def choose_planner(plan: Plan, planner: str | None, policy: str | os.PathLike | None,

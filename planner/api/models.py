@@ -30,7 +30,7 @@ from ..decision.parallel import parallel_flag
 from ..decision.models import tables
 from ..decision.lumped_model import lumped_model as build_lumped_model
 from ..decision.pomdp import POMDP
-from ..decision.step_observations import STATE, STEP, refuse_step_tables
+from ..decision.step_observations import STATE, of_step, refuse_step_tables
 from ..decision.step_pomdp import step_pomdp, step_pomdp_states
 from ..decision.lumped_model import lumped_pomdp_bytes
 from ..decision.presets import PRESETS, ModelPreset, preset_habits
@@ -153,7 +153,7 @@ def factored_decision_model(product: str | os.PathLike | Product | Plan, technic
                             deviations: Deviations | None = None, observe: str = STATE) -> FactoredIntentionModel:
     """The same decision model without enumerating intentions (paper Sec. V): beliefs over classes;
     ``parallel``: the parallel model (docs/parallel.md); ``deviations``: change of mind and mistakes;
-    ``observe``: the paper's observations (``"state"``) or a camera's (``"step"``, docs/camera.md)."""
+    ``observe``: the paper's observations (``"state"``) or a camera's (``"step"``, ``"join"``: docs/camera.md)."""
     plan = product if isinstance(product, Plan) else _decidable(plan_of(product, technical, limits))
     if parallel:
         check_parallel_memory(plan, limits.memory, parallel)
@@ -244,7 +244,7 @@ def model_of(argument: str | os.PathLike | Product | Plan, spec: ModelSpec = Mod
     is on the classes), and a plan may be given. Cost: that of the model built. ``spec.observe`` ``"step"``: with
     ``lumped``, the POMDP over (class, the step's observation) pairs (:func:`~planner.decision.step_pomdp.
     step_pomdp`: a bare POMDP, for files and solvers), else refused (the flat model cannot hold it)."""
-    if spec.observe == STEP:
+    if of_step(spec.observe):
         return _step_tables(argument, spec, lumped and not flat)
     if flat or isinstance(argument, Plan):
         return decision_model(argument, spec.technical, spec.rewards, spec.discount, spec.base_part, spec.limits,
@@ -254,24 +254,24 @@ def model_of(argument: str | os.PathLike | Product | Plan, spec: ModelSpec = Mod
 
 
 def _step_tables(argument, spec: ModelSpec, lumped: bool) -> POMDP:
-    """The POMDP of ``--observe step`` on a PRODUCT (:func:`~planner.decision.step_pomdp.step_pomdp`), after
+    """The POMDP of ``--observe step|join`` on a PRODUCT (:func:`~planner.decision.step_pomdp.step_pomdp`), after
     the factored model's and the lumped model's memory checks (its states: the classes and their pairs with the
     observations into them, refused past the budget with the count)."""
     if not lumped or isinstance(argument, Plan) or _model_file_kind(argument):
         refuse_step_tables(spec, "the flat model over intentions (or a model file)",
                            "add --lumped for the POMDP over (class, seen observation) pairs (docs/camera.md), use "
-                           "the online planner (aplan simulate/session), or leave out --observe step")
+                           "the online planner (aplan simulate/session), or leave out --observe")
     plan = _decidable(plan_of(argument, spec.technical, lumped_limits(spec.limits)))
     check_lumped_memory(plan, spec.limits.memory)
     model = factored_decision_model(plan, spec.technical, spec.rewards, spec.discount, spec.base_part, spec.limits,
-                                    spec.habits, spec.parallel, spec.deviations, STEP)
+                                    spec.habits, spec.parallel, spec.deviations, spec.observe)
     n = step_pomdp_states(model)
     needed = lumped_pomdp_bytes(n, len(model.actions))
     if needed > spec.limits.memory:
-        raise MemoryLimitError(f"the POMDP of --observe step would hold {n:,} states (the classes and their pairs "
+        raise MemoryLimitError(f"the POMDP of --observe {spec.observe} would hold {n:,} states (the classes and their pairs "
                                f"with the observations into them) x {len(model.actions):,} actions, about "
                                f"{gib(needed)}, past the memory budget of {gib(spec.limits.memory)}; use the online "
-                               "planner (aplan simulate/session --observe step), or --base-part")
+                               f"planner (aplan simulate/session --observe {spec.observe}), or --base-part")
     return step_pomdp(model)
 
 

@@ -1,7 +1,7 @@
 """A plan: the AND/OR graph, assembly state graph, tags and observations of one product, built once."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -10,9 +10,11 @@ from .andor import AndOrGraph, and_or_graph, connected_sets_bound, liaison_adjac
 from .guards import SizeLimits
 from .state_count import StateCount, count_states, count_unconstrained, is_unconstrained
 from .states import AssemblyStateGraph, assembly_state_graph, check_counted
-from .tags import Observation, OperationTags, fastener_installs, observation_table, operation_tags
+from .tags import (Observation, OperationTags, fastener_installs, join_observation_table, observation_table,
+                   operation_tags)
 
-__all__ = ["Plan", "make_plan", "count_before_andor", "check_before_andor", "guarded_state_graph"]
+__all__ = ["Plan", "make_plan", "with_join_observations", "count_before_andor", "check_before_andor",
+           "guarded_state_graph"]
 
 
 @dataclass(frozen=True)
@@ -62,6 +64,14 @@ def make_plan(product: Product, technical: bool | None = None, limits: SizeLimit
     states = guarded_state_graph(andor, limits, int(tags.robot.sum()) + 1, counted)
     return Plan(product, andor, states, tags, observations, operation_observation, groups, installs,
                 folding.original)
+
+
+def with_join_observations(plan: Plan) -> Plan:
+    """``plan`` with the observations of a camera that sees the pieces joined (one per operation:
+    :func:`~planner.assembly.tags.join_observation_table`) in place of the paper's. Cost: O(operations x
+    parts)."""
+    observations, seen = join_observation_table(plan.andor, plan.tags, plan.fasteners, plan.installs)
+    return replace(plan, observations=observations, operation_observation=seen)
 
 
 def _reserve(limits: SizeLimits, actions: int):

@@ -14,6 +14,11 @@ that are single parts (one part extends a subassembly, two parts start one, none
 and the fasteners it installs, together with the tool. The *blank* observation (nothing picked) is what
 waiting looks like; an operation that joins two subassemblies without a tool or fasteners looks the same as
 waiting.
+
+The *join* observation of an operation (:func:`join_observation_table`, ``--observe join``) is what a camera
+that also sees the pieces being joined reports: the same loose parts, fasteners and tool, and the parts of each
+input that is a subassembly (``pieces``). Two operations never share it (an operation is its two inputs), so it
+names the operation.
 """
 from __future__ import annotations
 
@@ -24,20 +29,24 @@ import numpy as np
 from ..product import FastenerGroup, Product
 from .andor import AndOrGraph
 
-__all__ = ["Observation", "BLANK", "OperationTags", "fastener_installs", "operation_tags", "observation_table"]
+__all__ = ["Observation", "BLANK", "OperationTags", "fastener_installs", "operation_tags", "observation_table",
+           "join_observation_table"]
 
 
 @dataclass(frozen=True, order=True)
 class Observation:
-    """The parts and tool the operator picks for one operation; ``BLANK`` when nothing is picked."""
+    """The parts and tool the operator picks for one operation; ``BLANK`` when nothing is picked. ``pieces``:
+    the parts of each subassembly the operation joins, in a join observation only (module docstring)."""
 
     parts: tuple[str, ...] = ()
     tool: str | None = None
+    pieces: tuple[tuple[str, ...], ...] = ()
 
     def __str__(self) -> str:
         if self == BLANK:
             return "blank"
-        return "+".join(list(self.parts) + ([f"[{self.tool}]"] if self.tool else []))
+        pieces = ["{" + " ".join(piece) + "}" for piece in self.pieces]
+        return "+".join(pieces + list(self.parts) + ([f"[{self.tool}]"] if self.tool else []))
 
 
 BLANK = Observation()
@@ -188,6 +197,21 @@ def observation_table(andor: AndOrGraph, tags: OperationTags, groups: tuple[Fast
     position = {o: i for i, o in enumerate(observations)}
     lookup = np.array([position[o] for o in per_key], dtype=np.int64)
     return observations, lookup[np.asarray(inverse).reshape(-1)]
+
+
+def join_observation_table(andor: AndOrGraph, tags: OperationTags, groups: tuple[FastenerGroup, ...] = (),
+                           installs: tuple[np.ndarray, ...] = ()) -> tuple[list[Observation], np.ndarray]:
+    """:func:`observation_table` for a camera that also sees the pieces joined: ``BLANK``, then one observation
+    per operation in operation order (its :func:`observation_table` observation with the parts of each input
+    that is a subassembly as ``pieces``), and ``operation j -> j + 1``. Cost: O(operations x parts)."""
+    observations, seen = observation_table(andor, tags, groups, installs)
+    single = _single_part(andor)
+    joined = [BLANK]
+    for j, operation in enumerate(andor.operations):
+        base = observations[seen[j]]
+        pieces = tuple(sorted(tuple(sorted(andor.parts_of(c))) for c in operation.children if single[c] < 0))
+        joined.append(Observation(base.parts, base.tool, pieces))
+    return joined, np.arange(1, len(andor.operations) + 1, dtype=np.int64)
 
 
 def _fastener_codes(count: int, groups: tuple[FastenerGroup, ...],

@@ -175,6 +175,7 @@ def _sim(args: argparse.Namespace) -> int:
     _require()
     import rospy
 
+    from ..api import check_cell_observe
     from ..runtime.ros.sim import SimulatedRosCell
     from ..runtime.tray import CameraModel, SimulatedCell, tray_layout
     from ..runtime.vision import marker_map
@@ -183,6 +184,7 @@ def _sim(args: argparse.Namespace) -> int:
     from .runtime import _demo_operations
 
     spec, choice = model_spec_from(args), planner_choice_from(args)  # once, for every level
+    check_cell_observe(spec.observe)
 
     def cell_of(product) -> SimulatedCell:
         """The cell of aplan session --demo K on one level, frame for frame (planner.cli.runtime._open_stream)."""

@@ -127,6 +127,7 @@ def _session(args: argparse.Namespace) -> int:
     for path in paths:  # every level's log before the first level starts: a refusal has done nothing
         check_output(path, option="--log", replaceable=False, noun="log")
     spec, choice = model_spec_from(args), planner_choice_from(args)  # once, for every level
+    api.check_cell_observe(spec.observe)
     status = 0
     for k, ((level, product), path) in enumerate(zip(levels, paths), start=1):
         if len(levels) > 1:

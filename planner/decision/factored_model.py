@@ -52,7 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..assembly.intentions import allowed_edges, base_part_first_edges, paths_to_final
-from ..assembly.plan import Plan
+from ..assembly.plan import Plan, with_join_observations
 from ..defaults import BLANK_WEIGHT, DISCOUNT, STAY
 from ..errors import PlannerError
 from .deviations import Deviations, mix_likelihood, operator_step, switch_share
@@ -65,7 +65,7 @@ from .parallel import (ParallelTable, parallel_expected_rewards, parallel_predic
 from .joins import JOINS, join_actions
 from .orders import OrdersPrior, check_alone, node_keys
 from .projected import PROJECTED, projected_table
-from .step_observations import STATE, check_observe, operator_advance, stay_part
+from .step_observations import JOIN, STATE, check_observe, operator_advance, stay_part
 
 __all__ = ["FactoredBelief", "FactoredIntentionModel", "factored_model", "factored_model_bytes"]
 
@@ -363,7 +363,8 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     :mod:`~planner.decision.joins`); False: the paper's.
     ``deviations``: change of mind and mistakes (:mod:`~planner.decision.deviations`), None for the paper's.
     ``orders``: the orders' model (:mod:`~planner.decision.orders`), built on its augmented graph and weights.
-    ``observe``: ``"state"`` (the paper's observations) or ``"step"`` (:mod:`~planner.decision.step_observations`).
+    ``observe``: ``"state"`` (the paper's observations), ``"step"`` or ``"join"`` (a camera's:
+    :mod:`~planner.decision.step_observations`; ``"join"`` puts the alphabet of the pieces joined in the model's plan).
 
     Cost: O(S + E log E) time and O(S + E) memory for S states and E state edges (one sort of the edges by
     source, one of the (state, observation) pairs); Python-int arithmetic only where the counts pass 2**52.
@@ -371,6 +372,8 @@ def factored_model(plan: Plan, rewards: Rewards = Rewards(), discount: float = D
     if orders is not None:
         check_alone(weights, base_part, parallel, deviations)
         plan, weights = orders.plan, orders.weights
+    if check_observe(observe) == JOIN:  # the camera's alphabet names each operation
+        plan = with_join_observations(plan)
     states = plan.states
     S, E, Z = states.n_states, states.n_edges, len(plan.observations)
     final = states.final

@@ -10,7 +10,7 @@ from ..assembly.intentions import IntentionGraph
 from .belief import UnexplainedObservation, _log_reset, reset_support
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .intention_model import intention_weights
-from .step_observations import STEP, predict_seen, step_posterior
+from .step_observations import of_step, predict_seen, step_posterior
 
 __all__ = ["FactoredUpdater", "to_flat"]
 
@@ -38,7 +38,7 @@ class FactoredUpdater:
         """The posterior belief; on an unexplained observation, a reset (class docstring). An action or
         observation that is not the model's raises :class:`PlannerError`."""
         self.model.check_step(action, observation)
-        if self.model.observe == STEP:  # the likelihood depends on the step taken: per piece of the prediction
+        if of_step(self.model):  # the likelihood depends on the step taken: per piece of the prediction
             posterior = step_posterior(self.model, predict_seen(self.model, belief, action), observation)
             return posterior if posterior is not None else self._reset(belief, action, observation)
         predicted = self.model.predict(belief, action)

@@ -45,7 +45,7 @@ from .deviations import with_mistakes
 from .factored_model import FactoredBelief, FactoredIntentionModel
 from .online_steps import StepTimes
 from .policy import AlphaVectorPolicy
-from .step_observations import STEP, StepSplit, predict_seen, refuse_step_tables
+from .step_observations import StepSplit, of_step, predict_seen, refuse_step_tables
 
 # ClassValues, class_values, revealed_state_values and VALUE_BLOCK live in planner.decision.bounds (the
 # online planner's and the solver's warm start's bounds); still importable from here.
@@ -67,7 +67,7 @@ def observation_split(model: FactoredIntentionModel, predicted: FactoredBelief
 def _split_of(model: FactoredIntentionModel, belief: FactoredBelief, action: int, value: np.ndarray | None):
     """The split by observation of ``belief`` after ``action``: :class:`_Split` (with mistakes mixed in), or
     with observations of the step :class:`~planner.decision.step_observations.StepSplit`."""
-    if model.observe == STEP:
+    if of_step(model):
         return StepSplit(model, predict_seen(model, belief, action), value)
     return with_mistakes(model, _Split(model, model.predict(belief, action), value), value)
 

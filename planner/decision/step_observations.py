@@ -13,7 +13,10 @@ gives blank only 1/(4k + 1) of the time), so a robot reading a camera drifts off
                       (1 - b) [z = obs(e)] + b [z = 0]        when it did state edge e's operation,
 
 ``obs(e)`` the observation of ``e``'s operation (:attr:`~planner.assembly.plan.Plan.operation_observation`: its
-loose part and tool; 0 when it has neither, and then the step is never seen). The robot's own operation is not
+loose part and tool; 0 when it has neither, and then the step is never seen). ``--observe join`` is the same
+model over a richer alphabet: a camera that also sees the pieces joined, so that ``obs(e)`` names ``e``'s
+operation (:func:`~planner.assembly.tags.join_observation_table`; the model's plan carries that alphabet,
+:func:`~planner.assembly.plan.with_join_observations`), and no operation is unseen but by a miss. The robot's own operation is not
 an observation (the robot knows what it did; the camera watches the operator), as in the camera world. States,
 transitions, rewards, the initial belief, habits, the parallel models and the change of mind are the factored
 model's, unchanged; mistakes mix as before, ``(1 - mu) O + mu / Z``. With ``observe="state"`` (the default) the
@@ -43,28 +46,38 @@ from ..errors import PlannerError
 from ..defaults import CAMERA_BLANK
 from .factored_belief import FactoredBelief, _sum_by
 
-__all__ = ["OBSERVE", "STATE", "STEP", "check_observe", "StepPrediction", "stay_part", "operator_advance",
+__all__ = ["OBSERVE", "STATE", "STEP", "JOIN", "STEPWISE", "check_observe", "of_step", "StepPrediction", "stay_part", "operator_advance",
            "predict_seen", "step_likelihood", "step_posterior", "StepSplit", "refuse_step_tables"]
 
-STATE, STEP = "state", "step"
-#: What an observation depends on: the state reached (Alg. 3, the default) or the operator's step (a camera).
-OBSERVE = (STATE, STEP)
+STATE, STEP, JOIN = "state", "step", "join"
+#: What an observation depends on: the state reached (Alg. 3, the default), the operator's step as the tray
+#: camera sees it (its loose parts and tool), or the step with the pieces it joined (a camera that sees them).
+OBSERVE = (STATE, STEP, JOIN)
+#: The observation models whose observation depends on the step taken (this module's).
+STEPWISE = (STEP, JOIN)
 
 
 def check_observe(observe: str) -> str:
     """``observe`` when it is one of :data:`OBSERVE`, else a :class:`PlannerError` naming them."""
     if observe not in OBSERVE:
-        raise PlannerError(f"unknown observation model {observe!r}: use {STATE!r} (the paper's: the state reached) "
-                           f"or {STEP!r} (a camera's: the operator's step) (--observe)")
+        raise PlannerError(f"unknown observation model {observe!r}: use {STATE!r} (the paper's: the state reached), "
+                           f"{STEP!r} (a camera's: the operator's step) or {JOIN!r} (the step and the pieces it "
+                           "joined) (--observe)")
     return observe
 
 
+def of_step(model_or_observe) -> bool:
+    """Whether a model (or an ``observe`` value) has observations of the step taken (:data:`STEPWISE`)."""
+    observe = model_or_observe if isinstance(model_or_observe, str) else getattr(model_or_observe, "observe", STATE)
+    return observe in STEPWISE
+
+
 def refuse_step_tables(model, what: str, fix: str = "use the online planner (--planner online, the default "
-                       "without --policy), or leave out --observe step") -> None:
+                       "without --policy), or leave out --observe") -> None:
     """A :class:`PlannerError` when ``model`` observes steps and ``what`` (a lumped POMDP, a file) needs tables
     ``O(z | state reached)``, which cannot hold observations of the step: ``fix`` names what can."""
-    if getattr(model, "observe", STATE) == STEP:
-        raise PlannerError(f"--observe step gives observations of the operator's step, and {what} holds "
+    if of_step(model):
+        raise PlannerError(f"--observe {model.observe} gives observations of the operator's step, and {what} holds "
                            f"observations of the state reached only: {fix}")
 
 

@@ -31,7 +31,7 @@ from .deviations import lumped_switch
 from .lumped_model import LUMPED_SUFFIX, _rewards, advance_matrix, class_names
 from .parallel_values import parallel_rows
 from .pomdp import POMDP
-from .step_observations import STEP
+from .step_observations import of_step
 
 __all__ = ["STEP_SUFFIX", "step_states", "step_pomdp", "step_pomdp_states"]
 
@@ -63,8 +63,8 @@ def _columns(model, keys: np.ndarray, classes: np.ndarray, seen: np.ndarray) -> 
 def step_pomdp(model) -> POMDP:
     """The POMDP over pairs (module docstring) of a factored model with ``observe="step"``. Cost: module
     docstring."""
-    if model.observe != STEP:
-        raise ValueError("step_pomdp needs a model with observations of the step (observe='step')")
+    if not of_step(model):
+        raise ValueError("step_pomdp needs a model with observations of the step (observe='step' or 'join')")
     n, Z, E = model.n_classes, len(model.plan.observations), model.final_class
     pair_class, pair_seen = step_states(model)
     keys = pair_class * Z + pair_seen

@@ -20,7 +20,7 @@ from planner.decision.deviations import Deviations
 from planner.decision.habits import habit_weights_from
 from planner.decision.online import OnlinePlanner, _split_of
 from planner.decision.belief import DiscreteUpdater
-from planner.decision.step_observations import STEP, check_observe, predict_seen, step_posterior
+from planner.decision.step_observations import JOIN, STEP, check_observe, predict_seen, step_posterior
 from planner.decision.step_pomdp import step_pomdp, step_states
 from planner.defaults import CAMERA_BLANK, STAY
 from planner.errors import PlannerError
@@ -108,14 +108,15 @@ def plans(pen):
     return {"pen": make_plan(pen, True), "chain 5": make_plan(chain_product(5))}
 
 
+@pytest.mark.parametrize("observe", [STEP, JOIN])
 @pytest.mark.parametrize("case", CASES)
 @pytest.mark.parametrize("product", PRODUCTS)
-def test_the_step_filter_equals_the_filter_over_every_completion(plans, product, case):
+def test_the_step_filter_equals_the_filter_over_every_completion(plans, product, case, observe):
     plan = plans[product]
     habits, deviations = CASES[case]
     rng = np.random.default_rng(7)
     weights = habit_weights_from(plan, rng.integers(0, 4, plan.states.n_edges).astype(float), 1.0) if habits else None
-    model = factored_model(plan, weights=weights, deviations=deviations, observe=STEP)
+    model = factored_model(plan, weights=weights, deviations=deviations, observe=observe)
     reference = CompletionFilter(model, model.weights, deviations)
     updater = FactoredUpdater(model)
     for episode in range(4):
@@ -129,10 +130,11 @@ def test_the_step_filter_equals_the_filter_over_every_completion(plans, product,
     assert updater.events == []  # every observation drawn from the world is explained: no reset
 
 
+@pytest.mark.parametrize("observe", [STEP, JOIN])
 @pytest.mark.parametrize("parallel", [False, "joins"])
 @pytest.mark.parametrize("case", CASES)
 @pytest.mark.parametrize("product", PRODUCTS)
-def test_the_step_pomdp_summed_over_the_seen_is_the_step_filter(plans, product, case, parallel):
+def test_the_step_pomdp_summed_over_the_seen_is_the_step_filter(plans, product, case, parallel, observe):
     """The POMDP over (class, seen) pairs (planner/decision/step_pomdp.py), filtered exactly by the generic
     DiscreteUpdater and summed over the seen observation, is the factored step filter; its rows are
     distributions, and the observations are drawn from the POMDP itself (so parallel joins are covered)."""
@@ -140,7 +142,7 @@ def test_the_step_pomdp_summed_over_the_seen_is_the_step_filter(plans, product, 
     habits, deviations = CASES[case]
     rng = np.random.default_rng(11)
     weights = habit_weights_from(plan, rng.integers(0, 4, plan.states.n_edges).astype(float), 1.0) if habits else None
-    model = factored_model(plan, weights=weights, deviations=deviations, parallel=parallel, observe=STEP)
+    model = factored_model(plan, weights=weights, deviations=deviations, parallel=parallel, observe=observe)
     pomdp = step_pomdp(model)
     pair_class, pair_seen = step_states(model)
     assert pomdp.n_states == pair_class.size and np.all(pair_seen[np.flatnonzero(np.diff(pair_class)) + 1] == 0)

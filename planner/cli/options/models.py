@@ -13,7 +13,7 @@ from ...decision.presets import CAMERA, CONFIDENT, HELPFUL, ORDERS, PRESETS, pre
 from ...decision.joins import JOINS
 from ...decision.parallel import parallel_flag
 from ...decision.projected import PROJECTED, PROJECTED_CONFIDENCE
-from ...decision.step_observations import OBSERVE, STATE, STEP
+from ...decision.step_observations import OBSERVE, STATE, of_step
 from ...defaults import DISCOUNT
 from ...errors import PlannerError, UsageError
 
@@ -163,25 +163,29 @@ def model_spec_from(args: argparse.Namespace) -> api.ModelSpec:
 
 
 def add_observation_options(group) -> None:
-    """``--observe state|step``: what an observation depends on (docs/camera.md); the paper's by default."""
+    """``--observe state|step|join``: what an observation depends on (docs/camera.md); the paper's by default."""
     group.add_argument("--observe", choices=OBSERVE, default=None,
                        help="what the robot's observations depend on: state (the paper's Alg. 3: the state reached, "
-                            "drawn afresh each step; the default) or step (a camera that reports the operation the "
-                            "operator did, missing it with probability 1/5, and blank when it did nothing; the online "
-                            f"planner or a policy over the lumped model's steps; --model {CAMERA.name} sets it; "
-                            "docs/camera.md)")
+                            "drawn afresh each step; the default), step (a camera that reports the operation the "
+                            "operator did by its loose parts and tool, missing it with probability 1/5, and blank "
+                            "when it did nothing; the online planner or a policy over the lumped model's steps; "
+                            f"--model {CAMERA.name} sets it) or join (the same camera seeing the pieces joined too, "
+                            "so each operation is told apart; simulated worlds only: the tray camera cannot see "
+                            "them); docs/camera.md")
 
 
 def observe_from(args: argparse.Namespace) -> str:
     """``--observe``, else the ``--model`` preset's (``camera``: ``step``), else ``state``; ``--model paper`` with
-    ``step`` is a usage error (the paper's model observes the state reached), and so is a preset's observation
-    model contradicted (``--model camera --observe state``)."""
+    ``step`` or ``join`` is a usage error (the paper's model observes the state reached), and so is a preset's
+    observation model contradicted (``--model camera --observe state``; ``join`` is a camera's too)."""
     given = getattr(args, "observe", None)
     preset = PRESETS.get(getattr(args, "habit_model", None))
-    if given == STEP and preset is not None and preset.name == "paper":
+    if given is not None and of_step(given) and preset is not None and preset.name == "paper":
         raise UsageError("--model paper is Alg. 3 as published, whose observations are of the state reached: leave "
-                         "out --observe step, or choose another --model")
+                         f"out --observe {given}, or choose another --model")
     if preset is not None and preset.observe != STATE:
+        if given is not None and of_step(given) and of_step(preset.observe):
+            return given
         if given is not None and given != preset.observe:
             raise UsageError(f"--model {preset.name} reads observations of the {preset.observe} "
                              f"(--observe {preset.observe}); leave out --observe {given}, or choose another --model "

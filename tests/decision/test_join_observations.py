@@ -1,0 +1,103 @@
+"""The camera that sees the pieces joined (``--observe join``; planner/assembly/tags.py
+``join_observation_table``, planner/decision/step_observations.py): one observation per operation, each naming
+its two inputs; with no missed detection the filter knows the assembly state after every step (where the tray
+camera's alphabet, ``--observe step``, leaves states it cannot tell apart); a session refuses it (its camera
+and keyboard report the loose parts and tool only); the simulated camera world runs it without a reset.
+The filter's exactness over every completion, and the POMDP over (class, seen) pairs, are checked with the
+step model's in test_step_observations.py (parametrised over both alphabets)."""
+from __future__ import annotations
+
+from argparse import Namespace
+
+import numpy as np
+import pytest
+from aplan_runner import run_aplan
+
+from planner import chain_product, complete_product, make_plan
+from planner.assembly.plan import with_join_observations
+from planner.assembly.tags import BLANK
+from planner.decision import FactoredUpdater, factored_model
+from planner.decision.online import OnlinePlanner
+from planner.cli.options.models import observe_from
+from planner.decision.step_observations import JOIN, STEP
+from planner.errors import UsageError
+
+
+@pytest.fixture(scope="module")
+def plans(pen):
+    return {"pen": make_plan(pen, True), "chain 5": make_plan(chain_product(5)),
+            "complete 4": make_plan(complete_product(4))}
+
+
+@pytest.mark.parametrize("product", ["pen", "chain 5", "complete 4"])
+def test_each_operation_has_its_own_observation_naming_its_inputs(plans, product):
+    plan = with_join_observations(plans[product])
+    andor = plan.andor
+    assert plan.observations[0] == BLANK and len(plan.observations) == len(andor.operations) + 1
+    assert len(set(plan.observations)) == len(plan.observations)  # distinct: the observation names the operation
+    assert np.array_equal(plan.operation_observation, np.arange(1, len(andor.operations) + 1))
+    for j in range(len(andor.operations)):
+        seen = plan.observations[plan.operation_observation[j]]
+        first, second = andor.inputs(j)
+        assert seen != BLANK
+        assert set(seen.parts) | {p for piece in seen.pieces for p in piece} == first | second
+        assert set(map(frozenset, seen.pieces)) == {s for s in (first, second) if len(s) > 1}
+        assert seen.tool == plan.tags.tool[j]
+    # the tray camera's alphabet is the paper's, unchanged beside it
+    assert plans[product].observations[0] == BLANK and not any(o.pieces for o in plans[product].observations)
+
+
+def _true_state_mass(model, belief, state: int) -> float:
+    return float(belief.mass[model.class_source[belief.classes] == state].sum())
+
+
+def _known_after_every_step(model, sequence) -> list[float]:
+    """The operator does ``sequence`` (state edges) one per step while the robot waits, every step seen: the
+    belief on the true assembly state after each step."""
+    updater = FactoredUpdater(model)
+    belief, known = updater.initialize(), []
+    for edge in sequence:
+        z = int(model.plan.operation_observation[model.class_operation[edge]])
+        belief = updater.update(belief, model.wait, z)
+        known.append(_true_state_mass(model, belief, int(model.class_target[edge])))
+    assert updater.events == []
+    return known
+
+
+@pytest.mark.parametrize("product", ["chain 5", "complete 4"])
+def test_with_every_step_seen_the_state_is_known_after_each(plans, product):
+    """Closed form: each seen operation names its inputs, so the history of operations from the initial state
+    names the state (mass 1 on it, to rounding). The tray camera's alphabet does not: on these products some
+    operations join two subassemblies without a tool (blank to it), and some states share every history."""
+    join, step = factored_model(plans[product], observe=JOIN), factored_model(plans[product], observe=STEP)
+    least_step = 1.0
+    for r in range(join.n_sequences):
+        sequence = join.sequence(r)
+        assert min(_known_after_every_step(join, sequence)) == pytest.approx(1.0, abs=1e-12)
+        least_step = min(least_step, min(_known_after_every_step(step, step.sequence(r))))
+    assert least_step < 0.9
+
+
+def test_the_camera_world_runs_it_without_a_reset(plans):
+    from planner import api
+    from planner.decision.operators import parse_operator
+
+    model = factored_model(plans["pen"], parallel="joins", observe=JOIN)
+    choice = api.EpisodeChoice(random=6, seed=3, operator_model=parse_operator("uniform,changing:0.3"),
+                               world="camera")
+    episodes = api.simulate(model, OnlinePlanner(model, expansions=40), choice)
+    assert all(e.finished for e in episodes) and sum(e.resets for e in episodes) == 0
+
+
+def test_a_session_refuses_it_and_the_presets_take_it(tmp_path):
+    log = tmp_path / "s.jsonl"
+    done = run_aplan("session", "pen", "--demo", "1", "--observe", "join", "--log", log)
+    assert done.returncode == 2 and "--observe join needs a camera that sees the pieces" in done.stderr, done.stderr
+    assert not log.exists()
+    paper = run_aplan("simulate", "pen", "--random", "1", "--observe", "join", "--model", "paper")
+    assert paper.returncode == 2 and "--model paper is Alg. 3 as published" in paper.stderr, paper.stderr
+    # the camera preset reads either camera's observations, not the paper's
+    assert observe_from(Namespace(observe=JOIN, habit_model="camera")) == JOIN
+    assert observe_from(Namespace(observe=None, habit_model="camera")) == STEP
+    with pytest.raises(UsageError, match="--model camera reads observations of the step"):
+        observe_from(Namespace(observe="state", habit_model="camera"))
