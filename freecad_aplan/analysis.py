@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from planner.defaults import PRODUCT_FORMAT, PRODUCT_VERSION
+from planner.assembly.support_contacts import CANDIDATES_KEY
 from planner.errors import ProductFormatError
 from planner.product import product_from_dict
 
@@ -102,14 +103,30 @@ def analysis_product(analysis, name: str = ""):
             "parts": parts, "contacts": diagrams["contacts"], "obstructions": diagrams["obstructions"],
             **product_intent(intent), **structure_entries(intent, component_objects(intent))}
     record, released = designer_record(intent), diagrams.get("analysis", {}).get("designer")
-    if record or released:  # the designer's directions and marks, and what the marks released (aplan stats)
-        data["geometry"] = {**({"designer": record} if record else {}),
-                            **({"analysis": {"designer": released}} if released else {})}
+    candidates = level_candidates(intent)
+    found = {**({"designer": released} if released else {}), **({CANDIDATES_KEY: candidates} if candidates else {})}
+    if record or found:  # the designer's directions and marks, what the marks released (aplan stats), and the
+        # support rule's candidates for the levels (a product too large to judge flat), less those rejected
+        data["geometry"] = {**({"designer": record} if record else {}), **({"analysis": found} if found else {})}
     try:
         return product_from_dict(data, analysis.Label)
     except ProductFormatError as exc:
         raise IntentError(f"{analysis.Label}: {exc.location}: {exc.problem}; fix it in the APLAN task panels, "
                           "or run the detection again if the components changed") from None
+
+
+def level_candidates(intent) -> dict | None:
+    """The support rule's candidates the last detection recorded for the levels (a product too large to judge
+    flat, :mod:`planner.assembly.level_supports`), without those the designer rejected in the interlocks panel
+    (:mod:`freecad_aplan.interlocks`): the levels add a contact for each one left that frees them. None when
+    none is left."""
+    record = intent.diagrams.get("analysis", {}).get(CANDIDATES_KEY)
+    if not record:
+        return None
+    rejected = {frozenset(d.get("parts", ())) for d in intent.interlocks
+                if d.get("rule") == "support" and d.get("decision") == "rejected"}
+    kept = [c for c in record.get("contacts", []) if frozenset(c.get("parts", ())) not in rejected]
+    return {**record, "contacts": kept} if kept else None
 
 
 def analysis_base_part(analysis) -> str | None:

@@ -129,7 +129,8 @@ _PROPERTIES = (
      'one JSON object per subassembly: {"id": s, "parts": [component or subassembly ids]}; empty: the document\'s own'),
     ("Interlocks", "App::PropertyStringList", "Detection",
      'the designer\'s decisions on the interlock proposals, one JSON object each: {"parts": [a, b], "rule": r, '
-     '"text": t, "decision": "accepted" or "rejected"} (made in the interlocks panel)'),
+     '"text": t, "decision": "accepted" or "rejected"}, and "level" for a support contact of a workstation '
+     '(made in the interlocks panel)'),
 )
 
 
@@ -375,7 +376,8 @@ def designer_record(intent: Intent) -> dict:
     """The product's ``geometry.designer`` (:mod:`planner.product.designer`): the designer's directions and
     not-blocking marks the analysis holds, and the interlock proposals the designer rejected
     (``refused_interlocks``, :mod:`planner.assembly.interlock_proposals`); empty when it holds none."""
-    # A rejected support contact is only not added (freecad_aplan.interlocks): no refusal for the planner.
+    # A rejected support contact is only not added (freecad_aplan.interlocks): no refusal for the planner (one
+    # of a workstation's is left out of the candidates instead: freecad_aplan.analysis.level_candidates).
     refused = [{k: d[k] for k in ("parts", "rule", "text") if k in d} for d in intent.interlocks
                if d.get("decision") == "rejected" and d.get("rule") != "support"]
     return {**({"directions": [list(v) for v in intent.directions]} if intent.directions else {}),

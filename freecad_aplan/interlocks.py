@@ -20,13 +20,21 @@ a part that would float inside the part whose cavity holds it) are listed after 
 ``--support-contacts keep``: the plan names the parts that would float. A new detection drops an accepted
 contact from the diagrams; its proposal reads *not decided* again then.
 
-Every decision is recorded in ``Interlocks`` (``{"parts", "rule", "text", "decision"}``). One OK is one undo
-step. Plain functions (no Qt), shared by the panel (:mod:`freecad_aplan.gui.interlocks`) and the tests.
+A product too large for the support rule to judge flat (:data:`~planner.assembly.support_contacts.CHECK_LIMIT`)
+gets the rule's candidates recorded by the detection instead, and its levels (the designer's subassemblies)
+judge them when it is planned (:mod:`planner.assembly.level_supports`). The report lists what they would add,
+each with its ``level`` (:func:`planner.api.level_support_proposals`, on the product the planner sees), after
+the flat ones: *accepted*, the contact is added to the stored diagrams as above; *rejected*, the candidate is
+left out of the product the planner sees (:func:`freecad_aplan.analysis.level_candidates`), so the level's plan
+names the parts that would float; not decided, planning adds it, saying so in one line, as the command line does.
+
+Every decision is recorded in ``Interlocks`` (``{"parts", "rule", "text", "decision"}``, and ``level``). One OK
+is one undo step. Plain functions (no Qt), shared by the panel (:mod:`freecad_aplan.gui.interlocks`) and the tests.
 """
 from __future__ import annotations
 
 from planner.assembly.interlock_proposals import PROPOSALS_KEY, apply_proposal
-from planner.assembly.support_contacts import SUPPORT_PROPOSALS_KEY, apply_support_proposal
+from planner.assembly.support_contacts import CANDIDATES_KEY, SUPPORT_PROPOSALS_KEY, apply_support_proposal
 from planner.errors import PlannerError
 
 from .intent import IntentError, read_intent, update_intent
@@ -61,7 +69,29 @@ def interlock_report(analysis) -> tuple[list[dict], list[str]]:
     contacts = {frozenset(c) for c in intent.diagrams.get("contacts", [])}
     proposals = [{**p, "decision": _decision(p, decided, contacts)}
                  for p in record.get(PROPOSALS_KEY, []) + record.get(SUPPORT_PROPOSALS_KEY, [])]
-    return proposals, list(record.get("interlock_unresolved", []))
+    unresolved = list(record.get("interlock_unresolved", []))
+    if record.get(CANDIDATES_KEY):
+        try:
+            levels = _level_proposals(analysis, intent)
+        except PlannerError as exc:  # IntentError too: the structure does not fit (its own panel says why)
+            levels = []
+            unresolved.append(f"the support contacts of the workstations are not judged: {exc}")
+        proposals += [{**p, "decision": _decision(p, decided, contacts)} for p in levels]
+    return proposals, unresolved
+
+
+def _level_proposals(analysis, intent) -> list[dict]:
+    """The support contacts the levels would add (module docstring), then those decided earlier that they no
+    longer list (an accepted contact frees its level; a rejected one is no candidate any more)."""
+    from planner import api
+
+    from .analysis import analysis_product
+
+    live = api.level_support_proposals(analysis_product(analysis))
+    listed = {frozenset(p["parts"]) for p in live}
+    earlier = [{k: d[k] for k in ("rule", "parts", "level", "text")} for d in intent.interlocks
+               if d.get("rule") == "support" and d.get("level") and frozenset(d["parts"]) not in listed]
+    return live + earlier
 
 
 def _merged_component(diagrams: dict, groups: dict, proposal: dict) -> None:
@@ -131,7 +161,7 @@ def decide_interlocks(analysis, decisions: dict[int, str]) -> list[str]:
                     entry["parts"] = list(dict.fromkeys(proposal["component"] if p in inside else p
                                                         for p in entry["parts"]))
         record.append({"parts": list(proposal["parts"]), "rule": proposal["rule"], "text": proposal["text"],
-                       "decision": decision})
+                       "decision": decision, **({"level": proposal["level"]} if proposal.get("level") else {})})
         said = (proposal["text"] if decision == "accepted" else f"{pair} ({proposal['rule']}): " +
                 ("not added; the plan names the parts that would float" if support else "refused when planning"))
         lines.append(f"{'support contact' if support else 'interlock'} {decision}: {said}")

@@ -50,7 +50,8 @@ def show_interlock(view: PlanView, proposal: dict) -> None:
 def _entry(proposal: dict, decision) -> str:
     a, b = proposal["parts"]
     pair = f"{a} rests in {b}" if proposal["rule"] == "support" else f"{a}\n+ {b}"
-    return f"{pair}\n{RULE_NAMES.get(proposal['rule'], proposal['rule'])}: {_SHOWN[decision]}"
+    where = f"\nat level {proposal['level']}" if proposal.get("level") else ""  # a line of its own: the list's width
+    return f"{pair}{where}\n{RULE_NAMES.get(proposal['rule'], proposal['rule'])}: {_SHOWN[decision]}"
 
 
 def _button(text: str, name: str, slot) -> QtGui.QPushButton:

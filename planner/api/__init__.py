@@ -45,6 +45,7 @@ from .levels import (
     arranged,
     hierarchy_statistics_of,
     level_product,
+    level_support_proposals,
     level_report,
     level_table,
     levels_of,
@@ -98,7 +99,7 @@ from .specs import EpisodeChoice, ModelSpec, PlannerChoice
 _PRIVATE = (_decidable, _model_file_kind)
 
 __all__ = ["resolve_product", "record_detection_proposals", "DEFAULT_MODE", "fastener_report", "accept_fasteners", "FASTENER_MODES", "plan_of",
-           "proposed_subassemblies", "structure_problems", "level_report", "level_table", "LEVEL_KEYS",
+           "proposed_subassemblies", "level_support_proposals", "structure_problems", "level_report", "level_table", "LEVEL_KEYS",
            "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
            "check_solved", "evaluate_operator",

@@ -25,7 +25,7 @@ from ..product import Product, Subassembly
 
 from .products import resolve_product
 
-__all__ = ["arranged", "levels_of", "level_product", "hierarchy_statistics_of", "LEVEL_KEYS",
+__all__ = ["arranged", "levels_of", "level_product", "level_support_proposals", "hierarchy_statistics_of", "LEVEL_KEYS",
            "proposed_subassemblies", "structure_problems", "level_report", "level_table"]
 
 
@@ -44,6 +44,17 @@ def levels_of(product: str | os.PathLike | Product, subassemblies: str = "design
     none, at most ``max_components`` members each) or ``none`` (one level: the product flat)."""
     product = product if isinstance(product, Product) else resolve_product(product)
     return product_levels(with_subassemblies(product, subassemblies, max_components))
+
+
+def level_support_proposals(product: str | os.PathLike | Product) -> list[dict]:
+    """The support contacts the levels of ``product`` (its own subassemblies) would get from the support rule's
+    candidates that a detection recorded (a product too large to judge flat:
+    :func:`~planner.assembly.level_supports.level_proposals`), each ``{"rule": "support", "parts": [part, host],
+    "level", "text"}``; ``[]`` without candidates or levels. The workbench's interlocks panel lists them."""
+    from ..assembly.level_supports import level_proposals
+
+    product = product if isinstance(product, Product) else resolve_product(product)
+    return level_proposals(product) if product.subassemblies else []
 
 
 def level_product(product: str | os.PathLike | Product, subassemblies: str = "designer", level: str | None = None,

@@ -196,18 +196,20 @@ def record_detection_proposals(product: Product, meshes=None) -> Product:
     add`` would do to it recorded as proposals in ``geometry.analysis``
     (:func:`~planner.assembly.interlock_proposals.record_proposals`,
     :func:`~planner.assembly.support_contacts.record_support_proposals`): the workbench's detection calls this
-    while the meshes exist, its interlocks panel lists them. The support contacts are those of the product
+    while the meshes exist, its interlocks panel lists them (a product too large to judge flat: the support
+    rule's candidates, for its levels, :func:`level_support_proposals`). The support contacts are those of the product
     with every interlock proposal applied, as the command line orders the two rules (a merged component has
     no mesh: no support contact is proposed then). Cost: that of the two rules."""
     from ..assembly.interlock_proposals import PROPOSALS_KEY, apply_proposal, record_proposals
-    from ..assembly.support_contacts import SUPPORT_PROPOSALS_KEY, record_support_proposals
+    from ..assembly.support_contacts import CANDIDATES_KEY, SUPPORT_PROPOSALS_KEY, record_support_proposals
 
     recorded = record_proposals(product, meshes)
     resolved = product
     for proposal in recorded.geometry.get("analysis", {}).get(PROPOSALS_KEY, []):
         resolved = apply_proposal(resolved, proposal)
-    supports = record_support_proposals(resolved, meshes).geometry.get("analysis", {}).get(SUPPORT_PROPOSALS_KEY)
-    if not supports:
+    found = record_support_proposals(resolved, meshes).geometry.get("analysis", {})
+    kept = {key: found[key] for key in (SUPPORT_PROPOSALS_KEY, CANDIDATES_KEY) if found.get(key)}
+    if not kept:
         return recorded
-    analysis = {**recorded.geometry.get("analysis", {}), SUPPORT_PROPOSALS_KEY: supports}
+    analysis = {**recorded.geometry.get("analysis", {}), **kept}
     return replace(recorded, geometry={**recorded.geometry, "analysis": analysis})

@@ -35,7 +35,7 @@ from .hierarchy import Level, product_levels
 from .support_contacts import (CANDIDATES_KEY, SupportContact, _floating_parts, candidates_of, record_candidates,
                                refuse_or_say, without_candidates)
 
-__all__ = ["CANDIDATES_KEY", "freeing_contacts", "with_level_supports", "onto_level"]
+__all__ = ["CANDIDATES_KEY", "freeing_contacts", "level_needs", "level_proposals", "with_level_supports", "onto_level"]
 
 
 def freeing_contacts(level: Product, candidates: tuple[SupportContact, ...],
@@ -69,6 +69,27 @@ def _member_map(level: Level, levels: list[Level]) -> dict[str, str]:
     return {p: m for m in level.members for p in holds.get(m, frozenset((m,)))}
 
 
+def level_needs(product: Product) -> tuple[tuple[str, SupportContact], ...]:
+    """The ``(level id, candidate)`` pairs :func:`with_level_supports` would add to ``product`` (its
+    subassemblies chosen), in level order, whatever the candidates' mode; ``()`` without candidates. Cost:
+    module docstring."""
+    _, candidates = candidates_of(product)
+    if not candidates:
+        return ()
+    product = without_candidates(product)
+    levels = product_levels(product)
+    return tuple((level.id, c) for level in levels
+                 for c in freeing_contacts(level.product, candidates, _member_map(level, levels)))
+
+
+def level_proposals(product: Product) -> list[dict]:
+    """:func:`level_needs` as the workbench's interlocks panel lists proposals: ``{"rule": "support", "parts":
+    [part, host], "level": id, "text"}``, the parts the product's (not the level's members). Cost: that of
+    :func:`level_needs`."""
+    return [{"rule": "support", "parts": [c.part, c.host], "level": level, "text": f"level {level}: {c.text}"}
+            for level, c in level_needs(product)]
+
+
 def with_level_supports(product: Product) -> Product:
     """``product`` (its subassemblies chosen) with the support contacts its levels need (module docstring),
     its candidates record consumed; ``product`` itself without candidates. Raises
@@ -77,14 +98,10 @@ def with_level_supports(product: Product) -> Product:
     mode, candidates = candidates_of(product)
     if not candidates:
         return product
+    found = level_needs(product)
     product = without_candidates(product)
-    levels = product_levels(product)
-    found: list[tuple[str, SupportContact]] = []
-    for level in levels:
-        added = freeing_contacts(level.product, candidates, _member_map(level, levels))
-        if added:
-            refuse_or_say(added, mode, product.name, level.id)
-            found.extend((level.id, c) for c in added)
+    for level in dict.fromkeys(level for level, _ in found):
+        refuse_or_say(tuple(c for lv, c in found if lv == level), mode, product.name, level)
     if not found:
         return product
     analysis = dict(product.geometry.get("analysis", {}))

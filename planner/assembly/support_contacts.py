@@ -196,8 +196,13 @@ def refuse_or_say(added: tuple[SupportContact, ...], mode: str, name: str = "", 
 def record_support_proposals(product: Product, meshes=None) -> Product:
     """``product``, its diagrams as they are, with the contacts :func:`support_contacts` would add recorded as
     proposals in ``geometry.analysis.support_proposals`` (``[{"rule": "support", "parts": [part, host],
-    "text"}]``); ``product`` itself when it needs none. Cost: that of :func:`support_contacts`."""
-    _, added = support_contacts(product, meshes)
+    "text"}]``); a product past :data:`CHECK_LIMIT` with the rule's candidates recorded instead (mode ``add``,
+    :data:`CANDIDATES_KEY`), for its levels to judge once its subassemblies are chosen
+    (:func:`~planner.assembly.level_supports.level_proposals` lists what they would add); ``product`` itself
+    when it needs none. Cost: that of :func:`support_contacts`."""
+    _, added, candidates = _judged(product, meshes)
+    if candidates:
+        return record_candidates(product, candidates, "add")
     if not added:
         return product
     analysis = {**product.geometry.get("analysis", {}), SUPPORT_PROPOSALS_KEY: [

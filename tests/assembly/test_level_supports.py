@@ -172,3 +172,31 @@ def test_a_product_with_its_own_subassemblies_is_judged_when_it_is_read(tmp_path
     lines = [r.getMessage() for r in caplog.records if r.getMessage().startswith("support contacts")]
     assert len(lines) == 1 and lines[0].startswith("support contacts: level gearbox: gear_a rests in housing")
     assert [r["level"] for r in resolved.geometry["analysis"]["support_contacts"]] == ["gearbox", "gearbox"]
+
+
+def test_a_detection_records_the_candidates_and_the_levels_proposals_name_the_gearbox_level():
+    """What the workbench's detection records of the machine (too large to judge flat): the rule's candidates,
+    mode add, and no flat proposal; at the levels of the machine's subassemblies, the proposals are the two
+    gears resting in the housing, at the gearbox's level (as the command line adds them)."""
+    recorded = api.record_detection_proposals(machine(), box_meshes(machine_boxes()))
+    analysis = recorded.geometry["analysis"]
+    assert analysis[CANDIDATES_KEY]["mode"] == "add" and "support_proposals" not in analysis
+    assert [c["parts"] for c in analysis[CANDIDATES_KEY]["contacts"]] == [["gear_a", "housing"],
+                                                                           ["gear_b", "housing"]]
+    assert api.level_support_proposals(recorded) == []  # planned flat: no level to judge them
+    chosen = replace(recorded, subassemblies=with_subassemblies(machine(), "auto").subassemblies)
+    level = gearbox_level(chosen)
+    proposals = api.level_support_proposals(chosen)
+    assert [(p["rule"], p["parts"], p["level"]) for p in proposals] == [("support", ["gear_a", "housing"], level.id),
+                                                                        ("support", ["gear_b", "housing"], level.id)]
+    assert proposals[0]["text"].startswith(f"level {level.id}: gear_a rests in housing")
+    # What they propose is what planning adds.
+    added = with_level_supports(chosen)
+    assert [r["parts"] for r in added.geometry["analysis"]["support_contacts"]] == [p["parts"] for p in proposals]
+    # One candidate dropped (the workbench drops those the designer rejected): the other alone does not free
+    # the level (gear_a would still float), so the rule proposes nothing there and the level's plan names it.
+    one = {**analysis[CANDIDATES_KEY], "contacts": analysis[CANDIDATES_KEY]["contacts"][1:]}
+    fewer = replace(chosen, geometry={**chosen.geometry, "analysis": {**analysis, CANDIDATES_KEY: one}})
+    assert api.level_support_proposals(fewer) == []
+    with pytest.raises(NotDisassemblableError, match="gear_a"):
+        and_or_graph(gearbox_level(with_level_supports(fewer)).product)

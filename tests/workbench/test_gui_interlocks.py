@@ -7,8 +7,11 @@ and colours as they were), undoes it, then rejects it (the plan refuses the pair
 words). Then the captured knob of the same tests: its one-component proposal shows the cover and the knob
 together (tests/artifacts/gui_interlocks_component.png), Cancel restores the view. Then the closed gearbox of
 tests/integration/unseen_documents.py: its support contacts listed ("GearA rests in Housing"), the first shows the
-gear and the housing orange together (tests/artifacts/gui_interlocks_support.png). The panel fits the default
-task view (tests/artifacts/gui_panel_interlocks.png)."""
+gear and the housing orange together (tests/artifacts/gui_interlocks_support.png). Then the machine of the same
+tests (the gearbox on a plate with 20 brackets, too large to judge flat), the gearbox one workstation: the panel
+lists that level's support contacts ("GearA rests in Housing / at level sa2"), the first shows the gear and the housing orange
+together (tests/artifacts/gui_interlocks_level_support.png), rejected there and stored on OK the level's plan
+names the gear that would float. The panel fits the default task view (tests/artifacts/gui_panel_interlocks.png)."""
 from __future__ import annotations
 
 import shutil
@@ -19,7 +22,7 @@ from background import Job, folder, run
 from conftest import REPO, freecad_gui_result, freecad_gui_run, require_freecad_gui
 from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, WORKBENCH_HELPERS
 from integration.interlock_documents import SCRIPT
-from integration.unseen_documents import GEARBOX
+from integration.unseen_documents import GEARBOX, MACHINE
 from integration.unseen_documents import SCRIPT as UNSEEN
 from pictures import hue_of, read_picture
 
@@ -31,7 +34,8 @@ import hashlib, json, os, time, traceback
 from PySide import QtCore, QtGui
 import FreeCAD, FreeCADGui
 
-OUT, COPY, CAPTURED, GEARBOX, ARTIFACTS = {out!r}, {copy!r}, {captured!r}, {gearbox!r}, {artifacts!r}
+OUT, COPY, CAPTURED, GEARBOX, MACHINE, ARTIFACTS = ({out!r}, {copy!r}, {captured!r}, {gearbox!r}, {machine!r},
+                                                     {artifacts!r})
 result = {{}}
 PARTS = ("Block", "Pin")
 MATERIALS = {{}}
@@ -245,6 +249,63 @@ def captured_panel():
 
 def gearbox_panel():
     result["support"] = first_proposal("gui_interlocks_support.png", ("GearA", "Housing"))
+    # The machine: the same gearbox on a plate with 20 brackets, too large to judge flat; its workstations do.
+    result["machine_home"] = opened(MACHINE, machine_panel)
+
+
+def level_plan(analysis):
+    # The gearbox's workstation as the planner plans it, and the support contacts planning added.
+    from freecad_aplan.analysis import analysis_product
+    from planner import api
+    from planner.assembly.hierarchy import product_levels
+    from planner.assembly.subassembly_proposals import with_subassemblies
+    try:
+        product = with_subassemblies(analysis_product(analysis))
+        level = next(lv for lv in product_levels(product) if "Housing" in lv.members)
+        added = [r["parts"] for r in product.geometry.get("analysis", {{}}).get("support_contacts", [])]
+        return ["planned", api.plan_statistics_of(level.product)[1].sequences, added]
+    except Exception as exc:
+        return [type(exc).__name__, str(exc)]
+
+
+def machine_panel():
+    # The designer's tree: the planner's proposals (the gearbox one workstation), as the structure panel takes
+    # them; then the interlocks panel lists the gearbox level's support contacts, the first is shown in 3D and
+    # rejected there, OK stores it: the level's plan then names the gear that would float.
+    from freecad_aplan.analysis import analysis_product
+    from freecad_aplan.intent import find_analysis, read_intent, update_intent
+    from planner.assembly.subassembly_proposals import with_subassemblies
+    analysis = find_analysis(FreeCAD.ActiveDocument)
+    record = read_intent(analysis).diagrams.get("analysis", {{}})
+    result["machine_candidates"] = [c["parts"] for c in record.get("support_candidates", {{}}).get("contacts", [])]
+    tree = with_subassemblies(analysis_product(analysis), "auto").subassemblies
+    update_intent(analysis, "structure", subassemblies=[{{"id": s.id, "parts": list(s.parts)}} for s in tree])
+    result["machine_tree"] = [[s.id, sorted(s.parts)] for s in tree]
+    result["level_plan_before"] = level_plan(analysis)
+    FreeCADGui.runCommand("Aplan_Interlocks")
+    settle()
+    window = FreeCADGui.getMainWindow()
+    listed = window.findChild(QtGui.QListWidget, "AplanInterlocksList")
+    listed.setCurrentRow(0)
+    FreeCADGui.SendMsgToActiveView("ViewFit")
+    settle()
+    view = FreeCADGui.ActiveDocument.ActiveView
+    view.saveImage(os.path.join(ARTIFACTS, "gui_interlocks_level_support.png"), *view.getSize(), "White")
+    shown = {{"entries": [listed.item(r).text() for r in range(listed.count())],
+             "summary": window.findChild(QtGui.QLabel, "AplanInterlocksSummary").text(),
+             "does": window.findChild(QtGui.QPlainTextEdit, "AplanInterlockDoes").toPlainText(),
+             "looks": shown_looks(MATERIALS), "arrows": len(arrows()),
+             "screen": {{n: on_screen(n) for n in ("GearA", "Housing")}},
+             "cut_off": cut_off(task_view_viewport()) + broken_words(task_view_viewport())}}
+    window.findChild(QtGui.QPushButton, "AplanRejectInterlock").click()
+    settle()
+    shown["after_reject"] = listed.item(0).text()
+    state().panel.accept()
+    settle()
+    shown["decisions"] = [[d["parts"], d.get("level"), d["decision"]] for d in read_intent(analysis).interlocks]
+    shown["plan"] = level_plan(analysis)
+    shown["closed_looks"] = shown_looks(MATERIALS)
+    result["level_support"] = shown
     finish(0)
 
 
@@ -265,14 +326,14 @@ def _in_the_window() -> tuple:
     unseen = tmp / "unseen.py"  # the closed gearbox (and the other unseen documents: one script builds them)
     unseen.write_text(f"TMP = {str(tmp)!r}\nREPO = {str(REPO)!r}\n" + UNSEEN)
     built = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(unseen)])
-    if not (tmp / f"{GEARBOX}.FCStd").is_file():
+    if not (tmp / f"{GEARBOX}.FCStd").is_file() or not (tmp / f"{MACHINE}.FCStd").is_file():
         return tmp, built
     ARTIFACTS.mkdir(exist_ok=True)
     script = tmp / "gui_interlocks.py"
     script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS, layout_check=LAYOUT_CHECK,
                                         out=str(tmp / "result.json"), copy=str(tmp / "press_fit.FCStd"),
                                         captured=str(tmp / "captured.FCStd"), gearbox=str(tmp / f"{GEARBOX}.FCStd"),
-                                        artifacts=str(ARTIFACTS)))
+                                        machine=str(tmp / f"{MACHINE}.FCStd"), artifacts=str(ARTIFACTS)))
     return tmp, freecad_gui_run(tmp, script, display=170)
 
 
@@ -351,6 +412,40 @@ def test_an_interlock_proposal_shown_accepted_undone_and_rejected():
     assert rejected["arrows"] == 0 and rejected["looks"] == data["home_looks"]
     _assert_component(data)
     _assert_support(data)
+    _assert_level_support(data)
+
+
+def _assert_level_support(data) -> None:
+    """The machine (too large to judge flat): the detection recorded the rule's candidates (the two gears in the
+    housing); with the gearbox one workstation, the panel lists its support contacts at that level, the first
+    shows the gear and the housing orange together (tests/artifacts/gui_interlocks_level_support.png); rejected
+    in the panel and stored on OK, the level's plan names the gear that would float (before: planning added
+    both, as the command line does)."""
+    assert data["machine_candidates"] == [["GearA", "Housing"], ["GearB", "Housing"]]
+    gearbox = next(parts for _, parts in data["machine_tree"] if "Housing" in parts)
+    assert len(gearbox) == 14 and not any(p.startswith(("Bracket", "Plate")) for p in gearbox)
+    level = next(sid for sid, parts in data["machine_tree"] if parts == gearbox)
+    kind, sequences, added = data["level_plan_before"]
+    assert kind == "planned" and sequences > 0 and added == [["GearA", "Housing"], ["GearB", "Housing"]]
+    shown = data["level_support"]
+    assert shown["entries"] == [f"Gear{g} rests in Housing\nat level {level}\nsupport contact: not decided"
+                                for g in "AB"]
+    assert shown["summary"].startswith("2 support contacts for parts that would float; select one")
+    assert shown["does"].startswith(f"level {level}: GearA rests in Housing")
+    assert shown["cut_off"] == [], shown["cut_off"]
+    looks = shown["looks"]
+    assert looks["GearA"] == looks["Housing"] == [pytest.approx(list(ORANGE)), 0] and shown["arrows"] == 0
+    assert all(t == 85 for name, (_, t) in looks.items() if name not in ("GearA", "Housing")), looks
+    picture = read_picture(ARTIFACTS / "gui_interlocks_level_support.png")
+    orange = picture.coloured(hue_of(ORANGE), saturation=0.3)
+    housing = _region(shown["screen"]["Housing"], picture.size)
+    # The housing orange under its see-through cover, as on the gearbox alone (measured there 0.65).
+    assert _share(orange, housing) >= 0.3, _share(orange, housing)
+    assert shown["after_reject"] == f"GearA rests in Housing\nat level {level}\nsupport contact: rejected"
+    assert shown["decisions"] == [[["GearA", "Housing"], level, "rejected"]]
+    kind, text = shown["plan"][:2]
+    assert kind == "NotDisassemblableError" and "GearA" in text, shown["plan"]
+    assert shown["closed_looks"] == data["machine_home"]  # the view restored when the panel closed
 
 
 def _assert_support(data) -> None:
