@@ -60,6 +60,13 @@ def test_pomdpx_round_trip_and_size(tmp_path, pen_model):
     assert np.array_equal(model.reward, again.reward) and np.allclose(model.initial, again.initial)
     assert again.discount == model.discount
     assert path.stat().st_size < 300_000  # the authors' dense files: 5 and 18 MB
+    # A name with XML's special characters is escaped in the file and reads back as it was.
+    import dataclasses
+
+    named = dataclasses.replace(model, name="pen <v2> & co")
+    write_pomdpx(named, tmp_path / "named.pomdpx")
+    assert "<Description>pen &lt;v2&gt; &amp; co</Description>" in (tmp_path / "named.pomdpx").read_text()
+    assert read_pomdpx(tmp_path / "named.pomdpx").name == "pen <v2> & co"
 
 
 def test_eagerness_is_configurable(pen):
