@@ -39,15 +39,16 @@ def online_planner(model: FactoredIntentionModel, decision_time: float | None = 
                          lower=lower)
 
 
-def check_cell_observe(observe: str) -> None:
-    """A session reads the tray camera or the keyboard, which report the loose parts and tool of a step, not the
-    pieces joined: ``--observe join`` (their alphabet) is for simulated worlds (``aplan simulate/evaluate
-    --world camera``) until a camera that sees the pieces is built. A :class:`UsageError` naming the fix."""
-    if observe == JOIN:
+def check_cell_observe(observe: str, keyboard: bool = False) -> None:
+    """A session's camera (the parts tray) reports the loose parts and tool of a step, not the pieces joined:
+    ``--observe join`` (their alphabet) is for the keyboard, where a person tells which pieces were joined, and
+    for simulated worlds (``aplan simulate/evaluate --world camera``), until a camera that sees the pieces is
+    built. A :class:`UsageError` naming the fix otherwise."""
+    if observe == JOIN and not keyboard:
         raise UsageError("--observe join needs a camera that sees the pieces being joined, and a session's camera "
-                         "(the parts tray) and keyboard report the loose parts and tool only: use --observe step "
-                         "(or --model camera), or simulate the join camera with aplan simulate --world camera "
-                         "--observe join (docs/camera.md)")
+                         "(the parts tray) reports the loose parts and tool only: use --observe step (or --model "
+                         "camera), --keyboard (a person types which pieces were joined), or simulate the join camera "
+                         "with aplan simulate --world camera --observe join (docs/camera.md)")
 
 
 def check_step_planner(observe: str, planner: str, policy) -> None:

@@ -127,7 +127,7 @@ def _session(args: argparse.Namespace) -> int:
     for path in paths:  # every level's log before the first level starts: a refusal has done nothing
         check_output(path, option="--log", replaceable=False, noun="log")
     spec, choice = model_spec_from(args), planner_choice_from(args)  # once, for every level
-    api.check_cell_observe(spec.observe)
+    api.check_cell_observe(spec.observe, keyboard=bool(args.keyboard))
     status = 0
     for k, ((level, product), path) in enumerate(zip(levels, paths), start=1):
         if len(levels) > 1:
@@ -158,6 +158,7 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
     from ..runtime.session import run_session
     from ..runtime.vision import MarkerDetector, VisionSource, marker_map
     from ..decision.orders import real_plan
+    from ..decision.step_observations import JOIN
 
     model, policy = decision_maker_from(args, product, spec, choice)
     plan = real_plan(model.plan)  # the real assembly states (the orders' model plans on an augmented graph)
@@ -190,7 +191,9 @@ def _session_level(args: argparse.Namespace, product, log_path: str, level: str 
     events = EventLog(log_path, on_event=show)
     if args.keyboard:
         # the fasteners are picked too; a robot acting by itself says what it does (a console robot's person does)
-        source = KeyboardSource(plan.designed or plan.product, show_robot=args.robot == "auto")
+        # --observe join: the person tells which pieces were joined (the model's alphabet names them)
+        joins = plan.observations if spec.observe == JOIN else None
+        source = KeyboardSource(plan.designed or plan.product, show_robot=args.robot == "auto", joins=joins)
     else:
         close_without_tool = any(o.parts and o.tool is None for o in plan.observations)
         source = VisionSource((), markers, detector, args.debounce, args.quiet_frames, close_without_tool,

@@ -7,7 +7,7 @@ error, so standard output stays for results. This is user interaction, not loggi
 from __future__ import annotations
 
 import sys
-from typing import Callable
+from typing import Callable, Sequence
 
 from ..assembly.tags import Observation
 from ..product import Product
@@ -70,19 +70,38 @@ class KeyboardSource:
     Before each prompt the person sees what the operator could pick now (:meth:`offer`: the observations of the
     operations possible in the assembly state, ``cartridge+ink+[hammer]``) and, with ``show_robot`` (a robot
     that performs by itself, ``--robot auto``), what the robot does at this step: the person at the keyboard
-    needs both to type what the operator did next to it."""
+    needs both to type what the operator did next to it.
+
+    ``joins`` (the observations of ``--observe join``, :func:`~planner.assembly.tags.join_observation_table`):
+    the person also tells which pieces were joined. The choices are then numbered (``1. {cartridge ink}+head``),
+    and the person types the number of what the operator did, or its text as shown; picks that name no piece
+    are taken as they are when some operation of loose parts alone shows them."""
 
     def __init__(self, product: Product, read: Callable[[str], str] = read_line,
-                 write: Callable[[str], None] | None = None, show_robot: bool = False):
+                 write: Callable[[str], None] | None = None, show_robot: bool = False,
+                 joins: Sequence[Observation] | None = None):
         self.parts = set(product.part_ids)
         self.tools = {t.id for t in product.tools}
         self._read = read
         self._write = write or _to_stderr
         self.show_robot = show_robot
+        self.joins = None if joins is None else {str(o): o for o in joins}
+        self._offered: list[str] = []
 
     def offer(self, picks: list[str]) -> None:
-        """Show ``picks`` (observations as text, e.g. ``body+button+[hammer]``) as what the operator could pick."""
-        self._write(COULD_PICK + (", ".join(picks) if picks else "nothing that shows (Enter)"))
+        """Show ``picks`` (observations as text, e.g. ``body+button+[hammer]``) as what the operator could pick
+        (numbered, with ``joins``)."""
+        self._offered = list(picks)
+        shown = [f"{k}. {p}" for k, p in enumerate(picks, 1)] if self.joins is not None else picks
+        self._write(COULD_PICK + (", ".join(shown) if shown else "nothing that shows (Enter)"))
+
+    def _join(self, line: str) -> Observation | None:
+        """With ``joins``: the observation a line names (a number of the choices offered, or a choice's text);
+        None when it names none of them."""
+        text = line.strip()
+        if text.isdigit() and 1 <= int(text) <= len(self._offered):
+            text = self._offered[int(text) - 1]
+        return self.joins.get(text)
 
     def observe(self) -> Observation | Apart | None:
         while True:
@@ -93,6 +112,15 @@ class KeyboardSource:
             names = line.replace(",", " ").split()
             if names in (["q"], ["quit"]):
                 return None
+            if self.joins is not None and names and names[0] != "apart":
+                joined = self._join(line)
+                if joined is not None:
+                    return joined
+                if any(c in line for c in "{}") or line.strip().isdigit():
+                    self._write(f"  not one of the choices: {line.strip()} (" + (
+                        f"type its number, 1 to {len(self._offered)}, or its text as shown)" if self._offered else
+                        "nothing shows now: press Enter)"))
+                    continue
             if names[:1] == ["apart"]:
                 unknown = [n for n in names[1:] if n not in self.parts]
                 if names[1:] and not unknown:
@@ -108,7 +136,12 @@ class KeyboardSource:
             elif len(tools) > 1:
                 self._write(f"  one tool per operation, got {', '.join(tools)}")
             else:
-                return Observation(tuple(sorted(set(n for n in names if n in self.parts))), tools[0] if tools else None)
+                picked = Observation(tuple(sorted(set(n for n in names if n in self.parts))), tools[0] if tools else None)
+                if self.joins is not None and picked.parts and str(picked) not in self.joins:
+                    self._write("  which pieces did these join? type the number of what the operator did (the "
+                                "choices above name the pieces)")
+                    continue
+                return picked
 
     def robot_acting(self, instruction: Instruction) -> None:
         """With ``show_robot``, say what the robot does at this step (the person types only the operator's picks)."""

@@ -7,6 +7,7 @@ The filter's exactness over every completion, and the POMDP over (class, seen) p
 step model's in test_step_observations.py (parametrised over both alphabets)."""
 from __future__ import annotations
 
+import json
 from argparse import Namespace
 
 import numpy as np
@@ -89,10 +90,11 @@ def test_the_camera_world_runs_it_without_a_reset(plans):
     assert all(e.finished for e in episodes) and sum(e.resets for e in episodes) == 0
 
 
-def test_a_session_refuses_it_and_the_presets_take_it(tmp_path):
+def test_a_camera_session_refuses_it_and_the_presets_take_it(tmp_path):
     log = tmp_path / "s.jsonl"
     done = run_aplan("session", "pen", "--demo", "1", "--observe", "join", "--log", log)
     assert done.returncode == 2 and "--observe join needs a camera that sees the pieces" in done.stderr, done.stderr
+    assert "--keyboard (a person types which pieces were joined)" in done.stderr
     assert not log.exists()
     paper = run_aplan("simulate", "pen", "--random", "1", "--observe", "join", "--model", "paper")
     assert paper.returncode == 2 and "--model paper is Alg. 3 as published" in paper.stderr, paper.stderr
@@ -101,3 +103,44 @@ def test_a_session_refuses_it_and_the_presets_take_it(tmp_path):
     assert observe_from(Namespace(observe=None, habit_model="camera")) == STEP
     with pytest.raises(UsageError, match="--model camera reads observations of the step"):
         observe_from(Namespace(observe="state", habit_model="camera"))
+
+
+def test_at_the_keyboard_the_person_tells_the_pieces_and_the_log_replays(pen, tmp_path):
+    """``aplan session pen --keyboard --observe join``: the choices are numbered and name the pieces; the person
+    types the number of the first each step (a number past the list, and loose parts that name no piece, are
+    asked again); the product is assembled, every operator step the log records is one of the join alphabet
+    (one that joins a subassembly names it), and the log replays."""
+    log = tmp_path / "k.jsonl"
+    # 9: past the list; head: loose parts that name no piece (both asked again); then the first choice each step,
+    # and Enter once nothing shows (the robot did the last operation: the online planner at 20 expansions)
+    lines = ["9", "head", "1", "1", "1", "", "", ""]
+    done = run_aplan("session", "pen", "--keyboard", "--robot", "auto", "--observe", "join", "--joins",
+                     "--expansions", "20", "--log", log, stdin="\n".join(lines) + "\n")
+    assert done.returncode == 0 and done.stdout.startswith("assembled"), done.stdout + done.stderr
+    assert "not one of the choices: 9" in done.stderr and "which pieces did these join?" in done.stderr
+    assert "the operator could pick now: 1. " in done.stderr
+    events = [json.loads(line) for line in log.read_text().splitlines()]
+    assert events[0]["settings"]["observe"] == JOIN
+    plan = with_join_observations(make_plan(pen))
+    seen = [e for e in events if e["event"] == "observation" and e["index"]]
+    assert seen and all(plan.observations[e["index"]] != BLANK and not e["ignored"] for e in seen)
+    assert any("{" in e["observation"] for e in seen)  # a step that joined a subassembly names its parts
+    replay = run_aplan("replay", log)
+    assert replay.returncode == 0 and "beliefs and the operations of its" in replay.stdout, replay.stderr
+
+
+def test_the_keyboard_takes_a_number_a_choice_as_shown_or_loose_parts_that_name_no_piece(pen):
+    from planner.runtime.console import KeyboardSource
+
+    plan = with_join_observations(make_plan(pen))  # the file's technical constraints, as aplan session pen
+    typed, said = iter(["2", "{body button}+{cartridge head ink}+[hammer]", "cartridge ink hammer", ""]), []
+    source = KeyboardSource(pen, read=lambda prompt: next(typed), write=said.append, joins=plan.observations)
+    choices = ["cartridge+head+[hammer]", "cartridge+ink+[hammer]", "{body button}+{cartridge head ink}+[hammer]"]
+    source.offer(choices)
+    assert said[-1].endswith("1. cartridge+head+[hammer], 2. cartridge+ink+[hammer], 3. {body button}+"
+                             "{cartridge head ink}+[hammer]")
+    first, second, third, fourth = (source.observe() for _ in range(4))
+    assert str(first) == "cartridge+ink+[hammer]" and first in plan.observations
+    assert second.pieces == (("body", "button"), ("cartridge", "head", "ink")) and second.tool == "hammer"
+    assert str(third) == "cartridge+ink+[hammer]"  # loose parts alone: as typed, a choice of the alphabet
+    assert fourth == BLANK
