@@ -430,17 +430,8 @@ def _assert_level_support(data) -> None:
     shown = data["level_support"]
     assert shown["entries"] == [f"Gear{g} rests in Housing\nat level {level}\nsupport contact: not decided"
                                 for g in "AB"]
-    assert shown["summary"].startswith("2 support contacts for parts that would float; select one")
     assert shown["does"].startswith(f"level {level}: GearA rests in Housing")
-    assert shown["cut_off"] == [], shown["cut_off"]
-    looks = shown["looks"]
-    assert looks["GearA"] == looks["Housing"] == [pytest.approx(list(ORANGE)), 0] and shown["arrows"] == 0
-    assert all(t == 85 for name, (_, t) in looks.items() if name not in ("GearA", "Housing")), looks
-    picture = read_picture(ARTIFACTS / "gui_interlocks_level_support.png")
-    orange = picture.coloured(hue_of(ORANGE), saturation=0.3)
-    housing = _region(shown["screen"]["Housing"], picture.size)
-    # The housing orange under its see-through cover, as on the gearbox alone (measured there 0.65).
-    assert _share(orange, housing) >= 0.3, _share(orange, housing)
+    _assert_gear_in_housing(shown, "gui_interlocks_level_support.png")
     assert shown["after_reject"] == f"GearA rests in Housing\nat level {level}\nsupport contact: rejected"
     assert shown["decisions"] == [[["GearA", "Housing"], level, "rejected"]]
     kind, text = shown["plan"][:2]
@@ -453,14 +444,20 @@ def _assert_support(data) -> None:
     shows the gear and the housing orange together, the other parts dimmed, no arrow."""
     support = data["support"]
     assert support["entries"] == [f"Gear{g} rests in Housing\nsupport contact: not decided" for g in "AB"]
-    assert support["summary"].startswith("2 support contacts for parts that would float; select one")
-    assert support["cut_off"] == [], support["cut_off"]
-    looks = support["looks"]
-    assert looks["GearA"] == looks["Housing"] == [pytest.approx(list(ORANGE)), 0] and support["arrows"] == 0
+    _assert_gear_in_housing(support, "gui_interlocks_support.png")
+
+
+def _assert_gear_in_housing(shown: dict, picture_name: str) -> None:
+    """Two support contacts listed, the panel not cut off, and the first shown: GearA and the Housing orange
+    together, every other part dimmed, no arrow; in the picture a person sees, the housing's box mostly orange."""
+    assert shown["summary"].startswith("2 support contacts for parts that would float; select one")
+    assert shown["cut_off"] == [], shown["cut_off"]
+    looks = shown["looks"]
+    assert looks["GearA"] == looks["Housing"] == [pytest.approx(list(ORANGE)), 0] and shown["arrows"] == 0
     assert all(t == 85 for name, (_, t) in looks.items() if name not in ("GearA", "Housing")), looks
-    picture = read_picture(ARTIFACTS / "gui_interlocks_support.png")
+    picture = read_picture(ARTIFACTS / picture_name)
     orange = picture.coloured(hue_of(ORANGE), saturation=0.3)
-    housing = _region(support["screen"]["Housing"], picture.size)
+    housing = _region(shown["screen"]["Housing"], picture.size)
     # The housing orange, the cover see-through over it: measured 0.65 of its projected box; about half of that.
     assert _share(orange, housing) >= 0.3, _share(orange, housing)
 
