@@ -153,7 +153,8 @@ def main() -> None:
                              "operation the operator did)")
     parser.add_argument("--observe", choices=OBSERVE, default=STATE,
                         help="what the models but the paper's read an observation as: of the state reached (the "
-                             "paper's), of the step taken (a camera's, docs/camera.md), or of the step and the pieces it joined")
+                             "paper's), of the step taken (a camera's, docs/camera.md), or of the step and the pieces it "
+                             "joined")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--max-steps", type=int, default=100)
     args = parser.parse_args()

@@ -99,11 +99,13 @@ from .specs import EpisodeChoice, ModelSpec, PlannerChoice
 _PRIVATE = (_decidable, _model_file_kind)
 
 __all__ = ["resolve_product", "record_detection_proposals", "DEFAULT_MODE", "fastener_report", "accept_fasteners", "FASTENER_MODES", "plan_of",
-           "proposed_subassemblies", "level_support_proposals", "structure_problems", "level_report", "level_table", "LEVEL_KEYS",
+           "proposed_subassemblies", "level_support_proposals", "structure_problems", "level_report", "level_table",
+           "LEVEL_KEYS",
            "explain_disconnected", "plan_statistics_of", "base_part_of", "decision_model", "lumped_model",
            "load_model", "save_model", "check_model_file", "tables", "MODEL_SUFFIXES", "SOLVER_ENGINES", "solve",
            "check_solved", "evaluate_operator",
-           "policy_for", "simulate", "evaluate", "check_cell_observe", "PLANNERS", "factored_decision_model", "online_planner",
+           "policy_for", "simulate", "evaluate", "check_cell_observe", "PLANNERS", "factored_decision_model",
+           "online_planner",
            "choose_planner", "decision_maker", "arranged", "levels_of", "level_product", "hierarchy_statistics_of",
            "sequence_choices", "plan_in_3d", "sequence_from_log", "InputLimits",
            # the stages' values (issue 24), and names front ends read from here

@@ -268,8 +268,8 @@ def _step_tables(argument, spec: ModelSpec, lumped: bool) -> POMDP:
     n = step_pomdp_states(model)
     needed = lumped_pomdp_bytes(n, len(model.actions))
     if needed > spec.limits.memory:
-        raise MemoryLimitError(f"the POMDP of --observe {spec.observe} would hold {n:,} states (the classes and their pairs "
-                               f"with the observations into them) x {len(model.actions):,} actions, about "
+        raise MemoryLimitError(f"the POMDP of --observe {spec.observe} would hold {n:,} states (the classes and their "
+                               f"pairs with the observations into them) x {len(model.actions):,} actions, about "
                                f"{gib(needed)}, past the memory budget of {gib(spec.limits.memory)}; use the online "
                                f"planner (aplan simulate/session --observe {spec.observe}), or --base-part")
     return step_pomdp(model)

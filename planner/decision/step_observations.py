@@ -13,14 +13,14 @@ gives blank only 1/(4k + 1) of the time), so a robot reading a camera drifts off
                       (1 - b) [z = obs(e)] + b [z = 0]        when it did state edge e's operation,
 
 ``obs(e)`` the observation of ``e``'s operation (:attr:`~planner.assembly.plan.Plan.operation_observation`: its
-loose part and tool; 0 when it has neither, and then the step is never seen). ``--observe join`` is the same
-model over a richer alphabet: a camera that also sees the pieces joined, so that ``obs(e)`` names ``e``'s
-operation (:func:`~planner.assembly.tags.join_observation_table`; the model's plan carries that alphabet,
-:func:`~planner.assembly.plan.with_join_observations`), and no operation is unseen but by a miss. The robot's own operation is not
-an observation (the robot knows what it did; the camera watches the operator), as in the camera world. States,
-transitions, rewards, the initial belief, habits, the parallel models and the change of mind are the factored
-model's, unchanged; mistakes mix as before, ``(1 - mu) O + mu / Z``. With ``observe="state"`` (the default) the
-model is the paper's, table for table.
+loose part and tool; 0 when it has neither, and then the step is never seen). ``--observe join`` is the same model
+over a richer alphabet: a camera that also sees the pieces joined, so that ``obs(e)`` names ``e``'s operation
+(:func:`~planner.assembly.tags.join_observation_table`; the model's plan carries that alphabet,
+:func:`~planner.assembly.plan.with_join_observations`), and no operation is unseen but by a miss. The robot's own
+operation is not an observation (the robot knows what it did; the camera watches the operator), as in the camera
+world. States, transitions, rewards, the initial belief, habits, the parallel models and the change of mind are the
+factored model's, unchanged; mistakes mix as before, ``(1 - mu) O + mu / Z``. With ``observe="state"`` (the
+default) the model is the paper's, table for table.
 
 Exactness on the classes. The likelihood depends on the transition, not on the class reached, so the filter
 multiplies each *piece* of the prediction (the mass that stayed, the mass each operator step moved, tagged with
@@ -46,7 +46,8 @@ from ..errors import PlannerError
 from ..defaults import CAMERA_BLANK
 from .factored_belief import FactoredBelief, _sum_by
 
-__all__ = ["OBSERVE", "STATE", "STEP", "JOIN", "STEPWISE", "check_observe", "of_step", "StepPrediction", "stay_part", "operator_advance",
+__all__ = ["OBSERVE", "STATE", "STEP", "JOIN", "STEPWISE", "check_observe", "of_step", "StepPrediction", "stay_part",
+           "operator_advance",
            "predict_seen", "step_likelihood", "step_posterior", "StepSplit", "refuse_step_tables"]
 
 STATE, STEP, JOIN = "state", "step", "join"

@@ -136,7 +136,8 @@ class KeyboardSource:
             elif len(tools) > 1:
                 self._write(f"  one tool per operation, got {', '.join(tools)}")
             else:
-                picked = Observation(tuple(sorted(set(n for n in names if n in self.parts))), tools[0] if tools else None)
+                picked = Observation(tuple(sorted(set(n for n in names if n in self.parts))),
+                                     tools[0] if tools else None)
                 if self.joins is not None and picked.parts and str(picked) not in self.joins:
                     self._write("  which pieces did these join? type the number of what the operator did (the "
                                 "choices above name the pieces)")

@@ -170,8 +170,8 @@ def add_observation_options(group) -> None:
                             "operator did by its loose parts and tool, missing it with probability 1/5, and blank "
                             "when it did nothing; the online planner or a policy over the lumped model's steps; "
                             f"--model {CAMERA.name} sets it) or join (the same camera seeing the pieces joined too, "
-                            "so each operation is told apart; simulated worlds only: the tray camera cannot see "
-                            "them); docs/camera.md")
+                            "so each operation is told apart: simulated worlds and --keyboard sessions, where the "
+                            "person names the pieces; the tray camera cannot see them); docs/camera.md")
 
 
 def observe_from(args: argparse.Namespace) -> str:

@@ -351,7 +351,8 @@ def pomdpx_chunks(model: POMDP):
     S, A, Z = _tokens(model.states), _tokens(model.actions), _tokens(model.observations)
     yield ('<?xml version="1.0" encoding="ISO-8859-1"?>\n'
            f'<pomdpx version="0.1" id="{_token(model.name)}">\n'
-           f"<Description>{_escape(model.name, quote=False)}</Description>\n<Discount>{_num(model.discount)}</Discount>\n"
+           f"<Description>{_escape(model.name, quote=False)}</Description>\n"
+           f"<Discount>{_num(model.discount)}</Discount>\n"
            "<Variable>\n"
            f'<StateVar vnamePrev="state_0" vnameCurr="state_1" fullyObs="false"><ValueEnum>{" ".join(S)}'
            "</ValueEnum></StateVar>\n"
