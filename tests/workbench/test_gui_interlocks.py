@@ -18,13 +18,16 @@ import shutil
 
 import numpy as np
 import pytest
-from background import Job, folder, run
+from background import Job, folder
 from conftest import REPO, freecad_gui_result, freecad_gui_run, require_freecad_gui
 from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, WORKBENCH_HELPERS
-from integration.interlock_documents import SCRIPT
+from integration.test_interlock_documents import BACKGROUND as INTERLOCK_JOBS
+from integration.test_unseen_documents import BACKGROUND as UNSEEN_JOBS
 from integration.unseen_documents import GEARBOX, MACHINE
-from integration.unseen_documents import SCRIPT as UNSEEN
 from pictures import hue_of, read_picture
+
+#: The jobs that build the documents this window opens (they run once for both modules).
+INTERLOCK_DOCUMENTS, UNSEEN_DOCUMENTS = INTERLOCK_JOBS[0], UNSEEN_JOBS[0]
 
 ARTIFACTS = REPO / "tests" / "artifacts"
 ORANGE, BLUE = (1.0, 0.55, 0.0), (0.1, 0.35, 0.9)
@@ -315,19 +318,17 @@ QtCore.QTimer.singleShot(1500, guarded(start))
 
 
 def _in_the_window() -> tuple:
-    """FreeCADCmd builds the press fit (tests/integration/interlock_documents.py), then the GUI script runs on it:
-    (folder, FreeCAD's run); the script's result in folder/result.json."""
+    """The documents the integration tests' jobs build in FreeCADCmd (the press fit and the captured knob:
+    tests/integration/interlock_documents.py; the gearbox and the machine: unseen_documents.py), copied here,
+    then the GUI script runs on them: (folder, FreeCAD's run); the script's result in folder/result.json. Built
+    once for both modules (this job built them again before)."""
     tmp = folder("gui-interlocks")
-    build = tmp / "build.py"
-    build.write_text(f"TMP = {str(tmp)!r}\n" + SCRIPT)
-    built = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(build)])
-    if not (tmp / "press_fit.FCStd").is_file():
-        return tmp, built
-    unseen = tmp / "unseen.py"  # the closed gearbox (and the other unseen documents: one script builds them)
-    unseen.write_text(f"TMP = {str(tmp)!r}\nREPO = {str(REPO)!r}\n" + UNSEEN)
-    built = run([shutil.which("freecadcmd") or shutil.which("FreeCADCmd"), str(unseen)])
-    if not (tmp / f"{GEARBOX}.FCStd").is_file() or not (tmp / f"{MACHINE}.FCStd").is_file():
-        return tmp, built
+    for job, names in ((INTERLOCK_DOCUMENTS, ("press_fit", "captured")), (UNSEEN_DOCUMENTS, (GEARBOX, MACHINE))):
+        documents, built = job.result()
+        for name in names:
+            if not (documents / f"{name}.FCStd").is_file():
+                return tmp, built
+            shutil.copy(documents / f"{name}.FCStd", tmp / f"{name}.FCStd")  # a copy: the window opens it read-write
     ARTIFACTS.mkdir(exist_ok=True)
     script = tmp / "gui_interlocks.py"
     script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS, layout_check=LAYOUT_CHECK,
