@@ -24,6 +24,7 @@ from integration.freecad_tools import GUI_HELPERS, LAYOUT_CHECK, WORKBENCH_HELPE
 from integration.test_interlock_documents import BACKGROUND as INTERLOCK_JOBS
 from integration.test_unseen_documents import BACKGROUND as UNSEEN_JOBS
 from integration.unseen_documents import GEARBOX, MACHINE
+from test_level_support_decisions import LEVEL_PLAN
 from pictures import hue_of, read_picture
 
 #: The jobs that build the documents this window opens (they run once for both modules).
@@ -216,8 +217,16 @@ def opened(path, then):
 
 
 def first_proposal(picture, names):
+    # first_selected, then Cancel (the view as it was, nothing stored).
+    shown = first_selected(picture, names)
+    state().panel.reject()
+    settle()
+    return shown
+
+
+def first_selected(picture, names):
     # The interlocks panel opened, its first proposal selected: what it lists and what the 3D view shows (the
-    # view saved as `picture`, the screen boxes of `names`); then Cancel (the view as it was, nothing stored).
+    # view saved as `picture`, the screen boxes of `names`); the panel left open.
     FreeCADGui.runCommand("Aplan_Interlocks")
     settle()
     window = FreeCADGui.getMainWindow()
@@ -227,13 +236,11 @@ def first_proposal(picture, names):
     settle()
     view = FreeCADGui.ActiveDocument.ActiveView
     view.saveImage(os.path.join(ARTIFACTS, picture), *view.getSize(), "White")
-    shown = {{"entries": [listed.item(r).text() for r in range(listed.count())],
-             "summary": window.findChild(QtGui.QLabel, "AplanInterlocksSummary").text(),
-             "looks": shown_looks(MATERIALS), "arrows": len(arrows()), "screen": {{n: on_screen(n) for n in names}},
-             "cut_off": cut_off(task_view_viewport()) + broken_words(task_view_viewport())}}
-    state().panel.reject()
-    settle()
-    return shown
+    return {{"entries": [listed.item(r).text() for r in range(listed.count())],
+            "summary": window.findChild(QtGui.QLabel, "AplanInterlocksSummary").text(),
+            "does": window.findChild(QtGui.QPlainTextEdit, "AplanInterlockDoes").toPlainText(),
+            "looks": shown_looks(MATERIALS), "arrows": len(arrows()), "screen": {{n: on_screen(n) for n in names}},
+            "cut_off": cut_off(task_view_viewport()) + broken_words(task_view_viewport())}}
 
 
 def captured():
@@ -256,20 +263,7 @@ def gearbox_panel():
     result["machine_home"] = opened(MACHINE, machine_panel)
 
 
-def level_plan(analysis):
-    # The gearbox's workstation as the planner plans it, and the support contacts planning added.
-    from freecad_aplan.analysis import analysis_product
-    from planner import api
-    from planner.assembly.hierarchy import product_levels
-    from planner.assembly.subassembly_proposals import with_subassemblies
-    try:
-        product = with_subassemblies(analysis_product(analysis))
-        level = next(lv for lv in product_levels(product) if "Housing" in lv.members)
-        added = [r["parts"] for r in product.geometry.get("analysis", {{}}).get("support_contacts", [])]
-        return ["planned", api.plan_statistics_of(level.product)[1].sequences, added]
-    except Exception as exc:
-        return [type(exc).__name__, str(exc)]
-
+{level_plan}
 
 def machine_panel():
     # The designer's tree: the planner's proposals (the gearbox one workstation), as the structure panel takes
@@ -284,29 +278,17 @@ def machine_panel():
     tree = with_subassemblies(analysis_product(analysis), "auto").subassemblies
     update_intent(analysis, "structure", subassemblies=[{{"id": s.id, "parts": list(s.parts)}} for s in tree])
     result["machine_tree"] = [[s.id, sorted(s.parts)] for s in tree]
-    result["level_plan_before"] = level_plan(analysis)
-    FreeCADGui.runCommand("Aplan_Interlocks")
-    settle()
+    result["level_plan_before"] = level_plan(analysis, "Housing")
+    shown = first_selected("gui_interlocks_level_support.png", ("GearA", "Housing"))
     window = FreeCADGui.getMainWindow()
     listed = window.findChild(QtGui.QListWidget, "AplanInterlocksList")
-    listed.setCurrentRow(0)
-    FreeCADGui.SendMsgToActiveView("ViewFit")
-    settle()
-    view = FreeCADGui.ActiveDocument.ActiveView
-    view.saveImage(os.path.join(ARTIFACTS, "gui_interlocks_level_support.png"), *view.getSize(), "White")
-    shown = {{"entries": [listed.item(r).text() for r in range(listed.count())],
-             "summary": window.findChild(QtGui.QLabel, "AplanInterlocksSummary").text(),
-             "does": window.findChild(QtGui.QPlainTextEdit, "AplanInterlockDoes").toPlainText(),
-             "looks": shown_looks(MATERIALS), "arrows": len(arrows()),
-             "screen": {{n: on_screen(n) for n in ("GearA", "Housing")}},
-             "cut_off": cut_off(task_view_viewport()) + broken_words(task_view_viewport())}}
     window.findChild(QtGui.QPushButton, "AplanRejectInterlock").click()
     settle()
     shown["after_reject"] = listed.item(0).text()
     state().panel.accept()
     settle()
     shown["decisions"] = [[d["parts"], d.get("level"), d["decision"]] for d in read_intent(analysis).interlocks]
-    shown["plan"] = level_plan(analysis)
+    shown["plan"] = level_plan(analysis, "Housing")
     shown["closed_looks"] = shown_looks(MATERIALS)
     result["level_support"] = shown
     finish(0)
@@ -334,7 +316,8 @@ def _in_the_window() -> tuple:
     script.write_text(GUI_SCRIPT.format(gui_helpers=GUI_HELPERS, workbench_helpers=WORKBENCH_HELPERS, layout_check=LAYOUT_CHECK,
                                         out=str(tmp / "result.json"), copy=str(tmp / "press_fit.FCStd"),
                                         captured=str(tmp / "captured.FCStd"), gearbox=str(tmp / f"{GEARBOX}.FCStd"),
-                                        machine=str(tmp / f"{MACHINE}.FCStd"), artifacts=str(ARTIFACTS)))
+                                        machine=str(tmp / f"{MACHINE}.FCStd"), artifacts=str(ARTIFACTS),
+                                        level_plan=LEVEL_PLAN))
     return tmp, freecad_gui_run(tmp, script, display=170)
 
 

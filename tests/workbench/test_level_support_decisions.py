@@ -27,37 +27,45 @@ from test_floating_parts import box_meshes  # noqa: E402
 from test_interlock_decisions import PREAMBLE  # noqa: E402
 from test_level_supports import GEARBOX, machine, machine_boxes  # noqa: E402
 
+#: FreeCAD-side helper (no format fields; the GUI test's script inserts it too): the workstation that holds
+#: ``housing`` as the planner plans the analysis (its level's support contacts judged), with the contacts added.
+LEVEL_PLAN = r"""
+def level_plan(analysis, housing):
+    from freecad_aplan.analysis import analysis_product
+    from planner import api
+    from planner.assembly.hierarchy import product_levels
+    from planner.assembly.subassembly_proposals import with_subassemblies
+    try:
+        product = with_subassemblies(analysis_product(analysis))
+        level = next(lv for lv in product_levels(product) if housing in lv.members)
+        added = [r["parts"] for r in product.geometry.get("analysis", {}).get("support_contacts", [])]
+        return ["planned", api.plan_statistics_of(level.product)[1].sequences, added]
+    except Exception as exc:
+        return [type(exc).__name__, str(exc)]
+"""
+
 SCRIPT = PREAMBLE + r"""
-from planner.assembly.hierarchy import product_levels
-from planner.assembly.subassembly_proposals import with_subassemblies
-from freecad_aplan.analysis import analysis_product
+{level_plan}
 update_intent(analysis, "detect", diagrams={diagrams!r})
 update_intent(analysis, "structure", subassemblies={tree!r})
 def contacts():
     return sorted(sorted(c) for c in read_intent(analysis).diagrams["contacts"])
-def level_plan():
-    # The gearbox's workstation as the planner plans it (its level's support contacts judged).
-    try:
-        product = with_subassemblies(analysis_product(analysis))
-        level = next(lv for lv in product_levels(product) if "housing" in lv.members)
-        added = [r["parts"] for r in product.geometry.get("analysis", {{}}).get("support_contacts", [])]
-        return ["planned", api.plan_statistics_of(level.product)[1].sequences, added]
-    except Exception as exc:
-        return [type(exc).__name__, str(exc)]
 def report():
     return [[p["rule"], p["parts"], p.get("level"), p["decision"]] for p in interlock_report(analysis)[0]]
-out["report"], out["plan_before"], out["contacts_before"] = report(), level_plan(), contacts()
+def gearbox_plan():
+    return level_plan(analysis, "housing")
+out["report"], out["plan_before"], out["contacts_before"] = report(), gearbox_plan(), contacts()
 out["texts"] = [p["text"] for p in interlock_report(analysis)[0]]
 undo = len(doc.UndoNames)
 out["lines"] = decide_interlocks(analysis, {{0: "accepted", 1: "accepted"}})
 out["accepted"] = {{"undo": [len(doc.UndoNames) - undo, doc.UndoNames[0]], "contacts": contacts(),
-                   "plan": level_plan(), "report": report(), "same": shapes() == before}}
+                   "plan": gearbox_plan(), "report": report(), "same": shapes() == before}}
 doc.undo()
 out["undone"] = {{"contacts": contacts(), "decisions": read_intent(analysis).interlocks, "report": report()}}
 out["rejected_lines"] = decide_interlocks(analysis, {{0: "rejected"}})
 out["rejected"] = {{"decisions": [[d["parts"], d["rule"], d.get("level"), d["decision"]]
                                  for d in read_intent(analysis).interlocks],
-                   "contacts": contacts(), "plan": level_plan(), "report": report(), "same": shapes() == before}}
+                   "contacts": contacts(), "plan": gearbox_plan(), "report": report(), "same": shapes() == before}}
 print("APLAN-RESULT " + json.dumps(out), flush=True)
 """
 
@@ -71,7 +79,7 @@ def decided(tmp_path_factory) -> dict:
                 "analysis": data["geometry"]["analysis"]}
     tree = [{"id": s.id, "parts": list(s.parts)} for s in with_subassemblies(machine(), "auto").subassemblies]
     script = tmp_path_factory.mktemp("level_supports") / "level_supports.py"
-    script.write_text(SCRIPT.format(repo=str(REPO), name="machine", parts=diagrams["parts"],
+    script.write_text(SCRIPT.format(repo=str(REPO), name="machine", parts=diagrams["parts"], level_plan=LEVEL_PLAN,
                                     diagrams=json.loads(json.dumps(diagrams)), tree=tree))
     return freecad_result(subprocess.run([freecadcmd, str(script)], capture_output=True, text=True, timeout=300))
 
